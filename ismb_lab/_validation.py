@@ -1,0 +1,140 @@
+"""Input checks shared by the whole package.
+
+Every check raises with one message format, modelled on scikit-learn's::
+
+    The 'theta_c' parameter of Params must be a finite number >= 0. Got -1.0 instead.
+
+so that the parameter, the rule and the received value are always named.
+"""
+
+from __future__ import annotations
+
+import math
+import numbers
+
+import numpy as np
+
+
+def message(name: str, owner: str, rule: str, value) -> str:
+    """Return the package's one error message format."""
+    shown = value if isinstance(value, str) and len(value) > 60 else repr(value)
+    if isinstance(shown, str) and len(shown) > 80:
+        shown = shown[:77] + "..."
+    return f"The {name!r} parameter of {owner} must be {rule}. Got {shown} instead."
+
+
+def check_number(value, name: str, owner: str, *, low=None, high=None,
+                 low_open: bool = False, integer: bool = False) -> float | int:
+    """Check that `value` is a finite real (or integral) number within bounds.
+
+    Parameters
+    ----------
+    value : object
+        The value received.
+    name, owner : str
+        The parameter's name and the function or class it belongs to.
+    low, high : float, optional
+        Inclusive bounds; `low_open` makes the lower bound strict.
+    integer : bool
+        Require an integral value (``bool`` is never accepted).
+
+    Returns
+    -------
+    number : float or int
+        The value as a Python ``float`` (or ``int`` when `integer`).
+
+    Examples
+    --------
+    >>> check_number(3, "n_min", "detect_corners", low=1, integer=True)
+    3
+    >>> check_number(float("nan"), "theta_c", "Params")
+    Traceback (most recent call last):
+    ...
+    ValueError: The 'theta_c' parameter of Params must be a finite number. Got nan instead.
+    """
+    kind = "an integer" if integer else "a finite number"
+    rule = kind
+    if low is not None:
+        rule += f" {'>' if low_open else '>='} {low}"
+    if high is not None:
+        rule += f"{' and' if low is not None else ''} <= {high}"
+    if isinstance(value, bool) or not isinstance(value, numbers.Real):
+        raise TypeError(message(name, owner, rule, value))
+    if integer:
+        if not isinstance(value, numbers.Integral):
+            if float(value).is_integer():
+                value = int(value)
+            else:
+                raise TypeError(message(name, owner, rule, value))
+        value = int(value)
+    else:
+        value = float(value)
+        if not math.isfinite(value):
+            raise ValueError(message(name, owner, rule, value))
+    if low is not None and (value <= low if low_open else value < low):
+        raise ValueError(message(name, owner, rule, value))
+    if high is not None and value > high:
+        raise ValueError(message(name, owner, rule, value))
+    return value
+
+
+def check_choice(value, name: str, owner: str, choices) -> str:
+    """Check that `value` is one of the strings in `choices`.
+
+    Examples
+    --------
+    >>> check_choice("sweep", "stop_rule", "run", ("sweep", "stall"))
+    'sweep'
+    >>> check_choice("fast", "stop_rule", "run", ("sweep", "stall"))
+    Traceback (most recent call last):
+    ...
+    ValueError: The 'stop_rule' parameter of run must be one of 'sweep', 'stall'. Got 'fast' instead.
+    """
+    rule = "one of " + ", ".join(repr(c) for c in choices)
+    if not isinstance(value, str):
+        raise TypeError(message(name, owner, rule, value))
+    if value not in choices:
+        raise ValueError(message(name, owner, rule, value))
+    return value
+
+
+def check_points(points, name: str, owner: str) -> np.ndarray:
+    """Check an ``(N, 2)`` array of finite ``(x, y)`` points and return it as float.
+
+    Examples
+    --------
+    >>> check_points([[1, 2], [3, 4]], "left_xy", "match").shape
+    (2, 2)
+    """
+    rule = "an (N, 2) array of finite (x, y) coordinates"
+    try:
+        arr = np.asarray(points, dtype=float)
+    except (TypeError, ValueError):
+        raise TypeError(message(name, owner, rule, points)) from None
+    if arr.size == 0:
+        return arr.reshape(0, 2)
+    if arr.ndim != 2 or arr.shape[1] != 2:
+        raise ValueError(message(name, owner, rule, f"an array of shape {arr.shape}"))
+    if not np.all(np.isfinite(arr)):
+        raise ValueError(message(name, owner, rule, "an array with NaN or infinite values"))
+    return arr
+
+
+def check_rng(rng, name: str = "rng", owner: str = "function") -> np.random.Generator:
+    """Return a numpy Generator from a Generator or an integer seed.
+
+    There is no global seeding anywhere in the package: randomness enters only
+    through this argument.
+
+    Examples
+    --------
+    >>> int(check_rng(0).integers(10)) == int(check_rng(0).integers(10))
+    True
+    """
+    if isinstance(rng, np.random.Generator):
+        return rng
+    if isinstance(rng, numbers.Integral) and not isinstance(rng, bool):
+        if rng < 0:
+            raise ValueError(message(name, owner, "a non-negative integer seed or a numpy Generator", rng))
+        return np.random.default_rng(int(rng))
+    raise TypeError(message(name, owner, "a non-negative integer seed or a numpy Generator", rng))

@@ -1,0 +1,206 @@
+"""The network against its theory: energy identities, descent, determinism, kernels."""
+
+import numpy as np
+import pytest
+
+from ismb_lab.hopfield import Network, energy, hopfield_form, iter_updates, run
+
+
+def random_network(seed, n_left=None, n_right=None, p_candidate=0.4, p_pair=0.5):
+    """A random energy (3-15) with random candidates, S in [-1, 1] and C in [-1, 1]."""
+    rng = np.random.default_rng(seed)
+    n_left = n_left or int(rng.integers(2, 9))
+    n_right = n_right or int(rng.integers(2, 9))
+    mask = rng.random((n_left, n_right)) < p_candidate
+    rows, cols = np.nonzero(mask)
+    n = len(rows)
+    a, b = np.triu_indices(n, k=1)
+    ok = (rows[a] != rows[b]) & (cols[a] != cols[b]) & (rng.random(len(a)) < p_pair)
+    a, b = a[ok], b[ok]
+    return Network(n_left, n_right, rows, cols, similarity=rng.uniform(-1, 1, n),
+                   pair_a=a, pair_b=b, pair_c=rng.uniform(-1, 1, len(a)),
+                   self_c=rng.uniform(0, 1, n))
+
+
+def thesis_energy(net, state):
+    """(3-15) evaluated over the full N_l x N_r grid with a dense 4-D C."""
+    y = net.to_matrix(state).astype(float)
+    C = np.zeros((net.n_left, net.n_right, net.n_left, net.n_right))
+    ra, ca = net.rows[net.pair_a], net.cols[net.pair_a]
+    rb, cb = net.rows[net.pair_b], net.cols[net.pair_b]
+    C[ra, ca, rb, cb] = net.pair_c
+    C[rb, cb, ra, ca] = net.pair_c
+    S = np.zeros((net.n_left, net.n_right))
+    S[net.rows, net.cols] = net.similarity
+    return (-np.einsum("ikjl,ik,jl->", C, y, y)
+            + np.sum((1 - y.sum(axis=1)) ** 2) + np.sum((1 - y.sum(axis=0)) ** 2)
+            - np.sum(S * y))
+
+
+NETS = [random_network(s) for s in range(60)]
+NETS = [net for net in NETS if net.n_neurons > 0]
+
+
+@pytest.mark.parametrize("seed", range(20))
+def test_energy_is_the_thesis_energy_and_the_hopfield_form(seed):
+    net = NETS[seed]
+    W, I = hopfield_form(net)
+    rng = np.random.default_rng(seed)
+    for _ in range(10):
+        y = (rng.random(net.n_neurons) < 0.5).astype(np.uint8)
+        e = energy(net, y)
+        assert e == pytest.approx(thesis_energy(net, y), abs=1e-9)
+        constant = net.n_left + net.n_right
+        assert e == pytest.approx(constant - 0.5 * y @ W @ y - I @ y, abs=1e-9)
+
+
+def test_exact_weights_have_the_derived_structure():
+    net = NETS[3]
+    W, I = hopfield_form(net)
+    assert np.array_equal(W, W.T)
+    assert np.all(np.diag(W) == 0)
+    same_row = net.rows[:, None] == net.rows[None, :]
+    same_col = net.cols[:, None] == net.cols[None, :]
+    off = ~np.eye(net.n_neurons, dtype=bool)
+    assert np.all(W[(same_row | same_col) & off] == -2)
+    assert np.allclose(W[net.pair_a, net.pair_b], 2 * net.pair_c)
+    assert np.allclose(I, 2 + net.similarity)
+
+
+@pytest.mark.parametrize("stop_rule", ["sweep", "stall"])
+@pytest.mark.parametrize("seed", range(12))
+def test_every_flip_lowers_energy_by_u_times_dy(seed, stop_rule):
+    net = NETS[seed]
+    y = net.initial_state().astype(np.uint8)
+    previous = energy(net, y)
+    flips = 0
+    for step in iter_updates(net, rng=seed, stop_rule=stop_rule):
+        y[step.neuron] = step.new
+        e = energy(net, y)
+        assert e - previous == pytest.approx(-step.u * (step.new - step.old), abs=1e-9)
+        assert e <= previous + 1e-9
+        assert step.energy == pytest.approx(e, abs=1e-9)
+        flips += step.changed
+        previous = e
+    assert flips > 0
+
+
+@pytest.mark.parametrize("seed", range(15))
+def test_sweep_rule_stops_at_an_exact_fixed_point(seed):
+    net = NETS[seed]
+    result = run(net, rng=seed)
+    assert result.stop_rule == "sweep" and result.converged
+    W, I = hopfield_form(net)
+    u = W @ result.state + I
+    assert np.all(result.state[u > 1e-9] == 1)
+    assert np.all(result.state[u < -1e-9] == 0)
+
+
+def test_stall_rule_counts_unchanged_attempts():
+    net = NETS[0]
+    steps = list(iter_updates(net, rng=0, stop_rule="stall", patience=7))
+    tail = steps[-7:]
+    assert steps[-1].stop == "stall"
+    assert not any(s.changed for s in tail)
+    assert steps[-8].changed
+    assert all(s.stop is None for s in steps[:-1])
+
+
+@pytest.mark.parametrize("rule", ["exact", "thesis"])
+@pytest.mark.parametrize("stop_rule", ["sweep", "stall"])
+@pytest.mark.parametrize("seed", range(25))
+def test_kernels_agree_bit_for_bit(seed, stop_rule, rule):
+    net = NETS[seed]
+    fast = run(net, rng=seed, stop_rule=stop_rule, rule=rule, max_sweeps=40)
+    slow = run(net, rng=seed, stop_rule=stop_rule, rule=rule, max_sweeps=40, kernel="textbook")
+    assert np.array_equal(fast.state, slow.state)
+    assert fast.energy == slow.energy
+    assert (fast.stop_rule, fast.attempts, fast.flips) == (slow.stop_rule, slow.attempts, slow.flips)
+
+
+def test_kernels_agree_on_large_networks():
+    for seed in range(3):
+        net = random_network(100 + seed, 60, 60, p_candidate=0.15, p_pair=0.3)
+        fast = run(net, rng=seed)
+        slow = run(net, rng=seed, kernel="textbook")
+        assert net.n_neurons > 400
+        assert np.array_equal(fast.state, slow.state) and fast.energy == slow.energy
+        assert fast.attempts == slow.attempts
+
+
+def test_ties_are_exact_in_fixed_point():
+    # u = 2 + S + 2C - 2 = 0 exactly when S = 0 and C = 0: the neuron must stay as it is,
+    # in both kernels, even after neighbours switch back and forth.
+    net = Network(2, 3, rows=[0, 0, 1], cols=[0, 1, 2], similarity=[0.0, -0.3, 0.1],
+                  pair_a=[0], pair_b=[2], pair_c=[0.1])
+    for seed in range(10):
+        fast = run(net, rng=seed)
+        slow = run(net, rng=seed, kernel="textbook")
+        assert np.array_equal(fast.state, slow.state)
+
+
+def test_seeded_runs_are_bit_identical_and_seeds_matter():
+    net = random_network(7, 40, 40, p_candidate=0.2, p_pair=0.4)
+    a = run(net, rng=5)
+    b = run(net, rng=np.random.default_rng(5))
+    assert np.array_equal(a.state, b.state) and a.energy == b.energy and a.attempts == b.attempts
+    attempts = {run(net, rng=s).attempts for s in range(8)}
+    assert len(attempts) > 1
+
+
+def test_literal_thesis_rule_raises_energy_and_fails_to_settle():
+    raised = not_settled = runs = 0
+    for seed, net in enumerate(NETS[:30]):
+        runs += 1
+        e = [s.energy for s in iter_updates(net, rng=seed, rule="thesis", max_sweeps=50)]
+        raised += any(b > a + 1e-9 for a, b in zip(e, e[1:]))
+        not_settled += not run(net, rng=seed, rule="thesis", max_sweeps=50).converged
+    assert raised >= runs // 2
+    assert not_settled >= runs // 2
+    for seed, net in enumerate(NETS[:30]):
+        assert run(net, rng=seed, rule="exact").converged
+
+
+def test_literal_rule_uses_halved_weights_and_a_self_weight():
+    net = NETS[2]
+    W, I = hopfield_form(net, rule="thesis")
+    We, _ = hopfield_form(net)
+    off = ~np.eye(net.n_neurons, dtype=bool)
+    assert np.allclose(W[off], We[off] / 2)
+    assert np.allclose(np.diag(W), net.self_c - 2)
+
+
+def test_empty_network_runs():
+    net = Network(3, 0, rows=[], cols=[], similarity=[], pair_a=[], pair_b=[], pair_c=[])
+    result = run(net)
+    assert result.state.shape == (0,) and result.energy == 3.0 and result.attempts == 0
+    assert list(iter_updates(net)) == []
+
+
+@pytest.mark.parametrize("kwargs, error, words", [
+    (dict(stop_rule="never"), ValueError, "'stop_rule'"),
+    (dict(rule="mine"), ValueError, "'rule'"),
+    (dict(kernel="cuda"), ValueError, "'kernel'"),
+    (dict(patience=0), ValueError, "'patience'"),
+    (dict(max_sweeps=1.5), TypeError, "'max_sweeps'"),
+    (dict(rng=-1), ValueError, "'rng'"),
+    (dict(rng="seed"), TypeError, "'rng'"),
+    (dict(state=[2, 0]), ValueError, "'state'"),
+])
+def test_run_rejects_bad_arguments(kwargs, error, words):
+    with pytest.raises(error, match=words):
+        run(NETS[0], **kwargs)
+
+
+@pytest.mark.parametrize("kwargs, words", [
+    (dict(cols=[0, 5]), "'cols'"),
+    (dict(rows=[1, 0]), "'rows'"),
+    (dict(similarity=[np.nan, 0]), "'similarity'"),
+    (dict(pair_a=[0], pair_b=[1], pair_c=[0.5]), "shared row"),
+    (dict(similarity=[0.0]), "'similarity'"),
+])
+def test_network_rejects_inconsistent_arrays(kwargs, words):
+    base = dict(rows=[0, 0], cols=[0, 1], similarity=[0.0, 0.0], pair_a=[], pair_b=[], pair_c=[])
+    base.update(kwargs)
+    with pytest.raises(ValueError, match=words):
+        Network(2, 2, **base)
