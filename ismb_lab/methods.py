@@ -1,0 +1,271 @@
+"""Methods I, II and III as energy recipes (thesis §3.3, §5.2).
+
+A method turns the ingredients of one image pair (a :class:`Problem`) and its
+parameters into a :class:`~ismb_lab.hopfield.Network`, and may post-process the
+network's final state.
+
+* **Method-II**: a separate similarity ``S = transfer(M, theta_s, lambda_s)`` and
+  ``X = dd + dD``.
+* **Method-III** (ISMB, the thesis' method): Method-II plus the vertical-disparity
+  term, ``X = dd + dD + dY``.
+* **Method-I** (Achour & Mahiddine 2002) is a *reconstruction*: their paper is not
+  at hand, and the thesis says only that the similarity ``M`` is folded into the
+  pairwise term, that there is no separate ``S``, that vertical disparity is used
+  only afterwards to remove multiple matches, and that it has two parameters
+  ``(theta_c, lambda_c)``.  Here ``X = dd + dD + (M_ik + M_jl) / 2``, ``S = 0``, and
+  the post-processing keeps, for every feature matched more than once, the match
+  with the smallest vertical disparity.
+"""
+
+from __future__ import annotations
+
+from dataclasses import asdict, dataclass, fields
+
+import numpy as np
+
+from ._validation import check_choice, check_number, message
+from .compatibility import NeuronPairs, left_neighbours, neuron_pairs
+from .hopfield import Network
+from .similarity import candidate_mask, transfer
+
+METHOD_NAMES = ("I", "II", "III")
+
+
+@dataclass(frozen=True)
+class Params:
+    """The four parameters of the energy: tolerances ``theta`` and steepnesses ``lambda``.
+
+    The defaults are the thesis' Method-III values ``[17.97, 24.02, 6.37, 2.2]``
+    (§5.2.2), found by its GA on its own images.  Method-I reads only
+    ``theta_c`` and ``lambda_c``.
+
+    Examples
+    --------
+    >>> Params()
+    Params(theta_c=17.97, theta_s=24.02, lambda_c=6.37, lambda_s=2.2)
+    >>> Params(lambda_c=-1)
+    Traceback (most recent call last):
+    ...
+    ValueError: The 'lambda_c' parameter of Params must be a finite number > 0. Got -1.0 instead.
+    """
+
+    theta_c: float = 17.97
+    theta_s: float = 24.02
+    lambda_c: float = 6.37
+    lambda_s: float = 2.2
+
+    def __post_init__(self):
+        for f in fields(self):
+            strict = f.name.startswith("lambda")
+            value = check_number(getattr(self, f.name), f.name, "Params", low=0, low_open=strict)
+            object.__setattr__(self, f.name, value)
+
+    def to_dict(self) -> dict:
+        return asdict(self)
+
+    @classmethod
+    def from_dict(cls, values, owner: str = "Params.from_dict") -> "Params":
+        """Build from a mapping; unknown keys are an error, missing keys take the defaults."""
+        if not isinstance(values, dict):
+            raise TypeError(message("params", owner, "a JSON object of parameter values", values))
+        unknown = sorted(set(values) - {f.name for f in fields(cls)})
+        if unknown:
+            raise ValueError(message("params", owner, "an object with keys among theta_c, theta_s, "
+                                     "lambda_c, lambda_s", f"unknown keys {unknown}"))
+        return cls(**values)
+
+
+#: The parameters the thesis' GA found (§5.2.1 for Method-I, §5.2.2 for II and III).
+#: Method-I's theta_s and lambda_s are unused placeholders.
+THESIS_PARAMS = {
+    "I": Params(theta_c=41.57, lambda_c=4.40),
+    "II": Params(theta_c=11.51, theta_s=26.24, lambda_c=8.89, lambda_s=1.16),
+    "III": Params(theta_c=17.97, theta_s=24.02, lambda_c=6.37, lambda_s=2.2),
+}
+
+
+@dataclass(frozen=True, eq=False)
+class Problem:
+    """The parameter-free ingredients of one image pair's energy.
+
+    Everything that does not depend on ``theta``/``lambda`` is computed once
+    here, so a GA can build thousands of networks cheaply.
+
+    Attributes
+    ----------
+    left_xy : (N_l, 2) ndarray
+    right_xy : (N_r, 2) ndarray
+        Feature points ``(x, y)``.
+    dissimilarity : (N_l, N_r) ndarray
+        ``M_ik`` (3-8).
+    rows, cols : (n,) int ndarray
+        Candidate neurons ``(i, k)``, sorted.
+    pairs : NeuronPairs
+        Interacting neuron pairs with their ``dd``, ``dD``, ``dY``.
+    """
+
+    left_xy: np.ndarray
+    right_xy: np.ndarray
+    dissimilarity: np.ndarray
+    rows: np.ndarray
+    cols: np.ndarray
+    pairs: NeuronPairs
+
+    @property
+    def n_neurons(self) -> int:
+        return len(self.rows)
+
+
+def build_problem(left_xy, right_xy, dissimilarity, *, shift: float = 20.0,
+                  window_height: float = 30.0, window_width: float = 40.0,
+                  radius: float = 20.0, neighbourhood: str = "box") -> Problem:
+    """Candidate neurons and their interacting pairs for one image pair.
+
+    Parameters
+    ----------
+    left_xy, right_xy : (N, 2) array_like
+        Feature points.
+    dissimilarity : (N_l, N_r) array_like
+        ``M_ik`` from :func:`ismb_lab.similarity.mean_abs_difference`.
+    shift, window_height, window_width : float
+        The candidate window (§3.3), see :func:`ismb_lab.similarity.candidate_mask`.
+    radius, neighbourhood
+        Which left features are neighbours, see :func:`ismb_lab.compatibility.left_neighbours`.
+
+    Returns
+    -------
+    problem : Problem
+
+    Examples
+    --------
+    >>> p = build_problem([[100, 50], [110, 50]], [[80, 51], [90, 51]], np.zeros((2, 2)))
+    >>> p.rows, p.cols, len(p.pairs)
+    (array([0, 0, 1, 1]), array([0, 1, 0, 1]), 2)
+    """
+    lxy = np.asarray(left_xy, dtype=float).reshape(-1, 2)
+    rxy = np.asarray(right_xy, dtype=float).reshape(-1, 2)
+    M = np.asarray(dissimilarity, dtype=float)
+    if M.shape != (len(lxy), len(rxy)):
+        raise ValueError(message("dissimilarity", "build_problem", f"of shape ({len(lxy)}, {len(rxy)})",
+                                 f"shape {M.shape}"))
+    mask = candidate_mask(lxy, rxy, shift=shift, height=window_height, width=window_width)
+    rows, cols = np.nonzero(mask)
+    neighbours = left_neighbours(lxy, radius=radius, shape=neighbourhood)
+    pairs = neuron_pairs(lxy, rxy, rows, cols, neighbours)
+    return Problem(lxy, rxy, M, rows.astype(np.int64), cols.astype(np.int64), pairs)
+
+
+class Method:
+    """An energy recipe: how ``S`` and ``X`` are formed, and any post-processing.
+
+    Use :func:`get_method` to obtain one by name.
+    """
+
+    name: str = ""
+    genes: tuple[str, ...] = ()
+    description: str = ""
+
+    def similarity(self, problem: Problem, params: Params) -> np.ndarray:
+        return transfer(problem.dissimilarity[problem.rows, problem.cols], params.theta_s, params.lambda_s)
+
+    def pair_measure(self, problem: Problem) -> np.ndarray:
+        """``X`` for every interacting pair, and ``X`` of a neuron with itself."""
+        raise NotImplementedError
+
+    def self_measure(self, problem: Problem) -> np.ndarray:
+        return np.zeros(problem.n_neurons)
+
+    def network(self, problem: Problem, params: Params) -> Network:
+        """The network whose energy (3-15) this method minimises."""
+        if not isinstance(params, Params):
+            raise TypeError(message("params", f"Method-{self.name}", "a Params instance", params))
+        X = self.pair_measure(problem)
+        c = transfer(X, params.theta_c, params.lambda_c)
+        self_c = transfer(self.self_measure(problem), params.theta_c, params.lambda_c)
+        return Network(len(problem.left_xy), len(problem.right_xy), problem.rows, problem.cols,
+                       similarity=self.similarity(problem, params), pair_a=problem.pairs.a,
+                       pair_b=problem.pairs.b, pair_c=c, self_c=self_c)
+
+    def postprocess(self, problem: Problem, state: np.ndarray) -> np.ndarray:
+        return state
+
+    def __repr__(self) -> str:
+        return f"Method-{self.name}"
+
+
+class MethodI(Method):
+    """Method-I, reconstructed from the thesis' description of Achour & Mahiddine (2002).
+
+    ``X = dd + dD + (M_ik + M_jl) / 2``: the similarity acts only through
+    neighbouring pairs; ``S = 0``; two parameters ``(theta_c, lambda_c)``.
+    Afterwards, a feature matched more than once keeps only its match with the
+    smallest absolute vertical disparity ``|y_k - y_i|`` (left features first,
+    then right features; ties go to the lower index).
+    """
+
+    name, genes = "I", ("theta_c", "lambda_c")
+    description = "X = dd + dD + mean(M); no S; vertical disparity only as post-processing"
+
+    def similarity(self, problem, params):
+        return np.zeros(problem.n_neurons)
+
+    def pair_measure(self, problem):
+        p = problem.pairs
+        m = problem.dissimilarity[problem.rows, problem.cols]
+        return p.dd + p.dD + 0.5 * (m[p.a] + m[p.b])
+
+    def self_measure(self, problem):
+        return problem.dissimilarity[problem.rows, problem.cols]
+
+    def postprocess(self, problem, state):
+        state = np.array(state, dtype=np.uint8)
+        dy = np.abs(problem.right_xy[problem.cols, 1] - problem.left_xy[problem.rows, 1])
+        for owner in (problem.rows, problem.cols):
+            on = np.flatnonzero(state)
+            order = np.lexsort((on, dy[on], owner[on]))  # by feature, then |dy|, then index
+            ranked = on[order]
+            first = np.ones(len(ranked), dtype=bool)
+            first[1:] = owner[ranked][1:] != owner[ranked][:-1]
+            state[ranked[~first]] = 0
+        return state
+
+
+class MethodII(Method):
+    """Method-II: separate similarity ``S``, ``X = dd + dD``."""
+
+    name, genes = "II", ("theta_c", "theta_s", "lambda_c", "lambda_s")
+    description = "S from M; X = dd + dD"
+
+    def pair_measure(self, problem):
+        return problem.pairs.dd + problem.pairs.dD
+
+
+class MethodIII(Method):
+    """Method-III (ISMB): separate similarity ``S``, ``X = dd + dD + dY``."""
+
+    name, genes = "III", ("theta_c", "theta_s", "lambda_c", "lambda_s")
+    description = "S from M; X = dd + dD + dY (vertical disparity)"
+
+    def pair_measure(self, problem):
+        return problem.pairs.dd + problem.pairs.dD + problem.pairs.dY
+
+
+_METHODS = {m.name: m for m in (MethodI(), MethodII(), MethodIII())}
+
+
+def get_method(name) -> Method:
+    """Look a method up by name: ``"I"``, ``"II"`` or ``"III"`` (a ``Method`` passes through).
+
+    Examples
+    --------
+    >>> get_method("III")
+    Method-III
+    >>> get_method("IV")
+    Traceback (most recent call last):
+    ...
+    ValueError: The 'method' parameter of get_method must be one of 'I', 'II', 'III'. Got 'IV' instead.
+    """
+    if isinstance(name, Method):
+        return name
+    check_choice(name, "method", "get_method", tuple(_METHODS))
+    return _METHODS[name]

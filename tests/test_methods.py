@@ -1,0 +1,122 @@
+"""Energy ingredients: similarity, candidates, compatibility and the three methods."""
+
+import itertools
+
+import numpy as np
+import pytest
+
+from ismb_lab.compatibility import left_neighbours
+from ismb_lab.methods import THESIS_PARAMS, Params, build_problem, get_method
+from ismb_lab.similarity import candidate_mask, mean_abs_difference, patches, transfer
+
+
+def test_transfer_matches_the_thesis_formula_and_its_limits():
+    x = np.linspace(-50, 80, 27)
+    for theta, lam in [(10.0, 0.3), (24.02, 2.2), (17.97, 6.37)]:
+        literal = 2 / (1 + np.exp(lam * (x - theta))) - 1
+        assert np.allclose(transfer(x, theta, lam), literal, atol=1e-12)
+    assert transfer(1e9, 1.0, 5.0) == -1.0 and transfer(-1e9, 1.0, 5.0) == 1.0
+
+
+def test_dissimilarity_is_zero_for_equal_windows_and_ignores_brightness_offset():
+    rng = np.random.default_rng(1)
+    img = rng.uniform(0, 200, (60, 60))
+    xy = [[20, 20], [40, 30]]
+    M = mean_abs_difference(img, img + 17, xy, xy, size=9)
+    assert np.allclose(np.diag(M), 0) and np.all(M[~np.eye(2, dtype=bool)] > 10)
+    w = patches(img, xy, 9)
+    assert np.allclose(w.mean(axis=(1, 2)), 0)
+    hand = np.abs(w[0] - w[1]).mean()
+    assert M[0, 1] == pytest.approx(hand)
+
+
+def test_candidate_window_is_30_by_40_centred_shift_pixels_left():
+    left = [[120.0, 100.0]]
+    right = [[100 + dx, 100 + dy] for dx, dy in [(0, 0), (20, 15), (-20, -15), (20.5, 0), (0, 15.5)]]
+    assert candidate_mask(left, right).tolist() == [[True, True, True, False, False]]
+    assert candidate_mask(left, right, shift=0).tolist() == [[True, True, False, True, False]]
+
+
+def brute_force_pairs(lxy, rxy, mask, radius):
+    """Every ordered neuron pair of the 4-D definition, with (3-12)'s three terms."""
+    out = {}
+    for (i, k), (j, l) in itertools.product(zip(*np.nonzero(mask)), repeat=2):
+        if i == j or k == l or not np.all(np.abs(lxy[i] - lxy[j]) < radius):
+            continue
+        d = lambda a, b: np.hypot(*(lxy[a] - rxy[b]))
+        dd = abs(d(i, k) - d(j, l))
+        dD = abs(np.hypot(*(lxy[i] - lxy[j])) - np.hypot(*(rxy[k] - rxy[l])))
+        dY = abs((rxy[k, 1] - lxy[i, 1]) - (rxy[l, 1] - lxy[j, 1]))
+        out[(i, k, j, l)] = (dd, dD, dY)
+    return out
+
+
+@pytest.mark.parametrize("seed", range(5))
+def test_sparse_pairs_equal_the_dense_definition_and_are_symmetric(seed):
+    rng = np.random.default_rng(seed)
+    lxy = rng.integers(80, 160, (14, 2)).astype(float)
+    rxy = lxy[rng.permutation(14)[:12]] + [-20, 0] + rng.integers(-3, 4, (12, 2))
+    problem = build_problem(lxy, rxy, np.zeros((14, 12)))
+    dense = brute_force_pairs(lxy, rxy, candidate_mask(lxy, rxy), 20.0)
+    p = problem.pairs
+    sparse = {}
+    for a, b, dd, dD, dY in zip(p.a, p.b, p.dd, p.dD, p.dY):
+        i, k, j, l = problem.rows[a], problem.cols[a], problem.rows[b], problem.cols[b]
+        sparse[(i, k, j, l)] = sparse[(j, l, i, k)] = (dd, dD, dY)
+    assert len(dense) > 20
+    assert set(sparse) == set(dense)
+    for key, value in dense.items():
+        assert np.allclose(sparse[key], value) and np.allclose(dense[key[2:] + key[:2]], value)
+
+
+def test_neighbourhood_rules():
+    xy = [[0, 0], [19, 19], [0, 19.9], [20, 0]]
+    assert left_neighbours(xy).tolist() == [[0, 1], [0, 2], [1, 2], [1, 3]]
+    assert left_neighbours(xy, shape="disc").tolist() == [[0, 2], [1, 2], [1, 3]]
+
+
+def test_methods_build_the_documented_energies():
+    rng = np.random.default_rng(3)
+    lxy = rng.integers(80, 160, (12, 2)).astype(float)
+    rxy = lxy + [-20, 1] + rng.integers(-2, 3, (12, 2))
+    M = rng.uniform(0, 40, (12, 12))
+    problem = build_problem(lxy, rxy, M)
+    params = Params(theta_c=9.0, theta_s=20.0, lambda_c=0.7, lambda_s=0.3)
+    p = problem.pairs
+    m = M[problem.rows, problem.cols]
+    net3 = get_method("III").network(problem, params)
+    net2 = get_method("II").network(problem, params)
+    net1 = get_method("I").network(problem, params)
+    assert np.allclose(net3.pair_c, transfer(p.dd + p.dD + p.dY, 9.0, 0.7))
+    assert np.allclose(net2.pair_c, transfer(p.dd + p.dD, 9.0, 0.7))
+    assert np.allclose(net1.pair_c, transfer(p.dd + p.dD + (m[p.a] + m[p.b]) / 2, 9.0, 0.7))
+    assert np.allclose(net3.similarity, transfer(m, 20.0, 0.3))
+    assert np.all(net1.similarity == 0)
+    assert np.array_equal(net1.pair_c, get_method("I").network(
+        problem, Params(theta_c=9.0, lambda_c=0.7, theta_s=1.0, lambda_s=5.0)).pair_c)
+
+
+def test_method_one_postprocessing_keeps_the_smallest_vertical_disparity():
+    lxy = np.array([[100.0, 50.0], [115.0, 50.0]])
+    rxy = np.array([[80.0, 58.0], [85.0, 51.0], [110.0, 50.0]])
+    problem = build_problem(lxy, rxy, np.zeros((2, 3)))
+    assert problem.rows.tolist() == [0, 0, 1, 1, 1] and problem.cols.tolist() == [0, 1, 0, 1, 2]
+    state = get_method("I").postprocess(problem, np.ones(5, np.uint8))
+    # left 0 keeps right 1 (|dy| = 1); left 1 keeps right 2 (|dy| = 0)
+    assert state.tolist() == [0, 1, 0, 0, 1]
+    state = get_method("I").postprocess(problem, np.array([1, 0, 1, 0, 0], np.uint8))
+    assert state.tolist() == [1, 0, 0, 0, 0]  # right 0 is shared: the tie goes to the lower index
+
+
+def test_params_validation_and_thesis_values():
+    assert THESIS_PARAMS["III"] == Params()
+    assert THESIS_PARAMS["II"].to_dict() == dict(theta_c=11.51, theta_s=26.24, lambda_c=8.89, lambda_s=1.16)
+    for bad, error in [(dict(theta_c=np.nan), ValueError), (dict(theta_s=-1), ValueError),
+                       (dict(lambda_s=0), ValueError), (dict(lambda_c=np.inf), ValueError),
+                       (dict(theta_c="12"), TypeError)]:
+        with pytest.raises(error, match=f"'{next(iter(bad))}' parameter of Params"):
+            Params(**bad)
+    with pytest.raises(ValueError, match="unknown keys"):
+        Params.from_dict({"theta_c": 1.0, "theta_x": 2.0})
+    with pytest.raises(ValueError, match="'method'.*Got 'IV'"):
+        get_method("IV")
