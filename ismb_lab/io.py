@@ -1,0 +1,238 @@
+"""Read images as grey float arrays and fingerprint them.
+
+Every image in the package is a C-contiguous ``float64`` array of grey values in
+``[0, 255]``, indexed ``image[y, x]`` (see :mod:`ismb_lab.coords`).
+"""
+
+from __future__ import annotations
+
+import hashlib
+import os
+from dataclasses import dataclass
+
+import cv2
+import numpy as np
+
+from ._validation import check_number, message
+
+_ARRAY_TAG = b"ismb_lab-array-v1\n"
+
+
+def _is_path(source) -> bool:
+    return isinstance(source, (str, os.PathLike))
+
+
+def _path_error(name: str, owner: str, why: str, path: str) -> ValueError:
+    # The shared message() shortens long values, but a path is only useful whole.
+    return ValueError(f"The {name!r} parameter of {owner} must be a readable image file "
+                      f"({why}). Got {path!r} instead.")
+
+
+def _read(path: str, name: str, owner: str) -> np.ndarray:
+    if not os.path.exists(path):
+        raise _path_error(name, owner, "the file does not exist", path)
+    if not os.path.isfile(path):
+        raise _path_error(name, owner, "it is not a file", path)
+    image = cv2.imread(path, cv2.IMREAD_UNCHANGED)
+    if image is None:
+        raise _path_error(name, owner, "OpenCV cannot decode it as an image", path)
+    return image
+
+
+def _to_grey(image, name: str, owner: str, *, bgr: bool) -> np.ndarray:
+    rule = ("a 2-D grey or 3-D (H, W, 3 or 4) colour image of uint8, uint16 or finite "
+            "float values in [0, 255]")
+    image = np.asarray(image)
+    if image.dtype == np.uint8:
+        grey = image.astype(np.float64)
+    elif image.dtype == np.uint16:
+        grey = image * (255.0 / 65535.0)
+    elif np.issubdtype(image.dtype, np.floating):
+        grey = image.astype(np.float64)
+        if not np.all(np.isfinite(grey)):
+            raise ValueError(message(name, owner, rule, "an array with NaN or infinite values"))
+        if grey.size and (grey.min() < 0 or grey.max() > 255):
+            raise ValueError(message(name, owner, rule,
+                                     f"values in [{grey.min():g}, {grey.max():g}]"))
+    else:
+        raise TypeError(message(name, owner, rule, f"an array of dtype {image.dtype}"))
+    colour = grey.ndim == 3 and grey.shape[2] in (3, 4)
+    if not (grey.ndim == 2 or colour) or grey.size == 0:
+        raise ValueError(message(name, owner, rule, f"an array of shape {image.shape}"))
+    if colour:
+        # cvtColor has no float64 path; float32 keeps the fractions that uint8 would round.
+        code = cv2.COLOR_BGR2GRAY if bgr else cv2.COLOR_RGB2GRAY
+        grey = cv2.cvtColor(np.ascontiguousarray(grey[:, :, :3], dtype=np.float32), code)
+        grey = np.clip(grey.astype(np.float64), 0.0, 255.0)
+    return np.ascontiguousarray(grey)
+
+
+def _load(source, name: str, owner: str) -> np.ndarray:
+    if _is_path(source):
+        return _to_grey(_read(os.fspath(source), name, owner), name, owner, bgr=True)
+    return _to_grey(source, name, owner, bgr=False)
+
+
+def load_image(source, name: str = "image") -> np.ndarray:
+    """Load an image file or array as grey ``float64`` values in ``[0, 255]``.
+
+    Parameters
+    ----------
+    source : str, os.PathLike or array_like
+        A file OpenCV can read (read unchanged: 8 or 16 bit, grey, BGR or BGRA),
+        or an array: ``(H, W)`` grey, or ``(H, W, 3)`` RGB / ``(H, W, 4)`` RGBA.
+        ``uint8`` values are used as they are, ``uint16`` values are scaled by
+        ``255 / 65535``, float values must already be finite and in ``[0, 255]``.
+    name : str
+        The name used for `source` in error messages.
+
+    Returns
+    -------
+    image : (H, W) ndarray of float64
+        C-contiguous grey values in ``[0, 255]``.  Colour is converted with
+        ``cv2.cvtColor`` (ITU-R BT.601 luma ``0.299 R + 0.587 G + 0.114 B``), in
+        float32 so that no rounding to integers happens; alpha is dropped.
+
+    Raises
+    ------
+    ValueError
+        A missing or undecodable file, a bad shape, or float values that are not
+        finite or lie outside ``[0, 255]``.
+    TypeError
+        Any dtype other than ``uint8``, ``uint16`` or floating point (``bool`` included).
+
+    Examples
+    --------
+    >>> load_image(np.array([[0, 65535]], dtype=np.uint16))
+    array([[  0., 255.]])
+    >>> load_image(np.full((1, 1, 3), [255, 0, 0], dtype=np.uint8)).round(3)   # pure red
+    array([[76.245]])
+    """
+    return _load(source, name, "load_image")
+
+
+def image_sha256(source) -> str:
+    """SHA-256 fingerprint of an image file or array.
+
+    Parameters
+    ----------
+    source : str, os.PathLike or array_like
+        For a path: the hex digest of the file's bytes, so it equals
+        ``sha256sum FILE``.  For an array (which never came from a file): the
+        digest of ``b"ismb_lab-array-v1\\n"``, then ``f"{dtype.str} {shape}\\n"``
+        encoded as ASCII (e.g. ``"|u1 (240, 320)\\n"``), then the array's bytes in
+        C order, exactly as given (no conversion to grey or float).
+
+    Returns
+    -------
+    digest : str
+        64 hexadecimal characters.
+
+    Examples
+    --------
+    >>> a = np.zeros((2, 3), dtype=np.uint8)
+    >>> image_sha256(a) == image_sha256(a.copy())
+    True
+    >>> image_sha256(a) == image_sha256(a.astype(np.float64))
+    False
+    """
+    digest = hashlib.sha256()
+    if _is_path(source):
+        path = os.fspath(source)
+        try:
+            with open(path, "rb") as handle:
+                for block in iter(lambda: handle.read(1 << 20), b""):
+                    digest.update(block)
+        except OSError as exc:
+            raise _path_error("source", "image_sha256", exc.strerror or str(exc), path) from None
+        return digest.hexdigest()
+    array = np.asarray(source)
+    if array.dtype.hasobject:
+        raise TypeError(message("source", "image_sha256", "a path or a numeric array",
+                                f"an array of dtype {array.dtype}"))
+    digest.update(_ARRAY_TAG)
+    digest.update(f"{array.dtype.str} {array.shape}\n".encode("ascii"))
+    digest.update(array.tobytes(order="C"))
+    return digest.hexdigest()
+
+
+@dataclass(frozen=True, eq=False)
+class StereoPair:
+    """A left and a right grey image of equal size, with their fingerprints.
+
+    Attributes
+    ----------
+    left, right : (H, W) ndarray of float64
+        Grey values in ``[0, 255]``.
+    left_sha256, right_sha256 : str
+        :func:`image_sha256` of each source (of the file, or of the array as given).
+    left_path, right_path : str or None
+        The file each image was read from, None for arrays.
+    """
+
+    left: np.ndarray
+    right: np.ndarray
+    left_sha256: str
+    right_sha256: str
+    left_path: str | None = None
+    right_path: str | None = None
+
+    @property
+    def shape(self) -> tuple[int, int]:
+        """``(height, width)`` of both images."""
+        return self.left.shape
+
+
+def load_pair(left, right, *, min_shape=(1, 1)) -> StereoPair:
+    """Load a stereo pair with :func:`load_image` and check the two sizes.
+
+    Parameters
+    ----------
+    left, right : str, os.PathLike or array_like
+        The images; see :func:`load_image`.
+    min_shape : (int, int)
+        Smallest allowed ``(height, width)``, e.g. what the matching windows need.
+
+    Returns
+    -------
+    pair : StereoPair
+
+    Raises
+    ------
+    ValueError
+        An unreadable image (named 'left' or 'right'), a left image smaller than
+        `min_shape` (named 'left'), or a right image of another size (named 'right').
+
+    Examples
+    --------
+    >>> pair = load_pair(np.zeros((4, 6)), np.ones((4, 6)))
+    >>> pair.shape, pair.left_path
+    ((4, 6), None)
+    >>> load_pair(np.zeros((4, 6)), np.zeros((4, 5)))
+    Traceback (most recent call last):
+    ...
+    ValueError: The 'right' parameter of load_pair must be an image of the same size as 'left',
+    4x6 pixels (height x width). Got 'an image of 4x5 pixels' instead.
+    """
+    owner = "load_pair"
+    rule = "a (height, width) pair of integers >= 1"
+    if isinstance(min_shape, (str, bytes)) or not hasattr(min_shape, "__len__"):
+        raise TypeError(message("min_shape", owner, rule, min_shape))
+    if len(min_shape) != 2:
+        raise ValueError(message("min_shape", owner, rule, min_shape))
+    min_h, min_w = (check_number(v, "min_shape", owner, low=1, integer=True) for v in min_shape)
+
+    images = {side: _load(src, side, owner) for side, src in (("left", left), ("right", right))}
+    (h, w), (rh, rw) = images["left"].shape, images["right"].shape
+    if h < min_h or w < min_w:
+        raise ValueError(message(
+            "left", owner, f"an image of at least {min_h}x{min_w} pixels (height x width) "
+            "to hold the matching windows", f"an image of {h}x{w} pixels"))
+    if (rh, rw) != (h, w):
+        raise ValueError(message(
+            "right", owner, f"an image of the same size as 'left', {h}x{w} pixels "
+            "(height x width)", f"an image of {rh}x{rw} pixels"))
+    path = {side: os.fspath(src) if _is_path(src) else None
+            for side, src in (("left", left), ("right", right))}
+    return StereoPair(images["left"], images["right"], image_sha256(left), image_sha256(right),
+                      path["left"], path["right"])

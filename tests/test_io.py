@@ -1,0 +1,150 @@
+"""Loading images and pairs, and their fingerprints."""
+
+import hashlib
+
+import cv2
+import numpy as np
+import pytest
+
+from ismb_lab.io import StereoPair, image_sha256, load_image, load_pair
+
+
+def bt601(rgb):
+    rgb = np.asarray(rgb, dtype=float)
+    return 0.299 * rgb[..., 0] + 0.587 * rgb[..., 1] + 0.114 * rgb[..., 2]
+
+
+@pytest.fixture
+def rgb():
+    return np.random.default_rng(0).integers(0, 256, (7, 9, 3), dtype=np.uint8)
+
+
+def says(info, *fragments):
+    """The exception message names every fragment (parameter, rule, received value)."""
+    text = str(info.value)
+    missing = [f for f in fragments if f not in text]
+    assert not missing, f"{missing} not in {text!r}"
+
+
+def write(path, array):
+    assert cv2.imwrite(str(path), array)
+    return path
+
+
+def test_grey_png_loads_exactly_as_float64(tmp_path):
+    grey = np.arange(7 * 9, dtype=np.uint8).reshape(7, 9) * 4
+    img = load_image(write(tmp_path / "g.png", grey))
+    assert img.dtype == np.float64 and img.flags.c_contiguous
+    assert np.array_equal(img, grey.astype(float))
+
+
+def test_colour_file_is_bgr_and_colour_array_is_rgb(tmp_path, rgb):
+    from_file = load_image(write(tmp_path / "c.png", rgb[..., ::-1]))   # imwrite takes BGR
+    from_array = load_image(rgb)
+    assert from_file.shape == (7, 9)
+    assert np.allclose(from_file, bt601(rgb), atol=1e-3)
+    assert np.allclose(from_array, from_file, atol=1e-9)
+    assert 0 <= from_file.min() and from_file.max() <= 255
+
+
+def test_alpha_is_dropped(tmp_path, rgb):
+    alpha = np.random.default_rng(1).integers(0, 256, rgb.shape[:2], dtype=np.uint8)
+    bgra = np.dstack([rgb[..., ::-1], alpha])
+    assert np.allclose(load_image(write(tmp_path / "a.png", bgra)), bt601(rgb), atol=1e-3)
+    assert np.allclose(load_image(np.dstack([rgb, alpha])), bt601(rgb), atol=1e-3)
+
+
+def test_16_bit_file_is_scaled_to_0_255(tmp_path):
+    deep = np.array([[0, 257, 65535], [1000, 30000, 65534]], dtype=np.uint16)
+    img = load_image(write(tmp_path / "d.png", deep))
+    assert img.dtype == np.float64
+    assert np.allclose(img, deep * (255 / 65535), rtol=0, atol=1e-12)
+    assert img.max() == 255.0 and img[0, 1] == pytest.approx(1.0)
+
+
+def test_float_array_is_copied_not_aliased():
+    src = np.full((3, 4), 7.5)
+    img = load_image(src)
+    img[0, 0] = 0
+    assert src[0, 0] == 7.5 and np.array_equal(load_image(src.astype(np.float32)), src)
+
+
+def test_file_hash_is_sha256_of_its_bytes(tmp_path, rgb):
+    path = write(tmp_path / "c.png", rgb)
+    expected = hashlib.sha256(path.read_bytes()).hexdigest()
+    assert image_sha256(path) == image_sha256(str(path)) == expected
+    pair = load_pair(path, rgb)
+    assert pair.left_sha256 == expected and pair.left_path == str(path)
+    assert pair.right_sha256 == image_sha256(rgb) and pair.right_path is None
+
+
+def test_array_hash_follows_its_documented_definition(rgb):
+    head = b"ismb_lab-array-v1\n" + f"{rgb.dtype.str} {rgb.shape}\n".encode()
+    assert image_sha256(rgb) == hashlib.sha256(head + rgb.tobytes()).hexdigest()
+    view = rgb[:, ::2]                              # not contiguous: hashed in C order
+    assert image_sha256(view) == image_sha256(np.ascontiguousarray(view))
+
+
+def test_array_hash_is_stable_and_tells_dtype_and_shape_apart():
+    a = np.zeros((2, 6), dtype=np.uint8)
+    digests = {image_sha256(x) for x in (a, a.reshape(3, 4), a.reshape(12), a.view(np.int8),
+                                         a.astype(np.uint16), a.astype(float))}
+    assert len(digests) == 6
+    assert image_sha256(a) == image_sha256(np.zeros((2, 6), dtype=np.uint8))
+    b = a.copy()
+    b[1, 5] = 1
+    assert image_sha256(b) != image_sha256(a)
+
+
+def test_pair_holds_equal_size_float_images():
+    pair = load_pair(np.zeros((40, 50), np.uint8), np.ones((40, 50)), min_shape=(31, 41))
+    assert isinstance(pair, StereoPair) and pair.shape == (40, 50)
+    assert pair.left.dtype == pair.right.dtype == np.float64
+
+
+def test_missing_file_names_the_parameter_and_the_path(tmp_path):
+    path = tmp_path / "nowhere" / "y.png"
+    with pytest.raises(ValueError) as info:
+        load_pair(path, np.zeros((3, 3)))
+    says(info, "'left'", "load_pair", repr(str(path)), "does not exist")
+    with pytest.raises(ValueError) as info:
+        load_image(path)
+    says(info, "'image'", "load_image", str(path))
+    with pytest.raises(ValueError) as info:
+        image_sha256(path)
+    says(info, "image_sha256", str(path))
+
+
+def test_text_file_named_png_is_not_an_image(tmp_path):
+    path = tmp_path / "fake.png"
+    path.write_text("not a picture")
+    with pytest.raises(ValueError) as info:
+        load_pair(np.zeros((3, 3)), path)
+    says(info, "'right'", str(path), "cannot decode")
+
+
+def test_sizes_must_match_and_reach_the_minimum():
+    with pytest.raises(ValueError) as info:
+        load_pair(np.zeros((40, 50)), np.zeros((40, 51)))
+    says(info, "'right'", "40x50", "40x51")
+    with pytest.raises(ValueError) as info:
+        load_pair(np.zeros((30, 50)), np.zeros((30, 50)), min_shape=(31, 41))
+    says(info, "'left'", "at least 31x41", "30x50", "matching windows")
+    with pytest.raises(ValueError) as info:
+        load_pair(np.zeros((3, 3)), np.zeros((3, 3)), min_shape=(0, 3))
+    says(info, "'min_shape'", "0")
+
+
+@pytest.mark.parametrize("array, exc, fragment", [
+    (np.array([[1.0, np.nan]]), ValueError, "NaN"),
+    (np.array([[-1.0, 5.0]]), ValueError, "-1"),
+    (np.array([[255.5]]), ValueError, "255.5"),
+    (np.zeros((2, 2), dtype=bool), TypeError, "bool"),
+    (np.zeros((2, 2), dtype=np.int32), TypeError, "int32"),
+    (np.zeros((2, 2, 2)), ValueError, "(2, 2, 2)"),
+    (np.zeros((0, 4)), ValueError, "(0, 4)"),
+])
+def test_bad_arrays_are_refused_with_the_received_value(array, exc, fragment):
+    with pytest.raises(exc) as info:
+        load_pair(array, np.zeros((2, 2)))
+    says(info, "'left'", "load_pair", fragment)
