@@ -15,6 +15,18 @@ import numbers
 import numpy as np
 
 
+class ParameterError(ValueError):
+    """A parameter value breaks its rule.  The command line reports it in one line."""
+
+    __module__ = "ismb_lab"
+
+
+class ParameterTypeError(TypeError):
+    """A parameter has the wrong type.  The command line reports it in one line."""
+
+    __module__ = "ismb_lab"
+
+
 def message(name: str, owner: str, rule: str, value) -> str:
     """Return the package's one error message format."""
     shown = value if isinstance(value, str) and len(value) > 60 else repr(value)
@@ -50,7 +62,7 @@ def check_number(value, name: str, owner: str, *, low=None, high=None,
     >>> check_number(float("nan"), "theta_c", "Params")
     Traceback (most recent call last):
     ...
-    ValueError: The 'theta_c' parameter of Params must be a finite number. Got nan instead.
+    ismb_lab.ParameterError: The 'theta_c' parameter of Params must be a finite number. Got nan instead.
     """
     kind = "an integer" if integer else "a finite number"
     rule = kind
@@ -59,22 +71,22 @@ def check_number(value, name: str, owner: str, *, low=None, high=None,
     if high is not None:
         rule += f"{' and' if low is not None else ''} <= {high}"
     if isinstance(value, bool) or not isinstance(value, numbers.Real):
-        raise TypeError(message(name, owner, rule, value))
+        raise ParameterTypeError(message(name, owner, rule, value))
     if integer:
         if not isinstance(value, numbers.Integral):
             if float(value).is_integer():
                 value = int(value)
             else:
-                raise TypeError(message(name, owner, rule, value))
+                raise ParameterTypeError(message(name, owner, rule, value))
         value = int(value)
     else:
         value = float(value)
         if not math.isfinite(value):
-            raise ValueError(message(name, owner, rule, value))
+            raise ParameterError(message(name, owner, rule, value))
     if low is not None and (value <= low if low_open else value < low):
-        raise ValueError(message(name, owner, rule, value))
+        raise ParameterError(message(name, owner, rule, value))
     if high is not None and value > high:
-        raise ValueError(message(name, owner, rule, value))
+        raise ParameterError(message(name, owner, rule, value))
     return value
 
 
@@ -88,13 +100,13 @@ def check_choice(value, name: str, owner: str, choices) -> str:
     >>> check_choice("fast", "stop_rule", "run", ("sweep", "stall"))
     Traceback (most recent call last):
     ...
-    ValueError: The 'stop_rule' parameter of run must be one of 'sweep', 'stall'. Got 'fast' instead.
+    ismb_lab.ParameterError: The 'stop_rule' parameter of run must be one of 'sweep', 'stall'. Got 'fast' instead.
     """
     rule = "one of " + ", ".join(repr(c) for c in choices)
     if not isinstance(value, str):
-        raise TypeError(message(name, owner, rule, value))
+        raise ParameterTypeError(message(name, owner, rule, value))
     if value not in choices:
-        raise ValueError(message(name, owner, rule, value))
+        raise ParameterError(message(name, owner, rule, value))
     return value
 
 
@@ -110,13 +122,13 @@ def check_points(points, name: str, owner: str) -> np.ndarray:
     try:
         arr = np.asarray(points, dtype=float)
     except (TypeError, ValueError):
-        raise TypeError(message(name, owner, rule, points)) from None
+        raise ParameterTypeError(message(name, owner, rule, points)) from None
     if arr.size == 0:
         return arr.reshape(0, 2)
     if arr.ndim != 2 or arr.shape[1] != 2:
-        raise ValueError(message(name, owner, rule, f"an array of shape {arr.shape}"))
+        raise ParameterError(message(name, owner, rule, f"an array of shape {arr.shape}"))
     if not np.all(np.isfinite(arr)):
-        raise ValueError(message(name, owner, rule, "an array with NaN or infinite values"))
+        raise ParameterError(message(name, owner, rule, "an array with NaN or infinite values"))
     return arr
 
 
@@ -135,6 +147,6 @@ def check_rng(rng, name: str = "rng", owner: str = "function") -> np.random.Gene
         return rng
     if isinstance(rng, numbers.Integral) and not isinstance(rng, bool):
         if rng < 0:
-            raise ValueError(message(name, owner, "a non-negative integer seed or a numpy Generator", rng))
+            raise ParameterError(message(name, owner, "a non-negative integer seed or a numpy Generator", rng))
         return np.random.default_rng(int(rng))
-    raise TypeError(message(name, owner, "a non-negative integer seed or a numpy Generator", rng))
+    raise ParameterTypeError(message(name, owner, "a non-negative integer seed or a numpy Generator", rng))

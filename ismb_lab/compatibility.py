@@ -18,7 +18,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ._validation import check_choice, check_number, check_points
+from ._validation import ParameterError, check_choice, check_number, check_points
 from .coords import euclidean_disparity
 
 
@@ -119,7 +119,7 @@ def neuron_pairs(left_xy, right_xy, rows, cols, neighbours) -> NeuronPairs:
     cols = np.asarray(cols, dtype=np.int64)
     nb = np.asarray(neighbours, dtype=np.int64).reshape(-1, 2)
     if np.any(np.diff(rows) < 0):
-        raise ValueError("The 'rows' parameter of neuron_pairs must be sorted ascending. "
+        raise ParameterError("The 'rows' parameter of neuron_pairs must be sorted ascending. "
                          f"Got {rows.tolist()[:10]} instead.")
     counts = np.bincount(rows, minlength=len(lxy))
     starts = np.concatenate([[0], np.cumsum(counts)[:-1]])

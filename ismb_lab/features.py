@@ -16,7 +16,7 @@ from dataclasses import dataclass
 import numpy as np
 from scipy import ndimage as ndi
 
-from ._validation import check_number, message
+from ._validation import ParameterError, ParameterTypeError, check_number, message
 
 
 def _check_image(image, owner: str) -> np.ndarray:
@@ -24,19 +24,19 @@ def _check_image(image, owner: str) -> np.ndarray:
     image = np.asarray(image)
     if not (np.issubdtype(image.dtype, np.floating)
             or np.issubdtype(image.dtype, np.unsignedinteger)):
-        raise TypeError(message("image", owner, rule, f"an array of dtype {image.dtype}"))
+        raise ParameterTypeError(message("image", owner, rule, f"an array of dtype {image.dtype}"))
     if image.ndim != 2 or image.size == 0:
-        raise ValueError(message("image", owner, rule, f"an array of shape {image.shape}"))
+        raise ParameterError(message("image", owner, rule, f"an array of shape {image.shape}"))
     image = image.astype(np.float64)
     if not np.all(np.isfinite(image)):
-        raise ValueError(message("image", owner, rule, "an array with NaN or infinite values"))
+        raise ParameterError(message("image", owner, rule, "an array with NaN or infinite values"))
     return image
 
 
 def _check_k(k, owner: str) -> float:
     k = check_number(k, "k", owner, low=0, low_open=True, high=0.25)
     if k == 0.25:   # then R = -(l1 - l2)^2 / 4 <= 0 everywhere: no corner can exist
-        raise ValueError(message("k", owner, "a finite number > 0 and < 0.25", k))
+        raise ParameterError(message("k", owner, "a finite number > 0 and < 0.25", k))
     return k
 
 
@@ -188,7 +188,7 @@ def resolve_roi(roi, shape) -> tuple[int, int, int, int]:
     >>> resolve_roi((300, 0, 30, 10), (240, 320))
     Traceback (most recent call last):
     ...
-    ValueError: The 'roi' parameter of resolve_roi must be ... inside the 320x240 (width x height)
+    ismb_lab.ParameterError: The 'roi' parameter of resolve_roi must be ... inside the 320x240 (width x height)
     image. Got (300, 0, 30, 10) instead.
     """
     height, width = (int(n) for n in shape)
@@ -202,18 +202,18 @@ def resolve_roi(roi, shape) -> tuple[int, int, int, int]:
             return 0, 0, width, height
         parts = [p.strip() for p in name.split(",")]
         if len(parts) != 4 or not all(p.lstrip("+-").isdigit() for p in parts):
-            raise ValueError(message("roi", "resolve_roi", rule, roi))
+            raise ParameterError(message("roi", "resolve_roi", rule, roi))
         box = tuple(int(p) for p in parts)
     elif isinstance(roi, (tuple, list, np.ndarray)):
         if len(roi) != 4 or not all(isinstance(v, numbers.Integral) and not isinstance(v, bool)
                                     for v in roi):
-            raise ValueError(message("roi", "resolve_roi", rule, roi))
+            raise ParameterError(message("roi", "resolve_roi", rule, roi))
         box = tuple(int(v) for v in roi)
     else:
-        raise TypeError(message("roi", "resolve_roi", rule, roi))
+        raise ParameterTypeError(message("roi", "resolve_roi", rule, roi))
     x, y, w, h = box
     if w < 1 or h < 1 or x < 0 or y < 0 or x + w > width or y + h > height:
-        raise ValueError(message("roi", "resolve_roi", rule, roi))
+        raise ParameterError(message("roi", "resolve_roi", rule, roi))
     return box
 
 
@@ -364,7 +364,7 @@ def detect_corners(image, *, roi="center", n_min: int = 20, n_max: int = 30,
     min_distance = check_number(min_distance, "min_distance", owner, low=1, integer=True)
     relax = check_number(relax, "relax", owner, low=0, low_open=True, high=1)
     if relax == 1:
-        raise ValueError(message("relax", owner, "a finite number > 0 and < 1", relax))
+        raise ParameterError(message("relax", owner, "a finite number > 0 and < 1", relax))
     box = resolve_roi(roi, image.shape)
 
     R = harris_response(image, sigma, k)

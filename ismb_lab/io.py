@@ -13,7 +13,7 @@ from dataclasses import dataclass
 import cv2
 import numpy as np
 
-from ._validation import check_number, message
+from ._validation import ParameterError, ParameterTypeError, check_number, message
 
 _ARRAY_TAG = b"ismb_lab-array-v1\n"
 
@@ -22,9 +22,9 @@ def _is_path(source) -> bool:
     return isinstance(source, (str, os.PathLike))
 
 
-def _path_error(name: str, owner: str, why: str, path: str) -> ValueError:
+def _path_error(name: str, owner: str, why: str, path: str) -> ParameterError:
     # The shared message() shortens long values, but a path is only useful whole.
-    return ValueError(f"The {name!r} parameter of {owner} must be a readable image file "
+    return ParameterError(f"The {name!r} parameter of {owner} must be a readable image file "
                       f"({why}). Got {path!r} instead.")
 
 
@@ -50,15 +50,15 @@ def _to_grey(image, name: str, owner: str, *, bgr: bool) -> np.ndarray:
     elif np.issubdtype(image.dtype, np.floating):
         grey = image.astype(np.float64)
         if not np.all(np.isfinite(grey)):
-            raise ValueError(message(name, owner, rule, "an array with NaN or infinite values"))
+            raise ParameterError(message(name, owner, rule, "an array with NaN or infinite values"))
         if grey.size and (grey.min() < 0 or grey.max() > 255):
-            raise ValueError(message(name, owner, rule,
+            raise ParameterError(message(name, owner, rule,
                                      f"values in [{grey.min():g}, {grey.max():g}]"))
     else:
-        raise TypeError(message(name, owner, rule, f"an array of dtype {image.dtype}"))
+        raise ParameterTypeError(message(name, owner, rule, f"an array of dtype {image.dtype}"))
     colour = grey.ndim == 3 and grey.shape[2] in (3, 4)
     if not (grey.ndim == 2 or colour) or grey.size == 0:
-        raise ValueError(message(name, owner, rule, f"an array of shape {image.shape}"))
+        raise ParameterError(message(name, owner, rule, f"an array of shape {image.shape}"))
     if colour:
         # cvtColor has no float64 path; float32 keeps the fractions that uint8 would round.
         code = cv2.COLOR_BGR2GRAY if bgr else cv2.COLOR_RGB2GRAY
@@ -148,7 +148,7 @@ def image_sha256(source) -> str:
         return digest.hexdigest()
     array = np.asarray(source)
     if array.dtype.hasobject:
-        raise TypeError(message("source", "image_sha256", "a path or a numeric array",
+        raise ParameterTypeError(message("source", "image_sha256", "a path or a numeric array",
                                 f"an array of dtype {array.dtype}"))
     digest.update(_ARRAY_TAG)
     digest.update(f"{array.dtype.str} {array.shape}\n".encode("ascii"))
@@ -211,25 +211,25 @@ def load_pair(left, right, *, min_shape=(1, 1)) -> StereoPair:
     >>> load_pair(np.zeros((4, 6)), np.zeros((4, 5)))
     Traceback (most recent call last):
     ...
-    ValueError: The 'right' parameter of load_pair must be an image of the same size as 'left',
+    ismb_lab.ParameterError: The 'right' parameter of load_pair must be an image of the same size as 'left',
     4x6 pixels (height x width). Got 'an image of 4x5 pixels' instead.
     """
     owner = "load_pair"
     rule = "a (height, width) pair of integers >= 1"
     if isinstance(min_shape, (str, bytes)) or not hasattr(min_shape, "__len__"):
-        raise TypeError(message("min_shape", owner, rule, min_shape))
+        raise ParameterTypeError(message("min_shape", owner, rule, min_shape))
     if len(min_shape) != 2:
-        raise ValueError(message("min_shape", owner, rule, min_shape))
+        raise ParameterError(message("min_shape", owner, rule, min_shape))
     min_h, min_w = (check_number(v, "min_shape", owner, low=1, integer=True) for v in min_shape)
 
     images = {side: _load(src, side, owner) for side, src in (("left", left), ("right", right))}
     (h, w), (rh, rw) = images["left"].shape, images["right"].shape
     if h < min_h or w < min_w:
-        raise ValueError(message(
+        raise ParameterError(message(
             "left", owner, f"an image of at least {min_h}x{min_w} pixels (height x width) "
             "to hold the matching windows", f"an image of {h}x{w} pixels"))
     if (rh, rw) != (h, w):
-        raise ValueError(message(
+        raise ParameterError(message(
             "right", owner, f"an image of the same size as 'left', {h}x{w} pixels "
             "(height x width)", f"an image of {rh}x{rw} pixels"))
     path = {side: os.fspath(src) if _is_path(src) else None

@@ -23,9 +23,9 @@ from dataclasses import asdict, dataclass, fields
 
 import numpy as np
 
-from ._validation import check_choice, check_number, message
+from ._validation import ParameterError, ParameterTypeError, check_choice, check_number, message
 from .compatibility import NeuronPairs, left_neighbours, neuron_pairs
-from .hopfield import Network
+from .hopfield import Network, Topology
 from .similarity import candidate_mask, transfer
 
 METHOD_NAMES = ("I", "II", "III")
@@ -46,7 +46,7 @@ class Params:
     >>> Params(lambda_c=-1)
     Traceback (most recent call last):
     ...
-    ValueError: The 'lambda_c' parameter of Params must be a finite number > 0. Got -1.0 instead.
+    ismb_lab.ParameterError: The 'lambda_c' parameter of Params must be a finite number > 0. Got -1.0 instead.
     """
 
     theta_c: float = 17.97
@@ -67,10 +67,10 @@ class Params:
     def from_dict(cls, values, owner: str = "Params.from_dict") -> "Params":
         """Build from a mapping; unknown keys are an error, missing keys take the defaults."""
         if not isinstance(values, dict):
-            raise TypeError(message("params", owner, "a JSON object of parameter values", values))
+            raise ParameterTypeError(message("params", owner, "a JSON object of parameter values", values))
         unknown = sorted(set(values) - {f.name for f in fields(cls)})
         if unknown:
-            raise ValueError(message("params", owner, "an object with keys among theta_c, theta_s, "
+            raise ParameterError(message("params", owner, "an object with keys among theta_c, theta_s, "
                                      "lambda_c, lambda_s", f"unknown keys {unknown}"))
         return cls(**values)
 
@@ -102,6 +102,8 @@ class Problem:
         Candidate neurons ``(i, k)``, sorted.
     pairs : NeuronPairs
         Interacting neuron pairs with their ``dd``, ``dD``, ``dY``.
+    topology : Topology
+        The same neurons and pairs, laid out for the network.
     """
 
     left_xy: np.ndarray
@@ -110,6 +112,7 @@ class Problem:
     rows: np.ndarray
     cols: np.ndarray
     pairs: NeuronPairs
+    topology: Topology
 
     @property
     def n_neurons(self) -> int:
@@ -146,13 +149,15 @@ def build_problem(left_xy, right_xy, dissimilarity, *, shift: float = 20.0,
     rxy = np.asarray(right_xy, dtype=float).reshape(-1, 2)
     M = np.asarray(dissimilarity, dtype=float)
     if M.shape != (len(lxy), len(rxy)):
-        raise ValueError(message("dissimilarity", "build_problem", f"of shape ({len(lxy)}, {len(rxy)})",
+        raise ParameterError(message("dissimilarity", "build_problem", f"of shape ({len(lxy)}, {len(rxy)})",
                                  f"shape {M.shape}"))
     mask = candidate_mask(lxy, rxy, shift=shift, height=window_height, width=window_width)
     rows, cols = np.nonzero(mask)
     neighbours = left_neighbours(lxy, radius=radius, shape=neighbourhood)
     pairs = neuron_pairs(lxy, rxy, rows, cols, neighbours)
-    return Problem(lxy, rxy, M, rows.astype(np.int64), cols.astype(np.int64), pairs)
+    rows, cols = rows.astype(np.int64), cols.astype(np.int64)
+    topology = Topology(len(lxy), len(rxy), rows, cols, pairs.a, pairs.b)
+    return Problem(lxy, rxy, M, rows, cols, pairs, topology)
 
 
 class Method:
@@ -178,13 +183,11 @@ class Method:
     def network(self, problem: Problem, params: Params) -> Network:
         """The network whose energy (3-15) this method minimises."""
         if not isinstance(params, Params):
-            raise TypeError(message("params", f"Method-{self.name}", "a Params instance", params))
+            raise ParameterTypeError(message("params", f"Method-{self.name}", "a Params instance", params))
         X = self.pair_measure(problem)
         c = transfer(X, params.theta_c, params.lambda_c)
         self_c = transfer(self.self_measure(problem), params.theta_c, params.lambda_c)
-        return Network(len(problem.left_xy), len(problem.right_xy), problem.rows, problem.cols,
-                       similarity=self.similarity(problem, params), pair_a=problem.pairs.a,
-                       pair_b=problem.pairs.b, pair_c=c, self_c=self_c)
+        return Network(problem.topology, self.similarity(problem, params), c, self_c)
 
     def postprocess(self, problem: Problem, state: np.ndarray) -> np.ndarray:
         return state
@@ -263,7 +266,7 @@ def get_method(name) -> Method:
     >>> get_method("IV")
     Traceback (most recent call last):
     ...
-    ValueError: The 'method' parameter of get_method must be one of 'I', 'II', 'III'. Got 'IV' instead.
+    ismb_lab.ParameterError: The 'method' parameter of get_method must be one of 'I', 'II', 'III'. Got 'IV' instead.
     """
     if isinstance(name, Method):
         return name

@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ._validation import check_number, check_points
+from ._validation import ParameterError, check_number, check_points
 
 
 def transfer(x, theta: float, lam: float) -> np.ndarray:
@@ -69,13 +69,15 @@ def patches(image: np.ndarray, xy, size: int) -> np.ndarray:
     """
     size = check_number(size, "size", "patches", low=1, integer=True)
     if size % 2 == 0:
-        raise ValueError(f"The 'size' parameter of patches must be an odd integer. Got {size} instead.")
+        raise ParameterError(f"The 'size' parameter of patches must be an odd integer. Got {size} instead.")
     xy = check_points(xy, "xy", "patches")
     half = size // 2
     padded = np.pad(np.asarray(image, dtype=float), half, mode="reflect")
     cols = np.rint(xy[:, 0]).astype(int)
     rows = np.rint(xy[:, 1]).astype(int)
     offsets = np.arange(size)
+    if len(xy) == 0:
+        return np.zeros((0, size, size))
     windows = padded[rows[:, None, None] + offsets[None, :, None],
                      cols[:, None, None] + offsets[None, None, :]]
     return windows - windows.mean(axis=(1, 2), keepdims=True)
@@ -108,10 +110,8 @@ def mean_abs_difference(left: np.ndarray, right: np.ndarray, left_xy, right_xy,
     >>> np.diag(M)            # a constant brightness offset does not matter
     array([0., 0.])
     """
-    lp = patches(left, left_xy, size).reshape(len(np.atleast_2d(left_xy)), -1)
-    rp = patches(right, right_xy, size).reshape(len(np.atleast_2d(right_xy)), -1)
-    if lp.shape[0] == 0 or rp.shape[0] == 0:
-        return np.zeros((lp.shape[0], rp.shape[0]))
+    lp = patches(left, left_xy, size).reshape(-1, size * size)
+    rp = patches(right, right_xy, size).reshape(-1, size * size)
     return np.abs(lp[:, None, :] - rp[None, :, :]).mean(axis=2)
 
 

@@ -1,0 +1,151 @@
+"""The ``ismb-lab`` command line.
+
+Every error the user can cause prints one line on stderr and exits with code 2.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+from pathlib import Path
+
+from . import __version__
+from ._files import atomic_write_text
+from ._validation import ParameterError, ParameterTypeError
+from .methods import METHOD_NAMES, THESIS_PARAMS, Params
+
+PARAM_OPTIONS = ("theta_c", "theta_s", "lambda_c", "lambda_s")
+
+
+class UsageError(Exception):
+    """A mistake in the command line or its files, reported in one line."""
+
+
+class _Parser(argparse.ArgumentParser):
+    def error(self, message):  # one line instead of argparse's usage dump
+        raise UsageError(f"{message} (see '{self.prog} --help')")
+
+
+def _add_matching_options(p: argparse.ArgumentParser) -> None:
+    p.add_argument("--method", choices=METHOD_NAMES, default=None,
+                   help="energy recipe (default: the params file's, else III)")
+    for name in PARAM_OPTIONS:
+        p.add_argument("--" + name.replace("_", "-"), type=float, default=None, metavar="X",
+                       help=f"override {name} (thesis default for the method)")
+    p.add_argument("--params-file", type=Path, default=None, metavar="P.json",
+                   help='parameters as {"method": ..., "params": {...}}, e.g. from ismb-lab tune')
+    p.add_argument("--roi", default="center", help="center | full | X,Y,W,H (default: center)")
+    p.add_argument("--shift", type=float, default=20.0, metavar="PX",
+                   help="expected disparity: centre of the candidate window (default: 20)")
+    p.add_argument("--n-min", type=int, default=20, help="fewest corners per image (default: 20)")
+    p.add_argument("--n-max", type=int, default=30, help="most corners per image (default: 30)")
+    p.add_argument("--seed", type=int, default=0, help="seed of the update order (default: 0)")
+    p.add_argument("--stop-rule", choices=("sweep", "stall"), default="sweep",
+                   help="sweep: a full sweep without change (default); stall: 200 idle attempts")
+    p.add_argument("--rule", choices=("exact", "thesis"), default="exact",
+                   help="exact Hopfield weights (default) or the thesis' literal (3-17)/(3-20)")
+
+
+def build_parser() -> argparse.ArgumentParser:
+    parser = _Parser(prog="ismb-lab", description="Hopfield-network stereo matching of Harris "
+                     "corners (the ISMB thesis) from the command line.")
+    parser.add_argument("--version", action="version", version=f"%(prog)s {__version__}")
+    sub = parser.add_subparsers(dest="command", metavar="COMMAND", parser_class=_Parser)
+    sub.required = True
+    m = sub.add_parser("match", help="match the corners of a stereo pair and print Table 5.3",
+                       description="Match the Harris corners of LEFT and RIGHT and print the "
+                       "matches in the shape of the thesis' Table 5.3.")
+    m.add_argument("left", type=Path, help="left image file")
+    m.add_argument("right", type=Path, help="right image file")
+    _add_matching_options(m)
+    m.add_argument("--json", type=Path, default=None, metavar="OUT", help="write the result as JSON")
+    m.add_argument("--plot", type=Path, default=None, metavar="OUT.png",
+                   help="draw the pair with features and match lines")
+    m.set_defaults(run=_cmd_match)
+    return parser
+
+
+def read_params_file(path: Path) -> tuple[str | None, dict]:
+    """Read ``{"method": ..., "params": {...}}``; extra keys are allowed."""
+    try:
+        data = json.loads(Path(path).read_text(encoding="utf-8"))
+    except FileNotFoundError:
+        raise UsageError(f"--params-file {path}: no such file") from None
+    except (OSError, UnicodeDecodeError, json.JSONDecodeError) as exc:
+        raise UsageError(f"--params-file {path}: not a readable JSON file ({exc})") from None
+    if not isinstance(data, dict) or not isinstance(data.get("params"), dict):
+        raise UsageError(f"--params-file {path}: expected an object with a 'params' object")
+    method = data.get("method")
+    if method is not None and method not in METHOD_NAMES:
+        raise UsageError(f"--params-file {path}: unknown method {method!r} "
+                         f"(expected one of {', '.join(METHOD_NAMES)})")
+    return method, data["params"]
+
+
+def resolve_params(args) -> tuple[str, Params]:
+    """The method and parameters from --method, --params-file and the single overrides."""
+    file_method, values = (None, {})
+    if args.params_file is not None:
+        file_method, values = read_params_file(args.params_file)
+    if args.method and file_method and args.method != file_method:
+        raise UsageError(f"--method {args.method} conflicts with --params-file, "
+                         f"which holds parameters for Method-{file_method}")
+    method = args.method or file_method or "III"
+    merged = THESIS_PARAMS[method].to_dict()
+    merged.update(values)
+    merged.update({k: getattr(args, k) for k in PARAM_OPTIONS if getattr(args, k) is not None})
+    return method, Params.from_dict(merged, owner="ismb-lab")
+
+
+def _config(args):
+    from .matching import MatchConfig
+    return MatchConfig(roi=args.roi, shift=args.shift, n_min=args.n_min, n_max=args.n_max)
+
+
+def _cmd_match(args) -> int:
+    from .matching import match, prepare
+
+    method, params = resolve_params(args)
+    prepared = prepare(args.left, args.right, _config(args))
+    result = match(method=method, params=params, seed=args.seed, stop_rule=args.stop_rule,
+                   rule=args.rule, prepared=prepared)
+    print(f"Method-{result.method}  params {params.to_dict()}  seed {result.seed}")
+    print(f"{len(result.left_xy)} left / {len(result.right_xy)} right corners, "
+          f"{result.n_candidates} candidate neurons, {len(result.pairs)} matches, "
+          f"energy {result.energy:.4f}, stopped by '{result.stop_rule}' "
+          f"after {result.attempts} attempts")
+    print(result.table())
+    if args.json is not None:
+        atomic_write_text(args.json, result.to_json() + "\n")
+    if args.plot is not None:
+        from matplotlib.figure import Figure
+
+        from .plotting import plot_matches
+        pair = prepared.pair
+        fig = Figure(figsize=(10, 4), layout="constrained")
+        ax = fig.subplots()
+        plot_matches(ax, pair.left, pair.right, result.left_xy, result.right_xy, result.pairs)
+        ax.set_title(f"Method-{result.method}: {len(result.pairs)} matches")
+        fig.savefig(args.plot, dpi=120)
+    return 0
+
+
+def main(argv=None) -> int:
+    """Entry point of ``ismb-lab``; returns the exit code."""
+    parser = build_parser()
+    try:
+        args = parser.parse_args(argv)
+        return args.run(args)
+    except UsageError as exc:
+        print(f"ismb-lab: error: {exc}", file=sys.stderr)
+    except (ParameterError, ParameterTypeError, OSError) as exc:
+        print(f"ismb-lab: error: {exc}", file=sys.stderr)
+    except KeyboardInterrupt:
+        print("ismb-lab: interrupted", file=sys.stderr)
+        return 130
+    return 2
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,311 @@
+"""Match one stereo pair end to end: corners, energy, network, result (thesis Fig. 3.4).
+
+>>> from ismb_lab.scenes import synthetic_scene
+>>> scene = synthetic_scene(seed=0)
+>>> result = match(scene.left, scene.right, method="III", seed=0)
+>>> result.stop_rule, len(result.pairs) > 10
+('sweep', True)
+"""
+
+from __future__ import annotations
+
+import json
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from ._validation import ParameterError, ParameterTypeError, check_choice, check_number, message
+from .coords import euclidean_disparity, horizontal_disparity
+from .features import Corners, detect_corners, resolve_roi
+from .hopfield import RULES, STOP_RULES, run
+from .io import StereoPair, load_pair
+from .methods import THESIS_PARAMS, Params, Problem, build_problem, get_method
+from .similarity import mean_abs_difference
+
+
+@dataclass(frozen=True)
+class MatchConfig:
+    """Everything about a match that is not an energy parameter.
+
+    Attributes
+    ----------
+    roi : str or tuple
+        ``"center"`` (the centre quarter, as in the thesis), ``"full"`` or ``(x, y, w, h)``.
+    n_min, n_max : int
+        Bounds on the number of corners per image (the thesis uses [20, 30]).
+    threshold : float or None
+        Initial Harris threshold ``T``; None starts at the strongest response.
+    harris_sigma, harris_k, min_distance : float, float, int
+        Gaussian window of the structure tensor, Harris ``k``, local-maximum radius.
+    patch_size : int
+        Odd side of the window for ``M_ik`` (3-8).
+    shift, window_height, window_width : float
+        The candidate window: ``30 x 40`` centred ``shift`` pixels left (§3.3).
+    neighbour_radius : float, neighbourhood : {"box", "disc"}
+        Which left features interact (3-12, §3.3).
+    right_roi : {"shifted", "same"}
+        ``"shifted"`` (default) moves the right image's ROI ``shift`` pixels left,
+        like the candidate window, so that left corners near the ROI's left edge
+        keep their partners.  ``"same"`` uses the left ROI in both images, as the
+        thesis does; it loses about one corner in eight to the ROI border.
+    """
+
+    roi: object = "center"
+    n_min: int = 20
+    n_max: int = 30
+    threshold: float | None = None
+    harris_sigma: float = 1.0
+    harris_k: float = 0.04
+    min_distance: int = 3
+    patch_size: int = 11
+    shift: float = 20.0
+    window_height: float = 30.0
+    window_width: float = 40.0
+    neighbour_radius: float = 20.0
+    neighbourhood: str = "box"
+    right_roi: str = "shifted"
+
+    def __post_init__(self):
+        owner = "MatchConfig"
+        check_number(self.n_min, "n_min", owner, low=1, integer=True)
+        check_number(self.n_max, "n_max", owner, low=self.n_min, integer=True)
+        if self.threshold is not None:
+            check_number(self.threshold, "threshold", owner, low=0, low_open=True)
+        check_number(self.harris_sigma, "harris_sigma", owner, low=0, low_open=True)
+        k = check_number(self.harris_k, "harris_k", owner, low=0, low_open=True)
+        if k >= 0.25:
+            raise ParameterError(message("harris_k", owner, "a finite number > 0 and < 0.25", k))
+        check_number(self.min_distance, "min_distance", owner, low=1, integer=True)
+        size = check_number(self.patch_size, "patch_size", owner, low=1, integer=True)
+        if size % 2 == 0:
+            raise ParameterError(message("patch_size", owner, "an odd integer", size))
+        check_number(self.shift, "shift", owner)
+        check_number(self.window_height, "window_height", owner, low=0, low_open=True)
+        check_number(self.window_width, "window_width", owner, low=0, low_open=True)
+        check_number(self.neighbour_radius, "neighbour_radius", owner, low=0, low_open=True)
+        check_choice(self.neighbourhood, "neighbourhood", owner, ("box", "disc"))
+        check_choice(self.right_roi, "right_roi", owner, ("shifted", "same"))
+        if isinstance(self.roi, list):
+            object.__setattr__(self, "roi", tuple(self.roi))
+
+    @property
+    def min_shape(self) -> tuple[int, int]:
+        """Smallest image (height, width) that holds the similarity and Harris windows."""
+        border = int(np.ceil(3 * self.harris_sigma)) + 1
+        side = max(self.patch_size, 2 * border + 1)
+        return side, side
+
+
+def shift_roi(roi, shift: float, shape) -> tuple[int, int, int, int]:
+    """Move an ``(x, y, w, h)`` ROI ``shift`` pixels left, cropped to the image.
+
+    Examples
+    --------
+    >>> shift_roi((80, 60, 160, 120), 20, (240, 320))
+    (60, 60, 160, 120)
+    >>> shift_roi((10, 60, 160, 120), 20, (240, 320))
+    (0, 60, 150, 120)
+    """
+    x, y, w, h = roi
+    height, width = shape
+    start = min(max(x - int(round(shift)), 0), width - 1)
+    stop = max(min(x + w - int(round(shift)), width), start + 1)
+    return start, y, stop - start, h
+
+
+@dataclass(frozen=True, eq=False)
+class Prepared:
+    """A loaded pair with its corners and parameter-free energy ingredients."""
+
+    pair: StereoPair
+    config: MatchConfig
+    left_corners: Corners
+    right_corners: Corners
+    problem: Problem
+
+
+def prepare(left, right, config: MatchConfig | None = None) -> Prepared:
+    """Load a pair, detect corners in both images and compute ``M`` and the geometry.
+
+    Parameters
+    ----------
+    left, right : path or ndarray
+        The images (see :func:`ismb_lab.io.load_pair`).
+    config : MatchConfig, optional
+
+    Returns
+    -------
+    prepared : Prepared
+    """
+    config = MatchConfig() if config is None else config
+    if not isinstance(config, MatchConfig):
+        raise ParameterTypeError(message("config", "prepare", "a MatchConfig", config))
+    pair = left if isinstance(left, StereoPair) and right is None else load_pair(
+        left, right, min_shape=config.min_shape)
+    left_roi = resolve_roi(config.roi, pair.shape)
+    right_roi = left_roi if config.right_roi == "same" else shift_roi(left_roi, config.shift, pair.shape)
+    kwargs = dict(n_min=config.n_min, n_max=config.n_max, threshold=config.threshold,
+                  sigma=config.harris_sigma, k=config.harris_k, min_distance=config.min_distance)
+    lc = detect_corners(pair.left, roi=left_roi, **kwargs)
+    rc = detect_corners(pair.right, roi=right_roi, **kwargs)
+    M = mean_abs_difference(pair.left, pair.right, lc.xy, rc.xy, config.patch_size)
+    problem = build_problem(lc.xy, rc.xy, M, shift=config.shift,
+                            window_height=config.window_height, window_width=config.window_width,
+                            radius=config.neighbour_radius, neighbourhood=config.neighbourhood)
+    return Prepared(pair, config, lc, rc, problem)
+
+
+@dataclass(frozen=True, eq=False)
+class MatchResult:
+    """The outcome of matching one pair.
+
+    Attributes
+    ----------
+    method : str
+    params : Params
+    seed : int
+    stop_rule : str
+        What stopped the network (``"sweep"``, ``"stall"``, ``"max_attempts"``).
+    energy : float
+        Final energy (3-15).
+    attempts : int
+    left_xy, right_xy : (N, 2) ndarray
+        All features, ``(x, y)`` in the full image.
+    pairs : (m, 2) int ndarray
+        Matched ``(i, k)`` feature indices, sorted by ``i``.
+    message : str
+        Empty when all went well, otherwise why the match is empty or partial.
+    """
+
+    method: str
+    params: Params
+    seed: int
+    stop_rule: str
+    energy: float
+    attempts: int
+    left_xy: np.ndarray
+    right_xy: np.ndarray
+    pairs: np.ndarray
+    message: str = ""
+    n_candidates: int = 0
+    state: np.ndarray = field(default=None, repr=False)
+
+    @property
+    def left_match_xy(self) -> np.ndarray:
+        return self.left_xy[self.pairs[:, 0]]
+
+    @property
+    def right_match_xy(self) -> np.ndarray:
+        return self.right_xy[self.pairs[:, 1]]
+
+    @property
+    def disparity(self) -> np.ndarray:
+        """Euclidean disparity of each match, as in the thesis' tables."""
+        return euclidean_disparity(self.left_match_xy, self.right_match_xy)
+
+    @property
+    def horizontal_disparity(self) -> np.ndarray:
+        return horizontal_disparity(self.left_match_xy, self.right_match_xy)
+
+    def table(self) -> str:
+        """A plain-text table shaped like Table 5.3 (features numbered from 1)."""
+        head = ("Pair", "Left", "Right", "y_left", "x_left", "y_right", "x_right", "disparity")
+        lines = ["{:>4} {:>5} {:>5} {:>7} {:>7} {:>7} {:>7} {:>9}".format(*head)]
+        for n, ((i, k), p, q, d) in enumerate(zip(self.pairs, self.left_match_xy,
+                                                  self.right_match_xy, self.disparity), 1):
+            lines.append(f"{n:>4} {i + 1:>5} {k + 1:>5} {p[1]:>7g} {p[0]:>7g} {q[1]:>7g} "
+                         f"{q[0]:>7g} {d:>9.2f}")
+        if self.message:
+            lines.append(self.message)
+        return "\n".join(lines)
+
+    def to_dict(self) -> dict:
+        """The JSON contract of ``ismb-lab match --json``."""
+        return {
+            "method": self.method,
+            "params": self.params.to_dict(),
+            "seed": self.seed,
+            "energy": self.energy,
+            "stop_rule": self.stop_rule,
+            "attempts": self.attempts,
+            "message": self.message,
+            "left_features": _xy_list(self.left_xy),
+            "right_features": _xy_list(self.right_xy),
+            "matches": [
+                {"left": int(i), "right": int(k), "left_xy": _xy_list(p), "right_xy": _xy_list(q),
+                 "disparity": float(d)}
+                for (i, k), p, q, d in zip(self.pairs, self.left_match_xy, self.right_match_xy,
+                                           self.disparity)
+            ],
+        }
+
+    def to_json(self) -> str:
+        return json.dumps(self.to_dict(), indent=2)
+
+
+def _xy_list(xy):
+    xy = np.asarray(xy, dtype=float)
+    if np.all(xy == np.round(xy)):
+        return xy.astype(int).tolist()
+    return xy.tolist()
+
+
+def match(left=None, right=None, method="III", params: Params | None = None, *,
+          config: MatchConfig | None = None, seed: int = 0, stop_rule: str = "sweep",
+          rule: str = "exact", kernel: str = "numba", prepared: Prepared | None = None) -> MatchResult:
+    """Match the Harris corners of a stereo pair with the Hopfield network.
+
+    Parameters
+    ----------
+    left, right : path or ndarray
+        The image pair; ignored when `prepared` is given.
+    method : {"I", "II", "III"}
+        Energy recipe (see :mod:`ismb_lab.methods`).
+    params : Params, optional
+        Energy parameters; by default the thesis' GA values for the method.
+    config : MatchConfig, optional
+        Corners, candidate window and neighbourhood settings.
+    seed : int
+        Seed of the random update order.
+    stop_rule, rule, kernel
+        See :func:`ismb_lab.hopfield.run`.
+    prepared : Prepared, optional
+        Reuse corners and geometry from :func:`prepare`.
+
+    Returns
+    -------
+    result : MatchResult
+    """
+    m = get_method(method)
+    params = THESIS_PARAMS[m.name] if params is None else params
+    if not isinstance(params, Params):
+        raise ParameterTypeError(message("params", "match", "a Params instance", params))
+    check_number(seed, "seed", "match", low=0, integer=True)
+    check_choice(stop_rule, "stop_rule", "match", STOP_RULES)
+    check_choice(rule, "rule", "match", RULES)
+    if prepared is None:
+        prepared = prepare(left, right, config)
+    problem = prepared.problem
+    result = run(m.network(problem, params), rng=seed, stop_rule=stop_rule, rule=rule, kernel=kernel)
+    state = m.postprocess(problem, result.state)
+    on = np.flatnonzero(state)
+    pairs = np.stack([problem.rows[on], problem.cols[on]], axis=1).reshape(-1, 2)
+    return MatchResult(m.name, params, int(seed), result.stop_rule, result.energy, result.attempts,
+                       problem.left_xy, problem.right_xy, pairs, _explain(prepared, result),
+                       problem.n_neurons, state)
+
+
+def _explain(prepared: Prepared, result) -> str:
+    lc, rc, problem = prepared.left_corners, prepared.right_corners, prepared.problem
+    notes = [f"{side} image: {c.message}" for side, c in (("left", lc), ("right", rc)) if c.message]
+    if len(lc) and len(rc) and problem.n_neurons == 0:
+        c = prepared.config
+        notes.append(f"no candidate pairs: no right corner lies in the {c.window_height:g}x"
+                     f"{c.window_width:g} window shifted {c.shift:g} px left of any left corner")
+    elif problem.n_neurons:
+        lonely = len(lc) - len(np.unique(problem.rows))
+        if lonely:
+            notes.append(f"{lonely} of {len(lc)} left corners have no candidate in their window")
+    if not result.converged:
+        notes.append("the network did not settle within the attempt limit")
+    return "; ".join(notes)

@@ -1,0 +1,69 @@
+"""Matplotlib drawings of the pipeline's results.
+
+Every ``plot_*`` function draws into a given ``Axes`` and returns its artists;
+none of them calls ``pyplot``, so they serve notebooks, widgets and the CLI alike.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+GAP = 8  # pixels between the left and right image in side-by-side views
+
+
+def side_by_side(left: np.ndarray, right: np.ndarray, gap: int = GAP) -> np.ndarray:
+    """The two images next to each other, separated by a white gap.
+
+    Examples
+    --------
+    >>> side_by_side(np.zeros((2, 3)), np.ones((2, 3)), gap=1).shape
+    (2, 7)
+    """
+    spacer = np.full((left.shape[0], gap), 255.0)
+    return np.hstack([left, spacer, right])
+
+
+def plot_matches(ax, left, right, left_xy, right_xy, pairs, *, numbers: bool = True,
+                 cmap: str = "viridis") -> dict:
+    """Draw a pair side by side with its features and match lines.
+
+    Parameters
+    ----------
+    ax : matplotlib.axes.Axes
+    left, right : (H, W) ndarray
+        Grey images.
+    left_xy, right_xy : (N, 2) ndarray
+        Feature points ``(x, y)``; right points are drawn offset by ``W + GAP``.
+    pairs : (m, 2) int ndarray
+        Matched ``(i, k)`` indices; lines are coloured by Euclidean disparity.
+    numbers : bool
+        Label features 1, 2, ... as in the thesis' figures.
+
+    Returns
+    -------
+    artists : dict
+        ``image``, ``left_points``, ``right_points``, ``lines`` and ``labels``.
+    """
+    from matplotlib.collections import LineCollection
+
+    left_xy = np.asarray(left_xy, float).reshape(-1, 2)
+    right_xy = np.asarray(right_xy, float).reshape(-1, 2)
+    pairs = np.asarray(pairs, int).reshape(-1, 2)
+    offset = np.array([left.shape[1] + GAP, 0.0])
+    shifted = right_xy + offset
+    image = ax.imshow(side_by_side(left, right), cmap="gray", vmin=0, vmax=255)
+    lp, = ax.plot(*left_xy.T, "+", color="yellow", ms=8, mew=1.5)
+    rp, = ax.plot(*shifted.T, "+", color="cyan", ms=8, mew=1.5)
+    segments = np.stack([left_xy[pairs[:, 0]], shifted[pairs[:, 1]]], axis=1)
+    lines = LineCollection(segments, cmap=cmap, linewidths=1.2)
+    if len(pairs):
+        diff = left_xy[pairs[:, 0]] - right_xy[pairs[:, 1]]
+        lines.set_array(np.hypot(diff[:, 0], diff[:, 1]))
+    ax.add_collection(lines)
+    labels = []
+    if numbers:
+        for xy, colour in ((left_xy, "yellow"), (shifted, "cyan")):
+            labels += [ax.text(x + 2, y - 2, str(n), color=colour, fontsize=7)
+                       for n, (x, y) in enumerate(xy, 1)]
+    ax.set_axis_off()
+    return {"image": image, "left_points": lp, "right_points": rp, "lines": lines, "labels": labels}
