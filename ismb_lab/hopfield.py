@@ -50,14 +50,16 @@ Both give up after ``max_sweeps * n`` attempts (stop rule ``"max_attempts"``).
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+import itertools
+import numbers
+from dataclasses import dataclass
 from functools import cached_property
 from typing import Iterator, NamedTuple
 
 import numba
 import numpy as np
 
-from ._validation import check_choice, check_number, check_rng, message
+from ._validation import ParameterError, ParameterTypeError, check_choice, check_number, check_rng, message
 
 SCALE = 2.0 ** 40
 RULES = ("exact", "thesis")
@@ -70,42 +72,48 @@ def _quantise(x) -> np.ndarray:
     return np.rint(np.asarray(x, dtype=float) * SCALE).astype(np.int64)
 
 
-def _csr(n: int, src: np.ndarray, dst: np.ndarray, values=None):
+def _csr(n: int, src: np.ndarray, dst: np.ndarray):
+    """Compressed rows: for each source, its destinations; plus the sort order used."""
     order = np.lexsort((dst, src))
     indptr = np.zeros(n + 1, dtype=np.int64)
     np.cumsum(np.bincount(src, minlength=n), out=indptr[1:])
-    if values is None:
-        return indptr, dst[order].astype(np.int64)
-    return indptr, dst[order].astype(np.int64), values[order]
+    return indptr, dst[order].astype(np.int64), order
+
+
+class _Layout(NamedTuple):
+    """Adjacency of a topology in compressed-row form, read by both kernels."""
+
+    nb_ptr: np.ndarray   # neighbours of neuron a: nb_idx[nb_ptr[a]:nb_ptr[a + 1]]
+    nb_idx: np.ndarray
+    nb_pair: np.ndarray  # the pair index of each neighbour entry
+    row_ptr: np.ndarray  # neurons of left feature i: row_idx[row_ptr[i]:row_ptr[i + 1]]
+    row_idx: np.ndarray
+    col_ptr: np.ndarray  # neurons of right feature k
+    col_idx: np.ndarray
 
 
 @dataclass(frozen=True, eq=False)
-class Network:
-    """An energy (3-15) over the candidate neurons of one image pair.
+class Topology:
+    """Which neurons exist and which pairs of them interact.
+
+    A topology depends on the features and the candidate window only, not on
+    the energy parameters, so all networks a GA builds for one image pair share
+    one topology: it is validated and laid out once.
 
     Parameters
     ----------
     n_left, n_right : int
         Number of left and right features ``N_l`` and ``N_r``.
-    rows, cols : (n,) int ndarray
+    rows, cols : (n,) int array_like
         Left feature ``i`` and right feature ``k`` of each candidate neuron,
         sorted by ``(i, k)``.
-    similarity : (n,) float ndarray
-        ``S_ik`` of each neuron, in ``[-1, 1]`` (zero for Method-I).
-    pair_a, pair_b : (P,) int ndarray
-        Interacting neuron pairs, ``pair_a < pair_b``.
-    pair_c : (P,) float ndarray
-        Their compatibility ``C_ab`` in ``[-1, 1]``.
-    self_c : (n,) float ndarray, optional
-        ``C_ikik`` (compatibility of a neuron with itself, ``X = 0`` for the
-        geometric terms).  Only the thesis' literal rule uses it.
+    pair_a, pair_b : (P,) int array_like
+        Interacting neuron pairs, ``pair_a < pair_b``, on different rows and columns.
 
     Examples
     --------
-    >>> net = Network(2, 2, rows=[0, 0, 1, 1], cols=[0, 1, 0, 1],
-    ...               similarity=[0.5, -0.5, -0.5, 0.5],
-    ...               pair_a=[0, 1], pair_b=[3, 2], pair_c=[0.9, -0.9])
-    >>> net.n_neurons, net.n_pairs
+    >>> top = Topology(2, 2, rows=[0, 0, 1, 1], cols=[0, 1, 0, 1], pair_a=[0, 1], pair_b=[3, 2])
+    >>> top.n_neurons, top.n_pairs
     (4, 2)
     """
 
@@ -113,48 +121,36 @@ class Network:
     n_right: int
     rows: np.ndarray
     cols: np.ndarray
-    similarity: np.ndarray
     pair_a: np.ndarray
     pair_b: np.ndarray
-    pair_c: np.ndarray
-    self_c: np.ndarray | None = field(default=None)
 
     def __post_init__(self):
-        owner = "Network"
+        owner = "Topology"
         check_number(self.n_left, "n_left", owner, low=0, integer=True)
         check_number(self.n_right, "n_right", owner, low=0, integer=True)
-        set_ = lambda name, value: object.__setattr__(self, name, value)
         for name in ("rows", "cols", "pair_a", "pair_b"):
-            set_(name, np.asarray(getattr(self, name), dtype=np.int64).ravel())
-        for name in ("similarity", "pair_c"):
-            set_(name, np.asarray(getattr(self, name), dtype=float).ravel())
-        n = len(self.rows)
-        self_c = np.zeros(n) if self.self_c is None else np.asarray(self.self_c, float).ravel()
-        set_("self_c", self_c)
-        for name in ("cols", "similarity", "self_c"):
-            if len(getattr(self, name)) != n:
-                raise ValueError(message(name, owner, f"of length {n} like 'rows'", f"length {len(getattr(self, name))}"))
-        for name in ("pair_b", "pair_c"):
-            if len(getattr(self, name)) != len(self.pair_a):
-                raise ValueError(message(name, owner, "as long as 'pair_a'", f"length {len(getattr(self, name))}"))
-        if n and (self.rows.min() < 0 or self.rows.max() >= self.n_left):
-            raise ValueError(message("rows", owner, f"indices in [0, {self.n_left})", self.rows))
-        if n and (self.cols.min() < 0 or self.cols.max() >= self.n_right):
-            raise ValueError(message("cols", owner, f"indices in [0, {self.n_right})", self.cols))
-        key = self.rows * max(self.n_right, 1) + self.cols
-        if np.any(np.diff(key) <= 0):
-            raise ValueError(message("rows", owner, "sorted by (row, col) without repeats", "unsorted or repeated neurons"))
-        if len(self.pair_a):
-            if self.pair_a.min() < 0 or self.pair_b.max() >= n or np.any(self.pair_a >= self.pair_b):
-                raise ValueError(message("pair_a", owner, f"indices with 0 <= pair_a < pair_b < {n}", "other indices"))
-            if np.any(self.rows[self.pair_a] == self.rows[self.pair_b]) or np.any(
-                    self.cols[self.pair_a] == self.cols[self.pair_b]):
-                raise ValueError(message("pair_a", owner, "pairs of neurons on different rows and columns "
-                                         "(C is zero when i == j or k == l)", "a shared row or column"))
-        for name in ("similarity", "pair_c", "self_c"):
-            values = getattr(self, name)
-            if not np.all(np.isfinite(values)):
-                raise ValueError(message(name, owner, "finite", "NaN or infinite values"))
+            object.__setattr__(self, name, np.asarray(getattr(self, name), dtype=np.int64).ravel())
+        n, rows, cols, a, b = self.n_neurons, self.rows, self.cols, self.pair_a, self.pair_b
+        if len(cols) != n:
+            raise ParameterError(message("cols", owner, f"of length {n} like 'rows'", f"length {len(cols)}"))
+        if len(b) != len(a):
+            raise ParameterError(message("pair_b", owner, "as long as 'pair_a'", f"length {len(b)}"))
+        if n and (rows.min() < 0 or rows.max() >= self.n_left):
+            raise ParameterError(message("rows", owner, f"indices in [0, {self.n_left})", rows))
+        if n and (cols.min() < 0 or cols.max() >= self.n_right):
+            raise ParameterError(message("cols", owner, f"indices in [0, {self.n_right})", cols))
+        if np.any(np.diff(rows * max(self.n_right, 1) + cols) <= 0):
+            raise ParameterError(message("rows", owner, "sorted by (row, col) without repeats",
+                                         "unsorted or repeated neurons"))
+        if len(a):
+            if a.min() < 0 or b.max() >= n or np.any(a >= b):
+                raise ParameterError(message("pair_a", owner, f"indices with 0 <= pair_a < pair_b < {n}",
+                                             "other indices"))
+            if np.any(rows[a] == rows[b]) or np.any(cols[a] == cols[b]):
+                raise ParameterError(message("pair_a", owner, "pairs of neurons on different rows and "
+                                             "columns (C is zero when i == j or k == l)",
+                                             "a shared row or column"))
+        object.__setattr__(self, "_orders", {})
 
     @property
     def n_neurons(self) -> int:
@@ -163,6 +159,95 @@ class Network:
     @property
     def n_pairs(self) -> int:
         return len(self.pair_a)
+
+    @cached_property
+    def layout(self) -> _Layout:
+        n, p = self.n_neurons, self.n_pairs
+        src = np.concatenate([self.pair_a, self.pair_b])
+        dst = np.concatenate([self.pair_b, self.pair_a])
+        nb_ptr, nb_idx, order = _csr(n, src, dst)
+        nb_pair = np.concatenate([np.arange(p), np.arange(p)])[order].astype(np.int64)
+        idx = np.arange(n, dtype=np.int64)
+        row_ptr, row_idx, _ = _csr(self.n_left, self.rows, idx)
+        col_ptr, col_idx, _ = _csr(self.n_right, self.cols, idx)
+        return _Layout(nb_ptr, nb_idx, nb_pair, row_ptr, row_idx, col_ptr, col_idx)
+
+    def orders(self, seed: int, stop_rule: str) -> Iterator[np.ndarray]:
+        """:func:`visiting_order` of ``default_rng(seed)``, remembered for reuse.
+
+        The visiting order does not depend on the energy, so networks that
+        share this topology and a seed (a GA's population) draw it only once.
+        """
+        key = (seed, stop_rule)
+        if key not in self._orders:
+            self._orders[key] = ([], visiting_order(np.random.default_rng(seed), self.n_neurons, stop_rule))
+        blocks, source = self._orders[key]
+        for t in itertools.count():
+            if t == len(blocks):
+                blocks.append(next(source))
+            yield blocks[t]
+
+
+@dataclass(frozen=True, eq=False)
+class Network:
+    """An energy (3-15) over the candidate neurons of one image pair.
+
+    Parameters
+    ----------
+    topology : Topology
+        The candidate neurons and their interacting pairs.
+    similarity : (n,) float array_like
+        ``S_ik`` of each neuron, in ``[-1, 1]`` (zero for Method-I).
+    pair_c : (P,) float array_like
+        Compatibility ``C_ab`` in ``[-1, 1]`` of each interacting pair.
+    self_c : (n,) float array_like, optional
+        ``C_ikik`` (a neuron's compatibility with itself, ``X = 0`` for the
+        geometric terms).  Only the thesis' literal rule uses it.
+
+    Examples
+    --------
+    >>> net = Network.from_arrays(2, 2, rows=[0, 0, 1, 1], cols=[0, 1, 0, 1],
+    ...                           similarity=[0.5, -0.5, -0.5, 0.5],
+    ...                           pair_a=[0, 1], pair_b=[3, 2], pair_c=[0.9, -0.9])
+    >>> net.n_neurons, net.n_pairs
+    (4, 2)
+    """
+
+    topology: Topology
+    similarity: np.ndarray
+    pair_c: np.ndarray
+    self_c: np.ndarray | None = None
+
+    def __post_init__(self):
+        owner = "Network"
+        if not isinstance(self.topology, Topology):
+            raise ParameterTypeError(message("topology", owner, "a Topology", type(self.topology).__name__))
+        n, p = self.topology.n_neurons, self.topology.n_pairs
+        if self.self_c is None:
+            object.__setattr__(self, "self_c", np.zeros(n))
+        for name, length in (("similarity", n), ("pair_c", p), ("self_c", n)):
+            values = np.asarray(getattr(self, name), dtype=float).ravel()
+            if len(values) != length:
+                raise ParameterError(message(name, owner, f"of length {length}", f"length {len(values)}"))
+            if not np.all(np.isfinite(values)):
+                raise ParameterError(message(name, owner, "finite", "NaN or infinite values"))
+            object.__setattr__(self, name, values)
+        object.__setattr__(self, "_weights", {})
+
+    @classmethod
+    def from_arrays(cls, n_left, n_right, rows, cols, similarity, pair_a, pair_b, pair_c,
+                    self_c=None) -> "Network":
+        """Build the topology and the network in one call."""
+        return cls(Topology(n_left, n_right, rows, cols, pair_a, pair_b), similarity, pair_c, self_c)
+
+    n_left = property(lambda self: self.topology.n_left)
+    n_right = property(lambda self: self.topology.n_right)
+    rows = property(lambda self: self.topology.rows)
+    cols = property(lambda self: self.topology.cols)
+    pair_a = property(lambda self: self.topology.pair_a)
+    pair_b = property(lambda self: self.topology.pair_b)
+    n_neurons = property(lambda self: self.topology.n_neurons)
+    n_pairs = property(lambda self: self.topology.n_pairs)
 
     def initial_state(self) -> np.ndarray:
         """Every candidate neuron on, as in §3.3."""
@@ -173,19 +258,6 @@ class Network:
         grid = np.zeros((self.n_left, self.n_right), dtype=np.uint8)
         grid[self.rows, self.cols] = np.asarray(state, dtype=np.uint8)
         return grid
-
-    @cached_property
-    def _structure(self):
-        """Neighbour, row and column adjacency (CSR), shared by both kernels."""
-        n = self.n_neurons
-        src = np.concatenate([self.pair_a, self.pair_b])
-        dst = np.concatenate([self.pair_b, self.pair_a])
-        c = np.concatenate([self.pair_c, self.pair_c])
-        nb_ptr, nb_idx, nb_c = _csr(n, src, dst, c)
-        idx = np.arange(n, dtype=np.int64)
-        row_ptr, row_idx = _csr(self.n_left, self.rows, idx)
-        col_ptr, col_idx = _csr(self.n_right, self.cols, idx)
-        return nb_ptr, nb_idx, nb_c, row_ptr, row_idx, col_ptr, col_idx
 
 
 class _Weights(NamedTuple):
@@ -207,15 +279,18 @@ class _Weights(NamedTuple):
 
 
 def _weights(net: Network, rule: str) -> _Weights:
-    nb_ptr, nb_idx, nb_c, row_ptr, row_idx, col_ptr, col_idx = net._structure
-    bias = _quantise(2.0 + net.similarity)
+    if rule in net._weights:
+        return net._weights[rule]
+    lay = net.topology.layout
     if rule == "exact":
-        pair, unique, self_w = 2.0 * nb_c, -2.0, np.zeros(net.n_neurons)
+        pair, unique, self_w = 2.0 * net.pair_c, -2.0, np.zeros(net.n_neurons)
     else:  # (3-17) taken literally, with the neuron's own term of (3-20)
-        pair, unique, self_w = nb_c, -1.0, net.self_c - 2.0
-    return _Weights(nb_ptr, nb_idx, _quantise(pair), row_ptr, row_idx, col_ptr, col_idx,
-                    net.rows, net.cols, np.int64(_quantise(unique)), np.int64(_quantise(unique)),
-                    _quantise(self_w), bias)
+        pair, unique, self_w = net.pair_c, -1.0, net.self_c - 2.0
+    w = _Weights(lay.nb_ptr, lay.nb_idx, _quantise(pair)[lay.nb_pair], lay.row_ptr, lay.row_idx,
+                 lay.col_ptr, lay.col_idx, net.rows, net.cols, np.int64(_quantise(unique)),
+                 np.int64(_quantise(unique)), _quantise(self_w), _quantise(2.0 + net.similarity))
+    net._weights[rule] = w
+    return w
 
 
 def hopfield_form(net: Network, rule: str = "exact") -> tuple[np.ndarray, np.ndarray]:
@@ -238,7 +313,7 @@ def hopfield_form(net: Network, rule: str = "exact") -> tuple[np.ndarray, np.nda
 
     Examples
     --------
-    >>> net = Network(1, 2, rows=[0, 0], cols=[0, 1], similarity=[0.5, 0.0],
+    >>> net = Network.from_arrays(1, 2, rows=[0, 0], cols=[0, 1], similarity=[0.5, 0.0],
     ...               pair_a=[], pair_b=[], pair_c=[])
     >>> W, I = hopfield_form(net)
     >>> W
@@ -280,25 +355,43 @@ def energy(net: Network, state) -> float:
 
     Examples
     --------
-    >>> net = Network(1, 2, rows=[0, 0], cols=[0, 1], similarity=[0.5, 0.0],
+    >>> net = Network.from_arrays(1, 2, rows=[0, 0], cols=[0, 1], similarity=[0.5, 0.0],
     ...               pair_a=[], pair_b=[], pair_c=[])
     >>> energy(net, [1, 0])   # row and column 0 satisfied, column 1 empty
     0.5
     >>> energy(net, [1, 1])   # (1 - 2)^2 + 0 + 0 - 0.5
     0.5
     """
-    y = _check_state(net, state, "energy").astype(float)
-    compat = -2.0 * float(np.sum(net.pair_c * y[net.pair_a] * y[net.pair_b]))
-    row_sum = np.bincount(net.rows, weights=y, minlength=net.n_left)
-    col_sum = np.bincount(net.cols, weights=y, minlength=net.n_right)
-    uniqueness = float(np.sum((1.0 - row_sum) ** 2) + np.sum((1.0 - col_sum) ** 2))
-    return compat + uniqueness - float(np.dot(net.similarity, y))
+    y = _check_state(net, state, "energy")
+    return _energy(net.n_left, net.n_right, net.rows, net.cols, net.similarity, net.pair_a,
+                   net.pair_b, net.pair_c, y)
+
+
+@numba.njit(cache=True)
+def _energy(n_left, n_right, rows, cols, similarity, pair_a, pair_b, pair_c, y):
+    # - sum_ik sum_jl C_ikjl y_ik y_jl: each stored pair stands for (a, b) and (b, a)
+    compatibility = 0.0
+    for p in range(pair_a.shape[0]):
+        compatibility -= 2.0 * pair_c[p] * y[pair_a[p]] * y[pair_b[p]]
+    row_sum = np.zeros(n_left)
+    col_sum = np.zeros(n_right)
+    similar = 0.0
+    for a in range(rows.shape[0]):
+        row_sum[rows[a]] += y[a]
+        col_sum[cols[a]] += y[a]
+        similar += similarity[a] * y[a]
+    uniqueness = 0.0
+    for i in range(n_left):
+        uniqueness += (1.0 - row_sum[i]) ** 2
+    for k in range(n_right):
+        uniqueness += (1.0 - col_sum[k]) ** 2
+    return compatibility + uniqueness - similar
 
 
 def _check_state(net: Network, state, owner: str) -> np.ndarray:
     y = np.asarray(state)
     if y.shape != (net.n_neurons,) or not np.all((y == 0) | (y == 1)):
-        raise ValueError(message("state", owner, f"a 0/1 array of shape ({net.n_neurons},)",
+        raise ParameterError(message("state", owner, f"a 0/1 array of shape ({net.n_neurons},)",
                                  f"an array of shape {y.shape}" if y.shape != (net.n_neurons,) else y))
     return y.astype(np.uint8)
 
@@ -382,13 +475,17 @@ def _net_input_textbook(a: int, y: list, w: _Weights) -> int:
 
 def _check_run_args(net, rng, state, stop_rule, rule, patience, max_sweeps, owner):
     if not isinstance(net, Network):
-        raise TypeError(message("net", owner, "a Network", type(net).__name__))
+        raise ParameterTypeError(message("net", owner, "a Network", type(net).__name__))
     check_choice(stop_rule, "stop_rule", owner, STOP_RULES)
     check_choice(rule, "rule", owner, RULES)
     check_number(patience, "patience", owner, low=1, integer=True)
     check_number(max_sweeps, "max_sweeps", owner, low=1, integer=True)
     y0 = net.initial_state() if state is None else _check_state(net, state, owner)
-    return check_rng(rng, "rng", owner), y0
+    if isinstance(rng, np.random.Generator):
+        return visiting_order(rng, net.n_neurons, stop_rule), y0
+    if isinstance(rng, numbers.Integral) and not isinstance(rng, bool) and rng >= 0:
+        return net.topology.orders(int(rng), stop_rule), y0
+    check_rng(rng, "rng", owner)  # raises the standard error
 
 
 def iter_updates(net: Network, *, rng=0, state=None, stop_rule: str = "sweep",
@@ -423,7 +520,7 @@ def iter_updates(net: Network, *, rng=0, state=None, stop_rule: str = "sweep",
 
     Examples
     --------
-    >>> net = Network(1, 2, rows=[0, 0], cols=[0, 1], similarity=[0.5, -0.5],
+    >>> net = Network.from_arrays(1, 2, rows=[0, 0], cols=[0, 1], similarity=[0.5, -0.5],
     ...               pair_a=[], pair_b=[], pair_c=[])
     >>> steps = list(iter_updates(net, rng=0))
     >>> [(s.neuron, s.u, s.old, s.new) for s in steps if s.changed]
@@ -431,7 +528,11 @@ def iter_updates(net: Network, *, rng=0, state=None, stop_rule: str = "sweep",
     >>> steps[-1].stop, steps[-1].energy
     ('sweep', 0.5)
     """
-    rng, y0 = _check_run_args(net, rng, state, stop_rule, rule, patience, max_sweeps, "iter_updates")
+    blocks, y0 = _check_run_args(net, rng, state, stop_rule, rule, patience, max_sweeps, "iter_updates")
+    return _updates(net, blocks, y0, stop_rule, rule, patience, max_sweeps)
+
+
+def _updates(net, blocks, y0, stop_rule, rule, patience, max_sweeps):
     n = net.n_neurons
     if n == 0:
         return
@@ -441,7 +542,7 @@ def iter_updates(net: Network, *, rng=0, state=None, stop_rule: str = "sweep",
     e0 = energy(net, y0)
     drop = 0  # exact sum of u * dy so far, in units of 2**-40
     attempt = changed_in_sweep = unchanged = 0
-    for block in visiting_order(rng, n, stop_rule):
+    for block in blocks:
         for a in block.tolist():
             u = _net_input_textbook(a, y, w)
             old = y[a]
@@ -501,9 +602,14 @@ _STOP_NAMES = {1: "sweep", 2: "stall", 3: "max_attempts"}
 
 
 @numba.njit(cache=True)
-def _initial_input(y, nb_ptr, nb_idx, nb_w, rows, cols, row_sum, col_sum, row_w, col_w,
+def _initial_input(y, nb_ptr, nb_idx, nb_w, rows, cols, n_left, n_right, row_w, col_w,
                    self_w, bias):
     n = y.shape[0]
+    row_sum = np.zeros(n_left, dtype=np.int64)
+    col_sum = np.zeros(n_right, dtype=np.int64)
+    for a in range(n):
+        row_sum[rows[a]] += y[a]
+        col_sum[cols[a]] += y[a]
     u = np.empty(n, dtype=np.int64)
     for a in range(n):
         s = bias[a]
@@ -581,9 +687,9 @@ def run(net: Network, *, rng=0, state=None, stop_rule: str = "sweep", rule: str 
 
     Examples
     --------
-    >>> net = Network(2, 2, rows=[0, 0, 1, 1], cols=[0, 1, 0, 1],
-    ...               similarity=[0.5, -0.5, -0.5, 0.5],
-    ...               pair_a=[0, 1], pair_b=[3, 2], pair_c=[0.9, -0.9])
+    >>> net = Network.from_arrays(2, 2, rows=[0, 0, 1, 1], cols=[0, 1, 0, 1],
+    ...                           similarity=[0.5, -0.5, -0.5, 0.5],
+    ...                           pair_a=[0, 1], pair_b=[3, 2], pair_c=[0.9, -0.9])
     >>> r = run(net, rng=1)
     >>> r.state, r.stop_rule, round(r.energy, 2)
     (array([1, 0, 0, 1], dtype=uint8), 'sweep', -2.8)
@@ -591,29 +697,27 @@ def run(net: Network, *, rng=0, state=None, stop_rule: str = "sweep", rule: str 
     True
     """
     check_choice(kernel, "kernel", "run", KERNELS)
-    rng, y0 = _check_run_args(net, rng, state, stop_rule, rule, patience, max_sweeps, "run")
+    blocks, y0 = _check_run_args(net, rng, state, stop_rule, rule, patience, max_sweeps, "run")
     n = net.n_neurons
     if n == 0:
         return RunResult(y0, energy(net, y0), stop_rule, 0, 0)
     if kernel == "textbook":
         y, flips, last = y0.copy(), 0, None
-        for last in iter_updates(net, rng=rng, state=y0, stop_rule=stop_rule, rule=rule,
-                                 patience=patience, max_sweeps=max_sweeps):
+        for last in _updates(net, blocks, y0, stop_rule, rule, patience, max_sweeps):
             y[last.neuron] = last.new
             flips += last.changed
         return RunResult(y, energy(net, y), last.stop, last.attempt + 1, flips)
     w = _weights(net, rule)
     y = y0.astype(np.int64)
-    row_sum = np.bincount(net.rows, weights=y, minlength=net.n_left).astype(np.int64)
-    col_sum = np.bincount(net.cols, weights=y, minlength=net.n_right).astype(np.int64)
-    u = _initial_input(y, w.nb_ptr, w.nb_idx, w.nb_w, w.rows, w.cols, row_sum, col_sum,
+    u = _initial_input(y, w.nb_ptr, w.nb_idx, w.nb_w, w.rows, w.cols, net.n_left, net.n_right,
                        w.row_w, w.col_w, w.self_w, w.bias)
     counters = np.zeros(4, dtype=np.int64)
-    for block in visiting_order(rng, n, stop_rule):
+    for block in blocks:
         code = _run_block(block, y, u, counters, w.nb_ptr, w.nb_idx, w.nb_w, w.row_ptr,
                           w.row_idx, w.col_ptr, w.col_idx, w.rows, w.cols, w.row_w, w.col_w,
                           w.self_w, stop_rule == "sweep", patience, max_sweeps * n)
         if code:
             state = y.astype(np.uint8)
-            return RunResult(state, energy(net, state), _STOP_NAMES[code], int(counters[0]),
-                             int(counters[3]))
+            e = _energy(net.n_left, net.n_right, net.rows, net.cols, net.similarity, net.pair_a,
+                        net.pair_b, net.pair_c, state)
+            return RunResult(state, e, _STOP_NAMES[code], int(counters[0]), int(counters[3]))

@@ -17,7 +17,7 @@ def random_network(seed, n_left=None, n_right=None, p_candidate=0.4, p_pair=0.5)
     a, b = np.triu_indices(n, k=1)
     ok = (rows[a] != rows[b]) & (cols[a] != cols[b]) & (rng.random(len(a)) < p_pair)
     a, b = a[ok], b[ok]
-    return Network(n_left, n_right, rows, cols, similarity=rng.uniform(-1, 1, n),
+    return Network.from_arrays(n_left, n_right, rows, cols, similarity=rng.uniform(-1, 1, n),
                    pair_a=a, pair_b=b, pair_c=rng.uniform(-1, 1, len(a)),
                    self_c=rng.uniform(0, 1, n))
 
@@ -131,7 +131,7 @@ def test_kernels_agree_on_large_networks():
 def test_ties_are_exact_in_fixed_point():
     # u = 2 + S + 2C - 2 = 0 exactly when S = 0 and C = 0: the neuron must stay as it is,
     # in both kernels, even after neighbours switch back and forth.
-    net = Network(2, 3, rows=[0, 0, 1], cols=[0, 1, 2], similarity=[0.0, -0.3, 0.1],
+    net = Network.from_arrays(2, 3, rows=[0, 0, 1], cols=[0, 1, 2], similarity=[0.0, -0.3, 0.1],
                   pair_a=[0], pair_b=[2], pair_c=[0.1])
     for seed in range(10):
         fast = run(net, rng=seed)
@@ -171,7 +171,7 @@ def test_literal_rule_uses_halved_weights_and_a_self_weight():
 
 
 def test_empty_network_runs():
-    net = Network(3, 0, rows=[], cols=[], similarity=[], pair_a=[], pair_b=[], pair_c=[])
+    net = Network.from_arrays(3, 0, rows=[], cols=[], similarity=[], pair_a=[], pair_b=[], pair_c=[])
     result = run(net)
     assert result.state.shape == (0,) and result.energy == 3.0 and result.attempts == 0
     assert list(iter_updates(net)) == []
@@ -203,4 +203,4 @@ def test_network_rejects_inconsistent_arrays(kwargs, words):
     base = dict(rows=[0, 0], cols=[0, 1], similarity=[0.0, 0.0], pair_a=[], pair_b=[], pair_c=[])
     base.update(kwargs)
     with pytest.raises(ValueError, match=words):
-        Network(2, 2, **base)
+        Network.from_arrays(2, 2, **base)
