@@ -63,6 +63,11 @@ def build_parser() -> argparse.ArgumentParser:
     m.add_argument("--plot", type=Path, default=None, metavar="OUT.png",
                    help="draw the pair with features and match lines")
     m.set_defaults(run=_cmd_match)
+    r = sub.add_parser("render", help="render the project's stereo pairs into images/",
+                       description="Render the project's synthetic stereo pairs with their ground "
+                       "truth. The output is byte for byte what is committed in images/.")
+    r.add_argument("--out", type=Path, default=Path("images"), help="folder (default: images)")
+    r.set_defaults(run=_cmd_render)
     return parser
 
 
@@ -128,6 +133,14 @@ def _cmd_match(args) -> int:
         plot_matches(ax, pair.left, pair.right, result.left_xy, result.right_xy, result.pairs)
         ax.set_title(f"Method-{result.method}: {len(result.pairs)} matches")
         fig.savefig(args.plot, dpi=120)
+    return 0
+
+
+def _cmd_render(args) -> int:
+    from .gallery import render_gallery
+
+    for path in render_gallery(args.out):
+        print(path)
     return 0
 
 

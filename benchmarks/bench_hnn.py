@@ -1,0 +1,51 @@
+"""Time one Hopfield network run: the textbook kernel against the numba kernel.
+
+Problems are real Harris corners of the synthetic scene (seed 0): the centre-quarter
+ROI with 20 and 30 corners per image, and the full image with 200.  Each figure is
+the median over runs with different update-order seeds.
+
+    python benchmarks/bench_hnn.py
+"""
+
+from __future__ import annotations
+
+import statistics
+import time
+
+from ismb_lab.hopfield import run
+from ismb_lab.matching import MatchConfig, prepare
+from ismb_lab.methods import THESIS_PARAMS, get_method
+from ismb_lab.scenes import synthetic_scene
+
+
+def median_seconds(fn, repeats: int) -> float:
+    times = []
+    for seed in range(repeats):
+        start = time.perf_counter()
+        fn(seed)
+        times.append(time.perf_counter() - start)
+    return statistics.median(times)
+
+
+def main() -> None:
+    scene = synthetic_scene(seed=0)
+    method, params = get_method("III"), THESIS_PARAMS["III"]
+    print(f"{'problem':>9} {'neurons':>7} {'pairs':>7} {'attempts':>8} {'textbook':>10} "
+          f"{'numba':>10} {'ratio':>6} {'build+numba':>11}")
+    for n, roi in ((20, "center"), (30, "center"), (200, "full")):
+        prepared = prepare(scene.left, scene.right, MatchConfig(roi=roi, n_min=n, n_max=n))
+        problem = prepared.problem
+        net = method.network(problem, params)
+        run(net)  # compile outside the timing
+        attempts = statistics.median(run(net, rng=s).attempts for s in range(20))
+        slow = median_seconds(lambda s: run(net, rng=s, kernel="textbook"), 7 if n > 30 else 31)
+        fast = median_seconds(lambda s: run(net, rng=s), 501)
+        full = median_seconds(lambda s: run(method.network(problem, params), rng=s), 501)
+        size = f"{len(problem.left_xy)}x{len(problem.right_xy)}"
+        print(f"{size:>9} {problem.n_neurons:>7} {2 * len(problem.pairs):>7} {attempts:>8.0f} "
+              f"{slow * 1e3:>8.2f}ms {fast * 1e6:>8.1f}us {slow / fast:>5.0f}x {full * 1e6:>9.1f}us")
+    print("pairs: non-zero compatibility weights (both directions); attempts: median per run")
+
+
+if __name__ == "__main__":
+    main()
