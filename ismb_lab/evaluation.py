@@ -1,0 +1,101 @@
+"""Scoring matches against target pairs: C/E/T as in the thesis' Fig. 5.10.
+
+* **C**: matched pairs identical to a target;
+* **E**: matched pairs that are not targets, split into *wrong partner* (the
+  left feature has a target, but with another right feature) and *extra* (the
+  left feature has no target at all);
+* **T**: the number of targets.
+
+The thesis prints ``C/E/T``; with E split it reads ``14/2+0/16`` (C / wrong +
+extra / T).  Matches of left features whose truth is unknown (no ground truth
+there) are not counted either way.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+
+@dataclass(frozen=True)
+class Score:
+    """C/E/T counts of one or more pairs (scores add with ``+``).
+
+    Examples
+    --------
+    >>> s = Score(correct=14, wrong_partner=2, extra=0, targets=16)
+    >>> str(s), round(s.precision, 3), s.recall
+    ('14/2+0/16', 0.875, 0.875)
+    >>> str(s + Score(16, 0, 1, 16))
+    '30/2+1/32'
+    """
+
+    correct: int
+    wrong_partner: int
+    extra: int
+    targets: int
+
+    @property
+    def errors(self) -> int:
+        return self.wrong_partner + self.extra
+
+    @property
+    def recall(self) -> float:
+        """C / T (the thesis' "accurate rate")."""
+        return self.correct / self.targets if self.targets else float("nan")
+
+    @property
+    def precision(self) -> float:
+        """C / (C + E)."""
+        matched = self.correct + self.errors
+        return self.correct / matched if matched else float("nan")
+
+    @property
+    def fitness(self) -> int:
+        """The GA's fitness (4-1): n_c - n_e."""
+        return self.correct - self.errors
+
+    def __add__(self, other: "Score") -> "Score":
+        return Score(self.correct + other.correct, self.wrong_partner + other.wrong_partner,
+                     self.extra + other.extra, self.targets + other.targets)
+
+    def __str__(self) -> str:
+        return f"{self.correct}/{self.wrong_partner}+{self.extra}/{self.targets}"
+
+
+def score(pairs, targets, unknown=()) -> Score:
+    """Compare matched feature pairs with target feature pairs.
+
+    Parameters
+    ----------
+    pairs : (m, 2) int array_like
+        Matched ``(i, k)`` feature indices.
+    targets : (t, 2) int array_like
+        Target ``(i, k)`` feature indices (snapped from coordinates).
+    unknown : int array_like
+        Left features whose truth is unknown; their matches are not counted.
+
+    Returns
+    -------
+    score : Score
+
+    Examples
+    --------
+    >>> str(score([[0, 0], [1, 2], [3, 3], [4, 4]], [[0, 0], [1, 1], [2, 2]], unknown=[4]))
+    '1/1+1/3'
+    """
+    pairs = np.asarray(pairs, dtype=np.int64).reshape(-1, 2)
+    targets = np.asarray(targets, dtype=np.int64).reshape(-1, 2)
+    wanted = {tuple(t) for t in targets.tolist()}
+    has_target = set(targets[:, 0].tolist())
+    skip = set(np.asarray(unknown, dtype=np.int64).ravel().tolist())
+    correct = wrong = extra = 0
+    for i, k in pairs.tolist():
+        if (i, k) in wanted:
+            correct += 1
+        elif i in has_target:
+            wrong += 1
+        elif i not in skip:
+            extra += 1
+    return Score(correct, wrong, extra, len(wanted))
