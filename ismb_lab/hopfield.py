@@ -235,6 +235,16 @@ class Network:
         object.__setattr__(self, "_weights", {})
 
     @classmethod
+    def _trusted(cls, topology: Topology, similarity, pair_c, self_c) -> "Network":
+        """Skip validation: for float arrays of the right lengths that are finite by
+        construction (transfer functions of validated parameters)."""
+        net = object.__new__(cls)
+        for name, value in (("topology", topology), ("similarity", similarity),
+                            ("pair_c", pair_c), ("self_c", self_c), ("_weights", {})):
+            object.__setattr__(net, name, value)
+        return net
+
+    @classmethod
     def from_arrays(cls, n_left, n_right, rows, cols, similarity, pair_a, pair_b, pair_c,
                     self_c=None) -> "Network":
         """Build the topology and the network in one call."""
@@ -282,15 +292,31 @@ def _weights(net: Network, rule: str) -> _Weights:
     if rule in net._weights:
         return net._weights[rule]
     lay = net.topology.layout
-    if rule == "exact":
-        pair, unique, self_w = 2.0 * net.pair_c, -2.0, np.zeros(net.n_neurons)
-    else:  # (3-17) taken literally, with the neuron's own term of (3-20)
-        pair, unique, self_w = net.pair_c, -1.0, net.self_c - 2.0
-    w = _Weights(lay.nb_ptr, lay.nb_idx, _quantise(pair)[lay.nb_pair], lay.row_ptr, lay.row_idx,
-                 lay.col_ptr, lay.col_idx, net.rows, net.cols, np.int64(_quantise(unique)),
-                 np.int64(_quantise(unique)), _quantise(self_w), _quantise(2.0 + net.similarity))
+    exact = rule == "exact"
+    # exact: W = 2C, -2 on a shared row or column, no self-weight;
+    # thesis: (3-17) taken literally, W = C - 1 - 1, with the neuron's own term of (3-20)
+    nb_w, self_w, bias = _quantised(net.pair_c, lay.nb_pair, net.similarity, net.self_c, exact, SCALE)
+    unique = np.int64(_quantise(-2.0 if exact else -1.0))
+    w = _Weights(lay.nb_ptr, lay.nb_idx, nb_w, lay.row_ptr, lay.row_idx, lay.col_ptr, lay.col_idx,
+                 net.rows, net.cols, unique, unique, self_w, bias)
     net._weights[rule] = w
     return w
+
+
+@numba.njit(cache=True)
+def _quantised(pair_c, nb_pair, similarity, self_c, exact, scale):
+    nb_w = np.empty(nb_pair.shape[0], dtype=np.int64)
+    for p in range(nb_pair.shape[0]):
+        c = pair_c[nb_pair[p]]
+        nb_w[p] = np.int64(np.rint((2.0 * c if exact else c) * scale))
+    n = similarity.shape[0]
+    self_w = np.zeros(n, dtype=np.int64)
+    bias = np.empty(n, dtype=np.int64)
+    for a in range(n):
+        bias[a] = np.int64(np.rint((2.0 + similarity[a]) * scale))
+        if not exact:
+            self_w[a] = np.int64(np.rint((self_c[a] - 2.0) * scale))
+    return nb_w, self_w, bias
 
 
 def hopfield_form(net: Network, rule: str = "exact") -> tuple[np.ndarray, np.ndarray]:

@@ -184,10 +184,10 @@ class Method:
         """The network whose energy (3-15) this method minimises."""
         if not isinstance(params, Params):
             raise ParameterTypeError(message("params", f"Method-{self.name}", "a Params instance", params))
-        X = self.pair_measure(problem)
-        c = transfer(X, params.theta_c, params.lambda_c)
+        c = transfer(self.pair_measure(problem), params.theta_c, params.lambda_c)
         self_c = transfer(self.self_measure(problem), params.theta_c, params.lambda_c)
-        return Network(problem.topology, self.similarity(problem, params), c, self_c)
+        # Params are validated finite and transfer() maps finite input into [-1, 1].
+        return Network._trusted(problem.topology, self.similarity(problem, params), c, self_c)
 
     def postprocess(self, problem: Problem, state: np.ndarray) -> np.ndarray:
         return state
