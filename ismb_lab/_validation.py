@@ -70,7 +70,7 @@ def check_number(value, name: str, owner: str, *, low=None, high=None,
         rule += f" {'>' if low_open else '>='} {low}"
     if high is not None:
         rule += f"{' and' if low is not None else ''} <= {high}"
-    if isinstance(value, bool) or not isinstance(value, numbers.Real):
+    if type(value) not in (float, int) and (isinstance(value, bool) or not isinstance(value, numbers.Real)):
         raise ParameterTypeError(message(name, owner, rule, value))
     if integer:
         if not isinstance(value, numbers.Integral):
