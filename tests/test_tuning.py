@@ -1,0 +1,83 @@
+"""The GA joined to matching: genes <-> parameters, fitness (4-1), and learning from targets."""
+
+import numpy as np
+import pytest
+
+from ismb_lab import ParameterError
+from ismb_lab.evaluation import format_protocol, protocol
+from ismb_lab.matching import match, prepare
+from ismb_lab.methods import Params
+from ismb_lab.scenes import synthetic_scene, true_matches
+from ismb_lab.tuning import Case, Fitness, evaluate, gene_bounds, to_chromosome, to_params, tune
+
+
+def case(seed):
+    scene = synthetic_scene(seed=seed)
+    prepared = prepare(scene.left, scene.right)
+    truth = true_matches(scene, prepared.problem.left_xy, prepared.problem.right_xy)
+    left = np.flatnonzero(truth >= 0)
+    return Case(prepared, np.stack([left, truth[left]], axis=1), name=f"scene {seed}")
+
+
+@pytest.fixture(scope="module")
+def cases():
+    return [case(s) for s in (100, 101, 0, 1)]
+
+
+def test_genes_round_trip_and_bounds():
+    p = Params(theta_c=3.0, theta_s=20.0, lambda_c=0.7, lambda_s=1.5)
+    assert to_params("III", to_chromosome("III", p)) == p
+    assert to_params("I", [5.0, 2.0], base=p) == Params(5.0, 20.0, 2.0, 1.5)
+    assert gene_bounds("II").names == ("theta_c", "theta_s", "lambda_c", "lambda_s")
+    assert np.all(gene_bounds("III").low < gene_bounds("III").high)
+    with pytest.raises(ParameterError, match="'chromosome'"):
+        to_params("III", [1.0, 2.0])
+
+
+def test_fitness_is_n_correct_minus_n_errors(cases):
+    params = Params(theta_c=2.0, lambda_c=0.5)
+    fitness = Fitness(cases[:2], "III")
+    value = fitness(to_chromosome("III", params)[None, :])[0]
+    expected = 0
+    for c in cases[:2]:
+        result = match(prepared=c.prepared, params=params, seed=0)
+        wanted = {tuple(t) for t in c.targets.tolist()}
+        hits = sum(tuple(p) in wanted for p in result.pairs.tolist())
+        expected += hits - (len(result.pairs) - hits)
+    assert value == expected
+    assert fitness.target == sum(len(c.targets) for c in cases[:2])
+
+
+def test_ga_learns_parameters_that_transfer_to_held_out_scenes(cases):
+    records = list(tune(cases[:1], "III", rng=0, generations=60))
+    best = to_params("III", records[-1].best_chromosome)
+    assert records[-1].best >= records[0].best
+    held_out = evaluate(cases[2:], "III", best)
+    assert held_out.recall >= 0.9 and held_out.precision >= 0.9
+
+
+def test_same_seed_same_tuning(cases):
+    a = [r.best_chromosome for r in tune(cases[:1], "I", rng=4, generations=5)]
+    b = [r.best_chromosome for r in tune(cases[:1], "I", rng=4, generations=5)]
+    assert all(np.array_equal(x, y) for x, y in zip(a, b))
+
+
+def test_empty_targets_and_bad_arguments_are_rejected(cases):
+    empty = Case(cases[0].prepared, np.zeros((0, 2), dtype=np.int64))
+    with pytest.raises(ParameterError, match="empty target set"):
+        tune([empty], "III")
+    with pytest.raises(ParameterError, match="'population'"):
+        tune(cases[:1], "III", population=1)
+    with pytest.raises(ParameterError, match="'cases'"):
+        Fitness([], "III")
+
+
+def test_protocol_reports_training_testing_and_peers(cases):
+    report = protocol(cases[:3], "III", train=0, seeds=2, generations=20, peers=True)
+    text = format_protocol(report)
+    assert "Testing:" in text and "Training:" in text and "over 2 update-order seeds" in text
+    assert len(report["held_out"]) == 2 and set(report["peers"]) == {"mutual-nn", "hungarian", "rrwm", "spectral"}
+    pooled = report["held_out"][0]
+    assert pooled.targets == sum(len(c.targets) for c in cases[1:3])
+    with pytest.raises(ParameterError, match="'train'"):
+        protocol(cases[:2], train=5)
