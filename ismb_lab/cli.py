@@ -35,16 +35,20 @@ def _add_matching_options(p: argparse.ArgumentParser) -> None:
                        help=f"override {name} (thesis default for the method)")
     p.add_argument("--params-file", type=Path, default=None, metavar="P.json",
                    help='parameters as {"method": ..., "params": {...}}, e.g. from ismb-lab tune')
-    p.add_argument("--roi", default="center", help="center | full | X,Y,W,H (default: center)")
-    p.add_argument("--shift", type=float, default=20.0, metavar="PX",
-                   help="expected disparity: centre of the candidate window (default: 20)")
-    p.add_argument("--n-min", type=int, default=20, help="fewest corners per image (default: 20)")
-    p.add_argument("--n-max", type=int, default=30, help="most corners per image (default: 30)")
+    _add_feature_options(p)
     p.add_argument("--seed", type=int, default=0, help="seed of the update order (default: 0)")
     p.add_argument("--stop-rule", choices=("sweep", "stall"), default="sweep",
                    help="sweep: a full sweep without change (default); stall: 200 idle attempts")
     p.add_argument("--rule", choices=("exact", "thesis"), default="exact",
                    help="exact Hopfield weights (default) or the thesis' literal (3-17)/(3-20)")
+
+
+def _add_feature_options(p: argparse.ArgumentParser) -> None:
+    p.add_argument("--roi", default="center", help="center | full | X,Y,W,H (default: center)")
+    p.add_argument("--shift", type=float, default=20.0, metavar="PX",
+                   help="expected disparity: centre of the candidate window (default: 20)")
+    p.add_argument("--n-min", type=int, default=20, help="fewest corners per image (default: 20)")
+    p.add_argument("--n-max", type=int, default=30, help="most corners per image (default: 30)")
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -63,6 +67,34 @@ def build_parser() -> argparse.ArgumentParser:
     m.add_argument("--plot", type=Path, default=None, metavar="OUT.png",
                    help="draw the pair with features and match lines")
     m.set_defaults(run=_cmd_match)
+    t = sub.add_parser("tune", help="fit the parameters to target pairs with the GA (ch. 4)",
+                       description="Fit a method's parameters to the target pairs of one image pair "
+                       "with the real-coded GA, and write them for 'ismb-lab match --params-file'. "
+                       "Ctrl-C stops early and still writes the best parameters so far.")
+    t.add_argument("left", type=Path, help="left image file")
+    t.add_argument("right", type=Path, help="right image file")
+    t.add_argument("targets", type=Path, help="target pairs (JSON, as saved by the labeller)")
+    t.add_argument("--method", choices=METHOD_NAMES, default="III", help="energy recipe (default: III)")
+    t.add_argument("--generations", type=int, default=500, help="most generations (default: 500)")
+    t.add_argument("--population", type=int, default=30, help="chromosomes (default: 30)")
+    t.add_argument("--seed", type=int, default=0, help="seed of the GA (default: 0)")
+    _add_feature_options(t)
+    t.add_argument("--out", type=Path, default=Path("params.json"), metavar="PARAMS.json",
+                   help="where to write the parameters (default: params.json)")
+    t.set_defaults(run=_cmd_tune)
+    e = sub.add_parser("evaluate", help="train on one pair, test on the others (Fig. 5.10)",
+                       description="Run the thesis' train/test protocol over the pairs of a "
+                       "manifest, with every network figure over several update-order seeds.")
+    e.add_argument("manifest", type=Path, help='JSON: {"pairs": [{"left", "right", "targets", '
+                   '"roi", "shift"} or {"source": "middlebury-motorcycle", "roi"}, ...]}')
+    e.add_argument("--method", choices=METHOD_NAMES, default="III", help="energy recipe (default: III)")
+    e.add_argument("--train", type=int, default=0, metavar="INDEX",
+                   help="the pair whose GA parameters are tested on the others (default: 0)")
+    e.add_argument("--seeds", type=int, default=5, help="update-order seeds per figure (default: 5)")
+    e.add_argument("--generations", type=int, default=500, help="GA generations (default: 500)")
+    e.add_argument("--peers", action="store_true", help="also score the peer matchers")
+    e.add_argument("--json", type=Path, default=None, metavar="OUT", help="write the report as JSON")
+    e.set_defaults(run=_cmd_evaluate)
     r = sub.add_parser("render", help="render the project's stereo pairs into images/",
                        description="Render the project's synthetic stereo pairs with their ground "
                        "truth. The output is byte for byte what is committed in images/.")
@@ -101,6 +133,90 @@ def resolve_params(args) -> tuple[str, Params]:
     merged.update(values)
     merged.update({k: getattr(args, k) for k in PARAM_OPTIONS if getattr(args, k) is not None})
     return method, Params.from_dict(merged, owner="ismb-lab")
+
+
+def _progress(total: int, desc: str):
+    from tqdm import tqdm
+    return tqdm(total=total, desc=desc, unit="gen", file=sys.stderr, dynamic_ncols=True,
+                disable=None)
+
+
+def _cmd_tune(args) -> int:
+    from .evaluation import score
+    from .matching import prepare
+    from .targets import load_targets, snap
+    from .tuning import Case, evaluate, to_params, tune
+
+    prepared = prepare(args.left, args.right, _config(args))
+    targets = load_targets(args.targets, pair=prepared.pair)
+    snapped = snap(targets, prepared.problem.left_xy, prepared.problem.right_xy)
+    missing = sorted(set(snapped.missing_left.tolist()) | set(snapped.missing_right.tolist()))
+    if missing:
+        print(f"ismb-lab: note: {len(missing)} of {len(targets)} targets have no corner within "
+              f"1.5 px and are left out: {', '.join(f'#{n + 1}' for n in missing)}", file=sys.stderr)
+    if len(snapped.pairs) == 0:
+        raise UsageError(f"{args.targets}: no target pair lies on the corners found "
+                         f"({len(targets)} targets, {len(prepared.problem.left_xy)} left corners)")
+    case = Case(prepared, snapped.pairs, name=str(args.left))
+    records = tune([case], args.method, rng=args.seed, population=args.population,
+                   generations=args.generations)
+    best, interrupted = None, False
+    with _progress(args.generations + 1, f"Method-{args.method} GA") as bar:
+        try:
+            for best in records:
+                bar.update(1)
+                bar.set_postfix(best=f"{best.best:g}", mean=f"{best.mean:.2f}", target=len(case.targets))
+        except KeyboardInterrupt:
+            interrupted = True
+    if best is None:
+        raise KeyboardInterrupt
+    params = to_params(args.method, best.best_chromosome)
+    out = {"method": args.method, "params": params.to_dict(), "fitness": best.best,
+           "generations": best.index, "seed": args.seed, "targets": len(case.targets),
+           "interrupted": interrupted}
+    atomic_write_text(args.out, json.dumps(out, indent=2) + "\n")
+    result = evaluate([case], args.method, params)
+    print(f"Method-{args.method}: best fitness {best.best:g} of {len(case.targets)} after "
+          f"{best.index} generations; C/E/T {result}; parameters {params.to_dict()}")
+    print(f"written to {args.out}")
+    if interrupted:
+        print("ismb-lab: interrupted; the best parameters so far were written", file=sys.stderr)
+        return 130
+    return 0
+
+
+def _cmd_evaluate(args) -> int:
+    from .evaluation import format_protocol, load_manifest, protocol
+
+    cases = load_manifest(args.manifest)
+    bars = {}
+
+    def progress(name, record):
+        if name not in bars:
+            for bar in bars.values():
+                bar.close()
+            bars[name] = _progress(args.generations + 1, f"GA on {name}")
+        bars[name].update(1)
+        bars[name].set_postfix(best=f"{record.best:g}", mean=f"{record.mean:.2f}")
+
+    try:
+        report = protocol(cases, args.method, train=args.train, seeds=args.seeds,
+                          generations=args.generations, peers=args.peers, progress=progress)
+    finally:
+        for bar in bars.values():
+            bar.close()
+    print(format_protocol(report))
+    if args.json is not None:
+        data = {"method": report["method"], "train": report["train"],
+                "params": report["params"].to_dict(), "seeds": args.seeds,
+                "pairs": [{"name": r["name"], "testing": [str(s) for s in r["testing"]],
+                           "training": [str(s) for s in r["training"]]} for r in report["rows"]],
+                "held_out": [{"cet": str(s), "recall": s.recall, "precision": s.precision}
+                             for s in report["held_out"]],
+                "peers": {name: {"held_out": str(p["held_out"]), "recall": p["held_out"].recall,
+                                 "precision": p["held_out"].precision} for name, p in report["peers"].items()}}
+        atomic_write_text(args.json, json.dumps(data, indent=2) + "\n")
+    return 0
 
 
 def _config(args):
