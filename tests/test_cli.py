@@ -75,7 +75,7 @@ def test_same_seed_same_output_and_stop_rules(pair, tmp_path):
     (lambda p, t: ["match", t / "missing.png", p[1]], "does not exist"),
     (lambda p, t: ["match", t / "text.png", p[1]], "image"),
     (lambda p, t: ["match", p[0], t / "small.png"], "'right'"),
-    (lambda p, t: ["match", p[0], p[1], "--method", "IV"], "invalid choice"),
+    (lambda p, t: ["match", p[0], p[1], "--method", "VII"], "invalid choice"),
     (lambda p, t: ["match", p[0], p[1], "--theta-c", "nan"], "'theta_c'"),
     (lambda p, t: ["match", p[0], p[1], "--lambda-s", "-2"], "'lambda_s'"),
     (lambda p, t: ["match", p[0], p[1], "--roi", "300,10,50,50"], "'roi'"),
@@ -120,3 +120,160 @@ def test_help_lists_every_option():
     for option in ("--method", "--theta-c", "--theta-s", "--lambda-c", "--lambda-s", "--params-file",
                    "--roi", "--shift", "--n-min", "--n-max", "--seed", "--stop-rule", "--json", "--plot"):
         assert option in proc.stdout
+
+
+# --- ismb-lab tune and ismb-lab evaluate ------------------------------------------------
+
+@pytest.fixture(scope="module")
+def targets(pair, tmp_path_factory):
+    """Ground-truth targets of the pair, in the labeller's file format, with image hashes."""
+    from ismb_lab.matching import prepare
+    from ismb_lab.scenes import true_matches
+    from ismb_lab.targets import save_targets, targets_from_matches
+
+    prepared = prepare(*pair)
+    truth = true_matches(synthetic_scene(seed=3), prepared.problem.left_xy, prepared.problem.right_xy)
+    pairs = [(i, k) for i, k in enumerate(truth) if k >= 0]
+    assert len(pairs) >= 10
+    target_set = targets_from_matches(pairs, prepared.problem.left_xy, prepared.problem.right_xy,
+                                      left_sha256=prepared.pair.left_sha256,
+                                      right_sha256=prepared.pair.right_sha256)
+    return save_targets(tmp_path_factory.mktemp("targets") / "targets.json", target_set)
+
+
+def test_tune_writes_what_match_reads(pair, targets, tmp_path, capsys):
+    out = tmp_path / "params.json"
+    assert main(["tune", *map(str, pair), str(targets), "--generations", "15", "--seed", "2",
+                 "--out", str(out)]) == 0
+    data = json.loads(out.read_text())
+    assert {"method", "params", "fitness", "generations", "seed"} <= set(data)
+    assert data["method"] == "III" and data["seed"] == 2 and 1 <= data["generations"] <= 15
+    assert set(data["params"]) == {"theta_c", "theta_s", "lambda_c", "lambda_s"}
+    n_targets = len(json.loads(targets.read_text())["pairs"])
+    assert -n_targets <= data["fitness"] <= n_targets
+    assert f"best fitness {data['fitness']:g} of {n_targets}" in capsys.readouterr().out
+
+    matched = tmp_path / "m.json"
+    assert main(["match", *map(str, pair), "--params-file", str(out), "--json", str(matched)]) == 0
+    assert json.loads(matched.read_text())["params"] == data["params"]
+
+
+def test_tune_is_reproducible_and_the_seed_matters(pair, targets, tmp_path):
+    runs = []
+    for name, seed in (("a", 5), ("b", 5), ("c", 6)):
+        out = tmp_path / f"{name}.json"
+        assert main(["tune", *map(str, pair), str(targets), "--generations", "8", "--seed", str(seed),
+                     "--out", str(out)]) == 0
+        runs.append(json.loads(out.read_text())["params"])
+    assert runs[0] == runs[1]
+    assert runs[0] != runs[2]
+
+
+def test_tune_interrupted_still_writes_the_best_so_far(pair, targets, tmp_path, monkeypatch, capsys):
+    import ismb_lab.tuning
+
+    real_tune = ismb_lab.tuning.tune
+
+    def interrupted_after_three(*args, **kwargs):
+        for n, record in enumerate(real_tune(*args, **kwargs)):
+            if n == 3:
+                raise KeyboardInterrupt   # what Ctrl-C raises in the main thread
+            yield record
+
+    monkeypatch.setattr(ismb_lab.tuning, "tune", interrupted_after_three)
+    out = tmp_path / "params.json"
+    code = main(["tune", *map(str, pair), str(targets), "--generations", "400", "--out", str(out)])
+    assert code == 130
+    data = json.loads(out.read_text())
+    assert data["interrupted"] is True and data["generations"] == 2
+    assert "interrupted" in capsys.readouterr().err
+    assert main(["match", *map(str, pair), "--params-file", str(out)]) == 0
+
+
+def test_a_real_ctrl_c_stops_tune_cleanly(pair, targets, tmp_path):
+    import signal
+    import time
+
+    # Two targets with swapped partners: no chromosome reaches the target fitness, so the GA
+    # cannot stop by itself before the signal.
+    data = json.loads(targets.read_text())
+    data["pairs"][0]["right_xy"], data["pairs"][1]["right_xy"] = (data["pairs"][1]["right_xy"],
+                                                                  data["pairs"][0]["right_xy"])
+    hard = tmp_path / "hard.json"
+    hard.write_text(json.dumps(data))
+    out = tmp_path / "params.json"
+    proc = subprocess.Popen([sys.executable, "-m", "ismb_lab.cli", "tune", *map(str, pair), str(hard),
+                             "--generations", "100000", "--population", "60", "--out", str(out)],
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    time.sleep(6)   # start-up plus some generations; a process still in start-up must also exit cleanly
+    proc.send_signal(signal.SIGINT)
+    stdout, stderr = proc.communicate(timeout=120)
+    assert proc.returncode == 130, stderr
+    assert "Traceback" not in stderr and "interrupted" in stderr
+    if out.exists():   # written whenever at least one generation had finished
+        assert json.loads(out.read_text())["interrupted"] is True
+
+
+@pytest.mark.parametrize("make_args, words", [
+    (lambda p, t, g: ["tune", p[0], p[1], t / "corrupt.json"], "JSON"),
+    (lambda p, t, g: ["tune", p[0], p[1], t / "truncated.json"], "JSON"),
+    (lambda p, t, g: ["tune", p[0], p[1], t / "v2.json"], "'version'"),
+    (lambda p, t, g: ["tune", p[0], p[1], t / "outside.json"], "inside"),
+    (lambda p, t, g: ["tune", p[0], p[1], t / "other.json"], "other images"),
+    (lambda p, t, g: ["tune", p[0], p[1], t / "empty.json"], "no target"),
+    (lambda p, t, g: ["tune", p[0], p[1], g, "--population", "1"], "'population'"),
+    (lambda p, t, g: ["tune", p[0], p[1], g, "--generations", "0"], "'generations'"),
+    (lambda p, t, g: ["evaluate", t / "missing_manifest.json"], "existing file"),
+    (lambda p, t, g: ["evaluate", t / "manifest_missing_file.json"], "existing file"),
+])
+def test_tune_and_evaluate_bad_input(pair, targets, tmp_path, capsys, make_args, words):
+    good = json.loads(targets.read_text())
+    (tmp_path / "corrupt.json").write_text("{not json")
+    (tmp_path / "truncated.json").write_text(targets.read_text()[: len(targets.read_text()) // 2])
+    (tmp_path / "v2.json").write_text(json.dumps({**good, "version": 2}))
+    far = {**good, "pairs": [{"left_xy": [5000, 10], "right_xy": [10, 10]}]}
+    (tmp_path / "outside.json").write_text(json.dumps(far))
+    (tmp_path / "other.json").write_text(json.dumps({**good, "left_image_sha256": "0" * 64}))
+    (tmp_path / "empty.json").write_text(json.dumps({"version": 1, "pairs": []}))
+    (tmp_path / "manifest_missing_file.json").write_text(json.dumps(
+        {"pairs": [{"left": "nope.png", "right": str(pair[1]), "targets": str(targets)}]}))
+    before = targets.read_text()
+    code = main([str(a) for a in make_args(pair, tmp_path, targets)])
+    err = capsys.readouterr().err
+    assert code == 2, err
+    assert len(err.strip().splitlines()) == 1 and err.startswith("ismb-lab: error:")
+    assert words in err
+    assert targets.read_text() == before
+
+
+def test_evaluate_runs_the_train_test_protocol_with_peers(pair, targets, tmp_path, capsys):
+    import shutil
+
+    folder = tmp_path / "set"
+    folder.mkdir()
+    for p in (*pair, targets):
+        shutil.copy(p, folder / p.name)
+    entry = {"left": "left.png", "right": "right.png", "targets": "targets.json"}
+    manifest = folder / "manifest.json"
+    manifest.write_text(json.dumps({"pairs": [{**entry, "name": "a"}, {**entry, "name": "b"}]}))
+    out = tmp_path / "report.json"
+    assert main(["evaluate", str(manifest), "--generations", "6", "--seeds", "2", "--peers",
+                 "--json", str(out)]) == 0
+    text = capsys.readouterr().out
+    assert "a (training pair): Testing:" in text and "b: Testing:" in text
+    report = json.loads(out.read_text())
+    assert report["method"] == "III" and report["train"] == 0 and report["seeds"] == 2
+    assert [row["name"] for row in report["pairs"]] == ["a", "b"]
+    assert {"mutual-nn", "hungarian", "rrwm", "spectral"} <= set(report["peers"])
+    for held in report["held_out"]:
+        assert 0.0 <= held["recall"] <= 1.0 and 0.0 <= held["precision"] <= 1.0
+
+
+def test_help_of_tune_and_evaluate():
+    for command, options in (("tune", ("--method", "--generations", "--population", "--seed", "--roi",
+                                       "--shift", "--n-min", "--n-max", "--out")),
+                             ("evaluate", ("--method", "--train", "--seeds", "--peers", "--json"))):
+        proc = run_cli(command, "--help")
+        assert proc.returncode == 0
+        for option in options:
+            assert option in proc.stdout
