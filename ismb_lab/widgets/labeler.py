@@ -1,0 +1,524 @@
+"""Hand-label target pairs on a stereo pair: click a left feature, then its right partner.
+
+:class:`LabelModel` is the plain-Python model (no widgets, no pyplot);
+:class:`TargetLabeler` adds the figure and the buttons.
+
+Coordinates
+-----------
+:meth:`LabelModel.click` takes a point ``(x, y)`` of the side-by-side figure by
+default: the left image occupies ``0 <= x <= W - 1`` and the right image
+``W + GAP <= x <= 2 W + GAP - 1`` (see :data:`ismb_lab.plotting.GAP`).  With
+``side="left"`` or ``side="right"`` it takes image coordinates instead (the
+package's convention, :mod:`ismb_lab.coords`).
+"""
+
+from __future__ import annotations
+
+import html
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from .._validation import ParameterError, ParameterTypeError, check_choice, check_number, message
+from ..matching import MatchConfig, Prepared, prepare
+from ..plotting import GAP, plot_matches
+from ..targets import TargetSet, load_targets, save_targets, snap, targets_from_matches
+from ._common import Base, Pane, button, grey_rgb, number_labels, pair_files, with_class
+
+COLUMNS = ("Pair", "Left", "Right", "y_left", "x_left", "y_right", "x_right", "disparity")
+
+
+@dataclass(frozen=True)
+class Comparison:
+    """Student labels against the answer key, as feature pairs ``(i, k)``.
+
+    `off_feature` counts answer-key pairs with no detected feature within reach
+    on one side; they cannot be labelled with these features and are not missing.
+    """
+
+    correct: np.ndarray
+    wrong: np.ndarray
+    missing: np.ndarray
+    off_feature: int
+
+    def __str__(self) -> str:
+        text = f"{len(self.correct)} correct, {len(self.wrong)} wrong, {len(self.missing)} missing"
+        return text + (f" ({self.off_feature} key pairs lie off the features)" if self.off_feature else "")
+
+
+def _pair_array(pairs) -> np.ndarray:
+    return np.array(sorted(pairs), dtype=np.intp).reshape(-1, 2)
+
+
+class LabelModel:
+    """The labels of one stereo pair and every edit on them.
+
+    Parameters
+    ----------
+    prepared : Prepared
+        The pair and its features (:func:`ismb_lab.matching.prepare`).
+    path : str or os.PathLike, optional
+        Where :meth:`save` and :meth:`load` go by default.
+    answer_key : TargetSet, optional
+        Ground truth for :meth:`compare`.
+    snap_radius : float
+        A click snaps to the nearest feature within this many pixels.
+    key_tol : float
+        Answer-key points snap to features within this many pixels.
+
+    Examples
+    --------
+    >>> from ismb_lab.matching import prepare
+    >>> from ismb_lab.scenes import synthetic_scene
+    >>> scene = synthetic_scene(0)
+    >>> model = LabelModel(prepare(scene.left, scene.right))
+    >>> x, y = model.left_xy[0]
+    >>> model.click(x + 1, y, side="left")
+    'left feature 1 chosen: now click its partner in the right image'
+    >>> model.click(0, 0)
+    'no feature within 8 px of (0, 0) in the left image: click nearer a numbered feature'
+    """
+
+    def __init__(self, prepared: Prepared, *, path=None, answer_key: TargetSet | None = None,
+                 snap_radius: float = 8.0, key_tol: float = 3.0):
+        owner = "LabelModel"
+        if not isinstance(prepared, Prepared):
+            raise ParameterTypeError(message("prepared", owner, "a Prepared (see matching.prepare)", prepared))
+        if answer_key is not None and not isinstance(answer_key, TargetSet):
+            raise ParameterTypeError(message("answer_key", owner, "None or a TargetSet", answer_key))
+        self.prepared = prepared
+        self.path = None if path is None else Path(path)
+        self.answer_key = answer_key
+        self.snap_radius = check_number(snap_radius, "snap_radius", owner, low=0, low_open=True)
+        self.key_tol = check_number(key_tol, "key_tol", owner, low=0)
+        self.left_xy = prepared.problem.left_xy
+        self.right_xy = prepared.problem.right_xy
+        self.height, self.width = prepared.pair.shape
+        self.offset = self.width + GAP
+        self._pairs: list[tuple[int, int]] = []
+        self._history: list[tuple] = []
+        self._saved: tuple = ()
+        self.pending: int | None = None   # a left feature waiting for its partner
+        self.selected: int | None = None  # index into pairs
+        self.message = "click a left feature, then its partner in the right image"
+
+    # --- reading ------------------------------------------------------------------------
+    @property
+    def pairs(self) -> np.ndarray:
+        """The labelled ``(i, k)`` feature pairs, sorted by left feature: an ``(m, 2)`` array."""
+        return _pair_array(self._pairs)
+
+    @property
+    def dirty(self) -> bool:
+        """Whether the labels differ from the last save or load."""
+        return tuple(self._pairs) != self._saved
+
+    def rows(self) -> list[tuple]:
+        """The table in the thesis' column order (:data:`COLUMNS`); features numbered from 1."""
+        out = []
+        for n, (i, k) in enumerate(self._pairs, 1):
+            (xl, yl), (xr, yr) = self.left_xy[i], self.right_xy[k]
+            out.append((n, i + 1, k + 1, float(yl), float(xl), float(yr), float(xr),
+                        float(np.hypot(xl - xr, yl - yr))))
+        return out
+
+    def targets(self) -> TargetSet:
+        """The labels as a :class:`~ismb_lab.targets.TargetSet` bound to the two images."""
+        pair = self.prepared.pair
+        return targets_from_matches(self.pairs, self.left_xy, self.right_xy,
+                                    left_sha256=pair.left_sha256, right_sha256=pair.right_sha256)
+
+    def compare(self) -> Comparison:
+        """Compare the labels with the answer key (ParameterError without one)."""
+        if self.answer_key is None:
+            raise ParameterError(message("answer_key", "LabelModel.compare", "a TargetSet", None))
+        snapped = snap(self.answer_key, self.left_xy, self.right_xy, tol=self.key_tol)
+        key = {tuple(p) for p in snapped.pairs.tolist()}
+        mine = set(self._pairs)
+        off = len(self.answer_key) - len(snapped.pairs)
+        return Comparison(_pair_array(mine & key), _pair_array(mine - key), _pair_array(key - mine), off)
+
+    # --- locating clicks ----------------------------------------------------------------
+    def locate(self, x, y, side=None):
+        """``(side, x, y)`` in image coordinates of a click, or None off both images."""
+        x = check_number(x, "x", "LabelModel.click")
+        y = check_number(y, "y", "LabelModel.click")
+        if side is None:
+            if x > self.width - 0.5:
+                if x < self.offset - 0.5:
+                    return None
+                side, x = "right", x - self.offset
+            else:
+                side = "left"
+        check_choice(side, "side", "LabelModel.click", ("left", "right"))
+        if not (-0.5 <= x <= self.width - 0.5 and -0.5 <= y <= self.height - 0.5):
+            return None
+        return side, x, y
+
+    def nearest(self, side: str, x: float, y: float) -> tuple[int | None, float]:
+        """The nearest feature of one image to ``(x, y)`` and its distance (None, inf if none)."""
+        xy = self.left_xy if side == "left" else self.right_xy
+        if not len(xy):
+            return None, float("inf")
+        d = np.hypot(xy[:, 0] - x, xy[:, 1] - y)
+        j = int(np.argmin(d))
+        return j, float(d[j])
+
+    # --- editing ------------------------------------------------------------------------
+    def _say(self, text: str) -> str:
+        self.message = text
+        return text
+
+    def _remember(self):
+        self._history.append((tuple(self._pairs), self.pending, self.selected))
+
+    def click(self, x, y, side=None) -> str:
+        """Handle a click; see the module docstring for the coordinates.  Returns the status text.
+
+        A left feature starts a pair (or selects the pair it belongs to); a right
+        feature completes the pending pair (or selects the pair it belongs to).
+        A click on the pending left feature again cancels it.
+        """
+        where = self.locate(x, y, side)
+        if where is None:
+            return self._say(f"({x:g}, {y:g}) is not on either image: click a numbered feature")
+        side, ix, iy = where
+        j, dist = self.nearest(side, ix, iy)
+        if j is None or dist > self.snap_radius:
+            return self._say(f"no feature within {self.snap_radius:g} px of ({ix:g}, {iy:g}) in the "
+                             f"{side} image: click nearer a numbered feature")
+        column = 0 if side == "left" else 1
+        owner = [n for n, p in enumerate(self._pairs) if p[column] == j]
+        if owner:
+            self.pending, self.selected = None, owner[0]
+            i, k = self._pairs[owner[0]]
+            return self._say(f"pair {owner[0] + 1} selected (left {i + 1} - right {k + 1}): "
+                             "Delete removes it")
+        if side == "left":
+            self.selected = None
+            if self.pending == j:
+                self.pending = None
+                return self._say(f"left feature {j + 1} released")
+            self.pending = j
+            return self._say(f"left feature {j + 1} chosen: now click its partner in the right image")
+        if self.pending is None:
+            return self._say(f"right feature {j + 1}: click a left feature first")
+        self.add_pair(self.pending, j)
+        return self.message
+
+    def add_pair(self, i, k) -> None:
+        """Label left feature `i` with right feature `k` (0-based); each feature pairs once."""
+        owner = "LabelModel.add_pair"
+        i = check_number(i, "i", owner, low=0, high=len(self.left_xy) - 1, integer=True)
+        k = check_number(k, "k", owner, low=0, high=len(self.right_xy) - 1, integer=True)
+        for col, j, name in ((0, i, "i"), (1, k, "k")):
+            taken = [p for p in self._pairs if p[col] == j]
+            if taken:
+                raise ParameterError(message(name, owner, "a feature not yet in a pair (delete that "
+                                             "pair first)", f"{j}, already in the pair {taken[0]}"))
+        self._remember()
+        self._pairs = sorted(self._pairs + [(i, k)])
+        self.pending, self.selected = None, None
+        d = np.hypot(*(self.left_xy[i] - self.right_xy[k]))
+        self._say(f"pair added: left {i + 1} - right {k + 1}, disparity {d:.2f} px "
+                  f"({len(self._pairs)} pairs)")
+
+    def select(self, index) -> None:
+        """Select pair `index` (0-based, table order) or None."""
+        if index is not None:
+            index = check_number(index, "index", "LabelModel.select", low=0,
+                                 high=len(self._pairs) - 1, integer=True)
+        self.selected, self.pending = index, None
+
+    def delete_selected(self) -> bool:
+        """Remove the selected pair; False (and a message) when none is selected."""
+        if self.selected is None:
+            self._say("nothing selected: click a feature of a pair to select it")
+            return False
+        self._remember()
+        i, k = self._pairs.pop(self.selected)
+        self.selected = None
+        self._say(f"pair left {i + 1} - right {k + 1} deleted ({len(self._pairs)} pairs)")
+        return True
+
+    def undo(self) -> bool:
+        """Take back the last add, delete or load; False when there is nothing to undo."""
+        if not self._history:
+            self._say("nothing to undo")
+            return False
+        pairs, self.pending, self.selected = self._history.pop()
+        self._pairs = list(pairs)
+        self._say(f"undone ({len(self._pairs)} pairs)")
+        return True
+
+    # --- files --------------------------------------------------------------------------
+    def _path(self, path, owner) -> Path:
+        path = self.path if path is None else path
+        if path is None:
+            raise ParameterError(message("path", owner, "a file path (none was given here or to the "
+                                         "labeler)", None))
+        if not isinstance(path, (str, Path)):
+            raise ParameterTypeError(message("path", owner, "a str or Path", path))
+        return Path(path)
+
+    def save(self, path=None) -> Path:
+        """Write the labels atomically; on failure the old file is untouched and the error raised."""
+        path = self._path(path, "LabelModel.save")
+        save_targets(path, self.targets())
+        self._saved = tuple(self._pairs)
+        self._say(f"saved {len(self._pairs)} pairs to {path}")
+        return path
+
+    def load(self, path=None) -> int:
+        """Replace the labels by a targets file's; any error leaves the labels as they were.
+
+        Every target must lie on a detected feature (within 1.5 px) and no feature may
+        be used twice; otherwise the file was made with other features and is refused.
+        """
+        owner = "LabelModel.load"
+        path = self._path(path, owner)
+        targets = load_targets(path, pair=self.prepared.pair)
+        snapped = snap(targets, self.left_xy, self.right_xy)
+        lost = np.union1d(snapped.missing_left, snapped.missing_right)
+        if lost.size:
+            raise ParameterError(f"The 'path' parameter of {owner} must be targets on this pair's "
+                                 f"features. Got {str(path)!r}, where {lost.size} of {len(targets)} "
+                                 f"pairs have no feature within 1.5 px (first: pair {lost[0]}) instead.")
+        if snapped.shared.size:
+            raise ParameterError(f"The 'path' parameter of {owner} must be targets using each "
+                                 f"feature once. Got {str(path)!r}, where pairs "
+                                 f"{snapped.shared.tolist()} share a feature instead.")
+        self._remember()
+        self._pairs = sorted(map(tuple, snapped.pairs.tolist()))
+        self._saved = tuple(self._pairs)
+        self.pending = self.selected = None
+        self._say(f"loaded {len(self._pairs)} pairs from {path}")
+        return len(self._pairs)
+
+
+# --- view -------------------------------------------------------------------------------
+
+_KEY_COLOURS = {"correct": "#2ca02c", "wrong": "#d62728", "plain": "#ffb000", "selected": "#ff00ff"}
+
+
+def draw_labels(ax, model: LabelModel) -> dict:
+    """Create the labeler's artists on `ax` (image, numbered features, pair lines, markers)."""
+    from matplotlib.collections import LineCollection
+
+    pair = model.prepared.pair
+    art = plot_matches(ax, pair.left, pair.right, model.left_xy, model.right_xy, np.zeros((0, 2), int),
+                       numbers=False)
+    art["image"].set_data(grey_rgb(art["image"].get_array()))
+    art["image"].set_interpolation("nearest")
+    art["labels"] = [number_labels(ax, model.left_xy, "yellow"),
+                     number_labels(ax, model.right_xy + [model.offset, 0], "cyan")]
+    art["lines"].set_array(None)
+    art["lines"].set_linewidths(1.6)
+    art["missing"] = LineCollection([], colors=_KEY_COLOURS["plain"], linestyles="dashed", linewidths=1.2)
+    ax.add_collection(art["missing"])
+    art["pending"], = ax.plot([], [], "o", mfc="none", mec=_KEY_COLOURS["selected"], ms=12, mew=2)
+    ax.set_xlim(-0.5, model.offset + model.width - 0.5)
+    ax.set_ylim(model.height - 0.5, -0.5)
+    return art
+
+
+def update_labels(art: dict, model: LabelModel, show_key: bool = False) -> Comparison | None:
+    """Bring the artists of :func:`draw_labels` up to date with `model`."""
+    pairs = model.pairs
+    shift = np.array([model.offset, 0.0])
+    segments = np.stack([model.left_xy[pairs[:, 0]], model.right_xy[pairs[:, 1]] + shift], axis=1)
+    colours = [_KEY_COLOURS["plain"]] * len(pairs)
+    widths = [1.6] * len(pairs)
+    comparison = None
+    missing = np.zeros((0, 2, 2))
+    if show_key and model.answer_key is not None:
+        comparison = model.compare()
+        good = {tuple(p) for p in comparison.correct.tolist()}
+        colours = [_KEY_COLOURS["correct" if tuple(p) in good else "wrong"] for p in pairs.tolist()]
+        gone = comparison.missing
+        missing = np.stack([model.left_xy[gone[:, 0]], model.right_xy[gone[:, 1]] + shift], axis=1)
+    if model.selected is not None:
+        colours[model.selected] = _KEY_COLOURS["selected"]
+        widths[model.selected] = 3.5
+    art["lines"].set_segments(segments)
+    art["lines"].set_colors(colours)
+    art["lines"].set_linewidths(widths)
+    art["missing"].set_segments(missing)
+    if model.pending is not None:
+        art["pending"].set_data(*model.left_xy[[model.pending]].T)
+    else:
+        art["pending"].set_data([], [])
+    return comparison
+
+
+def pairs_html(model: LabelModel) -> str:
+    """The live table of pairs as HTML (thesis column order)."""
+    head = "".join(f"<th>{c}</th>" for c in COLUMNS)
+    body = []
+    for n, row in enumerate(model.rows()):
+        style = ' style="background:#fde"' if n == model.selected else ""
+        cells = [f"{v}" for v in row[:3]] + [f"{v:g}" for v in row[3:7]] + [f"{row[7]:.2f}"]
+        body.append(f"<tr{style}>" + "".join(f"<td>{c}</td>" for c in cells) + "</tr>")
+    if not body:
+        body = [f'<tr><td colspan="{len(COLUMNS)}">no pairs yet</td></tr>']
+    return f'<table class="ismb-table"><tr>{head}</tr>{"".join(body)}</table>'
+
+
+# --- controller -------------------------------------------------------------------------
+
+class TargetLabeler(Base):
+    """Label target pairs by clicking; save them in the targets format.
+
+    Parameters
+    ----------
+    left, right : path or ndarray
+        The image pair.
+    path : str or os.PathLike, optional
+        The targets file of Save and Load.
+    config : MatchConfig, optional
+        Corner settings: labels snap to the features the matcher sees.
+    answer_key : TargetSet or path, optional
+        Ground truth for "Show answer key".
+
+    Notes
+    -----
+    CSS classes: root ``ismb-labeler``, figure ``ismb-stereo``, buttons ``ismb-undo``,
+    ``ismb-delete``, ``ismb-save``, ``ismb-load``, toggle ``ismb-answer-key``, table
+    ``ismb-pairs``, unsaved-changes flag ``ismb-dirty``, key summary ``ismb-key-summary``,
+    status ``ismb-status``, error log ``ismb-log``.
+    """
+
+    def __init__(self, left, right=None, *, path=None, config: MatchConfig | None = None,
+                 answer_key=None):
+        import ipywidgets
+
+        super().__init__()
+        prepared = left if isinstance(left, Prepared) else prepare(left, right, config)
+        if answer_key is not None and not isinstance(answer_key, TargetSet):
+            answer_key = load_targets(answer_key, pair=prepared.pair)
+        self.model = LabelModel(prepared, path=path, answer_key=answer_key)
+        self.pane = Pane((9.0, 3.6), "ismb-stereo")
+        self.panes = (self.pane,)
+        self.ax = self.pane.fig.add_axes((0, 0, 1, 1))
+        self.artists = draw_labels(self.ax, self.model)
+
+        self.undo_button = button("Undo", "ismb-undo", icon="undo")
+        self.delete_button = button("Delete", "ismb-delete", "Delete the selected pair", icon="trash")
+        self.save_button = button("Save", "ismb-save", "Save the pairs to the targets file", icon="save")
+        self.load_button = button("Load", "ismb-load", "Load the pairs from the targets file",
+                                  icon="folder-open")
+        self.key_toggle = with_class(ipywidgets.ToggleButton(
+            description="Show answer key", disabled=answer_key is None,
+            tooltip="Compare your pairs with the ground truth" if answer_key is not None
+            else "This pair has no answer key"), "ismb-answer-key")
+        self.dirty_label = with_class(ipywidgets.HTML(""), "ismb-dirty")
+        self.key_summary = with_class(ipywidgets.HTML(""), "ismb-key-summary")
+        self.table = with_class(ipywidgets.HTML(""), "ismb-pairs")
+
+        self.undo_button.on_click(self.guard(lambda _: self.undo()))
+        self.delete_button.on_click(self.guard(lambda _: self.delete_selected()))
+        self.save_button.on_click(self.guard(lambda _: self._save_quietly()))
+        self.load_button.on_click(self.guard(lambda _: self._load_quietly()))
+        self.key_toggle.observe(self.guard(lambda _: self.refresh()), names="value")
+        self.pane.fig.canvas.mpl_connect("button_press_event", self.guard(self._on_press))
+
+        bar = ipywidgets.HBox([self.undo_button, self.delete_button, self.save_button,
+                               self.load_button, self.key_toggle, self.dirty_label])
+        self.widget = with_class(ipywidgets.VBox([self.pane.widget, bar, self.status, self.key_summary,
+                                                  self.table, self.log]), "ismb-labeler")
+        self.refresh()
+
+    @classmethod
+    def from_folder(cls, folder, *, path=None, config: MatchConfig | None = None) -> "TargetLabeler":
+        """Label ``folder/left.png`` and ``folder/right.png``; the answer key is
+        ``folder/answer_key.json`` when present."""
+        left, right, key = pair_files(folder, "TargetLabeler.from_folder")
+        return cls(left, right, path=path, config=config, answer_key=key if key.is_file() else None)
+
+    # --- the model's operations, redrawn ----------------------------------------------
+    @property
+    def pairs(self) -> np.ndarray:
+        return self.model.pairs
+
+    def click(self, x, y, side=None) -> str:
+        """:meth:`LabelModel.click` (side-by-side coordinates unless `side` is given), redrawn."""
+        text = self.model.click(x, y, side)
+        self.refresh()
+        return text
+
+    def add_pair(self, i, k) -> None:
+        self.model.add_pair(i, k)
+        self.refresh()
+
+    def undo(self) -> bool:
+        done = self.model.undo()
+        self.refresh()
+        return done
+
+    def delete_selected(self) -> bool:
+        done = self.model.delete_selected()
+        self.refresh()
+        return done
+
+    def save(self, path=None) -> Path:
+        """Save (raising on failure, after saying so in the status line)."""
+        try:
+            return self.model.save(path)
+        except Exception as exc:
+            self.model.message = (f"save failed, the file on disk is unchanged and your "
+                                  f"{len(self.model.pairs)} pairs are kept: {exc}")
+            raise
+        finally:
+            self.refresh()
+
+    def load(self, path=None) -> int:
+        """Load (raising on failure, after saying so; the current labels stay)."""
+        try:
+            return self.model.load(path)
+        except Exception as exc:
+            self.model.message = f"load failed, your {len(self.model.pairs)} pairs are kept: {exc}"
+            raise
+        finally:
+            self.refresh()
+
+    def _save_quietly(self):
+        try:
+            self.save()
+        except (OSError, ValueError, TypeError):
+            pass  # already in the status line
+
+    def _load_quietly(self):
+        try:
+            self.load()
+        except (OSError, ValueError, TypeError):
+            pass
+
+    def _on_press(self, event):
+        if event.inaxes is not self.ax or event.xdata is None or event.button not in (1, None):
+            return
+        toolbar = getattr(event.canvas, "toolbar", None)
+        if toolbar is not None and getattr(toolbar, "mode", ""):
+            return  # zooming or panning, not labelling
+        self.click(event.xdata, event.ydata)
+
+    # --- view ---------------------------------------------------------------------------
+    def refresh(self) -> None:
+        """Update the figure, table, flags and status from the model, then draw."""
+        comparison = update_labels(self.artists, self.model, self.key_toggle.value)
+        self.key_summary.value = "" if comparison is None else f"Answer key: {html.escape(str(comparison))}"
+        self.table.value = pairs_html(self.model)
+        self.dirty_label.value = "* unsaved changes" if self.model.dirty else "saved"
+        self.delete_button.disabled = self.model.selected is None
+        self.undo_button.disabled = not self.model._history
+        self.say(self.model.message)
+        self.pane.draw()
+
+    def static_figure(self):
+        """A plain matplotlib Figure of the pair and its labels (for print)."""
+        from matplotlib.figure import Figure
+
+        fig = Figure(figsize=(9.0, 3.6))
+        ax = fig.add_axes((0, 0, 1, 1))
+        update_labels(draw_labels(ax, self.model), self.model, self.key_toggle.value)
+        return fig

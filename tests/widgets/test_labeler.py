@@ -1,0 +1,227 @@
+import json
+
+import numpy as np
+import pytest
+
+from ismb_lab import ParameterError
+from ismb_lab.targets import load_targets
+from ismb_lab.widgets.labeler import COLUMNS, LabelModel, TargetLabeler
+
+
+@pytest.fixture
+def labeler(prepared, tmp_path, answer_key):
+    return TargetLabeler(prepared, path=tmp_path / "targets.json", answer_key=answer_key)
+
+
+def side_xy(model, side, j):
+    x, y = (model.left_xy if side == "left" else model.right_xy)[j]
+    return (x + (model.offset if side == "right" else 0), y)
+
+
+@pytest.fixture
+def canvas_click(press):
+    def click(labeler, side, j, jitter=(0.0, 0.0)):
+        x, y = side_xy(labeler.model, side, j)
+        press(labeler.pane.fig, labeler.ax, x + jitter[0], y + jitter[1])
+    return click
+
+
+def test_canvas_clicks_add_a_pair_and_redraw(labeler, canvas_click):
+    canvas_click(labeler, "left", 2, (2.0, -1.0))
+    assert labeler.model.pending == 2
+    assert "left feature 3 chosen" in labeler.status.value
+    canvas_click(labeler, "right", 4, (-1.5, 1.0))
+    assert labeler.pairs.tolist() == [[2, 4]]
+    segments = labeler.artists["lines"].get_segments()
+    assert len(segments) == 1
+    np.testing.assert_allclose(segments[0][0], labeler.model.left_xy[2])
+    np.testing.assert_allclose(segments[0][1], labeler.model.right_xy[4] + [labeler.model.offset, 0])
+    assert "<td>3</td><td>5</td>" in labeler.table.value
+    assert "*" in labeler.dirty_label.value
+
+
+def test_table_columns_follow_the_thesis(labeler):
+    labeler.add_pair(0, 1)
+    assert [c for c in COLUMNS] == ["Pair", "Left", "Right", "y_left", "x_left", "y_right", "x_right",
+                                    "disparity"]
+    row = labeler.model.rows()[0]
+    (xl, yl), (xr, yr) = labeler.model.left_xy[0], labeler.model.right_xy[1]
+    assert row == pytest.approx((1, 1, 2, yl, xl, yr, xr, np.hypot(xl - xr, yl - yr)))
+    header = labeler.table.value.split("</tr>")[0]
+    assert [h.split("</th>")[0] for h in header.split("<th>")[1:]] == list(COLUMNS)
+
+
+def test_far_click_does_nothing_and_says_why(labeler, canvas_click, press):
+    labeler.add_pair(0, 0)
+    before = labeler.pairs.copy()
+    canvas_click(labeler, "left", 1, (30.0, 30.0))  # nowhere near a corner of the ROI
+    assert labeler.model.pending is None
+    assert "no feature within" in labeler.status.value
+    press(labeler.pane.fig, labeler.ax, labeler.model.width + 3, 100)  # in the gap
+    assert "not on either image" in labeler.status.value
+    np.testing.assert_array_equal(labeler.pairs, before)
+
+
+def test_right_click_first_is_refused(labeler, canvas_click):
+    canvas_click(labeler, "right", 0)
+    assert len(labeler.pairs) == 0 and "left feature first" in labeler.status.value
+
+
+def test_clicking_a_paired_feature_selects_and_delete_removes(labeler, canvas_click):
+    labeler.add_pair(1, 2)
+    labeler.add_pair(3, 4)
+    assert labeler.delete_button.disabled
+    canvas_click(labeler, "right", 4)
+    assert labeler.model.selected == 1 and not labeler.delete_button.disabled
+    assert labeler.artists["lines"].get_linewidths()[1] > labeler.artists["lines"].get_linewidths()[0]
+    labeler.delete_button.click()
+    assert labeler.pairs.tolist() == [[1, 2]]
+    labeler.delete_button.click()  # nothing selected now
+    assert labeler.pairs.tolist() == [[1, 2]]
+
+
+def test_undo_button_takes_back_add_and_delete(labeler):
+    labeler.add_pair(1, 2)
+    labeler.add_pair(3, 4)
+    labeler.model.select(0)
+    labeler.delete_selected()
+    labeler.undo_button.click()
+    assert labeler.pairs.tolist() == [[1, 2], [3, 4]]
+    labeler.undo_button.click()
+    assert labeler.pairs.tolist() == [[1, 2]]
+    labeler.undo_button.click()
+    labeler.undo()
+    assert len(labeler.pairs) == 0 and "nothing to undo" in labeler.status.value
+
+
+def test_a_feature_pairs_only_once(labeler):
+    labeler.add_pair(1, 2)
+    with pytest.raises(ParameterError, match="'k' parameter .* already in the pair"):
+        labeler.add_pair(5, 2)
+    with pytest.raises(ParameterError, match="'i' parameter"):
+        labeler.add_pair(99, 0)
+
+
+def test_save_load_round_trip(labeler, tmp_path, prepared):
+    for i, k in ((0, 1), (4, 3), (2, 2)):
+        labeler.add_pair(i, k)
+    labeler.save_button.click()
+    assert "saved 3 pairs" in labeler.status.value and "*" not in labeler.dirty_label.value
+    on_disk = load_targets(tmp_path / "targets.json", pair=prepared.pair)
+    np.testing.assert_allclose(on_disk.left_xy, prepared.problem.left_xy[[0, 2, 4]])
+    fresh = TargetLabeler(prepared, path=tmp_path / "targets.json")
+    fresh.load_button.click()
+    np.testing.assert_array_equal(fresh.pairs, labeler.pairs)
+    assert "saved" == fresh.dirty_label.value
+
+
+@pytest.mark.parametrize("content", ["{not json", '{"version": 1, "pairs": [{"left_xy": [1, 2]}]}',
+                                     '{"version": 1, "pairs": [{"left_xy": [1, 1], "right_xy": [2, 2]}]}'])
+def test_a_bad_file_keeps_the_labels(labeler, tmp_path, content):
+    labeler.add_pair(0, 1)
+    (tmp_path / "targets.json").write_text(content)
+    labeler.load_button.click()
+    assert labeler.pairs.tolist() == [[0, 1]]
+    assert "load failed, your 1 pairs are kept" in labeler.status.value
+    with pytest.raises(ParameterError):
+        labeler.load()
+    assert labeler.pairs.tolist() == [[0, 1]]
+
+
+def test_a_failing_save_leaves_the_old_file(labeler, tmp_path):
+    labeler.add_pair(0, 1)
+    labeler.save()
+    old = (tmp_path / "targets.json").read_text()
+    labeler.add_pair(2, 3)
+    labeler.save_button.click()  # fine: two pairs
+    assert json.loads((tmp_path / "targets.json").read_text())["pairs"].__len__() == 2
+    (tmp_path / "targets.json").write_text(old)
+    labeler.model.path = tmp_path / "missing-folder" / "targets.json"
+    labeler.add_pair(4, 4)
+    labeler.save_button.click()
+    assert "save failed" in labeler.status.value and "3 pairs are kept" in labeler.status.value
+    assert len(labeler.pairs) == 3 and "*" in labeler.dirty_label.value
+    assert (tmp_path / "targets.json").read_text() == old
+
+
+def test_save_without_a_path_says_so(prepared):
+    labeler = TargetLabeler(prepared)
+    labeler.add_pair(0, 0)
+    labeler.save_button.click()
+    assert "save failed" in labeler.status.value and "'path' parameter" in labeler.status.value
+
+
+def test_answer_key_counts_and_markers(labeler, truth):
+    (i, k), (j, _) = truth[0], truth[1]
+    wrong_k = next(r for r in range(len(labeler.model.right_xy)) if r not in truth[:, 1])
+    labeler.add_pair(i, k)
+    labeler.add_pair(j, wrong_k)
+    labeler.key_toggle.value = True
+    c = labeler.model.compare()
+    assert (len(c.correct), len(c.wrong), len(c.missing)) == (1, 1, len(truth) - 1)
+    assert "1 correct, 1 wrong" in labeler.key_summary.value
+    assert len(labeler.artists["missing"].get_segments()) == len(truth) - 1
+    colours = labeler.artists["lines"].get_colors()
+    assert not np.allclose(colours[0], colours[1])
+    labeler.key_toggle.value = False
+    assert labeler.key_summary.value == "" and len(labeler.artists["missing"].get_segments()) == 0
+
+
+def test_from_folder_finds_the_answer_key(pair_folder):
+    labeler = TargetLabeler.from_folder(pair_folder, path=pair_folder / "mine.json")
+    assert not labeler.key_toggle.disabled
+    assert "ismb-labeler" in labeler.widget._dom_classes
+    assert "ismb-stereo" in labeler.pane.widget._dom_classes
+    (pair_folder / "answer_key.json").unlink()
+    assert TargetLabeler.from_folder(pair_folder).key_toggle.disabled
+
+
+def test_rapid_clicks_leave_a_consistent_state(labeler, canvas_click):
+    rng = np.random.default_rng(1)
+    model = labeler.model
+    for _ in range(120):
+        side = ("left", "right")[rng.integers(2)]
+        n = len(model.left_xy if side == "left" else model.right_xy)
+        action = rng.integers(10)
+        if action == 0:
+            labeler.undo_button.click()
+        elif action == 1:
+            labeler.delete_button.click()
+        else:
+            canvas_click(labeler, side, rng.integers(n), rng.normal(0, 3, 2))
+        pairs = labeler.pairs
+        assert len(set(pairs[:, 0])) == len(pairs) and len(set(pairs[:, 1])) == len(pairs)
+        assert model.selected is None or 0 <= model.selected < len(pairs)
+        assert len(labeler.artists["lines"].get_segments()) == len(pairs)
+        assert labeler.table.value.count("<tr>") + labeler.table.value.count("<tr style") == max(len(pairs), 1) + 1
+    assert labeler.errors == []
+
+
+def test_callback_exceptions_land_in_the_log(labeler, monkeypatch):
+    def broken(*args):
+        raise RuntimeError("boom")
+    monkeypatch.setattr(labeler.model, "undo", broken)
+    labeler.undo_button.click()
+    assert any("RuntimeError: boom" in o["text"] for o in labeler.log.outputs)
+    assert "boom" in labeler.status.value
+
+
+def test_static_figure_and_repr(labeler):
+    from matplotlib.figure import Figure
+
+    labeler.add_pair(0, 1)
+    fig = labeler.static_figure()
+    assert isinstance(fig, Figure) and len(fig.axes[0].collections[0].get_segments()) == 1
+    bundle = labeler._repr_mimebundle_()
+    assert "application/vnd.jupyter.widget-view+json" in bundle
+    assert labeler.pane.widget.value[:4] == b"\x89PNG"
+
+
+def test_model_refuses_bad_arguments(prepared):
+    with pytest.raises(TypeError, match="'prepared' parameter"):
+        LabelModel("left.png")
+    model = LabelModel(prepared)
+    with pytest.raises(ValueError, match="'side' parameter"):
+        model.click(1, 1, side="top")
+    with pytest.raises(ParameterError, match="'path' parameter"):
+        model.save()
