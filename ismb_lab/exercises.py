@@ -1,0 +1,257 @@
+"""Automatic checks for the notebook exercises.
+
+Each check compares a student's answer with the package's own computation and
+returns a :class:`Feedback`: ``"correct"``, or a sentence that names the term
+that is off.  The checks recognise the usual slips (a halved quadratic part, a
+missing constant, a flipped sign) and say which one it is.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from ._validation import ParameterError, ParameterTypeError, check_number, message
+from .features import harris_from_tensor, harris_response, image_gradients, structure_tensor
+from .hopfield import Network, hopfield_form
+from .similarity import transfer
+
+
+@dataclass(frozen=True)
+class Feedback:
+    """The verdict of one exercise check.
+
+    Attributes
+    ----------
+    correct : bool
+    text : str
+        ``"correct"``, or what is off and how to fix it.
+
+    Examples
+    --------
+    >>> print(Feedback(True, "correct"))
+    correct
+    """
+
+    correct: bool
+    text: str
+
+    def __str__(self) -> str:
+        return self.text
+
+    def __bool__(self) -> bool:
+        return self.correct
+
+
+_OK = Feedback(True, "correct")
+
+
+def _array(value, name: str, owner: str, shape) -> np.ndarray:
+    try:
+        arr = np.asarray(value, dtype=float)
+    except (TypeError, ValueError):
+        raise ParameterTypeError(message(name, owner, "an array of numbers",
+                                         type(value).__name__)) from None
+    if arr.shape != tuple(shape):
+        raise ParameterError(message(name, owner, f"an array of shape {tuple(shape)}",
+                                     f"shape {arr.shape}"))
+    if not np.all(np.isfinite(arr)):
+        raise ParameterError(message(name, owner, "finite", "NaN or infinite values"))
+    return arr
+
+
+def _close(a, b, atol: float = 1e-9) -> bool:
+    return bool(np.allclose(a, b, rtol=1e-9, atol=atol))
+
+
+def check_energy_derivation(W, I, net: Network) -> Feedback:
+    """Check a Hopfield form ``E = const - 1/2 y'Wy - I'y`` of the energy (3-15).
+
+    The reference is :func:`ismb_lab.hopfield.hopfield_form` with ``rule="exact"``:
+    ``W = 2C`` for neighbouring neurons, ``-2`` for two neurons that share a left
+    (``i = j``) or a right (``k = l``) feature, ``0`` on the diagonal and for
+    neurons that do not interact, and ``I = 2 + S``.
+
+    Parameters
+    ----------
+    W : (n, n) array_like
+        The student's weights over the candidate neurons of `net`.
+    I : (n,) array_like
+        The student's biases.
+    net : Network
+
+    Returns
+    -------
+    feedback : Feedback
+        ``"correct"`` or the terms that are off.
+
+    Examples
+    --------
+    >>> net = Network.from_arrays(2, 2, rows=[0, 0, 1, 1], cols=[0, 1, 0, 1],
+    ...                           similarity=[0.5, -0.5, -0.5, 0.5],
+    ...                           pair_a=[0, 1], pair_b=[3, 2], pair_c=[0.9, -0.9])
+    >>> W, I = hopfield_form(net)
+    >>> print(check_energy_derivation(W, I, net))
+    correct
+    >>> print(check_energy_derivation(W, I - 2, net))
+    I (the bias) is off: I_ik = 2 + S_ik; the 2 comes from expanding (1 - sum_k y_ik)^2 and (1 - sum_i y_ik)^2.
+    """
+    owner = "check_energy_derivation"
+    if not isinstance(net, Network):
+        raise ParameterTypeError(message("net", owner, "a Network", type(net).__name__))
+    n = net.n_neurons
+    W = _array(W, "W", owner, (n, n))
+    I = _array(I, "I", owner, (n,))
+    W_ok, I_ok = hopfield_form(net, "exact")
+    if _close(W, W_ok) and _close(I, I_ok):
+        return _OK
+    W_thesis, _ = hopfield_form(net, "thesis")
+    if _close(W, W_thesis):
+        return Feedback(False, "W is the thesis' (3-17) taken literally: W = C - delta_ij - delta_kl with "
+                               "the self-weight C_ikik - 2 on the diagonal. That halves the quadratic part "
+                               "of (3-15): the double sum counts every pair twice, so W = 2C and -2, and a "
+                               "neuron has no connection to itself (W_ikik = 0).")
+    if _close(W, W_thesis - np.diag(np.diag(W_thesis))):
+        return Feedback(False, "W is half of what it should be: the double sum in (3-15) counts every "
+                               "pair (ik, jl) twice, so W = 2C for neighbours and -2 for a shared feature.")
+    problems = []
+    if not _close(W, W.T):
+        problems.append("W is not symmetric: W_ikjl must equal W_jlik")
+    eye = np.eye(n, dtype=bool)
+    same_row = (net.rows[:, None] == net.rows[None, :]) & ~eye
+    same_col = (net.cols[:, None] == net.cols[None, :]) & ~eye
+    neighbour = np.zeros((n, n), dtype=bool)
+    neighbour[net.pair_a, net.pair_b] = neighbour[net.pair_b, net.pair_a] = True
+    rest = ~(eye | same_row | same_col | neighbour)
+    terms = (
+        (eye, "the diagonal W_ikik (self-connection) is off: it must be 0, since y^2 = y "
+              "moves the square terms into I"),
+        (same_row, "W for two neurons of the same left feature (i = j) is off: it must be -2, "
+                   "from the cross terms of (1 - sum_k y_ik)^2"),
+        (same_col, "W for two neurons of the same right feature (k = l) is off: it must be -2, "
+                   "from the cross terms of (1 - sum_i y_ik)^2"),
+        (neighbour, "W for neighbouring neurons is off: it must be 2 C_ikjl (the double sum "
+                    "counts every pair twice)"),
+        (rest, "W for neurons that do not interact is off: it must be 0"),
+    )
+    problems += [text for mask, text in terms if mask.any() and not _close(W[mask], W_ok[mask])]
+    if not _close(I, I_ok):
+        if _close(I, net.similarity):
+            problems.append("I (the bias) is off: I_ik = 2 + S_ik; the 2 comes from expanding "
+                            "(1 - sum_k y_ik)^2 and (1 - sum_i y_ik)^2")
+        elif _close(I, 1.0 + net.similarity):
+            problems.append("I (the bias) is off: I_ik = 2 + S_ik, one 1 from each of the two "
+                            "squared constraint terms, not just one of them")
+        else:
+            problems.append("I (the bias) is off: I_ik = 2 + S_ik")
+    return Feedback(False, "; ".join(problems) + ".")
+
+
+def check_harris_response(R, image, sigma: float = 1.0, k: float = 0.04) -> Feedback:
+    """Check a Harris response ``R = det(M) - k tr(M)^2`` (2-1 ... 2-8).
+
+    The reference is :func:`ismb_lab.features.harris_response` (Sobel gradients
+    divided by 8, a Gaussian window of standard deviation `sigma`).
+
+    Parameters
+    ----------
+    R : (H, W) array_like
+        The student's response.
+    image : (H, W) array_like
+        The grey image it was computed from.
+    sigma, k : float
+        The Gaussian window and Harris' constant used.
+
+    Returns
+    -------
+    feedback : Feedback
+
+    Examples
+    --------
+    >>> img = np.zeros((20, 20)); img[10:, 10:] = 100.0
+    >>> print(check_harris_response(harris_response(img, 1.5, 0.05), img, 1.5, 0.05))
+    correct
+    >>> Axx, Axy, Ayy = structure_tensor(img, 1.5)
+    >>> print(check_harris_response(Axx * Ayy - Axy ** 2, img, 1.5, 0.05))
+    The k tr(M)^2 term is missing: R = det(M) - k tr(M)^2, not det(M) alone.
+    """
+    owner = "check_harris_response"
+    expected = harris_response(image, sigma, k)
+    R = _array(R, "R", owner, expected.shape)
+    sigma = check_number(sigma, "sigma", owner, low=0, low_open=True)
+    # the scale of R, so that the comparison does not depend on the image's contrast
+    atol = 1e-9 * max(1.0, float(np.abs(expected).max()))
+    if _close(R, expected, atol):
+        return _OK
+    Axx, Axy, Ayy = structure_tensor(image, sigma)
+    det, trace = Axx * Ayy - Axy ** 2, Axx + Ayy
+    Ix, Iy = image_gradients(image)
+    slips = (
+        (det, "The k tr(M)^2 term is missing: R = det(M) - k tr(M)^2, not det(M) alone."),
+        (det + k * trace ** 2, "The sign of the k tr(M)^2 term is flipped: R = det(M) - k tr(M)^2."),
+        (det - k * trace, "tr(M) must be squared: R = det(M) - k tr(M)^2."),
+        (Axx * Ayy + Axy ** 2 - k * trace ** 2,
+         "det(M) is off: det(M) = Axx Ayy - Axy^2 (a minus before Axy^2)."),
+        (harris_from_tensor(Ix * Ix, Ix * Iy, Iy * Iy, k),
+         "The structure tensor is not windowed: average Ix^2, Ix Iy and Iy^2 with a Gaussian "
+         f"of sigma = {sigma:g} before forming det and trace."),
+    )
+    for candidate, text in slips:
+        if _close(R, candidate, atol):
+            return Feedback(False, text)
+    worst = np.unravel_index(np.argmax(np.abs(R - expected)), R.shape)
+    return Feedback(False, f"R is off; the largest difference is at (x, y) = ({worst[1]}, {worst[0]}): "
+                           f"{R[worst]:.6g} instead of {expected[worst]:.6g}.")
+
+
+def check_transfer(values, x, theta: float, lam: float) -> Feedback:
+    """Check a transfer function ``2 / (1 + exp(lam (x - theta))) - 1`` (3-10, 3-13).
+
+    Parameters
+    ----------
+    values : array_like
+        The student's outputs at `x`.
+    x : array_like
+        The inputs (``M_ik`` for S, ``X`` for C).
+    theta, lam : float
+        The tolerance and the steepness used.
+
+    Returns
+    -------
+    feedback : Feedback
+
+    Examples
+    --------
+    >>> x = np.linspace(0, 40, 9)
+    >>> print(check_transfer(2 / (1 + np.exp(2.0 * (x - 20))) - 1, x, 20, 2.0))
+    correct
+    >>> print(check_transfer(1 / (1 + np.exp(2.0 * (x - 20))), x, 20, 2.0))
+    The output must lie in [-1, 1]: double the logistic and subtract 1, 2 / (1 + exp(lam (x - theta))) - 1.
+    """
+    owner = "check_transfer"
+    theta = check_number(theta, "theta", owner)
+    lam = check_number(lam, "lam", owner, low=0, low_open=True)
+    x = np.asarray(x, dtype=float)
+    values = _array(values, "values", owner, x.shape)
+    expected = transfer(x, theta, lam)
+    if _close(values, expected, 1e-7):
+        return _OK
+    slips = (
+        (-expected, "The sign is flipped: small x (good agreement) must give values near +1, "
+                    "so the exponent is +lam (x - theta)."),
+        ((expected + 1) / 2, "The output must lie in [-1, 1]: double the logistic and subtract 1, "
+                             "2 / (1 + exp(lam (x - theta))) - 1."),
+        (expected + 1, "The '- 1' is missing: the output must lie in [-1, 1]."),
+        (transfer(x, 0.0, lam), "theta is not used: the output must cross 0 at x = theta."),
+        (transfer(x, theta, 1.0), "lambda is not used: it sets how steeply the output switches "
+                                  "around theta."),
+        (transfer(x, theta, 2.0 * lam), "lambda is doubled: the exponent is lam (x - theta)."),
+        (transfer(x, theta, 0.5 * lam), "lambda is halved: the exponent is lam (x - theta)."),
+    )
+    for candidate, text in slips:
+        if _close(values, candidate, 1e-7):
+            return Feedback(False, text)
+    worst = int(np.argmax(np.abs(values - expected).ravel()))
+    return Feedback(False, f"The values are off; the largest difference is at x = {x.ravel()[worst]:g}: "
+                           f"{values.ravel()[worst]:.6g} instead of {expected.ravel()[worst]:.6g}.")

@@ -1,0 +1,169 @@
+import numpy as np
+import pytest
+
+from ismb_lab import ParameterError, ParameterTypeError
+from ismb_lab.exercises import check_energy_derivation, check_harris_response, check_transfer
+from ismb_lab.features import harris_response, image_gradients, structure_tensor
+from ismb_lab.hopfield import Network, hopfield_form
+from ismb_lab.similarity import transfer
+
+
+@pytest.fixture
+def net():
+    """Two left and three right features: shared rows, shared columns, neighbours and strangers."""
+    rows = [0, 0, 0, 1, 1, 1]
+    cols = [0, 1, 2, 0, 1, 2]
+    similarity = [0.5, -0.2, 0.1, -0.4, 0.8, 0.3]
+    # (0,0)-(1,1), (0,1)-(1,0), (0,1)-(1,2) interact; (0,0)-(1,2) etc. do not
+    return Network.from_arrays(2, 3, rows, cols, similarity, pair_a=[0, 1, 1], pair_b=[4, 3, 5],
+                               pair_c=[0.7, -0.3, 0.25], self_c=[0.9] * 6)
+
+
+def test_energy_correct(net):
+    W, I = hopfield_form(net)
+    feedback = check_energy_derivation(W, I, net)
+    assert feedback.correct and str(feedback) == "correct"
+
+
+def test_energy_correct_agrees_with_brute_force(net):
+    """A W, I derived independently from (3-15) by finite differences passes."""
+    from ismb_lab.hopfield import energy
+
+    n = net.n_neurons
+    E = lambda y: energy(net, np.array(y, dtype=np.uint8))  # noqa: E731
+    zero = np.zeros(n, dtype=int)
+    I = np.array([E(zero) - E(np.eye(n, dtype=int)[a]) for a in range(n)])
+    W = np.zeros((n, n))
+    for a in range(n):
+        for b in range(n):
+            if a != b:
+                y = zero.copy(); y[[a, b]] = 1
+                W[a, b] = -(E(y) - E(zero)) - I[a] - I[b]
+    assert check_energy_derivation(W, I, net).correct
+
+
+def test_energy_thesis_literal(net):
+    W, I = hopfield_form(net, "thesis")
+    feedback = check_energy_derivation(W, I, net)
+    assert not feedback.correct and "(3-17)" in feedback.text and "halves" in feedback.text
+
+
+def test_energy_halved(net):
+    W, I = hopfield_form(net)
+    assert "half of what it should be" in check_energy_derivation(W / 2, I, net).text
+
+
+@pytest.mark.parametrize("term, expected", [
+    ("diagonal", "the diagonal W_ikik"),
+    ("row", "same left feature (i = j)"),
+    ("col", "same right feature (k = l)"),
+    ("neighbour", "neighbouring neurons is off"),
+    ("rest", "do not interact is off"),
+])
+def test_energy_names_the_wrong_term(net, term, expected):
+    W, I = hopfield_form(net)
+    W = W.copy()
+    a, b = {"diagonal": (2, 2), "row": (0, 2), "col": (0, 3), "neighbour": (0, 4), "rest": (0, 5)}[term]
+    W[a, b] += 0.5
+    if a != b:
+        W[b, a] += 0.5
+    feedback = check_energy_derivation(W, I, net)
+    assert not feedback.correct
+    assert expected in feedback.text
+    # only that term is named
+    others = {"the diagonal W_ikik", "same left feature (i = j)", "same right feature (k = l)",
+              "neighbouring neurons is off", "do not interact is off", "bias"} - {expected}
+    assert not any(o in feedback.text for o in others)
+
+
+def test_energy_asymmetric(net):
+    W, I = hopfield_form(net)
+    W = W.copy(); W[0, 4] += 1.0
+    assert "not symmetric" in check_energy_derivation(W, I, net).text
+
+
+@pytest.mark.parametrize("shift, expected", [(-2.0, "the 2 comes from"), (-1.0, "one 1 from each"),
+                                             (0.3, "I (the bias) is off: I_ik = 2 + S_ik")])
+def test_energy_bias(net, shift, expected):
+    W, I = hopfield_form(net)
+    feedback = check_energy_derivation(W, I + shift, net)
+    assert not feedback.correct and expected in feedback.text and "W " not in feedback.text
+
+
+def test_energy_bad_input(net):
+    W, I = hopfield_form(net)
+    with pytest.raises(ParameterError, match="'W' parameter of check_energy_derivation.*shape"):
+        check_energy_derivation(W[:2], I, net)
+    with pytest.raises(ParameterError, match="'I'.*finite"):
+        check_energy_derivation(W, np.full(6, np.nan), net)
+    with pytest.raises(ParameterTypeError, match="'net'.*a Network"):
+        check_energy_derivation(W, I, "net")
+
+
+@pytest.fixture
+def image():
+    rng = np.random.default_rng(3)
+    img = np.zeros((32, 40))
+    img[8:24, 10:30] = 180.0
+    return img + rng.normal(0, 2, img.shape)
+
+
+def test_harris_correct(image):
+    assert check_harris_response(harris_response(image, 1.5, 0.05), image, 1.5, 0.05).text == "correct"
+
+
+def test_harris_slips(image):
+    sigma, k = 1.5, 0.05
+    Axx, Axy, Ayy = structure_tensor(image, sigma)
+    det, tr = Axx * Ayy - Axy ** 2, Axx + Ayy
+    Ix, Iy = image_gradients(image)
+    cases = [
+        (det, "k tr(M)^2 term is missing"),
+        (det + k * tr ** 2, "sign of the k tr(M)^2 term is flipped"),
+        (det - k * tr, "tr(M) must be squared"),
+        (Axx * Ayy + Axy ** 2 - k * tr ** 2, "det(M) is off"),
+        (Ix * Ix * Iy * Iy - (Ix * Iy) ** 2 - k * (Ix * Ix + Iy * Iy) ** 2, "not windowed"),
+    ]
+    for R, expected in cases:
+        feedback = check_harris_response(R, image, sigma, k)
+        assert not feedback.correct and expected in feedback.text, expected
+
+
+def test_harris_other_error_names_the_place(image):
+    R = harris_response(image, 1.0, 0.04).copy()
+    R[5, 7] += 1.0
+    text = check_harris_response(R, image).text
+    assert "(x, y) = (7, 5)" in text
+
+
+def test_harris_bad_shape(image):
+    with pytest.raises(ParameterError, match="'R' parameter of check_harris_response"):
+        check_harris_response(np.zeros((3, 3)), image)
+
+
+def test_transfer_correct_and_slips():
+    x = np.linspace(0, 50, 11)
+    theta, lam = 20.0, 0.7
+    good = 2 / (1 + np.exp(lam * (x - theta))) - 1
+    assert check_transfer(good, x, theta, lam).correct
+    cases = [
+        (-good, "sign is flipped"),
+        (1 / (1 + np.exp(lam * (x - theta))), "must lie in [-1, 1]: double"),
+        (good + 1, "'- 1' is missing"),
+        (transfer(x, 0.0, lam), "theta is not used"),
+        (transfer(x, theta, 1.0), "lambda is not used"),
+        (transfer(x, theta, 2 * lam), "lambda is doubled"),
+        (transfer(x, theta, lam / 2), "lambda is halved"),
+    ]
+    for values, expected in cases:
+        feedback = check_transfer(values, x, theta, lam)
+        assert not feedback.correct and expected in feedback.text, expected
+    other = good.copy(); other[3] += 0.1
+    assert "at x = 15" in check_transfer(other, x, theta, lam).text
+
+
+def test_transfer_bad_input():
+    with pytest.raises(ParameterError, match="'lam' parameter of check_transfer"):
+        check_transfer([0.0], [0.0], 1.0, 0.0)
+    with pytest.raises(ParameterError, match="'values'.*shape"):
+        check_transfer([0.0, 1.0], [0.0], 1.0, 1.0)
