@@ -4,5 +4,6 @@ Display one by ending a notebook cell with it; ``.widget`` is its root container
 """
 
 from .labeler import LabelModel, TargetLabeler
+from .stepper import HopfieldStepper, StepperModel
 
-__all__ = ["LabelModel", "TargetLabeler"]
+__all__ = ["HopfieldStepper", "LabelModel", "StepperModel", "TargetLabeler"]

@@ -148,19 +148,34 @@ def grey_rgb(image) -> "np.ndarray":
     return np.repeat(g[:, :, None], 3, axis=2)
 
 
-def number_labels(ax, xy, colour, size: float = 7.0, start: int = 1):
-    """Number the points ``start, start + 1, ...`` beside them, as ONE artist.
+def path_labels(ax, offsets, strings, colour, *, size: float = 7.0, shift=(2.5, 2.5),
+                offset_transform=None, ha: str = "left"):
+    """Short strings drawn at `offsets` as glyph outlines in ONE collection.
 
-    Forty ``Text`` artists cost about 15 ms per Agg draw; the same glyphs as
-    outlines in a single collection cost well under 1 ms.
+    Each ``Text`` artist costs about 1 ms per Agg draw on a small classroom
+    machine; the same glyphs as paths in a single collection cost well under 1 ms,
+    which keeps a click or a step within the 30 ms a redraw may take.
+    `shift` is in points; ``ha="center"`` or ``"right"`` aligns on the shifted point.
     """
     from matplotlib.collections import PathCollection
+    from matplotlib.path import Path as MplPath
     from matplotlib.textpath import TextPath
     from matplotlib.transforms import Affine2D
 
-    paths = [TextPath((2.5, 2.5), str(n), size=size) for n in range(start, start + len(xy))]
+    paths = []
+    for text in strings:
+        path = TextPath((0, 0), str(text), size=size)
+        width = path.get_extents().x1 if len(path.vertices) else 0.0
+        dx = shift[0] - {"left": 0.0, "center": width / 2, "right": width}[ha]
+        paths.append(MplPath(path.vertices + [dx, shift[1]], path.codes))
     points = Affine2D().scale(1 / 72) + ax.figure.dpi_scale_trans
-    labels = PathCollection(paths, offsets=xy, offset_transform=ax.transData, transform=points,
-                            facecolors=colour, edgecolors="none")
+    labels = PathCollection(paths, offsets=offsets, offset_transform=offset_transform or ax.transData,
+                            transform=points, facecolors=colour, edgecolors="none")
+    labels.set_clip_on(offset_transform is None)  # axis numbers sit outside the axes
     ax.add_collection(labels, autolim=False)
     return labels
+
+
+def number_labels(ax, xy, colour, size: float = 7.0, start: int = 1):
+    """Number the points ``start, start + 1, ...`` beside them, as one artist (:func:`path_labels`)."""
+    return path_labels(ax, xy, range(start, start + len(xy)), colour, size=size)

@@ -1,0 +1,114 @@
+import numpy as np
+import pytest
+
+from ismb_lab.hopfield import iter_updates, run
+from ismb_lab.matching import match
+from ismb_lab.methods import THESIS_PARAMS, get_method
+from ismb_lab.widgets.stepper import HopfieldStepper, StepperModel
+
+
+@pytest.fixture
+def stepper(prepared):
+    return HopfieldStepper(prepared, seed=3)
+
+
+def test_steps_follow_the_core_generator(prepared):
+    model = StepperModel(prepared, seed=5)
+    made = model.step(37)
+    core = list(iter_updates(model.network, rng=5))[:37]
+    assert made == core
+    state = model.network.initial_state().copy()
+    for u in core:
+        state[u.neuron] = u.new
+    np.testing.assert_array_equal(model.state, state)
+    assert model.energies[1:] == [u.energy for u in core]
+
+
+@pytest.mark.parametrize("method,seed", [("III", 0), ("II", 4), ("I", 2)])
+def test_run_to_convergence_equals_the_core_run(prepared, method, seed):
+    model = StepperModel(prepared, method, seed=seed)
+    model.run()
+    assert model.stop == "sweep"
+    net = get_method(method).network(prepared.problem, THESIS_PARAMS[method])
+    core = run(net, rng=seed)
+    np.testing.assert_array_equal(model.state, core.state)
+    assert model.attempts == core.attempts and model.flips == core.flips
+    assert model.energies[-1] == pytest.approx(core.energy, abs=1e-9)
+    if method != "I":  # Method-I post-processes the final state
+        expected = match(prepared=prepared, method=method, seed=seed).pairs
+        np.testing.assert_array_equal(model.pairs, expected)
+
+
+def test_exact_rule_never_raises_the_energy_and_the_thesis_rule_does(prepared):
+    exact = StepperModel(prepared, seed=1)
+    exact.run()
+    assert len(exact.rises()) == 0 and np.all(np.diff(exact.energies) <= 1e-9)
+    thesis = StepperModel(prepared, seed=1, rule="thesis")
+    thesis.run(5000)
+    assert len(thesis.rises()) > 0
+
+
+def test_buttons_step_and_redraw(stepper):
+    stepper.step_button.click()
+    assert stepper.model.attempts == 1
+    u = stepper.model.last
+    assert f"neuron (i={u.i + 1}, k={u.k + 1})" in stepper.status.value
+    assert f"u = {u.u:+.3f}" in stepper.status.value and "Δy" in stepper.status.value
+    assert stepper.grid_artists["cursor"].get_xy() == (u.k - 0.5, u.i - 0.5)
+    stepper.step10_button.click()
+    assert stepper.model.attempts == 11
+    x, e = stepper.energy_artists["line"].get_data()
+    assert len(x) == 12 and list(e) == stepper.model.energies
+    np.testing.assert_array_equal(stepper.grid_artists["grid"].get_array(), stepper.model.grid() + 1)
+
+
+def test_run_button_converges_draws_once_and_disables_stepping(stepper, monkeypatch):
+    draws = []
+    monkeypatch.setattr(stepper.energy_pane, "draw", lambda: draws.append(1))
+    stepper.run_button.click()
+    assert stepper.model.stop == "sweep" and "converged (sweep rule)" in stepper.status.value
+    assert draws == [1]
+    assert stepper.step_button.disabled and stepper.run_button.disabled
+    assert len(stepper.pair_artists["lines"].get_segments()) == len(stepper.model.pairs)
+
+
+def test_run_is_capped(prepared):
+    stepper = HopfieldStepper(prepared, seed=0, run_limit=25)
+    stepper.rule_box.value = True
+    stepper.run_button.click()
+    assert stepper.model.attempts == 25 and "press Run again" in stepper.status.value
+    stepper.run_button.click()
+    assert stepper.model.attempts == 50
+
+
+def test_thesis_toggle_and_seed_reset(stepper):
+    stepper.step(30)
+    stepper.rule_box.value = True
+    assert stepper.model.rule == "thesis" and stepper.model.attempts == 0
+    stepper.step(3000)
+    assert len(stepper.energy_artists["rises"].get_offsets()) == len(stepper.model.rises()) > 0
+    stepper.seed_field.value = 9
+    assert stepper.model.seed == 9 and stepper.model.attempts == 0
+    stepper.rule_box.value = False
+    stepper.step(20)
+    stepper.reset_button.click()
+    assert stepper.model.attempts == 0 and stepper.model.rule == "exact"
+    assert not stepper.grid_artists["cursor"].get_visible()
+
+
+def test_callback_errors_are_logged(stepper, monkeypatch):
+    monkeypatch.setattr(stepper.model, "step", lambda n: 1 / 0)
+    stepper.step_button.click()
+    assert any("ZeroDivisionError" in o["text"] for o in stepper.log.outputs)
+
+
+def test_from_folder_static_figure_and_classes(pair_folder):
+    stepper = HopfieldStepper.from_folder(pair_folder, method="II", seed=2)
+    assert stepper.model.method.name == "II" and stepper.model.seed == 2
+    assert "ismb-stepper" in stepper.widget._dom_classes
+    assert "ismb-energy" in stepper.energy_pane.widget._dom_classes
+    stepper.step(5)
+    fig = stepper.static_figure()
+    assert len(fig.axes) == 3
+    with pytest.raises(ValueError, match="'folder' parameter"):
+        HopfieldStepper.from_folder(pair_folder / "nowhere")
