@@ -4,6 +4,7 @@ Display one by ending a notebook cell with it; ``.widget`` is its root container
 """
 
 from .labeler import LabelModel, TargetLabeler
+from .ga_runner import GAModel, GARunner
 from .stepper import HopfieldStepper, StepperModel
 
-__all__ = ["HopfieldStepper", "LabelModel", "StepperModel", "TargetLabeler"]
+__all__ = ["GAModel", "GARunner", "HopfieldStepper", "LabelModel", "StepperModel", "TargetLabeler"]

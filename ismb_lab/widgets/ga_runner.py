@@ -1,0 +1,389 @@
+"""Run the GA (thesis ch. 4) live: fitness curves grow while the notebook stays usable.
+
+Why a background thread
+-----------------------
+A GA generation is a burst of CPU work (a population of network runs per
+training pair).  Run in a worker thread, it leaves the kernel's main thread
+free to handle Pause and Stop clicks at once, and it works the same in a
+notebook, in Voilà, in a script and in tests, none of which needs an event loop.
+An asyncio task would run on the kernel's own loop: every generation would hold
+up the handling of clicks until it ended, and outside a kernel someone would
+have to drive the loop.  The thread checks a stop :class:`threading.Event`
+between generations (a stopped GA computes no further generation) and waits on
+a resume event while paused; widget values are set from the thread (ipywidgets
+sends them through the kernel's thread-safe I/O channel) and figure draws are
+serialised by a lock.
+
+:class:`GAModel` is the plain-Python model; :class:`GARunner` the widget.
+"""
+
+from __future__ import annotations
+
+import threading
+import time
+from pathlib import Path
+from typing import Callable
+
+import numpy as np
+
+from .._validation import ParameterError, ParameterTypeError, check_number, message
+from ..genetic import Generation
+from ..matching import MatchConfig, prepare
+from ..methods import Params, get_method
+from ..targets import load_targets, snap
+from ..tuning import Case, to_params, tune
+from ._common import Base, Pane, button, pair_files, with_class
+
+
+def case_from_folder(folder, config: MatchConfig | None = None) -> Case:
+    """A training :class:`~ismb_lab.tuning.Case` from ``left.png``, ``right.png`` and ``answer_key.json``."""
+    left, right, key = pair_files(folder, "case_from_folder")
+    if not key.is_file():
+        raise ParameterError(f"The 'folder' parameter of case_from_folder must be a folder with an "
+                             f"answer_key.json (the GA's targets). Got {str(folder)!r} instead.")
+    prepared = prepare(left, right, config)
+    snapped = snap(load_targets(key, pair=prepared.pair), prepared.problem.left_xy, prepared.problem.right_xy)
+    return Case(prepared, snapped.pairs, name=Path(folder).name)
+
+
+def as_cases(cases_or_folder, config: MatchConfig | None = None) -> list[Case]:
+    """Accept a Case, a folder, or a sequence of either."""
+    items = cases_or_folder if isinstance(cases_or_folder, (list, tuple)) else [cases_or_folder]
+    out = []
+    for item in items:
+        if isinstance(item, Case):
+            out.append(item)
+        elif isinstance(item, (str, Path)):
+            out.append(case_from_folder(item, config))
+        else:
+            raise ParameterTypeError(message("cases_or_folder", "GARunner", "a Case, a pair folder or a "
+                                             "list of them", item))
+    if not out:
+        raise ParameterError(message("cases_or_folder", "GARunner", "at least one training pair", items))
+    return out
+
+
+class GAModel:
+    """A GA run in a worker thread, with pause, resume and stop.
+
+    Parameters
+    ----------
+    cases : list of Case
+    method : {"I", "II", "III"}
+    population, generations : int
+        GA size (the thesis: 30 and 500).
+    seed : int
+        Seed of the GA (and of every network run's update order, as in ``tune``).
+
+    Examples
+    --------
+    >>> from ismb_lab.matching import prepare
+    >>> from ismb_lab.scenes import synthetic_scene, true_matches
+    >>> scene = synthetic_scene(0)
+    >>> p = prepare(scene.left, scene.right)
+    >>> k = true_matches(scene, p.problem.left_xy, p.problem.right_xy)
+    >>> case = Case(p, np.array([(i, j) for i, j in enumerate(k) if j >= 0]))
+    >>> ga = GAModel([case], population=6, generations=3)
+    >>> ga.start()
+    True
+    >>> ga.wait(60), ga.status, len(ga.history) >= 1
+    (True, 'finished', True)
+    """
+
+    def __init__(self, cases, method="III", *, population: int = 30, generations: int = 500, seed: int = 0):
+        owner = "GAModel"
+        self.cases = list(cases)
+        self.method = get_method(method)
+        self.population = check_number(population, "population", owner, low=2, integer=True)
+        self.generations = check_number(generations, "generations", owner, low=1, integer=True)
+        self.seed = check_number(seed, "seed", owner, low=0, integer=True)
+        self.target = sum(len(c.targets) for c in self.cases)
+        self.history: list[Generation] = []
+        self.status = "idle"
+        self.error: BaseException | None = None
+        self.listeners: list[Callable[[Generation], None]] = []
+        self._stop = threading.Event()
+        self._resume = threading.Event()
+        self._thread: threading.Thread | None = None
+
+    @property
+    def running(self) -> bool:
+        return self._thread is not None and self._thread.is_alive()
+
+    @property
+    def best(self) -> Generation | None:
+        return self.history[-1] if self.history else None
+
+    @property
+    def best_params(self) -> Params | None:
+        """The best chromosome so far as :class:`~ismb_lab.methods.Params` (None before generation 0)."""
+        return None if not self.history else to_params(self.method, self.history[-1].best_chromosome)
+
+    def start(self) -> bool:
+        """Start a fresh run in a worker thread; False if one is running already."""
+        if self.running:
+            return False
+        self.history, self.error = [], None
+        self._stop.clear()
+        self._resume.set()
+        self.status = "running"
+        # it checks its arguments now, in the caller's thread
+        records = tune(self.cases, self.method, rng=self.seed, population=self.population,
+                       generations=self.generations, seed=self.seed)
+        self._thread = threading.Thread(target=self._work, args=(records,), name="ismb-ga", daemon=True)
+        self._thread.start()
+        return True
+
+    def _work(self, records) -> None:
+        try:
+            for record in records:
+                self.history.append(record)
+                for listener in list(self.listeners):
+                    listener(record)
+                while not self._resume.wait(0.1):
+                    if self._stop.is_set():
+                        break
+                if self._stop.is_set():
+                    self.status = "stopped"
+                    return
+            self.status = "finished"
+        except BaseException as exc:  # noqa: BLE001 - kept for the caller, the thread must end cleanly
+            self.error, self.status = exc, "failed"
+
+    def pause(self) -> None:
+        if self.running:
+            self._resume.clear()
+            self.status = "paused"
+
+    def resume(self) -> None:
+        if self.running:
+            self.status = "running"
+            self._resume.set()
+
+    def stop(self) -> None:
+        """Ask the run to end after the generation in progress."""
+        self._stop.set()
+        self._resume.set()
+
+    def wait(self, timeout: float | None = None) -> bool:
+        """Wait for the run to end; True when no run is alive any more."""
+        if self._thread is not None:
+            self._thread.join(timeout)
+        return not self.running
+
+    def describe(self) -> str:
+        g = self.best
+        head = f"Method-{self.method.name} GA ({self.population} chromosomes, target fitness {self.target})"
+        if g is None:
+            return f"{head}: {self.status}"
+        text = (f"{head}: {self.status}, generation {g.index}/{self.generations}, best {g.best:g}, "
+                f"mean {g.mean:.2f}, {g.evaluations} network evaluations")
+        if self.status == "finished" and g.mean >= self.target:
+            text += "; every chromosome reproduces the targets"
+        if self.error is not None:
+            text += f"; failed: {self.error}"
+        return text
+
+
+# --- view -------------------------------------------------------------------------------
+
+def draw_fitness(ax, model: GAModel) -> dict:
+    """Best and mean fitness per generation (thesis Figs. 5.4, 5.5)."""
+    from matplotlib.ticker import MaxNLocator
+
+    best, = ax.plot([], [], "-", color="#d62728", lw=1.5, label="best")
+    mean, = ax.plot([], [], "-", color="#1f77b4", lw=1.2, label="mean")
+    ax.axhline(model.target, color="grey", ls=":", lw=1, label="target n_c")
+    ax.set_xlabel("generation")
+    ax.set_ylabel("fitness n_c - n_e")
+    ax.xaxis.set_major_locator(MaxNLocator(5, integer=True))
+    ax.yaxis.set_major_locator(MaxNLocator(4))
+    ax.legend(loc="lower right", fontsize=8)
+    ax.grid(alpha=0.3)
+    return {"best": best, "mean": mean, "ax": ax, "target": model.target}
+
+
+def update_fitness(art: dict, history: list) -> None:
+    x = np.array([g.index for g in history], dtype=float)
+    best = np.array([g.best for g in history])
+    mean = np.array([g.mean for g in history])
+    art["best"].set_data(x, best)
+    art["mean"].set_data(x, mean)
+    ax = art["ax"]
+    ax.set_xlim(0, max(10, x[-1] if len(x) else 0))
+    if len(x):
+        low = min(float(mean.min()), float(best.min()))
+        high = max(float(best.max()), art["target"])
+        ax.set_ylim(low - 1, high + 1)
+
+
+def chromosome_html(model: GAModel) -> str:
+    g = model.best
+    if g is None:
+        return ""
+    cells = "".join(f"<td><b>{name}</b> = {value:.2f}</td>"
+                    for name, value in zip(model.method.genes, g.best_chromosome))
+    return f'<table class="ismb-table"><tr><td>best chromosome:</td>{cells}</tr></table>'
+
+
+# --- controller -------------------------------------------------------------------------
+
+class GARunner(Base):
+    """Start, pause and stop the GA and watch its fitness; apply the best parameters elsewhere.
+
+    Parameters
+    ----------
+    cases_or_folder : Case, folder, or a list of them
+        Training pairs; a folder gives ``left.png``, ``right.png`` and ``answer_key.json``.
+    method, population, generations, seed
+        As in :func:`ismb_lab.tuning.tune` (seed: GA and update order).
+    config : MatchConfig, optional
+        Corner settings for folders.
+    redraw_every : float
+        Seconds between redraws of the curves while running (every generation
+        updates the progress bar and the status; the last one is always drawn).
+
+    Notes
+    -----
+    CSS classes: root ``ismb-ga``; buttons ``ismb-start``, ``ismb-pause``, ``ismb-stop``,
+    ``ismb-apply``; ``ismb-progress``; figure ``ismb-fitness``; best chromosome
+    ``ismb-chromosome``; ``ismb-status``; ``ismb-log``.
+    """
+
+    def __init__(self, cases_or_folder, *, method="III", population: int = 30, generations: int = 500,
+                 seed: int = 0, config: MatchConfig | None = None, redraw_every: float = 0.2):
+        import ipywidgets
+
+        super().__init__()
+        self.model = GAModel(as_cases(cases_or_folder, config), method, population=population,
+                             generations=generations, seed=seed)
+        self.redraw_every = check_number(redraw_every, "redraw_every", "GARunner", low=0)
+        self._apply: list[Callable[[Params], object]] = []
+        self._lock = threading.Lock()
+        self._drawn_at = 0.0
+        self._watcher: threading.Thread | None = None
+        self.pane = Pane((6.0, 3.0), "ismb-fitness")
+        self.panes = (self.pane,)
+        self.pane.fig.subplots_adjust(left=0.13, bottom=0.17, right=0.97, top=0.95)
+        self.artists = draw_fitness(self.pane.fig.add_subplot(), self.model)
+
+        self.start_button = button("Start", "ismb-start", "Start a fresh GA run", icon="play")
+        self.pause_button = button("Pause", "ismb-pause", "Pause or resume the run", icon="pause",
+                                   disabled=True)
+        self.stop_button = button("Stop", "ismb-stop", "Stop after the current generation", icon="stop",
+                                  disabled=True)
+        self.apply_button = button("Apply best parameters", "ismb-apply",
+                                   "Send the best chromosome to the registered widgets", disabled=True)
+        self.progress = with_class(ipywidgets.IntProgress(value=0, min=0, max=generations,
+                                                          description="generation"), "ismb-progress")
+        self.chromosome = with_class(ipywidgets.HTML(""), "ismb-chromosome")
+        self.start_button.on_click(self.guard(lambda _: self.start()))
+        self.pause_button.on_click(self.guard(lambda _: self.toggle_pause()))
+        self.stop_button.on_click(self.guard(lambda _: self.stop()))
+        self.apply_button.on_click(self.guard(lambda _: self.apply()))
+        self.model.listeners.append(self._on_generation)
+        bar = ipywidgets.HBox([self.start_button, self.pause_button, self.stop_button, self.apply_button])
+        self.widget = with_class(ipywidgets.VBox([bar, self.progress, self.status, self.pane.widget,
+                                                  self.chromosome, self.log]), "ismb-ga")
+        self.refresh()
+
+    @classmethod
+    def from_folder(cls, folder, **kw) -> "GARunner":
+        """Tune on one pair folder (targets: its ``answer_key.json``)."""
+        return cls(Path(folder) if isinstance(folder, str) else folder, **kw)
+
+    def on_apply(self, callback: Callable[[Params], object]) -> None:
+        """Call ``callback(params)`` when "Apply best parameters" is pressed."""
+        if not callable(callback):
+            raise ParameterTypeError(message("callback", "GARunner.on_apply", "a callable", callback))
+        self._apply.append(callback)
+
+    # --- actions ------------------------------------------------------------------------
+    def start(self) -> bool:
+        started = self.model.start()
+        if not started:
+            self.say("the GA is running already: Stop it first")
+            return False
+        self._drawn_at = 0.0
+        self._buttons()
+        self.say(self.model.describe())
+        self._watcher = threading.Thread(target=self._finish, name="ismb-ga-watch", daemon=True)
+        self._watcher.start()
+        return True
+
+    def toggle_pause(self) -> None:
+        if self.model.status == "paused":
+            self.model.resume()
+        else:
+            self.model.pause()
+        self._buttons()
+        self.say(self.model.describe())
+
+    def stop(self) -> None:
+        self.model.stop()
+        self.say("stopping after the current generation")
+
+    def wait(self, timeout: float | None = None) -> bool:
+        """Wait until the run and its final redraw are done; True if nothing is left running."""
+        end = None if timeout is None else time.monotonic() + timeout
+        done = self.model.wait(timeout)
+        watcher = self._watcher
+        if watcher is not None:
+            watcher.join(None if end is None else max(0.0, end - time.monotonic()))
+            done = done and not watcher.is_alive()
+        return done
+
+    def apply(self) -> Params | None:
+        """Send the best parameters so far to every :meth:`on_apply` callback."""
+        params = self.model.best_params
+        if params is None:
+            self.say("no generation yet: Start the GA first")
+            return None
+        for callback in self._apply:
+            callback(params)
+        self.say(f"applied {params} to {len(self._apply)} widget(s)")
+        return params
+
+    # --- updates from the worker thread -------------------------------------------------
+    def _on_generation(self, record: Generation) -> None:
+        self.progress.value = record.index
+        self.say(self.model.describe())
+        now = time.monotonic()
+        if now - self._drawn_at >= self.redraw_every:
+            self._drawn_at = now
+            self.refresh()
+
+    def _finish(self) -> None:
+        self.model.wait()
+        if self.model.error is not None:
+            self.report(self.model.error)
+        self.refresh()
+
+    def _buttons(self) -> None:
+        running = self.model.running and self.model.status in ("running", "paused")
+        self.start_button.disabled = running
+        self.pause_button.disabled = not running
+        self.stop_button.disabled = not running
+        self.pause_button.description = "Resume" if self.model.status == "paused" else "Pause"
+        self.pause_button.icon = "play" if self.model.status == "paused" else "pause"
+        self.apply_button.disabled = self.model.best is None
+
+    def refresh(self) -> None:
+        with self._lock:
+            history = list(self.model.history)
+            update_fitness(self.artists, history)
+            self.chromosome.value = chromosome_html(self.model)
+            if history:
+                self.progress.value = history[-1].index
+            self._buttons()
+            if self.model.error is None:
+                self.say(self.model.describe())
+            self.pane.draw()
+
+    def static_figure(self):
+        """A plain Figure of the fitness curves so far (for print)."""
+        from matplotlib.figure import Figure
+
+        fig = Figure(figsize=(6.0, 3.0), layout="constrained")
+        update_fitness(draw_fitness(fig.add_subplot(), self.model), list(self.model.history))
+        return fig

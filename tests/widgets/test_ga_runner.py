@@ -1,0 +1,117 @@
+import threading
+import time
+
+import numpy as np
+import pytest
+
+from ismb_lab.methods import Params
+from ismb_lab.tuning import Case, to_params, tune
+from ismb_lab.widgets.ga_runner import GAModel, GARunner
+
+
+@pytest.fixture(scope="module")
+def case(prepared, truth):
+    return Case(prepared, truth, name="synthetic")
+
+
+@pytest.fixture(scope="module")
+def endless(prepared, truth):
+    """A case with one target no network can produce (not a candidate), so the GA never
+    reaches its target mean and runs until stopped."""
+    rows, cols = prepared.problem.rows, prepared.problem.cols
+    k = next(k for k in range(len(prepared.problem.right_xy)) if k not in cols[rows == 0])
+    return Case(prepared, np.vstack([truth, [[0, k]]]), name="endless")
+
+
+def slow(runner, seconds=0.02):
+    runner.model.listeners.append(lambda record: time.sleep(seconds))
+
+
+def test_model_records_equal_tune(case):
+    model = GAModel([case], population=6, generations=4, seed=3)
+    assert model.start()
+    assert model.wait(60) and model.status in ("finished",)
+    expected = list(tune([case], "III", rng=3, population=6, generations=4, seed=3))
+    assert [g.best for g in model.history] == [g.best for g in expected]
+    assert [g.mean for g in model.history] == [g.mean for g in expected]
+    assert model.best_params == to_params("III", expected[-1].best_chromosome)
+
+
+def test_stop_mid_run_ends_the_thread(endless):
+    runner = GARunner(endless, population=6, generations=500, redraw_every=0.05)
+    slow(runner)
+    runner.start_button.click()
+    assert runner.model.running and runner.start_button.disabled and not runner.stop_button.disabled
+    deadline = time.monotonic() + 20
+    while len(runner.model.history) < 4 and time.monotonic() < deadline:
+        time.sleep(0.01)
+    assert len(runner.model.history) >= 4
+    runner.stop_button.click()
+    assert runner.wait(10)
+    count = len(runner.model.history)
+    assert 4 <= count < 50 and runner.model.status == "stopped"
+    time.sleep(0.1)
+    assert len(runner.model.history) == count
+    assert not any(t.name.startswith("ismb-ga") for t in threading.enumerate())
+    assert runner.progress.value == runner.model.history[-1].index
+    assert "stopped, generation" in runner.status.value
+    assert len(runner.artists["best"].get_xdata()) == count  # the final redraw happened
+    assert not runner.start_button.disabled and runner.stop_button.disabled
+
+
+def test_pause_holds_the_run_and_resume_continues(endless):
+    runner = GARunner(endless, population=6, generations=500)
+    slow(runner, 0.01)
+    runner.start()
+    while len(runner.model.history) < 2:
+        time.sleep(0.01)
+    runner.pause_button.click()
+    assert runner.model.status == "paused" and runner.pause_button.description == "Resume"
+    time.sleep(0.1)
+    held = len(runner.model.history)
+    time.sleep(0.2)
+    assert len(runner.model.history) == held
+    runner.pause_button.click()
+    while len(runner.model.history) < held + 2:
+        time.sleep(0.01)
+    runner.stop()
+    assert runner.wait(10) and runner.model.status == "stopped"
+
+
+def test_finished_run_apply_calls_back(case):
+    runner = GARunner(case, population=8, generations=6, seed=1)
+    received = []
+    runner.on_apply(received.append)
+    runner.apply_button.click()
+    assert received == [] and "Start the GA first" in runner.status.value
+    runner.start()
+    assert runner.wait(60)
+    assert runner.model.status == "finished"
+    runner.apply_button.click()
+    assert len(received) == 1 and isinstance(received[0], Params)
+    assert received[0] == runner.model.best_params
+    assert "best chromosome" in runner.chromosome.value
+    x, best = runner.artists["best"].get_data()
+    assert list(best) == [g.best for g in runner.model.history]
+
+
+def test_a_failing_fitness_lands_in_the_log(case, monkeypatch):
+    runner = GARunner(case, population=4, generations=5)
+    runner.model.listeners.insert(0, lambda record: 1 / 0)
+    runner.start()
+    assert runner.wait(30)
+    assert runner.model.status == "failed"
+    assert any("ZeroDivisionError" in o["text"] for o in runner.log.outputs)
+
+
+def test_from_folder_and_bad_input(pair_folder, tmp_path):
+    runner = GARunner.from_folder(pair_folder, method="I", population=4, generations=2)
+    assert runner.model.method.name == "I" and runner.model.target > 0
+    assert "ismb-ga" in runner.widget._dom_classes and "ismb-progress" in runner.progress._dom_classes
+    with pytest.raises(TypeError, match="'cases_or_folder' parameter"):
+        GARunner(42)
+    (pair_folder / "answer_key.json").unlink()
+    with pytest.raises(ValueError, match="answer_key.json"):
+        GARunner.from_folder(pair_folder)
+    with pytest.raises(TypeError, match="'callback' parameter"):
+        runner.on_apply("not callable")
