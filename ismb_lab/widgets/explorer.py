@@ -1,0 +1,259 @@
+"""Explore the energy parameters: move a slider, the pair is matched again and scored.
+
+:class:`ExplorerModel` is the plain-Python model; :class:`ParameterExplorer` adds
+sliders for θc, θs, λc, λs, the matches on the image pair, the C/E/T score
+against the loaded targets and the transfer functions S and C (thesis Fig. 3.3).
+"""
+
+from __future__ import annotations
+
+import html
+from dataclasses import replace
+
+import numpy as np
+
+from .._validation import ParameterTypeError, check_number, message
+from ..evaluation import Score, score
+from ..matching import MatchConfig, MatchResult, Prepared, match, prepare
+from ..methods import METHOD_NAMES, THESIS_PARAMS, Params, get_method
+from ..similarity import transfer
+from ..targets import TargetSet, load_targets, snap
+from ..tuning import GENE_BOUNDS
+from ._common import Base, Pane, pair_files, with_class
+from .stepper import draw_pair, update_pair  # the same pair view as the stepper's
+
+GENES = ("theta_c", "theta_s", "lambda_c", "lambda_s")
+SYMBOLS = {"theta_c": "θc", "theta_s": "θs", "lambda_c": "λc", "lambda_s": "λs"}
+
+
+class ExplorerModel:
+    """Match one pair with given parameters and score it against target feature pairs.
+
+    Parameters
+    ----------
+    prepared : Prepared
+    method : {"I", "II", "III"}
+    params : Params, optional
+        The thesis' values for the method by default.
+    seed : int
+        Update-order seed.
+    targets : (t, 2) int array_like, optional
+        Target ``(i, k)`` feature pairs (see :func:`ismb_lab.targets.snap`).
+
+    Examples
+    --------
+    >>> from ismb_lab.matching import prepare
+    >>> from ismb_lab.scenes import synthetic_scene
+    >>> scene = synthetic_scene(0)
+    >>> model = ExplorerModel(prepare(scene.left, scene.right), targets=[[0, 0]])
+    >>> model.set(theta_c=5.0).params.theta_c, type(model.score).__name__
+    (5.0, 'Score')
+    """
+
+    def __init__(self, prepared: Prepared, method="III", params: Params | None = None, seed: int = 0,
+                 targets=None):
+        owner = "ExplorerModel"
+        if not isinstance(prepared, Prepared):
+            raise ParameterTypeError(message("prepared", owner, "a Prepared (see matching.prepare)", prepared))
+        self.prepared = prepared
+        self.method = get_method(method).name
+        self.params = THESIS_PARAMS[self.method] if params is None else params
+        if not isinstance(self.params, Params):
+            raise ParameterTypeError(message("params", owner, "None or a Params", params))
+        self.seed = check_number(seed, "seed", owner, low=0, integer=True)
+        self.targets = None if targets is None else np.asarray(targets, dtype=np.intp).reshape(-1, 2)
+        self.result: MatchResult | None = None
+        self.score: Score | None = None
+        self.rematch()
+
+    def set(self, *, method=None, params: Params | None = None, seed=None, **genes) -> "ExplorerModel":
+        """Change any of method, params (whole or gene by gene, e.g. ``theta_c=12``) and seed; rematch."""
+        owner = "ExplorerModel.set"
+        if method is not None:
+            self.method = get_method(method).name
+        if params is not None:
+            if not isinstance(params, Params):
+                raise ParameterTypeError(message("params", owner, "a Params", params))
+            self.params = params
+        if genes:
+            self.params = replace(self.params, **genes)
+        if seed is not None:
+            self.seed = check_number(seed, "seed", owner, low=0, integer=True)
+        return self.rematch()
+
+    def rematch(self) -> "ExplorerModel":
+        self.result = match(prepared=self.prepared, method=self.method, params=self.params, seed=self.seed)
+        self.score = None if self.targets is None else score(self.result.pairs, self.targets)
+        return self
+
+    @property
+    def pairs(self) -> np.ndarray:
+        return self.result.pairs
+
+    def describe(self) -> str:
+        r = self.result
+        text = f"Method-{self.method}, seed {self.seed}: {len(r.pairs)} matches, E = {r.energy:.3f}"
+        return text + (f"; {r.message}" if r.message else "")
+
+    def score_text(self) -> str:
+        s = self.score
+        if s is None:
+            return "no targets loaded: C/E/T needs target pairs"
+        pct = lambda v: "-" if np.isnan(v) else f"{100 * v:.1f}%"  # noqa: E731
+        return (f"C/E/T = {s} (correct / wrong partner + extra / targets): "
+                f"C/T {pct(s.recall)}, precision {pct(s.precision)}, fitness {s.fitness}")
+
+
+# --- view -------------------------------------------------------------------------------
+
+def draw_transfer(axes, model: ExplorerModel) -> dict:
+    """S(M) and C(X) (thesis 3-10, 3-13; Fig. 3.3) with a marker at the current θ."""
+    x = np.linspace(0, GENE_BOUNDS["theta_c"][1], 241)
+    art = {"x": x}
+    for ax, key, title, xlabel in ((axes[0], "s", "similarity S(M)", "M (grey levels)"),
+                                   (axes[1], "c", "compatibility C(X)", "X (pixels)")):
+        art[key], = ax.plot(x, np.zeros_like(x), "-", color="#1f77b4", lw=1.5)
+        art[key + "_theta"] = ax.axvline(0, color="#d62728", ls="--", lw=1)
+        art[key + "_dot"], = ax.plot([0], [0], "o", color="#d62728", ms=5)
+        ax.axhline(0, color="grey", lw=0.6)
+        ax.set_ylim(-1.08, 1.08)
+        ax.set_xlim(x[0], x[-1])
+        ax.set_title(title, fontsize=9)
+        ax.set_xlabel(xlabel, fontsize=8)
+        ax.set_yticks([-1, 0, 1])
+        ax.set_xticks([0, 20, 40, 60])
+        ax.tick_params(labelsize=7)
+    return art
+
+
+def update_transfer(art: dict, model: ExplorerModel) -> None:
+    p = model.params
+    uses_s = model.method != "I"
+    for key, theta, lam in (("s", p.theta_s, p.lambda_s), ("c", p.theta_c, p.lambda_c)):
+        art[key].set_ydata(transfer(art["x"], theta, lam))
+        art[key + "_theta"].set_xdata([theta, theta])
+        art[key + "_dot"].set_data([theta], [0.0])
+        faded = key == "s" and not uses_s
+        art[key].set_alpha(0.25 if faded else 1.0)
+
+
+# --- controller -------------------------------------------------------------------------
+
+class ParameterExplorer(Base):
+    """Sliders for the four energy parameters with live matches, score and transfer functions.
+
+    Parameters
+    ----------
+    left, right : path or ndarray, or a Prepared as `left`
+    method : {"I", "II", "III"}
+    params : Params, optional
+    seed : int
+    config : MatchConfig, optional
+    targets : TargetSet, path, or (t, 2) feature pairs, optional
+        What C/E/T is scored against.
+
+    Notes
+    -----
+    CSS classes: root ``ismb-explorer``; sliders ``ismb-theta-c``, ``ismb-theta-s``,
+    ``ismb-lambda-c``, ``ismb-lambda-s``; ``ismb-method``; ``ismb-seed``; ``ismb-score``;
+    figures ``ismb-matches`` and ``ismb-transfer``; ``ismb-status``; ``ismb-log``.
+    """
+
+    def __init__(self, left, right=None, *, method="III", params: Params | None = None, seed: int = 0,
+                 config: MatchConfig | None = None, targets=None):
+        import ipywidgets
+
+        super().__init__()
+        prepared = left if isinstance(left, Prepared) else prepare(left, right, config)
+        if targets is not None and not isinstance(targets, np.ndarray) and not isinstance(targets, list):
+            if not isinstance(targets, TargetSet):
+                targets = load_targets(targets, pair=prepared.pair)
+            targets = snap(targets, prepared.problem.left_xy, prepared.problem.right_xy).pairs
+        self.model = ExplorerModel(prepared, method, params, seed, targets)
+        self.pair_pane = Pane((6.6, 2.6), "ismb-matches")
+        self.transfer_pane = Pane((6.6, 2.2), "ismb-transfer")
+        self.panes = (self.pair_pane, self.transfer_pane)
+        self.pair_artists = draw_pair(self.pair_pane.fig.add_axes((0, 0, 1, 1)), self.model)
+        axes = self.transfer_pane.fig.subplots(1, 2)
+        self.transfer_pane.fig.subplots_adjust(left=0.08, right=0.98, bottom=0.2, top=0.88, wspace=0.25)
+        self.transfer_artists = draw_transfer(axes, self.model)
+
+        self.sliders = {}
+        for gene in GENES:
+            low, high = GENE_BOUNDS[gene]
+            s = ipywidgets.FloatSlider(value=getattr(self.model.params, gene), min=low, max=high,
+                                       step=0.01, description=SYMBOLS[gene], continuous_update=False,
+                                       readout_format=".2f")
+            s.add_class("ismb-" + gene.replace("_", "-"))
+            s.observe(self.guard(self._on_slider), names="value")
+            self.sliders[gene] = s
+        self.method_menu = with_class(ipywidgets.Dropdown(options=list(METHOD_NAMES), value=self.model.method,
+                                                          description="method"), "ismb-method")
+        self.seed_field = with_class(ipywidgets.BoundedIntText(value=self.model.seed, min=0, max=2**31 - 1,
+                                                               description="seed"), "ismb-seed")
+        self.score_label = with_class(ipywidgets.HTML(""), "ismb-score")
+        self.method_menu.observe(self.guard(lambda c: self._change(method=c["new"])), names="value")
+        self.seed_field.observe(self.guard(lambda c: self._change(seed=c["new"])), names="value")
+        self._hold = False
+        controls = ipywidgets.HBox([ipywidgets.VBox(list(self.sliders.values())),
+                                    ipywidgets.VBox([self.method_menu, self.seed_field])])
+        self.widget = with_class(ipywidgets.VBox([controls, self.score_label, self.status,
+                                                  self.pair_pane.widget, self.transfer_pane.widget,
+                                                  self.log]), "ismb-explorer")
+        self.refresh()
+
+    @classmethod
+    def from_folder(cls, folder, **kw) -> "ParameterExplorer":
+        """Explore ``folder/left.png``, ``folder/right.png``, scored against ``answer_key.json`` if present."""
+        left, right, key = pair_files(folder, "ParameterExplorer.from_folder")
+        if key.is_file():
+            kw.setdefault("targets", key)
+        return cls(left, right, **kw)
+
+    @property
+    def params(self) -> Params:
+        return self.model.params
+
+    def set_params(self, params: Params) -> None:
+        """Show and use `params` (e.g. the GA's best): one rematch, whatever changed."""
+        if not isinstance(params, Params):
+            raise ParameterTypeError(message("params", "ParameterExplorer.set_params", "a Params", params))
+        self._hold = True
+        try:
+            for gene, slider in self.sliders.items():
+                slider.value = min(max(getattr(params, gene), slider.min), slider.max)
+        finally:
+            self._hold = False
+        self._change(params=params)
+
+    def _on_slider(self, change) -> None:
+        if self._hold:
+            return
+        gene = next(g for g, s in self.sliders.items() if s is change["owner"])
+        self._change(**{gene: float(change["new"])})
+
+    def _change(self, **what) -> None:
+        self.model.set(**what)
+        self.refresh()
+
+    def refresh(self) -> None:
+        update_pair(self.pair_artists, self.model)
+        update_transfer(self.transfer_artists, self.model)
+        for gene in ("theta_s", "lambda_s"):
+            self.sliders[gene].disabled = self.model.method == "I"
+        self.score_label.value = html.escape(self.model.score_text(), quote=False)
+        self.say(self.model.describe())
+        self.pair_pane.draw()
+        self.transfer_pane.draw()
+
+    def static_figure(self):
+        """A plain Figure: the matches and the transfer functions (for print)."""
+        from matplotlib.figure import Figure
+
+        fig = Figure(figsize=(6.6, 5.0), layout="constrained")
+        top, bottom = fig.subfigures(2, 1, height_ratios=[1.2, 1])
+        art = draw_pair(top.add_subplot(), self.model)
+        update_pair(art, self.model)
+        top.suptitle(self.model.score_text(), fontsize=8)
+        update_transfer(draw_transfer(bottom.subplots(1, 2), self.model), self.model)
+        return fig

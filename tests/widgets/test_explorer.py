@@ -1,0 +1,86 @@
+import numpy as np
+import pytest
+
+from ismb_lab.evaluation import score
+from ismb_lab.matching import match
+from ismb_lab.methods import THESIS_PARAMS, Params
+from ismb_lab.similarity import transfer
+from ismb_lab.widgets.explorer import ExplorerModel, ParameterExplorer
+
+
+@pytest.fixture
+def explorer(prepared, truth):
+    return ParameterExplorer(prepared, targets=truth)
+
+
+def test_slider_rematches_and_redraws(explorer, prepared, truth):
+    explorer.sliders["theta_c"].value = 4.5
+    assert explorer.params.theta_c == 4.5
+    expected = match(prepared=prepared, method="III", params=Params(4.5, 24.02, 6.37, 2.2), seed=0)
+    np.testing.assert_array_equal(explorer.model.pairs, expected.pairs)
+    assert len(explorer.pair_artists["lines"].get_segments()) == len(expected.pairs)
+    assert str(score(expected.pairs, truth)) in explorer.score_label.value
+    np.testing.assert_allclose(explorer.transfer_artists["c"].get_ydata(),
+                               transfer(explorer.transfer_artists["x"], 4.5, 6.37))
+    assert explorer.transfer_artists["c_dot"].get_xdata()[0] == 4.5
+
+
+def test_each_slider_reaches_its_gene(explorer):
+    for gene, value in (("theta_s", 10.0), ("lambda_c", 1.5), ("lambda_s", 0.5)):
+        explorer.sliders[gene].value = value
+        assert getattr(explorer.params, gene) == value
+    np.testing.assert_allclose(explorer.transfer_artists["s"].get_ydata(),
+                               transfer(explorer.transfer_artists["x"], 10.0, 0.5))
+
+
+def test_method_and_seed_controls(explorer, prepared):
+    explorer.method_menu.value = "I"
+    assert explorer.model.method == "I" and explorer.sliders["theta_s"].disabled
+    explorer.seed_field.value = 7
+    expected = match(prepared=prepared, method="I", params=THESIS_PARAMS["III"], seed=7)
+    np.testing.assert_array_equal(explorer.model.pairs, expected.pairs)
+    assert "Method-I, seed 7" in explorer.status.value
+
+
+def test_set_params_rematches_once(explorer, monkeypatch):
+    calls = []
+    original = explorer.model.rematch
+    monkeypatch.setattr(explorer.model, "rematch", lambda: calls.append(1) or original())
+    params = Params(theta_c=9.0, theta_s=30.0, lambda_c=2.0, lambda_s=1.0)
+    explorer.set_params(params)
+    assert calls == [1] and explorer.params == params
+    assert [s.value for s in explorer.sliders.values()] == [9.0, 30.0, 2.0, 1.0]
+    with pytest.raises(TypeError, match="'params' parameter"):
+        explorer.set_params({"theta_c": 1})
+
+
+def test_ga_apply_reaches_the_explorer(explorer, prepared, truth):
+    from ismb_lab.tuning import Case
+    from ismb_lab.widgets.ga_runner import GARunner
+
+    runner = GARunner(Case(prepared, truth), population=4, generations=2)
+    runner.on_apply(explorer.set_params)
+    runner.start()
+    assert runner.wait(60)
+    runner.apply_button.click()
+    assert explorer.params == runner.model.best_params
+
+
+def test_bad_slider_value_is_logged_not_lost(explorer, monkeypatch):
+    monkeypatch.setattr(explorer.model, "set", lambda **kw: (_ for _ in ()).throw(ValueError("bad")))
+    explorer.sliders["lambda_c"].value = 3.0
+    assert any("ValueError: bad" in o["text"] for o in explorer.log.outputs)
+
+
+def test_without_targets_says_so(prepared):
+    model = ExplorerModel(prepared)
+    assert model.score is None and "no targets" in model.score_text()
+
+
+def test_from_folder_reads_the_answer_key(pair_folder, truth):
+    explorer = ParameterExplorer.from_folder(pair_folder)
+    np.testing.assert_array_equal(np.sort(explorer.model.targets, axis=0), np.sort(truth, axis=0))
+    assert "ismb-explorer" in explorer.widget._dom_classes
+    assert "ismb-theta-c" in explorer.sliders["theta_c"]._dom_classes
+    fig = explorer.static_figure()
+    assert len(fig.axes) == 3
