@@ -1,0 +1,47 @@
+"""Every teaching notebook is committed clean, follows the section order and runs without error."""
+
+import re
+from pathlib import Path
+
+import nbformat
+import pytest
+
+NOTEBOOKS = Path(__file__).resolve().parents[2] / "notebooks"
+SECTIONS = ("Overview", "Thesis section and equations", "Try it", "What to notice", "Exercises")
+
+NAMES = sorted(p.name for p in NOTEBOOKS.glob("[0-9][0-9]_*.ipynb"))
+
+pytestmark = pytest.mark.notebook
+
+
+def test_there_are_notebooks():
+    assert "00_start_here.ipynb" in NAMES
+
+
+@pytest.mark.parametrize("name", NAMES)
+def test_committed_without_outputs(name):
+    nb = nbformat.read(NOTEBOOKS / name, as_version=4)
+    nbformat.validate(nb)
+    for cell in nb.cells:
+        if cell.cell_type == "code":
+            assert cell.outputs == [], f"{name}: a code cell has outputs:\n{cell.source}"
+            assert cell.execution_count is None, f"{name}: execution_count is set:\n{cell.source}"
+
+
+@pytest.mark.parametrize("name", NAMES)
+def test_sections_in_order_and_thesis_cited(name):
+    nb = nbformat.read(NOTEBOOKS / name, as_version=4)
+    markdown = [c.source for c in nb.cells if c.cell_type == "markdown"]
+    headings = [line[3:].strip() for text in markdown for line in text.splitlines()
+                if line.startswith("## ")]
+    assert [h for h in headings if h in SECTIONS] == list(SECTIONS), headings
+    assert re.search(r"\(\d-\d+\)|Table 5\.\d|Fig\. 5\.\d|§\d", "\n".join(markdown)), \
+        f"{name} cites no thesis equation, table, figure or section"
+
+
+@pytest.mark.parametrize("name", NAMES)
+def test_runs_headless(name, run_notebook, notebook_errors):
+    nb = run_notebook(name)
+    assert notebook_errors(nb) == []
+    # every code cell ran
+    assert all(c.execution_count for c in nb.cells if c.cell_type == "code" and c.source.strip())
