@@ -3,10 +3,10 @@
 Display one by ending a notebook cell with it; ``.widget`` is its root container.
 """
 
-from .labeler import LabelModel, TargetLabeler
 from .explorer import ExplorerModel, ParameterExplorer
 from .ga_runner import GAModel, GARunner
+from .labeler import LabelModel, TargetLabeler
 from .stepper import HopfieldStepper, StepperModel
 
-__all__ = ["ExplorerModel", "GAModel", "GARunner", "HopfieldStepper", "LabelModel", "ParameterExplorer", "StepperModel",
-           "TargetLabeler"]
+__all__ = ["ExplorerModel", "GAModel", "GARunner", "HopfieldStepper", "LabelModel",
+           "ParameterExplorer", "StepperModel", "TargetLabeler"]
