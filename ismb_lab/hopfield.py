@@ -46,6 +46,34 @@ blocks (:func:`visiting_order`), shared by both kernels.  Two stop rules:
   replacement, change nothing.  With many neurons it can stop short of a fixed point.
 
 Both give up after ``max_sweeps * n`` attempts (stop rule ``"max_attempts"``).
+
+Beyond the thesis: a feature may stay unmatched
+-----------------------------------------------
+``(1 - r)^2`` with ``r = sum_k y_ik`` is smallest at *exactly one* match, so every
+corner without a partner (occluded, or simply not detected in the other image)
+is pushed to take a wrong one.  A network carries two more numbers, a
+uniqueness strength ``kappa`` and a match bias ``beta`` (the thesis: 1 and 2),
+and its energy is::
+
+    E = - sum C y y + kappa sum_i (h - r_i)^2 + kappa sum_k (h - c_k)^2 - sum S y,
+    h = 1/2 + beta / (4 kappa)
+
+``h`` is the preferred number of matches per feature.  For binary ``y``,
+``r^2 = r + 2 * (pairs of matches in the row)``, so
+``kappa (h - r)^2 = kappa h^2 + kappa (1 - 2h) r + 2 kappa * pairs``.  Adding the
+row and column terms gives the exact Hopfield form
+
+* ``W_ab = 2 C_ab`` for neighbouring pairs, ``W_ab = -2 kappa`` on a shared
+  row or column, ``W_aa = 0``;
+* ``I_a = S_a + 2 kappa (2h - 1) = S_a + beta``;
+* ``E = kappa h^2 (N_l + N_r) - 1/2 y'Wy - I'y``,
+
+and still ``dE = -u dy`` for every asynchronous flip: ``u_a`` is exactly
+``E(y_a = 0) - E(y_a = 1)`` with all other outputs fixed, because ``W`` is
+symmetric with a zero diagonal.  With ``h = 1/2`` (``beta = 0``) no match and one
+match cost the same, ``kappa / 4``, two matches ``9 kappa / 4``: the term only
+says *at most one*, and ``S`` and ``C`` decide whether a match is worth it.
+The thesis' energy is ``kappa = 1, beta = 2`` (``h = 1``), bit for bit.
 """
 
 from __future__ import annotations
@@ -203,6 +231,11 @@ class Network:
     self_c : (n,) float array_like, optional
         ``C_ikik`` (a neuron's compatibility with itself, ``X = 0`` for the
         geometric terms).  Only the thesis' literal rule uses it.
+    uniqueness : float
+        ``kappa > 0``, the weight of the uniqueness terms (1 in (3-15)).
+    match_bias : float
+        ``beta``, the bias every neuron gets on top of ``S`` (2 in (3-15), which
+        asks for exactly one match per feature; see the module docstring).
 
     Examples
     --------
@@ -217,9 +250,14 @@ class Network:
     similarity: np.ndarray
     pair_c: np.ndarray
     self_c: np.ndarray | None = None
+    uniqueness: float = 1.0
+    match_bias: float = 2.0
 
     def __post_init__(self):
         owner = "Network"
+        object.__setattr__(self, "uniqueness",
+                           check_number(self.uniqueness, "uniqueness", owner, low=0, low_open=True))
+        object.__setattr__(self, "match_bias", check_number(self.match_bias, "match_bias", owner))
         if not isinstance(self.topology, Topology):
             raise ParameterTypeError(message("topology", owner, "a Topology", type(self.topology).__name__))
         n, p = self.topology.n_neurons, self.topology.n_pairs
@@ -235,20 +273,23 @@ class Network:
         object.__setattr__(self, "_weights", {})
 
     @classmethod
-    def _trusted(cls, topology: Topology, similarity, pair_c, self_c) -> "Network":
+    def _trusted(cls, topology: Topology, similarity, pair_c, self_c, uniqueness: float = 1.0,
+                 match_bias: float = 2.0) -> "Network":
         """Skip validation: for float arrays of the right lengths that are finite by
-        construction (transfer functions of validated parameters)."""
+        construction (transfer functions of validated parameters), and validated scalars."""
         net = object.__new__(cls)
         for name, value in (("topology", topology), ("similarity", similarity),
-                            ("pair_c", pair_c), ("self_c", self_c), ("_weights", {})):
+                            ("pair_c", pair_c), ("self_c", self_c), ("uniqueness", float(uniqueness)),
+                            ("match_bias", float(match_bias)), ("_weights", {})):
             object.__setattr__(net, name, value)
         return net
 
     @classmethod
     def from_arrays(cls, n_left, n_right, rows, cols, similarity, pair_a, pair_b, pair_c,
-                    self_c=None) -> "Network":
+                    self_c=None, uniqueness: float = 1.0, match_bias: float = 2.0) -> "Network":
         """Build the topology and the network in one call."""
-        return cls(Topology(n_left, n_right, rows, cols, pair_a, pair_b), similarity, pair_c, self_c)
+        return cls(Topology(n_left, n_right, rows, cols, pair_a, pair_b), similarity, pair_c, self_c,
+                   uniqueness, match_bias)
 
     n_left = property(lambda self: self.topology.n_left)
     n_right = property(lambda self: self.topology.n_right)
@@ -258,6 +299,21 @@ class Network:
     pair_b = property(lambda self: self.topology.pair_b)
     n_neurons = property(lambda self: self.topology.n_neurons)
     n_pairs = property(lambda self: self.topology.n_pairs)
+
+    @property
+    def target_count(self) -> float:
+        """``h = 1/2 + beta / (4 kappa)``, the preferred number of matches per feature.
+
+        >>> net = Network.from_arrays(1, 1, [0], [0], [0.0], [], [], [])
+        >>> net.target_count, Network(net.topology, [0.0], [], match_bias=0.0).target_count
+        (1.0, 0.5)
+        """
+        return 0.5 + self.match_bias / (4.0 * self.uniqueness)
+
+    @property
+    def constant(self) -> float:
+        """The constant of the Hopfield form, ``kappa h^2 (N_l + N_r)``."""
+        return self.uniqueness * self.target_count ** 2 * (self.n_left + self.n_right)
 
     def initial_state(self) -> np.ndarray:
         """Every candidate neuron on, as in §3.3."""
@@ -293,10 +349,12 @@ def _weights(net: Network, rule: str) -> _Weights:
         return net._weights[rule]
     lay = net.topology.layout
     exact = rule == "exact"
-    # exact: W = 2C, -2 on a shared row or column, no self-weight;
-    # thesis: (3-17) taken literally, W = C - 1 - 1, with the neuron's own term of (3-20)
-    nb_w, self_w, bias = _quantised(net.pair_c, lay.nb_pair, net.similarity, net.self_c, exact, SCALE)
-    unique = np.int64(_quantise(-2.0 if exact else -1.0))
+    # exact: W = 2C, -2 kappa on a shared row or column, no self-weight;
+    # thesis: (3-17) taken literally, W = C - kappa - kappa, with the neuron's own term of (3-20)
+    kappa = net.uniqueness
+    nb_w, self_w, bias = _quantised(net.pair_c, lay.nb_pair, net.similarity, net.self_c, exact, SCALE,
+                                    net.match_bias, 2.0 * kappa)
+    unique = np.int64(_quantise(-2.0 * kappa if exact else -kappa))
     w = _Weights(lay.nb_ptr, lay.nb_idx, nb_w, lay.row_ptr, lay.row_idx, lay.col_ptr, lay.col_idx,
                  net.rows, net.cols, unique, unique, self_w, bias)
     net._weights[rule] = w
@@ -304,7 +362,7 @@ def _weights(net: Network, rule: str) -> _Weights:
 
 
 @numba.njit(cache=True)
-def _quantised(pair_c, nb_pair, similarity, self_c, exact, scale):
+def _quantised(pair_c, nb_pair, similarity, self_c, exact, scale, match_bias, self_penalty):
     nb_w = np.empty(nb_pair.shape[0], dtype=np.int64)
     for p in range(nb_pair.shape[0]):
         c = pair_c[nb_pair[p]]
@@ -313,9 +371,9 @@ def _quantised(pair_c, nb_pair, similarity, self_c, exact, scale):
     self_w = np.zeros(n, dtype=np.int64)
     bias = np.empty(n, dtype=np.int64)
     for a in range(n):
-        bias[a] = np.int64(np.rint((2.0 + similarity[a]) * scale))
+        bias[a] = np.int64(np.rint((match_bias + similarity[a]) * scale))
         if not exact:
-            self_w[a] = np.int64(np.rint((self_c[a] - 2.0) * scale))
+            self_w[a] = np.int64(np.rint((self_c[a] - self_penalty) * scale))
     return nb_w, self_w, bias
 
 
@@ -328,9 +386,11 @@ def hopfield_form(net: Network, rule: str = "exact") -> tuple[np.ndarray, np.nda
     ----------
     net : Network
     rule : {"exact", "thesis"}
-        ``"exact"``: ``W = 2C``, ``-2`` on a shared row or column, zero diagonal.
-        ``"thesis"``: (3-17) literally, ``W = C - delta_ij - delta_kl`` including
-        the diagonal ``C_ikik - 2``.
+        ``"exact"``: ``W = 2C``, ``-2 kappa`` on a shared row or column, zero diagonal.
+        ``"thesis"``: (3-17) literally, ``W = C - kappa (delta_ij + delta_kl)``
+        including the diagonal ``C_ikik - 2 kappa``.  Both have ``I = beta + S``
+        (``kappa = 1`` and ``beta = 2`` in the thesis); the constant is
+        :attr:`Network.constant`.
 
     Returns
     -------
@@ -349,25 +409,27 @@ def hopfield_form(net: Network, rule: str = "exact") -> tuple[np.ndarray, np.nda
     array([2.5, 2. ])
     """
     check_choice(rule, "rule", "hopfield_form", RULES)
-    n = net.n_neurons
+    n, kappa = net.n_neurons, net.uniqueness
     same = (net.rows[:, None] == net.rows[None, :]).astype(float) + (net.cols[:, None] == net.cols[None, :])
     W = np.zeros((n, n))
     W[net.pair_a, net.pair_b] = net.pair_c
     W += W.T
     if rule == "exact":
-        W = 2.0 * W - 2.0 * same
+        W = 2.0 * W - (2.0 * kappa) * same
         np.fill_diagonal(W, 0.0)
     else:
-        W = W - same
-        W[np.diag_indices(n)] = net.self_c - 2.0
-    return W, 2.0 + net.similarity
+        W = W - kappa * same
+        W[np.diag_indices(n)] = net.self_c - 2.0 * kappa
+    return W, net.match_bias + net.similarity
 
 
 def energy(net: Network, state) -> float:
     """The thesis energy (3-15), computed from its definition.
 
     It reads ``C`` and ``S`` directly and never the Hopfield weights, so it can
-    check them.
+    check them.  A network with its own ``uniqueness`` and ``match_bias`` has
+    the uniqueness terms ``kappa (h - r)^2`` of the module docstring instead of
+    ``(1 - r)^2``.
 
     Parameters
     ----------
@@ -390,11 +452,11 @@ def energy(net: Network, state) -> float:
     """
     y = _check_state(net, state, "energy")
     return _energy(net.n_left, net.n_right, net.rows, net.cols, net.similarity, net.pair_a,
-                   net.pair_b, net.pair_c, y)
+                   net.pair_b, net.pair_c, y, net.uniqueness, net.target_count)
 
 
 @numba.njit(cache=True)
-def _energy(n_left, n_right, rows, cols, similarity, pair_a, pair_b, pair_c, y):
+def _energy(n_left, n_right, rows, cols, similarity, pair_a, pair_b, pair_c, y, kappa, h):
     # - sum_ik sum_jl C_ikjl y_ik y_jl: each stored pair stands for (a, b) and (b, a)
     compatibility = 0.0
     for p in range(pair_a.shape[0]):
@@ -408,9 +470,9 @@ def _energy(n_left, n_right, rows, cols, similarity, pair_a, pair_b, pair_c, y):
         similar += similarity[a] * y[a]
     uniqueness = 0.0
     for i in range(n_left):
-        uniqueness += (1.0 - row_sum[i]) ** 2
+        uniqueness += kappa * (h - row_sum[i]) ** 2
     for k in range(n_right):
-        uniqueness += (1.0 - col_sum[k]) ** 2
+        uniqueness += kappa * (h - col_sum[k]) ** 2
     return compatibility + uniqueness - similar
 
 
@@ -745,5 +807,5 @@ def run(net: Network, *, rng=0, state=None, stop_rule: str = "sweep", rule: str 
         if code:
             state = y.astype(np.uint8)
             e = _energy(net.n_left, net.n_right, net.rows, net.cols, net.similarity, net.pair_a,
-                        net.pair_b, net.pair_c, state)
+                        net.pair_b, net.pair_c, state, net.uniqueness, net.target_count)
             return RunResult(state, e, _STOP_NAMES[code], int(counters[0]), int(counters[3]))

@@ -15,6 +15,13 @@ network's final state.
   ``(theta_c, lambda_c)``.  Here ``X = dd + dD + (M_ik + M_jl) / 2``, ``S = 0``, and
   the post-processing keeps, for every feature matched more than once, the match
   with the smallest vertical disparity.
+* **Method-NM** (beyond the thesis): Method-III's ``S`` and ``C`` with a
+  uniqueness term that lets a feature stay unmatched.  The thesis'
+  ``(1 - sum y)^2`` asks for *exactly one* match per feature, so corners without
+  a partner take wrong ones; Method-NM's fifth gene, the match bias ``beta``,
+  moves the preferred count to ``h = 1/2 + beta / 4`` (``beta = 2`` is
+  Method-III, ``beta = 0`` says "at most one").  The derivation is in
+  :mod:`ismb_lab.hopfield`.
 """
 
 from __future__ import annotations
@@ -28,21 +35,26 @@ from .compatibility import NeuronPairs, left_neighbours, neuron_pairs
 from .hopfield import Network, Topology
 from .similarity import candidate_mask, transfer
 
-METHOD_NAMES = ("I", "II", "III")
+METHOD_NAMES = ("I", "II", "III", "NM")
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, repr=False)
 class Params:
-    """The four parameters of the energy: tolerances ``theta`` and steepnesses ``lambda``.
+    """The parameters of the energy: tolerances ``theta``, steepnesses ``lambda``
+    and, for Method-NM only, a match bias.
 
     The defaults are the thesis' Method-III values ``[17.97, 24.02, 6.37, 2.2]``
     (§5.2.2), found by its GA on its own images.  Method-I reads only
-    ``theta_c`` and ``lambda_c``.
+    ``theta_c`` and ``lambda_c``.  ``match_bias`` (``beta``, any finite number)
+    is optional: it is None unless set, and then left out of ``repr`` and
+    :meth:`to_dict`, so the four-parameter methods see exactly the thesis' record.
 
     Examples
     --------
     >>> Params()
     Params(theta_c=17.97, theta_s=24.02, lambda_c=6.37, lambda_s=2.2)
+    >>> Params(match_bias=0.5).to_dict()["match_bias"]
+    0.5
     >>> Params(lambda_c=-1)
     Traceback (most recent call last):
     ...
@@ -53,15 +65,23 @@ class Params:
     theta_s: float = 24.02
     lambda_c: float = 6.37
     lambda_s: float = 2.2
+    match_bias: float | None = None
 
     def __post_init__(self):
         for f in fields(self):
+            if f.name == "match_bias":
+                if self.match_bias is not None:
+                    object.__setattr__(self, f.name, check_number(self.match_bias, f.name, "Params"))
+                continue
             strict = f.name.startswith("lambda")
             value = check_number(getattr(self, f.name), f.name, "Params", low=0, low_open=strict)
             object.__setattr__(self, f.name, value)
 
+    def __repr__(self) -> str:
+        return "Params(" + ", ".join(f"{k}={v!r}" for k, v in self.to_dict().items()) + ")"
+
     def to_dict(self) -> dict:
-        return asdict(self)
+        return {k: v for k, v in asdict(self).items() if v is not None}
 
     @classmethod
     def from_dict(cls, values, owner: str = "Params.from_dict") -> "Params":
@@ -71,16 +91,19 @@ class Params:
         unknown = sorted(set(values) - {f.name for f in fields(cls)})
         if unknown:
             raise ParameterError(message("params", owner, "an object with keys among theta_c, theta_s, "
-                                     "lambda_c, lambda_s", f"unknown keys {unknown}"))
+                                     "lambda_c, lambda_s, match_bias", f"unknown keys {unknown}"))
         return cls(**values)
 
 
 #: The parameters the thesis' GA found (§5.2.1 for Method-I, §5.2.2 for II and III).
-#: Method-I's theta_s and lambda_s are unused placeholders.
+#: Method-I's theta_s and lambda_s are unused placeholders.  Method-NM is not in
+#: the thesis: its entry is Method-III's values with ``match_bias = 0`` ("at most
+#: one match"), a neutral start for its GA rather than a fitted result.
 THESIS_PARAMS = {
     "I": Params(theta_c=41.57, lambda_c=4.40),
     "II": Params(theta_c=11.51, theta_s=26.24, lambda_c=8.89, lambda_s=1.16),
     "III": Params(theta_c=17.97, theta_s=24.02, lambda_c=6.37, lambda_s=2.2),
+    "NM": Params(theta_c=17.97, theta_s=24.02, lambda_c=6.37, lambda_s=2.2, match_bias=0.0),
 }
 
 
@@ -253,20 +276,56 @@ class MethodIII(Method):
         return problem.pairs.dd + problem.pairs.dD + problem.pairs.dY
 
 
-_METHODS = {m.name: m for m in (MethodI(), MethodII(), MethodIII())}
+class MethodNM(MethodIII):
+    """Method-NM: Method-III's ``S`` and ``C`` with a no-match-aware uniqueness term.
 
-
-def get_method(name) -> Method:
-    """Look a method up by name: ``"I"``, ``"II"`` or ``"III"`` (a ``Method`` passes through).
+    The energy is (3-15) with ``(1 - r)^2`` replaced by ``(h - r)^2``, where
+    ``h = 1/2 + beta / 4`` and ``beta`` is the fifth gene ``params.match_bias``.
+    Its exact Hopfield form has ``W = 2C`` between neighbours, ``W = -2`` on a
+    shared row or column, no self-weight, and ``I = S + beta`` (Method-III:
+    ``I = S + 2``), so every asynchronous flip changes the energy by exactly
+    ``-u dy`` (:mod:`ismb_lab.hopfield`).  With ``beta = 2`` it is Method-III;
+    with ``beta`` near 0 an isolated neuron turns on only when ``S + beta > 0``,
+    i.e. when its windows look alike, and a neuron with support from compatible
+    neighbours when ``S + beta + 2 sum C y > 0``: no match is an answer.
 
     Examples
     --------
-    >>> get_method("III")
-    Method-III
-    >>> get_method("IV")
+    >>> p = build_problem([[100, 50], [110, 50]], [[80, 51], [90, 51]], [[2.0, 40.0], [40.0, 60.0]])
+    >>> net = get_method("NM").network(p, Params(match_bias=0.0))
+    >>> float(net.match_bias), float(net.target_count)
+    (0.0, 0.5)
+    """
+
+    name = "NM"
+    genes = MethodIII.genes + ("match_bias",)
+    description = "Method-III with 'at most one' uniqueness and a match bias (fifth gene)"
+
+    def network(self, problem: Problem, params: Params) -> Network:
+        if not isinstance(params, Params):
+            raise ParameterTypeError(message("params", "Method-NM", "a Params instance", params))
+        if params.match_bias is None:
+            raise ParameterError(message("params", "Method-NM", "Params with a match_bias (its fifth "
+                                         "gene)", params))
+        base = super().network(problem, params)
+        return Network._trusted(problem.topology, base.similarity, base.pair_c, base.self_c,
+                                1.0, params.match_bias)
+
+
+_METHODS = {m.name: m for m in (MethodI(), MethodII(), MethodIII(), MethodNM())}
+
+
+def get_method(name) -> Method:
+    """Look a method up by name: ``"I"``, ``"II"``, ``"III"`` or ``"NM"`` (a ``Method`` passes through).
+
+    Examples
+    --------
+    >>> get_method("NM")
+    Method-NM
+    >>> get_method("V")
     Traceback (most recent call last):
     ...
-    ismb_lab.ParameterError: The 'method' parameter of get_method must be one of 'I', 'II', 'III'. Got 'IV' instead.
+    ismb_lab.ParameterError: The 'method' parameter of get_method must be one of 'I', 'II', 'III', 'NM'. Got 'V' instead.
     """
     if isinstance(name, Method):
         return name

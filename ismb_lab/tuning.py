@@ -1,9 +1,10 @@
 """Tuning the energy parameters with the GA: chromosome <-> Params, fitness n_c - n_e (ch. 4).
 
 The GA in :mod:`ismb_lab.genetic` knows nothing of stereo; this module gives it a
-fitness.  A chromosome is ``[theta_c, lambda_c]`` for Method-I and
+fitness.  A chromosome is ``[theta_c, lambda_c]`` for Method-I,
 ``[theta_c, theta_s, lambda_c, lambda_s]`` for Methods II and III (the thesis'
-order).  Its fitness (4-1) is ``n_c - n_e`` summed over every training pair.
+order) and the same plus ``match_bias`` for Method-NM.  Its fitness (4-1) is
+``n_c - n_e`` summed over every training pair.
 
 Gene bounds
 -----------
@@ -15,6 +16,11 @@ Gene bounds
   ones about 45 on the synthetic scenes.
 * ``lambda_c``, ``lambda_s`` in [0.05, 10]: from an almost flat transfer function to
   a step one pixel wide (the thesis found 1.16 to 8.89).
+* ``match_bias`` (Method-NM's fifth gene) in [-2, 2]: the preferred number of
+  matches per feature ``h = 1/2 + beta / 4`` runs from 0 (a match must pay 2 from
+  ``S`` and ``C``) through 1/2 ("at most one", ``beta = 0``) to 1 (exactly one: the
+  thesis).  ``S`` is in [-1, 1] and one compatible neighbour adds up to 2, so a
+  wider range only repeats the ends.
 """
 
 from __future__ import annotations
@@ -33,7 +39,7 @@ from .methods import Method, Params, get_method
 
 _DEFAULT = Params()
 GENE_BOUNDS = {"theta_c": (0.0, 60.0), "theta_s": (0.0, 60.0),
-               "lambda_c": (0.05, 10.0), "lambda_s": (0.05, 10.0)}
+               "lambda_c": (0.05, 10.0), "lambda_s": (0.05, 10.0), "match_bias": (-2.0, 2.0)}
 
 
 def gene_bounds(method) -> Bounds:
@@ -152,7 +158,7 @@ def tune(cases: Sequence[Case], method="III", *, rng=0, population: int = 30,
     ----------
     cases : sequence of Case
         Training pairs; their fitness is summed.
-    method : {"I", "II", "III"}
+    method : {"I", "II", "III", "NM"}
     rng : int or numpy.random.Generator
         Seed of the GA.
     population, generations : int

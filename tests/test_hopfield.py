@@ -22,8 +22,8 @@ def random_network(seed, n_left=None, n_right=None, p_candidate=0.4, p_pair=0.5)
                    self_c=rng.uniform(0, 1, n))
 
 
-def thesis_energy(net, state):
-    """(3-15) evaluated over the full N_l x N_r grid with a dense 4-D C."""
+def dense(net, state):
+    """The state, a dense 4-D C and S over the full N_l x N_r grid."""
     y = net.to_matrix(state).astype(float)
     C = np.zeros((net.n_left, net.n_right, net.n_left, net.n_right))
     ra, ca = net.rows[net.pair_a], net.cols[net.pair_a]
@@ -32,6 +32,12 @@ def thesis_energy(net, state):
     C[rb, cb, ra, ca] = net.pair_c
     S = np.zeros((net.n_left, net.n_right))
     S[net.rows, net.cols] = net.similarity
+    return y, C, S
+
+
+def thesis_energy(net, state):
+    """(3-15) evaluated over the full N_l x N_r grid with a dense 4-D C."""
+    y, C, S = dense(net, state)
     return (-np.einsum("ikjl,ik,jl->", C, y, y)
             + np.sum((1 - y.sum(axis=1)) ** 2) + np.sum((1 - y.sum(axis=0)) ** 2)
             - np.sum(S * y))
@@ -204,3 +210,115 @@ def test_network_rejects_inconsistent_arrays(kwargs, words):
     base.update(kwargs)
     with pytest.raises(ValueError, match=words):
         Network.from_arrays(2, 2, **base)
+
+
+# --- Beyond the thesis: a uniqueness strength kappa and a match bias beta --------------------
+
+def no_match_network(seed, **kwargs):
+    """A random network with its own kappa in (0.3, 3) and beta in (-2, 2)."""
+    net = random_network(seed, **kwargs)
+    rng = np.random.default_rng(1000 + seed)
+    return Network(net.topology, net.similarity, net.pair_c, net.self_c,
+                   uniqueness=float(rng.uniform(0.3, 3.0)), match_bias=float(rng.uniform(-2.0, 2.0)))
+
+
+def dense_energy(net, state):
+    """-sum C y y + kappa sum (h - r)^2 + kappa sum (h - c)^2 - sum S y on the full grid."""
+    y, C, S = dense(net, state)
+    h = 0.5 + net.match_bias / (4 * net.uniqueness)
+    return (-np.einsum("ikjl,ik,jl->", C, y, y)
+            + net.uniqueness * (np.sum((h - y.sum(axis=1)) ** 2) + np.sum((h - y.sum(axis=0)) ** 2))
+            - np.sum(S * y))
+
+
+NM_NETS = [net for net in (no_match_network(s) for s in range(60)) if net.n_neurons > 0]
+
+
+@pytest.mark.parametrize("seed", range(20))
+def test_no_match_energy_equals_its_definition_and_hopfield_form(seed):
+    net = NM_NETS[seed]
+    W, I = hopfield_form(net)
+    assert np.allclose(I, net.match_bias + net.similarity)
+    rng = np.random.default_rng(seed)
+    for _ in range(10):
+        y = (rng.random(net.n_neurons) < 0.5).astype(np.uint8)
+        e = energy(net, y)
+        assert e == pytest.approx(dense_energy(net, y), abs=1e-9)
+        assert e == pytest.approx(net.constant - 0.5 * y @ W @ y - I @ y, abs=1e-9)
+
+
+@pytest.mark.parametrize("seed", range(20))
+def test_no_match_net_input_is_the_energy_difference_of_one_flip(seed):
+    # u_a = E(y_a = 0) - E(y_a = 1) with all other outputs fixed, for any state and neuron
+    net = NM_NETS[seed]
+    W, I = hopfield_form(net)
+    rng = np.random.default_rng(seed)
+    for _ in range(10):
+        y = (rng.random(net.n_neurons) < 0.5).astype(np.uint8)
+        a = int(rng.integers(net.n_neurons))
+        on, off = y.copy(), y.copy()
+        on[a], off[a] = 1, 0
+        u = W[a] @ y + I[a]
+        assert energy(net, off) - energy(net, on) == pytest.approx(u, abs=1e-9)
+
+
+@pytest.mark.parametrize("stop_rule", ["sweep", "stall"])
+@pytest.mark.parametrize("seed", range(12))
+def test_no_match_flips_lower_energy_by_u_times_dy(seed, stop_rule):
+    net = NM_NETS[seed]
+    y = net.initial_state().astype(np.uint8)
+    previous = energy(net, y)
+    for step in iter_updates(net, rng=seed, stop_rule=stop_rule):
+        y[step.neuron] = step.new
+        e = energy(net, y)
+        assert e - previous == pytest.approx(-step.u * (step.new - step.old), abs=1e-9)
+        assert e <= previous + 1e-9 and step.energy == pytest.approx(e, abs=1e-9)
+        previous = e
+    W, I = hopfield_form(net)
+    u = W @ y + I
+    assert np.all(y[u > 1e-9] == 1) and np.all(y[u < -1e-9] == 0)
+
+
+@pytest.mark.parametrize("rule", ["exact", "thesis"])
+@pytest.mark.parametrize("seed", range(20))
+def test_no_match_kernels_agree_bit_for_bit(seed, rule):
+    net = NM_NETS[seed]
+    fast = run(net, rng=seed, rule=rule, max_sweeps=40)
+    slow = run(net, rng=seed, rule=rule, max_sweeps=40, kernel="textbook")
+    assert np.array_equal(fast.state, slow.state) and fast.energy == slow.energy
+    assert (fast.stop_rule, fast.attempts, fast.flips) == (slow.stop_rule, slow.attempts, slow.flips)
+
+
+def test_thesis_values_of_kappa_and_beta_reproduce_the_thesis_network_exactly():
+    for seed, net in enumerate(NETS[:10]):
+        same = Network(net.topology, net.similarity, net.pair_c, net.self_c, uniqueness=1.0, match_bias=2.0)
+        assert same.target_count == 1.0 and same.constant == net.n_left + net.n_right
+        for rule in ("exact", "thesis"):
+            W0, I0 = hopfield_form(net, rule)
+            W1, I1 = hopfield_form(same, rule)
+            assert np.array_equal(W0, W1) and np.array_equal(I0, I1)
+        a, b = run(net, rng=seed), run(same, rng=seed)
+        assert np.array_equal(a.state, b.state) and a.energy == b.energy
+        assert b.energy == pytest.approx(thesis_energy(net, b.state), abs=1e-9)
+
+
+def test_zero_bias_lets_an_unsupported_feature_stay_unmatched():
+    # one left feature, one right candidate with S = -0.3 and nothing else: the thesis' energy
+    # (beta = 2) matches it anyway, "at most one" (beta = 0) leaves it unmatched
+    net = Network.from_arrays(1, 1, [0], [0], [-0.3], [], [], [])
+    assert run(net).state.tolist() == [1]
+    free = Network(net.topology, net.similarity, net.pair_c, match_bias=0.0)
+    assert run(free).state.tolist() == [0]
+    assert energy(free, [0]) - energy(free, [1]) == pytest.approx(-0.3)   # u = S + beta
+
+
+@pytest.mark.parametrize("kwargs, error, words", [
+    (dict(uniqueness=0.0), ValueError, "'uniqueness'"),
+    (dict(uniqueness=-1.0), ValueError, "'uniqueness'"),
+    (dict(match_bias=np.nan), ValueError, "'match_bias'"),
+    (dict(match_bias="1"), TypeError, "'match_bias'"),
+])
+def test_network_rejects_bad_uniqueness_and_bias(kwargs, error, words):
+    net = NETS[0]
+    with pytest.raises(error, match=words):
+        Network(net.topology, net.similarity, net.pair_c, **kwargs)

@@ -118,5 +118,36 @@ def test_params_validation_and_thesis_values():
             Params(**bad)
     with pytest.raises(ValueError, match="unknown keys"):
         Params.from_dict({"theta_c": 1.0, "theta_x": 2.0})
-    with pytest.raises(ValueError, match="'method'.*Got 'IV'"):
-        get_method("IV")
+    with pytest.raises(ValueError, match="'method'.*Got 'V'"):
+        get_method("V")
+
+
+def test_method_nm_is_method_three_with_a_match_bias():
+    rng = np.random.default_rng(4)
+    lxy = rng.integers(80, 160, (12, 2)).astype(float)
+    rxy = lxy + [-20, 1] + rng.integers(-2, 3, (12, 2))
+    problem = build_problem(lxy, rxy, rng.uniform(0, 40, (12, 12)))
+    base = Params(theta_c=9.0, theta_s=20.0, lambda_c=0.7, lambda_s=0.3)
+    three = get_method("III").network(problem, base)
+    nm = get_method("NM").network(problem, Params(**base.to_dict(), match_bias=0.25))
+    assert np.array_equal(nm.pair_c, three.pair_c) and np.array_equal(nm.similarity, three.similarity)
+    assert (nm.uniqueness, nm.match_bias, nm.target_count) == (1.0, 0.25, 0.5625)
+    as_thesis = get_method("NM").network(problem, Params(**base.to_dict(), match_bias=2.0))
+    from ismb_lab.hopfield import hopfield_form, run
+    assert all(np.array_equal(x, y) for x, y in zip(hopfield_form(as_thesis), hopfield_form(three)))
+    assert np.array_equal(run(as_thesis, rng=3).state, run(three, rng=3).state)
+    assert get_method("NM").genes == ("theta_c", "theta_s", "lambda_c", "lambda_s", "match_bias")
+    with pytest.raises(ValueError, match="'params' parameter of Method-NM.*match_bias"):
+        get_method("NM").network(problem, base)
+
+
+def test_params_match_bias_is_optional_and_round_trips():
+    assert "match_bias" not in Params().to_dict() and "match_bias" not in repr(Params())
+    p = Params(theta_c=3.0, match_bias=-0.5)
+    assert Params.from_dict(p.to_dict()) == p and p.to_dict()["match_bias"] == -0.5
+    assert repr(p).endswith("match_bias=-0.5)")
+    assert THESIS_PARAMS["NM"].match_bias == 0.0
+    with pytest.raises(ValueError, match="'match_bias' parameter of Params"):
+        Params(match_bias=np.inf)
+    with pytest.raises(TypeError, match="'match_bias' parameter of Params"):
+        Params(match_bias="0")

@@ -145,7 +145,7 @@ def test_errors_name_the_parameter():
     with pytest.raises(ParameterTypeError, match="'max_dissimilarity' parameter of graph_matching"):
         graph_matching(p, max_dissimilarity="20")
     with pytest.raises(ParameterError, match="'method' parameter of get_method"):
-        graph_matching(p, "IV")
+        graph_matching(p, "V")
     with pytest.raises(ParameterTypeError, match="'params' parameter of affinity_matrix"):
         graph_matching(p, "III", {"theta_c": 1})
     spread = np.stack([np.arange(80) * 100.0, np.full(80, 50.0)], axis=1)

@@ -81,3 +81,11 @@ def test_protocol_reports_training_testing_and_peers(cases):
     assert pooled.targets == sum(len(c.targets) for c in cases[1:3])
     with pytest.raises(ParameterError, match="'train'"):
         protocol(cases[:2], train=5)
+
+
+def test_method_nm_has_a_fifth_gene_with_documented_bounds():
+    bounds = gene_bounds("NM")
+    assert bounds.names[-1] == "match_bias" and (bounds.low[-1], bounds.high[-1]) == (-2.0, 2.0)
+    p = to_params("NM", [3.0, 20.0, 0.7, 1.5, 0.25])
+    assert p.match_bias == 0.25 and to_chromosome("NM", p).tolist() == [3.0, 20.0, 0.7, 1.5, 0.25]
+    assert to_params("III", to_chromosome("III", p), base=Params()).match_bias is None
