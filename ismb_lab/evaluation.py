@@ -185,26 +185,40 @@ def load_manifest(path, config=None) -> list:
 
 
 def protocol(cases, method="III", *, train: int = 0, seeds: int = 5, generations: int = 500,
-             rng=0, peers: bool = False, progress=None) -> dict:
+             rng=0, peers: bool = False, progress=None, solvers=(), fit_solver: str = "network",
+             fit_seeds: int = 1) -> dict:
     """Fig. 5.10's protocol: GA-fit on each pair ("training") and on one pair applied to all
     the others ("testing"), every network figure over `seeds` update-order seeds.
 
     With `peers`, the peer matchers of :mod:`ismb_lab.peers` (deterministic) are scored
     on the same pairs, with the tested parameters where they use S and C.
 
-    Returns a dict with the tested parameters, per-pair :class:`Score` lists and pooled scores.
+    `solvers` adds rows that solve the same energies, with the same tested parameters,
+    another way: ``"anneal"`` (mean-field annealing, over the same seeds) and ``"exact"``
+    (the MILP global minimum, seed-independent: one value).  `fit_solver` and `fit_seeds`
+    choose how the GA scores a chromosome (:class:`~ismb_lab.tuning.Fitness`).
+
+    Returns a dict with the tested parameters, per-pair :class:`Score` lists and pooled
+    scores; ``report["solvers"][name]`` has ``"rows"`` (per pair, per seed) and ``"held_out"``.
     """
-    from ._validation import ParameterError, check_number, message
+    from ._validation import ParameterError, check_choice, check_number, message
+    from .tuning import SOLVERS
 
     if not cases:
         raise ParameterError(message("cases", "protocol", "at least one pair", cases))
     train = check_number(train, "train", "protocol", low=0, high=len(cases) - 1, integer=True)
     seeds = check_number(seeds, "seeds", "protocol", low=1, integer=True)
+    fit_solver = check_choice(fit_solver, "fit_solver", "protocol", SOLVERS)
+    fit_seeds = check_number(fit_seeds, "fit_seeds", "protocol", low=1, integer=True)
+    solvers = (solvers,) if isinstance(solvers, str) else tuple(solvers)
+    for name in solvers:
+        check_choice(name, "solvers", "protocol", SOLVERS[1:])
     from .tuning import to_params, tune
 
     def fit(case):
         last = None
-        for last in tune([case], method, rng=rng, generations=generations):
+        for last in tune([case], method, rng=rng, generations=generations, solver=fit_solver,
+                         seeds=fit_seeds):
             if progress:
                 progress(case.name, last)
         return to_params(method, last.best_chromosome)
@@ -220,7 +234,12 @@ def protocol(cases, method="III", *, train: int = 0, seeds: int = 5, generations
     held_out = [r for n, r in enumerate(rows) if n != train]
     pooled = [sum((r["testing"][s] for r in held_out), Score(0, 0, 0, 0)) for s in range(seeds)]
     report = {"method": method, "params": tested, "train": train, "rows": rows, "held_out": pooled,
-              "peers": {}}
+              "peers": {}, "solvers": {}}
+    for name in solvers:
+        runs = range(1) if name == "exact" else range(seeds)
+        per_pair = [tuple(evaluate([c], method, tested, s, name) for s in runs) for c in cases]
+        report["solvers"][name] = {"rows": per_pair, "held_out": [
+            sum((p[s] for n, p in enumerate(per_pair) if n != train), Score(0, 0, 0, 0)) for s in runs]}
     if peers:
         from .peers import PEERS
         for name, peer in PEERS.items():
@@ -243,6 +262,12 @@ def format_protocol(report: dict) -> str:
         precision = Spread.of([s.precision for s in pooled])
         lines.append(f"Held-out total (seed 0): {pooled[0]}   C/T {recall}   precision {precision}"
                      f"   over {len(pooled)} update-order seeds")
+    for name, variant in report.get("solvers", {}).items():
+        held = variant["held_out"]
+        recall = Spread.of([s.recall for s in held])
+        precision = Spread.of([s.precision for s in held])
+        lines.append(f"solver {name:>9}: held-out {held[0]}   C/T {recall}   precision {precision}   "
+                     f"per pair: " + "  ".join(str(p[0]) for p in variant["rows"]))
     for name, peer in report.get("peers", {}).items():
         total = peer["held_out"]
         lines.append(f"peer {name:>10}: held-out {total}   C/T {100 * total.recall:.1f}%   "

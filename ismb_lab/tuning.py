@@ -30,7 +30,7 @@ from typing import Iterator, Sequence
 
 import numpy as np
 
-from ._validation import ParameterError, ParameterTypeError, check_number, message
+from ._validation import ParameterError, ParameterTypeError, check_choice, check_number, message
 from .evaluation import Score, score
 from .genetic import Bounds, Generation, evolve
 from .hopfield import run
@@ -102,30 +102,53 @@ class Case:
     name: str = ""
 
 
-def solve(problem, method: Method, params: Params, seed: int = 0, **run_kwargs) -> np.ndarray:
-    """The matched ``(i, k)`` pairs of one network run (no bookkeeping: the GA's inner loop)."""
-    result = run(method.network(problem, params), rng=seed, **run_kwargs)
-    on = np.flatnonzero(method.postprocess(problem, result.state))
+#: How a network's final state is found: the discrete network of the thesis, mean-field
+#: annealing (:mod:`ismb_lab.annealing`) or the exact global minimum (:mod:`ismb_lab.exact`, MILP).
+SOLVERS = ("network", "anneal", "exact")
+
+
+def solve(problem, method: Method, params: Params, seed: int = 0, solver: str = "network",
+          **run_kwargs) -> np.ndarray:
+    """The matched ``(i, k)`` pairs of one run (no bookkeeping: the GA's inner loop).
+
+    `solver` is one of :data:`SOLVERS`; ``"exact"`` ignores `seed`.
+    """
+    net = method.network(problem, params)
+    if solver == "network":
+        state = run(net, rng=seed, **run_kwargs).state
+    elif solver == "anneal":
+        from .annealing import anneal
+        state = anneal(net, rng=seed).state
+    else:
+        from .exact import milp_minimum
+        state = milp_minimum(net).state
+    on = np.flatnonzero(method.postprocess(problem, state))
     return np.stack([problem.rows[on], problem.cols[on]], axis=1)
 
 
-def evaluate(cases: Sequence[Case], method, params: Params, seed: int = 0) -> Score:
+def evaluate(cases: Sequence[Case], method, params: Params, seed: int = 0,
+             solver: str = "network") -> Score:
     """The summed C/E/T of `params` over `cases`."""
     m = get_method(method)
+    check_choice(solver, "solver", "evaluate", SOLVERS)
     total = Score(0, 0, 0, 0)
     for case in cases:
-        total = total + score(solve(case.prepared.problem, m, params, seed), case.targets, case.unknown)
+        total = total + score(solve(case.prepared.problem, m, params, seed, solver), case.targets,
+                              case.unknown)
     return total
 
 
 class Fitness:
     """The batch fitness the GA calls: (4-1) summed over the training cases.
 
-    Every chromosome is scored with the same update-order seed, so a chromosome's
-    fitness is a deterministic function of its genes.
+    Every chromosome is scored with the same update-order seed(s), so a chromosome's
+    fitness is a deterministic function of its genes.  With ``seeds > 1`` the
+    fitness is the mean over seeds ``seed, seed + 1, ...``: parameters that only
+    work for one visiting order score lower.
     """
 
-    def __init__(self, cases: Sequence[Case], method, *, seed: int = 0, base: Params | None = None):
+    def __init__(self, cases: Sequence[Case], method, *, seed: int = 0, base: Params | None = None,
+                 solver: str = "network", seeds: int = 1):
         cases = list(cases)
         if not cases:
             raise ParameterError(message("cases", "Fitness", "at least one training pair", cases))
@@ -136,18 +159,22 @@ class Fitness:
                                          "an empty target set"))
         self.cases, self.method, self.base = cases, get_method(method), base
         self.seed = check_number(seed, "seed", "Fitness", low=0, integer=True)
+        self.seeds = check_number(seeds, "seeds", "Fitness", low=1, integer=True)
+        self.solver = check_choice(solver, "solver", "Fitness", SOLVERS)
         self.target = sum(len(c.targets) for c in cases)
 
     def params(self, chromosome) -> Params:
         return to_params(self.method, chromosome, self.base)
 
     def __call__(self, population: np.ndarray) -> np.ndarray:
-        return np.array([evaluate(self.cases, self.method, self.params(c), self.seed).fitness
+        return np.array([np.mean([evaluate(self.cases, self.method, self.params(c), self.seed + s,
+                                           self.solver).fitness for s in range(self.seeds)])
                          for c in np.atleast_2d(population)], dtype=float)
 
 
 def tune(cases: Sequence[Case], method="III", *, rng=0, population: int = 30,
-         generations: int = 500, seed: int = 0, base: Params | None = None) -> Iterator[Generation]:
+         generations: int = 500, seed: int = 0, base: Params | None = None,
+         solver: str = "network", seeds: int = 1) -> Iterator[Generation]:
     """Run the GA on `cases`, yielding one :class:`~ismb_lab.genetic.Generation` per generation.
 
     It stops when the mean fitness reaches the number of targets (every
@@ -167,7 +194,11 @@ def tune(cases: Sequence[Case], method="III", *, rng=0, population: int = 30,
         Update-order seed of every network run.
     base : Params, optional
         Values of the genes the method does not use.
+    solver : {"network", "anneal", "exact"}
+        How each network is solved (see :data:`SOLVERS`).
+    seeds : int
+        Update-order seeds each chromosome is scored over (mean fitness).
     """
-    fitness = Fitness(cases, method, seed=seed, base=base)
+    fitness = Fitness(cases, method, seed=seed, base=base, solver=solver, seeds=seeds)
     return evolve(fitness, gene_bounds(method), rng=rng, population=population,
                   generations=generations, target=fitness.target)

@@ -39,3 +39,50 @@ def test_the_thesis_fig_5_10_rows_do_not_add_up_to_its_printed_total():
         total = total + Score(int(c), int(w), int(x), int(t))
     assert (total.correct, total.errors, total.targets) == (139, 13, 150)
     assert (total.correct, total.errors, total.targets) != (125, 14, 137)
+
+
+# --- solvers in the protocol, on hand-made pairs -----------------------------------------------
+
+import numpy as np
+
+from ismb_lab.evaluation import format_protocol, protocol
+from ismb_lab.matching import Prepared
+from ismb_lab.methods import Params, build_problem
+from ismb_lab.tuning import Case, evaluate
+
+
+def hand_case(offset, name):
+    # three left corners; 0 and 1 have partners 20 px left, 2 (no neighbours) has none:
+    # its only candidate looks unlike it
+    lxy = np.array([[100.0, 50.0], [112.0, 56.0], [140.0, 90.0]]) + [offset, 0]
+    rxy = np.array([[80.0, 50.0], [92.0, 56.0], [126.0, 92.0]]) + [offset, 0]
+    M = np.array([[2.0, 60.0, 60.0], [60.0, 3.0, 60.0], [60.0, 60.0, 45.0]])
+    problem = build_problem(lxy, rxy, M)
+    prepared = Prepared.__new__(Prepared)
+    object.__setattr__(prepared, "problem", problem)
+    return Case(prepared, np.array([[0, 0], [1, 1]]), name=name)
+
+
+def test_no_match_energy_leaves_the_partnerless_corner_unmatched_under_every_solver():
+    case = hand_case(0, "a")
+    params = Params(theta_c=3.0, theta_s=20.0, lambda_c=1.0, lambda_s=0.5)
+    for solver in ("network", "anneal", "exact"):
+        three = evaluate([case], "III", params, solver=solver)
+        nm = evaluate([case], "NM", Params(**params.to_dict(), match_bias=0.0), solver=solver)
+        assert str(nm) == "2/0+0/2", solver
+        assert three.extra >= 1, solver          # exactly one match per row: corner 2 takes one
+
+
+def test_protocol_reports_annealed_and_exact_rows():
+    cases = [hand_case(0, "a"), hand_case(30, "b"), hand_case(60, "c")]
+    report = protocol(cases, "NM", train=0, seeds=2, generations=3, solvers=("anneal", "exact"),
+                      fit_solver="anneal")
+    assert set(report["solvers"]) == {"anneal", "exact"}
+    assert len(report["solvers"]["anneal"]["held_out"]) == 2 and len(report["solvers"]["exact"]["held_out"]) == 1
+    assert all(s.targets == 4 for s in report["solvers"]["exact"]["held_out"])
+    text = format_protocol(report)
+    assert "solver    anneal" in text and "solver     exact" in text
+    with pytest.raises(ValueError, match="'solvers' parameter of protocol"):
+        protocol(cases, "NM", solvers=("network",))
+    with pytest.raises(ValueError, match="'fit_solver' parameter of protocol"):
+        protocol(cases, "NM", fit_solver="magic")

@@ -89,3 +89,15 @@ def test_method_nm_has_a_fifth_gene_with_documented_bounds():
     p = to_params("NM", [3.0, 20.0, 0.7, 1.5, 0.25])
     assert p.match_bias == 0.25 and to_chromosome("NM", p).tolist() == [3.0, 20.0, 0.7, 1.5, 0.25]
     assert to_params("III", to_chromosome("III", p), base=Params()).match_bias is None
+
+
+def test_fitness_over_seeds_is_the_mean_of_single_seed_fitnesses(cases):
+    chromosome = to_chromosome("NM", Params(theta_c=2.0, lambda_c=0.5, match_bias=0.5))[None, :]
+    single = [Fitness(cases[:1], "NM", seed=s)(chromosome)[0] for s in range(3)]
+    assert Fitness(cases[:1], "NM", seed=0, seeds=3)(chromosome)[0] == pytest.approx(np.mean(single))
+    exact = Fitness(cases[:1], "NM", solver="exact")(chromosome)[0]
+    assert exact == Fitness(cases[:1], "NM", solver="exact", seed=5)(chromosome)[0]
+    with pytest.raises(ParameterError, match="'solver' parameter of Fitness"):
+        Fitness(cases[:1], "NM", solver="greedy")
+    with pytest.raises(ParameterError, match="'solver' parameter of evaluate"):
+        evaluate(cases[:1], "NM", Params(match_bias=0.0), solver="greedy")
