@@ -405,3 +405,81 @@ def test_scene_and_true_matches_validate(scene):
         true_matches(None, [[1, 2]], [[1, 2]])
     with pytest.raises(ValueError, match="The 'left_xy' parameter of Scene.correspond"):
         scene.correspond([[1, 2, 3]])
+
+
+# ------------------------------------------------------------ depth-demo scenes
+
+from ismb_lab.scenes import (CAR_DEPTH, REALISTIC_COUNT, Group, lab_scene, realistic_scene,  # noqa: E402
+                             toy_car, toy_car_layout, toy_car_scene)
+
+
+def test_toy_car_scene_is_the_lab_scene_plus_two_cars_left_nearer():
+    lab, cars = lab_scene(0, supersample=1), toy_car_scene(0, supersample=1)
+    wall, table, box = lab.primitives
+    assert len(cars.primitives) == 5
+    for a, b in zip(lab.primitives, cars.primitives[:3]):
+        assert type(a) is type(b)
+    assert np.array_equal(box.lo, cars.primitives[2].lo) and np.array_equal(box.hi, cars.primitives[2].hi)
+    left, right = cars.primitives[3:]
+    assert isinstance(left, Group) and (left.name, right.name) == ("left car", "right car")
+    assert left.parts[0].lo[2] < right.parts[0].lo[2] and right.hi[2] < box.lo[2]
+    # Where no car is, both views see the same surfaces: disparity maps agree.
+    free = np.isfinite(lab.disparity) & np.isfinite(cars.disparity) & (cars.depth == lab.depth)
+    assert free.mean() > 0.85
+    assert np.allclose(lab.disparity[free], cars.disparity[free])
+    # The cars are seen at their own depth (body side or wheels), left of and right of the box.
+    cx = lambda car: float(np.mean(cars.rig.project_left([(car.lo + car.hi) / 2])[0, 0]))
+    x_box = cars.rig.project_left([(box.lo + box.hi) / 2])[0, 0]
+    assert cx(left) < x_box < cx(right)
+    for car in (left, right):
+        z = car.parts[0].lo[2]
+        seen = np.isclose(cars.depth, z) | np.isclose(cars.depth, z - 0.006)
+        assert seen.sum() > 300
+
+
+def test_car_variants_differ_and_stay_in_their_ranges():
+    layouts = {toy_car_layout(c) for c in range(30)}
+    assert len(layouts) == 30
+    for (xl, zl, ll), (xr, zr, lr) in layouts:
+        assert 0.88 <= zl and zl + 0.1 <= zr <= 1.2 and xl < xr
+        assert 0.09 <= ll <= 0.11 and 0.09 <= lr <= 0.11
+    a, b = toy_car_scene(0, cars=1, supersample=1), toy_car_scene(0, cars=2, supersample=1)
+    assert not np.array_equal(a.left, b.left)
+
+
+def test_group_normals_and_albedo_follow_the_part_hit():
+    car = toy_car(3, 0.0, 1.0)
+    o = np.zeros((2, 3))
+    d = np.array([[0.0, 0.11, 1.0], [0.0, -1.0, 0.0]])
+    d /= np.linalg.norm(d, axis=1)[:, None]
+    t, info = car.intersect(o, d)
+    assert np.isclose(t[0] * d[0, 2], 1.0) and np.isinf(t[1])
+    assert info[0, 2] == 4                      # the body's front face, part 0
+    assert car.normals(info[:1]).tolist() == [[0, 0, -1]]
+    assert car.hi[2] == pytest.approx(1.0 + CAR_DEPTH + 0.006)
+
+
+def test_realistic_scenes_vary_and_some_are_not_rectified():
+    rigs = [realistic_scene(n, supersample=1).rig for n in range(1, REALISTIC_COUNT + 1)]
+    offsets = [r.vertical_offset_px for r in rigs]
+    assert sum(o > 0 for o in offsets) >= 5 and all(o == 0 or 2.5 <= o <= 5 for o in offsets)
+    assert any(r.roll_deg != 0 for r in rigs)
+    a, b = realistic_scene(1, supersample=1), realistic_scene(1, supersample=1)
+    assert np.array_equal(a.left, b.left)
+
+
+@pytest.mark.parametrize("make, name, error", [
+    (lambda: toy_car(0, 0.0, -1.0), "z_front", ValueError),
+    (lambda: toy_car(0, 0.0, 1.0, length=2.0), "length", ValueError),
+    (lambda: Group([]), "parts", TypeError),
+    (lambda: Group([Texture()]), "parts", TypeError),
+    (lambda: lab_scene(0, noise_std=-1), "noise_std", ValueError),
+    (lambda: toy_car_scene(0, cars=-3), "cars", ValueError),
+    (lambda: toy_car_layout(0, rig="rig"), "rig", TypeError),
+    (lambda: realistic_scene(0), "index", ValueError),
+    (lambda: realistic_scene(1.5), "index", TypeError),
+])
+def test_demo_scene_arguments_are_checked(make, name, error):
+    error = {ValueError: ParameterError, TypeError: ParameterTypeError}[error]
+    with pytest.raises(error, match=rf"^The '{name}' parameter of \w[\w.]* must be .* Got .* instead\.$"):
+        make()
