@@ -67,3 +67,36 @@ def plot_matches(ax, left, right, left_xy, right_xy, pairs, *, numbers: bool = T
                        for n, (x, y) in enumerate(xy, 1)]
     ax.set_axis_off()
     return {"image": image, "left_points": lp, "right_points": rp, "lines": lines, "labels": labels}
+
+
+def plot_depth(ax, left, result, *, cmap: str = "plasma") -> dict:
+    """Draw Fig. 5.14: the scene's left image, its new features coloured by disparity.
+
+    Features removed as background are small grey crosses; every object is labelled
+    with its rank (1 = nearest) and its depth.
+
+    Parameters
+    ----------
+    ax : matplotlib.axes.Axes
+    left : (H, W) ndarray
+        The scene's left image.
+    result : ismb_lab.depth.DepthResult
+
+    Returns
+    -------
+    artists : dict
+        ``image``, ``features`` (the scatter of kept matches), ``removed`` and ``labels``.
+    """
+    image = ax.imshow(left, cmap="gray", vmin=0, vmax=255)
+    removed, = ax.plot(*np.asarray(result.removed_xy).reshape(-1, 2).T, "x", color="0.6", ms=5)
+    xy = np.asarray(result.kept_xy).reshape(-1, 2)
+    features = ax.scatter(xy[:, 0], xy[:, 1], c=result.kept_disparity, cmap=cmap, s=28,
+                          edgecolors="white", linewidths=0.5)
+    labels = []
+    for obj in result.objects:
+        depth = f"{obj.depth_m:.2f} m" if obj.depth_m is not None else obj.depth.status
+        x, y = obj.centroid_xy
+        labels.append(ax.text(x, y - 8, f"#{obj.rank} {depth}\nd={obj.mean_disparity:.1f}",
+                              color="yellow", fontsize=7, ha="center", va="bottom"))
+    ax.set_axis_off()
+    return {"image": image, "features": features, "removed": removed, "labels": labels}
