@@ -1,0 +1,90 @@
+"""`ismb-lab depth` as a user runs it: the committed pairs, the JSON contract and bad input."""
+
+import json
+import subprocess
+import sys
+from pathlib import Path
+
+import cv2
+import numpy as np
+import pytest
+
+from ismb_lab.cli import main
+
+IMAGES = Path(__file__).resolve().parent.parent / "images"
+BG = [IMAGES / "lab" / "left.png", IMAGES / "lab" / "right.png"]
+CARS = [IMAGES / "toy_cars" / "left.png", IMAGES / "toy_cars" / "right.png"]
+
+
+def test_depth_ranks_the_left_car_first_and_writes_json_and_plot(tmp_path):
+    out, plot = tmp_path / "d.json", tmp_path / "d.png"
+    proc = subprocess.run([sys.executable, "-m", "ismb_lab.cli", "depth", *map(str, BG + CARS),
+                           "--json", str(out), "--plot", str(plot)],
+                          capture_output=True, text=True, timeout=300)
+    assert proc.returncode == 0, proc.stderr
+    data = json.loads(out.read_text())
+    objects = data["objects"]
+    assert data["background_removed"] >= 5 and len(objects) >= 2
+    assert [o["mean_disparity"] for o in objects] == sorted((o["mean_disparity"] for o in objects),
+                                                            reverse=True)
+    for o in objects:
+        assert set(o) >= {"centroid_xy", "mean_disparity", "depth_m", "features"}
+        assert o["depth_m"] == pytest.approx(300 * 0.1 / o["mean_disparity"])
+    # The nearest object lies on the left car (left half of the view), in front of the box.
+    first = objects[0]
+    assert first["centroid_xy"][0] < 160 and first["depth_m"] < 1.3
+    rows = [line for line in proc.stdout.splitlines() if line.startswith("#")]
+    assert len(rows) == len(objects) and rows[0].startswith("#1 ")
+    image = cv2.imread(str(plot))
+    assert image is not None and image.shape[0] > 100
+
+
+def test_calibration_options_scale_the_depth(tmp_path):
+    out = tmp_path / "d.json"
+    assert main(["depth", *map(str, BG + CARS), "--focal-px", "600", "--baseline-m", "0.2",
+                 "--json", str(out)]) == 0
+    for o in json.loads(out.read_text())["objects"]:
+        assert o["depth_m"] == pytest.approx(600 * 0.2 / o["mean_disparity"])
+
+
+def test_a_scene_identical_to_the_background_has_no_objects(capsys):
+    assert main(["depth", *map(str, BG + BG)]) == 0
+    assert "no objects" in capsys.readouterr().out
+
+
+def write(path, image):
+    cv2.imwrite(str(path), image.astype(np.uint8))
+    return str(path)
+
+
+@pytest.mark.parametrize("args, words", [
+    (["--focal-px", "-300"], "--focal-px must be a finite number > 0"),
+    (["--focal-px", "0"], "--focal-px must be a finite number > 0"),
+    (["--baseline-m", "0"], "--baseline-m must be a finite number > 0"),
+    (["--baseline-m", "-0.1"], "--baseline-m must be a finite number > 0"),
+])
+def test_bad_calibration_exits_2_with_one_line(args, words, capsys):
+    assert main(["depth", *map(str, BG + CARS), *args]) == 2
+    err = capsys.readouterr().err
+    assert words in err and err.count("\n") == 1 and "Traceback" not in err
+
+
+def test_pairs_of_different_sizes_exit_2(tmp_path, capsys):
+    small = cv2.imread(str(CARS[0]), cv2.IMREAD_GRAYSCALE)[:200, :300]
+    paths = [write(tmp_path / "l.png", small), write(tmp_path / "r.png", small)]
+    assert main(["depth", *map(str, BG), *paths]) == 2
+    err = capsys.readouterr().err
+    assert "300x200" in err and "320x240" in err and err.count("\n") == 1
+
+
+def test_no_matches_says_so_and_exits_2(tmp_path, capsys):
+    flat = np.full((240, 320), 128.0)
+    paths = [write(tmp_path / "l.png", flat), write(tmp_path / "r.png", flat)]
+    assert main(["depth", *map(str, BG), *paths]) == 2
+    err = capsys.readouterr().err
+    assert "no matches in the scene pair" in err and err.count("\n") == 1
+
+
+def test_missing_file_exits_2(tmp_path, capsys):
+    assert main(["depth", *map(str, BG), str(tmp_path / "nope.png"), str(CARS[1])]) == 2
+    assert capsys.readouterr().err.startswith("ismb-lab: error:")

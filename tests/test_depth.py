@@ -1,0 +1,115 @@
+"""Relative and metric depth (§5.2.3) on the committed toy-car scene and rendered variants."""
+
+import json
+import math
+
+import numpy as np
+import pytest
+
+from ismb_lab import ParameterError, ParameterTypeError
+from ismb_lab.depth import DepthConfig, depth_from_matches, metric_depth, relative_depth
+from ismb_lab.matching import match
+from ismb_lab.scenes import lab_scene, toy_car_scene
+
+IMAGES = __import__("pathlib").Path(__file__).resolve().parent.parent / "images"
+
+
+def on_car(scene, car, obj):
+    """Does the object's centroid lie on the car's image (its bounding box, 3 px margin)?"""
+    lo = scene.rig.project_left([[car.lo[0], car.lo[1], car.lo[2]]])[0]
+    hi = scene.rig.project_left([[car.hi[0], car.hi[1], car.lo[2]]])[0]
+    x, y = obj.centroid_xy
+    return lo[0] - 3 <= x <= hi[0] + 3 and lo[1] - 3 <= y <= hi[1] + 3
+
+
+def car_objects(scene, result):
+    return [[o for o in result.objects if on_car(scene, car, o)] for car in scene.primitives[3:]]
+
+
+@pytest.fixture(scope="module")
+def committed():
+    scene = toy_car_scene(0)
+    paths = [IMAGES / "lab" / n for n in ("left.png", "right.png")], \
+        [IMAGES / "toy_cars" / n for n in ("left.png", "right.png")]
+    return scene, relative_depth(tuple(paths[0]), tuple(paths[1]))
+
+
+def test_committed_scene_left_car_nearer_both_in_front_of_the_box(committed):
+    scene, result = committed
+    left, right = car_objects(scene, result)
+    assert left and right
+    assert min(o.rank for o in left) < min(o.rank for o in right)
+    box_z = scene.primitives[2].lo[2]
+    # The object that ranks each car (its nearest) stands in front of the box.
+    assert all(min(objs, key=lambda o: o.rank).depth_m < box_z for objs in (left, right))
+    ranks = [o.rank for o in result.objects]
+    assert ranks == list(range(1, len(ranks) + 1))
+    assert [o.mean_disparity for o in result.objects] == sorted(
+        (o.mean_disparity for o in result.objects), reverse=True)
+    assert result.background_removed >= 5
+
+
+def test_committed_scene_metric_depth_of_each_car_within_ten_percent(committed):
+    scene, result = committed
+    for car, objs in zip(scene.primitives[3:], car_objects(scene, result)):
+        truth = car.parts[0].lo[2]
+        best = min(abs(o.depth_m - truth) / truth for o in objs)
+        assert best <= 0.10, (car.name, [o.depth_m for o in objs], truth)
+        good = [o for o in objs if abs(o.depth_m - truth) / truth <= 0.10]
+        # The quantisation error bar is honest: it holds the truth within one more pixel.
+        assert any(metric_depth(o.mean_disparity + 1).z <= truth <= metric_depth(o.mean_disparity - 1).z
+                   for o in good)
+
+
+def test_ranking_on_rendered_variants():
+    """Measured, not tuned: Method-III with the thesis' parameters on 40 car layouts."""
+    background = lab_scene(0, supersample=1)
+    bg = match(background.left, background.right)
+    correct = 0
+    for cars in range(40):
+        scene = toy_car_scene(0, cars=cars, supersample=1)
+        result = depth_from_matches(bg, match(scene.left, scene.right))
+        left, right = car_objects(scene, result)
+        correct += bool(left and right and min(o.rank for o in left) < min(o.rank for o in right))
+    assert correct >= 20
+
+
+def test_metric_depth_never_divides_by_zero():
+    assert metric_depth(0.0).status == "at infinity" and metric_depth(0.0).z is None
+    assert metric_depth(-3.0).status == "invalid"
+    d = metric_depth(15.0, focal_px=600, baseline_m=0.05, error_px=0.5)
+    assert d.z == pytest.approx(2.0) and d.near < 2.0 < d.far
+    assert math.isinf(metric_depth(0.5).far)
+
+
+def test_identical_scene_and_background_give_no_objects():
+    scene = lab_scene(0, supersample=1)
+    m = match(scene.left, scene.right)
+    result = depth_from_matches(m, m)
+    assert result.objects == () and "no objects" in result.message
+    assert result.background_removed == len(np.unique(m.pairs[:, 0]))
+
+
+def test_to_dict_is_the_json_contract(committed):
+    _, result = committed
+    data = json.loads(json.dumps(result.to_dict()))
+    assert data["background_removed"] == result.background_removed
+    for obj, o in zip(data["objects"], result.objects):
+        assert obj["centroid_xy"] == list(o.centroid_xy) and obj["depth_m"] == o.depth_m
+        assert obj["mean_disparity"] == o.mean_disparity and len(obj["features"]) == len(o.features)
+
+
+@pytest.mark.parametrize("make, name, error", [
+    (lambda: DepthConfig(focal_px=-1), "focal_px", ValueError),
+    (lambda: DepthConfig(baseline_m=0), "baseline_m", ValueError),
+    (lambda: DepthConfig(min_features=0), "min_features", ValueError),
+    (lambda: DepthConfig(in_front="yes"), "in_front", TypeError),
+    (lambda: metric_depth(1.0, focal_px=0), "focal_px", ValueError),
+    (lambda: depth_from_matches(None, None), "background", TypeError),
+    (lambda: relative_depth(5, (np.zeros((60, 80)),) * 2), "background", TypeError),
+    (lambda: relative_depth((np.zeros((60, 80)),) * 2, (np.zeros((50, 80)),) * 2), "scene", ValueError),
+])
+def test_bad_input_names_the_parameter(make, name, error):
+    error = {ValueError: ParameterError, TypeError: ParameterTypeError}[error]
+    with pytest.raises(error, match=rf"^The '{name}' parameter of \w[\w.]* must be .* Got .* instead\.$"):
+        make()
