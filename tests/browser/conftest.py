@@ -1,0 +1,240 @@
+"""JupyterLab and Voila in headless Chromium, driven by Playwright (see the design's TESTING.md).
+
+The server runs on 127.0.0.1 with a token and throw-away config, data, runtime, workspace and
+settings folders, on a temporary copy of notebooks/ and images/, so that Save writes there.
+"""
+
+import json
+import os
+import secrets
+import shutil
+import signal
+import socket
+import subprocess
+import sys
+import time
+import urllib.error
+import urllib.request
+from pathlib import Path
+
+import pytest
+
+ROOT = Path(__file__).resolve().parents[2]
+ARTIFACTS = ROOT / "test-artifacts"
+CHROMIUM = Path("/usr/bin/chromium")
+ARGS = ["--headless", "--no-sandbox", "--disable-gpu", "--disable-quic", "--no-first-run",
+        "--disable-background-networking", "--disable-component-update", "--disable-sync"]
+
+
+def _free_port() -> int:
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        return s.getsockname()[1]
+
+
+def _wait_http(url: str, proc: subprocess.Popen, log: Path, timeout: float = 90.0) -> None:
+    deadline = time.monotonic() + timeout
+    while time.monotonic() < deadline:
+        if proc.poll() is not None:
+            raise RuntimeError(f"server exited with {proc.returncode}:\n{log.read_text()[-3000:]}")
+        try:
+            with urllib.request.urlopen(url, timeout=2):
+                return
+        except (urllib.error.URLError, OSError):
+            time.sleep(0.3)
+    raise RuntimeError(f"server did not answer {url} within {timeout} s:\n{log.read_text()[-3000:]}")
+
+
+def _wait_port(port: int, proc: subprocess.Popen, log: Path, timeout: float = 90.0) -> None:
+    deadline = time.monotonic() + timeout
+    while time.monotonic() < deadline:
+        if proc.poll() is not None:
+            raise RuntimeError(f"server exited with {proc.returncode}:\n{log.read_text()[-3000:]}")
+        with socket.socket() as s:
+            if s.connect_ex(("127.0.0.1", port)) == 0:
+                return
+        time.sleep(0.3)
+    raise RuntimeError(f"nothing listens on port {port} after {timeout} s:\n{log.read_text()[-3000:]}")
+
+
+def _stop(proc: subprocess.Popen) -> None:
+    """Terminate the one process this suite started, if it is still running."""
+    if proc.poll() is None:
+        proc.send_signal(signal.SIGTERM)
+        try:
+            proc.wait(15)
+        except subprocess.TimeoutExpired:
+            proc.kill()
+            proc.wait(5)
+
+
+@pytest.fixture(scope="session")
+def chromium():
+    """Chromium's path: missing fails under CI=true (so a broken install cannot hide), else skips."""
+    if not CHROMIUM.exists():
+        text = f"{CHROMIUM} is missing (install it: apt-get install -y chromium)"
+        if os.environ.get("CI", "").lower() in ("1", "true", "yes"):
+            pytest.fail(text)
+        pytest.skip(text)
+    return str(CHROMIUM)
+
+
+@pytest.fixture(scope="session")
+def browser(chromium):
+    from playwright.sync_api import sync_playwright
+
+    with sync_playwright() as p:
+        b = p.chromium.launch(executable_path=chromium, args=ARGS)
+        yield b
+        b.close()
+
+
+@pytest.fixture
+def page(browser):
+    context = browser.new_context(viewport={"width": 1400, "height": 1000})
+    context.set_default_timeout(60_000)
+    page = context.new_page()
+    yield page
+    context.close()
+
+
+@pytest.fixture(autouse=True)
+def deadline():
+    """No browser test may hang the suite: each gets 240 s, then fails with a clear error."""
+    def expire(signum, frame):
+        raise TimeoutError("browser test took longer than 240 s")
+
+    previous = signal.signal(signal.SIGALRM, expire)
+    signal.alarm(240)
+    yield
+    signal.alarm(0)
+    signal.signal(signal.SIGALRM, previous)
+
+
+@pytest.fixture(scope="session")
+def workspace(tmp_path_factory):
+    """A copy of notebooks/ and images/ with the repository's layout."""
+    root = tmp_path_factory.mktemp("lab")
+    shutil.copytree(ROOT / "notebooks", root / "notebooks",
+                    ignore=shutil.ignore_patterns(".ipynb_checkpoints", "my_targets*.json"))
+    shutil.copytree(ROOT / "images", root / "images")
+    return root
+
+
+@pytest.fixture(scope="session")
+def artifacts():
+    ARTIFACTS.mkdir(exist_ok=True)
+    return ARTIFACTS
+
+
+@pytest.fixture(scope="session")
+def lab(chromium, workspace, tmp_path_factory):
+    """A JupyterLab server: yields (base_url, token)."""
+    home = tmp_path_factory.mktemp("jupyter")
+    settings = home / "settings"
+    for rel, value in (("@jupyterlab/apputils-extension/notification.jupyterlab-settings",
+                        {"fetchNews": "false", "checkForUpdates": False}),
+                       ("@jupyterlab/notebook-extension/tracker.jupyterlab-settings",
+                        {"windowingMode": "none"})):
+        (settings / rel).parent.mkdir(parents=True, exist_ok=True)
+        (settings / rel).write_text(json.dumps(value))
+    env = dict(os.environ, JUPYTER_CONFIG_DIR=str(home / "config"), JUPYTER_DATA_DIR=str(home / "data"),
+               JUPYTER_RUNTIME_DIR=str(home / "runtime"))
+    token, port = secrets.token_hex(16), _free_port()
+    log = home / "server.log"
+    with open(log, "w") as out:
+        proc = subprocess.Popen(
+            [sys.executable, "-m", "jupyterlab", "--no-browser", "--allow-root", "--ip=127.0.0.1",
+             f"--port={port}", f"--IdentityProvider.token={token}",
+             f"--ServerApp.root_dir={workspace}", "--LabApp.expose_app_in_browser=True",
+             f"--LabApp.workspaces_dir={home / 'workspaces'}", f"--LabApp.user_settings_dir={settings}"],
+            env=env, stdout=out, stderr=subprocess.STDOUT, cwd=workspace)
+    base = f"http://127.0.0.1:{port}"
+    try:
+        _wait_http(f"{base}/api/status?token={token}", proc, log)
+        yield base, token
+    finally:
+        try:
+            request = urllib.request.Request(f"{base}/api/shutdown", method="POST",
+                                             headers={"Authorization": f"token {token}"})
+            urllib.request.urlopen(request, timeout=10)
+            proc.wait(20)
+        except (urllib.error.URLError, OSError, subprocess.TimeoutExpired):
+            pass
+        _stop(proc)
+
+
+# The kernel-ready wait: the toolbar says idle before the session has a kernel, and a Run All
+# issued then silently runs nothing.
+_READY = """() => {
+  const w = window.jupyterapp && window.jupyterapp.shell.currentWidget;
+  if (!w || !w.content || !w.content.activeCell || !w.context || !w.context.isReady) return false;
+  const s = w.sessionContext;
+  if (!s || !s.isReady || !s.session || !s.session.kernel) return false;
+  const k = s.session.kernel;
+  return k.connectionStatus === 'connected' && k.status === 'idle';
+}"""
+
+_IDLE = """() => {
+  const k = window.jupyterapp.shell.currentWidget.sessionContext.session.kernel;
+  return k.status === 'idle';
+}"""
+
+
+@pytest.fixture
+def open_notebook(lab, page):
+    """Open notebooks/<name> in JupyterLab and run all cells; returns the page."""
+    base, token = lab
+
+    def open_(name: str, timeout: float = 120_000):
+        page.goto(f"{base}/lab/tree/notebooks/{name}?token={token}")
+        page.wait_for_function(_READY, timeout=timeout, polling=200)
+        page.evaluate("() => window.jupyterapp.commands.execute('notebook:run-all-cells')")
+        # the kernel goes busy, then idle when the last cell is done
+        page.wait_for_function("""() => {
+            const w = window.jupyterapp.shell.currentWidget;
+            return [...w.content.widgets].every(c => c.model.type !== 'code' || c.model.executionCount);
+        }""", timeout=timeout, polling=250)
+        page.wait_for_function(_IDLE, timeout=timeout, polling=200)
+        return page
+
+    return open_
+
+
+@pytest.fixture(scope="session")
+def kernel_exec():
+    """``kernel_exec(page, code)`` runs code in the open notebook's kernel (e.g. to force a redraw)."""
+    return _kernel_exec
+
+
+def _kernel_exec(page, code: str):
+    page.evaluate("""async (code) => {
+        const k = window.jupyterapp.shell.currentWidget.sessionContext.session.kernel;
+        await k.requestExecute({code, silent: false, store_history: false}).done;
+    }""", code)
+
+
+@pytest.fixture
+def voila(chromium, workspace, tmp_path_factory):
+    """Start Voila on one notebook; yields a function name -> base URL."""
+    started = []
+
+    def serve(name: str) -> str:
+        home = tmp_path_factory.mktemp("voila")
+        env = dict(os.environ, JUPYTER_CONFIG_DIR=str(home / "config"),
+                   JUPYTER_DATA_DIR=str(home / "data"), JUPYTER_RUNTIME_DIR=str(home / "runtime"))
+        port = _free_port()
+        log = home / "voila.log"
+        with open(log, "w") as out:
+            proc = subprocess.Popen([sys.executable, "-m", "voila", str(workspace / "notebooks" / name),
+                                     "--no-browser", "--Voila.ip=127.0.0.1", f"--port={port}"],
+                                    env=env, stdout=out, stderr=subprocess.STDOUT,
+                                    cwd=workspace / "notebooks")
+        started.append(proc)
+        base = f"http://127.0.0.1:{port}"
+        _wait_port(port, proc, log)
+        return base
+
+    yield serve
+    for proc in started:
+        _stop(proc)
