@@ -3,10 +3,11 @@
 Display one by ending a notebook cell with it; ``.widget`` is its root container.
 """
 
+from .depth_demo import DepthDemo, DepthModel
 from .explorer import ExplorerModel, ParameterExplorer
 from .ga_runner import GAModel, GARunner
 from .labeler import LabelModel, TargetLabeler
 from .stepper import HopfieldStepper, StepperModel
 
-__all__ = ["ExplorerModel", "GAModel", "GARunner", "HopfieldStepper", "LabelModel",
-           "ParameterExplorer", "StepperModel", "TargetLabeler"]
+__all__ = ["DepthDemo", "DepthModel", "ExplorerModel", "GAModel", "GARunner", "HopfieldStepper",
+           "LabelModel", "ParameterExplorer", "StepperModel", "TargetLabeler"]

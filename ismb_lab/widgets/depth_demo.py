@@ -1,0 +1,397 @@
+"""Which toy car is nearer: the thesis' depth demonstration as a widget (§5.2.3, Figs. 5.11-5.14).
+
+:class:`DepthModel` runs :func:`ismb_lab.depth.relative_depth` on a background pair
+and a scene pair and words its ranking; :class:`DepthDemo` adds the background's
+matches and disparities (Fig. 5.12), the scene's new features coloured by
+disparity with the background's removed (Fig. 5.14), and controls for the seed,
+the method and the background-removal tolerances.
+"""
+
+from __future__ import annotations
+
+import html
+import math
+from dataclasses import fields, replace
+from pathlib import Path
+
+import numpy as np
+
+from .._validation import ParameterTypeError, check_number, message
+from ..depth import DepthConfig, DepthObject, DepthResult, relative_depth
+from ..io import StereoPair, load_pair
+from ..methods import METHOD_NAMES, Params, get_method
+from ._common import Base, Pane, button, grey_rgb, pair_files, path_labels, with_class
+
+#: The DepthConfig fields of the background removal that get a slider, with their labels.
+TOLERANCES = {"position_tol_px": "same place (px)", "disparity_tol_px": "same disparity (px)",
+              "local_px": "local background (px)"}
+CMAP = "plasma"
+
+
+def load_stereo(value, name: str, owner: str) -> StereoPair:
+    """A pair folder, a ``(left, right)`` pair or an object with ``.left`` and ``.right``, loaded."""
+    if isinstance(value, (str, Path)):
+        left, right, _ = pair_files(value, owner)
+        return load_pair(left, right)
+    if isinstance(value, StereoPair):
+        return value
+    if isinstance(value, (tuple, list)) and len(value) == 2:
+        return load_pair(value[0], value[1])
+    if hasattr(value, "left") and hasattr(value, "right"):
+        return load_pair(value.left, value.right)
+    raise ParameterTypeError(message(name, owner, "a pair folder, a (left, right) pair of images or "
+                                     "paths, or an object with .left and .right", value))
+
+
+def _tolerance_defaults() -> dict:
+    return {f.name: f.default for f in fields(DepthConfig) if f.name in TOLERANCES}
+
+
+class DepthModel:
+    """A background pair and a scene pair, matched and ranked near -> far.
+
+    Parameters
+    ----------
+    background, scene : pair folder, (left, right) or object with ``.left`` and ``.right``
+        The two stereo pairs of the same view (see :func:`ismb_lab.depth.relative_depth`).
+    method : {"I", "II", "III", "NM"}
+    params : Params, optional
+        None: the thesis' values of whichever method is chosen.
+    seed : int
+        Update-order seed of both network runs.
+    config : DepthConfig, optional
+        Tolerances and calibration.
+    match_config : MatchConfig, optional
+    background_name : str
+        What the scene's objects are compared with: the background's nearest object.
+
+    Examples
+    --------
+    >>> from ismb_lab.scenes import lab_scene, toy_car_scene
+    >>> model = DepthModel(lab_scene(0), toy_car_scene(0))
+    >>> model.result.objects == () or model.ranking()[0].startswith("1. object at (")
+    True
+    >>> model.set(seed=3).seed, model.set(position_tol_px=4).config.position_tol_px
+    (3, 4.0)
+    """
+
+    def __init__(self, background, scene, method="III", params: Params | None = None, seed: int = 0,
+                 config: DepthConfig | None = None, match_config=None,
+                 background_name: str = "the nearest background object"):
+        owner = "DepthModel"
+        self.background = load_stereo(background, "background", owner)
+        self.scene = load_stereo(scene, "scene", owner)
+        self.match_config = match_config
+        if not isinstance(background_name, str):
+            raise ParameterTypeError(message("background_name", owner, "a str", background_name))
+        self.background_name = background_name
+        self.method = get_method(method).name
+        self.params = self._check_params(params, owner)
+        self.config = self._check_config(DepthConfig() if config is None else config, owner)
+        self.seed = check_number(seed, "seed", owner, low=0, integer=True)
+        self.result: DepthResult = self._compute(self.method, self.params, self.seed, self.config)
+
+    @staticmethod
+    def _check_params(params, owner):
+        if params is not None and not isinstance(params, Params):
+            raise ParameterTypeError(message("params", owner, "None or a Params", params))
+        return params
+
+    @staticmethod
+    def _check_config(config, owner):
+        if not isinstance(config, DepthConfig):
+            raise ParameterTypeError(message("config", owner, "None or a DepthConfig", config))
+        return config
+
+    def _compute(self, method, params, seed, config) -> DepthResult:
+        return relative_depth(self.background, self.scene, method=method, params=params,
+                              match_config=self.match_config, config=config, seed=seed)
+
+    def set(self, *, method=None, params: Params | None = None, seed=None, config=None,
+            **tolerances) -> "DepthModel":
+        """Change any of method, params, seed, config or single config fields; recompute.
+
+        All or nothing: when a value is bad or the computation fails, the model is
+        left as it was and the error propagates.
+        """
+        owner = "DepthModel.set"
+        new_method = self.method if method is None else get_method(method).name
+        new_params = self.params if params is None else self._check_params(params, owner)
+        new_seed = self.seed if seed is None else check_number(seed, "seed", owner, low=0, integer=True)
+        new_config = self.config if config is None else self._check_config(config, owner)
+        if tolerances:
+            new_config = replace(new_config, **tolerances)
+        result = self._compute(new_method, new_params, new_seed, new_config)
+        self.method, self.params, self.seed, self.config = new_method, new_params, new_seed, new_config
+        self.result = result
+        return self
+
+    def recompute(self) -> "DepthModel":
+        """Match both pairs again with the current settings."""
+        return self.set()
+
+    @property
+    def objects(self) -> tuple:
+        return self.result.objects
+
+    def ranking(self) -> list[str]:
+        """One line per object, nearest first, e.g. ``1. object at (98, 163): d = 33.9 px, Z = 0.88 m ± 0.01``."""
+        return [f"{o.rank}. object at ({o.centroid_xy[0]:.0f}, {o.centroid_xy[1]:.0f}): "
+                f"d = {o.mean_disparity:.1f} px, {depth_text(o)} ({len(o.features)} features)"
+                for o in self.result.objects]
+
+    def sentence(self) -> str:
+        """The thesis' conclusion for this result: which object is nearer, and what they are in front of."""
+        objects = self.result.objects
+        if not objects:
+            return self.result.message or "No objects were found in the scene."
+        if len(objects) == 1:
+            text = f"One object was found, at ({_xy(objects[0])}), {depth_text(objects[0])}"
+        elif len(objects) == 2:
+            near, far = objects
+            side = "left" if near.centroid_xy[0] < far.centroid_xy[0] else "right"
+            other = "right" if side == "left" else "left"
+            text = (f"The {side} object is nearer to the cameras than the {other} one: its features have "
+                    f"the larger disparity ({near.mean_disparity:.1f} px > {far.mean_disparity:.1f} px)")
+        else:
+            text = (f"The object at ({_xy(objects[0])}) is the nearest ({objects[0].mean_disparity:.1f} px) "
+                    f"and the one at ({_xy(objects[-1])}) the farthest ({objects[-1].mean_disparity:.1f} px)")
+        return text + self._in_front() + "."
+
+    def _in_front(self) -> str:
+        if not self.result.background_objects:
+            return ""
+        ref = self.result.background_objects[0]  # nearest first: the largest background disparity
+        what = (f"{self.background_name} (d = {ref.mean_disparity:.1f} px"
+                + (f", Z = {ref.depth_m:.2f} m)" if ref.depth_m is not None else ")"))
+        objects = self.result.objects
+        ahead = [o.rank for o in objects if o.mean_disparity > ref.mean_disparity]
+        if len(ahead) == len(objects):
+            who = {1: "it is", 2: "both are"}.get(len(objects), f"all {len(objects)} are")
+            return f"; {who} in front of {what}"
+        if not ahead:
+            return f"; {'it is' if len(objects) == 1 else 'none is'} in front of {what}"
+        ranks = [str(r) for r in ahead]
+        names = ranks[0] if len(ranks) == 1 else ", ".join(ranks[:-1]) + " and " + ranks[-1]
+        verb = "objects {} are" if len(ranks) > 1 else "object {} is"
+        return f"; only {verb.format(names)} in front of {what}"
+
+    def ranking_html(self) -> str:
+        lines = "<br>".join(html.escape(line, quote=False) for line in self.ranking())
+        return (f"<div>{lines or 'no objects'}</div>"
+                f"<p>{html.escape(self.sentence(), quote=False)}</p>")
+
+    def describe(self) -> str:
+        r = self.result
+        text = (f"Method-{self.method}, seed {self.seed}: {len(r.background.pairs)} background and "
+                f"{len(r.scene.pairs)} scene matches; {r.background_removed} scene features removed as "
+                f"background, {r.behind_background} matches behind it, {r.dropped} features dropped; "
+                f"{len(r.objects)} object{'s' if len(r.objects) != 1 else ''}")
+        return text + (f"; {r.message}" if r.message else "")
+
+
+def _xy(obj: DepthObject) -> str:
+    return f"{obj.centroid_xy[0]:.0f}, {obj.centroid_xy[1]:.0f}"
+
+
+def depth_text(obj: DepthObject) -> str:
+    """``Z = 0.88 m ± 0.01`` (half the quantisation range), or why there is no depth."""
+    d = obj.depth
+    if d.z is None:
+        return f"Z {d.status}"
+    if math.isinf(d.far):
+        return f"Z = {d.z:.2f} m (at least {d.near:.2f} m, no far bound)"
+    return f"Z = {d.z:.2f} m ± {(d.far - d.near) / 2:.2f}"
+
+
+# --- view -------------------------------------------------------------------------------
+
+def disparity_limits(model: DepthModel) -> tuple[float, float]:
+    """One colour scale for both views: the background's and the kept scene disparities."""
+    d = np.concatenate([model.result.background.horizontal_disparity, model.result.kept_disparity])
+    if not len(d):
+        return 0.0, 1.0
+    return min(0.0, math.floor(d.min())), max(1.0, math.ceil(d.max()))
+
+
+def draw_background(ax, model: DepthModel) -> dict:
+    """Fig. 5.12: the background's left image, its matched features and their disparities."""
+    ax.imshow(grey_rgb(model.background.left), interpolation="nearest")
+    features = ax.scatter([], [], c=[], cmap=CMAP, s=22, edgecolors="white", linewidths=0.5)
+    ax.set_axis_off()
+    return {"ax": ax, "features": features, "numbers": None}
+
+
+def update_background(art: dict, model: DepthModel) -> None:
+    bg = model.result.background
+    xy, d = np.asarray(bg.left_match_xy).reshape(-1, 2), np.asarray(bg.horizontal_disparity)
+    art["features"].set_offsets(xy)
+    art["features"].set_array(d)
+    art["features"].set_clim(*disparity_limits(model))
+    if art["numbers"] is not None:
+        art["numbers"].remove()
+    art["numbers"] = path_labels(art["ax"], xy, [f"{v:.0f}" for v in d], "cyan", size=6.5)
+
+
+def draw_scene(ax, cax, model: DepthModel) -> dict:
+    """Fig. 5.14: the scene's left image, background features crossed out, new ones by disparity."""
+    ax.imshow(grey_rgb(model.scene.left), interpolation="nearest")
+    removed, = ax.plot([], [], "x", color="0.75", alpha=0.7, ms=4, mew=1)
+    features = ax.scatter([], [], c=[], cmap=CMAP, s=30, edgecolors="white", linewidths=0.6)
+    ax.set_axis_off()
+    bar = ax.figure.colorbar(features, cax=cax) if cax is not None else ax.figure.colorbar(features, ax=ax)
+    bar.set_label("disparity (px)", fontsize=8)
+    bar.ax.tick_params(labelsize=7)
+    return {"ax": ax, "removed": removed, "features": features, "labels": None}
+
+
+def update_scene(art: dict, model: DepthModel) -> None:
+    r = model.result
+    art["removed"].set_data(*np.asarray(r.removed_xy).reshape(-1, 2).T)
+    art["features"].set_offsets(np.asarray(r.kept_xy).reshape(-1, 2))
+    art["features"].set_array(np.asarray(r.kept_disparity))
+    art["features"].set_clim(*disparity_limits(model))
+    if art["labels"] is not None:
+        art["labels"].remove()
+    strings = [f"#{o.rank} " + (f"{o.depth_m:.2f} m" if o.depth_m is not None else o.depth.status)
+               for o in r.objects]
+    art["labels"] = path_labels(art["ax"], label_positions(r.objects), strings, "yellow",
+                                size=8, shift=(0, 7), ha="center")
+
+
+def label_positions(objects, width: float = 45.0, height: float = 12.0) -> np.ndarray:
+    """Object centroids, each label moved up above the labels of nearer objects it would cover."""
+    xy = np.array([o.centroid_xy for o in objects], dtype=float).reshape(-1, 2)
+    for n in range(1, len(xy)):
+        for m in range(n):
+            if abs(xy[n, 0] - xy[m, 0]) < width and abs(xy[n, 1] - xy[m, 1]) < height:
+                xy[n, 1] = xy[m, 1] - height  # image rows grow downwards: minus is up
+    return xy
+
+
+# --- controller -------------------------------------------------------------------------
+
+class DepthDemo(Base):
+    """Rank the objects added to a background near -> far, with both figures of the thesis.
+
+    Parameters
+    ----------
+    background, scene : pair folder, (left, right) or object with ``.left`` and ``.right``
+    method : {"I", "II", "III", "NM"}
+    params : Params, optional
+    seed : int
+    config : DepthConfig, optional
+    match_config : MatchConfig, optional
+    background_name : str
+        How the ranking sentence calls the background's nearest object (e.g. "the box").
+
+    Notes
+    -----
+    CSS classes: root ``ismb-depth``; ranking ``ismb-ranking``; ``ismb-seed``; ``ismb-method``;
+    sliders ``ismb-position-tol-px``, ``ismb-disparity-tol-px``, ``ismb-local-px``; button
+    ``ismb-recompute``; figures ``ismb-background`` (Fig. 5.12) and ``ismb-scene`` (Fig. 5.14);
+    ``ismb-status``; ``ismb-log``.
+    """
+
+    def __init__(self, background, scene, *, method="III", params: Params | None = None, seed: int = 0,
+                 config: DepthConfig | None = None, match_config=None,
+                 background_name: str = "the nearest background object"):
+        import ipywidgets
+
+        super().__init__()
+        self.model = DepthModel(background, scene, method, params, seed, config, match_config,
+                                background_name)
+        self.background_pane = Pane((3.6, 2.7), "ismb-background")
+        self.scene_pane = Pane((4.2, 2.7), "ismb-scene")
+        self.panes = (self.background_pane, self.scene_pane)
+        self.background_artists = draw_background(self.background_pane.fig.add_axes((0, 0, 1, 1)), self.model)
+        fig = self.scene_pane.fig
+        self.scene_artists = draw_scene(fig.add_axes((0, 0, 0.857, 1)), fig.add_axes((0.87, 0.08, 0.03, 0.84)),
+                                        self.model)
+
+        self.method_menu = with_class(ipywidgets.Dropdown(options=list(METHOD_NAMES), value=self.model.method,
+                                                          description="method", layout={"width": "160px"}),
+                                      "ismb-method")
+        self.seed_field = with_class(ipywidgets.BoundedIntText(value=self.model.seed, min=0, max=2**31 - 1,
+                                                               description="seed", layout={"width": "160px"}),
+                                     "ismb-seed")
+        self.recompute_button = button("Recompute", "ismb-recompute", "Match both pairs again", icon="refresh")
+        self.sliders = {}
+        defaults = _tolerance_defaults()
+        for name, label in TOLERANCES.items():
+            value = getattr(self.model.config, name)
+            s = ipywidgets.FloatSlider(value=value, min=min(0.5, value) if name == "local_px" else 0.0,
+                                       max=max(4 * defaults[name], value), step=0.5, description=label,
+                                       continuous_update=False, readout_format=".1f",
+                                       style={"description_width": "150px"}, layout={"width": "380px"})
+            s.add_class("ismb-" + name.replace("_", "-"))
+            s.observe(self.guard(self._on_control), names="value")
+            self.sliders[name] = s
+        self.ranking = with_class(ipywidgets.HTML(""), "ismb-ranking")
+        self._hold = False
+        self.method_menu.observe(self.guard(self._on_control), names="value")
+        self.seed_field.observe(self.guard(self._on_control), names="value")
+        self.recompute_button.on_click(self.guard(lambda _: self.recompute()))
+        controls = ipywidgets.HBox([ipywidgets.VBox([self.method_menu, self.seed_field, self.recompute_button]),
+                                    ipywidgets.VBox(list(self.sliders.values()))])
+        views = ipywidgets.HBox([self.background_pane.widget, self.scene_pane.widget])
+        self.widget = with_class(ipywidgets.VBox([controls, self.status, self.ranking, views, self.log]),
+                                 "ismb-depth")
+        self.refresh()
+
+    @classmethod
+    def from_folders(cls, background_folder, scene_folder, **kw) -> "DepthDemo":
+        """The demo on two pair folders, e.g. ``images/lab`` and ``images/toy_cars``."""
+        owner = "DepthDemo.from_folders"
+        pairs = [pair_files(f, owner)[:2] for f in (background_folder, scene_folder)]
+        return cls(*pairs, **kw)
+
+    def _on_control(self, _change) -> None:
+        if not self._hold:
+            self.recompute()
+
+    def recompute(self) -> None:
+        """Match both pairs again with the controls' method, seed and tolerances; redraw.
+
+        When that fails the model and the controls keep their last good state.
+        """
+        try:
+            self.model.set(method=self.method_menu.value, seed=self.seed_field.value,
+                           **{name: s.value for name, s in self.sliders.items()})
+        except Exception:
+            self._sync_controls()
+            raise
+        self.refresh()
+
+    def _sync_controls(self) -> None:
+        self._hold = True
+        try:
+            self.method_menu.value = self.model.method
+            self.seed_field.value = self.model.seed
+            for name, s in self.sliders.items():
+                s.value = getattr(self.model.config, name)
+        finally:
+            self._hold = False
+
+    def refresh(self) -> None:
+        """Update both views, the ranking and the status from the model, and draw."""
+        update_background(self.background_artists, self.model)
+        update_scene(self.scene_artists, self.model)
+        self.ranking.value = self.model.ranking_html()
+        self.say(self.model.describe())
+        self.background_pane.draw()
+        self.scene_pane.draw()
+
+    def static_figure(self):
+        """A plain Figure: Fig. 5.12 and Fig. 5.14 side by side, the ranking sentence on top (for print)."""
+        from matplotlib.figure import Figure
+
+        fig = Figure(figsize=(9.0, 3.6), layout="constrained")
+        bg_ax, scene_ax = fig.subplots(1, 2)
+        update_background(draw_background(bg_ax, self.model), self.model)
+        art = draw_scene(scene_ax, None, self.model)
+        update_scene(art, self.model)
+        bg_ax.set_title("background: matches and disparities", fontsize=8)
+        scene_ax.set_title("scene: new features by disparity", fontsize=8)
+        fig.suptitle(self.model.sentence(), fontsize=8, wrap=True)
+        return fig

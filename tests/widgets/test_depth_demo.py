@@ -1,0 +1,121 @@
+import re
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from ismb_lab.depth import DepthConfig, DepthObject, metric_depth, relative_depth
+from ismb_lab.methods import Params
+from ismb_lab.widgets import DepthDemo, DepthModel
+
+IMAGES = Path(__file__).resolve().parents[2] / "images"
+LAB = (IMAGES / "lab" / "left.png", IMAGES / "lab" / "right.png")
+CARS = (IMAGES / "toy_cars" / "left.png", IMAGES / "toy_cars" / "right.png")
+
+
+@pytest.fixture
+def demo():
+    return DepthDemo.from_folders(IMAGES / "lab", IMAGES / "toy_cars", background_name="the box")
+
+
+def expected(**kw):
+    return relative_depth(LAB, CARS, **kw).to_dict()
+
+
+def test_model_computes_what_relative_depth_computes():
+    model = DepthModel(IMAGES / "lab", IMAGES / "toy_cars")
+    assert model.result.to_dict() == expected()
+    config = DepthConfig(position_tol_px=3.0)
+    model.set(method="II", seed=4, config=config)
+    assert model.result.to_dict() == expected(method="II", seed=4, config=config)
+    model.set(disparity_tol_px=2.5)
+    assert model.config == DepthConfig(position_tol_px=3.0, disparity_tol_px=2.5)
+    assert model.result.to_dict() == expected(method="II", seed=4, config=model.config)
+
+
+def test_ranking_lists_objects_near_to_far(demo):
+    objects = demo.model.objects
+    lines = demo.model.ranking()
+    assert len(objects) >= 2 and len(lines) == len(objects)
+    shown = [float(re.search(r"d = ([\d.]+) px", line).group(1)) for line in lines]
+    assert shown == sorted(shown, reverse=True)
+    for n, (line, obj) in enumerate(zip(lines, objects), 1):
+        assert line.startswith(f"{n}. object at ({obj.centroid_xy[0]:.0f}, {obj.centroid_xy[1]:.0f}): ")
+        assert f"d = {obj.mean_disparity:.1f} px, Z = {obj.depth_m:.2f} m ± " in line
+    assert demo.ranking.value == demo.model.ranking_html()
+    assert lines[0] in demo.ranking.value and "the box" in demo.ranking.value
+    assert f"{len(objects)} objects" in demo.status.value
+
+
+def _object(rank, x, d):
+    return DepthObject(rank, (x, 100.0), d, 0.0, metric_depth(d), np.zeros((2, 2)), 2)
+
+
+def test_sentence_says_which_is_nearer_and_what_they_are_in_front_of(demo):
+    from dataclasses import replace
+
+    model = demo.model
+    base = model.result
+    model.result = replace(base, objects=(_object(1, 80, 34.0), _object(2, 200, 25.0)),
+                           background_objects=(_object(1, 150, 21.5),))
+    text = model.sentence()
+    assert text.startswith("The left object is nearer to the cameras than the right one")
+    assert "(34.0 px > 25.0 px)" in text and "both are in front of the box (d = 21.5 px" in text
+    model.result = replace(base, objects=(_object(1, 200, 30.0), _object(2, 80, 20.0)),
+                           background_objects=(_object(1, 150, 21.5),))
+    assert model.sentence().startswith("The right object is nearer")
+    assert "only object 1 is in front of the box" in model.sentence()
+    model.result = replace(base, objects=(), message="no matches in the scene pair")
+    assert model.sentence() == "no matches in the scene pair" and model.ranking() == []
+
+
+def test_controls_recompute_and_redraw(demo):
+    demo.seed_field.value = 3
+    assert demo.model.result.to_dict() == expected(seed=3)
+    demo.method_menu.value = "II"
+    assert demo.model.result.to_dict() == expected(seed=3, method="II")
+    demo.sliders["position_tol_px"].value = 4.0
+    config = DepthConfig(position_tol_px=4.0)
+    assert demo.model.result.to_dict() == expected(seed=3, method="II", config=config)
+    r = demo.model.result
+    np.testing.assert_array_equal(demo.scene_artists["features"].get_offsets(), r.kept_xy.reshape(-1, 2))
+    np.testing.assert_array_equal(demo.scene_artists["removed"].get_xdata(), r.removed_xy[:, 0])
+    np.testing.assert_array_equal(demo.background_artists["features"].get_offsets(),
+                                  r.background.left_match_xy)
+    assert len(demo.scene_artists["labels"].get_paths()) == len(r.objects)
+    assert "Method-II, seed 3" in demo.status.value and demo.errors == []
+    before = demo.model.result
+    demo.recompute_button.click()
+    assert demo.model.result is not before and demo.model.result.to_dict() == before.to_dict()
+
+
+def test_bad_input_is_logged_and_state_kept():
+    demo = DepthDemo(LAB, CARS, params=Params())  # four genes: Method-NM needs a fifth
+    before = demo.model.result
+    demo.method_menu.value = "NM"
+    assert any("match_bias" in o["text"] for o in demo.log.outputs)
+    assert demo.model.method == "III" and demo.model.result is before
+    assert demo.method_menu.value == "III" and "Error" in demo.status.value
+
+
+def test_bad_arguments_name_the_parameter(tmp_path):
+    with pytest.raises(ValueError, match="'folder' parameter of DepthDemo.from_folders"):
+        DepthDemo.from_folders(tmp_path, IMAGES / "toy_cars")
+    with pytest.raises(TypeError, match="'background' parameter of DepthModel"):
+        DepthModel(42, CARS)
+    model = DepthModel(LAB, CARS)
+    with pytest.raises(ValueError, match="'local_px' parameter of DepthConfig"):
+        model.set(local_px=0)
+    assert model.config == DepthConfig()
+
+
+def test_static_figure_and_css(demo):
+    fig = demo.static_figure()
+    assert len(fig.axes) == 3  # background, scene, colour bar
+    assert fig._suptitle.get_text() == demo.model.sentence()
+    assert "ismb-depth" in demo.widget._dom_classes
+    for w, css in ((demo.ranking, "ismb-ranking"), (demo.seed_field, "ismb-seed"),
+                   (demo.method_menu, "ismb-method"), (demo.recompute_button, "ismb-recompute"),
+                   (demo.sliders["disparity_tol_px"], "ismb-disparity-tol-px"),
+                   (demo.status, "ismb-status"), (demo.log, "ismb-log")):
+        assert css in w._dom_classes
