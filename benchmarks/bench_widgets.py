@@ -4,7 +4,9 @@
   flipped an output (three figures redrawn) and attempts that did not (two);
 * one ParameterExplorer slider change: rematch, score, redraw (target <= 100 ms);
 * one TargetLabeler canvas click (a mouse event through the canvas callbacks):
-  snap, edit, table, redraw (target <= 30 ms).
+  snap, edit, table, redraw (target <= 30 ms);
+* one DepthDemo seed change on images/lab + images/toy_cars: both pairs matched
+  again, objects ranked, two figures redrawn (target <= 100 ms, as a slider move).
 
 Prints medians (and the 90th percentile) over many repeats in this process.
 
@@ -24,9 +26,10 @@ matplotlib.use("Agg", force=True)
 from matplotlib.backend_bases import MouseEvent  # noqa: E402
 
 from ismb_lab.matching import prepare  # noqa: E402
-from ismb_lab.widgets import HopfieldStepper, ParameterExplorer, TargetLabeler  # noqa: E402
+from ismb_lab.widgets import DepthDemo, HopfieldStepper, ParameterExplorer, TargetLabeler  # noqa: E402
 
-PAIR = Path(__file__).resolve().parents[1] / "images" / "synthetic"
+IMAGES = Path(__file__).resolve().parents[1] / "images"
+PAIR = IMAGES / "synthetic"
 
 
 def timed(action) -> float:
@@ -81,6 +84,13 @@ def bench_labeler(prepared, n: int = 120) -> None:
     summary("TargetLabeler canvas click + redraw", times, 30)
 
 
+def bench_depth(n: int = 30) -> None:
+    demo = DepthDemo.from_folders(IMAGES / "lab", IMAGES / "toy_cars")
+    times = [timed(lambda s=s: setattr(demo.seed_field, "value", s)) for s in range(1, n + 1)]
+    assert demo.errors == []
+    summary("DepthDemo seed -> recompute + redraw", times, 100)
+
+
 def main() -> None:
     prepared = prepare(PAIR / "left.png", PAIR / "right.png")
     problem = prepared.problem
@@ -89,6 +99,7 @@ def main() -> None:
     bench_stepper(prepared)
     bench_explorer(prepared)
     bench_labeler(prepared)
+    bench_depth()
 
 
 if __name__ == "__main__":
