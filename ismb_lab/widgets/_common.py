@@ -60,11 +60,26 @@ class Pane:
 
     def draw(self) -> None:
         """Render now.  ``draw()``, not ``draw_idle()``: idle draws left stale plots in browsers."""
-        self.fig.canvas.draw()
+        canvas = self.fig.canvas
+        canvas.draw()
+        if self.interactive and canvas.syncing_data_url:
+            self._seed_first_frame(canvas)
         if self.live and not self.interactive:
             buffer = io.BytesIO()
             self.fig.savefig(buffer, format="png")
             self.widget.value = buffer.getvalue()
+
+
+    def _seed_first_frame(self, canvas) -> None:
+        # Until the browser's view of an ipympl 0.10 canvas says "initialized", a draw stores
+        # the frame as bare base64 (no "data:image/png;base64," prefix) and leaves the size at
+        # (0, 0) when the canvas sits inside a box.  The browser then fails to set that state
+        # and never initialises the view: the figure stays 0 x 0 px.  Give it a valid first
+        # frame and its size; once initialised, ipympl sends its own frames and sizes.
+        url = canvas._data_url
+        if isinstance(url, str) and not url.startswith("data:"):
+            canvas._data_url = "data:image/png;base64," + url
+        canvas._size = tuple(float(v) for v in self.fig.bbox.size / canvas.device_pixel_ratio)
 
 
 class Base:

@@ -15,14 +15,6 @@ from playwright.sync_api import expect  # noqa: E402
 
 pytestmark = pytest.mark.browser
 
-# ipympl 0.10 stores a canvas drawn before its front end exists as bare base64 in `_data_url`
-# (no "data:image/png;base64," prefix) and leaves `_size` at (0, 0) when the canvas is a child
-# of a container in JupyterLab (Voila is not affected); the browser then reports a broken image and the figure stays 0 x 0 px, so
-# nothing can be clicked.  The fix belongs in ismb_lab/widgets/_common.py (Pane.draw).  Until
-# it lands these tests are expected to fail; strict, so that the fix makes them count again.
-IPYMPL_ZERO_SIZE = pytest.mark.xfail(
-    strict=True, reason="ipympl canvas inside a widget container renders 0x0 (Pane.draw needs a "
-                        "data: prefix for _data_url and _size before the front end initialises)")
 ARTIFACTS = Path(__file__).resolve().parents[2] / "test-artifacts"
 
 
@@ -45,8 +37,10 @@ def label_targets_geometry(workspace):
 
 
 def click_fraction(page, canvas, fraction):
+    """Click at a fraction of the element's size; Playwright scrolls it into view, waits until it
+    stops moving and measures it at click time (JupyterLab still scrolls after Run All)."""
     box = canvas.bounding_box()
-    page.mouse.click(box["x"] + fraction[0] * box["width"], box["y"] + fraction[1] * box["height"])
+    canvas.click(position={"x": fraction[0] * box["width"], "y": fraction[1] * box["height"]})
 
 
 def wait_sized(page, canvas):
@@ -79,7 +73,6 @@ def label_one_pair(page, root, workspace):
     return left_xy, right_xy
 
 
-@IPYMPL_ZERO_SIZE
 def test_label_targets_click_and_save(open_notebook, workspace, artifacts):
     page = open_notebook("04_label_targets.ipynb")
     root = page.locator(".ismb-labeler")
@@ -110,7 +103,6 @@ def settled(canvas, quiet: float = 1.0, timeout: float = 30.0) -> str:
     raise AssertionError("the canvas kept changing")
 
 
-@IPYMPL_ZERO_SIZE
 def test_hopfield_step_updates_status_and_energy_plot(open_notebook, kernel_exec, artifacts):
     page = open_notebook("02_hopfield_network.ipynb")
     root = page.locator(".ismb-stepper")
