@@ -15,7 +15,7 @@ from ._files import atomic_write_text
 from ._validation import ParameterError, ParameterTypeError
 from .methods import METHOD_NAMES, THESIS_PARAMS, Params
 
-PARAM_OPTIONS = ("theta_c", "theta_s", "lambda_c", "lambda_s")
+PARAM_OPTIONS = ("theta_c", "theta_s", "lambda_c", "lambda_s", "match_bias")
 
 
 class UsageError(Exception):
@@ -93,6 +93,12 @@ def build_parser() -> argparse.ArgumentParser:
     e.add_argument("--seeds", type=int, default=5, help="update-order seeds per figure (default: 5)")
     e.add_argument("--generations", type=int, default=500, help="GA generations (default: 500)")
     e.add_argument("--peers", action="store_true", help="also score the peer matchers")
+    e.add_argument("--solvers", nargs="*", choices=("anneal", "exact"), default=(),
+                   help="also solve the tested energies by mean-field annealing and/or exactly (MILP)")
+    e.add_argument("--fit-solver", choices=("network", "anneal", "exact"), default="network",
+                   help="how the GA solves each network while fitting (default: network)")
+    e.add_argument("--fit-seeds", type=int, default=1, metavar="N",
+                   help="update-order seeds averaged in each GA fitness (default: 1)")
     e.add_argument("--json", type=Path, default=None, metavar="OUT", help="write the report as JSON")
     e.set_defaults(run=_cmd_evaluate)
     dp = sub.add_parser("depth", help="rank the objects added to a background by depth (§5.2.3)",
@@ -216,7 +222,9 @@ def _cmd_evaluate(args) -> int:
 
     try:
         report = protocol(cases, args.method, train=args.train, seeds=args.seeds,
-                          generations=args.generations, peers=args.peers, progress=progress)
+                          generations=args.generations, peers=args.peers, progress=progress,
+                          solvers=tuple(args.solvers), fit_solver=args.fit_solver,
+                          fit_seeds=args.fit_seeds)
     finally:
         for bar in bars.values():
             bar.close()
@@ -229,7 +237,9 @@ def _cmd_evaluate(args) -> int:
                 "held_out": [{"cet": str(s), "recall": s.recall, "precision": s.precision}
                              for s in report["held_out"]],
                 "peers": {name: {"held_out": str(p["held_out"]), "recall": p["held_out"].recall,
-                                 "precision": p["held_out"].precision} for name, p in report["peers"].items()}}
+                                 "precision": p["held_out"].precision} for name, p in report["peers"].items()},
+                "solvers": {name: [{"cet": str(s), "recall": s.recall, "precision": s.precision}
+                                   for s in v["held_out"]] for name, v in report.get("solvers", {}).items()}}
         atomic_write_text(args.json, json.dumps(data, indent=2) + "\n")
     return 0
 

@@ -277,3 +277,32 @@ def test_help_of_tune_and_evaluate():
         assert proc.returncode == 0
         for option in options:
             assert option in proc.stdout
+
+
+def test_method_nm_round_trips_its_fifth_gene_through_tune_and_match(pair, targets, tmp_path):
+    out, matched = tmp_path / "nm.json", tmp_path / "m.json"
+    assert main(["tune", *map(str, pair), str(targets), "--method", "NM", "--generations", "4",
+                 "--out", str(out)]) == 0
+    params = json.loads(out.read_text())["params"]
+    assert set(params) == {"theta_c", "theta_s", "lambda_c", "lambda_s", "match_bias"}
+    assert main(["match", *map(str, pair), "--params-file", str(out), "--json", str(matched)]) == 0
+    assert json.loads(matched.read_text())["params"] == params
+
+
+def test_evaluate_reports_the_annealed_and_exact_solvers(pair, targets, tmp_path, capsys):
+    import shutil
+
+    for p in (*pair, targets):
+        shutil.copy(p, tmp_path / p.name)
+    entry = {"left": "left.png", "right": "right.png", "targets": "targets.json"}
+    manifest = tmp_path / "manifest.json"
+    manifest.write_text(json.dumps({"pairs": [{**entry, "name": "a"}, {**entry, "name": "b"}]}))
+    out = tmp_path / "report.json"
+    assert main(["evaluate", str(manifest), "--generations", "3", "--seeds", "1",
+                 "--solvers", "anneal", "exact", "--json", str(out)]) == 0
+    text = capsys.readouterr().out
+    assert "solver    anneal:" in text and "solver     exact:" in text
+    solvers = json.loads(out.read_text())["solvers"]
+    assert set(solvers) == {"anneal", "exact"}
+    for rows in solvers.values():
+        assert all(0.0 <= r["recall"] <= 1.0 and 0.0 <= r["precision"] <= 1.0 for r in rows)
