@@ -186,7 +186,7 @@ def load_manifest(path, config=None) -> list:
 
 def protocol(cases, method="III", *, train: int = 0, seeds: int = 5, generations: int = 500,
              rng=0, peers: bool = False, progress=None, solvers=(), fit_solver: str = "network",
-             fit_seeds: int = 1) -> dict:
+             fit_seeds: int = 1, fit_all: bool = True) -> dict:
     """Fig. 5.10's protocol: GA-fit on each pair ("training") and on one pair applied to all
     the others ("testing"), every network figure over `seeds` update-order seeds.
 
@@ -196,7 +196,9 @@ def protocol(cases, method="III", *, train: int = 0, seeds: int = 5, generations
     `solvers` adds rows that solve the same energies, with the same tested parameters,
     another way: ``"anneal"`` (mean-field annealing, over the same seeds) and ``"exact"``
     (the MILP global minimum, seed-independent: one value).  `fit_solver` and `fit_seeds`
-    choose how the GA scores a chromosome (:class:`~ismb_lab.tuning.Fitness`).
+    choose how the GA scores a chromosome (:class:`~ismb_lab.tuning.Fitness`).  Without
+    `fit_all` only the training pair is fitted: the other rows' ``"training"`` and
+    ``"params"`` are None (the held-out figures do not use them).
 
     Returns a dict with the tested parameters, per-pair :class:`Score` lists and pooled
     scores; ``report["solvers"][name]`` has ``"rows"`` (per pair, per seed) and ``"held_out"``.
@@ -227,9 +229,10 @@ def protocol(cases, method="III", *, train: int = 0, seeds: int = 5, generations
     tested = fit(cases[train])
     rows = []
     for n, case in enumerate(cases):
-        own = tested if n == train else fit(case)
+        own = tested if n == train else fit(case) if fit_all else None
         testing = tuple(evaluate([case], method, tested, seed) for seed in range(seeds))
-        training = tuple(evaluate([case], method, own, seed) for seed in range(seeds))
+        training = None if own is None else tuple(evaluate([case], method, own, seed)
+                                                  for seed in range(seeds))
         rows.append({"name": case.name, "testing": testing, "training": training, "params": own})
     held_out = [r for n, r in enumerate(rows) if n != train]
     pooled = [sum((r["testing"][s] for r in held_out), Score(0, 0, 0, 0)) for s in range(seeds)]
@@ -255,7 +258,8 @@ def format_protocol(report: dict) -> str:
              f"{report['params']}"]
     for n, row in enumerate(report["rows"]):
         mark = " (training pair)" if n == report["train"] else ""
-        lines.append(f"{row['name']}{mark}: Testing: {row['testing'][0]}  Training: {row['training'][0]}")
+        trained = "not fitted" if row["training"] is None else row["training"][0]
+        lines.append(f"{row['name']}{mark}: Testing: {row['testing'][0]}  Training: {trained}")
     pooled = report["held_out"]
     if pooled:
         recall = Spread.of([s.recall for s in pooled])

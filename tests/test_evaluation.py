@@ -86,3 +86,13 @@ def test_protocol_reports_annealed_and_exact_rows():
         protocol(cases, "NM", solvers=("network",))
     with pytest.raises(ValueError, match="'fit_solver' parameter of protocol"):
         protocol(cases, "NM", fit_solver="magic")
+
+
+def test_protocol_can_fit_the_training_pair_only():
+    cases = [hand_case(0, "a"), hand_case(30, "b"), hand_case(60, "c")]
+    full = protocol(cases, "NM4", train=0, seeds=2, generations=3)
+    lean = protocol(cases, "NM4", train=0, seeds=2, generations=3, fit_all=False)
+    assert lean["params"] == full["params"] and lean["held_out"] == full["held_out"]
+    assert lean["rows"][0]["training"] == full["rows"][0]["training"]
+    assert lean["rows"][1]["training"] is None and lean["rows"][2]["params"] is None
+    assert "Training: not fitted" in format_protocol(lean)

@@ -122,11 +122,15 @@ def test_params_validation_and_thesis_values():
         get_method("V")
 
 
+def random_problem(seed, n):
+    rng = np.random.default_rng(seed)
+    lxy = rng.integers(80, 160, (n, 2)).astype(float)
+    rxy = lxy + [-20, 1] + rng.integers(-2, 3, (n, 2))
+    return build_problem(lxy, rxy, rng.uniform(0, 40, (n, n)))
+
+
 def test_method_nm_is_method_three_with_a_match_bias():
-    rng = np.random.default_rng(4)
-    lxy = rng.integers(80, 160, (12, 2)).astype(float)
-    rxy = lxy + [-20, 1] + rng.integers(-2, 3, (12, 2))
-    problem = build_problem(lxy, rxy, rng.uniform(0, 40, (12, 12)))
+    problem = random_problem(4, 12)
     base = Params(theta_c=9.0, theta_s=20.0, lambda_c=0.7, lambda_s=0.3)
     three = get_method("III").network(problem, base)
     nm = get_method("NM").network(problem, Params(**base.to_dict(), match_bias=0.25))
@@ -151,3 +155,18 @@ def test_params_match_bias_is_optional_and_round_trips():
         Params(match_bias=np.inf)
     with pytest.raises(TypeError, match="'match_bias' parameter of Params"):
         Params(match_bias="0")
+
+
+def test_method_nm4_is_method_nm_with_the_match_bias_fixed_at_zero():
+    problem = random_problem(5, 10)
+    base = Params(theta_c=9.0, theta_s=20.0, lambda_c=0.7, lambda_s=0.3)
+    four = get_method("NM4").network(problem, base)
+    nm = get_method("NM").network(problem, Params(**base.to_dict(), match_bias=0.0))
+    from ismb_lab.hopfield import hopfield_form, run
+    assert all(np.array_equal(x, y) for x, y in zip(hopfield_form(four), hopfield_form(nm)))
+    assert np.array_equal(run(four, rng=2).state, run(nm, rng=2).state)
+    ignored = get_method("NM4").network(problem, Params(**base.to_dict(), match_bias=1.5))
+    assert ignored.match_bias == 0.0 and ignored.target_count == 0.5
+    assert get_method("NM4").genes == get_method("III").genes
+    with pytest.raises(TypeError, match="'params' parameter of Method-NM4"):
+        get_method("NM4").network(problem, base.to_dict())
