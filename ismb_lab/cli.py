@@ -104,7 +104,9 @@ def build_parser() -> argparse.ArgumentParser:
     dp = sub.add_parser("depth", help="rank the objects added to a background by depth (§5.2.3)",
                         description="Match a background pair and a scene pair of the same view, "
                         "remove the scene's background features and rank the objects left "
-                        "near -> far, with metric depth Z = f B / d.")
+                        "near -> far, with metric depth Z = f B / d. Defaults: Method-III with "
+                        "the parameters fitted on images/lab (scripts/fit_depth_params.py) and "
+                        "40 to 60 corners per image.")
     for name in ("bg_left", "bg_right", "scene_left", "scene_right"):
         dp.add_argument(name, type=Path, help=name.replace("_", " ") + " image file")
     _add_matching_options(dp)
@@ -115,7 +117,7 @@ def build_parser() -> argparse.ArgumentParser:
     dp.add_argument("--json", type=Path, default=None, metavar="OUT", help="write the objects as JSON")
     dp.add_argument("--plot", type=Path, default=None, metavar="OUT.png",
                     help="draw the scene's features by disparity with the ranked objects")
-    dp.set_defaults(run=_cmd_depth)
+    dp.set_defaults(run=_cmd_depth, n_min=40, n_max=60)   # ismb_lab.depth.DEPTH_MATCH_CONFIG
     r = sub.add_parser("render", help="render the project's stereo pairs into images/",
                        description="Render the project's synthetic stereo pairs with their ground "
                        "truth. The output is byte for byte what is committed in images/.")
@@ -278,7 +280,7 @@ def _cmd_match(args) -> int:
 
 
 def _cmd_depth(args) -> int:
-    from .depth import DepthConfig, depth_from_matches
+    from .depth import DEPTH_PARAMS, DepthConfig, depth_from_matches
     from .io import load_pair
     from .matching import match, prepare
 
@@ -288,6 +290,11 @@ def _cmd_depth(args) -> int:
             raise UsageError(f"--{name.replace('_', '-')} must be a finite number > 0, got {value:g}")
     config = DepthConfig(focal_px=args.focal_px, baseline_m=args.baseline_m)
     method, params = resolve_params(args)
+    if method == "III" and args.params_file is None:
+        # The demo's own fit (images/lab) replaces the thesis' values; single options still win.
+        values = DEPTH_PARAMS.to_dict()
+        values.update({k: getattr(args, k) for k in PARAM_OPTIONS if getattr(args, k) is not None})
+        params = Params.from_dict(values, owner="ismb-lab")
     match_config = _config(args)
     pairs = [load_pair(args.bg_left, args.bg_right), load_pair(args.scene_left, args.scene_right)]
     if pairs[0].shape != pairs[1].shape:

@@ -33,6 +33,9 @@ def test_depth_ranks_the_left_car_first_and_writes_json_and_plot(tmp_path):
     # The nearest object lies on the left car (left half of the view), in front of the box.
     first = objects[0]
     assert first["centroid_xy"][0] < 160 and first["depth_m"] < 1.3
+    # With the defaults fitted on images/lab: the two cars and nothing else (0.885 and 1.183 m).
+    assert len(objects) == 2 and objects[1]["centroid_xy"][0] > 160
+    assert [o["depth_m"] for o in objects] == pytest.approx([0.885, 1.183], rel=0.10)
     rows = [line for line in proc.stdout.splitlines() if line.startswith("#")]
     assert len(rows) == len(objects) and rows[0].startswith("#1 ")
     image = cv2.imread(str(plot))

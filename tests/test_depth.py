@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 from ismb_lab import ParameterError, ParameterTypeError
-from ismb_lab.depth import DepthConfig, depth_from_matches, metric_depth, relative_depth
+from ismb_lab.depth import DEPTH_MATCH_CONFIG, DEPTH_PARAMS, DepthConfig, depth_from_matches, metric_depth, relative_depth
 from ismb_lab.matching import match
 from ismb_lab.scenes import lab_scene, toy_car_scene
 
@@ -49,6 +49,13 @@ def test_committed_scene_left_car_nearer_both_in_front_of_the_box(committed):
     assert result.background_removed >= 5
 
 
+def test_committed_scene_has_no_spurious_objects(committed):
+    """Exactly one object per car: nothing at wall disparity, no second object on a car."""
+    scene, result = committed
+    assert [len(objs) for objs in car_objects(scene, result)] == [1, 1]
+    assert len(result.objects) == 2
+
+
 def test_committed_scene_metric_depth_of_each_car_within_ten_percent(committed):
     scene, result = committed
     for car, objs in zip(scene.primitives[3:], car_objects(scene, result)):
@@ -61,17 +68,29 @@ def test_committed_scene_metric_depth_of_each_car_within_ten_percent(committed):
                    for o in good)
 
 
+# Car layouts of the variants: drawn from their own seed, never used to fit anything
+# (DEPTH_PARAMS come from images/lab alone; the layouts 100-139 served for development).
+VARIANTS = np.random.default_rng(5213).integers(1000, 10 ** 6, size=20).tolist()
+# Measured: 17 of 20 right (37 of 40 on the development layouts).  In the three failures
+# the matcher gives the right car one correct match only (too few right-image corners
+# there), or only two matches shifted by the period of its windows; no extraction rule
+# recovers a car that has no consensus of correct matches.
+BAR = 3
+
+
 def test_ranking_on_rendered_variants():
-    """Measured, not tuned: Method-III with the thesis' parameters on 40 car layouts."""
+    """Measured, not tuned: the demo's defaults on 20 random car layouts, left car nearer."""
     background = lab_scene(0, supersample=1)
-    bg = match(background.left, background.right)
-    correct = 0
-    for cars in range(40):
+    bg = match(background.left, background.right, params=DEPTH_PARAMS, config=DEPTH_MATCH_CONFIG)
+    wrong = []
+    for cars in VARIANTS:
         scene = toy_car_scene(0, cars=cars, supersample=1)
-        result = depth_from_matches(bg, match(scene.left, scene.right))
+        result = depth_from_matches(bg, match(scene.left, scene.right, params=DEPTH_PARAMS,
+                                              config=DEPTH_MATCH_CONFIG))
         left, right = car_objects(scene, result)
-        correct += bool(left and right and min(o.rank for o in left) < min(o.rank for o in right))
-    assert correct >= 20
+        if not (left and right and min(o.rank for o in left) < min(o.rank for o in right)):
+            wrong.append(cars)
+    assert len(wrong) <= BAR, wrong
 
 
 def test_metric_depth_never_divides_by_zero():
