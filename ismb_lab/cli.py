@@ -47,8 +47,8 @@ def _add_feature_options(p: argparse.ArgumentParser) -> None:
     p.add_argument("--roi", default="center", help="center | full | X,Y,W,H (default: center)")
     p.add_argument("--shift", type=float, default=20.0, metavar="PX",
                    help="expected disparity: centre of the candidate window (default: 20)")
-    p.add_argument("--n-min", type=int, default=20, help="fewest corners per image (default: 20)")
-    p.add_argument("--n-max", type=int, default=30, help="most corners per image (default: 30)")
+    p.add_argument("--n-min", type=int, default=20, help="fewest corners per image (default: %(default)s)")
+    p.add_argument("--n-max", type=int, default=30, help="most corners per image (default: %(default)s)")
 
 
 def build_parser() -> argparse.ArgumentParser:
