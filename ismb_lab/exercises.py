@@ -12,7 +12,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ._validation import ParameterError, ParameterTypeError, check_number, message
+from ._validation import ParameterError, ParameterTypeError, check_number, check_points, message
+from .coords import euclidean_disparity, horizontal_disparity, vertical_disparity
+from .evaluation import score
 from .features import harris_from_tensor, harris_response, image_gradients, structure_tensor
 from .hopfield import Network, hopfield_form
 from .similarity import transfer
@@ -255,3 +257,102 @@ def check_transfer(values, x, theta: float, lam: float) -> Feedback:
     worst = int(np.argmax(np.abs(values - expected).ravel()))
     return Feedback(False, f"The values are off; the largest difference is at x = {x.ravel()[worst]:g}: "
                            f"{values.ravel()[worst]:.6g} instead of {expected.ravel()[worst]:.6g}.")
+
+
+def check_disparity(values, left_xy, right_xy) -> Feedback:
+    """Check the "disparity" column of the thesis' tables: ``||p - q||`` of matched points.
+
+    Parameters
+    ----------
+    values : (m,) array_like
+        The student's disparities, rounded as they like (compared to 0.01).
+    left_xy, right_xy : (m, 2) array_like
+        The matched points ``(x, y)``; a table's ``x_left, y_left`` and ``x_right, y_right``.
+
+    Returns
+    -------
+    feedback : Feedback
+
+    Examples
+    --------
+    >>> left, right = [[99, 99], [120, 155]], [[88, 100], [98, 158]]   # Tables 5.1 and 5.4
+    >>> print(check_disparity([11.05, 22.20], left, right))
+    correct
+    >>> print(check_disparity([11, 22], left, right))
+    That is the horizontal disparity x_left - x_right alone; the tables' column is the distance sqrt(dx^2 + dy^2).
+    """
+    owner = "check_disparity"
+    left = check_points(left_xy, "left_xy", owner)
+    right = check_points(right_xy, "right_xy", owner)
+    if left.shape != right.shape:
+        raise ParameterError(message("right_xy", owner, f"an array of shape {left.shape}, like left_xy",
+                                     f"shape {right.shape}"))
+    values = _array(values, "values", owner, (len(left),))
+    expected = euclidean_disparity(left, right)
+    near = lambda a, b: bool(np.all(np.abs(a - b) <= 0.01 + 1e-9))  # noqa: E731
+    if near(values, expected):
+        return _OK
+    dx, dy = horizontal_disparity(left, right), vertical_disparity(left, right)
+    slips = (
+        (np.abs(dx), "That is the horizontal disparity x_left - x_right alone; the tables' column "
+                     "is the distance sqrt(dx^2 + dy^2)."),
+        (expected ** 2, "The square root is missing: disparity = sqrt(dx^2 + dy^2)."),
+        (np.abs(dx) + np.abs(dy), "That is |dx| + |dy|; the tables' column is sqrt(dx^2 + dy^2)."),
+        (np.abs(dy), "That is the vertical disparity alone; the tables' column is sqrt(dx^2 + dy^2)."),
+    )
+    for candidate, text in slips:
+        if near(values, candidate):
+            return Feedback(False, text)
+    worst = int(np.argmax(np.abs(values - expected)))
+    return Feedback(False, f"Row {worst + 1} is off: {values[worst]:g} instead of {expected[worst]:.2f} "
+                           f"= sqrt({dx[worst]:g}^2 + {dy[worst]:g}^2).")
+
+
+def check_fitness(value, pairs, targets, unknown=()) -> Feedback:
+    """Check a GA fitness (4-1) ``f = n_c - n_e`` of matched pairs against target pairs.
+
+    ``n_c`` counts matches that are targets, ``n_e`` every other match (wrong
+    partner or extra), except matches of left features in `unknown`; see
+    :func:`ismb_lab.evaluation.score`.
+
+    Parameters
+    ----------
+    value : float
+        The student's fitness.
+    pairs, targets : (m, 2) int array_like
+        Matched and target ``(i, k)`` feature pairs.
+    unknown : int array_like
+        Left features whose truth is unknown.
+
+    Returns
+    -------
+    feedback : Feedback
+
+    Examples
+    --------
+    >>> pairs, targets = [[0, 0], [1, 2], [3, 3]], [[0, 0], [1, 1], [2, 2]]
+    >>> print(check_fitness(-1, pairs, targets))
+    correct
+    >>> print(check_fitness(1, pairs, targets))
+    n_c is right, but n_e = 2 is not subtracted: f = n_c - n_e.
+    """
+    value = check_number(value, "value", "check_fitness")
+    s = score(pairs, targets, unknown)
+    if value == s.fitness:
+        return _OK
+    slips = (
+        (s.correct, f"n_c is right, but n_e = {s.errors} is not subtracted: f = n_c - n_e."),
+        (s.correct - s.wrong_partner, f"n_e must count every match that is not a target: "
+                                      f"{s.wrong_partner} with a wrong partner and {s.extra} extra."),
+        (s.correct - s.extra, f"n_e must count every match that is not a target: "
+                              f"{s.extra} extra and {s.wrong_partner} with a wrong partner."),
+        (s.correct + s.errors, "The sign of n_e is flipped: errors lower the fitness, f = n_c - n_e."),
+        (s.correct - (s.targets - s.correct), "n_e counts wrong matches, not missed targets: "
+                                              "a missed target only fails to add to n_c."),
+        (s.recall, "That is n_c / T (the accurate rate); the fitness is the count n_c - n_e."),
+    )
+    for candidate, text in slips:
+        if value == candidate:
+            return Feedback(False, text)
+    return Feedback(False, f"The fitness is off: {value:g} instead of {s.fitness}; count n_c (matches "
+                           f"that are targets) and n_e (all the other matches).")

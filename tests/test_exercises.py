@@ -2,7 +2,8 @@ import numpy as np
 import pytest
 
 from ismb_lab import ParameterError, ParameterTypeError
-from ismb_lab.exercises import check_energy_derivation, check_harris_response, check_transfer
+from ismb_lab.exercises import (check_disparity, check_energy_derivation, check_fitness,
+                                check_harris_response, check_transfer)
 from ismb_lab.features import harris_response, image_gradients, structure_tensor
 from ismb_lab.hopfield import Network, hopfield_form
 from ismb_lab.similarity import transfer
@@ -167,3 +168,78 @@ def test_transfer_bad_input():
         check_transfer([0.0], [0.0], 1.0, 0.0)
     with pytest.raises(ParameterError, match="'values'.*shape"):
         check_transfer([0.0, 1.0], [0.0], 1.0, 1.0)
+
+
+# Table 5.4's first three rows as (x, y)
+TABLE_LEFT = [[111, 70], [113, 128], [120, 155]]
+TABLE_RIGHT = [[92, 73], [95, 131], [98, 158]]
+
+
+def test_disparity_correct_as_printed():
+    assert check_disparity([19.24, 18.25, 22.20], TABLE_LEFT, TABLE_RIGHT).correct
+
+
+def test_disparity_slips():
+    dx = np.array([19.0, 18.0, 22.0]); dy = np.array([3.0, 3.0, 3.0])
+    cases = [
+        (dx, "horizontal disparity x_left - x_right alone"),
+        (dx ** 2 + dy ** 2, "square root is missing"),
+        (dx + dy, "|dx| + |dy|"),
+        (dy, "vertical disparity alone"),
+    ]
+    for values, expected in cases:
+        feedback = check_disparity(values, TABLE_LEFT, TABLE_RIGHT)
+        assert not feedback.correct and expected in feedback.text, expected
+
+
+def test_disparity_table_5_5_misprint_is_caught():
+    """Table 5.5 prints 9.85 for the coordinates Table 5.4 gives 22.20."""
+    text = check_disparity([19.24, 18.25, 9.85], TABLE_LEFT, TABLE_RIGHT).text
+    assert text.startswith("Row 3 is off: 9.85 instead of 22.20")
+
+
+def test_disparity_bad_input():
+    with pytest.raises(ParameterError, match="'right_xy' parameter of check_disparity"):
+        check_disparity([1.0], [[0, 0]], [[0, 0], [1, 1]])
+    with pytest.raises(ParameterError, match="'values'.*shape"):
+        check_disparity([1.0, 2.0], [[0, 0]], [[1, 1]])
+
+
+@pytest.fixture
+def matches():
+    """2 correct, 1 wrong partner, 2 extra, 1 unknown; 4 targets."""
+    pairs = [[0, 0], [1, 1], [2, 5], [4, 4], [5, 6], [7, 7]]
+    targets = [[0, 0], [1, 1], [2, 2], [3, 3]]
+    return pairs, targets, [7]
+
+
+def test_fitness_correct(matches):
+    pairs, targets, unknown = matches
+    assert check_fitness(2 - 3, pairs, targets, unknown).text == "correct"
+    # without the unknown feature, its match counts as an extra error
+    assert check_fitness(2 - 4, pairs, targets).correct
+
+
+def test_fitness_slips(matches):
+    pairs, targets, unknown = matches
+    cases = [
+        (2, "n_e = 3 is not subtracted"),
+        (2 - 1, "1 with a wrong partner and 2 extra"),
+        (2 - 2, "2 extra and 1 with a wrong partner"),
+        (2 + 3, "sign of n_e is flipped"),
+        (0.5, "n_c / T"),
+        (7, "instead of -1"),
+    ]
+    for value, expected in cases:
+        feedback = check_fitness(value, pairs, targets, unknown)
+        assert not feedback.correct and expected in feedback.text, (value, expected)
+
+
+def test_fitness_missed_targets_are_not_errors():
+    pairs, targets = [[0, 0], [1, 1], [2, 2]], [[0, 0], [1, 1], [2, 2], [3, 3], [4, 4], [5, 5]]
+    assert "not missed targets" in check_fitness(0, pairs, targets).text
+
+
+def test_fitness_bad_input():
+    with pytest.raises(ParameterTypeError, match="'value' parameter of check_fitness"):
+        check_fitness("3", [[0, 0]], [[0, 0]])
