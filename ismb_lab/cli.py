@@ -110,6 +110,9 @@ def build_parser() -> argparse.ArgumentParser:
     for name in ("bg_left", "bg_right", "scene_left", "scene_right"):
         dp.add_argument(name, type=Path, help=name.replace("_", " ") + " image file")
     _add_matching_options(dp)
+    dp.add_argument("--solver", choices=("anneal", "network"), default="anneal",
+                    help="solve each pair's energy by mean-field annealing (default, as the demo "
+                    "does) or with the discrete network alone (honours --stop-rule and --rule)")
     dp.add_argument("--focal-px", type=float, default=300.0, metavar="F",
                     help="focal length in pixels (default: 300, the rendered rig's)")
     dp.add_argument("--baseline-m", type=float, default=0.10, metavar="B",
@@ -280,7 +283,7 @@ def _cmd_match(args) -> int:
 
 
 def _cmd_depth(args) -> int:
-    from .depth import DEPTH_PARAMS, DepthConfig, depth_from_matches
+    from .depth import DEPTH_PARAMS, DepthConfig, depth_from_matches, depth_match
     from .io import load_pair
     from .matching import match, prepare
 
@@ -301,8 +304,12 @@ def _cmd_depth(args) -> int:
         (h, w), (h2, w2) = pairs[0].shape, pairs[1].shape
         raise UsageError(f"the scene images are {w2}x{h2} but the background images are {w}x{h}: "
                          "both pairs must show the same view at one size")
-    results = [match(method=method, params=params, seed=args.seed, stop_rule=args.stop_rule,
-                     rule=args.rule, prepared=prepare(p, None, match_config)) for p in pairs]
+    if args.solver == "network":
+        results = [match(method=method, params=params, seed=args.seed, stop_rule=args.stop_rule,
+                         rule=args.rule, prepared=prepare(p, None, match_config)) for p in pairs]
+    else:
+        results = [depth_match(p, method=method, params=params, match_config=match_config,
+                               seed=args.seed, solver=args.solver) for p in pairs]
     for what, res in zip(("background", "scene"), results):
         if not len(res.pairs):
             raise UsageError(f"no matches in the {what} pair" + (f": {res.message}" if res.message else ""))

@@ -91,3 +91,15 @@ def test_no_matches_says_so_and_exits_2(tmp_path, capsys):
 def test_missing_file_exits_2(tmp_path, capsys):
     assert main(["depth", *map(str, BG), str(tmp_path / "nope.png"), str(CARS[1])]) == 2
     assert capsys.readouterr().err.startswith("ismb-lab: error:")
+
+
+def test_the_command_agrees_with_the_library_demo_and_can_use_the_plain_network(tmp_path):
+    from ismb_lab.depth import relative_depth
+
+    out, plain = tmp_path / "d.json", tmp_path / "n.json"
+    assert main(["depth", *map(str, BG + CARS), "--json", str(out)]) == 0
+    demo = relative_depth(BG, CARS).to_dict()
+    assert json.loads(out.read_text())["objects"] == json.loads(json.dumps(demo["objects"]))
+    assert main(["depth", *map(str, BG + CARS), "--solver", "network", "--json", str(plain)]) == 0
+    objects = json.loads(plain.read_text())["objects"]
+    assert objects and objects[0]["centroid_xy"][0] < 160
