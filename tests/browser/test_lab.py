@@ -130,3 +130,47 @@ def test_voila_label_targets(voila, page, workspace, artifacts):
     root.wait_for(timeout=120_000)
     label_one_pair(page, root, workspace)
     root.screenshot(path=artifacts / "voila_04_label_targets.png")
+
+
+def _generation(text: str) -> int:
+    import re
+
+    found = re.search(r"generation (\d+)/", text)
+    return int(found.group(1)) if found else -1
+
+
+def test_ga_runs_live_and_stops(open_notebook, artifacts):
+    page = open_notebook("05_genetic_algorithm.ipynb")
+    root = page.locator(".ismb-ga")
+    status = root.locator(".ismb-status")
+    bar = root.locator(".ismb-progress .progress-bar")
+    root.locator("button.ismb-start").click()
+    expect(status).to_contain_text("running, generation", timeout=60_000)
+    seen, widths = set(), set()
+    deadline = time.monotonic() + 60
+    while len(seen) < 3 and time.monotonic() < deadline:   # progress advances while it runs
+        text = status.inner_text()
+        assert "finished" not in text, f"the GA ended before Stop: {text}"
+        seen.add(_generation(text))
+        widths.add(bar.evaluate("e => e.style.width"))
+        time.sleep(0.2)
+    assert len(seen - {-1}) >= 3, seen
+    assert len(widths) >= 2, widths
+    root.locator("button.ismb-stop").click()
+    expect(status).to_contain_text("stopped", timeout=60_000)
+    stopped_at = _generation(status.inner_text())
+    time.sleep(2)
+    assert _generation(status.inner_text()) == stopped_at
+    expect(root.locator("button.ismb-start")).to_be_enabled()
+    root.screenshot(path=artifacts / "05_genetic_algorithm.png")
+
+
+def test_toy_car_ranking_appears(open_notebook, artifacts):
+    page = open_notebook("07_toy_car_depth.ipynb")
+    root = page.locator(".ismb-depth")
+    ranking = root.locator(".ismb-ranking")
+    expect(ranking).to_contain_text("1. object at", timeout=60_000)
+    expect(ranking).to_contain_text("Z = ")
+    expect(ranking).to_contain_text("nearer")
+    wait_sized(page, root.locator(".ismb-scene canvas").first)
+    root.screenshot(path=artifacts / "07_toy_car_depth.png")
