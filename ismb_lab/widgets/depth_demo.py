@@ -382,6 +382,11 @@ class DepthDemo(Base):
         self.background_pane.draw()
         self.scene_pane.draw()
 
+    @property
+    def objects(self):
+        """The ranked objects of the current result (``self.model.objects``)."""
+        return self.model.objects
+
     def static_figure(self):
         """A plain Figure: Fig. 5.12 and Fig. 5.14 side by side, the ranking sentence on top (for print)."""
         from matplotlib.figure import Figure

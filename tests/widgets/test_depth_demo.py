@@ -35,6 +35,7 @@ def test_model_computes_what_relative_depth_computes():
 
 def test_ranking_lists_objects_near_to_far(demo):
     objects = demo.model.objects
+    assert demo.objects is objects
     lines = demo.model.ranking()
     assert len(objects) >= 2 and len(lines) == len(objects)
     shown = [float(re.search(r"d = ([\d.]+) px", line).group(1)) for line in lines]
