@@ -246,7 +246,9 @@ def test_tune_and_evaluate_bad_input(pair, targets, tmp_path, capsys, make_args,
     assert targets.read_text() == before
 
 
-def test_evaluate_runs_the_train_test_protocol_with_peers(pair, targets, tmp_path, capsys):
+@pytest.fixture
+def manifest(pair, targets, tmp_path):
+    """A manifest of two pairs, "a" and "b" (the same images), beside copies of the files."""
     import shutil
 
     folder = tmp_path / "set"
@@ -254,8 +256,12 @@ def test_evaluate_runs_the_train_test_protocol_with_peers(pair, targets, tmp_pat
     for p in (*pair, targets):
         shutil.copy(p, folder / p.name)
     entry = {"left": "left.png", "right": "right.png", "targets": "targets.json"}
-    manifest = folder / "manifest.json"
-    manifest.write_text(json.dumps({"pairs": [{**entry, "name": "a"}, {**entry, "name": "b"}]}))
+    path = folder / "manifest.json"
+    path.write_text(json.dumps({"pairs": [{**entry, "name": "a"}, {**entry, "name": "b"}]}))
+    return path
+
+
+def test_evaluate_runs_the_train_test_protocol_with_peers(manifest, tmp_path, capsys):
     out = tmp_path / "report.json"
     assert main(["evaluate", str(manifest), "--generations", "6", "--seeds", "2", "--peers",
                  "--json", str(out)]) == 0
@@ -289,14 +295,7 @@ def test_method_nm_round_trips_its_fifth_gene_through_tune_and_match(pair, targe
     assert json.loads(matched.read_text())["params"] == params
 
 
-def test_evaluate_reports_the_annealed_and_exact_solvers(pair, targets, tmp_path, capsys):
-    import shutil
-
-    for p in (*pair, targets):
-        shutil.copy(p, tmp_path / p.name)
-    entry = {"left": "left.png", "right": "right.png", "targets": "targets.json"}
-    manifest = tmp_path / "manifest.json"
-    manifest.write_text(json.dumps({"pairs": [{**entry, "name": "a"}, {**entry, "name": "b"}]}))
+def test_evaluate_reports_the_annealed_and_exact_solvers(manifest, tmp_path, capsys):
     out = tmp_path / "report.json"
     assert main(["evaluate", str(manifest), "--generations", "3", "--seeds", "1",
                  "--solvers", "anneal", "exact", "--json", str(out)]) == 0
