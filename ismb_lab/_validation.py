@@ -102,12 +102,11 @@ def check_choice(value, name: str, owner: str, choices) -> str:
     ...
     ismb_lab.ParameterError: The 'stop_rule' parameter of run must be one of 'sweep', 'stall'. Got 'fast' instead.
     """
+    if isinstance(value, str) and value in choices:
+        return value
     rule = "one of " + ", ".join(repr(c) for c in choices)
-    if not isinstance(value, str):
-        raise ParameterTypeError(message(name, owner, rule, value))
-    if value not in choices:
-        raise ParameterError(message(name, owner, rule, value))
-    return value
+    kind = ParameterError if isinstance(value, str) else ParameterTypeError
+    raise kind(message(name, owner, rule, value))
 
 
 def check_points(points, name: str, owner: str) -> np.ndarray:
