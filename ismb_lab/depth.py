@@ -81,7 +81,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ._validation import ParameterError, ParameterTypeError, check_number, message
+from ._validation import ParameterError, ParameterTypeError, check_choice, check_number, message
 
 __all__ = ["DEPTH_MATCH_CONFIG", "DEPTH_PARAMS", "DEPTH_SOLVER", "DepthConfig", "Depth",
            "DepthObject", "DepthResult", "metric_depth", "depth_from_matches", "depth_match",
@@ -517,16 +517,14 @@ def depth_match(pair, *, method: str = "III", params=None, match_config=None, se
     from dataclasses import replace
 
     from .annealing import anneal
+    from .io import StereoPair
     from .matching import match, prepare
     from .methods import get_method
 
-    if solver not in SOLVERS:
-        raise ParameterError(message("solver", "depth_match", "one of 'network', 'anneal'", solver))
+    check_choice(solver, "solver", "depth_match", SOLVERS)
     if params is None and method == "III":
         params = DEPTH_PARAMS
     match_config = DEPTH_MATCH_CONFIG if match_config is None else match_config
-    from .io import StereoPair
-
     prepared = (prepare(pair, None, match_config) if isinstance(pair, StereoPair)
                 else prepare(*_pair(pair, "pair", "depth_match"), match_config))
     result = match(method=method, params=params, seed=seed, prepared=prepared)
