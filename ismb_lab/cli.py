@@ -168,7 +168,6 @@ def _progress(total: int, desc: str):
 
 
 def _cmd_tune(args) -> int:
-    from .evaluation import score
     from .matching import prepare
     from .targets import load_targets, snap
     from .tuning import Case, evaluate, to_params, tune

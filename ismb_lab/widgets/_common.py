@@ -14,6 +14,7 @@ from pathlib import Path
 
 import ipywidgets
 import matplotlib
+import numpy as np
 from matplotlib.figure import Figure
 
 from .._validation import ParameterError, ParameterTypeError, message
@@ -155,10 +156,8 @@ def pair_files(folder, owner: str) -> tuple[Path, Path, Path]:
     return folder / "left.png", folder / "right.png", folder / "answer_key.json"
 
 
-def grey_rgb(image) -> "np.ndarray":
+def grey_rgb(image) -> np.ndarray:
     """A grey image as an ``(H, W, 3)`` uint8 array: drawn without a colour map, so faster."""
-    import numpy as np
-
     g = np.clip(np.rint(np.asarray(image, dtype=float)), 0, 255).astype(np.uint8)
     return np.repeat(g[:, :, None], 3, axis=2)
 
