@@ -224,6 +224,7 @@ def test_a_real_ctrl_c_stops_tune_cleanly(pair, targets, tmp_path):
     (lambda p, t, g: ["tune", p[0], p[1], g, "--population", "1"], "'population'"),
     (lambda p, t, g: ["tune", p[0], p[1], g, "--generations", "0"], "'generations'"),
     (lambda p, t, g: ["evaluate", t / "missing_manifest.json"], "existing file"),
+    (lambda p, t, g: ["evaluate", t / "missing_manifest.json", "--ga-seed", "-1"], "--ga-seed must be"),
     (lambda p, t, g: ["evaluate", t / "manifest_missing_file.json"], "existing file"),
 ])
 def test_tune_and_evaluate_bad_input(pair, targets, tmp_path, capsys, make_args, words):
@@ -275,10 +276,29 @@ def test_evaluate_runs_the_train_test_protocol_with_peers(manifest, tmp_path, ca
         assert 0.0 <= held["recall"] <= 1.0 and 0.0 <= held["precision"] <= 1.0
 
 
+def test_evaluate_ga_seed_and_held_out_only(manifest, tmp_path, capsys):
+    """The GA seed reaches the GA (another seed, other parameters; the same seed, the same
+    report), and --held-out-only fits only the training pair without changing held-out figures."""
+    reports = {}
+    for name, extra in (("s0", []), ("s0-again", ["--ga-seed", "0"]), ("s7", ["--ga-seed", "7"]),
+                        ("held", ["--held-out-only"])):
+        out = tmp_path / f"{name}.json"
+        assert main(["evaluate", str(manifest), "--generations", "4", "--seeds", "1",
+                     "--json", str(out), *extra]) == 0
+        reports[name] = json.loads(out.read_text())
+    capsys.readouterr()
+    assert reports["s0"] == reports["s0-again"] and reports["s0"]["ga_seed"] == 0
+    assert reports["s7"]["ga_seed"] == 7 and reports["s7"]["params"] != reports["s0"]["params"]
+    held = reports["held"]
+    assert held["pairs"][1]["training"] is None and reports["s0"]["pairs"][1]["training"] is not None
+    assert held["held_out"] == reports["s0"]["held_out"] and held["params"] == reports["s0"]["params"]
+
+
 def test_help_of_tune_and_evaluate():
     for command, options in (("tune", ("--method", "--generations", "--population", "--seed", "--roi",
                                        "--shift", "--n-min", "--n-max", "--out")),
-                             ("evaluate", ("--method", "--train", "--seeds", "--peers", "--json"))):
+                             ("evaluate", ("--method", "--train", "--seeds", "--peers", "--json", "--ga-seed",
+                                           "--held-out-only"))):
         proc = run_cli(command, "--help")
         assert proc.returncode == 0
         for option in options:
