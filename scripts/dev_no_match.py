@@ -21,10 +21,11 @@ make the fit generalise from a training pair of 9 targets (``--variants all``): 
 of the GA's final plateau, a fitness averaged over 3 annealing seeds, a fitted uniqueness
 strength, and a majority vote of the GA seeds' matchings.
 
-Measured with ``--variants all --ga-seeds 0 1 2`` (50 generations, about 18 minutes on two
+Measured with ``--variants all --ga-seeds 0 1 2`` (50 generations, 19 minutes on two
 cores): no variant beats every peer on both pooled figures for every GA seed.  Pooled
 C/T ranged 91.2-95.0% for NM4 and its variants and 91.2-93.5% for the peers; precision
-was 83.8-87.5% for the NM4 variants and 85.6-87.8% for the peers.  Most errors of every
+was 83.8-87.5% for the NM4 variants and 85.6-87.8% for the peers.  The vote of the three
+GA seeds' NM4 matchings gave 93.5% and 87.4%.  Most errors of every
 method are "extra" matches of corners with no target (NM4 variants 33-42, peers 32-40, of
 260 targets).
 """
