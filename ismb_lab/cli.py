@@ -112,7 +112,8 @@ def build_parser() -> argparse.ArgumentParser:
                         "remove the scene's background features and rank the objects left "
                         "near -> far, with metric depth Z = f B / d. Defaults: Method-III with "
                         "the parameters fitted on images/lab (scripts/fit_depth_params.py) and "
-                        "40 to 60 corners per image.")
+                        "40 to 60 corners per image; the scene's corners are sought in the part of "
+                        "the ROI where its left image differs from the background's.")
     for name in ("bg_left", "bg_right", "scene_left", "scene_right"):
         dp.add_argument(name, type=Path, help=name.replace("_", " ") + " image file")
     _add_matching_options(dp)
@@ -291,7 +292,7 @@ def _cmd_match(args) -> int:
 
 
 def _cmd_depth(args) -> int:
-    from .depth import DEPTH_PARAMS, DepthConfig, depth_from_matches, depth_match
+    from .depth import DEPTH_PARAMS, DepthConfig, depth_from_matches, depth_match, scene_match_config
     from .io import load_pair
     from .matching import match, prepare
 
@@ -313,11 +314,12 @@ def _cmd_depth(args) -> int:
         raise UsageError(f"the scene images are {w2}x{h2} but the background images are {w}x{h}: "
                          "both pairs must show the same view at one size")
     if args.solver == "network":
+        configs = match_config, scene_match_config(*pairs, match_config)
         results = [match(method=method, params=params, seed=args.seed, stop_rule=args.stop_rule,
-                         rule=args.rule, prepared=prepare(p, None, match_config)) for p in pairs]
+                         rule=args.rule, prepared=prepare(p, None, c)) for p, c in zip(pairs, configs)]
     else:
-        results = [depth_match(p, method=method, params=params, match_config=match_config,
-                               seed=args.seed, solver=args.solver) for p in pairs]
+        results = [depth_match(p, background=b, method=method, params=params, match_config=match_config,
+                               seed=args.seed, solver=args.solver) for p, b in zip(pairs, (None, pairs[0]))]
     for what, res in zip(("background", "scene"), results):
         if not len(res.pairs):
             raise UsageError(f"no matches in the {what} pair" + (f": {res.message}" if res.message else ""))

@@ -7,8 +7,10 @@ import numpy as np
 import pytest
 
 from ismb_lab import ParameterError, ParameterTypeError
-from ismb_lab.depth import (DEPTH_MATCH_CONFIG, DEPTH_PARAMS, DepthConfig, depth_from_matches, depth_match,
-                            metric_depth, relative_depth)
+from ismb_lab.depth import (DEPTH_MATCH_CONFIG, DEPTH_PARAMS, DepthConfig, changed_roi, depth_from_matches,
+                            depth_match, metric_depth, relative_depth, scene_match_config)
+from ismb_lab.features import resolve_roi
+from ismb_lab.io import load_pair
 from ismb_lab.matching import match, prepare
 from ismb_lab.scenes import lab_scene, toy_car_scene
 
@@ -69,28 +71,56 @@ def test_committed_scene_metric_depth_of_each_car_within_ten_percent(committed):
                    for o in good)
 
 
-# Car layouts of the variants: drawn from their own seed, never used to fit anything
+# Car layouts of the variants: drawn from their own seeds, never used to fit anything
 # (DEPTH_PARAMS come from images/lab alone; the layouts 100-139 served for development).
-VARIANTS = np.random.default_rng(5213).integers(1000, 10 ** 6, size=20).tolist()
-# Measured with the demo's annealing (DEPTH_SOLVER): 19 of 20 right (39 of 40 on the
-# development layouts; the discrete network alone: 17 of 20 and 37 of 40).  In the failure
-# (48274) the right car gets a single correct match, too few right-image corners there; on
-# the development layout 127 its only matches are wrong.  No extraction rule recovers a car
-# that has no consensus of correct matches.
-BAR = 3
+# The first 20 were checked once with the thesis' ROI for the scene (19 right; in 48274
+# the far car had a single correct match) and again after the change box of
+# ismb_lab.depth.changed_roi was chosen on the development layouts; the second 20 were
+# drawn after that choice and checked once.  Measured with the demo's defaults: 40 of 40
+# right here (supersample 1); rendered at the committed images' supersample 2, 39 of 40
+# (in 35318 the near car, 1.00 m against 1.15 m, kept no object).
+VARIANTS = (np.random.default_rng(5213).integers(1000, 10 ** 6, size=20).tolist()
+            + np.random.default_rng(20261123).integers(1000, 10 ** 6, size=20).tolist())
 
 
 def test_ranking_on_rendered_variants():
-    """Measured, not tuned: the demo's defaults on 20 random car layouts, left car nearer."""
-    bg = depth_match(lab_scene(0, supersample=1))
+    """Measured, not tuned: the demo's defaults on 40 random car layouts, left car nearer."""
+    background = lab_scene(0, supersample=1)
+    bg = depth_match(background)
     wrong = []
     for cars in VARIANTS:
         scene = toy_car_scene(0, cars=cars, supersample=1)
-        result = depth_from_matches(bg, depth_match(scene))
+        result = depth_from_matches(bg, depth_match(scene, background=background))
         left, right = car_objects(scene, result)
         if not (left and right and min(o.rank for o in left) < min(o.rank for o in right)):
             wrong.append(cars)
-    assert len(wrong) <= BAR, wrong
+    assert wrong == []
+
+
+def test_changed_roi_boxes_what_changed_inside_the_roi():
+    bg = np.full((240, 320), 100.0)
+    scene = bg.copy()
+    scene[100:120, 150:190] = 150.0
+    x, y, w, h = changed_roi(bg, scene)
+    assert x <= 150 and y <= 100 and x + w >= 190 and y + h >= 120
+    assert w < 60 and h < 40
+    assert changed_roi(bg, bg + 3.0) is None          # below the threshold: camera noise
+    assert changed_roi(bg, bg + 30.0) == resolve_roi("center", bg.shape)   # new lighting
+    outside = bg.copy()
+    outside[:20, :20] = 250.0
+    assert changed_roi(bg, outside) is None and changed_roi(bg, outside, "full") is not None
+
+
+def test_scene_corners_are_sought_where_the_cars_are():
+    background, scene = (load_pair(s.left, s.right) for s in (lab_scene(0), toy_car_scene(0)))
+    assert scene_match_config(background, background) is DEPTH_MATCH_CONFIG
+    box = scene_match_config(background, scene).roi
+    x, y, w, h = box
+    cx, cy, cw, ch = resolve_roi(DEPTH_MATCH_CONFIG.roi, scene.shape)
+    assert cx <= x and cy <= y and x + w <= cx + cw and y + h <= cy + ch and w * h < cw * ch / 2
+    for car in toy_car_scene(0).primitives[3:]:
+        (x0, y0), (x1, y1) = toy_car_scene(0).rig.project_left([car.lo, car.hi])
+        assert x <= min(x0, x1) and max(x0, x1) <= x + w
 
 
 def test_network_solver_is_the_plain_match_and_annealing_ends_at_a_fixed_point():
@@ -143,6 +173,12 @@ def test_to_dict_is_the_json_contract(committed):
     (lambda: depth_match((np.zeros((60, 80)),) * 2, solver="exact"), "solver", ValueError),
     (lambda: depth_match(7), "pair", TypeError),
     (lambda: relative_depth((np.zeros((60, 80)),) * 2, (np.zeros((50, 80)),) * 2), "scene", ValueError),
+    (lambda: changed_roi(np.zeros((60, 80)), np.zeros((50, 80))), "scene_left", ValueError),
+    (lambda: changed_roi(np.zeros((60, 80)), np.zeros((60, 80)), threshold=-1), "threshold", ValueError),
+    (lambda: scene_match_config(np.zeros((60, 80)), None), "background", TypeError),
+    (lambda: depth_match((np.zeros((60, 80)),) * 2, background=(np.zeros((50, 80)),) * 2), "scene",
+     ValueError),
+    (lambda: depth_match((np.zeros((60, 80)),) * 2, match_config="center"), "match_config", TypeError),
 ])
 def test_bad_input_names_the_parameter(make, name, error):
     error = {ValueError: ParameterError, TypeError: ParameterTypeError}[error]
