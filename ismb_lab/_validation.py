@@ -32,7 +32,9 @@ def message(name: str, owner: str, rule: str, value) -> str:
     if isinstance(value, np.ndarray):
         shown = f"an array of shape {value.shape} and dtype {value.dtype}"
     else:
-        shown = value if isinstance(value, str) and len(value) > 60 else " ".join(repr(value).split())
+        shown = value if isinstance(value, str) and len(value) > 60 else repr(value)
+        if "\n" in shown:
+            shown = " ".join(shown.split())
     if isinstance(shown, str) and len(shown) > 80:
         shown = shown[:77] + "..."
     return f"The {name!r} parameter of {owner} must be {rule}. Got {shown} instead."
