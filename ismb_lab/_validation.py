@@ -29,7 +29,7 @@ class ParameterTypeError(TypeError):
 
 def message(name: str, owner: str, rule: str, value) -> str:
     """Return the package's one error message format (on one line)."""
-    if isinstance(value, np.ndarray):
+    if isinstance(value, np.ndarray) and value.ndim > 1:
         shown = f"an array of shape {value.shape} and dtype {value.dtype}"
     else:
         shown = value if isinstance(value, str) and len(value) > 60 else repr(value)
