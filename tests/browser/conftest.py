@@ -181,6 +181,21 @@ _IDLE = """() => {
 }"""
 
 
+_ALL_RAN = """() => [...window.jupyterapp.shell.currentWidget.content.widgets]
+  .every(c => c.model.type !== 'code' || c.model.executionCount)"""
+
+_FIRST_ERROR = """() => {
+  for (const c of window.jupyterapp.shell.currentWidget.content.widgets) {
+    const outputs = c.model.type === 'code' ? c.model.outputs : null;
+    for (let i = 0; outputs && i < outputs.length; i++) {
+      const o = outputs.get(i).toJSON();
+      if (o.output_type === 'error') return `${o.ename}: ${o.evalue}`;
+    }
+  }
+  return null;
+}"""
+
+
 @pytest.fixture
 def open_notebook(lab, page):
     """Open notebooks/<name> in JupyterLab and run all cells; returns the page."""
@@ -190,11 +205,12 @@ def open_notebook(lab, page):
         page.goto(f"{base}/lab/tree/notebooks/{name}?token={token}")
         page.wait_for_function(_READY, timeout=timeout, polling=200)
         page.evaluate("() => window.jupyterapp.commands.execute('notebook:run-all-cells')")
-        # the kernel goes busy, then idle when the last cell is done
-        page.wait_for_function("""() => {
-            const w = window.jupyterapp.shell.currentWidget;
-            return [...w.content.widgets].every(c => c.model.type !== 'code' || c.model.executionCount);
-        }""", timeout=timeout, polling=250)
+        # Every code cell has run, or one failed (Run All stops there, so waiting on would
+        # only time out).
+        page.wait_for_function(f"() => ({_FIRST_ERROR})() !== null || ({_ALL_RAN})()",
+                               timeout=timeout, polling=250)
+        error = page.evaluate(_FIRST_ERROR)
+        assert error is None, f"{name}: a cell failed under Run All: {error}"
         page.wait_for_function(_IDLE, timeout=timeout, polling=200)
         return page
 
