@@ -43,16 +43,16 @@ How it works
 ------------
 0. *Corners where something changed.*  The corner detector keeps the strongest
    corners of its ROI, and textured posters have stronger corners than a small toy
-   car, so with the thesis' ROI a far car can end with one corner or none: the left
-   car failed to rank first on 1 of the 40 development layouts (``cars=100..139``),
-   and on 6 of them rendered at the committed images' supersampling; on none of
-   either with the box below.  The
-   demo knows the background, so it looks for the scene pair's corners only in the
+   car, so with the thesis' ROI a far car can end with one corner or none.  The demo
+   knows the background, so it looks for the scene pair's corners only in the
    bounding box of the ROI's pixels whose smoothed left-image difference from the
-   background exceeds ``change_threshold`` grey levels (:func:`changed_roi`), with a
-   margin.  The box still holds some background, so step 1 has work to do; where
-   nothing changed, or everything did (another day's lighting), it is the whole ROI.
-   The background pair keeps the ROI.
+   background exceeds 8 grey levels, plus a margin (:func:`changed_roi`).  The box
+   still holds some background, so step 1 has work to do; where nothing changed, or
+   everything did (another day's lighting), it is the whole ROI.  The background
+   pair keeps the ROI.  With the thesis' ROI the left car
+   failed to rank first on 1 of the 40 development layouts (``cars=100..139``), and
+   on 6 of them rendered at the committed images' supersampling; with the box, on
+   none of either.
 1. *Background removal.*  A scene feature belongs to the background when one of its
    matches lies within ``position_tol_px`` of a background match (left image) with a
    horizontal disparity within ``disparity_tol_px`` of it.  Its matches are dropped.
@@ -596,12 +596,16 @@ def scene_match_config(background, scene, match_config=None):
     for name, value in (("background", background), ("scene", scene)):
         if not isinstance(value, StereoPair):
             raise ParameterTypeError(message(name, own, "a StereoPair", value))
-    if background.shape != scene.shape:
-        (h, w), (h2, w2) = background.shape, scene.shape
-        raise ParameterError(message("scene", own, f"images of the background's size {h}x{w}",
-                                     f"images of size {h2}x{w2}"))
+    _check_same_size(background, scene, own)
     box = changed_roi(background.left, scene.left, match_config.roi)
     return match_config if box is None else replace(match_config, roi=box)
+
+
+def _check_same_size(background, scene, owner: str):
+    if background.shape != scene.shape:
+        (h, w), (h2, w2) = background.shape, scene.shape
+        raise ParameterError(message("scene", owner, f"images of the background's size {h}x{w}",
+                                     f"images of size {h2}x{w2}"))
 
 
 def _load(value, name: str, owner: str):
@@ -713,15 +717,9 @@ def relative_depth(background, scene, *, method: str = "III", params=None, match
     ...
     ismb_lab.ParameterError: The 'scene' parameter of relative_depth must be images of the background's size 60x80. Got 'images of size 50x80' instead.
     """
-    from .io import load_pair
-
     own = "relative_depth"
-    bg, sc = (load_pair(*_pair(value, name)) for value, name in ((background, "background"),
-                                                                 (scene, "scene")))
-    if bg.shape != sc.shape:
-        (h, w), (h2, w2) = bg.shape, sc.shape
-        raise ParameterError(message("scene", own, f"images of the background's size {h}x{w}",
-                                     f"images of size {h2}x{w2}"))
+    bg, sc = _load(background, "background", own), _load(scene, "scene", own)
+    _check_same_size(bg, sc, own)
     results = [depth_match(p, background=b, method=method, params=params, match_config=match_config,
                            seed=seed, solver=solver) for p, b in ((bg, None), (sc, bg))]
     return depth_from_matches(*results, config)
