@@ -292,7 +292,10 @@ def _cmd_match(args) -> int:
 
 
 def _cmd_depth(args) -> int:
+    from dataclasses import replace
+
     from .depth import DEPTH_PARAMS, DepthConfig, depth_from_matches, depth_match, scene_match_config
+    from .features import resolve_roi
     from .io import load_pair
     from .matching import match, prepare
 
@@ -313,17 +316,18 @@ def _cmd_depth(args) -> int:
         (h, w), (h2, w2) = pairs[0].shape, pairs[1].shape
         raise UsageError(f"the scene images are {w2}x{h2} but the background images are {w}x{h}: "
                          "both pairs must show the same view at one size")
+    configs = match_config, scene_match_config(*pairs, match_config)
     if args.solver == "network":
-        configs = match_config, scene_match_config(*pairs, match_config)
         results = [match(method=method, params=params, seed=args.seed, stop_rule=args.stop_rule,
                          rule=args.rule, prepared=prepare(p, None, c)) for p, c in zip(pairs, configs)]
     else:
-        results = [depth_match(p, background=b, method=method, params=params, match_config=match_config,
-                               seed=args.seed, solver=args.solver) for p, b in zip(pairs, (None, pairs[0]))]
+        results = [depth_match(p, method=method, params=params, match_config=c, seed=args.seed,
+                               solver=args.solver) for p, c in zip(pairs, configs)]
     for what, res in zip(("background", "scene"), results):
         if not len(res.pairs):
             raise UsageError(f"no matches in the {what} pair" + (f": {res.message}" if res.message else ""))
-    result = depth_from_matches(*results, config)
+    result = replace(depth_from_matches(*results, config),
+                     scene_roi=resolve_roi(configs[1].roi, pairs[1].shape))
     print(f"Method-{method}: {len(results[0].pairs)} background matches, {len(results[1].pairs)} "
           f"scene matches; {result.background_removed} scene features removed as background")
     if not result.objects:

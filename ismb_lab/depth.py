@@ -327,6 +327,9 @@ class DepthResult:
     config : DepthConfig
     message : str
         Empty, or why there are no objects.
+    scene_roi : (x, y, w, h) or None
+        The box in which the scene pair's corners were sought (:func:`changed_roi`),
+        when :func:`relative_depth` made the result.
     """
 
     objects: tuple
@@ -341,6 +344,7 @@ class DepthResult:
     scene: object
     config: DepthConfig
     message: str = ""
+    scene_roi: tuple | None = None
 
     def to_dict(self) -> dict:
         """The JSON of ``ismb-lab depth --json``: objects near -> far and the counts."""
@@ -349,6 +353,7 @@ class DepthResult:
                 "behind_background": self.behind_background, "dropped": self.dropped,
                 "background_objects": [o.to_dict() for o in self.background_objects],
                 "focal_px": self.config.focal_px, "baseline_m": self.config.baseline_m,
+                "scene_roi": None if self.scene_roi is None else list(self.scene_roi),
                 "message": self.message}
 
 
@@ -717,9 +722,15 @@ def relative_depth(background, scene, *, method: str = "III", params=None, match
     ...
     ismb_lab.ParameterError: The 'scene' parameter of relative_depth must be images of the background's size 60x80. Got 'images of size 50x80' instead.
     """
+    from dataclasses import replace
+
+    from .features import resolve_roi
+
     own = "relative_depth"
     bg, sc = _load(background, "background", own), _load(scene, "scene", own)
     _check_same_size(bg, sc, own)
-    results = [depth_match(p, background=b, method=method, params=params, match_config=match_config,
-                           seed=seed, solver=solver) for p, b in ((bg, None), (sc, bg))]
-    return depth_from_matches(*results, config)
+    scene_config = scene_match_config(bg, sc, match_config)
+    results = [depth_match(p, method=method, params=params, match_config=c, seed=seed, solver=solver)
+               for p, c in ((bg, match_config), (sc, scene_config))]
+    return replace(depth_from_matches(*results, config),
+                   scene_roi=resolve_roi(scene_config.roi, sc.shape))

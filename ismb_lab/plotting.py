@@ -73,7 +73,8 @@ def plot_depth(ax, left, result, *, cmap: str = "plasma") -> dict:
     """Draw Fig. 5.14: the scene's left image, its new features coloured by disparity.
 
     Features removed as background are small grey crosses; every object is labelled
-    with its rank (1 = nearest) and its depth.
+    with its rank (1 = nearest) and its depth; a dashed box shows where the scene's
+    corners were sought, when the result knows it.
 
     Parameters
     ----------
@@ -85,8 +86,11 @@ def plot_depth(ax, left, result, *, cmap: str = "plasma") -> dict:
     Returns
     -------
     artists : dict
-        ``image``, ``features`` (the scatter of kept matches), ``removed`` and ``labels``.
+        ``image``, ``features`` (the scatter of kept matches), ``removed``, ``labels``
+        and ``box`` (None without ``result.scene_roi``).
     """
+    from matplotlib.patches import Rectangle
+
     image = ax.imshow(left, cmap="gray", vmin=0, vmax=255)
     removed, = ax.plot(*np.asarray(result.removed_xy).reshape(-1, 2).T, "x", color="0.6", ms=5)
     xy = np.asarray(result.kept_xy).reshape(-1, 2)
@@ -98,5 +102,9 @@ def plot_depth(ax, left, result, *, cmap: str = "plasma") -> dict:
         x, y = obj.centroid_xy
         labels.append(ax.text(x, y - 8, f"#{obj.rank} {depth}\nd={obj.mean_disparity:.1f}",
                               color="yellow", fontsize=7, ha="center", va="bottom"))
+    box = None
+    if result.scene_roi is not None:
+        x, y, w, h = result.scene_roi
+        box = ax.add_patch(Rectangle((x - 0.5, y - 0.5), w, h, fill=False, ec="yellow", lw=0.8, ls="--"))
     ax.set_axis_off()
-    return {"image": image, "features": features, "removed": removed, "labels": labels}
+    return {"image": image, "features": features, "removed": removed, "labels": labels, "box": box}

@@ -99,7 +99,9 @@ def test_the_command_agrees_with_the_library_demo_and_can_use_the_plain_network(
     out, plain = tmp_path / "d.json", tmp_path / "n.json"
     assert main(["depth", *map(str, BG + CARS), "--json", str(out)]) == 0
     demo = relative_depth(BG, CARS).to_dict()
-    assert json.loads(out.read_text())["objects"] == json.loads(json.dumps(demo["objects"]))
+    written = json.loads(out.read_text())
+    assert written["objects"] == json.loads(json.dumps(demo["objects"]))
+    assert written["scene_roi"] == demo["scene_roi"] and demo["scene_roi"] is not None
     assert main(["depth", *map(str, BG + CARS), "--solver", "network", "--json", str(plain)]) == 0
     objects = json.loads(plain.read_text())["objects"]
     assert objects and objects[0]["centroid_xy"][0] < 160

@@ -111,10 +111,13 @@ def test_changed_roi_boxes_what_changed_inside_the_roi():
     assert changed_roi(bg, outside) is None and changed_roi(bg, outside, "full") is not None
 
 
-def test_scene_corners_are_sought_where_the_cars_are():
+def test_scene_corners_are_sought_where_the_cars_are(committed):
     background, scene = (load_pair(s.left, s.right) for s in (lab_scene(0), toy_car_scene(0)))
     assert scene_match_config(background, background) is DEPTH_MATCH_CONFIG
     box = scene_match_config(background, scene).roi
+    assert committed[1].scene_roi == box
+    corners = committed[1].scene.left_xy
+    assert np.all((corners >= box[:2]) & (corners < np.add(box[:2], box[2:])))
     x, y, w, h = box
     cx, cy, cw, ch = resolve_roi(DEPTH_MATCH_CONFIG.roi, scene.shape)
     assert cx <= x and cy <= y and x + w <= cx + cw and y + h <= cy + ch and w * h < cw * ch / 2

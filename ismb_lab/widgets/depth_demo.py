@@ -234,15 +234,19 @@ def update_background(art: dict, model: DepthModel) -> None:
 
 
 def draw_scene(ax, cax, model: DepthModel) -> dict:
-    """Fig. 5.14: the scene's left image, background features crossed out, new ones by disparity."""
+    """Fig. 5.14: the scene's left image, background features crossed out, new ones by disparity,
+    and (dashed) the box where the scene's corners were sought."""
     ax.imshow(grey_rgb(model.scene.left), interpolation="nearest")
+    from matplotlib.patches import Rectangle
+
     removed, = ax.plot([], [], "x", color="0.75", alpha=0.7, ms=4, mew=1)
     features = ax.scatter([], [], c=[], cmap=CMAP, s=30, edgecolors="white", linewidths=0.6)
+    box = ax.add_patch(Rectangle((0, 0), 0, 0, fill=False, ec="yellow", lw=0.8, ls="--", visible=False))
     ax.set_axis_off()
     bar = ax.figure.colorbar(features, cax=cax) if cax is not None else ax.figure.colorbar(features, ax=ax)
     bar.set_label("disparity (px)", fontsize=8)
     bar.ax.tick_params(labelsize=7)
-    return {"ax": ax, "removed": removed, "features": features, "labels": None}
+    return {"ax": ax, "removed": removed, "features": features, "box": box, "labels": None}
 
 
 def update_scene(art: dict, model: DepthModel) -> None:
@@ -251,6 +255,10 @@ def update_scene(art: dict, model: DepthModel) -> None:
     art["features"].set_offsets(np.asarray(r.kept_xy).reshape(-1, 2))
     art["features"].set_array(np.asarray(r.kept_disparity))
     art["features"].set_clim(*disparity_limits(model))
+    if r.scene_roi is not None:
+        x, y, w, h = r.scene_roi
+        art["box"].set_bounds(x - 0.5, y - 0.5, w, h)
+    art["box"].set_visible(r.scene_roi is not None)
     if art["labels"] is not None:
         art["labels"].remove()
     strings = [f"#{o.rank} " + (f"{o.depth_m:.2f} m" if o.depth_m is not None else o.depth.status)

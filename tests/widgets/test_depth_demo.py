@@ -84,6 +84,9 @@ def test_controls_recompute_and_redraw(demo):
     np.testing.assert_array_equal(demo.background_artists["features"].get_offsets(),
                                   r.background.left_match_xy)
     assert len(demo.scene_artists["labels"].get_paths()) == len(r.objects)
+    box, (x, y, w, h) = demo.scene_artists["box"], r.scene_roi
+    assert box.get_visible() and (box.get_x(), box.get_y(), box.get_width(), box.get_height()) == (
+        x - 0.5, y - 0.5, w, h)
     assert "Method-II, seed 3" in demo.status.value and demo.errors == []
     before = demo.model.result
     demo.recompute_button.click()
