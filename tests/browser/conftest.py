@@ -164,36 +164,58 @@ def lab(chromium, workspace, tmp_path_factory):
         _stop(proc)
 
 
+# Every helper finds the notebook by its path, never as "the current widget": JupyterLab
+# restores the tabs of earlier tests on page load, and a restored notebook whose kernel is
+# still running can be current and ready first, so a Run All sent to "the current widget"
+# ran that notebook again and left the new one unrun.
+_FIND = ("[...window.jupyterapp.shell.widgets('main')]"
+         ".find(w => w.context && w.context.path === path)")
+
 # The kernel-ready wait: the toolbar says idle before the session has a kernel, and a Run All
 # issued then silently runs nothing.
-_READY = """() => {
-  const w = window.jupyterapp && window.jupyterapp.shell.currentWidget;
-  if (!w || !w.content || !w.content.activeCell || !w.context || !w.context.isReady) return false;
+_READY = f"""(path) => {{
+  const w = window.jupyterapp && {_FIND};
+  if (!w) return false;
+  if (window.jupyterapp.shell.currentWidget !== w) {{ window.jupyterapp.shell.activateById(w.id); return false; }}
+  if (!w.content || !w.content.activeCell || !w.context.isReady) return false;
   const s = w.sessionContext;
   if (!s || !s.isReady || !s.session || !s.session.kernel) return false;
   const k = s.session.kernel;
   return k.connectionStatus === 'connected' && k.status === 'idle';
-}"""
+}}"""
 
-_IDLE = """() => {
-  const k = window.jupyterapp.shell.currentWidget.sessionContext.session.kernel;
-  return k.status === 'idle';
-}"""
+_RUN_ALL = f"""(path) => {{
+  if (window.jupyterapp.shell.currentWidget !== {_FIND}) return false;
+  window.jupyterapp.commands.execute('notebook:run-all-cells');
+  return true;
+}}"""
 
+_IDLE = f"""(path) => {_FIND}.sessionContext.session.kernel.status === 'idle'"""
 
-_ALL_RAN = """() => [...window.jupyterapp.shell.currentWidget.content.widgets]
+_ALL_RAN = f"""(path) => [...{_FIND}.content.widgets]
   .every(c => c.model.type !== 'code' || c.model.executionCount)"""
 
-_FIRST_ERROR = """() => {
-  for (const c of window.jupyterapp.shell.currentWidget.content.widgets) {
+_FIRST_ERROR = f"""(path) => {{
+  for (const c of {_FIND}.content.widgets) {{
     const outputs = c.model.type === 'code' ? c.model.outputs : null;
-    for (let i = 0; outputs && i < outputs.length; i++) {
+    for (let i = 0; outputs && i < outputs.length; i++) {{
       const o = outputs.get(i).toJSON();
-      if (o.output_type === 'error') return `${o.ename}: ${o.evalue}`;
-    }
-  }
+      if (o.output_type === 'error') return `${{o.ename}}: ${{o.evalue}}`;
+    }}
+  }}
   return null;
-}"""
+}}"""
+
+_PROGRESS = f"""(path) => {{
+  const w = {_FIND};
+  const code = [...w.content.widgets].map((c, i) => [i, c.model]).filter(([i, m]) => m.type === 'code');
+  const waiting = code.filter(([i, m]) => !m.executionCount).map(([i, m]) => i);
+  const k = w.sessionContext.session && w.sessionContext.session.kernel;
+  const current = window.jupyterapp.shell.currentWidget;
+  return `kernel ${{k ? k.status + '/' + k.connectionStatus : 'none'}}; code cells not run: ` +
+         `${{waiting.join(', ') || 'none'}} of ${{code.length}}; current tab ` +
+         `${{current && current.context ? current.context.path : current && current.id}}`;
+}}"""
 
 
 @pytest.fixture
@@ -202,16 +224,23 @@ def open_notebook(lab, page):
     base, token = lab
 
     def open_(name: str, timeout: float = 120_000):
-        page.goto(f"{base}/lab/tree/notebooks/{name}?token={token}")
-        page.wait_for_function(_READY, timeout=timeout, polling=200)
-        page.evaluate("() => window.jupyterapp.commands.execute('notebook:run-all-cells')")
+        from playwright.sync_api import TimeoutError as PlaywrightTimeout
+
+        path = f"notebooks/{name}"
+        page.goto(f"{base}/lab/tree/{path}?token={token}")
+        page.wait_for_function(_READY, arg=path, timeout=timeout, polling=200)
+        assert page.evaluate(_RUN_ALL, path), f"{name} is not the current tab"
         # Every code cell has run, or one failed (Run All stops there, so waiting on would
         # only time out).
-        page.wait_for_function(f"() => ({_FIRST_ERROR})() !== null || ({_ALL_RAN})()",
-                               timeout=timeout, polling=250)
-        error = page.evaluate(_FIRST_ERROR)
+        try:
+            page.wait_for_function(f"(path) => ({_FIRST_ERROR})(path) !== null || ({_ALL_RAN})(path)",
+                                   arg=path, timeout=timeout, polling=250)
+        except PlaywrightTimeout:
+            raise AssertionError(f"{name}: Run All did not finish in {timeout / 1000:.0f} s; "
+                                 f"{page.evaluate(_PROGRESS, path)}") from None
+        error = page.evaluate(_FIRST_ERROR, path)
         assert error is None, f"{name}: a cell failed under Run All: {error}"
-        page.wait_for_function(_IDLE, timeout=timeout, polling=200)
+        page.wait_for_function(_IDLE, arg=path, timeout=timeout, polling=200)
         return page
 
     return open_
