@@ -151,7 +151,7 @@ def _anneal(net, rng, t_start, t_end, cooling, sweeps, holder):
                 d = new - v[a]
                 if d:
                     v[a] = new
-                    u += W[:, a] * d
+                    u += W[a] * d  # W is symmetric; its rows are contiguous
                     change = max(change, abs(d))
         e = net.constant - 0.5 * v @ W @ v - I @ v
         committed = float(np.mean((v < 0.05) | (v > 0.95))) if n else 1.0
