@@ -236,9 +236,9 @@ def update_background(art: dict, model: DepthModel) -> None:
 def draw_scene(ax, cax, model: DepthModel) -> dict:
     """Fig. 5.14: the scene's left image, background features crossed out, new ones by disparity,
     and (dashed) the box where the scene's corners were sought."""
-    ax.imshow(grey_rgb(model.scene.left), interpolation="nearest")
     from matplotlib.patches import Rectangle
 
+    ax.imshow(grey_rgb(model.scene.left), interpolation="nearest")
     removed, = ax.plot([], [], "x", color="0.75", alpha=0.7, ms=4, mew=1)
     features = ax.scatter([], [], c=[], cmap=CMAP, s=30, edgecolors="white", linewidths=0.6)
     box = ax.add_patch(Rectangle((0, 0), 0, 0, fill=False, ec="yellow", lw=0.8, ls="--", visible=False))
