@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import functools
 import io
+import threading
 import traceback
 from pathlib import Path
 
@@ -23,6 +24,31 @@ from .._validation import ParameterError, ParameterTypeError, message
 def ipympl_active() -> bool:
     """Whether pyplot draws into ipympl canvases (``%matplotlib widget``)."""
     return "ipympl" in matplotlib.get_backend().lower() or matplotlib.get_backend() == "widget"
+
+
+def _serialise_frames(canvas) -> None:
+    """Let one thread at a time render an ipympl canvas, and send every frame whole.
+
+    The GA runner draws from its worker thread, while the kernel's main thread draws
+    whenever the browser asks for a frame.  Two renders of one Agg canvas at once leave
+    a half-drawn buffer, and the browser showed it: after stopping the GA in notebook
+    05, a blank plot with a few tick labels, until the next draw.  A lock per canvas
+    serialises the renders.  Whole frames, never diffs, keep ipympl's frame mode (sent
+    in a separate message) from flipping between frames, so no frame is laid over the
+    wrong base.
+    """
+    lock = threading.RLock()
+    draw, diff_image = canvas.draw, canvas.get_diff_image
+
+    def locked_draw(*args, **kwargs):
+        with lock:
+            return draw(*args, **kwargs)
+
+    def whole_image():
+        canvas._force_full = True
+        return diff_image()
+
+    canvas.draw, canvas.get_diff_image = locked_draw, whole_image
 
 
 class Pane:
@@ -45,6 +71,7 @@ class Pane:
             canvas.header_visible = False
             canvas.footer_visible = False
             canvas.resizable = False
+            _serialise_frames(canvas)
             self.widget = canvas
         else:
             from matplotlib.backends.backend_agg import FigureCanvasAgg

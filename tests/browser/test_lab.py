@@ -1,5 +1,6 @@
 """Real clicks in JupyterLab and Voila: what a student does, checked on the page and on disk."""
 
+import base64
 import json
 import time
 from pathlib import Path
@@ -139,7 +140,7 @@ def _generation(text: str) -> int:
     return int(found.group(1)) if found else -1
 
 
-def test_ga_runs_live_and_stops(open_notebook, artifacts):
+def test_ga_runs_live_and_stops(open_notebook, kernel_exec, artifacts):
     page = open_notebook("05_genetic_algorithm.ipynb")
     root = page.locator(".ismb-ga")
     status = root.locator(".ismb-status")
@@ -162,6 +163,14 @@ def test_ga_runs_live_and_stops(open_notebook, artifacts):
     time.sleep(2)
     assert _generation(status.inner_text()) == stopped_at
     expect(root.locator("button.ismb-start")).to_be_enabled()
+    fitness = root.locator(".ismb-fitness canvas").first
+    shown = settled(fitness)
+    kernel_exec(page, "runner.pane.draw()")
+    current = settled(fitness)
+    if current != shown:   # keep both pictures to look at
+        for what, url in (("shown", shown), ("current", current)):
+            (artifacts / f"05_fitness_{what}.png").write_bytes(base64.b64decode(url.split(",", 1)[1]))
+    assert current == shown, "the fitness plot after Stop was not the current one"
     root.screenshot(path=artifacts / "05_genetic_algorithm.png")
 
 
