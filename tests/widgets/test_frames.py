@@ -3,13 +3,24 @@
 import threading
 import time
 
-from ipympl.backend_nbagg import Canvas, FigureManager
+import matplotlib
+import pytest
 from matplotlib.figure import Figure
 
 from ismb_lab.widgets._common import _serialise_frames
 
 
+@pytest.fixture(autouse=True)
+def keep_backend():
+    """Importing ipympl switches matplotlib's backend; the other widget tests need Agg."""
+    backend = matplotlib.get_backend()
+    yield
+    matplotlib.use(backend, force=True)
+
+
 def ipympl_figure():
+    from ipympl.backend_nbagg import Canvas, FigureManager
+
     fig = Figure(figsize=(2, 1))
     canvas = Canvas(fig)
     FigureManager(canvas, 0)
