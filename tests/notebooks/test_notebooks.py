@@ -1,5 +1,6 @@
 """Every teaching notebook is committed clean, follows the section order and runs without error."""
 
+import json
 import re
 from pathlib import Path
 
@@ -20,6 +21,9 @@ def test_there_are_notebooks():
 
 @pytest.mark.parametrize("name", NAMES)
 def test_committed_without_outputs(name):
+    raw = json.loads((NOTEBOOKS / name).read_text(encoding="utf-8"))
+    ids = [cell.get("id") for cell in raw["cells"]]
+    assert None not in ids and len(set(ids)) == len(ids), f"{name}: cells need unique ids (nbformat 4.5)"
     nb = nbformat.read(NOTEBOOKS / name, as_version=4)
     nbformat.validate(nb)
     for cell in nb.cells:
