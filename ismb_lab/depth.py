@@ -556,15 +556,6 @@ def changed_roi(background_left, scene_left, roi="center", *, threshold: float =
     return int(x + x0), int(y + y0), int(x1 - x0 + 1), int(y1 - y0 + 1)
 
 
-def _pair(value, name: str, owner: str = "relative_depth"):
-    if hasattr(value, "left") and hasattr(value, "right"):
-        return value.left, value.right
-    if isinstance(value, (tuple, list)) and len(value) == 2:
-        return value[0], value[1]
-    raise ParameterTypeError(message(name, owner, "a (left, right) pair of images or "
-                                     "paths, or an object with .left and .right", value))
-
-
 def scene_match_config(background, scene, match_config=None):
     """The demo's corner settings for a scene pair: `match_config` with its ROI cut
     down to :func:`changed_roi`.
@@ -614,9 +605,17 @@ def _check_same_size(background, scene, owner: str):
 
 
 def _load(value, name: str, owner: str):
+    """A StereoPair from a StereoPair, a (left, right) pair or an object with .left and .right."""
     from .io import StereoPair, load_pair
 
-    return value if isinstance(value, StereoPair) else load_pair(*_pair(value, name, owner))
+    if isinstance(value, StereoPair):
+        return value
+    if hasattr(value, "left") and hasattr(value, "right"):
+        return load_pair(value.left, value.right)
+    if isinstance(value, (tuple, list)) and len(value) == 2:
+        return load_pair(value[0], value[1])
+    raise ParameterTypeError(message(name, owner, "a (left, right) pair of images or "
+                                     "paths, or an object with .left and .right", value))
 
 
 def depth_match(pair, *, background=None, method: str = "III", params=None, match_config=None,
