@@ -1,0 +1,49 @@
+"""``ismb-lab match``: the matches of one pair, shaped like the thesis' Table 5.3."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+from .._files import atomic_write_text
+from ._common import add_matching_options, match_config, resolve_params
+
+
+def add_parser(sub) -> None:
+    m = sub.add_parser("match", help="match the corners of a stereo pair and print Table 5.3",
+                       description="Match the Harris corners of LEFT and RIGHT and print the "
+                       "matches in the shape of the thesis' Table 5.3.")
+    m.add_argument("left", type=Path, help="left image file")
+    m.add_argument("right", type=Path, help="right image file")
+    add_matching_options(m)
+    m.add_argument("--json", type=Path, default=None, metavar="OUT", help="write the result as JSON")
+    m.add_argument("--plot", type=Path, default=None, metavar="OUT.png",
+                   help="draw the pair with features and match lines")
+    m.set_defaults(run=run)
+
+
+def run(args) -> int:
+    from ..matching import match, prepare
+
+    method, params = resolve_params(args)
+    prepared = prepare(args.left, args.right, match_config(args))
+    result = match(method=method, params=params, seed=args.seed, stop_rule=args.stop_rule,
+                   rule=args.rule, prepared=prepared)
+    print(f"Method-{result.method}  params {params.to_dict()}  seed {result.seed}")
+    print(f"{len(result.left_xy)} left / {len(result.right_xy)} right corners, "
+          f"{result.n_candidates} candidate neurons, {len(result.pairs)} matches, "
+          f"energy {result.energy:.4f}, stopped by '{result.stop_rule}' "
+          f"after {result.attempts} attempts")
+    print(result.table())
+    if args.json is not None:
+        atomic_write_text(args.json, result.to_json() + "\n")
+    if args.plot is not None:
+        from matplotlib.figure import Figure
+
+        from ..plotting import plot_matches
+        pair = prepared.pair
+        fig = Figure(figsize=(10, 4), layout="constrained")
+        ax = fig.subplots()
+        plot_matches(ax, pair.left, pair.right, result.left_xy, result.right_xy, result.pairs)
+        ax.set_title(f"Method-{result.method}: {len(result.pairs)} matches")
+        fig.savefig(args.plot, dpi=120)
+    return 0
