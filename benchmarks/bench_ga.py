@@ -14,18 +14,14 @@ import time
 import numpy as np
 
 from ismb_lab.genetic import evolve
-from ismb_lab.matching import prepare
-from ismb_lab.scenes import synthetic_scene, true_matches
-from ismb_lab.tuning import Case, Fitness, gene_bounds
+from ismb_lab.protocol import Case
+from ismb_lab.scenes import synthetic_scene
+from ismb_lab.tuning import Fitness, gene_bounds
 
 
 def main(repeats: int = 3) -> None:
-    scene = synthetic_scene(seed=100)
-    prepared = prepare(scene.left, scene.right)
-    truth = true_matches(scene, prepared.problem.left_xy, prepared.problem.right_xy)
-    left = np.flatnonzero(truth >= 0)
-    case = Case(prepared, np.stack([left, truth[left]], axis=1))
-    problem = prepared.problem
+    case = Case.from_scene(synthetic_scene(seed=100))
+    problem = case.prepared.problem
     print(f"pair: {len(problem.left_xy)}x{len(problem.right_xy)} corners, "
           f"{problem.n_neurons} candidate neurons, {len(case.targets)} targets")
     for method in ("I", "III"):

@@ -95,8 +95,8 @@ def check_number(value, name: str, owner: str, *, low=None, high=None,
     return value
 
 
-def check_choice(value, name: str, owner: str, choices) -> str:
-    """Check that `value` is one of the strings in `choices`.
+def check_choice(value, name: str, owner: str, choices, rule: str | None = None) -> str:
+    """Check that `value` is one of the strings in `choices` (`rule` words the message).
 
     Examples
     --------
@@ -109,7 +109,7 @@ def check_choice(value, name: str, owner: str, choices) -> str:
     """
     if isinstance(value, str) and value in choices:
         return value
-    rule = "one of " + ", ".join(repr(c) for c in choices)
+    rule = rule or "one of " + ", ".join(repr(c) for c in choices)
     kind = ParameterError if isinstance(value, str) else ParameterTypeError
     raise kind(message(name, owner, rule, value))
 

@@ -37,6 +37,8 @@ import numpy as np
 from ._validation import ParameterError, ParameterTypeError, check_number, check_rng, message
 from .hopfield import Network, energy, hopfield_form, run
 
+__all__ = ["anneal", "AnnealResult", "AnnealStep", "iter_annealing"]
+
 
 @dataclass(frozen=True)
 class AnnealStep:

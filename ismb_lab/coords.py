@@ -17,11 +17,38 @@ Everything in the package, its files and its command line follows these rules.
   - Euclidean disparity ``||p - q||``, the "disparity" column of the thesis' tables.
 
 * **ROIs** are ``(x, y, w, h)`` boxes: columns ``x .. x + w - 1`` and rows ``y .. y + h - 1``.
+
+Glossary
+--------
+"Pair" alone is ambiguous here, so each meaning has its own word:
+
+image pair
+    A left and a right image of one view (:class:`ismb_lab.io.StereoPair`).
+feature
+    A Harris corner in one image, numbered as above (``i`` on the left, ``k`` on the right).
+candidate
+    A neuron ``(i, k)`` whose right feature lies in left feature ``i``'s candidate
+    window (§3.3); only candidates ever change state.
+neighbours
+    Two neurons ``(i, k)`` and ``(j, l)`` whose left features lie close enough to
+    interact through ``C_ikjl`` (3-12).
+match
+    A candidate that is on in a solved state, after the method's post-processing
+    (:func:`ismb_lab.solvers.to_matches`); ``MatchResult.pairs`` lists them as ``(i, k)``.
+target
+    A match a person (or a ground truth) says is right, stored by coordinates with
+    the images' hashes (:mod:`ismb_lab.targets`) and snapped to features for scoring.
+case
+    An image pair with its targets, the unit the GA trains on (:class:`ismb_lab.protocol.Case`).
+solver
+    A way to find the network's final state (:data:`ismb_lab.solvers.SOLVERS`).
 """
 
 from __future__ import annotations
 
 import numpy as np
+
+__all__ = ["euclidean_disparity", "horizontal_disparity", "vertical_disparity"]
 
 
 def horizontal_disparity(left_xy, right_xy) -> np.ndarray:

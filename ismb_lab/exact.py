@@ -40,6 +40,8 @@ import numpy as np
 from ._validation import ParameterError, ParameterTypeError, check_number, message
 from .hopfield import SCALE, Network, energy, hopfield_form
 
+__all__ = ["MAX_EXHAUSTIVE", "exhaustive_minimum", "milp_minimum", "Minimum"]
+
 #: Largest network :func:`exhaustive_minimum` accepts (``2**26`` states).
 MAX_EXHAUSTIVE = 26
 

@@ -19,6 +19,9 @@ from .features import harris_from_tensor, harris_response, image_gradients, stru
 from .hopfield import Network, hopfield_form
 from .similarity import transfer
 
+__all__ = ["check_disparity", "check_energy_derivation", "check_fitness", "check_harris_response",
+           "check_transfer", "Feedback"]
+
 
 @dataclass(frozen=True)
 class Feedback:
@@ -105,7 +108,7 @@ def check_energy_derivation(W, I, net: Network) -> Feedback:
     n = net.n_neurons
     W = _array(W, "W", owner, (n, n))
     I = _array(I, "I", owner, (n,))
-    W_ok, I_ok = hopfield_form(net, "exact")
+    W_ok, I_ok = hopfield_form(net, rule="exact")
     if _close(W, W_ok) and _close(I, I_ok):
         return _OK
     W_thesis, _ = hopfield_form(net, "thesis")

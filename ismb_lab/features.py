@@ -18,6 +18,9 @@ from scipy import ndimage as ndi
 
 from ._validation import ParameterError, ParameterTypeError, check_number, message
 
+__all__ = ["Corners", "detect_corners", "harris_from_tensor", "harris_response", "image_gradients",
+           "resolve_roi", "structure_tensor"]
+
 
 def _check_image(image, owner: str) -> np.ndarray:
     rule = "a non-empty 2-D array of finite float or unsigned integer values"

@@ -23,6 +23,9 @@ from .scenes import (REALISTIC_COUNT, Scene, lab_scene, realistic_scene, synthet
                      toy_car_scene, true_matches)
 from .targets import save_targets, targets_from_matches
 
+__all__ = ["ANSWER_KEY", "DISPARITY_SCALE", "SNAP_PX", "answer_key", "decode_disparity",
+           "encode_disparity", "render_gallery", "write_manifest", "write_pair", "write_scene"]
+
 DISPARITY_SCALE = 256.0
 
 

@@ -32,14 +32,14 @@ deterministic: unchanged chromosomes (elite, uncrossed copies) keep their fitnes
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import asdict, dataclass, fields
 from typing import Callable, Iterator
 
 import numpy as np
 
 from ._validation import ParameterError, ParameterTypeError, check_number, check_rng, message
 
-__all__ = ["Bounds", "Generation", "arithmetic_crossover", "batch", "elite", "evolve",
+__all__ = ["Bounds", "GAConfig", "Generation", "arithmetic_crossover", "batch", "elite", "evolve",
            "initial_population", "next_generation", "random_mutation", "tournament"]
 
 
@@ -47,6 +47,61 @@ def _readonly(values) -> np.ndarray:
     arr = np.array(values, dtype=float)
     arr.flags.writeable = False
     return arr
+
+
+@dataclass(frozen=True)
+class GAConfig:
+    """The GA's settings; the defaults are the thesis' (§4.2, §5.2.1).
+
+    Attributes
+    ----------
+    population : int
+        Chromosomes per generation (>= 2).
+    generations : int
+        The last generation index (>= 1): the GA stops there at the latest.
+    p_crossover, p_mutation : float
+        Probability that a pair of winners is crossed, and that a child mutates.
+    n_elite : int
+        Best chromosomes copied unchanged into the next generation.
+
+    Examples
+    --------
+    >>> GAConfig()
+    GAConfig(population=30, generations=500, p_crossover=0.8, p_mutation=0.05, n_elite=2)
+    >>> GAConfig().updated("tune", generations=60, population=None).generations
+    60
+    >>> GAConfig(population=1)
+    Traceback (most recent call last):
+    ...
+    ismb_lab.ParameterError: The 'population' parameter of GAConfig must be an integer >= 2. Got 1 instead.
+    """
+
+    population: int = 30
+    generations: int = 500
+    p_crossover: float = 0.8
+    p_mutation: float = 0.05
+    n_elite: int = 2
+
+    def __post_init__(self):
+        for name, value in _check_settings(asdict(self), "GAConfig").items():
+            object.__setattr__(self, name, value)
+
+    def updated(self, owner: str, **changes) -> "GAConfig":
+        """A copy with the `changes` that are not None, checked in the name of `owner`."""
+        unknown = sorted(set(changes) - {f.name for f in fields(self)})
+        if unknown:
+            raise ParameterTypeError(message("settings", owner, "GAConfig fields", unknown))
+        values = {**asdict(self), **{k: v for k, v in changes.items() if v is not None}}
+        return GAConfig(**_check_settings(values, owner))
+
+
+def _check_settings(values: dict, owner: str) -> dict:
+    size = check_number(values["population"], "population", owner, low=2, integer=True)
+    return {"population": size,
+            "generations": check_number(values["generations"], "generations", owner, low=1, integer=True),
+            "p_crossover": check_number(values["p_crossover"], "p_crossover", owner, low=0, high=1),
+            "p_mutation": check_number(values["p_mutation"], "p_mutation", owner, low=0, high=1),
+            "n_elite": check_number(values["n_elite"], "n_elite", owner, low=0, high=size, integer=True)}
 
 
 @dataclass(frozen=True, eq=False)
@@ -141,12 +196,6 @@ def _scores(values, owner: str, rule: str, ok=lambda n: n > 0) -> np.ndarray:
     if not np.all(np.isfinite(arr)):
         raise ParameterError(message("fitness", owner, rule, arr))
     return arr
-
-
-def _rates(p_crossover, p_mutation, n_elite, size: int, owner: str):
-    return (check_number(p_crossover, "p_crossover", owner, low=0, high=1),
-            check_number(p_mutation, "p_mutation", owner, low=0, high=1),
-            check_number(n_elite, "n_elite", owner, low=0, high=size, integer=True))
 
 
 def batch(score: Callable) -> Callable:
@@ -260,9 +309,11 @@ def _breed(rng, population, fitness, bounds, p_c, p_m, n_elite):
     return children, origin
 
 
-def next_generation(rng, population, fitness, bounds: Bounds, *, p_crossover: float = 0.8,
-                    p_mutation: float = 0.05, n_elite: int = 2) -> np.ndarray:
+def next_generation(rng, population, fitness, bounds: Bounds, *, p_crossover: float | None = None,
+                    p_mutation: float | None = None, n_elite: int | None = None) -> np.ndarray:
     """Selection, crossover and mutation of one generation (thesis §4.2; see the module notes).
+
+    Rates left at None take :class:`GAConfig`'s defaults.
 
     Examples
     --------
@@ -280,17 +331,19 @@ def next_generation(rng, population, fitness, bounds: Bounds, *, p_crossover: fl
                                      f"an array of shape {pop.shape}"))
     size = len(pop)
     fitness = _scores(fitness, owner, f"{size} finite numbers, one per chromosome", lambda n: n == size)
-    return _breed(rng, pop, fitness, bounds, *_rates(p_crossover, p_mutation, n_elite, size, owner))[0]
+    ga = GAConfig(population=size).updated(owner, p_crossover=p_crossover, p_mutation=p_mutation,
+                                           n_elite=n_elite)
+    return _breed(rng, pop, fitness, bounds, ga.p_crossover, ga.p_mutation, ga.n_elite)[0]
 
 
-def evolve(fitness: Callable, bounds: Bounds, *, rng, population: int = 30, generations: int = 500,
-           target: float | None = None, p_crossover: float = 0.8, p_mutation: float = 0.05,
-           n_elite: int = 2, keep_population: bool = False) -> Iterator[Generation]:
+def evolve(fitness: Callable, bounds: Bounds, *, rng, config: GAConfig | None = None,
+           target: float | None = None, keep_population: bool = False,
+           **settings) -> Iterator[Generation]:
     """Maximise `fitness` within `bounds`, yielding one :class:`Generation` per generation.
 
     Arguments are checked at once, but the work is lazy: a generation is bred and
     evaluated only when its record is requested, so a consumer stops the GA simply
-    by not iterating further.  Defaults are the thesis' settings (§5.2.1).
+    by not iterating further.  Defaults are the thesis' settings (:class:`GAConfig`).
 
     Parameters
     ----------
@@ -298,12 +351,15 @@ def evolve(fitness: Callable, bounds: Bounds, *, rng, population: int = 30, gene
         Batch fitness to maximise: an ``(m, n_genes)`` array -> ``m`` finite numbers.
     bounds : Bounds
         The search box.  `rng` (Generator or seed) is the only source of randomness.
-    population, generations : int
-        Chromosomes per generation (>= 2) and the last generation index (>= 1).
+    config : GAConfig, optional
+        Population, generations, rates and elite size.
     target : float, optional
         Stop after the first generation whose mean fitness is ``>= target``.
-    p_crossover, p_mutation, n_elite, keep_population
-        Crossover and mutation rates, elite size, and whether records keep arrays.
+    keep_population : bool
+        Whether records keep the population and fitness arrays.
+    **settings
+        :class:`GAConfig` fields that override `config` (None keeps its value),
+        e.g. ``generations=60``.
 
     Returns
     -------
@@ -322,13 +378,14 @@ def evolve(fitness: Callable, bounds: Bounds, *, rng, population: int = 30, gene
         raise ParameterTypeError(message("fitness", owner, "a callable", fitness))
     bounds = _check_bounds(bounds, owner)
     rng = check_rng(rng, "rng", owner)
-    size = check_number(population, "population", owner, low=2, integer=True)
-    generations = check_number(generations, "generations", owner, low=1, integer=True)
+    if config is not None and not isinstance(config, GAConfig):
+        raise ParameterTypeError(message("config", owner, "a GAConfig", config))
+    ga = (config or GAConfig()).updated(owner, **settings)
     target = None if target is None else check_number(target, "target", owner)
-    rates = _rates(p_crossover, p_mutation, n_elite, size, owner)
     if not isinstance(keep_population, bool):
         raise ParameterTypeError(message("keep_population", owner, "a bool", keep_population))
-    return _run(fitness, bounds, rng, size, generations, target, rates, keep_population)
+    rates = ga.p_crossover, ga.p_mutation, ga.n_elite
+    return _run(fitness, bounds, rng, ga.population, ga.generations, target, rates, keep_population)
 
 
 def _run(fitness, bounds, rng, size, generations, target, rates, keep) -> Iterator[Generation]:

@@ -17,10 +17,13 @@ import numpy as np
 from ._validation import ParameterError, ParameterTypeError, check_choice, check_number, message
 from .coords import euclidean_disparity, horizontal_disparity
 from .features import Corners, detect_corners, resolve_roi
-from .hopfield import RULES, STOP_RULES, run
+from .hopfield import RULES, STOP_RULES
 from .io import StereoPair, load_pair
-from .methods import THESIS_PARAMS, Params, Problem, build_problem, get_method
+from .methods import Params, Problem, build_problem, get_method
 from .similarity import mean_abs_difference
+from .solvers import DEFAULT_SOLVER, get_solver, solve, to_matches
+
+__all__ = ["MatchConfig", "MatchResult", "Prepared", "match", "prepare", "shift_roi"]
 
 
 @dataclass(frozen=True)
@@ -165,7 +168,8 @@ class MatchResult:
     params : Params
     seed : int
     stop_rule : str
-        What stopped the network (``"sweep"``, ``"stall"``, ``"max_attempts"``).
+        What stopped the network (``"sweep"``, ``"stall"``, ``"max_attempts"``), or
+        the solver's name when another solver found the state.
     energy : float
         Final energy (3-15).
     attempts : int
@@ -175,6 +179,12 @@ class MatchResult:
         Matched ``(i, k)`` feature indices, sorted by ``i``.
     message : str
         Empty when all went well, otherwise why the match is empty or partial.
+    n_candidates : int
+        Candidate neurons.
+    state : (n,) uint8 ndarray
+        Final outputs of the candidate neurons, after the method's post-processing.
+    solver : str
+        Which of :data:`ismb_lab.solvers.SOLVERS` found the state.
     """
 
     method: str
@@ -189,6 +199,7 @@ class MatchResult:
     message: str = ""
     n_candidates: int = 0
     state: np.ndarray = field(default=None, repr=False)
+    solver: str = DEFAULT_SOLVER
 
     @property
     def left_match_xy(self) -> np.ndarray:
@@ -223,6 +234,7 @@ class MatchResult:
         """The JSON contract of ``ismb-lab match --json``."""
         return {
             "method": self.method,
+            "solver": self.solver,
             "params": self.params.to_dict(),
             "seed": self.seed,
             "energy": self.energy,
@@ -251,24 +263,27 @@ def _xy_list(xy):
 
 
 def match(left=None, right=None, method="III", params: Params | None = None, *,
-          config: MatchConfig | None = None, seed: int = 0, stop_rule: str = "sweep",
-          rule: str = "exact", kernel: str = "numba", prepared: Prepared | None = None) -> MatchResult:
+          config: MatchConfig | None = None, seed: int = 0, solver: str = DEFAULT_SOLVER,
+          stop_rule: str = "sweep", rule: str = "exact", kernel: str = "numba",
+          prepared: Prepared | None = None) -> MatchResult:
     """Match the Harris corners of a stereo pair with the Hopfield network.
 
     Parameters
     ----------
     left, right : path or ndarray
         The image pair; ignored when `prepared` is given.
-    method : {"I", "II", "III"}
-        Energy recipe (see :mod:`ismb_lab.methods`).
+    method : str
+        Energy recipe, a name in :func:`ismb_lab.methods.method_names`.
     params : Params, optional
-        Energy parameters; by default the thesis' GA values for the method.
+        Energy parameters; by default the method's (the thesis' GA values).
     config : MatchConfig, optional
         Corners, candidate window and neighbourhood settings.
     seed : int
-        Seed of the random update order.
+        Seed of the random update order (and of annealing).
+    solver : str
+        How the energy is minimised, a name in :data:`ismb_lab.solvers.SOLVERS`.
     stop_rule, rule, kernel
-        See :func:`ismb_lab.hopfield.run`.
+        The discrete network's settings, see :func:`ismb_lab.hopfield.run`.
     prepared : Prepared, optional
         Reuse corners and geometry from :func:`prepare`.
 
@@ -277,22 +292,24 @@ def match(left=None, right=None, method="III", params: Params | None = None, *,
     result : MatchResult
     """
     m = get_method(method)
-    params = THESIS_PARAMS[m.name] if params is None else params
+    params = m.defaults if params is None else params
     if not isinstance(params, Params):
         raise ParameterTypeError(message("params", "match", "a Params instance", params))
+    get_solver(solver, "match")   # the settings are checked before the images are read
     check_number(seed, "seed", "match", low=0, integer=True)
     check_choice(stop_rule, "stop_rule", "match", STOP_RULES)
     check_choice(rule, "rule", "match", RULES)
     if prepared is None:
         prepared = prepare(left, right, config)
+    elif not isinstance(prepared, Prepared):
+        raise ParameterTypeError(message("prepared", "match", "a Prepared from prepare()", prepared))
     problem = prepared.problem
-    result = run(m.network(problem, params), rng=seed, stop_rule=stop_rule, rule=rule, kernel=kernel)
-    state = m.postprocess(problem, result.state)
-    on = np.flatnonzero(state)
-    pairs = np.stack([problem.rows[on], problem.cols[on]], axis=1).reshape(-1, 2)
+    result = solve(m.network(problem, params), solver, seed=seed, stop_rule=stop_rule, rule=rule,
+                   kernel=kernel, owner="match")
+    found = to_matches(problem, result.state, m)
     return MatchResult(m.name, params, int(seed), result.stop_rule, result.energy, result.attempts,
-                       problem.left_xy, problem.right_xy, pairs, _explain(prepared, result),
-                       problem.n_neurons, state)
+                       problem.left_xy, problem.right_xy, found.pairs, _explain(prepared, result),
+                       problem.n_neurons, found.state, solver)
 
 
 def _explain(prepared: Prepared, result) -> str:

@@ -26,20 +26,47 @@ network's final state.
   per feature") and Method-III's four genes.  Trained on one small pair, the
   fifth gene mostly fits that pair's own count of unmatched corners; without
   it the GA has one thing less to overfit.
+
+Each method describes itself: its name, the thesis section it comes from, its
+genes (:class:`Gene`, with the GA's search bounds), its default parameters and
+a one-line description.  :func:`register_method` adds a method, and the command
+line, :func:`ismb_lab.tuning.tune` and the widgets list whatever is registered.
+
+Gene bounds
+-----------
+* ``theta_c`` in [0, 60] px: ``X`` is a sum of pixel differences.  Correct pairs of
+  neighbours have ``X`` of a few pixels and wrong ones tens (on the synthetic
+  scenes: median 0 against 22); 60 px already calls almost everything
+  compatible.  The thesis' values, 7.45 to 41.57, lie inside.
+* ``theta_s`` in [0, 60] grey levels: ``M`` of true matches is about 5, of false
+  ones about 45 on the synthetic scenes.
+* ``lambda_c``, ``lambda_s`` in [0.05, 10]: from an almost flat transfer function to
+  a step one pixel wide (the thesis found 1.16 to 8.89).
+* ``match_bias`` (Method-NM's fifth gene) in [-2, 2]: the preferred number of
+  matches per feature ``h = 1/2 + beta / 4`` runs from 0 (a match must pay 2 from
+  ``S`` and ``C``) through 1/2 ("at most one", ``beta = 0``) to 1 (exactly one: the
+  thesis).  ``S`` is in [-1, 1] and one compatible neighbour adds up to 2, so a
+  wider range only repeats the ends.
 """
 
 from __future__ import annotations
 
+import json
+from collections.abc import Mapping
 from dataclasses import asdict, dataclass, fields, replace
+from pathlib import Path
 
 import numpy as np
 
+from ._files import atomic_write_text
 from ._validation import ParameterError, ParameterTypeError, check_choice, check_number, message
 from .compatibility import NeuronPairs, left_neighbours, neuron_pairs
 from .hopfield import Network, Topology
 from .similarity import candidate_mask, transfer
 
-METHOD_NAMES = ("I", "II", "III", "NM", "NM4")
+__all__ = ["Gene", "all_genes", "Method", "MethodI", "MethodII", "MethodIII", "MethodNM", "MethodNM4", "Params",
+           "Problem", "THESIS_PARAMS", "build_problem", "get_method", "load_params", "method_names",
+           "register_method", "save_params", "unregister_method"]
 
 
 @dataclass(frozen=True, repr=False)
@@ -99,17 +126,50 @@ class Params:
         return cls(**values)
 
 
-#: The parameters the thesis' GA found (§5.2.1 for Method-I, §5.2.2 for II and III).
-#: Method-I's theta_s and lambda_s are unused placeholders.  Method-NM is not in
-#: the thesis: its entry is Method-III's values with ``match_bias = 0`` ("at most
-#: one match"), a neutral start for its GA rather than a fitted result.
-THESIS_PARAMS = {
-    "I": Params(theta_c=41.57, lambda_c=4.40),
-    "II": Params(theta_c=11.51, theta_s=26.24, lambda_c=8.89, lambda_s=1.16),
-    "III": Params(theta_c=17.97, theta_s=24.02, lambda_c=6.37, lambda_s=2.2),
-    "NM": Params(theta_c=17.97, theta_s=24.02, lambda_c=6.37, lambda_s=2.2, match_bias=0.0),
-    "NM4": Params(theta_c=17.97, theta_s=24.02, lambda_c=6.37, lambda_s=2.2),
-}
+@dataclass(frozen=True)
+class Gene:
+    """One parameter a method's GA searches, with its search bounds.
+
+    Attributes
+    ----------
+    name : str
+        A field of :class:`Params`.
+    low, high : float
+        The GA's search box (see "Gene bounds" in this module's docstring).
+    meaning : str
+        What the gene does, for help texts.
+    symbol : str
+        Its symbol in the thesis, for slider labels.
+
+    Examples
+    --------
+    >>> THETA_C
+    Gene(name='theta_c', low=0.0, high=60.0, meaning='tolerance of X in C (3-13)', symbol='θc')
+    >>> Gene("theta_x", 0.0, 1.0)
+    Traceback (most recent call last):
+    ...
+    ismb_lab.ParameterError: The 'name' parameter of Gene must be a field of Params (theta_c, theta_s, lambda_c, lambda_s, match_bias). Got 'theta_x' instead.
+    """
+
+    name: str
+    low: float
+    high: float
+    meaning: str = ""
+    symbol: str = ""
+
+    def __post_init__(self):
+        names = tuple(f.name for f in fields(Params))
+        check_choice(self.name, "name", "Gene", names,
+                     rule=f"a field of Params ({', '.join(names)})")
+        low = check_number(self.low, "low", "Gene")
+        check_number(self.high, "high", "Gene", low=low, low_open=True)
+
+
+THETA_C = Gene("theta_c", 0.0, 60.0, "tolerance of X in C (3-13)", "θc")
+THETA_S = Gene("theta_s", 0.0, 60.0, "tolerance of M in S (3-10)", "θs")
+LAMBDA_C = Gene("lambda_c", 0.05, 10.0, "steepness of C (3-13)", "λc")
+LAMBDA_S = Gene("lambda_s", 0.05, 10.0, "steepness of S (3-10)", "λs")
+MATCH_BIAS = Gene("match_bias", -2.0, 2.0, "beta: preferred matches per feature h = 1/2 + beta/4", "β")
 
 
 @dataclass(frozen=True, eq=False)
@@ -195,8 +255,14 @@ class Method:
     """
 
     name: str = ""
-    genes: tuple[str, ...] = ()
+    section: str = ""
+    genes: tuple[Gene, ...] = ()
+    defaults: Params = Params()
     description: str = ""
+
+    @property
+    def gene_names(self) -> tuple[str, ...]:
+        return tuple(g.name for g in self.genes)
 
     def similarity(self, problem: Problem, params: Params) -> np.ndarray:
         return transfer(problem.dissimilarity[problem.rows, problem.cols], params.theta_s, params.lambda_s)
@@ -217,8 +283,12 @@ class Method:
         # Params are validated finite and transfer() maps finite input into [-1, 1].
         return Network._trusted(problem.topology, self.similarity(problem, params), c, self_c)
 
-    def postprocess(self, problem: Problem, state: np.ndarray) -> np.ndarray:
-        return state
+    def postprocess(self, problem: Problem, on: np.ndarray) -> np.ndarray:
+        """Which of the neurons that are on (indices `on`) stay matches; all, by default.
+
+        :func:`ismb_lab.solvers.to_matches` calls it.
+        """
+        return on
 
     def __repr__(self) -> str:
         return f"Method-{self.name}"
@@ -234,7 +304,9 @@ class MethodI(Method):
     then right features; ties go to the lower index).
     """
 
-    name, genes = "I", ("theta_c", "lambda_c")
+    name, section, genes = "I", "§3.3, §5.2.1 (Achour & Mahiddine 2002)", (THETA_C, LAMBDA_C)
+    #: The thesis' GA result; theta_s and lambda_s are unused placeholders.
+    defaults = Params(theta_c=41.57, lambda_c=4.40)
     description = "X = dd + dD + mean(M); no S; vertical disparity only as post-processing"
 
     def similarity(self, problem, params):
@@ -248,23 +320,22 @@ class MethodI(Method):
     def self_measure(self, problem):
         return problem.dissimilarity[problem.rows, problem.cols]
 
-    def postprocess(self, problem, state):
-        state = np.array(state, dtype=np.uint8)
+    def postprocess(self, problem, on):
+        on = np.asarray(on, dtype=np.int64)
         dy = np.abs(problem.right_xy[problem.cols, 1] - problem.left_xy[problem.rows, 1])
         for owner in (problem.rows, problem.cols):
-            on = np.flatnonzero(state)
-            order = np.lexsort((on, dy[on], owner[on]))  # by feature, then |dy|, then index
-            ranked = on[order]
+            ranked = on[np.lexsort((on, dy[on], owner[on]))]  # by feature, then |dy|, then index
             first = np.ones(len(ranked), dtype=bool)
             first[1:] = owner[ranked][1:] != owner[ranked][:-1]
-            state[ranked[~first]] = 0
-        return state
+            on = np.sort(ranked[first])
+        return on
 
 
 class MethodII(Method):
     """Method-II: separate similarity ``S``, ``X = dd + dD``."""
 
-    name, genes = "II", ("theta_c", "theta_s", "lambda_c", "lambda_s")
+    name, section, genes = "II", "§3.3, §5.2.1", (THETA_C, THETA_S, LAMBDA_C, LAMBDA_S)
+    defaults = Params(theta_c=11.51, theta_s=26.24, lambda_c=8.89, lambda_s=1.16)
     description = "S from M; X = dd + dD"
 
     def pair_measure(self, problem):
@@ -274,7 +345,8 @@ class MethodII(Method):
 class MethodIII(Method):
     """Method-III (ISMB): separate similarity ``S``, ``X = dd + dD + dY``."""
 
-    name, genes = "III", ("theta_c", "theta_s", "lambda_c", "lambda_s")
+    name, section, genes = "III", "§3.2, §5.2.2 (ISMB)", (THETA_C, THETA_S, LAMBDA_C, LAMBDA_S)
+    defaults = Params(theta_c=17.97, theta_s=24.02, lambda_c=6.37, lambda_s=2.2)
     description = "S from M; X = dd + dD + dY (vertical disparity)"
 
     def pair_measure(self, problem):
@@ -302,8 +374,10 @@ class MethodNM(MethodIII):
     (0.0, 0.5)
     """
 
-    name = "NM"
-    genes = MethodIII.genes + ("match_bias",)
+    name, section = "NM", "beyond the thesis (README)"
+    genes = MethodIII.genes + (MATCH_BIAS,)
+    #: Not fitted: Method-III's values with "at most one match", a neutral start for the GA.
+    defaults = replace(MethodIII.defaults, match_bias=0.0)
     description = "Method-III with 'at most one' uniqueness and a match bias (fifth gene)"
 
     def network(self, problem: Problem, params: Params) -> Network:
@@ -328,12 +402,13 @@ class MethodNM4(MethodNM):
     --------
     >>> p = build_problem([[100, 50], [110, 50]], [[80, 51], [90, 51]], [[2.0, 40.0], [40.0, 60.0]])
     >>> net = get_method("NM4").network(p, Params())
-    >>> float(net.match_bias), get_method("NM4").genes
+    >>> float(net.match_bias), get_method("NM4").gene_names
     (0.0, ('theta_c', 'theta_s', 'lambda_c', 'lambda_s'))
     """
 
-    name = "NM4"
+    name, section = "NM4", "beyond the thesis (README)"
     genes = MethodIII.genes
+    defaults = MethodIII.defaults
     description = "Method-III with 'at most one' uniqueness (match bias 0), four genes"
 
     def network(self, problem: Problem, params: Params) -> Network:
@@ -342,9 +417,99 @@ class MethodNM4(MethodNM):
         return super().network(problem, replace(params, match_bias=0.0))
 
 
-_METHODS = {m.name: m for m in (MethodI(), MethodII(), MethodIII(), MethodNM(), MethodNM4())}
+_METHODS: dict[str, Method] = {}
 
 
+def register_method(method: Method) -> Method:
+    """Add a method to the registry that the command line, the GA and the widgets read.
+
+    Its name must be new, its genes distinct fields of :class:`Params` and its
+    defaults a :class:`Params`.  Returns `method`, so it can decorate an instance.
+
+    Examples
+    --------
+    >>> class Flat(MethodIII):
+    ...     name, description = "FLAT", "Method-III without the similarity term"
+    ...     def similarity(self, problem, params):
+    ...         return np.zeros(problem.n_neurons)
+    >>> register_method(Flat()); "FLAT" in method_names()
+    Method-FLAT
+    True
+    >>> unregister_method("FLAT"); "FLAT" in method_names()
+    False
+    """
+    own = "register_method"
+    if not isinstance(method, Method):
+        raise ParameterTypeError(message("method", own, "a Method instance", method))
+    if not isinstance(method.name, str) or not method.name or method.name in _METHODS:
+        raise ParameterError(message("method", own, "a method with a new, non-empty name",
+                                     f"name {method.name!r}"))
+    names = [g.name for g in method.genes]
+    if not names or not all(isinstance(g, Gene) for g in method.genes) or len(set(names)) != len(names):
+        raise ParameterError(message("method", own, "a method with one or more distinct Gene objects",
+                                     method.genes))
+    if not isinstance(method.defaults, Params):
+        raise ParameterTypeError(message("method", own, "a method whose defaults are Params",
+                                         method.defaults))
+    _METHODS[method.name] = method
+    return method
+
+
+def unregister_method(name: str) -> None:
+    """Remove a method added by :func:`register_method`."""
+    check_choice(name, "name", "unregister_method", tuple(_METHODS))
+    del _METHODS[name]
+
+
+def all_genes() -> tuple[Gene, ...]:
+    """Every registered method's genes, each once, in the order of :class:`Params`' fields.
+
+    Examples
+    --------
+    >>> [g.name for g in all_genes()]
+    ['theta_c', 'theta_s', 'lambda_c', 'lambda_s', 'match_bias']
+    """
+    seen = {}
+    for method in _METHODS.values():
+        for gene in method.genes:
+            seen.setdefault(gene.name, gene)
+    return tuple(seen[f.name] for f in fields(Params) if f.name in seen)
+
+
+def method_names() -> tuple[str, ...]:
+    """The registered methods' names, in registration order.
+
+    Examples
+    --------
+    >>> method_names()
+    ('I', 'II', 'III', 'NM', 'NM4')
+    """
+    return tuple(_METHODS)
+
+
+class _Defaults(Mapping):
+    """Each registered method's default parameters, by name (a live view of the registry)."""
+
+    def __getitem__(self, name):
+        return get_method(name).defaults
+
+    def __iter__(self):
+        return iter(_METHODS)
+
+    def __len__(self):
+        return len(_METHODS)
+
+    def __repr__(self):
+        return "THESIS_PARAMS(" + ", ".join(f"{k}={v!r}" for k, v in self.items()) + ")"
+
+
+#: The parameters the thesis' GA found (§5.2.1 for Method-I, §5.2.2 for II and III), read
+#: from each method's ``defaults``.  Method-I's theta_s and lambda_s are unused
+#: placeholders; Method-NM's entry is a neutral start for its GA rather than a fitted result.
+THESIS_PARAMS = _Defaults()
+
+for _method in (MethodI(), MethodII(), MethodIII(), MethodNM(), MethodNM4()):
+    register_method(_method)
 def get_method(name) -> Method:
     """Look a method up by name: ``"I"``, ``"II"``, ``"III"``, ``"NM"`` or ``"NM4"`` (a ``Method`` passes through).
 
@@ -359,5 +524,52 @@ def get_method(name) -> Method:
     """
     if isinstance(name, Method):
         return name
-    check_choice(name, "method", "get_method", tuple(_METHODS))
+    check_choice(name, "method", "get_method", method_names())
     return _METHODS[name]
+
+
+def save_params(path, method, params: Params, **extra) -> Path:
+    """Write ``{"method": ..., "params": {...}, **extra}`` atomically: the params file that
+    ``ismb-lab tune`` writes and ``ismb-lab match --params-file`` reads.
+
+    Examples
+    --------
+    >>> import tempfile, pathlib
+    >>> path = pathlib.Path(tempfile.mkdtemp()) / "p.json"
+    >>> _ = save_params(path, "II", Params(theta_c=5.0), fitness=3)
+    >>> load_params(path)
+    ('II', Params(theta_c=5.0, theta_s=24.02, lambda_c=6.37, lambda_s=2.2))
+    """
+    m = get_method(method)
+    if not isinstance(params, Params):
+        raise ParameterTypeError(message("params", "save_params", "a Params instance", params))
+    data = {"method": m.name, "params": params.to_dict(), **extra}
+    return atomic_write_text(path, json.dumps(data, indent=2) + "\n")
+
+
+def load_params(path, method: str | None = None) -> tuple[str | None, Params]:
+    """Read a params file: its method (None if it names none) and its parameters.
+
+    Values the file leaves out take the defaults of its method, else of `method`,
+    else of Method-III.  Extra top-level keys are allowed; unknown parameter names
+    and values out of range are errors that name the file.
+    """
+    own = "load_params"
+    try:
+        data = json.loads(Path(path).read_text(encoding="utf-8"))
+    except FileNotFoundError:
+        raise ParameterError(message("path", own, "an existing params file", str(path))) from None
+    except (OSError, UnicodeDecodeError, ValueError, RecursionError) as exc:
+        raise ParameterError(message("path", own, f"a readable JSON file ({type(exc).__name__})",
+                                     str(path))) from None
+    if not isinstance(data, dict) or not isinstance(data.get("params"), dict):
+        raise ParameterError(message("path", own, "a JSON object with a 'params' object", str(path)))
+    named = data.get("method")
+    if named is not None:
+        named = get_method(named).name if isinstance(named, str) and named in _METHODS else None
+        if named is None:
+            raise ParameterError(message("method", f"{own}('{path}')", "one of "
+                                         + ", ".join(repr(n) for n in method_names()), data["method"]))
+    base = get_method(named or method or "III").defaults
+    merged = {**base.to_dict(), **data["params"]}
+    return named, Params.from_dict(merged, owner=f"{own}('{path}')")

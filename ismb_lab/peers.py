@@ -24,7 +24,10 @@ import numpy as np
 from scipy.optimize import linear_sum_assignment
 
 from ._validation import ParameterError, ParameterTypeError, check_choice, check_number, message
-from .methods import THESIS_PARAMS, Params, Problem, get_method
+from .methods import Params, Problem, get_method
+
+__all__ = ["MAX_ASSIGNMENTS", "PEERS", "affinity_matrix", "default_no_match_cost", "graph_matching",
+           "hungarian", "mutual_nearest"]
 
 #: Largest ``N_l * N_r`` for :func:`graph_matching`: its dense affinity has this size squared.
 MAX_ASSIGNMENTS = 5000
@@ -163,7 +166,7 @@ def affinity_matrix(problem, method="III", params=None) -> np.ndarray:
     """
     problem = _check_problem(problem, "affinity_matrix")
     m = get_method(method)
-    params = THESIS_PARAMS[m.name] if params is None else params
+    params = m.defaults if params is None else params
     if not isinstance(params, Params):
         raise ParameterTypeError(message("params", "affinity_matrix", "a Params instance", params))
     n_l, n_r = problem.dissimilarity.shape

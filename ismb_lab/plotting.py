@@ -8,6 +8,8 @@ from __future__ import annotations
 
 import numpy as np
 
+__all__ = ["GAP", "plot_depth", "plot_matches", "side_by_side"]
+
 GAP = 8  # pixels between the left and right image in side-by-side views
 
 

@@ -1,45 +1,30 @@
 """Tuning the energy parameters with the GA: chromosome <-> Params, fitness n_c - n_e (ch. 4).
 
 The GA in :mod:`ismb_lab.genetic` knows nothing of stereo; this module gives it a
-fitness.  A chromosome is ``[theta_c, lambda_c]`` for Method-I,
-``[theta_c, theta_s, lambda_c, lambda_s]`` for Methods II and III (the thesis'
-order) and the same plus ``match_bias`` for Method-NM.  Its fitness (4-1) is
-``n_c - n_e`` summed over every training pair.
+fitness.  A chromosome holds a method's genes in its own order
+(:attr:`ismb_lab.methods.Method.genes`: ``[theta_c, lambda_c]`` for Method-I,
+``[theta_c, theta_s, lambda_c, lambda_s]`` for Methods II and III, the thesis'
+order), within the genes' bounds.  Its fitness (4-1) is ``n_c - n_e`` summed over
+every training pair.
 
-Gene bounds
------------
-* ``theta_c`` in [0, 60] px: ``X`` is a sum of pixel differences.  Correct pairs of
-  neighbours have ``X`` of a few pixels and wrong ones tens (measured on the
-  synthetic scenes: median 0 against 22); 60 px already calls almost everything
-  compatible.  The thesis' values, 7.45 to 41.57, lie inside.
-* ``theta_s`` in [0, 60] grey levels: ``M`` of true matches is about 5, of false
-  ones about 45 on the synthetic scenes.
-* ``lambda_c``, ``lambda_s`` in [0.05, 10]: from an almost flat transfer function to
-  a step one pixel wide (the thesis found 1.16 to 8.89).
-* ``match_bias`` (Method-NM's fifth gene) in [-2, 2]: the preferred number of
-  matches per feature ``h = 1/2 + beta / 4`` runs from 0 (a match must pay 2 from
-  ``S`` and ``C``) through 1/2 ("at most one", ``beta = 0``) to 1 (exactly one: the
-  thesis).  ``S`` is in [-1, 1] and one compatible neighbour adds up to 2, so a
-  wider range only repeats the ends.
+A training pair is a :class:`ismb_lab.protocol.Case`, or anything else with a
+``prepared`` pair (:func:`ismb_lab.matching.prepare`), ``targets`` and ``unknown``.
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field, replace
+from dataclasses import replace
 from typing import Iterator, Sequence
 
 import numpy as np
 
-from ._validation import ParameterError, ParameterTypeError, check_choice, check_number, message
+from ._validation import ParameterError, ParameterTypeError, check_number, message
 from .evaluation import Score, score
-from .genetic import Bounds, Generation, evolve
-from .hopfield import run
-from .matching import Prepared
-from .methods import Method, Params, get_method
+from .genetic import Bounds, GAConfig, Generation, evolve
+from .methods import Params, get_method
+from .solvers import DEFAULT_SOLVER, get_solver, solve, to_matches
 
-_DEFAULT = Params()
-GENE_BOUNDS = {"theta_c": (0.0, 60.0), "theta_s": (0.0, 60.0),
-               "lambda_c": (0.05, 10.0), "lambda_s": (0.05, 10.0), "match_bias": (-2.0, 2.0)}
+__all__ = ["Fitness", "evaluate", "gene_bounds", "to_chromosome", "to_params", "tune"]
 
 
 def gene_bounds(method) -> Bounds:
@@ -51,24 +36,25 @@ def gene_bounds(method) -> Bounds:
     ('theta_c', 'lambda_c')
     """
     genes = get_method(method).genes
-    return Bounds(low=[GENE_BOUNDS[g][0] for g in genes], high=[GENE_BOUNDS[g][1] for g in genes],
-                  names=genes)
+    return Bounds(low=[g.low for g in genes], high=[g.high for g in genes], names=tuple(g.name for g in genes))
 
 
 def to_params(method, chromosome, base: Params | None = None) -> Params:
-    """Chromosome to parameters; genes a method does not use keep `base`'s values.
+    """Chromosome to parameters; the genes a method does not use keep `base`'s values
+    (by default the method's own defaults).
 
     Examples
     --------
     >>> to_params("I", [41.57, 4.40])
     Params(theta_c=41.57, theta_s=24.02, lambda_c=4.4, lambda_s=2.2)
     """
-    genes = get_method(method).genes
+    m = get_method(method)
+    genes = m.gene_names
     chromosome = np.asarray(chromosome, dtype=float).ravel()
     if len(chromosome) != len(genes):
         raise ParameterError(message("chromosome", "to_params", f"{len(genes)} genes {genes}",
                                      chromosome.tolist()))
-    return replace(base or _DEFAULT, **dict(zip(genes, chromosome.tolist())))
+    return replace(base or m.defaults, **dict(zip(genes, chromosome.tolist())))
 
 
 def to_chromosome(method, params: Params) -> np.ndarray:
@@ -79,62 +65,19 @@ def to_chromosome(method, params: Params) -> np.ndarray:
     >>> to_chromosome("III", Params()).tolist()
     [17.97, 24.02, 6.37, 2.2]
     """
-    return np.array([getattr(params, g) for g in get_method(method).genes])
+    return np.array([getattr(params, g) for g in get_method(method).gene_names])
 
 
-@dataclass(frozen=True, eq=False)
-class Case:
-    """One training pair: its prepared features and the targets as feature pairs.
-
-    Attributes
-    ----------
-    prepared : Prepared
-    targets : (t, 2) int ndarray
-        Target ``(i, k)`` feature indices.
-    unknown : (u,) int ndarray
-        Left features whose truth is unknown (matches there are not scored).
-    name : str
-    """
-
-    prepared: Prepared
-    targets: np.ndarray
-    unknown: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=np.int64))
-    name: str = ""
-
-
-#: How a network's final state is found: the discrete network of the thesis, mean-field
-#: annealing (:mod:`ismb_lab.annealing`) or the exact global minimum (:mod:`ismb_lab.exact`, MILP).
-SOLVERS = ("network", "anneal", "exact")
-
-
-def solve(problem, method: Method, params: Params, seed: int = 0, solver: str = "network",
-          **run_kwargs) -> np.ndarray:
-    """The matched ``(i, k)`` pairs of one run (no bookkeeping: the GA's inner loop).
-
-    `solver` is one of :data:`SOLVERS`; ``"exact"`` ignores `seed`.
-    """
-    net = method.network(problem, params)
-    if solver == "network":
-        state = run(net, rng=seed, **run_kwargs).state
-    elif solver == "anneal":
-        from .annealing import anneal
-        state = anneal(net, rng=seed).state
-    else:
-        from .exact import milp_minimum
-        state = milp_minimum(net).state
-    on = np.flatnonzero(method.postprocess(problem, state))
-    return np.stack([problem.rows[on], problem.cols[on]], axis=1)
-
-
-def evaluate(cases: Sequence[Case], method, params: Params, seed: int = 0,
-             solver: str = "network") -> Score:
-    """The summed C/E/T of `params` over `cases`."""
+def evaluate(cases: Sequence, method, params: Params, seed: int = 0,
+             solver: str = DEFAULT_SOLVER) -> Score:
+    """The summed C/E/T of `params` over `cases`, each solved by `solver` with `seed`."""
     m = get_method(method)
-    check_choice(solver, "solver", "evaluate", SOLVERS)
+    get_solver(solver, "evaluate")
     total = Score(0, 0, 0, 0)
     for case in cases:
-        total = total + score(solve(case.prepared.problem, m, params, seed, solver), case.targets,
-                              case.unknown)
+        problem = case.prepared.problem
+        state = solve(m.network(problem, params), solver, seed=seed, owner="evaluate").state
+        total = total + score(to_matches(problem, state, m).pairs, case.targets, case.unknown)
     return total
 
 
@@ -147,12 +90,13 @@ class Fitness:
     work for one visiting order score lower.
     """
 
-    def __init__(self, cases: Sequence[Case], method, *, seed: int = 0, base: Params | None = None,
-                 solver: str = "network", seeds: int = 1):
+    def __init__(self, cases: Sequence, method, *, seed: int = 0, base: Params | None = None,
+                 solver: str = DEFAULT_SOLVER, seeds: int = 1):
         cases = list(cases)
         if not cases:
             raise ParameterError(message("cases", "Fitness", "at least one training pair", cases))
-        if not all(isinstance(c, Case) for c in cases):
+        if not all(hasattr(c, "prepared") and hasattr(c, "targets") and hasattr(c, "unknown")
+                   for c in cases):
             raise ParameterTypeError(message("cases", "Fitness", "a sequence of Case", cases))
         if sum(len(c.targets) for c in cases) == 0:
             raise ParameterError(message("cases", "Fitness", "target pairs to learn from",
@@ -160,7 +104,7 @@ class Fitness:
         self.cases, self.method, self.base = cases, get_method(method), base
         self.seed = check_number(seed, "seed", "Fitness", low=0, integer=True)
         self.seeds = check_number(seeds, "seeds", "Fitness", low=1, integer=True)
-        self.solver = check_choice(solver, "solver", "Fitness", SOLVERS)
+        self.solver = get_solver(solver, "Fitness").name
         self.target = sum(len(c.targets) for c in cases)
 
     def params(self, chromosome) -> Params:
@@ -172,33 +116,38 @@ class Fitness:
                          for c in np.atleast_2d(population)], dtype=float)
 
 
-def tune(cases: Sequence[Case], method="III", *, rng=0, population: int = 30,
-         generations: int = 500, seed: int = 0, base: Params | None = None,
-         solver: str = "network", seeds: int = 1) -> Iterator[Generation]:
+def tune(cases: Sequence, method="III", *, rng=0, ga: GAConfig | None = None, seed: int = 0,
+         base: Params | None = None, solver: str = DEFAULT_SOLVER, seeds: int = 1,
+         **settings) -> Iterator[Generation]:
     """Run the GA on `cases`, yielding one :class:`~ismb_lab.genetic.Generation` per generation.
 
     It stops when the mean fitness reaches the number of targets (every
     chromosome reproduces the targets exactly), as in the thesis, or after
-    `generations` generations.  Convert the best chromosome with :func:`to_params`.
+    ``ga.generations`` generations.  Convert the best chromosome with :func:`to_params`.
 
     Parameters
     ----------
     cases : sequence of Case
         Training pairs; their fitness is summed.
-    method : {"I", "II", "III", "NM"}
+    method : str
+        Energy recipe, a name in :func:`ismb_lab.methods.method_names`.
     rng : int or numpy.random.Generator
         Seed of the GA.
-    population, generations : int
-        GA size (thesis: 30 and 500).
+    ga : GAConfig, optional
+        Population, generations and rates (default: the thesis', 30 and 500).
     seed : int
         Update-order seed of every network run.
     base : Params, optional
-        Values of the genes the method does not use.
-    solver : {"network", "anneal", "exact"}
-        How each network is solved (see :data:`SOLVERS`).
+        Values of the genes the method does not use (default: the method's defaults).
+    solver : str
+        How each network is solved, a name in :data:`ismb_lab.solvers.SOLVERS`.
     seeds : int
         Update-order seeds each chromosome is scored over (mean fitness).
+    **settings
+        :class:`~ismb_lab.genetic.GAConfig` fields that override `ga`, e.g. ``generations=60``.
     """
     fitness = Fitness(cases, method, seed=seed, base=base, solver=solver, seeds=seeds)
-    return evolve(fitness, gene_bounds(method), rng=rng, population=population,
-                  generations=generations, target=fitness.target)
+    if ga is not None and not isinstance(ga, GAConfig):
+        raise ParameterTypeError(message("ga", "tune", "a GAConfig", ga))
+    ga = (ga or GAConfig()).updated("tune", **settings)
+    return evolve(fitness, gene_bounds(method), rng=rng, config=ga, target=fitness.target)

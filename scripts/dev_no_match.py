@@ -42,14 +42,16 @@ from pathlib import Path
 import numpy as np
 
 from ismb_lab.datasets import ground_truth_pairs, motorcycle
-from ismb_lab.evaluation import Score, load_manifest, protocol, score
+from ismb_lab.evaluation import Score, score
 from ismb_lab.gallery import write_manifest, write_pair
 from ismb_lab.genetic import evolve
 from ismb_lab.hopfield import Network
 from ismb_lab.matching import MatchConfig, prepare
 from ismb_lab.methods import MethodNM, MethodNM4, get_method
+from ismb_lab.protocol import Case, load_manifest, protocol
 from ismb_lab.scenes import realistic_scene
-from ismb_lab.tuning import Case, Fitness, evaluate, gene_bounds, solve, to_params
+from ismb_lab.solvers import solve, to_matches
+from ismb_lab.tuning import Fitness, evaluate, gene_bounds, to_params
 
 ROOT = Path(__file__).resolve().parents[1]
 DEV_REALISTIC = range(12, 24)
@@ -127,7 +129,9 @@ def voted(cases, method, params_list, need):
     for case in cases:
         votes = {}
         for params in params_list:
-            for pair in map(tuple, solve(case.prepared.problem, method, params, 0, "anneal").tolist()):
+            problem, m = case.prepared.problem, get_method(method)
+            state = solve(m.network(problem, params), "anneal").state
+            for pair in map(tuple, to_matches(problem, state, m).pairs.tolist()):
                 votes[pair] = votes.get(pair, 0) + 1
         kept = np.array([pair for pair, n in votes.items() if n >= need]).reshape(-1, 2)
         total = total + score(kept, case.targets, case.unknown)
@@ -178,9 +182,9 @@ def main():
             # The peers as scripts/evaluate_no_match.py scores them: with the S and C of
             # Method-III fitted by the plain network.
             peers = protocol(cases, "III", train=0, seeds=1, generations=args.generations, rng=ga_seed,
-                             peers=True, fit_all=False)["peers"]
+                             peers=True, fit_all=False).peers
             for peer, result in peers.items():
-                totals.setdefault(f"peer {peer}", {}).setdefault(ga_seed, []).append(result["held_out"])
+                totals.setdefault(f"peer {peer}", {}).setdefault(ga_seed, []).append(result.held_out)
     print("\n=== pooled development figures (annealed, update-order seed 0), per GA seed")
     for key, per_seed in totals.items():
         line = "  ".join(f"GA {s}: {sum(parts, Score(0, 0, 0, 0))} C/T "

@@ -13,12 +13,9 @@ import argparse
 import time
 from pathlib import Path
 
-import numpy as np
-
-from ismb_lab.evaluation import Score, Spread, format_protocol, load_manifest, protocol
-from ismb_lab.matching import prepare
-from ismb_lab.scenes import synthetic_scene, true_matches
-from ismb_lab.tuning import Case
+from ismb_lab.evaluation import Score
+from ismb_lab.protocol import Case, Spread, format_protocol, load_manifest, protocol
+from ismb_lab.scenes import synthetic_scene
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -26,11 +23,7 @@ ROOT = Path(__file__).resolve().parents[1]
 def synthetic_cases(seeds=range(100, 108)):
     cases = []
     for s in seeds:
-        scene = synthetic_scene(seed=s)
-        prepared = prepare(scene.left, scene.right)
-        truth = true_matches(scene, prepared.problem.left_xy, prepared.problem.right_xy)
-        left = np.flatnonzero(truth >= 0)
-        cases.append(Case(prepared, np.stack([left, truth[left]], axis=1), name=f"synthetic {s}"))
+        cases.append(Case.from_scene(synthetic_scene(seed=s), name=f"synthetic {s}"))
     return cases
 
 
@@ -64,11 +57,11 @@ def main():
                   f"({time.perf_counter() - t:.0f} s)")
             print(format_protocol(report))
             key = f"Method-{method} (fit: {fit_solver})"
-            totals.setdefault(key + " / network", []).append(report["held_out"])
-            for solver, variant in report["solvers"].items():
-                totals.setdefault(f"{key} / {solver}", []).append(variant["held_out"])
-            for peer, result in report["peers"].items():
-                totals.setdefault(f"peer {peer}", []).append([result["held_out"]])
+            totals.setdefault(key + " / network", []).append(report.held_out)
+            for solver, variant in report.solvers.items():
+                totals.setdefault(f"{key} / {solver}", []).append(variant.held_out)
+            for peer, result in report.peers.items():
+                totals.setdefault(f"peer {peer}", []).append([result.held_out])
     print(f"\n=== pooled over {len(sets)} data set(s) (held-out pairs only)")
     for key, parts in totals.items():
         n = min(len(p) for p in parts)

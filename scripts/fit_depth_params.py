@@ -18,24 +18,21 @@ readable by ``ismb-lab depth --params-file``.
 """
 
 import argparse
-import json
 import time
 from pathlib import Path
 
-from ismb_lab.depth import DEPTH_MATCH_CONFIG
-from ismb_lab.matching import prepare
-from ismb_lab.targets import load_targets, snap
-from ismb_lab.tuning import Case, evaluate, to_params, tune
+from ismb_lab.depth_demo import DEPTH_MATCH_CONFIG
+from ismb_lab.methods import save_params
+from ismb_lab.protocol import Case
+from ismb_lab.tuning import evaluate, to_params, tune
 
 LAB = Path(__file__).resolve().parents[1] / "images" / "lab"
 
 
 def lab_case(config=DEPTH_MATCH_CONFIG) -> Case:
     """The lab pair with its answer key snapped to the corners of `config`."""
-    prepared = prepare(LAB / "left.png", LAB / "right.png", config)
-    key = load_targets(LAB / "answer_key.json", pair=prepared.pair)
-    snapped = snap(key, prepared.problem.left_xy, prepared.problem.right_xy)
-    return Case(prepared, snapped.pairs, name="images/lab")
+    return Case.from_files(LAB / "left.png", LAB / "right.png", LAB / "answer_key.json", config,
+                           name="images/lab")
 
 
 def main(argv=None):
@@ -63,10 +60,8 @@ def main(argv=None):
     print("annealed, per seed:", ", ".join(map(str, annealed)))
     print("params:", {k: round(v, 4) for k, v in params.to_dict().items()})
     if args.out is not None:
-        out = {"method": "III", "params": params.to_dict(), "fitness": best.best,
-               "generations": best.index, "seed": args.seed, "targets": len(case.targets),
-               "interrupted": False}
-        args.out.write_text(json.dumps(out, indent=2) + "\n", encoding="utf-8")
+        save_params(args.out, "III", params, fitness=best.best, generations=best.index, seed=args.seed,
+                    targets=len(case.targets), interrupted=False)
         print(f"written to {args.out}")
 
 

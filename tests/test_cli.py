@@ -82,7 +82,7 @@ def test_same_seed_same_output_and_stop_rules(pair, tmp_path):
     (lambda p, t: ["match", p[0], p[1], "--roi", "10,10,0,50"], "'roi'"),
     (lambda p, t: ["match", p[0], p[1], "--n-min", "0"], "'n_min'"),
     (lambda p, t: ["match", p[0], p[1], "--params-file", t / "bad.json"], "JSON"),
-    (lambda p, t: ["match", p[0], p[1], "--params-file", t / "nope.json"], "no such file"),
+    (lambda p, t: ["match", p[0], p[1], "--params-file", t / "nope.json"], "existing params file"),
     (lambda p, t: ["match", p[0], p[1], "--params-file", t / "p3.json", "--method", "II"], "conflicts"),
     (lambda p, t: ["match", p[0]], "required"),
 ])

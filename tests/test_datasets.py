@@ -5,8 +5,8 @@ import pytest
 
 from ismb_lab import ParameterError
 from ismb_lab.datasets import MOTORCYCLE_ROIS, ground_truth_pairs, motorcycle
-from ismb_lab.evaluation import load_manifest
 from ismb_lab.matching import MatchConfig, prepare
+from ismb_lab.protocol import load_manifest
 
 MANIFEST = __import__("pathlib").Path(__file__).parents[1] / "manifests" / "middlebury.json"
 

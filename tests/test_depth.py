@@ -7,8 +7,15 @@ import numpy as np
 import pytest
 
 from ismb_lab import ParameterError, ParameterTypeError
-from ismb_lab.depth import (DEPTH_MATCH_CONFIG, DEPTH_PARAMS, DepthConfig, changed_roi, depth_from_matches,
-                            depth_match, metric_depth, relative_depth, scene_match_config)
+from ismb_lab.depth import DepthConfig, depth_from_matches, metric_depth
+from ismb_lab.depth_demo import (
+    DEPTH_MATCH_CONFIG,
+    DEPTH_PARAMS,
+    changed_roi,
+    depth_match,
+    relative_depth,
+    scene_match_config,
+)
 from ismb_lab.features import resolve_roi
 from ismb_lab.io import load_pair
 from ismb_lab.matching import match, prepare
@@ -173,7 +180,7 @@ def test_to_dict_is_the_json_contract(committed):
     (lambda: metric_depth(1.0, focal_px=0), "focal_px", ValueError),
     (lambda: depth_from_matches(None, None), "background", TypeError),
     (lambda: relative_depth(5, (np.zeros((60, 80)),) * 2), "background", TypeError),
-    (lambda: depth_match((np.zeros((60, 80)),) * 2, solver="exact"), "solver", ValueError),
+    (lambda: depth_match((np.zeros((60, 80)),) * 2, solver="magic"), "solver", ValueError),
     (lambda: depth_match(7), "pair", TypeError),
     (lambda: relative_depth((np.zeros((60, 80)),) * 2, (np.zeros((50, 80)),) * 2), "scene", ValueError),
     (lambda: changed_roi(np.zeros((60, 80)), np.zeros((50, 80))), "scene_left", ValueError),

@@ -45,10 +45,10 @@ def test_the_thesis_fig_5_10_rows_do_not_add_up_to_its_printed_total():
 
 import numpy as np
 
-from ismb_lab.evaluation import format_protocol, protocol
 from ismb_lab.matching import Prepared
 from ismb_lab.methods import Params, build_problem
-from ismb_lab.tuning import Case, evaluate
+from ismb_lab.protocol import Case, format_protocol, protocol
+from ismb_lab.tuning import evaluate
 
 
 def hand_case(offset, name):
@@ -77,9 +77,9 @@ def test_protocol_reports_annealed_and_exact_rows():
     cases = [hand_case(0, "a"), hand_case(30, "b"), hand_case(60, "c")]
     report = protocol(cases, "NM", train=0, seeds=2, generations=3, solvers=("anneal", "exact"),
                       fit_solver="anneal")
-    assert set(report["solvers"]) == {"anneal", "exact"}
-    assert len(report["solvers"]["anneal"]["held_out"]) == 2 and len(report["solvers"]["exact"]["held_out"]) == 1
-    assert all(s.targets == 4 for s in report["solvers"]["exact"]["held_out"])
+    assert set(report.solvers) == {"anneal", "exact"}
+    assert len(report.solvers["anneal"].held_out) == 2 and len(report.solvers["exact"].held_out) == 1
+    assert all(s.targets == 4 for s in report.solvers["exact"].held_out)
     text = format_protocol(report)
     assert "solver    anneal" in text and "solver     exact" in text
     with pytest.raises(ValueError, match="'solvers' parameter of protocol"):
@@ -92,7 +92,7 @@ def test_protocol_can_fit_the_training_pair_only():
     cases = [hand_case(0, "a"), hand_case(30, "b"), hand_case(60, "c")]
     full = protocol(cases, "NM4", train=0, seeds=2, generations=3)
     lean = protocol(cases, "NM4", train=0, seeds=2, generations=3, fit_all=False)
-    assert lean["params"] == full["params"] and lean["held_out"] == full["held_out"]
-    assert lean["rows"][0]["training"] == full["rows"][0]["training"]
-    assert lean["rows"][1]["training"] is None and lean["rows"][2]["params"] is None
+    assert lean.params == full.params and lean.held_out == full.held_out
+    assert lean.rows[0].training == full.rows[0].training
+    assert lean.rows[1].training is None and lean.rows[2].params is None
     assert "Training: not fitted" in format_protocol(lean)

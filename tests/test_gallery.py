@@ -8,9 +8,9 @@ import pytest
 
 from ismb_lab.cli import main
 from ismb_lab.gallery import decode_disparity
-from ismb_lab.evaluation import load_manifest
 from ismb_lab.io import load_pair
 from ismb_lab.matching import prepare
+from ismb_lab.protocol import load_manifest
 from ismb_lab.scenes import REALISTIC_COUNT, synthetic_scene, toy_car_scene, true_matches
 from ismb_lab.targets import load_targets, snap
 

@@ -8,6 +8,7 @@ import pytest
 from ismb_lab.compatibility import left_neighbours
 from ismb_lab.methods import THESIS_PARAMS, Params, build_problem, get_method
 from ismb_lab.similarity import candidate_mask, mean_abs_difference, patches, transfer
+from ismb_lab.solvers import to_matches
 
 
 def test_transfer_matches_the_thesis_formula_and_its_limits():
@@ -101,11 +102,13 @@ def test_method_one_postprocessing_keeps_the_smallest_vertical_disparity():
     rxy = np.array([[80.0, 58.0], [85.0, 51.0], [110.0, 50.0]])
     problem = build_problem(lxy, rxy, np.zeros((2, 3)))
     assert problem.rows.tolist() == [0, 0, 1, 1, 1] and problem.cols.tolist() == [0, 1, 0, 1, 2]
-    state = get_method("I").postprocess(problem, np.ones(5, np.uint8))
+    kept = get_method("I").postprocess(problem, np.arange(5))
     # left 0 keeps right 1 (|dy| = 1); left 1 keeps right 2 (|dy| = 0)
-    assert state.tolist() == [0, 1, 0, 0, 1]
-    state = get_method("I").postprocess(problem, np.array([1, 0, 1, 0, 0], np.uint8))
-    assert state.tolist() == [1, 0, 0, 0, 0]  # right 0 is shared: the tie goes to the lower index
+    assert kept.tolist() == [1, 4]
+    kept = get_method("I").postprocess(problem, np.array([0, 2]))
+    assert kept.tolist() == [0]  # right 0 is shared: the tie goes to the lower index
+    found = to_matches(problem, [1, 1, 1, 1, 1], get_method("I"))
+    assert found.pairs.tolist() == [[0, 1], [1, 2]] and found.state.tolist() == [0, 1, 0, 0, 1]
 
 
 def test_params_validation_and_thesis_values():
@@ -140,7 +143,7 @@ def test_method_nm_is_method_three_with_a_match_bias():
     from ismb_lab.hopfield import hopfield_form, run
     assert all(np.array_equal(x, y) for x, y in zip(hopfield_form(as_thesis), hopfield_form(three)))
     assert np.array_equal(run(as_thesis, rng=3).state, run(three, rng=3).state)
-    assert get_method("NM").genes == ("theta_c", "theta_s", "lambda_c", "lambda_s", "match_bias")
+    assert get_method("NM").gene_names == ("theta_c", "theta_s", "lambda_c", "lambda_s", "match_bias")
     with pytest.raises(ValueError, match="'params' parameter of Method-NM.*match_bias"):
         get_method("NM").network(problem, base)
 
@@ -168,5 +171,6 @@ def test_method_nm4_is_method_nm_with_the_match_bias_fixed_at_zero():
     ignored = get_method("NM4").network(problem, Params(**base.to_dict(), match_bias=1.5))
     assert ignored.match_bias == 0.0 and ignored.target_count == 0.5
     assert get_method("NM4").genes == get_method("III").genes
+    assert get_method("NM4").gene_names == ("theta_c", "theta_s", "lambda_c", "lambda_s")
     with pytest.raises(TypeError, match="'params' parameter of Method-NM4"):
         get_method("NM4").network(problem, base.to_dict())

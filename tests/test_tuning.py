@@ -4,11 +4,11 @@ import numpy as np
 import pytest
 
 from ismb_lab import ParameterError
-from ismb_lab.evaluation import format_protocol, protocol
 from ismb_lab.matching import match, prepare
 from ismb_lab.methods import Params
+from ismb_lab.protocol import Case, format_protocol, protocol
 from ismb_lab.scenes import synthetic_scene, true_matches
-from ismb_lab.tuning import Case, Fitness, evaluate, gene_bounds, to_chromosome, to_params, tune
+from ismb_lab.tuning import Fitness, evaluate, gene_bounds, to_chromosome, to_params, tune
 
 
 def case(seed):
@@ -76,8 +76,8 @@ def test_protocol_reports_training_testing_and_peers(cases):
     report = protocol(cases[:3], "III", train=0, seeds=2, generations=20, peers=True)
     text = format_protocol(report)
     assert "Testing:" in text and "Training:" in text and "over 2 update-order seeds" in text
-    assert len(report["held_out"]) == 2 and set(report["peers"]) == {"mutual-nn", "hungarian", "rrwm", "spectral"}
-    pooled = report["held_out"][0]
+    assert len(report.held_out) == 2 and set(report.peers) == {"mutual-nn", "hungarian", "rrwm", "spectral"}
+    pooled = report.held_out[0]
     assert pooled.targets == sum(len(c.targets) for c in cases[1:3])
     with pytest.raises(ParameterError, match="'train'"):
         protocol(cases[:2], train=5)

@@ -1,16 +1,31 @@
-"""Pieces every ``ismb-lab`` command shares: the one-line error, option groups, parameters."""
+"""Pieces every ``ismb-lab`` command shares: the one-line error, option groups, parameters.
+
+An option left out means "the library's default": options default to None, and
+their help shows the default that the library will use.
+"""
 
 from __future__ import annotations
 
 import argparse
-import json
+import inspect
 import sys
+from dataclasses import replace
 from pathlib import Path
 
-from .._validation import ParameterError, ParameterTypeError  # noqa: F401  (re-exported for main)
-from ..methods import METHOD_NAMES, THESIS_PARAMS, Params
+from .._validation import ParameterError, ParameterTypeError
+from ..genetic import GAConfig
+from ..hopfield import RULES, STOP_RULES
+from ..matching import MatchConfig, match
+from ..methods import all_genes, get_method, load_params, method_names
+from ..solvers import SOLVERS
 
-PARAM_OPTIONS = ("theta_c", "theta_s", "lambda_c", "lambda_s", "match_bias")
+__all__ = ["ParameterError", "ParameterTypeError", "Parser", "UsageError", "add_ga_options",
+           "add_matching_options", "add_feature_options", "add_solver_option", "ga_config",
+           "gene_options", "match_config", "progress_bar", "resolve_params"]
+
+#: The method the commands use when neither --method nor a params file names one.
+DEFAULT_METHOD = "III"
+FEATURE_OPTIONS = ("roi", "shift", "n_min", "n_max")
 
 
 class UsageError(Exception):
@@ -22,70 +37,102 @@ class Parser(argparse.ArgumentParser):
         raise UsageError(f"{message} (see '{self.prog} --help')")
 
 
-def add_matching_options(p: argparse.ArgumentParser) -> None:
-    p.add_argument("--method", choices=METHOD_NAMES, default=None,
-                   help="energy recipe (default: the params file's, else III)")
-    for name in PARAM_OPTIONS:
-        p.add_argument("--" + name.replace("_", "-"), type=float, default=None, metavar="X",
-                       help=f"override {name} (thesis default for the method)")
+def default_of(function, name: str):
+    """The default of one of `function`'s keyword arguments: the one place it is declared."""
+    return inspect.signature(function).parameters[name].default
+
+
+def gene_options() -> tuple[str, ...]:
+    """Every gene of every registered method: one option each."""
+    return tuple(g.name for g in all_genes())
+
+
+def add_method_option(p: argparse.ArgumentParser, default_text: str) -> None:
+    p.add_argument("--method", choices=method_names(), default=None,
+                   help=f"energy recipe (default: {default_text})")
+
+
+def add_matching_options(p: argparse.ArgumentParser, base: MatchConfig) -> None:
+    add_method_option(p, f"the params file's, else {DEFAULT_METHOD}")
+    for gene in all_genes():
+        p.add_argument("--" + gene.name.replace("_", "-"), type=float, default=None, metavar="X",
+                       help=f"{gene.meaning} (default: the method's)")
     p.add_argument("--params-file", type=Path, default=None, metavar="P.json",
                    help='parameters as {"method": ..., "params": {...}}, e.g. from ismb-lab tune')
-    add_feature_options(p)
-    p.add_argument("--seed", type=int, default=0, help="seed of the update order (default: 0)")
-    p.add_argument("--stop-rule", choices=("sweep", "stall"), default="sweep",
-                   help="sweep: a full sweep without change (default); stall: 200 idle attempts")
-    p.add_argument("--rule", choices=("exact", "thesis"), default="exact",
-                   help="exact Hopfield weights (default) or the thesis' literal (3-17)/(3-20)")
+    add_feature_options(p, base)
+    p.add_argument("--seed", type=int, default=None,
+                   help=f"seed of the update order (default: {default_of(match, 'seed')})")
+    p.add_argument("--stop-rule", choices=STOP_RULES, default=None,
+                   help="sweep: a full sweep without change; stall: 200 idle attempts "
+                   f"(default: {default_of(match, 'stop_rule')})")
+    p.add_argument("--rule", choices=RULES, default=None,
+                   help="exact Hopfield weights, or the thesis' literal (3-17)/(3-20) "
+                   f"(default: {default_of(match, 'rule')})")
 
 
-def add_feature_options(p: argparse.ArgumentParser) -> None:
-    p.add_argument("--roi", default="center", help="center | full | X,Y,W,H (default: center)")
-    p.add_argument("--shift", type=float, default=20.0, metavar="PX",
-                   help="expected disparity: centre of the candidate window (default: 20)")
-    p.add_argument("--n-min", type=int, default=20, help="fewest corners per image (default: %(default)s)")
-    p.add_argument("--n-max", type=int, default=30, help="most corners per image (default: %(default)s)")
+def add_solver_option(p: argparse.ArgumentParser, default: str) -> None:
+    text = "; ".join(f"{s.name}: {s.description}" for s in SOLVERS.values())
+    p.add_argument("--solver", choices=tuple(SOLVERS), default=None,
+                   help=f"how the energy is minimised ({text}) (default: {default})")
 
 
-def read_params_file(path: Path) -> tuple[str | None, dict]:
-    """Read ``{"method": ..., "params": {...}}``; extra keys are allowed."""
-    try:
-        data = json.loads(Path(path).read_text(encoding="utf-8"))
-    except FileNotFoundError:
-        raise UsageError(f"--params-file {path}: no such file") from None
-    except (OSError, UnicodeDecodeError, json.JSONDecodeError) as exc:
-        raise UsageError(f"--params-file {path}: not a readable JSON file ({exc})") from None
-    if not isinstance(data, dict) or not isinstance(data.get("params"), dict):
-        raise UsageError(f"--params-file {path}: expected an object with a 'params' object")
-    method = data.get("method")
-    if method is not None and method not in METHOD_NAMES:
-        raise UsageError(f"--params-file {path}: unknown method {method!r} "
-                         f"(expected one of {', '.join(METHOD_NAMES)})")
-    return method, data["params"]
+def add_feature_options(p: argparse.ArgumentParser, base: MatchConfig) -> None:
+    roi = base.roi if isinstance(base.roi, str) else ",".join(map(str, base.roi))
+    p.add_argument("--roi", default=None, help=f"center | full | X,Y,W,H (default: {roi})")
+    p.add_argument("--shift", type=float, default=None, metavar="PX",
+                   help=f"expected disparity: centre of the candidate window (default: {base.shift:g})")
+    p.add_argument("--n-min", type=int, default=None, help=f"fewest corners per image (default: {base.n_min})")
+    p.add_argument("--n-max", type=int, default=None, help=f"most corners per image (default: {base.n_max})")
 
 
-def resolve_params(args) -> tuple[str, Params]:
-    """The method and parameters from --method, --params-file and the single overrides."""
-    file_method, values = (None, {})
+def add_ga_options(p: argparse.ArgumentParser) -> None:
+    ga = GAConfig()
+    p.add_argument("--generations", type=int, default=None,
+                   help=f"most GA generations (default: {ga.generations})")
+    p.add_argument("--population", type=int, default=None,
+                   help=f"chromosomes per generation (default: {ga.population})")
+
+
+def ga_config(args) -> GAConfig:
+    return GAConfig().updated("ismb-lab", generations=args.generations,
+                              population=getattr(args, "population", None))
+
+
+def match_config(args, base: MatchConfig | None = None) -> MatchConfig:
+    """`base` (default: :class:`MatchConfig`'s defaults) with the feature options given."""
+    base = MatchConfig() if base is None else base
+    return replace(base, **{k: getattr(args, k) for k in FEATURE_OPTIONS if getattr(args, k) is not None})
+
+
+def resolve_params(args, defaults=None):
+    """The method and parameters from --method, --params-file and the single gene options.
+
+    `defaults`, a mapping of method name to Params, replaces a method's own defaults
+    when no params file is given (the depth demo's fitted values).
+    """
+    file_method, params = None, None
     if args.params_file is not None:
-        file_method, values = read_params_file(args.params_file)
+        file_method, params = load_params(args.params_file, args.method)
     if args.method and file_method and args.method != file_method:
         raise UsageError(f"--method {args.method} conflicts with --params-file, "
                          f"which holds parameters for Method-{file_method}")
-    method = args.method or file_method or "III"
-    merged = THESIS_PARAMS[method].to_dict()
-    merged.update(values)
-    merged.update({k: getattr(args, k) for k in PARAM_OPTIONS if getattr(args, k) is not None})
-    return method, Params.from_dict(merged, owner="ismb-lab")
+    method = args.method or file_method or DEFAULT_METHOD
+    if params is None:
+        params = (defaults or {}).get(method, get_method(method).defaults)
+    given = {k: getattr(args, k) for k in gene_options() if getattr(args, k) is not None}
+    try:
+        return method, replace(params, **given)
+    except (ParameterError, ParameterTypeError) as exc:
+        raise UsageError(str(exc).replace("of Params", "of ismb-lab")) from None
+
+
+def network_settings(args) -> dict:
+    """--seed, --stop-rule and --rule that were given, as keyword arguments."""
+    names = {"seed": "seed", "stop_rule": "stop_rule", "rule": "rule"}
+    return {key: getattr(args, name) for name, key in names.items() if getattr(args, name) is not None}
 
 
 def progress_bar(total: int, desc: str):
     from tqdm import tqdm
     return tqdm(total=total, desc=desc, unit="gen", file=sys.stderr, dynamic_ncols=True,
                 disable=None)
-
-
-def match_config(args):
-    from ..matching import MatchConfig
-    return MatchConfig(roi=args.roi, shift=args.shift, n_min=args.n_min, n_max=args.n_max)
-
-

@@ -6,8 +6,11 @@ import json
 from pathlib import Path
 
 from .._files import atomic_write_text
-from ..methods import METHOD_NAMES
-from ._common import UsageError, progress_bar
+from ..solvers import DEFAULT_SOLVER, SOLVERS
+from ._common import (DEFAULT_METHOD, UsageError, add_ga_options, add_method_option, add_solver_option,
+                      ga_config, progress_bar)
+
+__all__ = ["add_parser", "run"]
 
 
 def add_parser(sub) -> None:
@@ -16,21 +19,22 @@ def add_parser(sub) -> None:
                        "manifest, with every network figure over several update-order seeds.")
     e.add_argument("manifest", type=Path, help='JSON: {"pairs": [{"left", "right", "targets", '
                    '"roi", "shift"} or {"source": "middlebury-motorcycle", "roi"}, ...]}')
-    e.add_argument("--method", choices=METHOD_NAMES, default="III", help="energy recipe (default: III)")
+    add_method_option(e, DEFAULT_METHOD)
     e.add_argument("--train", type=int, default=0, metavar="INDEX",
-                   help="the pair whose GA parameters are tested on the others (default: 0)")
-    e.add_argument("--seeds", type=int, default=5, help="update-order seeds per figure (default: 5)")
-    e.add_argument("--generations", type=int, default=500, help="GA generations (default: 500)")
+                   help="the pair whose GA parameters are tested on the others (default: %(default)s)")
+    e.add_argument("--seeds", type=int, default=5, help="update-order seeds per figure (default: %(default)s)")
+    add_ga_options(e)
     e.add_argument("--peers", action="store_true", help="also score the peer matchers")
-    e.add_argument("--solvers", nargs="*", choices=("anneal", "exact"), default=(),
-                   help="also solve the tested energies by mean-field annealing and/or exactly (MILP)")
-    e.add_argument("--fit-solver", choices=("network", "anneal", "exact"), default="network",
-                   help="how the GA solves each network while fitting (default: network)")
+    add_solver_option(e, DEFAULT_SOLVER)
+    e.add_argument("--solvers", nargs="*", choices=tuple(SOLVERS), default=(),
+                   help="also solve the tested energies these other ways")
+    e.add_argument("--fit-solver", choices=tuple(SOLVERS), default=None,
+                   help=f"how the GA solves each network while fitting (default: {DEFAULT_SOLVER})")
     e.add_argument("--fit-seeds", type=int, default=1, metavar="N",
-                   help="update-order seeds averaged in each GA fitness (default: 1)")
+                   help="update-order seeds averaged in each GA fitness (default: %(default)s)")
     e.add_argument("--ga-seed", type=int, default=0, metavar="N",
-                   help="seed of the GA (default: 0); a small training pair can leave the GA on "
-                   "a plateau, so compare a few")
+                   help="seed of the GA (default: %(default)s); a small training pair can leave the GA "
+                   "on a plateau, so compare a few")
     e.add_argument("--held-out-only", action="store_true",
                    help="fit only the training pair (the held-out figures are the same; the other "
                    "rows' 'Training' column is skipped)")
@@ -39,10 +43,11 @@ def add_parser(sub) -> None:
 
 
 def run(args) -> int:
-    from ..evaluation import format_protocol, load_manifest, protocol
+    from ..protocol import format_protocol, load_manifest, protocol
 
     if args.ga_seed < 0:
         raise UsageError(f"--ga-seed must be an integer >= 0, got {args.ga_seed}")
+    ga = ga_config(args)
     cases = load_manifest(args.manifest)
     bars = {}
 
@@ -50,30 +55,20 @@ def run(args) -> int:
         if name not in bars:
             for bar in bars.values():
                 bar.close()
-            bars[name] = progress_bar(args.generations + 1, f"GA on {name}")
+            bars[name] = progress_bar(ga.generations + 1, f"GA on {name}")
         bars[name].update(1)
         bars[name].set_postfix(best=f"{record.best:g}", mean=f"{record.mean:.2f}")
 
     try:
-        report = protocol(cases, args.method, train=args.train, seeds=args.seeds,
-                          generations=args.generations, peers=args.peers, progress=progress,
-                          solvers=tuple(args.solvers), fit_solver=args.fit_solver,
+        report = protocol(cases, args.method or DEFAULT_METHOD, train=args.train, seeds=args.seeds, ga=ga,
+                          peers=args.peers, progress=progress, solver=args.solver or DEFAULT_SOLVER,
+                          solvers=tuple(args.solvers), fit_solver=args.fit_solver or DEFAULT_SOLVER,
                           fit_seeds=args.fit_seeds, rng=args.ga_seed, fit_all=not args.held_out_only)
     finally:
         for bar in bars.values():
             bar.close()
     print(format_protocol(report))
     if args.json is not None:
-        data = {"method": report["method"], "train": report["train"],
-                "params": report["params"].to_dict(), "seeds": args.seeds, "ga_seed": args.ga_seed,
-                "pairs": [{"name": r["name"], "testing": [str(s) for s in r["testing"]],
-                           "training": None if r["training"] is None else [str(s) for s in r["training"]]}
-                          for r in report["rows"]],
-                "held_out": [{"cet": str(s), "recall": s.recall, "precision": s.precision}
-                             for s in report["held_out"]],
-                "peers": {name: {"held_out": str(p["held_out"]), "recall": p["held_out"].recall,
-                                 "precision": p["held_out"].precision} for name, p in report["peers"].items()},
-                "solvers": {name: [{"cet": str(s), "recall": s.recall, "precision": s.precision}
-                                   for s in v["held_out"]] for name, v in report.get("solvers", {}).items()}}
+        data = {**report.to_dict(), "seeds": args.seeds, "ga_seed": args.ga_seed}
         atomic_write_text(args.json, json.dumps(data, indent=2) + "\n")
     return 0

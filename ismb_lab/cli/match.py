@@ -5,7 +5,11 @@ from __future__ import annotations
 from pathlib import Path
 
 from .._files import atomic_write_text
-from ._common import add_matching_options, match_config, resolve_params
+from ..matching import MatchConfig
+from ..solvers import DEFAULT_SOLVER
+from ._common import add_matching_options, add_solver_option, match_config, network_settings, resolve_params
+
+__all__ = ["add_parser", "run"]
 
 
 def add_parser(sub) -> None:
@@ -14,7 +18,8 @@ def add_parser(sub) -> None:
                        "matches in the shape of the thesis' Table 5.3.")
     m.add_argument("left", type=Path, help="left image file")
     m.add_argument("right", type=Path, help="right image file")
-    add_matching_options(m)
+    add_matching_options(m, MatchConfig())
+    add_solver_option(m, DEFAULT_SOLVER)
     m.add_argument("--json", type=Path, default=None, metavar="OUT", help="write the result as JSON")
     m.add_argument("--plot", type=Path, default=None, metavar="OUT.png",
                    help="draw the pair with features and match lines")
@@ -26,9 +31,9 @@ def run(args) -> int:
 
     method, params = resolve_params(args)
     prepared = prepare(args.left, args.right, match_config(args))
-    result = match(method=method, params=params, seed=args.seed, stop_rule=args.stop_rule,
-                   rule=args.rule, prepared=prepared)
-    print(f"Method-{result.method}  params {params.to_dict()}  seed {result.seed}")
+    result = match(method=method, params=params, prepared=prepared, solver=args.solver or DEFAULT_SOLVER,
+                   **network_settings(args))
+    print(f"Method-{result.method} ({result.solver})  params {params.to_dict()}  seed {result.seed}")
     print(f"{len(result.left_xy)} left / {len(result.right_xy)} right corners, "
           f"{result.n_candidates} candidate neurons, {len(result.pairs)} matches, "
           f"energy {result.energy:.4f}, stopped by '{result.stop_rule}' "

@@ -4,6 +4,8 @@ from __future__ import annotations
 
 from pathlib import Path
 
+__all__ = ["add_parser", "run"]
+
 
 def add_parser(sub) -> None:
     r = sub.add_parser("render", help="render the project's stereo pairs into images/",

@@ -2,13 +2,15 @@
 
 from __future__ import annotations
 
-import json
 import sys
 from pathlib import Path
 
-from .._files import atomic_write_text
-from ..methods import METHOD_NAMES
-from ._common import UsageError, add_feature_options, match_config, progress_bar
+from ..matching import MatchConfig
+from ..solvers import DEFAULT_SOLVER
+from ._common import (DEFAULT_METHOD, UsageError, add_feature_options, add_ga_options, add_method_option,
+                      add_solver_option, ga_config, match_config, progress_bar)
+
+__all__ = ["add_parser", "run"]
 
 
 def add_parser(sub) -> None:
@@ -19,36 +21,32 @@ def add_parser(sub) -> None:
     t.add_argument("left", type=Path, help="left image file")
     t.add_argument("right", type=Path, help="right image file")
     t.add_argument("targets", type=Path, help="target pairs (JSON, as saved by the labeller)")
-    t.add_argument("--method", choices=METHOD_NAMES, default="III", help="energy recipe (default: III)")
-    t.add_argument("--generations", type=int, default=500, help="most generations (default: 500)")
-    t.add_argument("--population", type=int, default=30, help="chromosomes (default: 30)")
-    t.add_argument("--seed", type=int, default=0, help="seed of the GA (default: 0)")
-    add_feature_options(t)
+    add_method_option(t, DEFAULT_METHOD)
+    add_ga_options(t)
+    t.add_argument("--seed", type=int, default=0, help="seed of the GA (default: %(default)s)")
+    add_solver_option(t, DEFAULT_SOLVER)
+    add_feature_options(t, MatchConfig())
     t.add_argument("--out", type=Path, default=Path("params.json"), metavar="PARAMS.json",
-                   help="where to write the parameters (default: params.json)")
+                   help="where to write the parameters (default: %(default)s)")
     t.set_defaults(run=run)
 
 
 def run(args) -> int:
-    from ..matching import prepare
-    from ..targets import load_targets, snap
-    from ..tuning import Case, evaluate, to_params, tune
+    from ..methods import save_params
+    from ..protocol import Case
+    from ..tuning import evaluate, to_params, tune
 
-    prepared = prepare(args.left, args.right, match_config(args))
-    targets = load_targets(args.targets, pair=prepared.pair)
-    snapped = snap(targets, prepared.problem.left_xy, prepared.problem.right_xy)
-    missing = sorted(set(snapped.missing_left.tolist()) | set(snapped.missing_right.tolist()))
-    if missing:
-        print(f"ismb-lab: note: {len(missing)} of {len(targets)} targets have no corner within "
-              f"1.5 px and are left out: {', '.join(f'#{n + 1}' for n in missing)}", file=sys.stderr)
-    if len(snapped.pairs) == 0:
+    method, solver, ga = args.method or DEFAULT_METHOD, args.solver or DEFAULT_SOLVER, ga_config(args)
+    case = Case.from_files(args.left, args.right, args.targets, match_config(args))
+    if len(case.left_out):
+        print(f"ismb-lab: note: {len(case.left_out)} targets have no corner within 1.5 px and are "
+              f"left out: {', '.join(f'#{n + 1}' for n in case.left_out)}", file=sys.stderr)
+    if len(case.targets) == 0:
         raise UsageError(f"{args.targets}: no target pair lies on the corners found "
-                         f"({len(targets)} targets, {len(prepared.problem.left_xy)} left corners)")
-    case = Case(prepared, snapped.pairs, name=str(args.left))
-    records = tune([case], args.method, rng=args.seed, population=args.population,
-                   generations=args.generations)
+                         f"({len(case.left_out)} targets, {len(case.prepared.problem.left_xy)} left corners)")
+    records = tune([case], method, rng=args.seed, ga=ga, solver=solver)
     best, interrupted = None, False
-    with progress_bar(args.generations + 1, f"Method-{args.method} GA") as bar:
+    with progress_bar(ga.generations + 1, f"Method-{method} GA") as bar:
         try:
             for best in records:
                 bar.update(1)
@@ -57,13 +55,11 @@ def run(args) -> int:
             interrupted = True
     if best is None:
         raise KeyboardInterrupt
-    params = to_params(args.method, best.best_chromosome)
-    out = {"method": args.method, "params": params.to_dict(), "fitness": best.best,
-           "generations": best.index, "seed": args.seed, "targets": len(case.targets),
-           "interrupted": interrupted}
-    atomic_write_text(args.out, json.dumps(out, indent=2) + "\n")
-    result = evaluate([case], args.method, params)
-    print(f"Method-{args.method}: best fitness {best.best:g} of {len(case.targets)} after "
+    params = to_params(method, best.best_chromosome)
+    save_params(args.out, method, params, solver=solver, fitness=best.best, generations=best.index,
+                seed=args.seed, targets=len(case.targets), interrupted=interrupted)
+    result = evaluate([case], method, params, solver=solver)
+    print(f"Method-{method} ({solver}): best fitness {best.best:g} of {len(case.targets)} after "
           f"{best.index} generations; C/E/T {result}; parameters {params.to_dict()}")
     print(f"written to {args.out}")
     if interrupted:

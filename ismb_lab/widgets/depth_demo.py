@@ -17,10 +17,15 @@ from pathlib import Path
 import numpy as np
 
 from .._validation import ParameterTypeError, check_number, message
-from ..depth import DepthConfig, DepthObject, DepthResult, relative_depth
+from ..depth import DepthConfig, DepthObject, DepthResult
+from ..depth_demo import relative_depth
 from ..io import StereoPair, load_pair
-from ..methods import METHOD_NAMES, Params, get_method
+from ..methods import Params, get_method, method_names
 from ._common import Base, Pane, button, grey_rgb, pair_files, path_labels, with_class
+
+__all__ = ["CMAP", "TOLERANCES", "depth_text", "DepthDemo", "DepthModel", "disparity_limits",
+           "draw_background", "draw_scene", "label_positions", "load_stereo", "update_background",
+           "update_scene"]
 
 #: The DepthConfig fields of the background removal that get a slider, with their labels.
 TOLERANCES = {"position_tol_px": "same place (px)", "disparity_tol_px": "same disparity (px)",
@@ -317,7 +322,7 @@ class DepthDemo(Base):
         self.scene_artists = draw_scene(fig.add_axes((0, 0, 0.857, 1)), fig.add_axes((0.87, 0.08, 0.03, 0.84)),
                                         self.model)
 
-        self.method_menu = with_class(ipywidgets.Dropdown(options=list(METHOD_NAMES), value=self.model.method,
+        self.method_menu = with_class(ipywidgets.Dropdown(options=list(method_names()), value=self.model.method,
                                                           description="method", layout={"width": "160px"}),
                                       "ismb-method")
         self.seed_field = with_class(ipywidgets.BoundedIntText(value=self.model.seed, min=0, max=2**31 - 1,

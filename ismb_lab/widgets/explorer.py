@@ -15,15 +15,14 @@ import numpy as np
 from .._validation import ParameterTypeError, check_number, message
 from ..evaluation import Score, score
 from ..matching import MatchConfig, MatchResult, Prepared, match, prepare
-from ..methods import METHOD_NAMES, THESIS_PARAMS, Params, get_method
+from ..methods import THETA_C, Params, all_genes, get_method, method_names
 from ..similarity import transfer
 from ..targets import TargetSet, load_targets, snap
-from ..tuning import GENE_BOUNDS
 from ._common import Base, Pane, pair_files, with_class
 from .stepper import draw_pair, update_pair  # the same pair view as the stepper's
 
-GENES = ("theta_c", "theta_s", "lambda_c", "lambda_s")
-SYMBOLS = {"theta_c": "θc", "theta_s": "θs", "lambda_c": "λc", "lambda_s": "λs"}
+__all__ = ["draw_transfer", "ExplorerModel", "ParameterExplorer", "update_transfer"]
+
 
 
 class ExplorerModel:
@@ -57,7 +56,7 @@ class ExplorerModel:
             raise ParameterTypeError(message("prepared", owner, "a Prepared (see matching.prepare)", prepared))
         self.prepared = prepared
         self.method = get_method(method).name
-        self.params = THESIS_PARAMS[self.method] if params is None else params
+        self.params = get_method(self.method).defaults if params is None else params
         if not isinstance(self.params, Params):
             raise ParameterTypeError(message("params", owner, "None or a Params", params))
         self.seed = check_number(seed, "seed", owner, low=0, integer=True)
@@ -79,6 +78,10 @@ class ExplorerModel:
             self.params = replace(self.params, **genes)
         if seed is not None:
             self.seed = check_number(seed, "seed", owner, low=0, integer=True)
+        m = get_method(self.method)
+        unset = {g: getattr(m.defaults, g) for g in m.gene_names if getattr(self.params, g) is None}
+        if unset:   # e.g. Method-NM's match bias after a four-gene method
+            self.params = replace(self.params, **unset)
         return self.rematch()
 
     def rematch(self) -> "ExplorerModel":
@@ -108,7 +111,7 @@ class ExplorerModel:
 
 def draw_transfer(axes, model: ExplorerModel) -> dict:
     """S(M) and C(X) (thesis 3-10, 3-13; Fig. 3.3) with a marker at the current θ."""
-    x = np.linspace(0, GENE_BOUNDS["theta_c"][1], 241)
+    x = np.linspace(0, THETA_C.high, 241)
     art = {"x": x}
     for ax, key, title, xlabel in ((axes[0], "s", "similarity S(M)", "M (grey levels)"),
                                    (axes[1], "c", "compatibility C(X)", "X (pixels)")):
@@ -179,15 +182,18 @@ class ParameterExplorer(Base):
         self.transfer_artists = draw_transfer(axes, self.model)
 
         self.sliders = {}
-        for gene in GENES:
-            low, high = GENE_BOUNDS[gene]
-            s = ipywidgets.FloatSlider(value=getattr(self.model.params, gene), min=low, max=high,
-                                       step=0.01, description=SYMBOLS[gene], continuous_update=False,
-                                       readout_format=".2f")
-            s.add_class("ismb-" + gene.replace("_", "-"))
+        # a gene the current parameters leave unset shows the value of a method that uses it
+        fallback = {g: getattr(get_method(m).defaults, g) for m in reversed(method_names())
+                    for g in get_method(m).gene_names}
+        for gene in all_genes():
+            value = getattr(self.model.params, gene.name)
+            s = ipywidgets.FloatSlider(value=fallback[gene.name] if value is None else value, min=gene.low,
+                                       max=gene.high, step=0.01, description=gene.symbol or gene.name,
+                                       continuous_update=False, readout_format=".2f")
+            s.add_class("ismb-" + gene.name.replace("_", "-"))
             s.observe(self.guard(self._on_slider), names="value")
-            self.sliders[gene] = s
-        self.method_menu = with_class(ipywidgets.Dropdown(options=list(METHOD_NAMES), value=self.model.method,
+            self.sliders[gene.name] = s
+        self.method_menu = with_class(ipywidgets.Dropdown(options=list(method_names()), value=self.model.method,
                                                           description="method"), "ismb-method")
         self.seed_field = with_class(ipywidgets.BoundedIntText(value=self.model.seed, min=0, max=2**31 - 1,
                                                                description="seed"), "ismb-seed")
@@ -221,7 +227,8 @@ class ParameterExplorer(Base):
         self._hold = True
         try:
             for gene, slider in self.sliders.items():
-                slider.value = min(max(getattr(params, gene), slider.min), slider.max)
+                if getattr(params, gene) is not None:
+                    slider.value = min(max(getattr(params, gene), slider.min), slider.max)
         finally:
             self._hold = False
         self._change(params=params)
@@ -239,8 +246,9 @@ class ParameterExplorer(Base):
     def refresh(self) -> None:
         update_pair(self.pair_artists, self.model)
         update_transfer(self.transfer_artists, self.model)
-        for gene in ("theta_s", "lambda_s"):
-            self.sliders[gene].disabled = self.model.method == "I"
+        used = get_method(self.model.method).gene_names
+        for gene, slider in self.sliders.items():
+            slider.disabled = gene not in used
         self.score_label.value = html.escape(self.model.score_text(), quote=False)
         self.say(self.model.describe())
         self.pair_pane.draw()

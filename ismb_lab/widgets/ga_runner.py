@@ -27,23 +27,24 @@ from typing import Callable
 import numpy as np
 
 from .._validation import ParameterError, ParameterTypeError, check_number, message
-from ..genetic import Generation
-from ..matching import MatchConfig, prepare
+from ..genetic import GAConfig, Generation
+from ..matching import MatchConfig
 from ..methods import Params, get_method
-from ..targets import load_targets, snap
-from ..tuning import Case, to_params, tune
+from ..protocol import Case
+from ..tuning import to_params, tune
 from ._common import Base, Pane, button, pair_files, with_class
+
+__all__ = ["as_cases", "case_from_folder", "chromosome_html", "draw_fitness", "GAModel", "GARunner",
+           "update_fitness"]
 
 
 def case_from_folder(folder, config: MatchConfig | None = None) -> Case:
-    """A training :class:`~ismb_lab.tuning.Case` from ``left.png``, ``right.png`` and ``answer_key.json``."""
+    """A training :class:`~ismb_lab.protocol.Case` from ``left.png``, ``right.png`` and ``answer_key.json``."""
     left, right, key = pair_files(folder, "case_from_folder")
     if not key.is_file():
         raise ParameterError(f"The 'folder' parameter of case_from_folder must be a folder with an "
                              f"answer_key.json (the GA's targets). Got {str(folder)!r} instead.")
-    prepared = prepare(left, right, config)
-    snapped = snap(load_targets(key, pair=prepared.pair), prepared.problem.left_xy, prepared.problem.right_xy)
-    return Case(prepared, snapped.pairs, name=Path(folder).name)
+    return Case.from_files(left, right, key, config, name=Path(folder).name)
 
 
 def as_cases(cases_or_folder, config: MatchConfig | None = None) -> list[Case]:
@@ -69,9 +70,10 @@ class GAModel:
     Parameters
     ----------
     cases : list of Case
-    method : {"I", "II", "III"}
-    population, generations : int
-        GA size (the thesis: 30 and 500).
+    method : str
+        A name in :func:`ismb_lab.methods.method_names`.
+    population, generations : int, optional
+        GA size (default: :class:`~ismb_lab.genetic.GAConfig`'s, the thesis' 30 and 500).
     seed : int
         Seed of the GA (and of every network run's update order, as in ``tune``).
 
@@ -90,12 +92,13 @@ class GAModel:
     (True, 'finished', True)
     """
 
-    def __init__(self, cases, method="III", *, population: int = 30, generations: int = 500, seed: int = 0):
+    def __init__(self, cases, method="III", *, population: int | None = None, generations: int | None = None,
+                 seed: int = 0):
         owner = "GAModel"
         self.cases = list(cases)
         self.method = get_method(method)
-        self.population = check_number(population, "population", owner, low=2, integer=True)
-        self.generations = check_number(generations, "generations", owner, low=1, integer=True)
+        self.ga = GAConfig().updated(owner, population=population, generations=generations)
+        self.population, self.generations = self.ga.population, self.ga.generations
         self.seed = check_number(seed, "seed", owner, low=0, integer=True)
         self.target = sum(len(c.targets) for c in self.cases)
         self.history: list[Generation] = []
@@ -128,8 +131,7 @@ class GAModel:
         self._resume.set()
         self.status = "running"
         # it checks its arguments now, in the caller's thread
-        records = tune(self.cases, self.method, rng=self.seed, population=self.population,
-                       generations=self.generations, seed=self.seed)
+        records = tune(self.cases, self.method, rng=self.seed, ga=self.ga, seed=self.seed)
         self._thread = threading.Thread(target=self._work, args=(records,), name="ismb-ga", daemon=True)
         self._thread.start()
         return True
@@ -222,7 +224,7 @@ def chromosome_html(model: GAModel) -> str:
     if g is None:
         return ""
     cells = "".join(f"<td><b>{name}</b> = {value:.2f}</td>"
-                    for name, value in zip(model.method.genes, g.best_chromosome))
+                    for name, value in zip(model.method.gene_names, g.best_chromosome))
     return f'<table class="ismb-table"><tr><td>best chromosome:</td>{cells}</tr></table>'
 
 
@@ -250,8 +252,9 @@ class GARunner(Base):
     ``ismb-chromosome``; ``ismb-status``; ``ismb-log``.
     """
 
-    def __init__(self, cases_or_folder, *, method="III", population: int = 30, generations: int = 500,
-                 seed: int = 0, config: MatchConfig | None = None, redraw_every: float = 0.2):
+    def __init__(self, cases_or_folder, *, method="III", population: int | None = None,
+                 generations: int | None = None, seed: int = 0, config: MatchConfig | None = None,
+                 redraw_every: float = 0.2):
         import ipywidgets
 
         super().__init__()
@@ -274,7 +277,7 @@ class GARunner(Base):
                                   disabled=True)
         self.apply_button = button("Apply best parameters", "ismb-apply",
                                    "Send the best chromosome to the registered widgets", disabled=True)
-        self.progress = with_class(ipywidgets.IntProgress(value=0, min=0, max=generations,
+        self.progress = with_class(ipywidgets.IntProgress(value=0, min=0, max=self.model.generations,
                                                           description="generation"), "ismb-progress")
         self.chromosome = with_class(ipywidgets.HTML(""), "ismb-chromosome")
         self.start_button.on_click(self.guard(lambda _: self.start()))

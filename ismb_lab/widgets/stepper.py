@@ -13,9 +13,13 @@ import numpy as np
 from .._validation import ParameterTypeError, check_choice, check_number, message
 from ..hopfield import RULES, STOP_RULES, Update, energy, iter_updates
 from ..matching import MatchConfig, Prepared, prepare
-from ..methods import THESIS_PARAMS, Params, get_method
+from ..methods import Params, get_method
 from ..plotting import GAP, plot_matches
+from ..solvers import to_matches
 from ._common import Base, Pane, button, grey_rgb, number_labels, pair_files, path_labels, with_class
+
+__all__ = ["draw_energy", "draw_grid", "draw_pair", "HopfieldStepper", "net_xy", "StepperModel",
+           "update_energy", "update_grid", "update_pair"]
 
 
 class StepperModel:
@@ -52,7 +56,7 @@ class StepperModel:
             raise ParameterTypeError(message("prepared", owner, "a Prepared (see matching.prepare)", prepared))
         self.prepared = prepared
         self.method = get_method(method)
-        self.params = THESIS_PARAMS[self.method.name] if params is None else params
+        self.params = self.method.defaults if params is None else params
         if not isinstance(self.params, Params):
             raise ParameterTypeError(message("params", owner, "None or a Params", params))
         self.stop_rule = check_choice(stop_rule, "stop_rule", owner, STOP_RULES)
@@ -113,8 +117,7 @@ class StepperModel:
     @property
     def pairs(self) -> np.ndarray:
         """``(i, k)`` of the neurons that are on now (before any post-processing)."""
-        on = np.flatnonzero(self.state)
-        return np.stack([self.network.rows[on], self.network.cols[on]], axis=1).reshape(-1, 2)
+        return to_matches(self.network, self.state).pairs
 
     def rises(self) -> np.ndarray:
         """Attempt numbers (1-based, as plotted) after which the energy went up."""

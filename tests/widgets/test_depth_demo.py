@@ -4,7 +4,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from ismb_lab.depth import DepthConfig, DepthObject, metric_depth, relative_depth
+from ismb_lab.depth import DepthConfig, DepthObject, metric_depth
+from ismb_lab.depth_demo import relative_depth
 from ismb_lab.methods import Params
 from ismb_lab.widgets import DepthDemo, DepthModel
 

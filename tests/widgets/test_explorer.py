@@ -49,13 +49,13 @@ def test_set_params_rematches_once(explorer, monkeypatch):
     params = Params(theta_c=9.0, theta_s=30.0, lambda_c=2.0, lambda_s=1.0)
     explorer.set_params(params)
     assert calls == [1] and explorer.params == params
-    assert [s.value for s in explorer.sliders.values()] == [9.0, 30.0, 2.0, 1.0]
+    assert [s.value for s in explorer.sliders.values()] == [9.0, 30.0, 2.0, 1.0, 0.0]
     with pytest.raises(TypeError, match="'params' parameter"):
         explorer.set_params({"theta_c": 1})
 
 
 def test_ga_apply_reaches_the_explorer(explorer, prepared, truth):
-    from ismb_lab.tuning import Case
+    from ismb_lab.protocol import Case
     from ismb_lab.widgets.ga_runner import GARunner
 
     runner = GARunner(Case(prepared, truth), population=4, generations=2)

@@ -5,7 +5,8 @@ import numpy as np
 import pytest
 
 from ismb_lab.methods import Params
-from ismb_lab.tuning import Case, to_params, tune
+from ismb_lab.protocol import Case
+from ismb_lab.tuning import to_params, tune
 from ismb_lab.widgets.ga_runner import GAModel, GARunner
 
 

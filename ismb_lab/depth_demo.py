@@ -1,0 +1,275 @@
+"""The toy-car depth demo of the thesis' §5.2.3, from four images to objects near -> far.
+
+``relative_depth(background, scene)`` matches a background pair and a scene pair of the
+same view (:func:`depth_match`) and hands both to
+:func:`ismb_lab.depth.depth_from_matches`, which removes the background and ranks the
+objects left.
+
+*Corners where something changed.*  The corner detector keeps the strongest corners
+of its ROI, and textured posters have stronger corners than a small toy car, so with
+the thesis' ROI a far car can end with one corner or none.  The demo knows the
+background, so it looks for the scene pair's corners only in the bounding box of the
+ROI's pixels whose smoothed left-image difference from the background exceeds 8 grey
+levels, plus a margin (:func:`changed_roi`).  The box still holds some background, so
+the background removal has work to do; where nothing changed, or everything did
+(another day's lighting), it is the whole ROI.  The background pair keeps the ROI.
+The figures behind this choice are in ``benchmarks/README.md``.
+
+The demo's defaults, :data:`DEPTH_PARAMS`, :data:`DEPTH_MATCH_CONFIG` and
+:data:`DEPTH_SOLVER`, are declared here once; the command line and the widget read them.
+
+>>> from ismb_lab.scenes import lab_scene, toy_car_scene
+>>> result = relative_depth(lab_scene(0), toy_car_scene(0))
+>>> [round(o.depth_m, 2) for o in result.objects]    # the cars are at 0.885 and 1.183 m
+[0.88, 1.16]
+"""
+
+from __future__ import annotations
+
+from dataclasses import replace
+
+import numpy as np
+from scipy.ndimage import gaussian_filter
+
+from ._validation import ParameterError, ParameterTypeError, check_number, message
+from .depth import DepthConfig, DepthResult, depth_from_matches
+from .features import resolve_roi
+from .io import StereoPair, load_pair
+from .matching import MatchConfig, MatchResult, match, prepare
+from .methods import Params
+from .solvers import ANNEAL, get_solver
+
+__all__ = ["DEPTH_MATCH_CONFIG", "DEPTH_PARAMS", "DEPTH_SOLVER", "changed_roi", "depth_match",
+           "relative_depth", "scene_match_config"]
+
+#: Corners of the depth demo: the thesis' centre quarter, but 40 to 60 corners instead of
+#: 20 to 30, so that the small toy cars get some next to the posters' many.
+DEPTH_MATCH_CONFIG = MatchConfig(n_min=40, n_max=60)
+
+
+#: Method-III parameters of the depth demo, fitted by the GA on the background pair
+#: images/lab and its answer key only, with :data:`DEPTH_MATCH_CONFIG`'s corners
+#: (``python scripts/fit_depth_params.py``: GA seed 0, 500 generations, each chromosome
+#: scored over update orders 0-4).  The thesis' values were fitted to its webcams and
+#: give many extra matches on rendered scenes.
+DEPTH_PARAMS = Params(theta_c=1.945540697133651, theta_s=13.577571706866182,
+                      lambda_c=7.143116184828514, lambda_s=6.966076587109354)
+
+#: How the demo solves the energy, a name in :data:`ismb_lab.solvers.SOLVERS`: mean-field
+#: annealing ranked the cars right on more development layouts than the discrete network
+#: (the figures are in ``benchmarks/README.md``).
+DEPTH_SOLVER = ANNEAL
+
+
+def changed_roi(background_left, scene_left, roi="center", *, threshold: float = 8.0,
+                sigma: float = 1.0, margin: int = 4):
+    """The box of `roi` where the scene's left image differs from the background's.
+
+    Parameters
+    ----------
+    background_left, scene_left : (H, W) array_like
+        Grey left images of the background and of the scene, one size.
+    roi : str or (x, y, w, h)
+        Where to look, as :attr:`ismb_lab.matching.MatchConfig.roi`.
+    threshold : float
+        Grey levels (0-255) by which the Gaussian-smoothed absolute difference must
+        exceed to count as a change; camera noise alone stays below it.
+    sigma : float
+        Standard deviation of the Gaussian smoothing, pixels.
+    margin : int
+        Pixels added on every side of the changed pixels' bounding box (clipped
+        to `roi`), so that corners on an object's outline are inside.
+
+    Returns
+    -------
+    box : (x, y, w, h) or None
+        None when no pixel of `roi` changed.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> background = np.zeros((240, 320))
+    >>> scene = background.copy()
+    >>> scene[100:120, 150:190] = 200.0
+    >>> changed_roi(background, scene)
+    (144, 94, 52, 32)
+    >>> changed_roi(background, background) is None
+    True
+    """
+    own = "changed_roi"
+    bg = np.asarray(background_left, dtype=float)
+    sc = np.asarray(scene_left, dtype=float)
+    if bg.ndim != 2 or bg.shape != sc.shape:
+        raise ParameterError(message("scene_left", own, "a grey image of the background's shape "
+                                     f"{bg.shape}", f"shape {sc.shape}"))
+    threshold = check_number(threshold, "threshold", own, low=0)
+    sigma = check_number(sigma, "sigma", own, low=0)
+    margin = check_number(margin, "margin", own, low=0, integer=True)
+    x, y, w, h = resolve_roi(roi, bg.shape)
+    diff = np.abs(sc - bg)
+    if sigma:
+        diff = gaussian_filter(diff, sigma)
+    rows, cols = np.nonzero(diff[y:y + h, x:x + w] > threshold)
+    if not len(rows):
+        return None
+    x0, y0 = max(cols.min() - margin, 0), max(rows.min() - margin, 0)
+    x1, y1 = min(cols.max() + margin, w - 1), min(rows.max() + margin, h - 1)
+    return int(x + x0), int(y + y0), int(x1 - x0 + 1), int(y1 - y0 + 1)
+
+
+def scene_match_config(background, scene, match_config=None):
+    """The demo's corner settings for a scene pair: `match_config` with its ROI cut
+    down to :func:`changed_roi`.
+
+    Parameters
+    ----------
+    background, scene : StereoPair
+        The two pairs of the same view (:func:`ismb_lab.io.load_pair`).
+    match_config : MatchConfig, optional
+        Default :data:`DEPTH_MATCH_CONFIG`.
+
+    Returns
+    -------
+    MatchConfig
+        `match_config` itself when nothing in its ROI changed.
+
+    Examples
+    --------
+    >>> from ismb_lab.io import load_pair
+    >>> from ismb_lab.scenes import lab_scene, toy_car_scene
+    >>> bg, sc = (load_pair(s.left, s.right) for s in (lab_scene(0), toy_car_scene(0)))
+    >>> scene_match_config(bg, sc).roi
+    (97, 127, 134, 49)
+    """
+    own = "scene_match_config"
+    match_config = DEPTH_MATCH_CONFIG if match_config is None else match_config
+    if not isinstance(match_config, MatchConfig):
+        raise ParameterTypeError(message("match_config", own, "a MatchConfig", match_config))
+    for name, value in (("background", background), ("scene", scene)):
+        if not isinstance(value, StereoPair):
+            raise ParameterTypeError(message(name, own, "a StereoPair", value))
+    _check_same_size(background, scene, own)
+    box = changed_roi(background.left, scene.left, match_config.roi)
+    return match_config if box is None else replace(match_config, roi=box)
+
+
+def _check_same_size(background, scene, owner: str):
+    if background.shape != scene.shape:
+        (h, w), (h2, w2) = background.shape, scene.shape
+        raise ParameterError(message("scene", owner, f"images of the background's size {w}x{h} "
+                                     "(width x height)", f"images of size {w2}x{h2}"))
+
+
+def _load(value, name: str, owner: str) -> StereoPair:
+    """A StereoPair from a StereoPair, a (left, right) pair or an object with .left and .right."""
+    if isinstance(value, StereoPair):
+        return value
+    if hasattr(value, "left") and hasattr(value, "right"):
+        return load_pair(value.left, value.right)
+    if isinstance(value, (tuple, list)) and len(value) == 2:
+        return load_pair(value[0], value[1])
+    raise ParameterTypeError(message(name, owner, "a (left, right) pair of images or "
+                                     "paths, or an object with .left and .right", value))
+
+
+def depth_match(pair, *, background=None, method: str = "III", params=None, match_config=None,
+                seed: int = 0, solver: str = DEPTH_SOLVER, **network) -> MatchResult:
+    """Match one stereo pair as the depth demo does.
+
+    Parameters
+    ----------
+    pair : StereoPair, (left, right) or object with ``.left`` and ``.right``
+        Images (arrays or paths); a :class:`~ismb_lab.scenes.Scene` works too.
+    background : same kinds as `pair`, optional
+        The background pair of the same view.  When given, `pair` is a scene and its
+        corners are sought only in :func:`changed_roi` of the ROI (the whole ROI
+        where nothing changed).
+    method, params, match_config, seed
+        As in :func:`relative_depth` (``params`` default: :data:`DEPTH_PARAMS` for
+        Method-III).
+    solver : str
+        A name in :data:`ismb_lab.solvers.SOLVERS` (default :data:`DEPTH_SOLVER`).
+    **network
+        ``stop_rule``, ``rule`` or ``kernel`` of the discrete network
+        (:func:`ismb_lab.matching.match`).
+
+    Returns
+    -------
+    MatchResult
+
+    Examples
+    --------
+    >>> from ismb_lab.scenes import lab_scene
+    >>> m = depth_match(lab_scene(0, supersample=1))
+    >>> m.solver, m.stop_rule, len(m.pairs) > 10
+    ('anneal', 'anneal', True)
+    >>> depth_match(lab_scene(0, supersample=1), solver="annealing")
+    Traceback (most recent call last):
+    ...
+    ismb_lab.ParameterError: The 'solver' parameter of depth_match must be one of 'network', 'anneal', 'exact'. Got 'annealing' instead.
+    """
+    own = "depth_match"
+    get_solver(solver, own)
+    if params is None and method == "III":
+        params = DEPTH_PARAMS
+    match_config = DEPTH_MATCH_CONFIG if match_config is None else match_config
+    if not isinstance(match_config, MatchConfig):
+        raise ParameterTypeError(message("match_config", own, "a MatchConfig", match_config))
+    pair = _load(pair, "pair", own)
+    if background is not None:
+        match_config = scene_match_config(_load(background, "background", own), pair, match_config)
+    return match(method=method, params=params, seed=seed, solver=solver,
+                 prepared=prepare(pair, None, match_config), **network)
+
+
+def relative_depth(background, scene, *, method: str = "III", params=None, match_config=None,
+                   config: DepthConfig | None = None, seed: int = 0,
+                   solver: str = DEPTH_SOLVER, **network) -> DepthResult:
+    """Match a background pair and a scene pair, and rank the scene's new objects by depth.
+
+    Parameters
+    ----------
+    background, scene : (left, right) or object with ``.left`` and ``.right``
+        The two stereo pairs of the same view, as image arrays or paths (a
+        :class:`~ismb_lab.scenes.Scene` works too).  All four images must have one size.
+    method : str
+        Energy recipe, see :mod:`ismb_lab.methods` (the thesis uses Method-III).
+    params : Params, optional
+        Energy parameters (default: :data:`DEPTH_PARAMS` for Method-III, fitted on the
+        background pair images/lab; the method's own defaults for the others).
+    match_config : MatchConfig, optional
+        Corners, ROI and candidate window (default: :data:`DEPTH_MATCH_CONFIG`, the
+        thesis' settings with 40 to 60 corners).  The scene pair's corners are
+        sought in the part of the ROI that changed (:func:`changed_roi`).
+    config : DepthConfig, optional
+        Tolerances and calibration.
+    seed : int
+        Update-order seed of both runs.
+    solver : str
+        How the energy is solved (see :func:`depth_match`).
+    **network
+        The discrete network's settings, as in :func:`depth_match`.
+
+    Returns
+    -------
+    DepthResult
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> flat = np.zeros((60, 80))
+    >>> relative_depth((flat, flat), (np.zeros((50, 80)), np.zeros((50, 80))))
+    Traceback (most recent call last):
+    ...
+    ismb_lab.ParameterError: The 'scene' parameter of relative_depth must be images of the background's size 80x60 (width x height). Got 'images of size 80x50' instead.
+    """
+    own = "relative_depth"
+    get_solver(solver, own)
+    bg, sc = _load(background, "background", own), _load(scene, "scene", own)
+    _check_same_size(bg, sc, own)
+    scene_config = scene_match_config(bg, sc, match_config)
+    results = [depth_match(p, method=method, params=params, match_config=c, seed=seed, solver=solver,
+                           **network)
+               for p, c in ((bg, match_config), (sc, scene_config))]
+    return replace(depth_from_matches(*results, config),
+                   scene_roi=resolve_roi(scene_config.roi, sc.shape))

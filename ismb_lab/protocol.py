@@ -1,0 +1,372 @@
+"""The train/test protocol of the thesis' Fig. 5.10, its report, and the training pair (Case).
+
+The thesis fits the GA on one pair ("training") and applies the parameters to
+every other pair ("testing"), printing ``C/E/T`` for each.  :func:`protocol` does
+that, with every network figure measured over several update-order seeds, and
+optionally scores other solvers of the same energy and the peer matchers of
+:mod:`ismb_lab.peers` on the same pairs.  Scoring itself lives in
+:mod:`ismb_lab.evaluation`, the GA's fitness in :mod:`ismb_lab.tuning`.
+"""
+
+from __future__ import annotations
+
+import json
+from dataclasses import dataclass, field, replace
+from pathlib import Path
+
+import numpy as np
+
+from ._validation import ParameterError, ParameterTypeError, check_number, message
+from .datasets import ground_truth_pairs, motorcycle
+from .evaluation import Score, score
+from .genetic import GAConfig
+from .matching import MatchConfig, Prepared, prepare
+from .methods import Params, get_method
+from .peers import PEERS
+from .scenes import true_matches
+from .solvers import DEFAULT_SOLVER, get_solver
+from .targets import load_targets, snap
+from .tuning import evaluate, to_params, tune
+
+__all__ = ["Case", "PairReport", "PeerReport", "ProtocolReport", "SolverReport", "Spread",
+           "format_protocol", "load_manifest", "protocol"]
+
+_NONE = Score(0, 0, 0, 0)
+
+
+@dataclass(frozen=True, eq=False)
+class Case:
+    """One stereo pair with its targets: the unit the GA trains on and the protocol scores.
+
+    Attributes
+    ----------
+    prepared : Prepared
+        The pair with its corners and energy ingredients (:func:`ismb_lab.matching.prepare`).
+    targets : (t, 2) int ndarray
+        Target ``(i, k)`` feature indices.
+    unknown : (u,) int ndarray
+        Left features whose truth is unknown (matches there are not scored).
+    name : str
+    left_out : (m,) int ndarray
+        Targets of the source file that no corner lies close enough to (see
+        :func:`ismb_lab.targets.snap`), numbered from 0 in the file's order.
+    """
+
+    prepared: Prepared
+    targets: np.ndarray
+    unknown: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=np.int64))
+    name: str = ""
+    left_out: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=np.int64))
+
+    @classmethod
+    def from_files(cls, left, right, targets, config: MatchConfig | None = None,
+                   name: str | None = None) -> "Case":
+        """A case from two image files and a targets file (as the labeller saves it).
+
+        The targets are checked against the images' hashes and snapped to the
+        corners that `config` finds.
+        """
+        prepared = prepare(left, right, config)
+        snapped = snap(load_targets(targets, pair=prepared.pair), prepared.problem.left_xy,
+                       prepared.problem.right_xy)
+        left_out = np.union1d(snapped.missing_left, snapped.missing_right).astype(np.int64)
+        return cls(prepared, snapped.pairs.astype(np.int64), name=str(left) if name is None else name,
+                   left_out=left_out)
+
+    @classmethod
+    def from_scene(cls, scene, config: MatchConfig | None = None, name: str = "") -> "Case":
+        """A case from a rendered :class:`~ismb_lab.scenes.Scene`: every corner whose true
+        partner is a detected corner (:func:`ismb_lab.scenes.true_matches`) is a target.
+
+        Examples
+        --------
+        >>> from ismb_lab.scenes import synthetic_scene
+        >>> case = Case.from_scene(synthetic_scene(seed=0), name="synthetic 0")
+        >>> case.name, len(case.targets) > 15
+        ('synthetic 0', True)
+        """
+        prepared = prepare(scene.left, scene.right, config)
+        truth = true_matches(scene, prepared.problem.left_xy, prepared.problem.right_xy)
+        left = np.flatnonzero(truth >= 0)
+        return cls(prepared, np.stack([left, truth[left]], axis=1).astype(np.int64), name=name)
+
+
+def load_manifest(path, config: MatchConfig | None = None) -> list[Case]:
+    """Read an evaluation manifest into :class:`Case` objects.
+
+    The manifest is JSON: ``{"pairs": [entry, ...]}``.  An entry is either a file pair,
+    ``{"name", "left", "right", "targets", "roi", "shift"}`` (paths relative to the
+    manifest; ``roi`` and ``shift`` optional), or a built-in ground-truth pair,
+    ``{"name", "source": "middlebury-motorcycle", "roi": [x, y, w, h]}``, whose targets
+    come from the ground-truth disparity (:func:`ismb_lab.datasets.ground_truth_pairs`).
+    """
+    path = Path(path)
+    owner = f"the manifest '{path}'"
+    try:
+        data = json.loads(path.read_text(encoding="utf-8"))
+    except FileNotFoundError:
+        raise ParameterError(message("path", "load_manifest", "an existing file", str(path))) from None
+    except (OSError, UnicodeDecodeError, json.JSONDecodeError) as exc:
+        raise ParameterError(message("path", "load_manifest", f"a JSON manifest ({exc})", str(path))) from None
+    entries = data.get("pairs") if isinstance(data, dict) else None
+    if not isinstance(entries, list) or not entries:
+        raise ParameterError(message("pairs", owner, "a non-empty list of pair entries", entries))
+    base = config or MatchConfig()
+    cases, moto = [], None
+    for n, entry in enumerate(entries):
+        if not isinstance(entry, dict):
+            raise ParameterError(message(f"pairs[{n}]", owner, "an object", entry))
+        cfg = replace(base, **{k: entry[k] for k in ("roi", "shift") if k in entry})
+        name = str(entry.get("name", f"pair {n}"))
+        if entry.get("source") == "middlebury-motorcycle":
+            moto = moto or motorcycle()
+            prepared = prepare(moto.left, moto.right, cfg)
+            targets, unknown = ground_truth_pairs(moto.disparity, prepared.problem.left_xy,
+                                                  prepared.problem.right_xy)
+            cases.append(Case(prepared, targets, unknown, name))
+            continue
+        files = {}
+        for key in ("left", "right", "targets"):
+            if key not in entry:
+                raise ParameterError(message(f"pairs[{n}].{key}", owner, "a file path", None))
+            files[key] = path.parent / entry[key]
+            if not files[key].is_file():
+                raise ParameterError(message(f"pairs[{n}].{key}", owner, "an existing file",
+                                             str(files[key])))
+        cases.append(Case.from_files(files["left"], files["right"], files["targets"], cfg, name))
+    return cases
+
+
+@dataclass(frozen=True)
+class Spread:
+    """A figure measured over several update-order seeds."""
+
+    mean: float
+    std: float
+    low: float
+    high: float
+    n: int
+
+    @classmethod
+    def of(cls, values) -> "Spread":
+        v = np.asarray(values, dtype=float)
+        return cls(float(v.mean()), float(v.std()), float(v.min()), float(v.max()), len(v))
+
+    def __str__(self) -> str:
+        if self.n == 1 or self.high == self.low:
+            return f"{100 * self.mean:.1f}%"
+        return f"{100 * self.mean:.1f}% ({100 * self.low:.1f}-{100 * self.high:.1f})"
+
+
+@dataclass(frozen=True)
+class PairReport:
+    """One pair's row: its scores with the tested parameters, and with its own fit.
+
+    `testing` and `training` hold one :class:`Score` per update-order seed;
+    `training` and `params` are None when the pair was not fitted.
+    """
+
+    name: str
+    testing: tuple
+    training: tuple | None
+    params: Params | None
+
+
+@dataclass(frozen=True)
+class SolverReport:
+    """The tested parameters solved another way: per pair and per seed, and pooled."""
+
+    rows: tuple
+    held_out: tuple
+
+
+@dataclass(frozen=True)
+class PeerReport:
+    """A deterministic peer matcher: per pair, and pooled over the held-out pairs."""
+
+    rows: tuple
+    held_out: Score
+
+
+@dataclass(frozen=True)
+class ProtocolReport:
+    """What :func:`protocol` measured.
+
+    Attributes
+    ----------
+    method : str
+    params : Params
+        The parameters fitted on the training pair and tested on all.
+    solver : str
+        How the tested energies were solved.
+    train : int
+        Index of the training pair.
+    rows : tuple of PairReport
+    held_out : tuple of Score
+        The held-out pairs' pooled score, one per update-order seed.
+    peers : dict of str to PeerReport
+    solvers : dict of str to SolverReport
+    """
+
+    method: str
+    params: Params
+    train: int
+    rows: tuple
+    held_out: tuple
+    solver: str = DEFAULT_SOLVER
+    peers: dict = field(default_factory=dict)
+    solvers: dict = field(default_factory=dict)
+
+    def to_dict(self) -> dict:
+        """The JSON of ``ismb-lab evaluate --json``."""
+        def figures(s: Score) -> dict:
+            return {"cet": str(s), "recall": s.recall, "precision": s.precision}
+
+        return {"method": self.method, "solver": self.solver, "train": self.train,
+                "params": self.params.to_dict(),
+                "seeds": len(self.held_out),
+                "pairs": [{"name": r.name, "testing": [str(s) for s in r.testing],
+                           "training": None if r.training is None else [str(s) for s in r.training]}
+                          for r in self.rows],
+                "held_out": [figures(s) for s in self.held_out],
+                "peers": {name: {"held_out": str(p.held_out), "recall": p.held_out.recall,
+                                 "precision": p.held_out.precision} for name, p in self.peers.items()},
+                "solvers": {name: [figures(s) for s in v.held_out] for name, v in self.solvers.items()}}
+
+
+def protocol(cases, method="III", *, train: int = 0, seeds: int = 5, ga: GAConfig | None = None,
+             rng=0, peers: bool = False, progress=None, solver: str = DEFAULT_SOLVER, solvers=(),
+             fit_solver: str = DEFAULT_SOLVER, fit_seeds: int = 1, fit_all: bool = True,
+             **settings) -> ProtocolReport:
+    """Fig. 5.10's protocol: GA-fit on each pair ("training") and on one pair applied to all
+    the others ("testing"), every network figure over `seeds` update-order seeds.
+
+    Parameters
+    ----------
+    cases : sequence of Case
+    method : str
+        A name in :func:`ismb_lab.methods.method_names`.
+    train : int
+        Index of the pair whose parameters are tested on all.
+    seeds : int
+        Update-order seeds per figure.
+    ga : GAConfig, optional
+        The GA's settings; `settings` override its fields (e.g. ``generations=60``).
+    rng : int or Generator
+        Seed of the GA.
+    peers : bool
+        Also score the peer matchers of :mod:`ismb_lab.peers` (deterministic), with the
+        tested parameters where they use S and C.
+    progress : callable, optional
+        ``progress(case_name, generation)`` after every GA generation.
+    solver : str
+        How the tested energies are solved (:data:`ismb_lab.solvers.SOLVERS`); a solver
+        that ignores the seed is run once.
+    solvers : sequence of str
+        Other solvers of the same energies with the same tested parameters, reported
+        beside `solver`'s rows.
+    fit_solver, fit_seeds
+        How the GA scores a chromosome (:class:`~ismb_lab.tuning.Fitness`).
+    fit_all : bool
+        Fit every pair for its "training" column; without it only the training pair is
+        fitted and the other rows' ``training`` and ``params`` are None (the held-out
+        figures do not use them).
+
+    Returns
+    -------
+    ProtocolReport
+    """
+    own = "protocol"
+    if not cases:
+        raise ParameterError(message("cases", own, "at least one pair", cases))
+    if not all(isinstance(c, Case) for c in cases):
+        raise ParameterTypeError(message("cases", own, "a sequence of Case", cases))
+    method = get_method(method).name
+    train = check_number(train, "train", own, low=0, high=len(cases) - 1, integer=True)
+    seeds = check_number(seeds, "seeds", own, low=1, integer=True)
+    main = get_solver(solver, own)
+    fit_solver = get_solver(fit_solver, own, "fit_solver").name
+    fit_seeds = check_number(fit_seeds, "fit_seeds", own, low=1, integer=True)
+    solvers = (solvers,) if isinstance(solvers, str) else tuple(solvers)
+    chosen = [get_solver(name, own, "solvers") for name in solvers]
+    if any(s.name == main.name for s in chosen):
+        raise ParameterError(message("solvers", own, f"solvers other than solver={main.name!r}, "
+                                     "whose rows the report has already", solvers))
+    runs = range(seeds) if main.seeded else range(1)
+    ga = (ga or GAConfig()).updated(own, **settings)
+
+    def fit(case):
+        last = None
+        for last in tune([case], method, rng=rng, ga=ga, solver=fit_solver, seeds=fit_seeds):
+            if progress:
+                progress(case.name, last)
+        return to_params(method, last.best_chromosome)
+
+    tested = fit(cases[train])
+    rows = []
+    for n, case in enumerate(cases):
+        own_params = tested if n == train else fit(case) if fit_all else None
+        testing = tuple(evaluate([case], method, tested, seed, main.name) for seed in runs)
+        training = None if own_params is None else tuple(
+            evaluate([case], method, own_params, seed, main.name) for seed in runs)
+        rows.append(PairReport(case.name, testing, training, own_params))
+
+    def pooled(per_pair, runs):
+        return tuple(sum((p[s] for n, p in enumerate(per_pair) if n != train), _NONE) for s in runs)
+
+    held_out = pooled([r.testing for r in rows], runs)
+    solver_reports = {}
+    for other in chosen:
+        other_runs = range(seeds) if other.seeded else range(1)
+        per_pair = tuple(tuple(evaluate([c], method, tested, s, other.name) for s in other_runs)
+                         for c in cases)
+        solver_reports[other.name] = SolverReport(per_pair, pooled(per_pair, other_runs))
+    peer_reports = {}
+    if peers:
+        for name, peer in PEERS.items():
+            per_pair = tuple(score(peer(c.prepared.problem, method, tested), c.targets, c.unknown)
+                             for c in cases)
+            peer_reports[name] = PeerReport(per_pair, sum(
+                (p for n, p in enumerate(per_pair) if n != train), _NONE))
+    return ProtocolReport(method, tested, train, tuple(rows), held_out, main.name, peer_reports,
+                          solver_reports)
+
+
+def _figures(s: Score) -> str:
+    return f"{s}   C/T {100 * s.recall:.1f}%   precision {100 * s.precision:.1f}%"
+
+
+def _over_seeds(scores, what: str) -> list[str]:
+    if len(scores) < 2:
+        return []
+    recall = Spread.of([s.recall for s in scores])
+    precision = Spread.of([s.precision for s in scores])
+    return [f"  {what} over {len(scores)} update-order seeds: C/T mean {recall}   "
+            f"precision mean {precision}"]
+
+
+def format_protocol(report: ProtocolReport) -> str:
+    """The protocol as the thesis prints it: "Testing: 14/2+0/16  Training: 16/0+1/16".
+
+    Each line that shows a count shows that count's own percentages; the mean and
+    range over the update-order seeds come on a line of their own.
+    """
+    lines = [f"Method-{report.method} ({report.solver}), parameters fitted on pair {report.train}: "
+             f"{report.params}",
+             "Per pair, update-order seed 0 (C/wrong+extra/T):"]
+    for n, row in enumerate(report.rows):
+        mark = " (training pair)" if n == report.train else ""
+        trained = "not fitted" if row.training is None else row.training[0]
+        lines.append(f"{row.name}{mark}: Testing: {row.testing[0]}  Training: {trained}")
+    if report.held_out:
+        lines.append(f"Held-out total, seed 0: {_figures(report.held_out[0])}")
+        lines += _over_seeds(report.held_out, "held-out total")
+    for name, variant in report.solvers.items():
+        seed = " (seed 0)" if get_solver(name).seeded else ""
+        lines.append(f"solver {name:>9}: held-out{seed} {_figures(variant.held_out[0])}   per pair: "
+                     + "  ".join(str(p[0]) for p in variant.rows))
+        lines += _over_seeds(variant.held_out, f"solver {name}")
+    for name, peer in report.peers.items():
+        lines.append(f"peer {name:>10}: held-out {_figures(peer.held_out)}   per pair: "
+                     + "  ".join(str(s) for s in peer.rows))
+    return "\n".join(lines)

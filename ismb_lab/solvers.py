@@ -1,0 +1,201 @@
+"""How a network's final state is found, and how a final state becomes matches.
+
+Three solvers minimise the same energy (3-15):
+
+* ``"network"``: the thesis' discrete Hopfield network (:func:`ismb_lab.hopfield.run`),
+  asynchronous flips from "all candidates on" to a fixed point; it honours the
+  update rule, the stop rule and the kernel.
+* ``"anneal"``: mean-field annealing (:func:`ismb_lab.annealing.anneal`), the analog
+  network of the thesis' future work, polished by the discrete network.
+* ``"exact"``: the global minimum as a mixed-integer programme
+  (:func:`ismb_lab.exact.milp_minimum`).  It ignores the seed, and refuses a
+  problem it cannot solve within its time limit.
+
+:data:`SOLVERS` is the one registry of them, which the command line, the library
+and the widgets read.  :func:`to_matches` is the one way from a final state to
+matched ``(i, k)`` feature pairs, including a method's post-processing.
+
+>>> from ismb_lab.hopfield import Network
+>>> net = Network.from_arrays(1, 2, rows=[0, 0], cols=[0, 1], similarity=[0.5, -0.7],
+...                           pair_a=[], pair_b=[], pair_c=[])
+>>> [solve(net, name).state.tolist() for name in SOLVERS]
+[[1, 0], [1, 0], [1, 0]]
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Callable, NamedTuple
+
+import numpy as np
+
+from ._validation import ParameterTypeError, check_choice, check_number, message
+from .annealing import anneal
+from .exact import milp_minimum
+from .hopfield import RULES, STOP_RULES, Network, run
+
+__all__ = ["ANNEAL", "DEFAULT_SOLVER", "EXACT", "NETWORK", "SOLVERS", "Matches", "Solution", "Solver", "get_solver", "solve",
+           "solver_names", "to_matches"]
+
+
+@dataclass(frozen=True, eq=False)
+class Solution:
+    """A solver's final state.
+
+    Attributes
+    ----------
+    state : (n,) uint8 ndarray
+        Outputs of the candidate neurons, before any post-processing.
+    energy : float
+        Energy (3-15) of `state`.
+    stop_rule : str
+        What stopped it: the network's ``"sweep"``, ``"stall"`` or ``"max_attempts"``,
+        else the solver's name.
+    attempts : int
+        Update attempts of the discrete network (annealing: of its polishing run;
+        exact: 0).
+    converged : bool
+        False only when the network hit its attempt limit.
+    """
+
+    state: np.ndarray
+    energy: float
+    stop_rule: str
+    attempts: int
+    converged: bool = True
+
+
+@dataclass(frozen=True)
+class Solver:
+    """One way to minimise the energy: its name, what it is, and the function.
+
+    ``solve(net, seed, stop_rule, rule, kernel) -> Solution``; `seeded` says whether
+    the seed matters.
+    """
+
+    name: str
+    description: str
+    seeded: bool
+    solve: Callable
+
+
+def _network(net, seed, stop_rule, rule, kernel) -> Solution:
+    r = run(net, rng=seed, stop_rule=stop_rule, rule=rule, kernel=kernel)
+    return Solution(r.state, r.energy, r.stop_rule, r.attempts, r.converged)
+
+
+def _anneal(net, seed, stop_rule, rule, kernel) -> Solution:
+    r = anneal(net, rng=seed)
+    return Solution(r.state, float(r.energy), ANNEAL, 0)
+
+
+def _exact(net, seed, stop_rule, rule, kernel) -> Solution:
+    r = milp_minimum(net)
+    return Solution(r.state, float(r.energy), EXACT, 0)
+
+
+#: The solvers' names, for code that means one of them.
+NETWORK, ANNEAL, EXACT = "network", "anneal", "exact"
+
+#: The solvers by name, in the order help texts list them.
+SOLVERS = {s.name: s for s in (
+    Solver(NETWORK, "the thesis' discrete network: asynchronous flips to a fixed point", True, _network),
+    Solver(ANNEAL, "mean-field annealing, then the discrete network from the rounded state", True, _anneal),
+    Solver(EXACT, "the global minimum energy as a mixed-integer programme (small problems)", False, _exact),
+)}
+
+#: The thesis' solver, the default everywhere except the depth demo.
+DEFAULT_SOLVER = NETWORK
+
+
+def solver_names() -> tuple[str, ...]:
+    """The registered solvers' names.
+
+    >>> solver_names()
+    ('network', 'anneal', 'exact')
+    """
+    return tuple(SOLVERS)
+
+
+def get_solver(name, owner: str = "get_solver", parameter: str = "solver") -> Solver:
+    """Look a solver up by name, checked as `owner`'s argument `parameter`.
+
+    >>> get_solver("annealing")
+    Traceback (most recent call last):
+    ...
+    ismb_lab.ParameterError: The 'solver' parameter of get_solver must be one of 'network', 'anneal', 'exact'. Got 'annealing' instead.
+    """
+    return SOLVERS[check_choice(name, parameter, owner, solver_names())]
+
+
+def solve(net: Network, solver: str = DEFAULT_SOLVER, *, seed: int = 0, stop_rule: str = "sweep",
+          rule: str = "exact", kernel: str = "numba", owner: str = "solve") -> Solution:
+    """Minimise `net`'s energy with one of :data:`SOLVERS`.
+
+    Parameters
+    ----------
+    net : Network
+    solver : str
+        A name in :data:`SOLVERS`.
+    seed : int
+        Update-order (and annealing) seed; the exact solver ignores it.
+    stop_rule, rule, kernel
+        The discrete network's settings (:func:`ismb_lab.hopfield.run`); only the
+        ``"network"`` solver reads them.
+    owner : str
+        The function named in error messages.
+
+    Returns
+    -------
+    Solution
+    """
+    chosen = get_solver(solver, owner)
+    if not isinstance(net, Network):
+        raise ParameterTypeError(message("net", owner, "a Network", net))
+    check_number(seed, "seed", owner, low=0, integer=True)
+    check_choice(stop_rule, "stop_rule", owner, STOP_RULES)
+    check_choice(rule, "rule", owner, RULES)
+    return chosen.solve(net, seed, stop_rule, rule, kernel)
+
+
+class Matches(NamedTuple):
+    """Matched feature pairs and the post-processed state they come from."""
+
+    pairs: np.ndarray
+    state: np.ndarray
+
+
+def to_matches(neurons, state, method=None) -> Matches:
+    """The matched ``(i, k)`` feature pairs of a final state: the one place this is done.
+
+    Parameters
+    ----------
+    neurons : Problem, Network or Topology
+        Anything with the candidate neurons' ``rows`` and ``cols``.
+    state : (n,) array_like of 0/1
+        Outputs of the candidate neurons.
+    method : Method, optional
+        Its :meth:`~ismb_lab.methods.Method.postprocess` decides which of the
+        neurons that are on stay matches (Method-I drops multiple matches).
+
+    Returns
+    -------
+    Matches
+        ``pairs`` (m, 2) int ndarray sorted by neuron, and the post-processed
+        ``state`` (uint8).
+
+    Examples
+    --------
+    >>> from ismb_lab.methods import build_problem
+    >>> p = build_problem([[100, 50], [110, 50]], [[80, 51], [90, 51]], np.zeros((2, 2)))
+    >>> to_matches(p, [1, 0, 0, 1]).pairs.tolist()
+    [[0, 0], [1, 1]]
+    """
+    state = np.asarray(state, dtype=np.uint8)
+    on = np.flatnonzero(state)
+    if method is not None:
+        on = np.sort(method.postprocess(neurons, on))
+        state = np.zeros_like(state)
+        state[on] = 1
+    pairs = np.stack([neurons.rows[on], neurons.cols[on]], axis=1).reshape(-1, 2)
+    return Matches(pairs.astype(np.int64, copy=False), state)
