@@ -1,4 +1,5 @@
-"""What every widget shares: figure panes, the error log, folder loading.
+"""What every widget shares: figure panes, the status line, the error area, the pair view,
+folder loading.
 
 A widget is a model (plain Python, in its own module), a view (matplotlib
 artists created once and updated in place) and a controller (ipywidgets
@@ -7,6 +8,7 @@ callbacks).  This module holds the plumbing all of them use.
 
 from __future__ import annotations
 
+import contextlib
 import functools
 import io
 import threading
@@ -111,10 +113,13 @@ class Pane:
 
 
 class Base:
-    """Root container, status line, error log and notebook display of a widget.
+    """Root container, status line, error area and notebook display of a widget.
 
     Subclasses set :attr:`widget` (an ipywidgets container with the widget's CSS
-    class) and list their figure panes in :attr:`panes`.
+    class) and list their figure panes in :attr:`panes`.  Every callback goes
+    through :meth:`guard`: its errors land in :attr:`log`, and while the widget
+    sets its own controls (:meth:`syncing`) the callbacks that would answer those
+    changes do nothing.
     """
 
     widget: ipywidgets.Box
@@ -126,6 +131,26 @@ class Base:
         self.log = ipywidgets.Output()
         self.log.add_class("ismb-log")
         self.errors: list[BaseException] = []
+        self._syncing = 0
+
+    @contextlib.contextmanager
+    def syncing(self):
+        """Set controls from the model without their guarded observers answering.
+
+        >>> class Demo(Base):
+        ...     pass
+        >>> demo, calls = Demo(), []
+        >>> callback = demo.guard(lambda: calls.append(1))
+        >>> with demo.syncing():
+        ...     callback()
+        >>> callback(); calls
+        [1]
+        """
+        self._syncing += 1
+        try:
+            yield
+        finally:
+            self._syncing -= 1
 
     def say(self, text: str) -> None:
         """Show `text` in the status line (plain text; it is HTML-escaped)."""
@@ -137,6 +162,8 @@ class Base:
         """Wrap a callback so that an exception is shown in the log, never lost."""
         @functools.wraps(callback)
         def safe(*args, **kwargs):
+            if self._syncing:
+                return None
             try:
                 return callback(*args, **kwargs)
             except Exception as exc:  # a callback has nobody above it to catch
@@ -220,3 +247,32 @@ def path_labels(ax, offsets, strings, colour, *, size: float = 7.0, shift=(2.5, 
 def number_labels(ax, xy, colour, size: float = 7.0, start: int = 1):
     """Number the points ``start, start + 1, ...`` beside them, as one artist (:func:`path_labels`)."""
     return path_labels(ax, xy, range(start, start + len(xy)), colour, size=size)
+
+
+def draw_pair(ax, model) -> dict:
+    """The pair view: the image pair side by side, numbered features and the current matches.
+
+    `model` has ``prepared`` (:class:`~ismb_lab.matching.Prepared`) and ``pairs``
+    (the matches as ``(i, k)``); :func:`update_pair` redraws the matches in place.
+    """
+    from ..plotting import GAP, plot_matches
+
+    pair = model.prepared.pair
+    left_xy, right_xy = model.prepared.problem.left_xy, model.prepared.problem.right_xy
+    art = plot_matches(ax, pair.left, pair.right, left_xy, right_xy, model.pairs, numbers=False)
+    art["image"].set_data(grey_rgb(art["image"].get_array()))
+    art["image"].set_interpolation("nearest")
+    offset = np.array([pair.shape[1] + GAP, 0.0])
+    number_labels(ax, left_xy, "yellow")
+    number_labels(ax, right_xy + offset, "cyan")
+    art["lines"].set_clim(0, 40)
+    art["offset"] = offset
+    return art
+
+
+def update_pair(art: dict, model) -> None:
+    """Show `model`'s current matches in a view made by :func:`draw_pair`."""
+    left_xy, right_xy = model.prepared.problem.left_xy, model.prepared.problem.right_xy
+    pairs = model.pairs
+    art["lines"].set_segments(np.stack([left_xy[pairs[:, 0]], right_xy[pairs[:, 1]] + art["offset"]], axis=1))
+    art["lines"].set_array(np.hypot(*(left_xy[pairs[:, 0]] - right_xy[pairs[:, 1]]).T))

@@ -341,7 +341,6 @@ class DepthDemo(Base):
             s.observe(self.guard(self._on_control), names="value")
             self.sliders[name] = s
         self.ranking = with_class(ipywidgets.HTML(""), "ismb-ranking")
-        self._hold = False
         self.method_menu.observe(self.guard(self._on_control), names="value")
         self.seed_field.observe(self.guard(self._on_control), names="value")
         self.recompute_button.on_click(self.guard(lambda _: self.recompute()))
@@ -360,8 +359,7 @@ class DepthDemo(Base):
         return cls(*pairs, **kw)
 
     def _on_control(self, _change) -> None:
-        if not self._hold:
-            self.recompute()
+        self.recompute()
 
     def recompute(self) -> None:
         """Match both pairs again with the controls' method, seed and tolerances; redraw.
@@ -377,14 +375,11 @@ class DepthDemo(Base):
         self.refresh()
 
     def _sync_controls(self) -> None:
-        self._hold = True
-        try:
+        with self.syncing():
             self.method_menu.value = self.model.method
             self.seed_field.value = self.model.seed
             for name, s in self.sliders.items():
                 s.value = getattr(self.model.config, name)
-        finally:
-            self._hold = False
 
     def refresh(self) -> None:
         """Update both views, the ranking and the status from the model, and draw."""

@@ -18,8 +18,7 @@ from ..matching import MatchConfig, MatchResult, Prepared, match, prepare
 from ..methods import THETA_C, Params, all_genes, get_method, method_names
 from ..similarity import transfer
 from ..targets import TargetSet, load_targets, snap
-from ._common import Base, Pane, pair_files, with_class
-from .stepper import draw_pair, update_pair  # the same pair view as the stepper's
+from ._common import Base, Pane, draw_pair, pair_files, update_pair, with_class
 
 __all__ = ["draw_transfer", "ExplorerModel", "ParameterExplorer", "update_transfer"]
 
@@ -200,7 +199,6 @@ class ParameterExplorer(Base):
         self.score_label = with_class(ipywidgets.HTML(""), "ismb-score")
         self.method_menu.observe(self.guard(lambda c: self._change(method=c["new"])), names="value")
         self.seed_field.observe(self.guard(lambda c: self._change(seed=c["new"])), names="value")
-        self._hold = False
         controls = ipywidgets.HBox([ipywidgets.VBox(list(self.sliders.values())),
                                     ipywidgets.VBox([self.method_menu, self.seed_field])])
         self.widget = with_class(ipywidgets.VBox([controls, self.score_label, self.status,
@@ -224,18 +222,13 @@ class ParameterExplorer(Base):
         """Show and use `params` (e.g. the GA's best): one rematch, whatever changed."""
         if not isinstance(params, Params):
             raise ParameterTypeError(message("params", "ParameterExplorer.set_params", "a Params", params))
-        self._hold = True
-        try:
+        with self.syncing():
             for gene, slider in self.sliders.items():
                 if getattr(params, gene) is not None:
                     slider.value = min(max(getattr(params, gene), slider.min), slider.max)
-        finally:
-            self._hold = False
         self._change(params=params)
 
     def _on_slider(self, change) -> None:
-        if self._hold:
-            return
         gene = next(g for g, s in self.sliders.items() if s is change["owner"])
         self._change(**{gene: float(change["new"])})
 

@@ -14,12 +14,10 @@ from .._validation import ParameterTypeError, check_choice, check_number, messag
 from ..hopfield import RULES, STOP_RULES, Update, energy, iter_updates
 from ..matching import MatchConfig, Prepared, prepare
 from ..methods import Params, get_method
-from ..plotting import GAP, plot_matches
 from ..solvers import to_matches
-from ._common import Base, Pane, button, grey_rgb, number_labels, pair_files, path_labels, with_class
+from ._common import Base, Pane, button, draw_pair, pair_files, path_labels, update_pair, with_class
 
-__all__ = ["draw_energy", "draw_grid", "draw_pair", "HopfieldStepper", "net_xy", "StepperModel",
-           "update_energy", "update_grid", "update_pair"]
+__all__ = ["draw_energy", "draw_grid", "HopfieldStepper", "StepperModel", "update_energy", "update_grid"]
 
 
 class StepperModel:
@@ -185,32 +183,6 @@ def update_grid(art: dict, model: StepperModel) -> None:
         cursor.set_visible(True)
         cursor.set_xy((model.last.k - 0.5, model.last.i - 0.5))
         cursor.set_edgecolor("#d62728" if model.last.changed else "#ff7f0e")
-
-
-def draw_pair(ax, model: StepperModel) -> dict:
-    """The image pair, its numbered features and the current matches."""
-    pair = model.prepared.pair
-    left_xy, right_xy = net_xy(model)
-    art = plot_matches(ax, pair.left, pair.right, left_xy, right_xy, model.pairs, numbers=False)
-    art["image"].set_data(grey_rgb(art["image"].get_array()))
-    art["image"].set_interpolation("nearest")
-    offset = np.array([pair.shape[1] + GAP, 0.0])
-    number_labels(ax, left_xy, "yellow")
-    number_labels(ax, right_xy + offset, "cyan")
-    art["lines"].set_clim(0, 40)
-    art["offset"] = offset
-    return art
-
-
-def net_xy(model: StepperModel):
-    return model.prepared.problem.left_xy, model.prepared.problem.right_xy
-
-
-def update_pair(art: dict, model: StepperModel) -> None:
-    left_xy, right_xy = net_xy(model)
-    pairs = model.pairs
-    art["lines"].set_segments(np.stack([left_xy[pairs[:, 0]], right_xy[pairs[:, 1]] + art["offset"]], axis=1))
-    art["lines"].set_array(np.hypot(*(left_xy[pairs[:, 0]] - right_xy[pairs[:, 1]]).T))
 
 
 def draw_energy(ax, model: StepperModel) -> dict:
