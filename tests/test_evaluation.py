@@ -43,6 +43,8 @@ def test_the_thesis_fig_5_10_rows_do_not_add_up_to_its_printed_total():
 
 # --- solvers in the protocol, on hand-made pairs -----------------------------------------------
 
+import re
+
 import numpy as np
 
 from ismb_lab.matching import Prepared
@@ -96,3 +98,35 @@ def test_protocol_can_fit_the_training_pair_only():
     assert lean.rows[0].training == full.rows[0].training
     assert lean.rows[1].training is None and lean.rows[2].params is None
     assert "Training: not fitted" in format_protocol(lean)
+
+
+# --- format_protocol: every printed count beside its own percentages -------------------------
+
+COUNT = re.compile(r"(\d+)/(\d+)\+(\d+)/(\d+)\s+C/T ([\d.]+)%\s+precision ([\d.]+)%")
+
+
+def check_printed_figures(text: str) -> int:
+    """Each 'C/W+E/T   C/T x%   precision y%' on a line: x and y are that count's own."""
+    checked = 0
+    for line in text.splitlines():
+        for c, w, e, t, recall, precision in COUNT.findall(line):
+            c, w, e, t = map(int, (c, w, e, t))
+            assert float(recall) == pytest.approx(100 * c / t, abs=0.05), line
+            assert float(precision) == pytest.approx(100 * c / (c + w + e), abs=0.05), line
+            checked += 1
+        if "%" in line and not COUNT.search(line):
+            assert "over" in line and "mean" in line and not re.search(r"\d+/\d+\+\d+/\d+", line), line
+    return checked
+
+
+def test_every_printed_percentage_is_its_printed_counts():
+    cases = [hand_case(0, "a"), hand_case(30, "b"), hand_case(60, "c")]
+    report = protocol(cases, "III", train=0, seeds=3, generations=3, solvers=("anneal", "exact"), peers=True)
+    text = format_protocol(report)
+    assert check_printed_figures(text) == 1 + 2 + 4     # held-out, two solvers, four peers
+    assert "over 3 update-order seeds" in text
+
+
+def test_the_figure_check_catches_a_mean_beside_a_count():
+    with pytest.raises(AssertionError):
+        check_printed_figures("Held-out total: 146/5+17/159   C/T 89.3%   precision 86.9%")
