@@ -6,9 +6,10 @@ import json
 from pathlib import Path
 
 from .._files import atomic_write_text
+from ..protocol import format_protocol, load_manifest, protocol
 from ..solvers import DEFAULT_SOLVER, SOLVERS
 from ._common import (DEFAULT_METHOD, UsageError, add_ga_options, add_method_option, add_solver_option,
-                      ga_config, progress_bar)
+                      default_of, ga_config, progress_bar)
 
 __all__ = ["add_parser", "run"]
 
@@ -20,9 +21,11 @@ def add_parser(sub) -> None:
     e.add_argument("manifest", type=Path, help='JSON: {"pairs": [{"left", "right", "targets", '
                    '"roi", "shift"} or {"source": "middlebury-motorcycle", "roi"}, ...]}')
     add_method_option(e, DEFAULT_METHOD)
-    e.add_argument("--train", type=int, default=0, metavar="INDEX",
-                   help="the pair whose GA parameters are tested on the others (default: %(default)s)")
-    e.add_argument("--seeds", type=int, default=5, help="update-order seeds per figure (default: %(default)s)")
+    e.add_argument("--train", type=int, default=None, metavar="INDEX",
+                   help="the pair whose GA parameters are tested on the others "
+                   f"(default: {default_of(protocol, 'train')})")
+    e.add_argument("--seeds", type=int, default=None,
+                   help=f"update-order seeds per figure (default: {default_of(protocol, 'seeds')})")
     add_ga_options(e)
     e.add_argument("--peers", action="store_true", help="also score the peer matchers")
     add_solver_option(e, DEFAULT_SOLVER)
@@ -30,11 +33,11 @@ def add_parser(sub) -> None:
                    help="also solve the tested energies these other ways")
     e.add_argument("--fit-solver", choices=tuple(SOLVERS), default=None,
                    help=f"how the GA solves each network while fitting (default: {DEFAULT_SOLVER})")
-    e.add_argument("--fit-seeds", type=int, default=1, metavar="N",
-                   help="update-order seeds averaged in each GA fitness (default: %(default)s)")
-    e.add_argument("--ga-seed", type=int, default=0, metavar="N",
-                   help="seed of the GA (default: %(default)s); a small training pair can leave the GA "
-                   "on a plateau, so compare a few")
+    e.add_argument("--fit-seeds", type=int, default=None, metavar="N",
+                   help=f"update-order seeds averaged in each GA fitness (default: {default_of(protocol, 'fit_seeds')})")
+    e.add_argument("--ga-seed", type=int, default=None, metavar="N",
+                   help=f"seed of the GA (default: {default_of(protocol, 'rng')}); a small training pair can "
+                   "leave the GA on a plateau, so compare a few")
     e.add_argument("--held-out-only", action="store_true",
                    help="fit only the training pair (the held-out figures are the same; the other "
                    "rows' 'Training' column is skipped)")
@@ -43,9 +46,7 @@ def add_parser(sub) -> None:
 
 
 def run(args) -> int:
-    from ..protocol import format_protocol, load_manifest, protocol
-
-    if args.ga_seed < 0:
+    if args.ga_seed is not None and args.ga_seed < 0:
         raise UsageError(f"--ga-seed must be an integer >= 0, got {args.ga_seed}")
     ga = ga_config(args)
     cases = load_manifest(args.manifest)
@@ -60,15 +61,16 @@ def run(args) -> int:
         bars[name].set_postfix(best=f"{record.best:g}", mean=f"{record.mean:.2f}")
 
     try:
-        report = protocol(cases, args.method or DEFAULT_METHOD, train=args.train, seeds=args.seeds, ga=ga,
-                          peers=args.peers, progress=progress, solver=args.solver or DEFAULT_SOLVER,
-                          solvers=tuple(args.solvers), fit_solver=args.fit_solver or DEFAULT_SOLVER,
-                          fit_seeds=args.fit_seeds, rng=args.ga_seed, fit_all=not args.held_out_only)
+        given = {k: v for k, v in (("train", args.train), ("seeds", args.seeds), ("fit_seeds", args.fit_seeds),
+                                   ("rng", args.ga_seed), ("solver", args.solver),
+                                   ("fit_solver", args.fit_solver)) if v is not None}
+        report = protocol(cases, args.method or DEFAULT_METHOD, ga=ga, peers=args.peers, progress=progress,
+                          solvers=tuple(args.solvers), fit_all=not args.held_out_only, **given)
     finally:
         for bar in bars.values():
             bar.close()
     print(format_protocol(report))
     if args.json is not None:
-        data = {**report.to_dict(), "seeds": args.seeds, "ga_seed": args.ga_seed}
+        data = {**report.to_dict(), "ga_seed": given.get("rng", default_of(protocol, "rng"))}
         atomic_write_text(args.json, json.dumps(data, indent=2) + "\n")
     return 0

@@ -6,11 +6,17 @@ import sys
 from pathlib import Path
 
 from ..matching import MatchConfig
+from ..methods import save_params
+from ..protocol import Case
 from ..solvers import DEFAULT_SOLVER
+from .. import tuning
 from ._common import (DEFAULT_METHOD, UsageError, add_feature_options, add_ga_options, add_method_option,
-                      add_solver_option, ga_config, match_config, progress_bar)
+                      add_solver_option, default_of, ga_config, match_config, progress_bar)
 
 __all__ = ["add_parser", "run"]
+
+#: The GA seed :func:`ismb_lab.tuning.tune` uses by default.
+GA_SEED = default_of(tuning.tune, "rng")
 
 
 def add_parser(sub) -> None:
@@ -23,7 +29,7 @@ def add_parser(sub) -> None:
     t.add_argument("targets", type=Path, help="target pairs (JSON, as saved by the labeller)")
     add_method_option(t, DEFAULT_METHOD)
     add_ga_options(t)
-    t.add_argument("--seed", type=int, default=0, help="seed of the GA (default: %(default)s)")
+    t.add_argument("--seed", type=int, default=None, help=f"seed of the GA (default: {GA_SEED})")
     add_solver_option(t, DEFAULT_SOLVER)
     add_feature_options(t, MatchConfig())
     t.add_argument("--out", type=Path, default=Path("params.json"), metavar="PARAMS.json",
@@ -32,11 +38,8 @@ def add_parser(sub) -> None:
 
 
 def run(args) -> int:
-    from ..methods import save_params
-    from ..protocol import Case
-    from ..tuning import evaluate, to_params, tune
-
     method, solver, ga = args.method or DEFAULT_METHOD, args.solver or DEFAULT_SOLVER, ga_config(args)
+    seed = GA_SEED if args.seed is None else args.seed
     case = Case.from_files(args.left, args.right, args.targets, match_config(args))
     if len(case.left_out):
         print(f"ismb-lab: note: {len(case.left_out)} targets have no corner within 1.5 px and are "
@@ -44,7 +47,7 @@ def run(args) -> int:
     if len(case.targets) == 0:
         raise UsageError(f"{args.targets}: no target pair lies on the corners found "
                          f"({len(case.left_out)} targets, {len(case.prepared.problem.left_xy)} left corners)")
-    records = tune([case], method, rng=args.seed, ga=ga, solver=solver)
+    records = tuning.tune([case], method, rng=seed, ga=ga, solver=solver)
     best, interrupted = None, False
     with progress_bar(ga.generations + 1, f"Method-{method} GA") as bar:
         try:
@@ -55,10 +58,10 @@ def run(args) -> int:
             interrupted = True
     if best is None:
         raise KeyboardInterrupt
-    params = to_params(method, best.best_chromosome)
+    params = tuning.to_params(method, best.best_chromosome)
     save_params(args.out, method, params, solver=solver, fitness=best.best, generations=best.index,
-                seed=args.seed, targets=len(case.targets), interrupted=interrupted)
-    result = evaluate([case], method, params, solver=solver)
+                seed=seed, targets=len(case.targets), interrupted=interrupted)
+    result = tuning.evaluate([case], method, params, solver=solver)
     print(f"Method-{method} ({solver}): best fitness {best.best:g} of {len(case.targets)} after "
           f"{best.index} generations; C/E/T {result}; parameters {params.to_dict()}")
     print(f"written to {args.out}")
