@@ -180,6 +180,11 @@ class Topology:
                                              "a shared row or column"))
         object.__setattr__(self, "_orders", {})
 
+    def __getstate__(self):
+        # The remembered visiting orders hold generators, which cannot be pickled (worker
+        # processes of the protocol); a copy draws them again, the same for the same seed.
+        return {**self.__dict__, "_orders": {}}
+
     @property
     def n_neurons(self) -> int:
         return len(self.rows)

@@ -11,6 +11,10 @@ optionally scores other solvers of the same energy and the peer matchers of
 from __future__ import annotations
 
 import json
+import multiprocessing
+import numbers
+import signal
+from concurrent.futures import ProcessPoolExecutor
 from dataclasses import dataclass, field, replace
 from pathlib import Path
 
@@ -236,7 +240,7 @@ class ProtocolReport:
 
 def protocol(cases, method="III", *, train: int = 0, seeds: int = 5, ga: GAConfig | None = None,
              rng=0, peers: bool = False, progress=None, solver: str = DEFAULT_SOLVER, solvers=(),
-             fit_solver: str = DEFAULT_SOLVER, fit_seeds: int = 1, fit_all: bool = True,
+             fit_solver: str = DEFAULT_SOLVER, fit_seeds: int = 1, fit_all: bool = True, jobs: int = 1,
              **settings) -> ProtocolReport:
     """Fig. 5.10's protocol: GA-fit on each pair ("training") and on one pair applied to all
     the others ("testing"), every network figure over `seeds` update-order seeds.
@@ -271,6 +275,11 @@ def protocol(cases, method="III", *, train: int = 0, seeds: int = 5, ga: GAConfi
         Fit every pair for its "training" column; without it only the training pair is
         fitted and the other rows' ``training`` and ``params`` are None (the held-out
         figures do not use them).
+    jobs : int
+        Worker processes for the GA fits and the per-pair scores.  The report is the
+        same for every `jobs`: each fit starts from the integer seed `rng` (a
+        Generator is accepted only with ``jobs=1``), and with ``jobs > 1`` `progress`
+        is called once per finished fit, with its last generation.
 
     Returns
     -------
@@ -294,22 +303,30 @@ def protocol(cases, method="III", *, train: int = 0, seeds: int = 5, ga: GAConfi
                                      "whose rows the report has already", solvers))
     runs = range(seeds) if main.seeded else range(1)
     ga = (ga or GAConfig()).updated(own, **settings)
+    jobs = check_number(jobs, "jobs", own, low=1, integer=True)
+    if jobs > 1 and not (isinstance(rng, numbers.Integral) and not isinstance(rng, bool)):
+        raise ParameterTypeError(message("rng", own, "an integer seed when jobs > 1", rng))
+    fitted = [train] + [n for n in range(len(cases)) if n != train and fit_all]
+    fit = (method, rng, ga, fit_solver, fit_seeds)
+    with _workers(jobs) as pool:
+        if pool is None:
+            fits = {n: _fit(cases[n], *fit, progress) for n in fitted}
+        else:
+            futures = {n: pool.submit(_fit, cases[n], *fit) for n in fitted}
+            fits = {}
+            for n, future in futures.items():
+                fits[n] = future.result()
+                if progress:
+                    progress(cases[n].name, fits[n][1])
+        tested = fits[train][0]
+        task = (method, tested, runs, main.name, [(o.name, o.seeded) for o in chosen], seeds, peers)
+        owns = [fits[n][0] if n in fits else None for n in range(len(cases))]
+        if pool is None:
+            scored = [_score_pair(c, p, *task) for c, p in zip(cases, owns)]
+        else:
+            scored = list(pool.map(_score_pair, cases, owns, *([t] * len(cases) for t in task)))
 
-    def fit(case):
-        last = None
-        for last in tune([case], method, rng=rng, ga=ga, solver=fit_solver, seeds=fit_seeds):
-            if progress:
-                progress(case.name, last)
-        return to_params(method, last.best_chromosome)
-
-    tested = fit(cases[train])
-    rows = []
-    for n, case in enumerate(cases):
-        own_params = tested if n == train else fit(case) if fit_all else None
-        testing = tuple(evaluate([case], method, tested, seed, main.name) for seed in runs)
-        training = None if own_params is None else tuple(
-            evaluate([case], method, own_params, seed, main.name) for seed in runs)
-        rows.append(PairReport(case.name, testing, training, own_params))
+    rows = tuple(PairReport(c.name, s["testing"], s["training"], p) for c, s, p in zip(cases, scored, owns))
 
     def pooled(per_pair, runs):
         return tuple(sum((p[s] for n, p in enumerate(per_pair) if n != train), _NONE) for s in runs)
@@ -317,19 +334,60 @@ def protocol(cases, method="III", *, train: int = 0, seeds: int = 5, ga: GAConfi
     held_out = pooled([r.testing for r in rows], runs)
     solver_reports = {}
     for other in chosen:
-        other_runs = range(seeds) if other.seeded else range(1)
-        per_pair = tuple(tuple(evaluate([c], method, tested, s, other.name) for s in other_runs)
-                         for c in cases)
-        solver_reports[other.name] = SolverReport(per_pair, pooled(per_pair, other_runs))
+        per_pair = tuple(s["solvers"][other.name] for s in scored)
+        solver_reports[other.name] = SolverReport(per_pair, pooled(per_pair, range(len(per_pair[0]))))
     peer_reports = {}
+    for name in PEERS if peers else ():
+        per_pair = tuple(s["peers"][name] for s in scored)
+        peer_reports[name] = PeerReport(per_pair, sum((p for n, p in enumerate(per_pair) if n != train), _NONE))
+    return ProtocolReport(method, tested, train, rows, held_out, main.name, peer_reports, solver_reports)
+
+
+def _fit(case, method, rng, ga, fit_solver, fit_seeds, progress=None):
+    """One GA fit: the best parameters and the last generation's record."""
+    last = None
+    for last in tune([case], method, rng=rng, ga=ga, solver=fit_solver, seeds=fit_seeds):
+        if progress:
+            progress(case.name, last)
+    return to_params(method, last.best_chromosome), last
+
+
+def _score_pair(case, own_params, method, tested, runs, solver, others, seeds, peers) -> dict:
+    """One pair's scores: tested and own parameters, other solvers and peers."""
+    out = {"testing": tuple(evaluate([case], method, tested, s, solver) for s in runs),
+           "training": None if own_params is None else tuple(
+               evaluate([case], method, own_params, s, solver) for s in runs),
+           "solvers": {name: tuple(evaluate([case], method, tested, s, name)
+                                   for s in (range(seeds) if seeded else range(1)))
+                       for name, seeded in others},
+           "peers": {}}
     if peers:
-        for name, peer in PEERS.items():
-            per_pair = tuple(score(peer(c.prepared.problem, method, tested), c.targets, c.unknown)
-                             for c in cases)
-            peer_reports[name] = PeerReport(per_pair, sum(
-                (p for n, p in enumerate(per_pair) if n != train), _NONE))
-    return ProtocolReport(method, tested, train, tuple(rows), held_out, main.name, peer_reports,
-                          solver_reports)
+        out["peers"] = {name: score(peer(case.prepared.problem, method, tested), case.targets, case.unknown)
+                        for name, peer in PEERS.items()}
+    return out
+
+
+def _ignore_interrupts() -> None:
+    # Ctrl-C reaches the whole process group; the parent stops the pool and reports once.
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+
+
+class _workers:
+    """A process pool for ``jobs > 1`` (fresh interpreters: no state shared with the caller)."""
+
+    def __init__(self, jobs: int):
+        self.jobs, self.pool = jobs, None
+
+    def __enter__(self):
+        if self.jobs > 1:
+            self.pool = ProcessPoolExecutor(self.jobs, mp_context=multiprocessing.get_context("spawn"),
+                                            initializer=_ignore_interrupts)
+        return self.pool
+
+    def __exit__(self, kind, *_):
+        if self.pool is not None:
+            self.pool.shutdown(wait=kind is None, cancel_futures=kind is not None)
+        return False
 
 
 def _figures(s: Score) -> str:

@@ -294,6 +294,18 @@ def test_evaluate_ga_seed_and_held_out_only(manifest, tmp_path, capsys):
     assert held["held_out"] == reports["s0"]["held_out"] and held["params"] == reports["s0"]["params"]
 
 
+def test_evaluate_on_two_processes_writes_the_same_report_as_on_one(manifest, tmp_path, capsys):
+    reports = []
+    for jobs in ("1", "2"):
+        out = tmp_path / f"jobs{jobs}.json"
+        assert main(["evaluate", str(manifest), "--generations", "5", "--seeds", "2", "--peers",
+                     "--jobs", jobs, "--json", str(out)]) == 0
+        reports.append(out.read_text())
+    assert reports[0] == reports[1]
+    assert main(["evaluate", str(manifest), "--jobs", "0"]) == 2
+    assert "--jobs must be an integer >= 1" in capsys.readouterr().err
+
+
 def test_help_of_tune_and_evaluate():
     for command, options in (("tune", ("--method", "--generations", "--population", "--seed", "--roi",
                                        "--shift", "--n-min", "--n-max", "--out")),

@@ -130,3 +130,12 @@ def test_every_printed_percentage_is_its_printed_counts():
 def test_the_figure_check_catches_a_mean_beside_a_count():
     with pytest.raises(AssertionError):
         check_printed_figures("Held-out total: 146/5+17/159   C/T 89.3%   precision 86.9%")
+
+
+def test_protocol_on_two_processes_reports_exactly_what_one_process_does():
+    cases = [hand_case(0, "a"), hand_case(30, "b"), hand_case(60, "c")]
+    kwargs = dict(train=1, seeds=2, generations=4, solvers=("anneal",), peers=True, rng=3)
+    one, two = protocol(cases, "NM4", jobs=1, **kwargs), protocol(cases, "NM4", jobs=2, **kwargs)
+    assert two == one and two.to_dict() == one.to_dict()
+    with pytest.raises(TypeError, match="'rng' parameter of protocol must be an integer seed"):
+        protocol(cases, "NM4", jobs=2, rng=np.random.default_rng(0))

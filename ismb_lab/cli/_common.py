@@ -132,7 +132,6 @@ def network_settings(args) -> dict:
     return {key: getattr(args, name) for name, key in names.items() if getattr(args, name) is not None}
 
 
-def progress_bar(total: int, desc: str):
+def progress_bar(total: int, desc: str, unit: str = "gen"):
     from tqdm import tqdm
-    return tqdm(total=total, desc=desc, unit="gen", file=sys.stderr, dynamic_ncols=True,
-                disable=None)
+    return tqdm(total=total, desc=desc, unit=unit, file=sys.stderr, dynamic_ncols=True, disable=None)

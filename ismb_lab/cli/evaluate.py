@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+import os
 from pathlib import Path
 
 from .._files import atomic_write_text
@@ -41,18 +42,36 @@ def add_parser(sub) -> None:
     e.add_argument("--held-out-only", action="store_true",
                    help="fit only the training pair (the held-out figures are the same; the other "
                    "rows' 'Training' column is skipped)")
+    e.add_argument("--jobs", type=int, default=None, metavar="N",
+                   help=f"worker processes for the GA fits and the scores; the report is the same for "
+                   f"every N (default: all cores, {available_cores()} here)")
     e.add_argument("--json", type=Path, default=None, metavar="OUT", help="write the report as JSON")
     e.set_defaults(run=run)
+
+
+def available_cores() -> int:
+    """The cores this process may run on."""
+    return len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else os.cpu_count() or 1
 
 
 def run(args) -> int:
     if args.ga_seed is not None and args.ga_seed < 0:
         raise UsageError(f"--ga-seed must be an integer >= 0, got {args.ga_seed}")
+    jobs = available_cores() if args.jobs is None else args.jobs
+    if jobs < 1:
+        raise UsageError(f"--jobs must be an integer >= 1, got {jobs}")
     ga = ga_config(args)
     cases = load_manifest(args.manifest)
     bars = {}
 
     def progress(name, record):
+        if jobs > 1:   # one update per finished fit
+            if not bars:
+                fits = len(cases) if not args.held_out_only else 1
+                bars["fits"] = progress_bar(fits, f"GA fits on {jobs} processes", unit="fit")
+            bars["fits"].update(1)
+            bars["fits"].set_postfix(last=name, best=f"{record.best:g}")
+            return
         if name not in bars:
             for bar in bars.values():
                 bar.close()
@@ -65,7 +84,7 @@ def run(args) -> int:
                                    ("rng", args.ga_seed), ("solver", args.solver),
                                    ("fit_solver", args.fit_solver)) if v is not None}
         report = protocol(cases, args.method or DEFAULT_METHOD, ga=ga, peers=args.peers, progress=progress,
-                          solvers=tuple(args.solvers), fit_all=not args.held_out_only, **given)
+                          solvers=tuple(args.solvers), fit_all=not args.held_out_only, jobs=jobs, **given)
     finally:
         for bar in bars.values():
             bar.close()
