@@ -36,7 +36,7 @@ from .depth import DepthConfig, DepthResult, depth_from_matches
 from .features import resolve_roi
 from .io import StereoPair, load_pair
 from .matching import MatchConfig, MatchResult, match, prepare
-from .methods import Params
+from .params import Params
 from .solvers import ANNEAL, get_solver
 
 __all__ = ["DEPTH_MATCH_CONFIG", "DEPTH_PARAMS", "DEPTH_SOLVER", "changed_roi", "depth_match",

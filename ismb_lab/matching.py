@@ -19,7 +19,8 @@ from .coords import euclidean_disparity, horizontal_disparity
 from .features import Corners, detect_corners, resolve_roi
 from .hopfield import RULES, STOP_RULES
 from .io import StereoPair, load_pair
-from .methods import Params, Problem, build_problem, get_method
+from .methods import Problem, build_problem, get_method
+from .params import Params
 from .similarity import mean_abs_difference
 from .solvers import DEFAULT_SOLVER, get_solver, solve, to_matches
 

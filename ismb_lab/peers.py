@@ -24,7 +24,8 @@ import numpy as np
 from scipy.optimize import linear_sum_assignment
 
 from ._validation import ParameterError, ParameterTypeError, check_choice, check_number, message
-from .methods import Params, Problem, get_method
+from .methods import Problem, get_method
+from .params import Params
 
 __all__ = ["MAX_ASSIGNMENTS", "PEERS", "affinity_matrix", "default_no_match_cost", "graph_matching",
            "hungarian", "mutual_nearest"]

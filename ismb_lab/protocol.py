@@ -25,7 +25,8 @@ from .datasets import ground_truth_pairs, motorcycle
 from .evaluation import Score, score
 from .genetic import GAConfig
 from .matching import MatchConfig, Prepared, prepare
-from .methods import Params, get_method
+from .methods import get_method
+from .params import Params
 from .peers import PEERS
 from .scenes import true_matches
 from .solvers import DEFAULT_SOLVER, get_solver

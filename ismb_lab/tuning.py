@@ -21,7 +21,8 @@ import numpy as np
 from ._validation import ParameterError, ParameterTypeError, check_number, message
 from .evaluation import Score, score
 from .genetic import Bounds, GAConfig, Generation, evolve
-from .methods import Params, get_method
+from .methods import get_method
+from .params import Params
 from .solvers import DEFAULT_SOLVER, get_solver, solve, to_matches
 
 __all__ = ["Fitness", "evaluate", "gene_bounds", "to_chromosome", "to_params", "tune"]

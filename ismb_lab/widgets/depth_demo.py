@@ -20,7 +20,8 @@ from .._validation import ParameterTypeError, check_number, message
 from ..depth import DepthConfig, DepthObject, DepthResult
 from ..depth_demo import relative_depth
 from ..io import StereoPair, load_pair
-from ..methods import Params, get_method, method_names
+from ..methods import get_method, method_names
+from ..params import Params
 from ._common import Base, Pane, button, grey_rgb, pair_files, path_labels, with_class
 
 __all__ = ["CMAP", "TOLERANCES", "depth_text", "DepthDemo", "DepthModel", "disparity_limits",

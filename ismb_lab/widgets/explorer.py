@@ -15,7 +15,8 @@ import numpy as np
 from .._validation import ParameterTypeError, check_number, message
 from ..evaluation import Score, score
 from ..matching import MatchConfig, MatchResult, Prepared, match, prepare
-from ..methods import THETA_C, Params, all_genes, get_method, method_names
+from ..methods import all_genes, get_method, method_names
+from ..params import THETA_C, Params
 from ..similarity import transfer
 from ..targets import TargetSet, load_targets, snap
 from ._common import Base, Pane, draw_pair, pair_files, update_pair, with_class

@@ -29,7 +29,8 @@ import numpy as np
 from .._validation import ParameterError, ParameterTypeError, check_number, message
 from ..genetic import GAConfig, Generation
 from ..matching import MatchConfig
-from ..methods import Params, get_method
+from ..methods import get_method
+from ..params import Params
 from ..protocol import Case
 from ..tuning import to_params, tune
 from ._common import Base, Pane, button, pair_files, with_class

@@ -13,7 +13,8 @@ import numpy as np
 from .._validation import ParameterTypeError, check_choice, check_number, message
 from ..hopfield import RULES, STOP_RULES, Update, energy, iter_updates
 from ..matching import MatchConfig, Prepared, prepare
-from ..methods import Params, get_method
+from ..methods import get_method
+from ..params import Params
 from ..solvers import to_matches
 from ._common import Base, Pane, button, draw_pair, pair_files, path_labels, update_pair, with_class
 
@@ -151,7 +152,6 @@ def _grid_colours():
 def draw_grid(ax, model: StepperModel) -> dict:
     """The ``N_l x N_r`` neuron grid with a cursor on the neuron just attempted."""
     from matplotlib.patches import Rectangle
-
     from matplotlib.transforms import blended_transform_factory
 
     grid = ax.imshow(model.grid() + 1, cmap=_grid_colours(), vmin=0, vmax=2, interpolation="nearest")
