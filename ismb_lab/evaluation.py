@@ -151,6 +151,8 @@ def load_manifest(path, config=None) -> list:
         raise ParameterError(message("path", "load_manifest", "an existing file", str(path))) from None
     except (OSError, UnicodeDecodeError, json.JSONDecodeError) as exc:
         raise ParameterError(message("path", "load_manifest", f"a JSON manifest ({exc})", str(path))) from None
+    except RecursionError:
+        raise ParameterError(message("path", "load_manifest", "a JSON manifest (not nested too deeply)", str(path))) from None
     entries = data.get("pairs") if isinstance(data, dict) else None
     if not isinstance(entries, list) or not entries:
         raise ParameterError(message("pairs", owner, "a non-empty list of pair entries", entries))
@@ -170,8 +172,8 @@ def load_manifest(path, config=None) -> list:
         else:
             files = {}
             for key in ("left", "right", "targets"):
-                if key not in entry:
-                    raise ParameterError(message(f"pairs[{n}].{key}", owner, "a file path", None))
+                if not isinstance(entry.get(key), str):
+                    raise ParameterError(message(f"pairs[{n}].{key}", owner, "a file path (a string)", entry.get(key)))
                 files[key] = path.parent / entry[key]
                 if not files[key].is_file():
                     raise ParameterError(message(f"pairs[{n}].{key}", owner, "an existing file",

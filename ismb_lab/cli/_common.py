@@ -7,8 +7,12 @@ import json
 import sys
 from pathlib import Path
 
+from .._files import check_input
 from .._validation import ParameterError, ParameterTypeError  # noqa: F401  (re-exported for main)
-from ..methods import METHOD_NAMES, THESIS_PARAMS, Params
+from ._guard import interrupted
+
+# The method names, here so that building the parser does not import numba.
+METHOD_NAMES = ("I", "II", "III", "NM", "NM4")
 
 PARAM_OPTIONS = ("theta_c", "theta_s", "lambda_c", "lambda_s", "match_bias")
 
@@ -49,11 +53,13 @@ def add_feature_options(p: argparse.ArgumentParser) -> None:
 def read_params_file(path: Path) -> tuple[str | None, dict]:
     """Read ``{"method": ..., "params": {...}}``; extra keys are allowed."""
     try:
-        data = json.loads(Path(path).read_text(encoding="utf-8"))
+        data = json.loads(check_input(path, what="--params-file").read_text(encoding="utf-8"))
     except FileNotFoundError:
         raise UsageError(f"--params-file {path}: no such file") from None
     except (OSError, UnicodeDecodeError, json.JSONDecodeError) as exc:
         raise UsageError(f"--params-file {path}: not a readable JSON file ({exc})") from None
+    except RecursionError:
+        raise UsageError(f"--params-file {path}: its JSON is nested too deeply to read") from None
     if not isinstance(data, dict) or not isinstance(data.get("params"), dict):
         raise UsageError(f"--params-file {path}: expected an object with a 'params' object")
     method = data.get("method")
@@ -64,7 +70,14 @@ def read_params_file(path: Path) -> tuple[str | None, dict]:
 
 
 def resolve_params(args) -> tuple[str, Params]:
-    """The method and parameters from --method, --params-file and the single overrides."""
+    """The method and parameters from --method, --params-file and the single overrides.
+
+    A ``match_bias`` is refused for a method that does not run it: only Method-NM
+    uses it, and Method-NM4 runs with 0 (so 0 is accepted there), so what a result
+    records is always what was run.
+    """
+    from ..methods import THESIS_PARAMS, Params
+
     file_method, values = (None, {})
     if args.params_file is not None:
         file_method, values = read_params_file(args.params_file)
@@ -75,13 +88,66 @@ def resolve_params(args) -> tuple[str, Params]:
     merged = THESIS_PARAMS[method].to_dict()
     merged.update(values)
     merged.update({k: getattr(args, k) for k in PARAM_OPTIONS if getattr(args, k) is not None})
-    return method, Params.from_dict(merged, owner="ismb-lab")
+    params = Params.from_dict(merged, owner="ismb-lab")
+    check_match_bias(method, params)
+    return method, params
+
+
+def check_match_bias(method: str, params) -> None:
+    """Refuse a ``match_bias`` that `method` would not run (recorded as one value, run as another)."""
+    bias = params.match_bias
+    if bias is None or method == "NM" or (method == "NM4" and bias == 0):
+        return
+    runs = "runs with match_bias 0" if method == "NM4" else "has no match bias"
+    raise UsageError(f"match_bias {bias:g} is not used by Method-{method}, which {runs}; "
+                     "only Method-NM takes a match_bias (use --method NM, or drop match_bias)")
 
 
 def progress_bar(total: int, desc: str):
+    """A tqdm bar whose ``update`` raises KeyboardInterrupt once SIGINT, SIGTERM or SIGHUP came.
+
+    The signal handler raises KeyboardInterrupt itself, but one raised inside a C
+    extension (numba's dispatcher, an import) can be swallowed there; checking at
+    every generation makes sure the work still stops at the next one.
+    """
     from tqdm import tqdm
-    return tqdm(total=total, desc=desc, unit="gen", file=sys.stderr, dynamic_ncols=True,
+
+    class _Bar(tqdm):
+        def update(self, n=1):
+            if interrupted():
+                raise KeyboardInterrupt
+            return super().update(n)
+
+    return _Bar(total=total, desc=desc, unit="gen", file=sys.stderr, dynamic_ncols=True,
                 disable=None)
+
+
+class BestSoFar:
+    """A GA progress callback's companion: keeps the latest record, to save it when interrupted."""
+
+    def __init__(self, method: str):
+        self.method, self.name, self.record = method, None, None
+
+    def __call__(self, name, record) -> None:
+        self.name, self.record = name, record
+
+    def save(self, path) -> int:
+        """Write the best parameters so far to `path` (if given and a generation finished); 130."""
+        from .._files import atomic_write_text
+        from ..tuning import to_params
+        from ._guard import json_text
+
+        if self.record is None:
+            raise KeyboardInterrupt
+        params = to_params(self.method, self.record.best_chromosome)
+        if path is not None:
+            atomic_write_text(path, json_text({
+                "method": self.method, "params": params.to_dict(), "fitness": self.record.best,
+                "generations": self.record.index, "fitted_on": self.name, "interrupted": True}))
+        print(f"ismb-lab: interrupted while fitting {self.name}; best parameters so far "
+              f"{params.to_dict()}" + (f", written to {path}" if path is not None else ""),
+              file=sys.stderr)
+        return 130
 
 
 def match_config(args):

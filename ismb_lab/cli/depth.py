@@ -2,12 +2,12 @@
 
 from __future__ import annotations
 
-import json
 from pathlib import Path
 
 from .._files import atomic_write_text
 from ..methods import Params
 from ._common import PARAM_OPTIONS, UsageError, add_matching_options, match_config, resolve_params
+from ._guard import json_text, save_figure
 
 
 def add_parser(sub) -> None:
@@ -85,7 +85,7 @@ def run(args) -> int:
         print(f"#{obj.rank}  at ({x:.0f}, {y:.0f})  disparity {obj.mean_disparity:.2f} px  "
               f"depth {depth}  {len(obj.features)} features")
     if args.json is not None:
-        atomic_write_text(args.json, json.dumps(result.to_dict(), indent=2) + "\n")
+        atomic_write_text(args.json, json_text(result.to_dict()))
     if args.plot is not None:
         from matplotlib.figure import Figure
 
@@ -94,5 +94,5 @@ def run(args) -> int:
         ax = fig.subplots()
         plot_depth(ax, pairs[1].left, result)
         ax.set_title(f"Method-{method}: {len(result.objects)} objects, near -> far")
-        fig.savefig(args.plot, dpi=120)
+        save_figure(fig, args.plot, dpi=120)
     return 0

@@ -2,12 +2,12 @@
 
 from __future__ import annotations
 
-import json
 from pathlib import Path
 
 from .._files import atomic_write_text
 from ..methods import METHOD_NAMES
-from ._common import UsageError, progress_bar
+from ._common import BestSoFar, UsageError, progress_bar
+from ._guard import json_text
 
 
 def add_parser(sub) -> None:
@@ -44,9 +44,10 @@ def run(args) -> int:
     if args.ga_seed < 0:
         raise UsageError(f"--ga-seed must be an integer >= 0, got {args.ga_seed}")
     cases = load_manifest(args.manifest)
-    bars = {}
+    bars, best = {}, BestSoFar(args.method)
 
     def progress(name, record):
+        best(name, record)
         if name not in bars:
             for bar in bars.values():
                 bar.close()
@@ -59,6 +60,8 @@ def run(args) -> int:
                           generations=args.generations, peers=args.peers, progress=progress,
                           solvers=tuple(args.solvers), fit_solver=args.fit_solver,
                           fit_seeds=args.fit_seeds, rng=args.ga_seed, fit_all=not args.held_out_only)
+    except KeyboardInterrupt:
+        return best.save(args.json)
     finally:
         for bar in bars.values():
             bar.close()
@@ -75,5 +78,5 @@ def run(args) -> int:
                                  "precision": p["held_out"].precision} for name, p in report["peers"].items()},
                 "solvers": {name: [{"cet": str(s), "recall": s.recall, "precision": s.precision}
                                    for s in v["held_out"]] for name, v in report.get("solvers", {}).items()}}
-        atomic_write_text(args.json, json.dumps(data, indent=2) + "\n")
+        atomic_write_text(args.json, json_text(data))
     return 0

@@ -6,6 +6,7 @@ from pathlib import Path
 
 from .._files import atomic_write_text
 from ._common import add_matching_options, match_config, resolve_params
+from ._guard import json_text, save_figure
 
 
 def add_parser(sub) -> None:
@@ -35,7 +36,7 @@ def run(args) -> int:
           f"after {result.attempts} attempts")
     print(result.table())
     if args.json is not None:
-        atomic_write_text(args.json, result.to_json() + "\n")
+        atomic_write_text(args.json, json_text(result.to_dict()))
     if args.plot is not None:
         from matplotlib.figure import Figure
 
@@ -45,5 +46,5 @@ def run(args) -> int:
         ax = fig.subplots()
         plot_matches(ax, pair.left, pair.right, result.left_xy, result.right_xy, result.pairs)
         ax.set_title(f"Method-{result.method}: {len(result.pairs)} matches")
-        fig.savefig(args.plot, dpi=120)
+        save_figure(fig, args.plot, dpi=120)
     return 0

@@ -35,7 +35,7 @@ def run(args) -> int:
     from ..tuning import Case, evaluate, to_params, tune
 
     prepared = prepare(args.left, args.right, match_config(args))
-    targets = load_targets(args.targets, pair=prepared.pair)
+    targets = load_targets(args.targets, pair=prepared.pair, check_hash=not args.no_hash_check)
     snapped = snap(targets, prepared.problem.left_xy, prepared.problem.right_xy)
     missing = sorted(set(snapped.missing_left.tolist()) | set(snapped.missing_right.tolist()))
     if missing:
