@@ -303,6 +303,16 @@ def test_the_pixel_limit_reads_the_header_and_can_be_raised(tmp_path, monkeypatc
     assert load_image(path).shape == (10, 300)
 
 
+def test_help_lists_every_limit():
+    from ismb_lab.cli import _EPILOG
+    from ismb_lab.cli._guard import LIMITS
+    from ismb_lab.io import MAX_PIXELS
+
+    assert f"<= {MAX_PIXELS} (ISMB_LAB_MAX_PIXELS)" in _EPILOG
+    for variable, default, _, option in LIMITS.values():
+        assert f"{option} <= {default} ({variable})" in _EPILOG
+
+
 def test_cli_method_names_match_the_library():
     from ismb_lab.cli._common import METHOD_NAMES
     from ismb_lab.methods import METHOD_NAMES as library
@@ -320,8 +330,8 @@ def test_importing_the_cli_does_not_import_numpy():
 
 def test_readme_install_command_installs_voila():
     import re
-    import tomllib
 
+    tomllib = pytest.importorskip("tomllib")   # Python 3.11+
     project = tomllib.loads((ROOT / "pyproject.toml").read_text())["project"]
     readme = (ROOT / "README.md").read_text()
     first = re.search(r"```bash\n(.*?)\n```", readme, re.S).group(1)

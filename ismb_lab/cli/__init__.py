@@ -26,8 +26,8 @@ from ._guard import LIMITS, Interrupts, preflight
 __all__ = ["COMMANDS", "UsageError", "build_parser", "main"]
 
 _EPILOG = ("limits (raise one by setting its environment variable): " + "; ".join(
-    f"{option} <= {default} ({variable})" for option, (variable, default, _, option)
-    in ((v[3], v) for v in LIMITS.values())) + "; pixels per image <= 25000000 (ISMB_LAB_MAX_PIXELS)")
+    f"{option} <= {default} ({variable})" for variable, default, _, option in LIMITS.values())
+    + "; pixels per image <= 25000000 (ISMB_LAB_MAX_PIXELS)")   # ismb_lab.io.MAX_PIXELS
 
 
 def _commands():
