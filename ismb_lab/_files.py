@@ -78,13 +78,13 @@ def atomic_write_bytes(path, data: bytes) -> Path:
     path = Path(path)
     final = Path(os.path.realpath(path)) if path.is_symlink() else path
     try:
-        mode = final.stat().st_mode
+        mode = path.stat().st_mode   # through any link
     except FileNotFoundError:
         mode = None
     if mode is not None and stat.S_ISDIR(mode):
         raise IsADirectoryError(21, "Is a directory", str(path))
     if mode is not None and not stat.S_ISREG(mode):
-        with open(final, "wb") as handle:   # a device or FIFO: write into it, never replace it
+        with open(path, "wb") as handle:   # a device or FIFO: write into it, never replace it
             handle.write(data)
         return path
     folder = final.parent
@@ -185,7 +185,7 @@ def check_output(path, *, inputs=(), force: bool = False, what: str = "output") 
     if path.is_symlink() and not final.parent.is_dir():
         raise OutputError(f"{shown} is a symbolic link to {str(final)!r}, whose folder does not exist")
     try:
-        st = final.stat()
+        st = path.stat()   # through any link (/dev/stdout -> /proc/self/fd/1 -> a pipe)
     except FileNotFoundError:
         st = None
     except OSError as exc:
@@ -196,7 +196,7 @@ def check_output(path, *, inputs=(), force: bool = False, what: str = "output") 
         if not force:
             raise OutputError(f"{shown} is {_kind(st.st_mode)}, which an output never replaces; "
                               "give --force to write into it")
-        if not os.access(final, os.W_OK):
+        if not os.access(path, os.W_OK):
             raise OutputError(f"{shown}: {_kind(st.st_mode)} that cannot be written")
         return path
     if st is not None and not force and (not st.st_mode & 0o222 or not os.access(final, os.W_OK)):

@@ -86,6 +86,14 @@ def test_force_writes_into_a_device_and_never_replaces_it(lab, tmp_path):
     assert stat.S_ISCHR(os.lstat(device).st_mode) and os.lstat(device).st_rdev == os.makedev(1, 3)
 
 
+def test_json_to_stdout_through_its_link_with_force(lab):
+    proc = subprocess.run([sys.executable, "-m", "ismb_lab.cli", "match", *map(str, lab[:2]),
+                           "--json", "/dev/stdout", "--force"], capture_output=True, text=True,
+                          timeout=300, cwd=ROOT)
+    assert proc.returncode == 0, proc.stderr
+    assert '"method": "III"' in proc.stdout
+
+
 def test_force_replaces_a_read_only_file_and_keeps_its_mode(lab, tmp_path):
     out = tmp_path / "ro.json"
     out.write_text("{}\n")
