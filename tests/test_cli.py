@@ -221,7 +221,12 @@ def test_a_real_ctrl_c_stops_tune_cleanly(pair, targets, tmp_path):
         time.sleep(0.01)
     time.sleep(2)
     proc.send_signal(signal.SIGINT)
-    stdout, stderr = proc.communicate(timeout=120)
+    try:
+        stdout, stderr = proc.communicate(timeout=120)
+    finally:
+        if proc.poll() is None:   # never leave a GA of 100000 generations running
+            proc.kill()
+            proc.communicate()
     assert proc.returncode == 130, stderr
     assert "Traceback" not in stderr and "interrupted" in stderr
     if out.exists():   # written whenever at least one generation had finished

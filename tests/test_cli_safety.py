@@ -39,10 +39,22 @@ def hard_targets(lab, tmp_path):
     return path
 
 
-def cli(*args, **kwargs):
-    return subprocess.Popen([sys.executable, "-m", "ismb_lab.cli", *map(str, args)],
-                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
-                            cwd=ROOT, **kwargs)
+@pytest.fixture
+def cli():
+    """Start ``python -m ismb_lab.cli ...``; whatever is still running at teardown is killed."""
+    started = []
+
+    def start(*args):
+        proc = subprocess.Popen([sys.executable, "-m", "ismb_lab.cli", *map(str, args)],
+                                stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, cwd=ROOT)
+        started.append(proc)
+        return proc
+
+    yield start
+    for proc in started:
+        if proc.poll() is None:
+            proc.kill()
+            proc.communicate()
 
 
 def handlers_installed(pid, timeout=120.0) -> bool:
@@ -152,7 +164,8 @@ def test_check_output_names_the_rule(tmp_path):
 
 @needs_proc
 @pytest.mark.parametrize("sig, code", [(signal.SIGTERM, 143), (signal.SIGHUP, 129)])
-def test_sigterm_and_sighup_stop_tune_and_write_the_best_so_far(lab, hard_targets, tmp_path, sig, code):
+def test_sigterm_and_sighup_stop_tune_and_write_the_best_so_far(cli, lab, hard_targets, tmp_path, sig,
+                                                               code):
     out = tmp_path / "params.json"
     proc = cli("tune", lab[0], lab[1], hard_targets, "--generations", "100000", "--out", out)
     assert handlers_installed(proc.pid)
@@ -169,7 +182,7 @@ def test_sigterm_and_sighup_stop_tune_and_write_the_best_so_far(lab, hard_target
 
 @needs_proc
 @pytest.mark.parametrize("delay", [0.0, 0.05, 0.2, 0.5, 1.0])
-def test_a_signal_during_start_up_exits_130_with_one_line(lab, hard_targets, tmp_path, delay):
+def test_a_signal_during_start_up_exits_130_with_one_line(cli, lab, hard_targets, tmp_path, delay):
     # From the moment main() has its handlers: imports, loading the pair, numba's first
     # compilation or cache load, the first generation.
     proc = cli("tune", lab[0], lab[1], hard_targets, "--generations", "100000",
