@@ -204,7 +204,10 @@ def test_a_real_ctrl_c_stops_tune_cleanly(pair, targets, tmp_path):
     out = tmp_path / "params.json"
     proc = subprocess.Popen([sys.executable, "-m", "ismb_lab.cli", "tune", *map(str, pair), str(hard),
                              "--generations", "100000", "--population", "60", "--out", str(out)],
-                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                            preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))
+    # (SIGINT at its default in the child even if this run inherited it ignored, as a
+    # background job of a shell does; the CLI respects an ignored SIGINT, like Python.)
     # Signal once main() has its handlers (polled in /proc, so a loaded machine only makes the
     # wait longer), then a little later: in start-up, numba's cache load or a generation.
     # Before the fix a KeyboardInterrupt raised inside numba's dispatcher could be swallowed

@@ -39,6 +39,13 @@ def hard_targets(lab, tmp_path):
     return path
 
 
+def default_signals():
+    """In the child: signals at their defaults, even if this test run was started with SIGINT
+    ignored (a background job of a shell), which the child would inherit and respect."""
+    for sig in (signal.SIGINT, signal.SIGTERM, signal.SIGHUP):
+        signal.signal(sig, signal.SIG_DFL)
+
+
 @pytest.fixture
 def cli():
     """Start ``python -m ismb_lab.cli ...``; whatever is still running at teardown is killed."""
@@ -46,7 +53,8 @@ def cli():
 
     def start(*args):
         proc = subprocess.Popen([sys.executable, "-m", "ismb_lab.cli", *map(str, args)],
-                                stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, cwd=ROOT)
+                                stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, cwd=ROOT,
+                                preexec_fn=default_signals)
         started.append(proc)
         return proc
 
