@@ -181,7 +181,7 @@ def test_sigterm_and_sighup_stop_tune_and_write_the_best_so_far(cli, lab, hard_t
     proc.send_signal(sig)
     _, stderr = proc.communicate(timeout=120)
     assert proc.returncode == code, stderr
-    assert "Traceback" not in stderr and "interrupted" in stderr
+    assert "Traceback" not in stderr and "interrupted" in stderr, stderr
     if "best parameters so far were written" in stderr:   # whenever a generation had finished
         assert json.loads(out.read_text())["interrupted"] is True
     else:
@@ -200,7 +200,7 @@ def test_a_signal_during_start_up_exits_130_with_one_line(cli, lab, hard_targets
     proc.send_signal(signal.SIGINT)
     _, stderr = proc.communicate(timeout=120)
     assert proc.returncode == 130, stderr
-    assert "Traceback" not in stderr and "SystemError" not in stderr
+    assert "Traceback" not in stderr and "SystemError" not in stderr, stderr
     lines = [line for line in stderr.splitlines() if line.startswith("ismb-lab:")]
     assert len(lines) == 1 and "interrupted" in lines[0], stderr
 
@@ -371,3 +371,28 @@ def test_readme_install_command_installs_voila():
         wanted += project["optional-dependencies"][extra]
     assert any(re.match(r"voila\b", dep) for dep in wanted), first
     assert "voila notebooks/04_label_targets.ipynb" in readme
+
+
+def test_an_interrupt_swallowed_in_a_finaliser_prints_nothing(monkeypatch):
+    """After a signal, "Exception ignored ... KeyboardInterrupt" reports are dropped."""
+    import gc
+
+    from ismb_lab.cli._guard import Interrupts, interrupted
+
+    reports = []
+    monkeypatch.setattr(sys, "unraisablehook", lambda report: reports.append(report.exc_type))
+
+    class Finalised:
+        def __del__(self):
+            raise KeyboardInterrupt   # what a signal handler raising inside __del__ gives
+
+    with Interrupts() as interrupts:
+        Finalised()
+        gc.collect()
+        assert reports == [KeyboardInterrupt]   # no signal yet: reported as usual
+        interrupts.signum = signal.SIGINT   # as the handler records it
+        Finalised()
+        gc.collect()
+        assert interrupted()
+    assert reports == [KeyboardInterrupt]
+    assert not interrupted()

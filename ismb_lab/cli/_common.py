@@ -6,10 +6,14 @@ import argparse
 import json
 import sys
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 from .._files import check_input
 from .._validation import ParameterError, ParameterTypeError  # noqa: F401  (re-exported for main)
 from ._guard import interrupted
+
+if TYPE_CHECKING:
+    from ..methods import Params
 
 # The method names, here so that building the parser does not import numba.
 METHOD_NAMES = ("I", "II", "III", "NM", "NM4")

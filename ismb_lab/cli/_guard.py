@@ -26,6 +26,7 @@ import json
 import math
 import os
 import signal
+import sys
 import threading
 from pathlib import Path
 
@@ -51,7 +52,7 @@ _ACTIVE: list = []
 
 def limit(name: str) -> int:
     """The limit in force for `name` (a key of :data:`LIMITS`), from the environment or the default."""
-    variable, default, _, option = LIMITS[name]
+    variable, default = LIMITS[name][:2]
     raw = os.environ.get(variable)
     if raw is None or raw.strip() == "":
         return default
@@ -79,6 +80,14 @@ class Interrupts:
     def __init__(self):
         self.signum = None
         self._old = {}
+        self._old_hook = None
+
+    def _unraisable(self, report):
+        # A KeyboardInterrupt raised inside a __del__ or a callback cannot propagate: Python
+        # prints "Exception ignored ... Traceback" and goes on.  Once a signal came, such
+        # reports are its echoes; the work stops at the next check of interrupted().
+        if self.signum is None:
+            self._old_hook(report)
 
     def _handle(self, signum, frame):
         if self.signum is None:
@@ -92,6 +101,7 @@ class Interrupts:
                 if number is None or signal.getsignal(number) == signal.SIG_IGN:
                     continue
                 self._old[number] = signal.signal(number, self._handle)
+        self._old_hook, sys.unraisablehook = sys.unraisablehook, self._unraisable
         _ACTIVE.append(self)
         return self
 
@@ -99,6 +109,7 @@ class Interrupts:
         for number, old in self._old.items():
             signal.signal(number, old)
         self._old.clear()
+        sys.unraisablehook = self._old_hook
         _ACTIVE.remove(self)
         return False
 
