@@ -163,7 +163,7 @@ CASES = [
     ("tune-n-max-limit", lambda w: _tune(w, "--n-max", "5000"), "ISMB_LAB_MAX_CORNERS", {}),
     ("tune-targets-fifo", lambda w: ["tune", *_pair(w), w / "fifo"], "FIFO", {}),
     ("tune-targets-dev-zero", lambda w: ["tune", *_pair(w), "/dev/zero"], "device", {}),
-    ("tune-targets-deep", lambda w: ["tune", *_pair(w), w / "deep.json"], "nested too deeply", {}),
+    ("tune-targets-deep", lambda w: ["tune", *_pair(w), w / "deep.json"], "targets '", {}),
     ("tune-targets-other-images", lambda w: ["tune", *_pair(w), w / "targets_other_images.json"],
      "--no-hash-check", {}),
     ("tune-right-huge-png", lambda w: ["tune", w / "L.png", w / "huge.png", w / "targets.json"],

@@ -100,7 +100,7 @@ def main(argv=None) -> int:
 
 
 def _main(argv, interrupts) -> int:
-    usage_errors = (OutputError, OSError)
+    usage_errors, args = (OutputError, OSError), None
     with interrupts:
         try:
             from ._common import ParameterError, ParameterTypeError, UsageError
@@ -122,7 +122,10 @@ def _main(argv, interrupts) -> int:
             if isinstance(exc, usage_errors):
                 print(f"ismb-lab: error: {_cli_words(str(exc))}", file=sys.stderr)
             elif isinstance(exc, RecursionError):
-                print("ismb-lab: error: an input file is nested too deeply to read", file=sys.stderr)
+                files = [f"{name} {str(getattr(args, name))!r}" for name in ("targets", "manifest")
+                         if getattr(args, name, None) is not None]
+                print(f"ismb-lab: error: {' or '.join(files) or 'an input file'}: its JSON is "
+                      "nested too deeply to read", file=sys.stderr)
             elif isinstance(exc, MemoryError):
                 print("ismb-lab: error: out of memory: the input is too large for this machine "
                       "(see the limits in 'ismb-lab --help')", file=sys.stderr)
