@@ -5,8 +5,15 @@ Bad input raises :class:`ParameterError` (a ``ValueError``) or
 the value received.
 """
 
-from ._validation import ParameterError, ParameterTypeError
-
 __version__ = "0.1.0"
 
 __all__ = ["ParameterError", "ParameterTypeError", "__version__"]
+
+
+def __getattr__(name):
+    # Imported on first use, so that ``import ismb_lab`` (and the command line's start-up,
+    # before its signal handlers are in place) does not wait for numpy.
+    if name in ("ParameterError", "ParameterTypeError"):
+        from . import _validation
+        return getattr(_validation, name)
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")

@@ -1,10 +1,32 @@
-"""Atomic file writes: a reader sees the old file or the new one, never half of one."""
+"""Safe file outputs and inputs.
+
+Writes are atomic: a reader sees the old file or the new one, never half of one.
+Outputs never destroy anything:
+
+* a symbolic link is never replaced: the write goes through it, to the file it
+  names (atomically, beside that file), and the link stays as it was;
+* an existing file that is not a regular file (a device such as ``/dev/null``, a
+  FIFO, a socket) is never replaced by a rename: :func:`check_output` refuses it,
+  and with ``force=True`` the data is written *into* it, as ``cat > path`` would;
+* a folder is always refused, and so is an output that is one of the inputs;
+* a read-only file is refused unless ``force=True``.
+
+After the rename the folder is flushed to disk too (``fsync``), so the new name
+survives a power cut.
+"""
 
 from __future__ import annotations
 
 import os
+import stat
 import tempfile
 from pathlib import Path
+
+__all__ = ["OutputError", "atomic_write_bytes", "atomic_write_text", "check_input", "check_output"]
+
+
+class OutputError(ValueError):
+    """An input or output path that must not be used; the message names the user's path."""
 
 
 def _mode_for(path: Path) -> int:
@@ -17,8 +39,34 @@ def _mode_for(path: Path) -> int:
         return 0o666 & ~umask
 
 
+def _fsync_folder(folder: Path) -> None:
+    try:
+        fd = os.open(folder, os.O_RDONLY | getattr(os, "O_DIRECTORY", 0))
+    except OSError:   # e.g. a platform that cannot open folders
+        return
+    try:
+        os.fsync(fd)
+    except OSError:   # some file systems do not support fsync on folders
+        pass
+    finally:
+        os.close(fd)
+
+
+def _kind(mode: int) -> str:
+    for test, name in ((stat.S_ISDIR, "a folder"), (stat.S_ISCHR, "a character device"),
+                       (stat.S_ISBLK, "a block device"), (stat.S_ISFIFO, "a FIFO (named pipe)"),
+                       (stat.S_ISSOCK, "a socket")):
+        if test(mode):
+            return name
+    return "not a regular file"
+
+
 def atomic_write_bytes(path, data: bytes) -> Path:
     """Write `data` to a temporary file beside `path`, flush it to disk, then rename.
+
+    A symbolic link is written through (the file it names is replaced, the link
+    stays); an existing device or FIFO is written into, never replaced; a folder
+    raises ``IsADirectoryError``.
 
     Examples
     --------
@@ -28,20 +76,140 @@ def atomic_write_bytes(path, data: bytes) -> Path:
     b'hello'
     """
     path = Path(path)
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent or ".")
+    final = Path(os.path.realpath(path)) if path.is_symlink() else path
     try:
-        os.chmod(tmp, _mode_for(path))
+        mode = path.stat().st_mode   # through any link
+    except FileNotFoundError:
+        mode = None
+    if mode is not None and stat.S_ISDIR(mode):
+        raise IsADirectoryError(21, "Is a directory", str(path))
+    if mode is not None and not stat.S_ISREG(mode):
+        with open(path, "wb") as handle:   # a device or FIFO: write into it, never replace it
+            handle.write(data)
+        return path
+    folder = final.parent
+    fd, tmp = tempfile.mkstemp(prefix=f".{final.name}.", suffix=".tmp", dir=folder)
+    try:
+        os.chmod(tmp, _mode_for(final))
         with os.fdopen(fd, "wb") as handle:
             handle.write(data)
             handle.flush()
             os.fsync(handle.fileno())
-        os.replace(tmp, path)
+        os.replace(tmp, final)
     except BaseException:
         Path(tmp).unlink(missing_ok=True)
         raise
+    _fsync_folder(folder)
     return path
 
 
 def atomic_write_text(path, text: str) -> Path:
     """:func:`atomic_write_bytes` for UTF-8 text."""
     return atomic_write_bytes(path, text.encode("utf-8"))
+
+
+def _same(a: Path, b: Path) -> bool:
+    try:
+        return os.path.samefile(a, b)
+    except OSError:
+        return os.path.realpath(a) == os.path.realpath(b)
+
+
+def check_input(path, *, what: str = "input") -> Path:
+    """Refuse an input that exists but is not a regular file, before anything opens it.
+
+    A FIFO would block the reader and ``/dev/zero`` never ends, so both are refused
+    here; a missing file is left to the reader, which names it.
+
+    Examples
+    --------
+    >>> check_input("/dev/zero", what="--params-file")
+    Traceback (most recent call last):
+    ...
+    ismb_lab._files.OutputError: --params-file '/dev/zero': a character device, not a regular file
+    """
+    path = Path(path)
+    try:
+        mode = path.stat().st_mode
+    except (OSError, ValueError):   # missing, a loop of links, a NUL in the name: the reader says
+        return path
+    if not stat.S_ISREG(mode):
+        if stat.S_ISDIR(mode):
+            raise OutputError(f"{what} {str(path)!r}: a folder, not a file")
+        raise OutputError(f"{what} {str(path)!r}: {_kind(mode)}, not a regular file")
+    return path
+
+
+def check_output(path, *, inputs=(), force: bool = False, what: str = "output") -> Path:
+    """Check, before any work, that `path` may be written by :func:`atomic_write_bytes`.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The output file the user named.
+    inputs : iterable of path
+        Files the same run reads; the output may never be one of them (not even
+        with `force`), whatever the link or spelling that leads there.
+    force : bool
+        Allow replacing a read-only file, and writing into an existing device or FIFO.
+    what : str
+        How the message names the path, e.g. ``"--json"``.
+
+    Returns
+    -------
+    path : Path
+
+    Raises
+    ------
+    OutputError
+        With a one-line reason naming `path` as the user gave it.
+
+    Examples
+    --------
+    >>> import tempfile, pathlib
+    >>> folder = pathlib.Path(tempfile.mkdtemp())
+    >>> check_output(folder / "p.json").name
+    'p.json'
+    >>> check_output(folder / "nodir" / "p.json", what="--out")
+    Traceback (most recent call last):
+    ...
+    ismb_lab._files.OutputError: --out '.../nodir/p.json': the folder '.../nodir' does not exist
+    """
+    path = Path(path)
+    shown = f"{what} {str(path)!r}"
+    for source in inputs:
+        if source is not None and _same(path, Path(source)):
+            raise OutputError(f"{shown} is also an input of this command ({str(source)!r}); "
+                              "an output never replaces an input: choose another name")
+    final = Path(os.path.realpath(path)) if path.is_symlink() else path
+    if path.is_symlink() and not final.parent.is_dir():
+        raise OutputError(f"{shown} is a symbolic link to {str(final)!r}, whose folder does not exist")
+    try:
+        st = path.stat()   # through any link (/dev/stdout -> /proc/self/fd/1 -> a pipe)
+    except FileNotFoundError:
+        st = None
+    except OSError as exc:
+        raise OutputError(f"{shown}: {exc.strerror or exc}") from None
+    if st is not None and stat.S_ISDIR(st.st_mode):
+        raise OutputError(f"{shown} is a folder; give a file name")
+    if st is not None and not stat.S_ISREG(st.st_mode):
+        if not force:
+            raise OutputError(f"{shown} is {_kind(st.st_mode)}, which an output never replaces; "
+                              "give --force to write into it")
+        if not os.access(path, os.W_OK):
+            raise OutputError(f"{shown}: {_kind(st.st_mode)} that cannot be written")
+        return path
+    if st is not None and not force and (not st.st_mode & 0o222 or not os.access(final, os.W_OK)):
+        raise OutputError(f"{shown} is a read-only file; give --force to replace it")
+    folder = final.parent
+    if not folder.is_dir():
+        why = "is not a folder" if folder.exists() else "does not exist"
+        raise OutputError(f"{shown}: the folder {str(folder)!r} {why}")
+    try:   # the only sure test of a writable folder (read-only mounts, ACLs, root)
+        fd, probe = tempfile.mkstemp(prefix=f".{final.name}.", suffix=".probe", dir=folder)
+    except OSError as exc:
+        raise OutputError(f"{shown}: cannot create a file in {str(folder)!r} "
+                          f"({exc.strerror or exc})") from None
+    os.close(fd)
+    os.unlink(probe)
+    return path

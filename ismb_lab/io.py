@@ -7,6 +7,7 @@ Every image in the package is a C-contiguous ``float64`` array of grey values in
 from __future__ import annotations
 
 import hashlib
+import io
 import os
 from dataclasses import dataclass
 
@@ -28,14 +29,80 @@ def _path_error(name: str, owner: str, why: str, path: str) -> ParameterError:
                       f"({why}). Got {path!r} instead.")
 
 
+#: Default most pixels of one image file; the environment variable ISMB_LAB_MAX_PIXELS
+#: raises (or lowers) it.  The pipeline keeps several float64 copies of each image
+#: (grey, the Harris products, the response): ``ismb-lab match`` on a 4000x3000 pair
+#: peaked at 1.18 GB resident, about 90 bytes a pixel, so 25 million pixels is about 2.3 GB.
+MAX_PIXELS = 25_000_000
+PIXELS_VARIABLE = "ISMB_LAB_MAX_PIXELS"
+
+
+def max_pixels() -> int:
+    """The pixel limit in force: ``ISMB_LAB_MAX_PIXELS`` if set, else :data:`MAX_PIXELS`.
+
+    >>> max_pixels() >= 1
+    True
+    """
+    raw = os.environ.get(PIXELS_VARIABLE, "").strip()
+    if not raw:
+        return MAX_PIXELS
+    try:
+        value = int(raw)
+    except ValueError:
+        value = 0
+    if value < 1:
+        raise ParameterError(f"The environment variable ISMB_LAB_MAX_PIXELS must be a whole number "
+                             f">= 1. Got {raw!r} instead.")
+    return value
+
+
+def _header_size(data: bytes):
+    """``(width, height)`` from an image file's header without decoding it, or None if unknown."""
+    if data[:8] == b"\x89PNG\r\n\x1a\n" and data[12:16] == b"IHDR":
+        return int.from_bytes(data[16:20], "big"), int.from_bytes(data[20:24], "big")
+    try:
+        import warnings
+
+        from PIL import Image
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            with Image.open(io.BytesIO(data)) as im:   # reads the header only
+                return im.size
+    except Exception as exc:   # noqa: BLE001  not a format Pillow knows: OpenCV decides
+        if type(exc).__name__ == "DecompressionBombError":   # over 179 million pixels
+            return (1 << 16, 1 << 16)
+        return None
+
+
+def _too_large(path: str, name: str, owner: str, what: str, limit: int) -> ParameterError:
+    return _path_error(name, owner, f"at most {limit} pixels, and {what}; set the environment "
+                       f"variable ISMB_LAB_MAX_PIXELS to allow more", path)
+
+
 def _read(path: str, name: str, owner: str) -> np.ndarray:
     if not os.path.exists(path):
         raise _path_error(name, owner, "the file does not exist", path)
-    if not os.path.isfile(path):
+    if not os.path.isfile(path):   # a folder, a device, a FIFO: never opened
         raise _path_error(name, owner, "it is not a file", path)
-    image = cv2.imread(path, cv2.IMREAD_UNCHANGED)
+    limit = max_pixels()
+    # The largest honest file of `limit` pixels: 16-bit RGBA, uncompressed, plus headers.
+    most_bytes = 8 * limit + (1 << 20)
+    size = os.path.getsize(path)
+    if size > most_bytes:
+        raise _too_large(path, name, owner, f"a file of {size} bytes holds more", limit)
+    try:   # bytes read here, so any file name works (cv2.imread crashes on non-UTF-8 names)
+        with open(path, "rb") as handle:
+            data = handle.read(most_bytes + 1)
+    except OSError as exc:
+        raise _path_error(name, owner, exc.strerror or str(exc), path) from None
+    header = _header_size(data)
+    if header is not None and header[0] * header[1] > limit:
+        raise _too_large(path, name, owner, f"its header says {header[0]}x{header[1]}", limit)
+    image = cv2.imdecode(np.frombuffer(data, dtype=np.uint8), cv2.IMREAD_UNCHANGED)
     if image is None:
         raise _path_error(name, owner, "OpenCV cannot decode it as an image", path)
+    if image.shape[0] * image.shape[1] > limit:
+        raise _too_large(path, name, owner, f"it is {image.shape[1]}x{image.shape[0]}", limit)
     return image
 
 

@@ -143,6 +143,8 @@ class Method:
     section: str = ""
     genes: tuple[Gene, ...] = ()
     defaults: Params = Params()
+    #: Parameters the method runs with whatever ``params`` says (Method-NM4: a match bias of 0).
+    fixed: dict = {}
     description: str = ""
 
     @property
@@ -294,12 +296,13 @@ class MethodNM4(MethodNM):
     name, section = "NM4", "beyond the thesis (README)"
     genes = MethodIII.genes
     defaults = MethodIII.defaults
+    fixed = {"match_bias": 0.0}
     description = "Method-III with 'at most one' uniqueness (match bias 0), four genes"
 
     def network(self, problem: Problem, params: Params) -> Network:
         if not isinstance(params, Params):
             raise ParameterTypeError(message("params", "Method-NM4", "a Params instance", params))
-        return super().network(problem, replace(params, match_bias=0.0))
+        return super().network(problem, replace(params, **self.fixed))
 
 
 _METHODS: dict[str, Method] = {}
@@ -444,7 +447,10 @@ def load_params(path, method: str | None = None) -> tuple[str | None, Params]:
         data = json.loads(Path(path).read_text(encoding="utf-8"))
     except FileNotFoundError:
         raise ParameterError(message("path", own, "an existing params file", str(path))) from None
-    except (OSError, UnicodeDecodeError, ValueError, RecursionError) as exc:
+    except RecursionError:
+        raise ParameterError(message("path", own, "a JSON file that is not nested too deeply",
+                                     str(path))) from None
+    except (OSError, UnicodeDecodeError, ValueError) as exc:
         raise ParameterError(message("path", own, f"a readable JSON file ({type(exc).__name__})",
                                      str(path))) from None
     if not isinstance(data, dict) or not isinstance(data.get("params"), dict):

@@ -65,14 +65,14 @@ class Case:
 
     @classmethod
     def from_files(cls, left, right, targets, config: MatchConfig | None = None,
-                   name: str | None = None) -> "Case":
+                   name: str | None = None, check_hash: bool = True) -> "Case":
         """A case from two image files and a targets file (as the labeller saves it).
 
-        The targets are checked against the images' hashes and snapped to the
-        corners that `config` finds.
+        The targets are checked against the images' hashes (unless not `check_hash`) and
+        snapped to the corners that `config` finds.
         """
         prepared = prepare(left, right, config)
-        snapped = snap(load_targets(targets, pair=prepared.pair), prepared.problem.left_xy,
+        snapped = snap(load_targets(targets, pair=prepared.pair, check_hash=check_hash), prepared.problem.left_xy,
                        prepared.problem.right_xy)
         left_out = np.union1d(snapped.missing_left, snapped.missing_right).astype(np.int64)
         return cls(prepared, snapped.pairs.astype(np.int64), name=str(left) if name is None else name,
@@ -113,6 +113,9 @@ def load_manifest(path, config: MatchConfig | None = None) -> list[Case]:
         raise ParameterError(message("path", "load_manifest", "an existing file", str(path))) from None
     except (OSError, UnicodeDecodeError, json.JSONDecodeError) as exc:
         raise ParameterError(message("path", "load_manifest", f"a JSON manifest ({exc})", str(path))) from None
+    except RecursionError:
+        raise ParameterError(message("path", "load_manifest", "a JSON manifest (not nested too deeply)",
+                                     str(path))) from None
     entries = data.get("pairs") if isinstance(data, dict) else None
     if not isinstance(entries, list) or not entries:
         raise ParameterError(message("pairs", owner, "a non-empty list of pair entries", entries))
@@ -132,8 +135,9 @@ def load_manifest(path, config: MatchConfig | None = None) -> list[Case]:
             continue
         files = {}
         for key in ("left", "right", "targets"):
-            if key not in entry:
-                raise ParameterError(message(f"pairs[{n}].{key}", owner, "a file path", None))
+            if not isinstance(entry.get(key), str):
+                raise ParameterError(message(f"pairs[{n}].{key}", owner, "a file path (a string)",
+                                             entry.get(key)))
             files[key] = path.parent / entry[key]
             if not files[key].is_file():
                 raise ParameterError(message(f"pairs[{n}].{key}", owner, "an existing file",

@@ -204,10 +204,32 @@ def test_a_real_ctrl_c_stops_tune_cleanly(pair, targets, tmp_path):
     out = tmp_path / "params.json"
     proc = subprocess.Popen([sys.executable, "-m", "ismb_lab.cli", "tune", *map(str, pair), str(hard),
                              "--generations", "100000", "--population", "60", "--out", str(out)],
-                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
-    time.sleep(6)   # start-up plus some generations; a process still in start-up must also exit cleanly
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                            preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))
+    # (SIGINT at its default in the child even if this run inherited it ignored, as a
+    # background job of a shell does; the CLI respects an ignored SIGINT, like Python.)
+    # Signal once main() has its handlers (polled in /proc, so a loaded machine only makes the
+    # wait longer), then a little later: in start-up, numba's cache load or a generation.
+    # Before the fix a KeyboardInterrupt raised inside numba's dispatcher could be swallowed
+    # there, and the GA carried on for its 100000 generations; now every generation checks.
+    status = f"/proc/{proc.pid}/status"
+    deadline = time.monotonic() + 120
+    while time.monotonic() < deadline:
+        try:
+            caught = next(int(line.split()[1], 16) for line in open(status) if line.startswith("SigCgt"))
+        except (OSError, StopIteration):
+            break
+        if caught >> (signal.SIGTERM - 1) & 1:
+            break
+        time.sleep(0.01)
+    time.sleep(2)
     proc.send_signal(signal.SIGINT)
-    stdout, stderr = proc.communicate(timeout=120)
+    try:
+        stdout, stderr = proc.communicate(timeout=120)
+    finally:
+        if proc.poll() is None:   # never leave a GA of 100000 generations running
+            proc.kill()
+            proc.communicate()
     assert proc.returncode == 130, stderr
     assert "Traceback" not in stderr and "interrupted" in stderr
     if out.exists():   # written whenever at least one generation had finished

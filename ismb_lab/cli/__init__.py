@@ -3,44 +3,135 @@
 Every error the user can cause prints one line on stderr and exits with code 2.
 Each command is a module of this package with ``add_parser(subparsers)``, which
 registers its options and its ``run(args) -> exit code``.
+
+Before a command's work starts, :func:`ismb_lab.cli._guard.preflight` checks its
+limits, its inputs (regular files only) and its outputs (never an input, a folder,
+a device, a FIFO or a read-only file unless ``--force``; symbolic links are written
+through, never replaced).  SIGINT, SIGTERM and SIGHUP stop the work alike; the exit
+code is 128 + the signal's number (130 for Ctrl-C).
+
+The command modules are imported when the parser is built, not when this package
+is, so that a signal during start-up already finds the handlers of :func:`main`.
 """
 
 from __future__ import annotations
 
+import os
 import sys
 
 from .. import __version__
-from . import depth, evaluate, match, render, tune
-from ._common import ParameterError, ParameterTypeError, Parser, UsageError
+from .._files import OutputError
+from ._guard import LIMITS, Interrupts, preflight
 
 __all__ = ["COMMANDS", "UsageError", "build_parser", "main"]
 
-#: The commands, in the order ``--help`` lists them.
-COMMANDS = (match, tune, evaluate, depth, render)
+def _epilog() -> str:
+    from ..io import MAX_PIXELS, PIXELS_VARIABLE
+
+    return ("limits (raise one by setting its environment variable): " + "; ".join(
+        f"{option} <= {default} ({variable})" for variable, default, _, option in LIMITS.values())
+        + f"; pixels per image <= {MAX_PIXELS} ({PIXELS_VARIABLE})")
 
 
-def build_parser() -> Parser:
+def _commands():
+    from . import depth, evaluate, match, render, tune
+    return (match, tune, evaluate, depth, render)
+
+
+def __getattr__(name):
+    if name == "COMMANDS":   #: The commands, in the order ``--help`` lists them.
+        return _commands()
+    if name == "UsageError":
+        from ._common import UsageError
+        return UsageError
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+
+
+def _add_safety_options(p) -> None:
+    options = p._option_string_actions
+    if any(o in options for o in ("--json", "--plot")) or (
+            "--out" in options and p.prog.split()[-1] != "render"):
+        p.add_argument("--force", action="store_true",
+                       help="replace a read-only output file, or write into an existing device "
+                       "or FIFO (an output that is an input is always refused)")
+    if p.prog.split()[-1] == "tune":
+        p.add_argument("--no-hash-check", action="store_true",
+                       help="accept targets labelled on images with other bytes (e.g. re-encoded)")
+
+
+def build_parser():
+    from ._common import Parser
+
     parser = Parser(prog="ismb-lab", description="Hopfield-network stereo matching of Harris "
-                    "corners (the ISMB thesis) from the command line.")
+                    "corners (the ISMB thesis) from the command line.", epilog=_epilog())
     parser.add_argument("--version", action="version", version=f"%(prog)s {__version__}")
     sub = parser.add_subparsers(dest="command", metavar="COMMAND", parser_class=Parser)
     sub.required = True
-    for command in COMMANDS:
+    for command in _commands():
         command.add_parser(sub)
+    for p in sub.choices.values():
+        _add_safety_options(p)
     return parser
 
 
+def _cli_words(text: str) -> str:
+    # The library's advice names its own keyword; on the command line the flag does that job.
+    return text.replace("or pass check_hash=False", "or give --no-hash-check to 'ismb-lab tune'")
+
+
+def _interrupted(interrupts) -> int:
+    how = "" if interrupts.signum in (None, 2) else f" ({interrupts.name})"
+    print(f"ismb-lab: interrupted{how}", file=sys.stderr)
+    return interrupts.exit_code
+
+
 def main(argv=None) -> int:
-    """Entry point of ``ismb-lab``; returns the exit code."""
-    parser = build_parser()
-    try:
-        args = parser.parse_args(argv)
-        return args.run(args)
-    except UsageError as exc:
-        print(f"ismb-lab: error: {exc}", file=sys.stderr)
-    except (ParameterError, ParameterTypeError, OSError) as exc:
-        print(f"ismb-lab: error: {exc}", file=sys.stderr)
-    except KeyboardInterrupt:
-        print("ismb-lab: interrupted", file=sys.stderr)
-        return 130
+    """Entry point of ``ismb-lab``; returns the exit code.
+
+    Run as the program (`argv` None), an interrupted run ends with ``os._exit`` once
+    its output is flushed: a KeyboardInterrupt that passed through a C extension can
+    leave CPython's "unhandled Ctrl-C" flag set, and the interpreter would then kill
+    itself with SIGINT at exit instead of returning 130.
+    """
+    interrupts = Interrupts()
+    code = _main(argv, interrupts)
+    if argv is None and interrupts.signum is not None:
+        sys.stdout.flush()
+        sys.stderr.flush()
+        os._exit(code)
+    return code
+
+
+def _main(argv, interrupts) -> int:
+    usage_errors, args = (OutputError, OSError), None
+    with interrupts:
+        try:
+            from ._common import ParameterError, ParameterTypeError, UsageError
+
+            usage_errors += (UsageError, ParameterError, ParameterTypeError)
+            args = build_parser().parse_args(argv)
+            preflight(args, UsageError)
+            code = args.run(args)
+            if code == 130 and interrupts.signum is not None:
+                return interrupts.exit_code   # the command said "interrupted": say by which signal
+            return code
+        except KeyboardInterrupt:
+            return _interrupted(interrupts)
+        except Exception as exc:
+            # A signal inside a C extension (numba's compiler, an import) can surface as a
+            # SystemError or another exception: it is still an interruption, not a crash.
+            if interrupts.signum is not None:
+                return _interrupted(interrupts)
+            if isinstance(exc, usage_errors):
+                print(f"ismb-lab: error: {_cli_words(str(exc))}", file=sys.stderr)
+            elif isinstance(exc, RecursionError):
+                files = [f"{name} {str(getattr(args, name))!r}" for name in ("targets", "manifest")
+                         if getattr(args, name, None) is not None]
+                print(f"ismb-lab: error: {' or '.join(files) or 'an input file'}: its JSON is "
+                      "nested too deeply to read", file=sys.stderr)
+            elif isinstance(exc, MemoryError):
+                print("ismb-lab: error: out of memory: the input is too large for this machine "
+                      "(see the limits in 'ismb-lab --help')", file=sys.stderr)
+            else:
+                raise
     return 2

@@ -12,12 +12,14 @@ import sys
 from dataclasses import replace
 from pathlib import Path
 
+from .._files import check_input
 from .._validation import ParameterError, ParameterTypeError
 from ..genetic import GAConfig
 from ..hopfield import RULES, STOP_RULES
 from ..matching import MatchConfig, match
 from ..methods import all_genes, get_method, load_params, method_names
 from ..solvers import SOLVERS
+from ._guard import UsageError, interrupted, json_text
 
 __all__ = ["ParameterError", "ParameterTypeError", "Parser", "UsageError", "add_ga_options",
            "add_matching_options", "add_feature_options", "add_solver_option", "ga_config",
@@ -26,10 +28,6 @@ __all__ = ["ParameterError", "ParameterTypeError", "Parser", "UsageError", "add_
 #: The method the commands use when neither --method nor a params file names one.
 DEFAULT_METHOD = "III"
 FEATURE_OPTIONS = ("roi", "shift", "n_min", "n_max")
-
-
-class UsageError(Exception):
-    """A mistake in the command line or its files, reported in one line."""
 
 
 class Parser(argparse.ArgumentParser):
@@ -112,7 +110,7 @@ def resolve_params(args, defaults=None):
     """
     file_method, params = None, None
     if args.params_file is not None:
-        file_method, params = load_params(args.params_file, args.method)
+        file_method, params = load_params(check_input(args.params_file, what="--params-file"), args.method)
     if args.method and file_method and args.method != file_method:
         raise UsageError(f"--method {args.method} conflicts with --params-file, "
                          f"which holds parameters for Method-{file_method}")
@@ -121,9 +119,27 @@ def resolve_params(args, defaults=None):
         params = (defaults or {}).get(method, get_method(method).defaults)
     given = {k: getattr(args, k) for k in gene_options() if getattr(args, k) is not None}
     try:
-        return method, replace(params, **given)
+        params = replace(params, **given)
     except (ParameterError, ParameterTypeError) as exc:
         raise UsageError(str(exc).replace("of Params", "of ismb-lab")) from None
+    check_unused_genes(method, params)
+    return method, params
+
+
+def check_unused_genes(method: str, params) -> None:
+    """Refuse a ``match_bias`` that `method` would not run, so that a result records what ran.
+
+    Only methods with the gene run it; a method that fixes it (Method-NM4: 0) accepts
+    that value alone.
+    """
+    m, bias = get_method(method), params.match_bias
+    if bias is None or "match_bias" in m.gene_names or m.fixed.get("match_bias") == bias:
+        return
+    runs = f"runs with match_bias {m.fixed['match_bias']:g}" if "match_bias" in m.fixed else "has no match bias"
+    users = [n for n in method_names() if "match_bias" in get_method(n).gene_names]
+    raise UsageError(f"match_bias {bias:g} is not used by Method-{method}, which {runs}; only "
+                     f"{', '.join('Method-' + n for n in users)} take a match_bias (drop it, or use "
+                     f"--method {users[0]})")
 
 
 def network_settings(args) -> dict:
@@ -133,5 +149,45 @@ def network_settings(args) -> dict:
 
 
 def progress_bar(total: int, desc: str, unit: str = "gen"):
+    """A tqdm bar whose ``update`` raises KeyboardInterrupt once SIGINT, SIGTERM or SIGHUP came.
+
+    The signal handler raises KeyboardInterrupt itself, but one raised inside a C
+    extension (numba's dispatcher, an import) can be swallowed there; checking at
+    every update makes sure the work still stops at the next one.
+    """
     from tqdm import tqdm
-    return tqdm(total=total, desc=desc, unit=unit, file=sys.stderr, dynamic_ncols=True, disable=None)
+
+    class _Bar(tqdm):
+        def update(self, n=1):
+            if interrupted():
+                raise KeyboardInterrupt
+            return super().update(n)
+
+    return _Bar(total=total, desc=desc, unit=unit, file=sys.stderr, dynamic_ncols=True, disable=None)
+
+
+class BestSoFar:
+    """A GA progress callback's companion: keeps the latest record, to save it when interrupted."""
+
+    def __init__(self, method: str):
+        self.method, self.name, self.record = method, None, None
+
+    def __call__(self, name, record) -> None:
+        self.name, self.record = name, record
+
+    def save(self, path) -> int:
+        """Write the best parameters so far to `path` (if given and a generation finished); 130."""
+        from .._files import atomic_write_text
+        from ..tuning import to_params
+
+        if self.record is None:
+            raise KeyboardInterrupt
+        params = to_params(self.method, self.record.best_chromosome)
+        if path is not None:
+            atomic_write_text(path, json_text({
+                "method": self.method, "params": params.to_dict(), "fitness": self.record.best,
+                "generations": self.record.index, "fitted_on": self.name, "interrupted": True}))
+        print(f"ismb-lab: interrupted while fitting {self.name}; best parameters so far "
+              f"{params.to_dict()}" + (f", written to {path}" if path is not None else ""),
+              file=sys.stderr)
+        return 130

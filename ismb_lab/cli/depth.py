@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import json
 import math
 from pathlib import Path
 
@@ -11,6 +10,7 @@ from ..depth import DepthConfig
 from ..depth_demo import DEPTH_MATCH_CONFIG, DEPTH_PARAMS, DEPTH_SOLVER
 from ._common import (UsageError, add_matching_options, add_solver_option, match_config, network_settings,
                       resolve_params)
+from ._guard import json_text, save_figure
 
 __all__ = ["add_parser", "run"]
 
@@ -72,7 +72,7 @@ def run(args) -> int:
         print(f"#{obj.rank}  at ({x:.0f}, {y:.0f})  disparity {obj.mean_disparity:.2f} px  "
               f"depth {depth}  {len(obj.features)} features")
     if args.json is not None:
-        atomic_write_text(args.json, json.dumps(result.to_dict(), indent=2) + "\n")
+        atomic_write_text(args.json, json_text(result.to_dict()))
     if args.plot is not None:
         from matplotlib.figure import Figure
 
@@ -82,5 +82,5 @@ def run(args) -> int:
         ax = fig.subplots()
         plot_depth(ax, load_pair(args.scene_left, args.scene_right).left, result)
         ax.set_title(f"Method-{method}: {len(result.objects)} objects, near -> far")
-        fig.savefig(args.plot, dpi=120)
+        save_figure(fig, args.plot, dpi=120)
     return 0

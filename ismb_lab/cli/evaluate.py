@@ -2,17 +2,20 @@
 
 from __future__ import annotations
 
-import json
 import os
 from pathlib import Path
 
 from .._files import atomic_write_text
 from ..protocol import format_protocol, load_manifest, protocol
 from ..solvers import DEFAULT_SOLVER, SOLVERS
-from ._common import (DEFAULT_METHOD, UsageError, add_ga_options, add_method_option, add_solver_option,
-                      default_of, ga_config, progress_bar)
+from ._common import (DEFAULT_METHOD, BestSoFar, UsageError, add_ga_options, add_method_option,
+                      add_solver_option, default_of, ga_config, progress_bar)
+from ._guard import json_text
 
 __all__ = ["add_parser", "run"]
+
+#: The protocol's own defaults, which the options fall back to.
+DEFAULTS = {name: default_of(protocol, name) for name in ("train", "seeds", "fit_seeds", "rng")}
 
 
 def add_parser(sub) -> None:
@@ -24,9 +27,9 @@ def add_parser(sub) -> None:
     add_method_option(e, DEFAULT_METHOD)
     e.add_argument("--train", type=int, default=None, metavar="INDEX",
                    help="the pair whose GA parameters are tested on the others "
-                   f"(default: {default_of(protocol, 'train')})")
+                   f"(default: {DEFAULTS['train']})")
     e.add_argument("--seeds", type=int, default=None,
-                   help=f"update-order seeds per figure (default: {default_of(protocol, 'seeds')})")
+                   help=f"update-order seeds per figure (default: {DEFAULTS['seeds']})")
     add_ga_options(e)
     e.add_argument("--peers", action="store_true", help="also score the peer matchers")
     add_solver_option(e, DEFAULT_SOLVER)
@@ -35,9 +38,9 @@ def add_parser(sub) -> None:
     e.add_argument("--fit-solver", choices=tuple(SOLVERS), default=None,
                    help=f"how the GA solves each network while fitting (default: {DEFAULT_SOLVER})")
     e.add_argument("--fit-seeds", type=int, default=None, metavar="N",
-                   help=f"update-order seeds averaged in each GA fitness (default: {default_of(protocol, 'fit_seeds')})")
+                   help=f"update-order seeds averaged in each GA fitness (default: {DEFAULTS['fit_seeds']})")
     e.add_argument("--ga-seed", type=int, default=None, metavar="N",
-                   help=f"seed of the GA (default: {default_of(protocol, 'rng')}); a small training pair can "
+                   help=f"seed of the GA (default: {DEFAULTS['rng']}); a small training pair can "
                    "leave the GA on a plateau, so compare a few")
     e.add_argument("--held-out-only", action="store_true",
                    help="fit only the training pair (the held-out figures are the same; the other "
@@ -62,9 +65,11 @@ def run(args) -> int:
         raise UsageError(f"--jobs must be an integer >= 1, got {jobs}")
     ga = ga_config(args)
     cases = load_manifest(args.manifest)
-    bars = {}
+    bars, method = {}, args.method or DEFAULT_METHOD
+    best = BestSoFar(method)
 
     def progress(name, record):
+        best(name, record)
         if jobs > 1:   # one update per finished fit
             if not bars:
                 fits = len(cases) if not args.held_out_only else 1
@@ -83,13 +88,15 @@ def run(args) -> int:
         given = {k: v for k, v in (("train", args.train), ("seeds", args.seeds), ("fit_seeds", args.fit_seeds),
                                    ("rng", args.ga_seed), ("solver", args.solver),
                                    ("fit_solver", args.fit_solver)) if v is not None}
-        report = protocol(cases, args.method or DEFAULT_METHOD, ga=ga, peers=args.peers, progress=progress,
+        report = protocol(cases, method, ga=ga, peers=args.peers, progress=progress,
                           solvers=tuple(args.solvers), fit_all=not args.held_out_only, jobs=jobs, **given)
+    except KeyboardInterrupt:
+        return best.save(args.json)
     finally:
         for bar in bars.values():
             bar.close()
     print(format_protocol(report))
     if args.json is not None:
-        data = {**report.to_dict(), "ga_seed": given.get("rng", default_of(protocol, "rng"))}
-        atomic_write_text(args.json, json.dumps(data, indent=2) + "\n")
+        data = {**report.to_dict(), "ga_seed": given.get("rng", DEFAULTS["rng"])}
+        atomic_write_text(args.json, json_text(data))
     return 0

@@ -8,6 +8,7 @@ from .._files import atomic_write_text
 from ..matching import MatchConfig
 from ..solvers import DEFAULT_SOLVER
 from ._common import add_matching_options, add_solver_option, match_config, network_settings, resolve_params
+from ._guard import json_text, save_figure
 
 __all__ = ["add_parser", "run"]
 
@@ -40,7 +41,7 @@ def run(args) -> int:
           f"after {result.attempts} attempts")
     print(result.table())
     if args.json is not None:
-        atomic_write_text(args.json, result.to_json() + "\n")
+        atomic_write_text(args.json, json_text(result.to_dict()))
     if args.plot is not None:
         from matplotlib.figure import Figure
 
@@ -50,5 +51,5 @@ def run(args) -> int:
         ax = fig.subplots()
         plot_matches(ax, pair.left, pair.right, result.left_xy, result.right_xy, result.pairs)
         ax.set_title(f"Method-{result.method}: {len(result.pairs)} matches")
-        fig.savefig(args.plot, dpi=120)
+        save_figure(fig, args.plot, dpi=120)
     return 0

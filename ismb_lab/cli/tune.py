@@ -40,7 +40,8 @@ def add_parser(sub) -> None:
 def run(args) -> int:
     method, solver, ga = args.method or DEFAULT_METHOD, args.solver or DEFAULT_SOLVER, ga_config(args)
     seed = GA_SEED if args.seed is None else args.seed
-    case = Case.from_files(args.left, args.right, args.targets, match_config(args))
+    case = Case.from_files(args.left, args.right, args.targets, match_config(args),
+                           check_hash=not args.no_hash_check)
     if len(case.left_out):
         print(f"ismb-lab: note: {len(case.left_out)} targets have no corner within 1.5 px and are "
               f"left out: {', '.join(f'#{n + 1}' for n in case.left_out)}", file=sys.stderr)

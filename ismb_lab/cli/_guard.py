@@ -1,0 +1,218 @@
+"""What every ``ismb-lab`` command gets before and around its work.
+
+* :class:`Interrupts`: SIGINT, SIGTERM and SIGHUP all stop the work like Ctrl-C,
+  and the exit code is ``128 + signal number`` (130, 143, 129).
+* :func:`preflight`: the limits, the inputs (regular files only) and the outputs
+  (:func:`ismb_lab._files.check_output`) are checked before any long work starts.
+* :func:`json_text` and :func:`save_figure`: every JSON and plot output is
+  written atomically through :func:`ismb_lab._files.atomic_write_bytes`.
+
+Limits (each raised by an environment variable; ``ismb-lab --help`` lists them):
+
+=========================  =========  =============================================
+variable                   default    what it bounds
+=========================  =========  =============================================
+ISMB_LAB_MAX_PIXELS        25000000   pixels of one image (read from the file header)
+ISMB_LAB_MAX_CORNERS       500        ``--n-max``, corners per image
+ISMB_LAB_MAX_POPULATION    1000       ``--population`` of the GA
+ISMB_LAB_MAX_GENERATIONS   100000     ``--generations`` of the GA
+ISMB_LAB_MAX_SEEDS         100        ``--seeds`` and ``--fit-seeds`` of evaluate
+=========================  =========  =============================================
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import os
+import signal
+import sys
+import threading
+from pathlib import Path
+
+from .._files import atomic_write_bytes, check_input, check_output
+
+__all__ = ["LIMITS", "Interrupts", "UsageError", "interrupted", "json_text", "limit", "preflight", "save_figure"]
+
+class UsageError(Exception):
+    """A mistake in the command line or its files, reported in one line."""
+
+
+#: name -> (environment variable, default, what it bounds, the option it bounds)
+LIMITS = {
+    "n_max": ("ISMB_LAB_MAX_CORNERS", 500, "corners per image", "--n-max"),
+    "population": ("ISMB_LAB_MAX_POPULATION", 1000, "chromosomes", "--population"),
+    "generations": ("ISMB_LAB_MAX_GENERATIONS", 100_000, "generations", "--generations"),
+    "seeds": ("ISMB_LAB_MAX_SEEDS", 100, "seeds", "--seeds"),
+    "fit_seeds": ("ISMB_LAB_MAX_SEEDS", 100, "seeds", "--fit-seeds"),
+}
+
+INPUTS = ("left", "right", "targets", "manifest", "params_file",
+          "bg_left", "bg_right", "scene_left", "scene_right")
+OUTPUTS = {"json": "--json", "plot": "--plot", "out": "--out"}
+
+_ACTIVE: list = []
+
+
+def limit(name: str) -> int:
+    """The limit in force for `name` (a key of :data:`LIMITS`), from the environment or the default."""
+    variable, default = LIMITS[name][:2]
+    raw = os.environ.get(variable)
+    if raw is None or raw.strip() == "":
+        return default
+    try:
+        value = int(raw)
+    except ValueError:
+        value = 0
+    if value < 1:
+        raise UsageError(f"{variable} must be a whole number >= 1, got {raw!r}")
+    return value
+
+
+class Interrupts:
+    """Within ``with Interrupts() as i:``, SIGINT, SIGTERM and SIGHUP raise KeyboardInterrupt.
+
+    The first signal is kept in ``i.signum``; :func:`interrupted` tells long loops
+    that one came, even if a C extension swallowed the KeyboardInterrupt.
+    Handlers are installed only in the main thread, and a signal that was ignored
+    when the process started (``nohup``) stays ignored.
+    """
+
+    NAMES = ("SIGINT", "SIGTERM", "SIGHUP")
+
+    def __init__(self):
+        self.signum = None
+        self._old = {}
+        self._old_hook = None
+
+    def _unraisable(self, report):
+        # A KeyboardInterrupt raised inside a __del__ or a callback cannot propagate: Python
+        # prints "Exception ignored ... Traceback" and goes on.  Once a signal came, such
+        # reports are its echoes; the work stops at the next check of interrupted().
+        if self.signum is None:
+            self._old_hook(report)
+
+    def _handle(self, signum, frame):
+        if self.signum is None:
+            self.signum = signum
+        raise KeyboardInterrupt
+
+    def __enter__(self):
+        if threading.current_thread() is threading.main_thread():
+            for name in self.NAMES:
+                number = getattr(signal, name, None)
+                if number is None or signal.getsignal(number) == signal.SIG_IGN:
+                    continue
+                self._old[number] = signal.signal(number, self._handle)
+        self._old_hook, sys.unraisablehook = sys.unraisablehook, self._unraisable
+        _ACTIVE.append(self)
+        return self
+
+    def __exit__(self, *exc):
+        for number, old in self._old.items():
+            signal.signal(number, old)
+        self._old.clear()
+        sys.unraisablehook = self._old_hook
+        _ACTIVE.remove(self)
+        return False
+
+    @property
+    def exit_code(self) -> int:
+        """``128 + n`` for signal n; 130 (SIGINT) when no signal was recorded."""
+        return 128 + (self.signum or signal.SIGINT)
+
+    @property
+    def name(self) -> str:
+        return signal.Signals(self.signum or signal.SIGINT).name
+
+
+def interrupted() -> bool:
+    """True once a signal reached the innermost active :class:`Interrupts`."""
+    return bool(_ACTIVE) and _ACTIVE[-1].signum is not None
+
+
+def _plain(value):
+    if isinstance(value, float) and not math.isfinite(value):
+        return None
+    if isinstance(value, dict):
+        return {k: _plain(v) for k, v in value.items()}
+    if isinstance(value, (list, tuple)):
+        return [_plain(v) for v in value]
+    return value
+
+
+def json_text(data) -> str:
+    """Strict JSON (RFC 8259) of `data`: a number that is not finite is written as ``null``.
+
+    ``json.dumps`` would write ``Infinity`` or ``NaN``, which JSON does not have.
+    In ``ismb-lab`` outputs ``null`` means "no finite value", e.g. an infinite depth.
+
+    >>> json_text({"z": float("inf"), "d": [1.5, float("nan")]})
+    '{\\n  "z": null,\\n  "d": [\\n    1.5,\\n    null\\n  ]\\n}\\n'
+    """
+    return json.dumps(_plain(data), indent=2, allow_nan=False) + "\n"
+
+
+def _plot_formats() -> dict:
+    from matplotlib.backend_bases import FigureCanvasBase
+    return FigureCanvasBase.get_supported_filetypes()
+
+
+def save_figure(fig, path, **kwargs) -> Path:
+    """Render `fig` in the format of `path`'s suffix (png without one) and write it atomically."""
+    import io
+
+    buffer = io.BytesIO()
+    fig.savefig(buffer, format=Path(path).suffix[1:].lower() or "png", **kwargs)
+    return atomic_write_bytes(path, buffer.getvalue())
+
+
+def _manifest_files(path) -> list:
+    """The files a manifest names (best effort: a bad manifest is reported by its loader)."""
+    try:
+        data = json.loads(Path(path).read_text(encoding="utf-8"))
+        entries = data["pairs"]
+        return [Path(path).parent / e[k] for e in entries for k in ("left", "right", "targets")
+                if isinstance(e, dict) and isinstance(e.get(k), str)]
+    except (OSError, ValueError, TypeError, KeyError, RecursionError):
+        return []
+
+
+def preflight(args, usage_error) -> None:
+    """Check the limits, inputs and outputs of a parsed command line before its work starts.
+
+    Raises `usage_error` (or :class:`ismb_lab._files.OutputError`) with a one-line message.
+    """
+    for name, (variable, _, what, option) in LIMITS.items():
+        value = getattr(args, name, None)
+        if isinstance(value, int) and value > limit(name):
+            raise usage_error(f"{option} {value} is above the limit of {limit(name)} {what}; "
+                              f"set {variable}={value} to allow it")
+    inputs = [getattr(args, a) for a in INPUTS if getattr(args, a, None) is not None]
+    for attr in INPUTS:
+        if getattr(args, attr, None) is not None:
+            check_input(getattr(args, attr), what=attr.replace("_", "-") if attr != "params_file"
+                        else "--params-file")
+    if getattr(args, "manifest", None) is not None:
+        inputs += _manifest_files(args.manifest)
+    if getattr(args, "command", None) == "render":
+        out = Path(args.out)
+        if out.exists() and not out.is_dir():
+            raise usage_error(f"--out {str(out)!r} is not a folder")
+        return
+    seen = {}
+    for attr, option in OUTPUTS.items():
+        path = getattr(args, attr, None)
+        if path is None:
+            continue
+        if attr == "plot":
+            suffix = Path(path).suffix[1:].lower()
+            formats = _plot_formats()
+            if suffix and suffix not in formats:
+                raise usage_error(f"--plot {str(path)!r}: cannot draw a '.{suffix}' file "
+                                  f"(formats: {', '.join(sorted(formats))})")
+        for other, other_path in seen.items():
+            if os.path.realpath(other_path) == os.path.realpath(path):
+                raise usage_error(f"{option} and {other} name the same file {str(path)!r}")
+        check_output(path, inputs=inputs, force=getattr(args, "force", False), what=option)
+        seen[option] = path
