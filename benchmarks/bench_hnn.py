@@ -12,7 +12,7 @@ from __future__ import annotations
 import statistics
 import time
 
-from ismb_lab.hopfield import run
+from ismb_lab.dynamics import run
 from ismb_lab.matching import MatchConfig, prepare
 from ismb_lab.methods import THESIS_PARAMS, get_method
 from ismb_lab.scenes import synthetic_scene

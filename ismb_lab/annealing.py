@@ -15,7 +15,7 @@ the way is ``const - 1/2 v'Wv - I'v``, which equals :func:`ismb_lab.hopfield.ene
 for 0/1 states.
 
 At the end ``v`` is rounded at 1/2 and handed to the discrete network
-(:func:`ismb_lab.hopfield.run` from that state), so the answer is an exact fixed
+(:func:`ismb_lab.dynamics.run` from that state), so the answer is an exact fixed
 point like the discrete network's.
 
 >>> from ismb_lab.hopfield import Network
@@ -35,7 +35,8 @@ from typing import Iterator
 import numpy as np
 
 from ._validation import ParameterError, ParameterTypeError, check_number, check_rng, message
-from .hopfield import Network, energy, hopfield_form, run
+from .hopfield import Network, energy, hopfield_form
+from .dynamics import run
 
 __all__ = ["anneal", "AnnealResult", "AnnealStep", "iter_annealing"]
 

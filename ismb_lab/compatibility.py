@@ -21,6 +21,8 @@ import numpy as np
 from ._validation import ParameterError, check_choice, check_number, check_points
 from .coords import euclidean_disparity
 
+__all__ = ["left_neighbours", "neuron_pairs", "NeuronPairs"]
+
 
 def left_neighbours(left_xy, *, radius: float = 20.0, shape: str = "box") -> np.ndarray:
     """Unordered pairs of neighbouring left features.

@@ -15,6 +15,8 @@ import numpy as np
 
 from ._validation import ParameterError, check_number, message
 
+__all__ = ["MOTORCYCLE_ROIS", "ground_truth_pairs", "GroundTruthPair", "motorcycle"]
+
 #: Four non-overlapping 160 x 108 ROIs (x, y, w, h) of the 320 x 216 pair.
 MOTORCYCLE_ROIS = ((0, 0, 160, 108), (160, 0, 160, 108), (0, 108, 160, 108), (160, 108, 160, 108))
 

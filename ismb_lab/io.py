@@ -16,6 +16,9 @@ import numpy as np
 
 from ._validation import ParameterError, ParameterTypeError, check_number, message
 
+__all__ = ["MAX_PIXELS", "PIXELS_VARIABLE", "image_sha256", "load_image", "load_pair", "max_pixels",
+           "StereoPair"]
+
 _ARRAY_TAG = b"ismb_lab-array-v1\n"
 
 

@@ -17,7 +17,8 @@ import numpy as np
 from ._validation import ParameterError, ParameterTypeError, check_choice, check_number, message
 from .coords import euclidean_disparity, horizontal_disparity
 from .features import Corners, detect_corners, resolve_roi
-from .hopfield import RULES, STOP_RULES
+from .hopfield import RULES
+from .dynamics import STOP_RULES
 from .io import StereoPair, load_pair
 from .methods import Problem, build_problem, get_method
 from .params import Params
@@ -284,7 +285,7 @@ def match(left=None, right=None, method="III", params: Params | None = None, *,
     solver : str
         How the energy is minimised, a name in :data:`ismb_lab.solvers.SOLVERS`.
     stop_rule, rule, kernel
-        The discrete network's settings, see :func:`ismb_lab.hopfield.run`.
+        The discrete network's settings, see :func:`ismb_lab.dynamics.run`.
     prepared : Prepared, optional
         Reuse corners and geometry from :func:`prepare`.
 

@@ -12,6 +12,8 @@ import numpy as np
 
 from ._validation import ParameterError, check_number, check_points
 
+__all__ = ["candidate_mask", "mean_abs_difference", "patches", "transfer"]
+
 
 def transfer(x, theta: float, lam: float) -> np.ndarray:
     """The thesis' transfer function ``2 / (1 + exp(lam * (x - theta))) - 1``.

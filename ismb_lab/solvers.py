@@ -2,7 +2,7 @@
 
 Three solvers minimise the same energy (3-15):
 
-* ``"network"``: the thesis' discrete Hopfield network (:func:`ismb_lab.hopfield.run`),
+* ``"network"``: the thesis' discrete Hopfield network (:func:`ismb_lab.dynamics.run`),
   asynchronous flips from "all candidates on" to a fixed point; it honours the
   update rule, the stop rule and the kernel.
 * ``"anneal"``: mean-field annealing (:func:`ismb_lab.annealing.anneal`), the analog
@@ -32,7 +32,8 @@ import numpy as np
 from ._validation import ParameterTypeError, check_choice, check_number, message
 from .annealing import anneal
 from .exact import milp_minimum
-from .hopfield import RULES, STOP_RULES, Network, run
+from .hopfield import RULES, Network
+from .dynamics import STOP_RULES, run
 
 __all__ = ["ANNEAL", "DEFAULT_SOLVER", "EXACT", "NETWORK", "SOLVERS", "Matches", "Solution", "Solver", "get_solver", "solve",
            "solver_names", "to_matches"]
@@ -140,7 +141,7 @@ def solve(net: Network, solver: str = DEFAULT_SOLVER, *, seed: int = 0, stop_rul
     seed : int
         Update-order (and annealing) seed; the exact solver ignores it.
     stop_rule, rule, kernel
-        The discrete network's settings (:func:`ismb_lab.hopfield.run`); only the
+        The discrete network's settings (:func:`ismb_lab.dynamics.run`); only the
         ``"network"`` solver reads them.
     owner : str
         The function named in error messages.

@@ -27,6 +27,9 @@ from ._files import atomic_write_text
 from ._validation import ParameterError, ParameterTypeError, check_number, check_points, message
 from .io import StereoPair
 
+__all__ = ["VERSION", "load_targets", "save_targets", "snap", "Snapped", "targets_from_matches",
+           "TargetSet"]
+
 VERSION = 1
 _HASHES = ("left_image_sha256", "right_image_sha256")
 _POINTS = ("left_xy", "right_xy")

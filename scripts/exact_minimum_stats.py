@@ -12,7 +12,7 @@ import numpy as np
 from ismb_lab.annealing import anneal
 from ismb_lab.evaluation import Score, score
 from ismb_lab.exact import MAX_EXHAUSTIVE, exhaustive_minimum
-from ismb_lab.hopfield import run
+from ismb_lab.dynamics import run
 from ismb_lab.matching import MatchConfig, prepare
 from ismb_lab.methods import Params, get_method
 from ismb_lab.scenes import synthetic_scene, true_matches

@@ -6,7 +6,8 @@ import pytest
 from ismb_lab import ParameterError
 from ismb_lab.annealing import anneal, iter_annealing
 from ismb_lab.exact import exhaustive_minimum
-from ismb_lab.hopfield import Network, energy, hopfield_form, run
+from ismb_lab.hopfield import Network, energy, hopfield_form
+from ismb_lab.dynamics import run
 
 
 def net_of(seed, no_match=True):

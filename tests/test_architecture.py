@@ -12,6 +12,7 @@ import pytest
 import ismb_lab
 from ismb_lab.cli import build_parser, main
 from ismb_lab.methods import MethodIII, get_method, method_names, register_method, unregister_method
+from ismb_lab.solvers import SOLVERS
 
 PACKAGE = Path(ismb_lab.__file__).parent
 IMAGES = PACKAGE.parent / "images"
@@ -99,6 +100,18 @@ def test_the_core_never_imports_pyplot_or_ipywidgets():
             assert not [n for n in names if "pyplot" in n or n.startswith("ipywidgets")], path
 
 
+def test_no_module_is_much_longer_than_600_lines():
+    long = {str(p.relative_to(PACKAGE)): n for p in MODULES
+            if (n := len(p.read_text(encoding="utf-8").splitlines())) > 650}
+    assert not long
+
+
+def test_every_public_module_declares_all():
+    missing = [module_name(p) for p in MODULES
+               if not p.name.startswith("_") and "__all__" not in p.read_text(encoding="utf-8")]
+    assert not missing
+
+
 # --- one place for each idea -------------------------------------------------------------
 
 STATE_TO_PAIRS = ("flatnonzero(state", "flatnonzero(self.state", "nonzero(state", ".rows[on]", "rows[on],")
@@ -112,7 +125,7 @@ def test_a_solved_state_becomes_matches_in_one_function_only():
 
 def solver_name_literals(path: Path):
     """String constants equal to a solver's name, outside docstrings, with their line."""
-    names = set(ismb_lab.solvers.SOLVERS)
+    names = set(SOLVERS)
     tree = ast.parse(path.read_text(encoding="utf-8"))
     docstrings = {id(n.body[0].value) for n in ast.walk(tree)
                   if isinstance(n, (ast.Module, ast.ClassDef, ast.FunctionDef)) and n.body

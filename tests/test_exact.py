@@ -7,7 +7,8 @@ import pytest
 
 from ismb_lab import ParameterError
 from ismb_lab.exact import MAX_EXHAUSTIVE, exhaustive_minimum, milp_minimum
-from ismb_lab.hopfield import Network, energy, run
+from ismb_lab.hopfield import Network, energy
+from ismb_lab.dynamics import run
 
 
 def random_net(rng, n_left, n_right, p_candidate, no_match):

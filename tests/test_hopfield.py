@@ -3,7 +3,8 @@
 import numpy as np
 import pytest
 
-from ismb_lab.hopfield import Network, energy, hopfield_form, iter_updates, run
+from ismb_lab.hopfield import Network, energy, hopfield_form
+from ismb_lab.dynamics import iter_updates, run
 
 
 def random_network(seed, n_left=None, n_right=None, p_candidate=0.4, p_pair=0.5):

@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 
 from ismb_lab import ParameterError, ParameterTypeError
-from ismb_lab.hopfield import iter_updates
+from ismb_lab.dynamics import iter_updates
 from ismb_lab.matching import MatchConfig, match, prepare
 from ismb_lab.methods import THESIS_PARAMS, Params, get_method
 from ismb_lab.scenes import synthetic_scene, true_matches

@@ -15,7 +15,8 @@ from pathlib import Path
 from .._files import check_input
 from .._validation import ParameterError, ParameterTypeError
 from ..genetic import GAConfig
-from ..hopfield import RULES, STOP_RULES
+from ..hopfield import RULES
+from ..dynamics import STOP_RULES
 from ..matching import MatchConfig, match
 from ..methods import all_genes, get_method, load_params, method_names
 from ..solvers import SOLVERS

@@ -12,6 +12,8 @@ import numpy as np
 
 from .._validation import ParameterError, ParameterTypeError, check_number, check_points, message
 
+__all__ = ["EPS", "ROI", "Rig"]
+
 ROI = (80, 60, 160, 120)
 """The thesis' region of interest, the centre quarter of a 320 x 240 image, as ``(x, y, w, h)``."""
 

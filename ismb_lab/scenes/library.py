@@ -17,6 +17,9 @@ from .primitives import _FACE_UV, Box, Group, Plane
 from .render import Scene, render
 from .textures import Texture, random_texture
 
+__all__ = ["CAR_DEPTH", "REALISTIC_COUNT", "TABLE_Y", "WALL_Z", "lab_scene", "realistic_scene",
+           "synthetic_scene", "toy_car", "toy_car_layout", "toy_car_scene"]
+
 # ------------------------------------------------------------ ready-made scene
 
 WALL_Z = 1.8

@@ -14,6 +14,8 @@ from .._validation import ParameterError, ParameterTypeError, check_number, mess
 from .geometry import EPS, _rays, _vector
 from .textures import Texture
 
+__all__ = ["Box", "cast", "Group", "Plane", "Primitive"]
+
 # -------------------------------------------------------------------- primitives
 
 

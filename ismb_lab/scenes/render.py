@@ -10,6 +10,8 @@ from .._validation import ParameterError, ParameterTypeError, check_number, chec
 from .geometry import Rig, _vector
 from .primitives import _check_primitives, cast
 
+__all__ = ["render", "Scene", "true_matches"]
+
 # -------------------------------------------------------------------------- scene
 
 

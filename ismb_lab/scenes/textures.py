@@ -9,6 +9,8 @@ import numpy as np
 from .._validation import ParameterError, check_number, check_points, check_rng, message
 from .geometry import _vector
 
+__all__ = ["random_texture", "Texture"]
+
 # ----------------------------------------------------------------------- texture
 
 

@@ -26,6 +26,9 @@ from ..plotting import GAP, plot_matches
 from ..targets import TargetSet, load_targets, save_targets, snap, targets_from_matches
 from ._common import Base, Pane, button, grey_rgb, number_labels, pair_files, with_class
 
+__all__ = ["COLUMNS", "Comparison", "draw_labels", "LabelModel", "pairs_html", "TargetLabeler",
+           "update_labels"]
+
 COLUMNS = ("Pair", "Left", "Right", "y_left", "x_left", "y_right", "x_right", "disparity")
 
 

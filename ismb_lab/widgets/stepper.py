@@ -1,6 +1,6 @@
 """Step the Hopfield network one update attempt at a time (thesis §3.3, Fig. 5.6).
 
-:class:`StepperModel` consumes :func:`ismb_lab.hopfield.iter_updates`, the same
+:class:`StepperModel` consumes :func:`ismb_lab.dynamics.iter_updates`, the same
 generator the core runs, so the widget shows exactly what the network does;
 :class:`HopfieldStepper` adds the neuron grid, the matches on the image pair and
 the energy curve.
@@ -11,7 +11,8 @@ from __future__ import annotations
 import numpy as np
 
 from .._validation import ParameterTypeError, check_choice, check_number, message
-from ..hopfield import RULES, STOP_RULES, Update, energy, iter_updates
+from ..hopfield import RULES, energy
+from ..dynamics import STOP_RULES, Update, iter_updates
 from ..matching import MatchConfig, Prepared, prepare
 from ..methods import get_method
 from ..params import Params
@@ -31,7 +32,7 @@ class StepperModel:
     params : Params, optional
         The thesis' values for the method by default.
     seed : int
-        Seed of the random visiting order (as in :func:`ismb_lab.hopfield.run`).
+        Seed of the random visiting order (as in :func:`ismb_lab.dynamics.run`).
     rule : {"exact", "thesis"}
         ``"thesis"`` is the literal (3-17)/(3-20) rule, whose energy can rise.
     stop_rule : {"sweep", "stall"}
