@@ -68,6 +68,17 @@ def _xy(value, name, owner) -> list[float]:
     return [float(v) for v in value]
 
 
+def _check_unique(left_xy, right_xy, owner) -> None:
+    """A pair listed twice would count twice in every score (and a GA could never reach it)."""
+    rows = np.hstack([np.reshape(left_xy, (-1, 2)), np.reshape(right_xy, (-1, 2))])
+    _, first, counts = np.unique(rows, axis=0, return_index=True, return_counts=True)
+    if (counts > 1).any():
+        j = int(np.sort(first[counts > 1])[0])
+        again = int(np.flatnonzero((rows == rows[j]).all(axis=1))[1])
+        raise ParameterError(message("pairs", owner, "a list that holds each pair once",
+                                     f"pairs[{j}] repeated as pairs[{again}]"))
+
+
 def _plain(xy) -> list:
     return [int(v) if float(v).is_integer() else float(v) for v in np.asarray(xy).tolist()]
 
@@ -82,7 +93,8 @@ def _set(obj, name, value):
 class TargetSet:
     """Target pairs ``left_xy[j] <-> right_xy[j]``; immutable, methods return new sets.
 
-    `left_xy`, `right_xy` are read-only ``(m, 2)`` float arrays of points >= 0;
+    `left_xy`, `right_xy` are read-only ``(m, 2)`` float arrays of points >= 0, each
+    pair at most once;
     `left_sha256`, `right_sha256` the :func:`ismb_lab.io.image_sha256` of the images
     (or None); `meta` the file's extra top-level keys; `extras` one dict of extra
     keys per pair (None: all empty).
@@ -113,6 +125,7 @@ class TargetSet:
         if len(self.right_xy) != m:
             raise ParameterError(message("right_xy", owner, f"{m} points, one per left point",
                                          f"{len(self.right_xy)} points"))
+        _check_unique(self.left_xy, self.right_xy, owner)
         for name in ("left_sha256", "right_sha256"):
             _set(self, name, _hash(getattr(self, name), name, owner))
         _set(self, "meta", _json_dict(self.meta, "meta", owner, _RESERVED))
@@ -184,6 +197,7 @@ class TargetSet:
                 raise kind(message(f"pairs[{j}]", source, rule, item))
             for key in _POINTS:
                 xy[key].append(_xy(item[key], f"pairs[{j}].{key}", source))
+        _check_unique(xy["left_xy"], xy["right_xy"], source)
         return cls(np.reshape(xy["left_xy"], (-1, 2)), np.reshape(xy["right_xy"], (-1, 2)),
                    *(_hash(d.get(k), k, source) for k in _HASHES),
                    meta={k: v for k, v in d.items() if k not in _RESERVED},

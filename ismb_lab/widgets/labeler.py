@@ -23,7 +23,8 @@ import numpy as np
 from .._validation import ParameterError, ParameterTypeError, check_choice, check_number, message
 from ..matching import MatchConfig, Prepared, prepare
 from ..plotting import GAP, plot_matches
-from ..targets import TargetSet, load_targets, save_targets, snap, targets_from_matches
+from ..classroom import save_merging, targets_path
+from ..targets import TargetSet, load_targets, snap, targets_from_matches
 from ._common import Base, Pane, button, grey_rgb, number_labels, pair_files, with_class
 
 __all__ = ["COLUMNS", "Comparison", "draw_labels", "LabelModel", "pairs_html", "TargetLabeler",
@@ -62,7 +63,10 @@ class LabelModel:
     prepared : Prepared
         The pair and its features (:func:`ismb_lab.matching.prepare`).
     path : str or os.PathLike, optional
-        Where :meth:`save` and :meth:`load` go by default.
+        Where :meth:`save` and :meth:`load` go by default.  A save merges with what
+        another process saved there since this model last read the file
+        (:func:`ismb_lab.classroom.save_merging`), so two labellers on one file lose
+        nothing; the file's other keys and per-pair notes are kept.
     answer_key : TargetSet, optional
         Ground truth for :meth:`compare`.
     snap_radius : float
@@ -102,6 +106,8 @@ class LabelModel:
         self._pairs: list[tuple[int, int]] = []
         self._history: list[tuple] = []
         self._saved: tuple = ()
+        self._base: TargetSet | None = None   # the file as last loaded or saved here
+        self._base_path: Path | None = None
         self.pending: int | None = None   # a left feature waiting for its partner
         self.selected: int | None = None  # index into pairs
         self.message = "click a left feature, then its partner in the right image"
@@ -130,7 +136,8 @@ class LabelModel:
         """The labels as a :class:`~ismb_lab.targets.TargetSet` bound to the two images."""
         pair = self.prepared.pair
         return targets_from_matches(self.pairs, self.left_xy, self.right_xy,
-                                    left_sha256=pair.left_sha256, right_sha256=pair.right_sha256)
+                                    left_sha256=pair.left_sha256, right_sha256=pair.right_sha256,
+                                    **(self._base.meta if self._base is not None else {}))
 
     def compare(self) -> Comparison:
         """Compare the labels with the answer key (ParameterError without one)."""
@@ -266,11 +273,21 @@ class LabelModel:
         return Path(path)
 
     def save(self, path=None) -> Path:
-        """Write the labels atomically; on failure the old file is untouched and the error raised."""
+        """Write the labels atomically, merged with what others saved to the file meanwhile.
+
+        On failure the old file is untouched and the error raised.  Pairs that another
+        labeller saved (on this pair's features) appear among the labels afterwards.
+        """
         path = self._path(path, "LabelModel.save")
-        save_targets(path, self.targets())
+        base = self._base if self._base is not None and path == self._base_path else None
+        merged = save_merging(path, self.targets(), base)
+        snapped = snap(merged.targets, self.left_xy, self.right_xy)
+        self._pairs = sorted(set(map(tuple, snapped.pairs.tolist())))
         self._saved = tuple(self._pairs)
-        self._say(f"saved {len(self._pairs)} pairs to {path}")
+        self._base, self._base_path = merged.targets, path
+        others = (f"; kept {merged.kept_from_disk} pairs saved there by someone else"
+                  if merged.kept_from_disk else "")
+        self._say(f"saved {len(self._pairs)} pairs to {path}{others}")
         return path
 
     def load(self, path=None) -> int:
@@ -295,6 +312,7 @@ class LabelModel:
         self._remember()
         self._pairs = sorted(map(tuple, snapped.pairs.tolist()))
         self._saved = tuple(self._pairs)
+        self._base, self._base_path = targets, path
         self.pending = self.selected = None
         self._say(f"loaded {len(self._pairs)} pairs from {path}")
         return len(self._pairs)
@@ -378,7 +396,12 @@ class TargetLabeler(Base):
     left, right : path or ndarray
         The image pair.
     path : str or os.PathLike, optional
-        The targets file of Save and Load.
+        The targets file of Save and Load.  By default each student gets their own,
+        ``targets-<user>-<pair>.json`` in the working folder
+        (:func:`ismb_lab.classroom.targets_path`), shown above the buttons.
+    pair_name : str, optional
+        The pair's name in that default file name (default: the folder's name for
+        :meth:`from_folder`, else the first 12 hex digits of the left image's hash).
     config : MatchConfig, optional
         Corner settings: labels snap to the features the matcher sees.
     answer_key : TargetSet or path, optional
@@ -393,13 +416,15 @@ class TargetLabeler(Base):
     """
 
     def __init__(self, left, right=None, *, path=None, config: MatchConfig | None = None,
-                 answer_key=None):
+                 answer_key=None, pair_name: str | None = None):
         import ipywidgets
 
         super().__init__()
         prepared = left if isinstance(left, Prepared) else prepare(left, right, config)
         if answer_key is not None and not isinstance(answer_key, TargetSet):
             answer_key = load_targets(answer_key, pair=prepared.pair)
+        if path is None:
+            path = targets_path(pair_name or prepared.pair.left_sha256[:12], Path.cwd())
         self.model = LabelModel(prepared, path=path, answer_key=answer_key)
         self.pane = Pane((9.0, 3.6), "ismb-stereo")
         self.panes = (self.pane,)
@@ -416,6 +441,8 @@ class TargetLabeler(Base):
             tooltip="Compare your pairs with the ground truth" if answer_key is not None
             else "This pair has no answer key"), "ismb-answer-key")
         self.dirty_label = with_class(ipywidgets.HTML(""), "ismb-dirty")
+        self.path_label = with_class(ipywidgets.HTML(
+            f"your targets file: <code>{html.escape(str(self.model.path))}</code>"), "ismb-path")
         self.key_summary = with_class(ipywidgets.HTML(""), "ismb-key-summary")
         self.table = with_class(ipywidgets.HTML(""), "ismb-pairs")
 
@@ -428,7 +455,8 @@ class TargetLabeler(Base):
 
         bar = ipywidgets.HBox([self.undo_button, self.delete_button, self.save_button,
                                self.load_button, self.key_toggle, self.dirty_label])
-        self.widget = with_class(ipywidgets.VBox([self.pane.widget, bar, self.status, self.key_summary,
+        self.widget = with_class(ipywidgets.VBox([self.pane.widget, self.path_label, bar, self.status,
+                                                  self.key_summary,
                                                   self.table, self.log]), "ismb-labeler")
         self.refresh()
 
@@ -437,7 +465,8 @@ class TargetLabeler(Base):
         """Label ``folder/left.png`` and ``folder/right.png``; the answer key is
         ``folder/answer_key.json`` when present."""
         left, right, key = pair_files(folder, "TargetLabeler.from_folder")
-        return cls(left, right, path=path, config=config, answer_key=key if key.is_file() else None)
+        return cls(left, right, path=path, config=config, answer_key=key if key.is_file() else None,
+                   pair_name=Path(folder).resolve().name)
 
     # --- the model's operations, redrawn ----------------------------------------------
     @property

@@ -116,7 +116,7 @@ def workspace(tmp_path_factory):
     """A copy of notebooks/ and images/ with the repository's layout."""
     root = tmp_path_factory.mktemp("lab")
     shutil.copytree(ROOT / "notebooks", root / "notebooks",
-                    ignore=shutil.ignore_patterns(".ipynb_checkpoints", "my_targets*.json"))
+                    ignore=shutil.ignore_patterns(".ipynb_checkpoints", "my_targets*.json", "targets-*.json"))
     shutil.copytree(ROOT / "images", root / "images")
     return root
 

@@ -81,7 +81,9 @@ def test_label_targets_click_and_save(open_notebook, workspace, artifacts):
     expect(root.locator(".ismb-dirty")).to_contain_text("unsaved")
     root.locator("button.ismb-save").click()
     expect(root.locator(".ismb-dirty")).to_have_text("saved", timeout=20_000)
-    saved = json.loads((workspace / "notebooks" / "my_targets.json").read_text())
+    files = sorted((workspace / "notebooks").glob("targets-*-synthetic.json"))   # the student's own file
+    assert len(files) == 1 and files[0].name.startswith("targets-") and files[0].name.endswith("-synthetic.json")
+    saved = json.loads(files[0].read_text())
     assert [(p["left_xy"], p["right_xy"]) for p in saved["pairs"]] == [(list(left_xy), list(right_xy))]
     root.screenshot(path=artifacts / "04_label_targets.png")
 

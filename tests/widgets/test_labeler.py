@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 
 from ismb_lab import ParameterError
-from ismb_lab.targets import load_targets
+from ismb_lab.targets import load_targets, targets_from_matches
 from ismb_lab.widgets.labeler import COLUMNS, LabelModel, TargetLabeler
 
 
@@ -144,11 +144,63 @@ def test_a_failing_save_leaves_the_old_file(labeler, tmp_path):
     assert (tmp_path / "targets.json").read_text() == old
 
 
-def test_save_without_a_path_says_so(prepared):
-    labeler = TargetLabeler(prepared)
-    labeler.add_pair(0, 0)
-    labeler.save_button.click()
-    assert "save failed" in labeler.status.value and "'path' parameter" in labeler.status.value
+def test_without_a_path_each_student_gets_their_own_file(prepared, tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    files = []
+    for user in ("ann", "bob"):
+        monkeypatch.setenv("JUPYTERHUB_USER", user)
+        labeler = TargetLabeler(prepared, pair_name="synthetic")
+        assert labeler.model.path == tmp_path / f"targets-{user}-synthetic.json"
+        assert f"targets-{user}-synthetic.json" in labeler.path_label.value
+        labeler.add_pair(0, 0) if user == "ann" else labeler.add_pair(1, 1)
+        labeler.save_button.click()
+        files.append(labeler.model.path)
+    assert all(f.is_file() for f in files) and files[0].read_text() != files[1].read_text()
+
+
+def test_two_labellers_on_one_file_keep_both_pairs(prepared, tmp_path):
+    path = tmp_path / "shared.json"
+    first, second = LabelModel(prepared, path=path), LabelModel(prepared, path=path)
+    first.add_pair(0, 0)
+    second.add_pair(1, 1)
+    first.save()
+    second.save()
+    assert load_targets(path).left_xy.tolist() == [first.left_xy[0].tolist(), first.left_xy[1].tolist()]
+    assert second.pairs.tolist() == [[0, 0], [1, 1]]      # the other's pair appears after a save
+
+
+def test_a_deletion_survives_another_labellers_save(prepared, tmp_path):
+    path = tmp_path / "shared.json"
+    a, b = LabelModel(prepared, path=path), LabelModel(prepared, path=path)
+    a.add_pair(0, 0)
+    a.add_pair(1, 1)
+    a.save()
+    b.load()
+    b.add_pair(2, 2)
+    a.selected = 0
+    a.delete_selected()          # a removes (0, 0) and saves; b then saves its addition
+    a.save()
+    b.save()
+    c = LabelModel(prepared, path=path)
+    c.load()
+    assert c.pairs.tolist() == [[1, 1], [2, 2]]
+
+
+def test_load_then_save_keeps_the_files_keys_and_notes(prepared, tmp_path):
+    path = tmp_path / "t.json"
+    base = targets_from_matches([[0, 0], [1, 1]], prepared.problem.left_xy, prepared.problem.right_xy,
+                                left_sha256=prepared.pair.left_sha256,
+                                right_sha256=prepared.pair.right_sha256, labeller="ann", course="cv1")
+    data = base.to_dict()
+    data["pairs"][1]["note"] = "occluded in the right image?"
+    path.write_text(json.dumps(data))
+    model = LabelModel(prepared, path=path)
+    model.load()
+    model.add_pair(2, 2)
+    model.save()
+    saved = json.loads(path.read_text())
+    assert saved["labeller"] == "ann" and saved["course"] == "cv1"
+    assert saved["pairs"][1]["note"] == "occluded in the right image?" and len(saved["pairs"]) == 3
 
 
 def test_answer_key_counts_and_markers(labeler, truth):
