@@ -16,7 +16,9 @@ import time
 import urllib.error
 import urllib.request
 from pathlib import Path
+from types import SimpleNamespace
 
+import numpy as np
 import pytest
 
 ROOT = Path(__file__).resolve().parents[2]
@@ -218,30 +220,36 @@ _PROGRESS = f"""(path) => {{
 }}"""
 
 
+def run_all(page, url: str, path: str, timeout: float = 120_000):
+    """Open `url` (a notebook at `path` in JupyterLab), wait for its kernel, run all cells."""
+    from playwright.sync_api import TimeoutError as PlaywrightTimeout
+
+    name = Path(path).name
+    page.goto(url)
+    page.wait_for_function(_READY, arg=path, timeout=timeout, polling=200)
+    assert page.evaluate(_RUN_ALL, path), f"{name} is not the current tab"
+    # Every code cell has run, or one failed (Run All stops there, so waiting on would
+    # only time out).
+    try:
+        page.wait_for_function(f"(path) => ({_FIRST_ERROR})(path) !== null || ({_ALL_RAN})(path)",
+                               arg=path, timeout=timeout, polling=250)
+    except PlaywrightTimeout:
+        raise AssertionError(f"{name}: Run All did not finish in {timeout / 1000:.0f} s; "
+                             f"{page.evaluate(_PROGRESS, path)}") from None
+    error = page.evaluate(_FIRST_ERROR, path)
+    assert error is None, f"{name}: a cell failed under Run All: {error}"
+    page.wait_for_function(_IDLE, arg=path, timeout=timeout, polling=200)
+    return page
+
+
 @pytest.fixture
 def open_notebook(lab, page):
     """Open notebooks/<name> in JupyterLab and run all cells; returns the page."""
     base, token = lab
 
     def open_(name: str, timeout: float = 120_000):
-        from playwright.sync_api import TimeoutError as PlaywrightTimeout
-
         path = f"notebooks/{name}"
-        page.goto(f"{base}/lab/tree/{path}?token={token}")
-        page.wait_for_function(_READY, arg=path, timeout=timeout, polling=200)
-        assert page.evaluate(_RUN_ALL, path), f"{name} is not the current tab"
-        # Every code cell has run, or one failed (Run All stops there, so waiting on would
-        # only time out).
-        try:
-            page.wait_for_function(f"(path) => ({_FIRST_ERROR})(path) !== null || ({_ALL_RAN})(path)",
-                                   arg=path, timeout=timeout, polling=250)
-        except PlaywrightTimeout:
-            raise AssertionError(f"{name}: Run All did not finish in {timeout / 1000:.0f} s; "
-                                 f"{page.evaluate(_PROGRESS, path)}") from None
-        error = page.evaluate(_FIRST_ERROR, path)
-        assert error is None, f"{name}: a cell failed under Run All: {error}"
-        page.wait_for_function(_IDLE, arg=path, timeout=timeout, polling=200)
-        return page
+        return run_all(page, f"{base}/lab/tree/{path}?token={token}", path, timeout)
 
     return open_
 
@@ -283,3 +291,70 @@ def voila(chromium, workspace, tmp_path_factory):
     yield serve
     for proc in started:
         _stop(proc)
+
+
+# --- what a student does on the page -------------------------------------------------------
+
+def label_targets_geometry(workspace):
+    """Where left feature 0 and a right feature near it sit, as fractions of the labeler's figure.
+
+    The labeler is built here too (Agg), with the notebook's arguments: same figure, same axes.
+    """
+    from ismb_lab.widgets import TargetLabeler
+
+    labeler = TargetLabeler.from_folder(workspace / "images" / "synthetic")
+    model, fig = labeler.model, labeler.pane.fig
+    x, y = model.left_xy[0]
+    k = int(np.argmin(np.hypot(*(model.right_xy - (x - 20, y)).T)))
+    points = [(x, y), (model.right_xy[k][0] + model.offset, model.right_xy[k][1])]
+    fractions = []
+    for px, py in (labeler.ax.transData.transform(p) for p in points):
+        fractions.append((px / fig.bbox.width, 1 - py / fig.bbox.height))
+    return model.left_xy[0], model.right_xy[k], k, fractions
+
+
+def click_fraction(page, canvas, fraction):
+    """Click at a fraction of the element's size; Playwright scrolls it into view, waits until it
+    stops moving and measures it at click time (JupyterLab still scrolls after Run All)."""
+    box = canvas.bounding_box()
+    canvas.click(position={"x": fraction[0] * box["width"], "y": fraction[1] * box["height"]})
+
+
+def wait_sized(page, canvas):
+    """Wait until the ipympl canvas has its figure's size."""
+    try:
+        canvas.wait_for(state="visible", timeout=60_000)
+    except Exception:
+        page.screenshot(path=ARTIFACTS / "failed-page.png")
+        raise
+    for _ in range(200):
+        box = canvas.bounding_box()
+        if box and box["width"] > 300 and box["height"] > 100:
+            return box
+        time.sleep(0.1)
+    raise AssertionError(f"canvas never got its size: {canvas.bounding_box()}")
+
+
+def label_one_pair(page, root, workspace):
+    from playwright.sync_api import expect
+
+    left_xy, right_xy, k, (left, right) = label_targets_geometry(workspace)
+    canvas = root.locator(".ismb-stereo canvas").nth(1)   # the top canvas takes the clicks
+    wait_sized(page, canvas)
+    click_fraction(page, canvas, left)
+    expect(root.locator(".ismb-status")).to_contain_text("left feature 1 chosen", timeout=20_000)
+    click_fraction(page, canvas, right)
+    row = root.locator(".ismb-pairs tr").nth(1)
+    expect(row).to_contain_text(f"1{k + 1}", timeout=20_000)   # Pair 1, Left 1, Right k+1
+    cells = row.locator("td").all_inner_texts()
+    assert cells[:3] == ["1", "1", str(k + 1)]
+    assert [float(c) for c in cells[3:7]] == [left_xy[1], left_xy[0], right_xy[1], right_xy[0]]
+    return left_xy, right_xy
+
+
+
+@pytest.fixture(scope="session")
+def ui():
+    """The page actions the tests share: ``run_all``, ``wait_sized``, ``label_one_pair``, ..."""
+    return SimpleNamespace(run_all=run_all, wait_sized=wait_sized, click_fraction=click_fraction,
+                           label_one_pair=label_one_pair, label_targets_geometry=label_targets_geometry)

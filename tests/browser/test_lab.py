@@ -9,7 +9,6 @@ import matplotlib
 
 matplotlib.use("Agg", force=True)
 
-import numpy as np  # noqa: E402
 import pytest  # noqa: E402
 from playwright.sync_api import expect  # noqa: E402
 
@@ -19,65 +18,10 @@ pytestmark = pytest.mark.browser
 ARTIFACTS = Path(__file__).resolve().parents[2] / "test-artifacts"
 
 
-def label_targets_geometry(workspace):
-    """Where left feature 0 and a right feature near it sit, as fractions of the labeler's figure.
-
-    The labeler is built here too (Agg), with the notebook's arguments: same figure, same axes.
-    """
-    from ismb_lab.widgets import TargetLabeler
-
-    labeler = TargetLabeler.from_folder(workspace / "images" / "synthetic")
-    model, fig = labeler.model, labeler.pane.fig
-    x, y = model.left_xy[0]
-    k = int(np.argmin(np.hypot(*(model.right_xy - (x - 20, y)).T)))
-    points = [(x, y), (model.right_xy[k][0] + model.offset, model.right_xy[k][1])]
-    fractions = []
-    for px, py in (labeler.ax.transData.transform(p) for p in points):
-        fractions.append((px / fig.bbox.width, 1 - py / fig.bbox.height))
-    return model.left_xy[0], model.right_xy[k], k, fractions
-
-
-def click_fraction(page, canvas, fraction):
-    """Click at a fraction of the element's size; Playwright scrolls it into view, waits until it
-    stops moving and measures it at click time (JupyterLab still scrolls after Run All)."""
-    box = canvas.bounding_box()
-    canvas.click(position={"x": fraction[0] * box["width"], "y": fraction[1] * box["height"]})
-
-
-def wait_sized(page, canvas):
-    """Wait until the ipympl canvas has its figure's size."""
-    try:
-        canvas.wait_for(state="visible", timeout=60_000)
-    except Exception:
-        page.screenshot(path=ARTIFACTS / "failed-page.png")
-        raise
-    for _ in range(200):
-        box = canvas.bounding_box()
-        if box and box["width"] > 300 and box["height"] > 100:
-            return box
-        time.sleep(0.1)
-    raise AssertionError(f"canvas never got its size: {canvas.bounding_box()}")
-
-
-def label_one_pair(page, root, workspace):
-    left_xy, right_xy, k, (left, right) = label_targets_geometry(workspace)
-    canvas = root.locator(".ismb-stereo canvas").nth(1)   # the top canvas takes the clicks
-    wait_sized(page, canvas)
-    click_fraction(page, canvas, left)
-    expect(root.locator(".ismb-status")).to_contain_text("left feature 1 chosen", timeout=20_000)
-    click_fraction(page, canvas, right)
-    row = root.locator(".ismb-pairs tr").nth(1)
-    expect(row).to_contain_text(f"1{k + 1}", timeout=20_000)   # Pair 1, Left 1, Right k+1
-    cells = row.locator("td").all_inner_texts()
-    assert cells[:3] == ["1", "1", str(k + 1)]
-    assert [float(c) for c in cells[3:7]] == [left_xy[1], left_xy[0], right_xy[1], right_xy[0]]
-    return left_xy, right_xy
-
-
-def test_label_targets_click_and_save(open_notebook, workspace, artifacts):
+def test_label_targets_click_and_save(open_notebook, ui, workspace, artifacts):
     page = open_notebook("04_label_targets.ipynb")
     root = page.locator(".ismb-labeler")
-    left_xy, right_xy = label_one_pair(page, root, workspace)
+    left_xy, right_xy = ui.label_one_pair(page, root, workspace)
     expect(root.locator(".ismb-dirty")).to_contain_text("unsaved")
     root.locator("button.ismb-save").click()
     expect(root.locator(".ismb-dirty")).to_have_text("saved", timeout=20_000)
@@ -106,12 +50,12 @@ def settled(canvas, quiet: float = 1.0, timeout: float = 30.0) -> str:
     raise AssertionError("the canvas kept changing")
 
 
-def test_hopfield_step_updates_status_and_energy_plot(open_notebook, kernel_exec, artifacts):
+def test_hopfield_step_updates_status_and_energy_plot(open_notebook, ui, kernel_exec, artifacts):
     page = open_notebook("02_hopfield_network.ipynb")
     root = page.locator(".ismb-stepper")
     status = root.locator(".ismb-status")
     energy = root.locator(".ismb-energy canvas").first    # the image layer
-    wait_sized(page, energy)
+    ui.wait_sized(page, energy)
     expect(status).to_contain_text("candidate neurons on", timeout=20_000)
     before = settled(energy)
     root.locator("button.ismb-step").click()
@@ -126,12 +70,12 @@ def test_hopfield_step_updates_status_and_energy_plot(open_notebook, kernel_exec
     root.screenshot(path=artifacts / "02_hopfield_stepper.png")
 
 
-def test_voila_label_targets(voila, page, workspace, artifacts):
+def test_voila_label_targets(voila, ui, page, workspace, artifacts):
     base = voila("04_label_targets.ipynb")
     page.goto(base, timeout=120_000)
     root = page.locator(".ismb-labeler")
     root.wait_for(timeout=120_000)
-    label_one_pair(page, root, workspace)
+    ui.label_one_pair(page, root, workspace)
     root.screenshot(path=artifacts / "voila_04_label_targets.png")
 
 
@@ -176,12 +120,12 @@ def test_ga_runs_live_and_stops(open_notebook, kernel_exec, artifacts):
     root.screenshot(path=artifacts / "05_genetic_algorithm.png")
 
 
-def test_toy_car_ranking_appears(open_notebook, artifacts):
+def test_toy_car_ranking_appears(open_notebook, ui, artifacts):
     page = open_notebook("07_toy_car_depth.ipynb")
     root = page.locator(".ismb-depth")
     ranking = root.locator(".ismb-ranking")
     expect(ranking).to_contain_text("1. object at", timeout=60_000)
     expect(ranking).to_contain_text("Z = ")
     expect(ranking).to_contain_text("nearer")
-    wait_sized(page, root.locator(".ismb-scene canvas").first)
+    ui.wait_sized(page, root.locator(".ismb-scene canvas").first)
     root.screenshot(path=artifacts / "07_toy_car_depth.png")
