@@ -29,7 +29,7 @@ import numpy as np
 from .._validation import ParameterError, ParameterTypeError, check_number, message
 from ..genetic import GAConfig, Generation
 from ..matching import MatchConfig
-from ..methods import get_method
+from ..methods import get_method, save_params
 from ..params import Params
 from ..protocol import Case
 from ..tuning import to_params, tune
@@ -77,6 +77,10 @@ class GAModel:
         GA size (default: :class:`~ismb_lab.genetic.GAConfig`'s, the thesis' 30 and 500).
     seed : int
         Seed of the GA (and of every network run's update order, as in ``tune``).
+    save_to : str or os.PathLike, optional
+        A params file (as ``ismb-lab tune`` writes it) rewritten atomically whenever the
+        best fitness improves, so that a kernel that is shut down, culled or killed
+        mid-run leaves the best parameters so far on disk.
 
     Examples
     --------
@@ -94,8 +98,12 @@ class GAModel:
     """
 
     def __init__(self, cases, method="III", *, population: int | None = None, generations: int | None = None,
-                 seed: int = 0):
+                 seed: int = 0, save_to=None):
         owner = "GAModel"
+        self.save_to = None if save_to is None else Path(save_to)
+        if self.save_to is not None and not self.save_to.parent.is_dir():
+            raise ParameterError(f"The 'save_to' parameter of {owner} must be a file in an existing folder. "
+                                 f"Got {str(save_to)!r} instead.")
         self.cases = list(cases)
         self.method = get_method(method)
         self.ga = GAConfig().updated(owner, population=population, generations=generations)
@@ -140,7 +148,12 @@ class GAModel:
     def _work(self, records) -> None:
         try:
             for record in records:
+                improved = not self.history or record.best > self.history[-1].best
                 self.history.append(record)
+                if improved and self.save_to is not None:
+                    save_params(self.save_to, self.method.name, to_params(self.method, record.best_chromosome),
+                                fitness=record.best, generations=record.index, seed=self.seed,
+                                targets=self.target)
                 for listener in list(self.listeners):
                     listener(record)
                 while not self._resume.wait(0.1):
@@ -242,6 +255,8 @@ class GARunner(Base):
         As in :func:`ismb_lab.tuning.tune` (seed: GA and update order).
     config : MatchConfig, optional
         Corner settings for folders.
+    save_to : str or os.PathLike, optional
+        Where the best parameters so far are kept on disk (see :class:`GAModel`).
     redraw_every : float
         Seconds between redraws of the curves while running (every generation
         updates the progress bar and the status; the last one is always drawn).
@@ -255,12 +270,12 @@ class GARunner(Base):
 
     def __init__(self, cases_or_folder, *, method="III", population: int | None = None,
                  generations: int | None = None, seed: int = 0, config: MatchConfig | None = None,
-                 redraw_every: float = 0.2):
+                 redraw_every: float = 0.2, save_to=None):
         import ipywidgets
 
         super().__init__()
         self.model = GAModel(as_cases(cases_or_folder, config), method, population=population,
-                             generations=generations, seed=seed)
+                             generations=generations, seed=seed, save_to=save_to)
         self.redraw_every = check_number(redraw_every, "redraw_every", "GARunner", low=0)
         self._apply: list[Callable[[Params], object]] = []
         self._lock = threading.Lock()

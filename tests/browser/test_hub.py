@@ -135,8 +135,8 @@ c.JupyterHub.cookie_secret_file = {str(tmp_path / "cookie_secret")!r}
 
 
 def kernels_rss(hub_proc) -> dict:
-    """Resident memory (MB) of each student's kernel process, by student."""
-    out = {}
+    """Resident memory (MB) of each student's kernel process, by student, and of their servers."""
+    out, servers = {}, []
     for child in psutil.Process(hub_proc.pid).children(recursive=True):
         try:
             cmd = " ".join(child.cmdline())
@@ -144,9 +144,11 @@ def kernels_rss(hub_proc) -> dict:
                 home = Path(child.cwd())
                 student = next((p for p in home.parts if p in STUDENTS), None)
                 out[student] = round(child.memory_info().rss / 2**20)
+            elif "jupyterhub.singleuser" in cmd:
+                servers.append(round(child.memory_info().rss / 2**20))
         except (psutil.NoSuchProcess, psutil.AccessDenied):
             continue
-    return out
+    return out, servers
 
 
 def test_five_students_label_and_save_their_own_files(class_hub, browser, ui, tmp_path, artifacts):
@@ -173,8 +175,9 @@ def test_five_students_label_and_save_their_own_files(class_hub, browser, ui, tm
         ui.label_one_pair(page, root, homes / name / "ismb_lab")
         root.locator("button.ismb-save").click()
         expect(root.locator(".ismb-dirty")).to_have_text("saved", timeout=30_000)
-    memory = kernels_rss(hub_proc)
-    (artifacts / "hub_kernels_rss_mb.json").write_text(json.dumps(memory, indent=2))
+    memory, servers = kernels_rss(hub_proc)
+    (artifacts / "hub_kernels_rss_mb.json").write_text(json.dumps({"kernels": memory, "servers": servers},
+                                                                  indent=2))
     pages[STUDENTS[-1]].locator(".ismb-labeler").screenshot(path=artifacts / "hub_student5_labeler.png")
 
     files = [homes / n / "ismb_lab" / "notebooks" / f"targets-{n}-synthetic.json" for n in STUDENTS]
@@ -191,4 +194,4 @@ def test_five_students_label_and_save_their_own_files(class_hub, browser, ui, tm
     assert main(["targets", "merge", *map(str, files), "--out", str(pooled)]) == 0
     everyone = load_targets(pooled)
     assert len(everyone) == 1 and len(everyone.extras[0]["labelled_by"]) == 5
-    assert set(memory) == set(STUDENTS), memory
+    assert set(memory) == set(STUDENTS) and len(servers) == 5, (memory, servers)

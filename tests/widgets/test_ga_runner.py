@@ -1,3 +1,4 @@
+import json
 import threading
 import time
 
@@ -116,3 +117,47 @@ def test_from_folder_and_bad_input(pair_folder, tmp_path):
         GARunner.from_folder(pair_folder)
     with pytest.raises(TypeError, match="'callback' parameter"):
         runner.on_apply("not callable")
+
+
+def test_the_best_parameters_so_far_are_on_disk_during_the_run(case, tmp_path):
+    path = tmp_path / "params.json"
+    model = GAModel([case], population=6, generations=5, seed=3, save_to=path)
+    model.start()
+    assert model.wait(120)
+    saved = json.loads(path.read_text())
+    assert saved["params"] == model.best_params.to_dict() and saved["fitness"] == model.best.best
+    with pytest.raises(ValueError, match="'save_to' parameter of GAModel"):
+        GAModel([case], save_to=tmp_path / "no" / "p.json")
+
+
+KILLED = """
+import sys, time
+from ismb_lab.protocol import Case
+from ismb_lab.scenes import synthetic_scene
+from ismb_lab.widgets.ga_runner import GAModel
+
+case = Case.from_scene(synthetic_scene(seed=0))
+model = GAModel([case], population=8, generations=100000, seed=1, save_to=sys.argv[1])
+model.start()
+while len(model.history) < 3:
+    time.sleep(0.05)
+print("running", flush=True)
+model.wait()
+"""
+
+
+def test_a_kernel_killed_mid_run_leaves_the_best_so_far(tmp_path):
+    import signal
+    import subprocess
+    import sys
+
+    path = tmp_path / "params.json"
+    proc = subprocess.Popen([sys.executable, "-c", KILLED, str(path)], stdout=subprocess.PIPE, text=True)
+    try:
+        assert proc.stdout.readline().strip() == "running"
+        proc.send_signal(signal.SIGTERM)       # what a hub's culler or a kernel shutdown sends
+        proc.wait(60)
+    finally:
+        proc.kill()
+    saved = json.loads(path.read_text())
+    assert saved["method"] == "III" and saved["generations"] >= 0 and set(saved["params"]) >= {"theta_c"}
