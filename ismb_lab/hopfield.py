@@ -77,7 +77,7 @@ import numpy as np
 
 from ._validation import ParameterError, ParameterTypeError, check_choice, check_number, message
 
-__all__ = ["RULES", "SCALE", "energy", "hopfield_form", "Network", "Topology"]
+__all__ = ["MAX_INPUT", "RULES", "SCALE", "energy", "hopfield_form", "Network", "Topology"]
 
 SCALE = 2.0 ** 40
 RULES = ("exact", "thesis")
@@ -321,6 +321,32 @@ class _Weights(NamedTuple):
     bias: np.ndarray
 
 
+#: Largest net input the 64-bit fixed point holds with room to spare: 2**62 / SCALE, about 4.2e6.
+MAX_INPUT = 2.0 ** 62 / SCALE
+
+
+def _check_fits(net: Network, lay) -> None:
+    """Refuse a network whose net inputs could overflow the int64 sums (exact descent would break).
+
+    S and C lie in [-1, 1]; the match bias and the uniqueness strength are the unbounded
+    parts, so a bound on |u| over every neuron is |beta| + 1 + 2 kappa (row + column size)
+    + 2 (neighbours) + 2 kappa.
+    """
+    n = net.n_neurons
+    if n == 0:
+        return
+    crowd = (np.diff(lay.row_ptr)[net.rows] + np.diff(lay.col_ptr)[net.cols]).max()
+    bound = abs(net.match_bias) + 1 + 2 * net.uniqueness * (crowd + 1) + 2 * np.diff(lay.nb_ptr).max()
+    if bound < MAX_INPUT:
+        return
+    rest = bound - abs(net.match_bias)
+    name, value, room = (("match_bias", net.match_bias, MAX_INPUT - rest)
+                         if abs(net.match_bias) >= 2 * net.uniqueness * (crowd + 1) else
+                         ("uniqueness", net.uniqueness, (MAX_INPUT - 1 - abs(net.match_bias)) / (2 * (crowd + 1))))
+    raise ParameterError(message(name, "Network", f"small enough for exact 64-bit net inputs (|{name}| below "
+                                 f"about {max(room, 0):.3g} for this network)", value))
+
+
 def _weights(net: Network, rule: str) -> _Weights:
     if rule in net._weights:
         return net._weights[rule]
@@ -329,6 +355,7 @@ def _weights(net: Network, rule: str) -> _Weights:
     # exact: W = 2C, -2 kappa on a shared row or column, no self-weight;
     # thesis: (3-17) taken literally, W = C - kappa - kappa, with the neuron's own term of (3-20)
     kappa = net.uniqueness
+    _check_fits(net, lay)
     nb_w, self_w, bias = _quantised(net.pair_c, lay.nb_pair, net.similarity, net.self_c, exact, SCALE,
                                     net.match_bias, 2.0 * kappa)
     unique = np.int64(_quantise(-2.0 * kappa if exact else -kappa))

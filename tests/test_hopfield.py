@@ -323,3 +323,16 @@ def test_network_rejects_bad_uniqueness_and_bias(kwargs, error, words):
     net = NETS[0]
     with pytest.raises(error, match=words):
         Network(net.topology, net.similarity, net.pair_c, **kwargs)
+
+
+def test_a_match_bias_too_large_for_the_fixed_point_is_refused():
+    """With beta = -1e7 the 2**-40 fixed point overflowed int64 and every neuron switched on."""
+    from ismb_lab.hopfield import MAX_INPUT
+
+    net = Network.from_arrays(2, 2, rows=[0, 0, 1, 1], cols=[0, 1, 0, 1], similarity=[0.5, -0.2, -0.3, 0.4],
+                              pair_a=[0, 1], pair_b=[3, 2], pair_c=[0.9, -0.5], match_bias=-1e7)
+    with pytest.raises(ValueError, match=r"'match_bias' parameter of Network must be small enough .* Got -10000000.0"):
+        run(net)
+    ok = Network.from_arrays(2, 2, rows=[0, 0, 1, 1], cols=[0, 1, 0, 1], similarity=[0.5, -0.2, -0.3, 0.4],
+                             pair_a=[0, 1], pair_b=[3, 2], pair_c=[0.9, -0.5], match_bias=-1e3)
+    assert run(ok).state.tolist() == [0, 0, 0, 0] and MAX_INPUT > 1e6
