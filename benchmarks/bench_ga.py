@@ -8,6 +8,7 @@ number of fitness evaluations (network runs) and the time per evaluation.
 
 from __future__ import annotations
 
+import argparse
 import statistics
 import time
 
@@ -19,7 +20,13 @@ from ismb_lab.scenes import synthetic_scene
 from ismb_lab.tuning import Fitness, gene_bounds
 
 
-def main(repeats: int = 3) -> None:
+def main(argv=None) -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--repeats", type=int, default=3)
+    parser.add_argument("--generations", type=int, default=500)
+    parser.add_argument("--smoke", action="store_true", help="one repeat of 3 generations")
+    args = parser.parse_args(argv)
+    repeats, generations = (1, 3) if args.smoke else (args.repeats, args.generations)
     case = Case.from_scene(synthetic_scene(seed=100))
     problem = case.prepared.problem
     print(f"pair: {len(problem.left_xy)}x{len(problem.right_xy)} corners, "
@@ -30,11 +37,11 @@ def main(repeats: int = 3) -> None:
         times, evaluations = [], 0
         for seed in range(repeats):
             start = time.perf_counter()
-            for record in evolve(fitness, gene_bounds(method), rng=seed, population=30, generations=500):
+            for record in evolve(fitness, gene_bounds(method), rng=seed, population=30, generations=generations):
                 evaluations = record.evaluations
             times.append(time.perf_counter() - start)
         wall = statistics.median(times)
-        print(f"Method-{method}: 30 x 500 GA median {wall:.2f} s over {repeats} seeds, "
+        print(f"Method-{method}: 30 x {generations} GA median {wall:.2f} s over {repeats} seeds, "
               f"{evaluations} network runs, {wall / evaluations * 1e6:.0f} us per run")
 
 

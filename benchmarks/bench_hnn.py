@@ -4,11 +4,12 @@ Problems are real Harris corners of the synthetic scene (seed 0): the centre-qua
 ROI with 20 and 30 corners per image, and the full image with 200.  Each figure is
 the median over runs with different update-order seeds.
 
-    python benchmarks/bench_hnn.py
+    python benchmarks/bench_hnn.py [--smoke]
 """
 
 from __future__ import annotations
 
+import argparse
 import statistics
 import time
 
@@ -27,21 +28,26 @@ def median_seconds(fn, repeats: int) -> float:
     return statistics.median(times)
 
 
-def main() -> None:
+def main(argv=None) -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--smoke", action="store_true", help="the 20-corner problem, a few runs each")
+    smoke = parser.parse_args(argv).smoke
+    scale = 0.02 if smoke else 1.0
     scene = synthetic_scene(seed=0)
     method, params = get_method("III"), THESIS_PARAMS["III"]
     print(f"{'problem':>9} {'neurons':>7} {'pairs':>7} {'attempts':>8} {'textbook':>10} "
           f"{'numba':>10} {'ratio':>6} {'order kept':>10} {'build+numba':>11}")
-    for n, roi in ((20, "center"), (30, "center"), (200, "full")):
+    for n, roi in ((20, "center"),) if smoke else ((20, "center"), (30, "center"), (200, "full")):
         prepared = prepare(scene.left, scene.right, MatchConfig(roi=roi, n_min=n, n_max=n))
         problem = prepared.problem
         net = method.network(problem, params)
         run(net)  # compile outside the timing
         attempts = statistics.median(run(net, rng=s).attempts for s in range(20))
-        slow = median_seconds(lambda s: run(net, rng=s, kernel="textbook"), 7 if n > 30 else 31)
-        fast = median_seconds(lambda s: run(net, rng=s), 501)         # each seed's order drawn anew
-        kept = median_seconds(lambda s: run(net, rng=s), 501)         # orders remembered by the topology
-        full = median_seconds(lambda s: run(method.network(problem, params), rng=s), 501)
+        many = max(3, int(501 * scale))
+        slow = median_seconds(lambda s: run(net, rng=s, kernel="textbook"), max(3, int((7 if n > 30 else 31) * scale)))
+        fast = median_seconds(lambda s: run(net, rng=s), many)        # each seed's order drawn anew
+        kept = median_seconds(lambda s: run(net, rng=s), many)        # orders remembered by the topology
+        full = median_seconds(lambda s: run(method.network(problem, params), rng=s), many)
         size = f"{len(problem.left_xy)}x{len(problem.right_xy)}"
         print(f"{size:>9} {problem.n_neurons:>7} {2 * len(problem.pairs):>7} {attempts:>8.0f} "
               f"{slow * 1e3:>8.2f}ms {fast * 1e6:>8.1f}us {slow / fast:>5.0f}x {kept * 1e6:>8.1f}us "

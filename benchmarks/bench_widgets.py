@@ -15,6 +15,7 @@ Prints medians (and the 90th percentile) over many repeats in this process.
 
 from __future__ import annotations
 
+import argparse
 import statistics
 import time
 from pathlib import Path
@@ -91,11 +92,20 @@ def bench_depth(n: int = 30) -> None:
     summary("DepthDemo seed -> recompute + redraw", times, 100)
 
 
-def main() -> None:
+def main(argv=None) -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--smoke", action="store_true", help="a few repeats of each")
+    smoke = parser.parse_args(argv).smoke
     prepared = prepare(PAIR / "left.png", PAIR / "right.png")
     problem = prepared.problem
     print(f"pair {PAIR.name}: {len(problem.left_xy)}x{len(problem.right_xy)} corners, "
           f"{problem.n_neurons} candidate neurons; matplotlib backend {matplotlib.get_backend()}")
+    if smoke:
+        bench_stepper(prepared, 12)
+        bench_explorer(prepared, 3)
+        bench_labeler(prepared, 8)
+        bench_depth(2)
+        return
     bench_stepper(prepared)
     bench_explorer(prepared)
     bench_labeler(prepared)

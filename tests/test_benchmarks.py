@@ -1,0 +1,31 @@
+"""Every benchmark still runs: its smoke mode, in a subprocess, prints its figures (no timing is asserted)."""
+
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+BENCHMARKS = Path(__file__).resolve().parents[1] / "benchmarks"
+EXPECTED = {
+    "bench_hnn.py": "numba",
+    "bench_ga.py": "network runs",
+    "bench_widgets.py": "TargetLabeler canvas click",
+    "bench_evaluate.py": "identical reports for every jobs value: True",
+    "bench_hub.py": "labeller click + redraw",
+}
+
+
+def test_every_benchmark_has_a_smoke_check():
+    assert sorted(p.name for p in BENCHMARKS.glob("bench_*.py")) == sorted(EXPECTED)
+
+
+@pytest.mark.parametrize("script", sorted(EXPECTED))
+def test_benchmark_smoke_mode_runs(script, tmp_path):
+    env = {**os.environ, "MPLBACKEND": "Agg"}
+    proc = subprocess.run([sys.executable, str(BENCHMARKS / script), "--smoke"], cwd=tmp_path,
+                          capture_output=True, text=True, timeout=600, env=env)
+    assert proc.returncode == 0, proc.stderr[-3000:]
+    assert EXPECTED[script] in proc.stdout, proc.stdout
+    assert not list(tmp_path.iterdir())      # a benchmark leaves nothing behind
