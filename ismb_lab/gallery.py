@@ -194,8 +194,8 @@ def _car_info(scene: Scene) -> list:
 def render_gallery(out="images") -> list[Path]:
     """Render every committed pair into `out`; returns the files written."""
     out = Path(out)
-    written = write_scene(synthetic_scene(seed=0), out / "synthetic",
-                          made_by="ismb_lab.scenes.synthetic_scene(seed=0)")
+    written = write_pair(synthetic_scene(seed=0), out / "synthetic",
+                         made_by="ismb_lab.scenes.synthetic_scene(seed=0)")
     lab = lab_scene(seed=0)
     box = lab.primitives[2]
     written += write_pair(lab, out / "lab", made_by="ismb_lab.scenes.lab_scene(seed=0)",

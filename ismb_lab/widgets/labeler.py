@@ -437,9 +437,9 @@ class TargetLabeler(Base):
         self.load_button = button("Load", "ismb-load", "Load the pairs from the targets file",
                                   icon="folder-open")
         self.key_toggle = with_class(ipywidgets.ToggleButton(
-            description="Show answer key", disabled=answer_key is None,
-            tooltip="Compare your pairs with the ground truth" if answer_key is not None
-            else "This pair has no answer key"), "ismb-answer-key")
+            description="Show answer key", disabled=True,
+            tooltip="Label a pair first, then compare your pairs with the ground truth"
+            if answer_key is not None else "This pair has no answer key"), "ismb-answer-key")
         self.dirty_label = with_class(ipywidgets.HTML(""), "ismb-dirty")
         self.path_label = with_class(ipywidgets.HTML(
             f"your targets file: <code>{html.escape(str(self.model.path))}</code>"), "ismb-path")
@@ -537,6 +537,12 @@ class TargetLabeler(Base):
     # --- view ---------------------------------------------------------------------------
     def refresh(self) -> None:
         """Update the figure, table, flags and status from the model, then draw."""
+        # the answer key opens once the student has labelled something of their own
+        locked = self.model.answer_key is None or not len(self.model.pairs)
+        if locked and self.key_toggle.value:
+            with self.syncing():
+                self.key_toggle.value = False
+        self.key_toggle.disabled = locked
         comparison = update_labels(self.artists, self.model, self.key_toggle.value)
         self.key_summary.value = "" if comparison is None else f"Answer key: {html.escape(str(comparison))}"
         self.table.value = pairs_html(self.model)

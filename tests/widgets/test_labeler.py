@@ -221,7 +221,12 @@ def test_answer_key_counts_and_markers(labeler, truth):
 
 def test_from_folder_finds_the_answer_key(pair_folder):
     labeler = TargetLabeler.from_folder(pair_folder, path=pair_folder / "mine.json")
+    assert labeler.key_toggle.disabled            # label first, then compare
+    labeler.add_pair(0, 0)
     assert not labeler.key_toggle.disabled
+    labeler.key_toggle.value = True
+    labeler.undo()
+    assert labeler.key_toggle.disabled and not labeler.key_toggle.value
     assert "ismb-labeler" in labeler.widget._dom_classes
     assert "ismb-stereo" in labeler.pane.widget._dom_classes
     (pair_folder / "answer_key.json").unlink()
