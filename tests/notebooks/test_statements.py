@@ -22,3 +22,15 @@ def test_02_shows_the_literal_rule_failing(run_notebook):
     assert re.search(r"Method-I: settled in 20/20 runs with the exact rule, 0/20 with the thesis rule", text)
     assert re.search(r"Method-II: settled in 20/20 runs with the exact rule, 20/20 with the thesis rule", text)
     assert re.search(r"Method-III: settled in 20/20 runs with the exact rule, 0/20 with the thesis rule", text)
+
+
+def test_00_scores_its_opening_result_and_counts_its_multiple_matches(run_notebook):
+    text = output_text(run_notebook("00_start_here.ipynb"))
+    found = re.search(r"C/E/T = (\d+)/(\d+)\+(\d+)/(\d+): (\d+) of (\d+) true matches found \(C/T (\d+)%\), "
+                      r"(\d+) of the (\d+) matches wrong \(precision (\d+)%\)", text)
+    assert found, text
+    c, w, e, t, c2, t2, recall, errors, matches, precision = map(int, found.groups())
+    assert (c, t, w + e) == (c2, t2, errors) and c + w + e == matches
+    assert recall == round(100 * c / t) and precision == round(100 * c / matches)
+    multi = re.search(r"left corners: (\d+) with more than one match", text)
+    assert multi, text
