@@ -34,3 +34,24 @@ def test_00_scores_its_opening_result_and_counts_its_multiple_matches(run_notebo
     assert recall == round(100 * c / t) and precision == round(100 * c / matches)
     multi = re.search(r"left corners: (\d+) with more than one match", text)
     assert multi, text
+
+
+def test_07_background_sliders_change_nothing_on_the_toy_car_pair():
+    """07 says: on this pair moving `same place` or `same disparity` across its range changes nothing."""
+    from pathlib import Path
+
+    import numpy as np
+
+    from ismb_lab.depth import DepthConfig, depth_from_matches
+    from ismb_lab.depth_demo import relative_depth
+
+    images = Path(__file__).resolve().parents[2] / "images"
+    base = relative_depth((images / "lab" / "left.png", images / "lab" / "right.png"),
+                          (images / "toy_cars" / "left.png", images / "toy_cars" / "right.png"))
+    default = DepthConfig()
+    expected = [(len(o.features), o.mean_disparity) for o in base.objects]
+    for name in ("position_tol_px", "disparity_tol_px"):      # the widget's slider range: 0 .. 4 x default
+        for value in np.linspace(0, 4 * getattr(default, name), 9):
+            r = depth_from_matches(base.background, base.scene, DepthConfig(**{name: float(value)}))
+            assert [(len(o.features), o.mean_disparity) for o in r.objects] == expected, (name, value)
+            assert r.background_removed == base.background_removed
