@@ -55,3 +55,26 @@ def test_07_background_sliders_change_nothing_on_the_toy_car_pair():
             r = depth_from_matches(base.background, base.scene, DepthConfig(**{name: float(value)}))
             assert [(len(o.features), o.mean_disparity) for o in r.objects] == expected, (name, value)
             assert r.background_removed == base.background_removed
+
+
+def test_05_and_06_use_the_labels_a_student_saved_in_04(run_notebook):
+    """One thread through the class: 04's saved labels feed 05's GA and 06's explorer."""
+    from pathlib import Path
+
+    from ismb_lab.classroom import targets_path
+    from ismb_lab.targets import TargetSet, load_targets, save_targets
+
+    notebooks = Path(__file__).resolve().parents[2] / "notebooks"
+    mine = notebooks / targets_path("synthetic").name
+    assert not mine.exists(), f"{mine} is in the way of this test"
+    key = load_targets(notebooks.parent / "images" / "synthetic" / "answer_key.json")
+    save_targets(mine, TargetSet(key.left_xy[:6], key.right_xy[:6], key.left_sha256, key.right_sha256))
+    try:
+        five = output_text(run_notebook("05_genetic_algorithm.ipynb"))
+        six = output_text(run_notebook("06_parameter_explorer.ipynb"))
+    finally:
+        mine.unlink()
+        for lock in notebooks.glob(f".{mine.name}.lock"):
+            lock.unlink()
+    assert f"The GA below trains on your 6 labelled pairs ({mine.name})" in five
+    assert f"Scored against your labels ({mine.name})" in six and "C/E/T" in six and "/6" in six
