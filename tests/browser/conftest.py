@@ -71,6 +71,12 @@ def _stop(proc: subprocess.Popen) -> None:
 
 
 @pytest.fixture(scope="session")
+def free_port():
+    """``free_port()``: a free TCP port on 127.0.0.1."""
+    return _free_port
+
+
+@pytest.fixture(scope="session")
 def chromium():
     """Chromium's path: missing fails under CI=true (so a broken install cannot hide), else skips."""
     if not CHROMIUM.exists():
@@ -101,13 +107,16 @@ def page(browser):
 
 
 @pytest.fixture(autouse=True)
-def deadline():
-    """No browser test may hang the suite: each gets 240 s, then fails with a clear error."""
+def deadline(request):
+    """No browser test may hang the suite: each gets 240 s (a module's DEADLINE_S, if it sets
+    one), then fails with a clear error."""
+    seconds = getattr(request.module, "DEADLINE_S", 240)
+
     def expire(signum, frame):
-        raise TimeoutError("browser test took longer than 240 s")
+        raise TimeoutError(f"browser test took longer than {seconds} s")
 
     previous = signal.signal(signal.SIGALRM, expire)
-    signal.alarm(240)
+    signal.alarm(seconds)
     yield
     signal.alarm(0)
     signal.signal(signal.SIGALRM, previous)

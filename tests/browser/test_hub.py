@@ -33,6 +33,7 @@ pytestmark = pytest.mark.browser
 ROOT = Path(__file__).resolve().parents[2]
 DEPLOY = ROOT / "deploy" / "jupyterhub_config.py"
 STUDENTS = [f"student{n}" for n in range(1, 6)]
+DEADLINE_S = 600     # five students take longer than one notebook (see conftest's deadline)
 NOTEBOOK = "ismb_lab/notebooks/04_label_targets.ipynb"
 
 
@@ -49,32 +50,11 @@ def proxy_command() -> str:
 
 
 @pytest.fixture
-def deadline():
-    """Five students take longer than one notebook: 600 s for this test."""
-    def expire(signum, frame):
-        raise TimeoutError("the JupyterHub test took longer than 600 s")
-
-    previous = signal.signal(signal.SIGALRM, expire)
-    signal.alarm(600)
-    yield
-    signal.alarm(0)
-    signal.signal(signal.SIGALRM, previous)
-
-
-def _free_port() -> int:
-    import socket
-
-    with socket.socket() as s:
-        s.bind(("127.0.0.1", 0))
-        return s.getsockname()[1]
-
-
-@pytest.fixture
-def class_hub(tmp_path, chromium):
+def class_hub(tmp_path, chromium, free_port):
     """The project's hub configuration on 127.0.0.1 with test accounts; yields (url, password, homes)."""
     pytest.importorskip("jupyterhub")
     chp = proxy_command()
-    password, port, hub_port = secrets.token_hex(8), _free_port(), _free_port()
+    password, port, hub_port = secrets.token_hex(8), free_port(), free_port()
     homes, settings = tmp_path / "homes", tmp_path / "lab-settings"
     for rel, value in (("@jupyterlab/apputils-extension/notification.jupyterlab-settings",
                         {"fetchNews": "false", "checkForUpdates": False}),
