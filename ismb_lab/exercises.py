@@ -100,7 +100,7 @@ def check_energy_derivation(W, I, net: Network) -> Feedback:
     >>> print(check_energy_derivation(W, I, net))
     correct
     >>> print(check_energy_derivation(W, I - 2, net))
-    I (the bias) is off: I_ik = 2 + S_ik; the 2 comes from expanding (1 - sum_k y_ik)^2 and (1 - sum_i y_ik)^2.
+    I (the bias) is off by a constant; hint: expanding (1 - sum_k y_ik)^2 and (1 - sum_i y_ik)^2 leaves terms linear in y_ik: where do they go?
     """
     owner = "check_energy_derivation"
     if not isinstance(net, Network):
@@ -113,13 +113,13 @@ def check_energy_derivation(W, I, net: Network) -> Feedback:
         return _OK
     W_thesis, _ = hopfield_form(net, "thesis")
     if _close(W, W_thesis):
-        return Feedback(False, "W is the thesis' (3-17) taken literally: W = C - delta_ij - delta_kl with "
-                               "the self-weight C_ikik - 2 on the diagonal. That halves the quadratic part "
-                               "of (3-15): the double sum counts every pair twice, so W = 2C and -2, and a "
-                               "neuron has no connection to itself (W_ikik = 0).")
+        return Feedback(False, "W is the thesis' (3-17) taken literally, with the neuron's own term of "
+                               "(3-20) on the diagonal. That halves the quadratic part of (3-15) and adds a "
+                               "self-connection. Hint: how many times does the double sum count the pair "
+                               "(ik, jl), and what does y^2 = y do to a neuron's own square term?")
     if _close(W, W_thesis - np.diag(np.diag(W_thesis))):
-        return Feedback(False, "W is half of what it should be: the double sum in (3-15) counts every "
-                               "pair (ik, jl) twice, so W = 2C for neighbours and -2 for a shared feature.")
+        return Feedback(False, "W is half of what it should be. Hint: how many times does the double "
+                               "sum in (3-15) count the pair (ik, jl)?")
     problems = []
     if not _close(W, W.T):
         problems.append("W is not symmetric: W_ikjl must equal W_jlik")
@@ -130,27 +130,30 @@ def check_energy_derivation(W, I, net: Network) -> Feedback:
     neighbour[net.pair_a, net.pair_b] = neighbour[net.pair_b, net.pair_a] = True
     rest = ~(eye | same_row | same_col | neighbour)
     terms = (
-        (eye, "the diagonal W_ikik (self-connection) is off: it must be 0, since y^2 = y "
-              "moves the square terms into I"),
-        (same_row, "W for two neurons of the same left feature (i = j) is off: it must be -2, "
-                   "from the cross terms of (1 - sum_k y_ik)^2"),
-        (same_col, "W for two neurons of the same right feature (k = l) is off: it must be -2, "
-                   "from the cross terms of (1 - sum_i y_ik)^2"),
-        (neighbour, "W for neighbouring neurons is off: it must be 2 C_ikjl (the double sum "
-                    "counts every pair twice)"),
-        (rest, "W for neurons that do not interact is off: it must be 0"),
+        (eye, "the diagonal W_ikik (self-connection) is off; hint: where do the square terms "
+              "y_ik^2 go once y^2 = y?"),
+        (same_row, "W for two neurons of the same left feature (i = j) is off; hint: expand "
+                   "(1 - sum_k y_ik)^2 and collect its cross terms"),
+        (same_col, "W for two neurons of the same right feature (k = l) is off; hint: expand "
+                   "(1 - sum_i y_ik)^2 and collect its cross terms"),
+        (neighbour, "W for neighbouring neurons is off; hint: how many times does the double sum "
+                    "count each pair?"),
+        (rest, "W for neurons that do not interact is off; hint: which term of (3-15) could "
+               "connect them?"),
     )
     problems += [text for mask, text in terms if mask.any() and not _close(W[mask], W_ok[mask])]
     if not _close(I, I_ok):
         if _close(I, net.similarity):
-            problems.append("I (the bias) is off: I_ik = 2 + S_ik; the 2 comes from expanding "
-                            "(1 - sum_k y_ik)^2 and (1 - sum_i y_ik)^2")
+            problems.append("I (the bias) is off by a constant; hint: expanding (1 - sum_k y_ik)^2 and "
+                            "(1 - sum_i y_ik)^2 leaves terms linear in y_ik: where do they go?")
         elif _close(I, 1.0 + net.similarity):
-            problems.append("I (the bias) is off: I_ik = 2 + S_ik, one 1 from each of the two "
-                            "squared constraint terms, not just one of them")
+            problems.append("I (the bias) is off by a constant; hint: you kept the linear term of one "
+                            "squared constraint term, and (3-15) has two of them")
         else:
-            problems.append("I (the bias) is off: I_ik = 2 + S_ik")
-    return Feedback(False, "; ".join(problems) + ".")
+            problems.append("I (the bias) is off; hint: collect every term of (3-15) that is linear "
+                            "in y_ik")
+    text = "; ".join(problems)
+    return Feedback(False, text if text.endswith("?") else text + ".")
 
 
 def check_harris_response(R, image, sigma: float = 1.0, k: float = 0.04) -> Feedback:
@@ -179,7 +182,7 @@ def check_harris_response(R, image, sigma: float = 1.0, k: float = 0.04) -> Feed
     correct
     >>> Axx, Axy, Ayy = structure_tensor(img, 1.5)
     >>> print(check_harris_response(Axx * Ayy - Axy ** 2, img, 1.5, 0.05))
-    The k tr(M)^2 term is missing: R = det(M) - k tr(M)^2, not det(M) alone.
+    The k tr(M)^2 term is missing: you have det(M) alone. Hint: read (2-6) again.
     """
     owner = "check_harris_response"
     expected = harris_response(image, sigma, k)
@@ -193,11 +196,13 @@ def check_harris_response(R, image, sigma: float = 1.0, k: float = 0.04) -> Feed
     det, trace = Axx * Ayy - Axy ** 2, Axx + Ayy
     Ix, Iy = image_gradients(image)
     slips = (
-        (det, "The k tr(M)^2 term is missing: R = det(M) - k tr(M)^2, not det(M) alone."),
-        (det + k * trace ** 2, "The sign of the k tr(M)^2 term is flipped: R = det(M) - k tr(M)^2."),
-        (det - k * trace, "tr(M) must be squared: R = det(M) - k tr(M)^2."),
+        (det, "The k tr(M)^2 term is missing: you have det(M) alone. Hint: read (2-6) again."),
+        (det + k * trace ** 2, "The sign of the k tr(M)^2 term is flipped. Hint: an edge must give "
+                               "a negative R."),
+        (det - k * trace, "tr(M) must be squared. Hint: R must not change its units when the image "
+                          "is brightened."),
         (Axx * Ayy + Axy ** 2 - k * trace ** 2,
-         "det(M) is off: det(M) = Axx Ayy - Axy^2 (a minus before Axy^2)."),
+         "det(M) is off. Hint: the determinant of [[a, b], [b, c]]."),
         (harris_from_tensor(Ix * Ix, Ix * Iy, Iy * Iy, k),
          "The structure tensor is not windowed: average Ix^2, Ix Iy and Iy^2 with a Gaussian "
          f"of sigma = {sigma:g} before forming det and trace."),
@@ -206,8 +211,8 @@ def check_harris_response(R, image, sigma: float = 1.0, k: float = 0.04) -> Feed
         if _close(R, candidate, atol):
             return Feedback(False, text)
     worst = np.unravel_index(np.argmax(np.abs(R - expected)), R.shape)
-    return Feedback(False, f"R is off; the largest difference is at (x, y) = ({worst[1]}, {worst[0]}): "
-                           f"{R[worst]:.6g} instead of {expected[worst]:.6g}.")
+    return Feedback(False, f"R is off; the largest difference is at (x, y) = ({worst[1]}, {worst[0]}), "
+                           f"where yours is {R[worst]:.6g}. Hint: compute M there by hand.")
 
 
 def check_transfer(values, x, theta: float, lam: float) -> Feedback:
@@ -232,7 +237,7 @@ def check_transfer(values, x, theta: float, lam: float) -> Feedback:
     >>> print(check_transfer(2 / (1 + np.exp(2.0 * (x - 20))) - 1, x, 20, 2.0))
     correct
     >>> print(check_transfer(1 / (1 + np.exp(2.0 * (x - 20))), x, 20, 2.0))
-    The output must lie in [-1, 1]: double the logistic and subtract 1, 2 / (1 + exp(lam (x - theta))) - 1.
+    The output must lie in [-1, 1], yours lies in [0, 1]. Hint: which two operations map [0, 1] onto [-1, 1]?
     """
     owner = "check_transfer"
     theta = check_number(theta, "theta", owner)
@@ -243,11 +248,12 @@ def check_transfer(values, x, theta: float, lam: float) -> Feedback:
     if _close(values, expected, 1e-7):
         return _OK
     slips = (
-        (-expected, "The sign is flipped: small x (good agreement) must give values near +1, "
-                    "so the exponent is +lam (x - theta)."),
-        ((expected + 1) / 2, "The output must lie in [-1, 1]: double the logistic and subtract 1, "
-                             "2 / (1 + exp(lam (x - theta))) - 1."),
-        (expected + 1, "The '- 1' is missing: the output must lie in [-1, 1]."),
+        (-expected, "The sign is flipped: small x (good agreement) must give values near +1. "
+                    "Hint: which sign must the exponent have for that?"),
+        ((expected + 1) / 2, "The output must lie in [-1, 1], yours lies in [0, 1]. Hint: which two "
+                             "operations map [0, 1] onto [-1, 1]?"),
+        (expected + 1, "The output must lie in [-1, 1], yours lies in [0, 2]. Hint: one operation "
+                       "is missing."),
         (transfer(x, 0.0, lam), "theta is not used: the output must cross 0 at x = theta."),
         (transfer(x, theta, 1.0), "lambda is not used: it sets how steeply the output switches "
                                   "around theta."),
@@ -258,8 +264,8 @@ def check_transfer(values, x, theta: float, lam: float) -> Feedback:
         if _close(values, candidate, 1e-7):
             return Feedback(False, text)
     worst = int(np.argmax(np.abs(values - expected).ravel()))
-    return Feedback(False, f"The values are off; the largest difference is at x = {x.ravel()[worst]:g}: "
-                           f"{values.ravel()[worst]:.6g} instead of {expected.ravel()[worst]:.6g}.")
+    return Feedback(False, f"The values are off; the largest difference is at x = {x.ravel()[worst]:g}, "
+                           f"where yours is {values.ravel()[worst]:.6g}. Hint: evaluate (3-10) there by hand.")
 
 
 def check_disparity(values, left_xy, right_xy) -> Feedback:
@@ -282,7 +288,7 @@ def check_disparity(values, left_xy, right_xy) -> Feedback:
     >>> print(check_disparity([11.05, 22.20], left, right))
     correct
     >>> print(check_disparity([11, 22], left, right))
-    That is the horizontal disparity x_left - x_right alone; the tables' column is the distance sqrt(dx^2 + dy^2).
+    That is the horizontal disparity x_left - x_right alone. Hint: the tables' column is a distance between the two points; which components does it use?
     """
     owner = "check_disparity"
     left = check_points(left_xy, "left_xy", owner)
@@ -297,18 +303,20 @@ def check_disparity(values, left_xy, right_xy) -> Feedback:
         return _OK
     dx, dy = horizontal_disparity(left, right), vertical_disparity(left, right)
     slips = (
-        (np.abs(dx), "That is the horizontal disparity x_left - x_right alone; the tables' column "
-                     "is the distance sqrt(dx^2 + dy^2)."),
-        (expected ** 2, "The square root is missing: disparity = sqrt(dx^2 + dy^2)."),
-        (np.abs(dx) + np.abs(dy), "That is |dx| + |dy|; the tables' column is sqrt(dx^2 + dy^2)."),
-        (np.abs(dy), "That is the vertical disparity alone; the tables' column is sqrt(dx^2 + dy^2)."),
+        (np.abs(dx), "That is the horizontal disparity x_left - x_right alone. Hint: the tables' "
+                     "column is a distance between the two points; which components does it use?"),
+        (expected ** 2, "The square root is missing. Hint: your values are in px^2."),
+        (np.abs(dx) + np.abs(dy), "That is |dx| + |dy|, the distance along the grid. Hint: the tables "
+                                  "use the straight-line distance."),
+        (np.abs(dy), "That is the vertical disparity alone. Hint: the tables' column is a distance "
+                     "between the two points; which components does it use?"),
     )
     for candidate, text in slips:
         if near(values, candidate):
             return Feedback(False, text)
     worst = int(np.argmax(np.abs(values - expected)))
-    return Feedback(False, f"Row {worst + 1} is off: {values[worst]:g} instead of {expected[worst]:.2f} "
-                           f"= sqrt({dx[worst]:g}^2 + {dy[worst]:g}^2).")
+    return Feedback(False, f"Row {worst + 1} is off (yours: {values[worst]:g}). Hint: recompute it from "
+                           f"its x_left, y_left, x_right and y_right.")
 
 
 def check_fitness(value, pairs, targets, unknown=()) -> Feedback:
@@ -337,25 +345,25 @@ def check_fitness(value, pairs, targets, unknown=()) -> Feedback:
     >>> print(check_fitness(-1, pairs, targets))
     correct
     >>> print(check_fitness(1, pairs, targets))
-    n_c is right, but n_e = 2 is not subtracted: f = n_c - n_e.
+    n_c is right, but the errors are not in it. Hint: what does (4-1) do with n_e?
     """
     value = check_number(value, "value", "check_fitness")
     s = score(pairs, targets, unknown)
     if value == s.fitness:
         return _OK
     slips = (
-        (s.correct, f"n_c is right, but n_e = {s.errors} is not subtracted: f = n_c - n_e."),
-        (s.correct - s.wrong_partner, f"n_e must count every match that is not a target: "
-                                      f"{s.wrong_partner} with a wrong partner and {s.extra} extra."),
-        (s.correct - s.extra, f"n_e must count every match that is not a target: "
-                              f"{s.extra} extra and {s.wrong_partner} with a wrong partner."),
-        (s.correct + s.errors, "The sign of n_e is flipped: errors lower the fitness, f = n_c - n_e."),
-        (s.correct - (s.targets - s.correct), "n_e counts wrong matches, not missed targets: "
-                                              "a missed target only fails to add to n_c."),
-        (s.recall, "That is n_c / T (the accurate rate); the fitness is the count n_c - n_e."),
+        (s.correct, "n_c is right, but the errors are not in it. Hint: what does (4-1) do with n_e?"),
+        (s.correct - s.wrong_partner, "n_e misses some errors: you counted the matches with a wrong "
+                                      "partner. Hint: what about a match of a left corner that has no target?"),
+        (s.correct - s.extra, "n_e misses some errors: you counted the extra matches. Hint: what about a "
+                              "match whose left corner has a target, but another partner?"),
+        (s.correct + s.errors, "The sign of n_e is flipped. Hint: should an error raise the fitness?"),
+        (s.correct - (s.targets - s.correct), "n_e counts wrong matches, not missed targets. Hint: "
+                                              "what does a missed target do to n_c?"),
+        (s.recall, "That is a rate (n_c / T). Hint: the fitness (4-1) is a count."),
     )
     for candidate, text in slips:
         if value == candidate:
             return Feedback(False, text)
-    return Feedback(False, f"The fitness is off: {value:g} instead of {s.fitness}; count n_c (matches "
-                           f"that are targets) and n_e (all the other matches).")
+    return Feedback(False, f"The fitness is off (yours: {value:g}). Hint: count n_c (matches that are "
+                           f"targets) and n_e (all the other matches) again.")

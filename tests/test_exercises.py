@@ -83,8 +83,9 @@ def test_energy_asymmetric(net):
     assert "not symmetric" in check_energy_derivation(W, I, net).text
 
 
-@pytest.mark.parametrize("shift, expected", [(-2.0, "the 2 comes from"), (-1.0, "one 1 from each"),
-                                             (0.3, "I (the bias) is off: I_ik = 2 + S_ik")])
+@pytest.mark.parametrize("shift, expected", [(-2.0, "leaves terms linear in y_ik"),
+                                             (-1.0, "(3-15) has two of them"),
+                                             (0.3, "I (the bias) is off; hint: collect every term")])
 def test_energy_bias(net, shift, expected):
     W, I = hopfield_form(net)
     feedback = check_energy_derivation(W, I + shift, net)
@@ -149,8 +150,8 @@ def test_transfer_correct_and_slips():
     assert check_transfer(good, x, theta, lam).correct
     cases = [
         (-good, "sign is flipped"),
-        (1 / (1 + np.exp(lam * (x - theta))), "must lie in [-1, 1]: double"),
-        (good + 1, "'- 1' is missing"),
+        (1 / (1 + np.exp(lam * (x - theta))), "yours lies in [0, 1]"),
+        (good + 1, "yours lies in [0, 2]"),
         (transfer(x, 0.0, lam), "theta is not used"),
         (transfer(x, theta, 1.0), "lambda is not used"),
         (transfer(x, theta, 2 * lam), "lambda is doubled"),
@@ -160,7 +161,8 @@ def test_transfer_correct_and_slips():
         feedback = check_transfer(values, x, theta, lam)
         assert not feedback.correct and expected in feedback.text, expected
     other = good.copy(); other[3] += 0.1
-    assert "at x = 15" in check_transfer(other, x, theta, lam).text
+    text = check_transfer(other, x, theta, lam).text
+    assert "at x = 15" in text and f"{good[3]:.6g}" not in text      # a hint, not the answer
 
 
 def test_transfer_bad_input():
@@ -195,7 +197,7 @@ def test_disparity_slips():
 def test_disparity_table_5_5_misprint_is_caught():
     """Table 5.5 prints 9.85 for the coordinates Table 5.4 gives 22.20."""
     text = check_disparity([19.24, 18.25, 9.85], TABLE_LEFT, TABLE_RIGHT).text
-    assert text.startswith("Row 3 is off: 9.85 instead of 22.20")
+    assert text.startswith("Row 3 is off (yours: 9.85)") and "22.2" not in text   # a hint, not the answer
 
 
 def test_disparity_bad_input():
@@ -223,16 +225,17 @@ def test_fitness_correct(matches):
 def test_fitness_slips(matches):
     pairs, targets, unknown = matches
     cases = [
-        (2, "n_e = 3 is not subtracted"),
-        (2 - 1, "1 with a wrong partner and 2 extra"),
-        (2 - 2, "2 extra and 1 with a wrong partner"),
+        (2, "the errors are not in it"),
+        (2 - 1, "you counted the matches with a wrong partner"),
+        (2 - 2, "you counted the extra matches"),
         (2 + 3, "sign of n_e is flipped"),
         (0.5, "n_c / T"),
-        (7, "instead of -1"),
+        (7, "The fitness is off (yours: 7)"),
     ]
     for value, expected in cases:
         feedback = check_fitness(value, pairs, targets, unknown)
         assert not feedback.correct and expected in feedback.text, (value, expected)
+        assert "-1" not in feedback.text           # a hint, never the answer
 
 
 def test_fitness_missed_targets_are_not_errors():
