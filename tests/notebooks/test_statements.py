@@ -78,3 +78,24 @@ def test_05_and_06_use_the_labels_a_student_saved_in_04(run_notebook):
             lock.unlink()
     assert f"The GA below trains on your 6 labelled pairs ({mine.name})" in five
     assert f"Scored against your labels ({mine.name})" in six and "C/E/T" in six and "/6" in six
+
+
+def test_03_explains_method_one_by_its_post_processing(run_notebook):
+    text = output_text(run_notebook("03_methods_compared.ipynb"))
+    rows = re.findall(r"Method-I seed \d: before its post-processing (\d+)/(\d+)\+(\d+)/\d+, "
+                      r"after (\d+)/(\d+)\+(\d+)/\d+", text)
+    assert len(rows) == 3
+    assert all(int(w1) + int(e1) < int(w0) + int(e0) for _, w0, e0, _, w1, e1 in rows), rows
+    recall = {}
+    for m in ("I", "III"):
+        line = re.search(rf"Method-{m:>3} on the eleven realistic pairs.*", text).group(0)
+        recall[m] = [int(c) / int(t) for c, t in re.findall(r"(\d+)/\d+\+\d+/(\d+) \(C/T", line)]
+    assert min(recall["III"]) > max(recall["I"]), recall      # the thesis' ranking by C/T holds there
+
+
+def test_05_shows_the_plateau_it_describes(run_notebook):
+    text = output_text(run_notebook("05_genetic_algorithm.ipynb"))
+    best = [int(v) for v in re.search(r"best fitness per generation: \[([\d, ]+)\]", text).group(1).split(", ")]
+    assert best[-1] == best[len(best) // 2]          # no gain over the second half of the run
+    share = re.search(r"(\d+) of 30 chromosomes have the best fitness", text)
+    assert share and int(share.group(1)) >= 20
