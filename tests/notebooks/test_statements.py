@@ -99,3 +99,8 @@ def test_05_shows_the_plateau_it_describes(run_notebook):
     assert best[-1] == best[len(best) // 2]          # no gain over the second half of the run
     share = re.search(r"(\d+) of 30 chromosomes have the best fitness", text)
     assert share and int(share.group(1)) >= 20
+
+
+def test_05_adds_up_the_thesis_fig_5_10(run_notebook):
+    text = output_text(run_notebook("05_genetic_algorithm.ipynb"))
+    assert "the entries add up to C/E/T = 139/13/150 (C/T 92.67%); the thesis prints 125/14/137" in text
