@@ -49,7 +49,8 @@ def copy_course(spawner) -> None:
     target.mkdir(parents=True)
     for name in ("notebooks", "images"):
         shutil.copytree(PROJECT / name, target / name,
-                        ignore=shutil.ignore_patterns(".ipynb_checkpoints", "targets-*.json", "my_targets*.json"))
+                        ignore=shutil.ignore_patterns(".ipynb_checkpoints", "targets-*.json", "my_targets*.json",
+                                                     "params-*.json", "solutions"))
     try:
         shutil.chown(target, spawner.user.name)
         for path in target.rglob("*"):
