@@ -1,10 +1,16 @@
 """C/E/T arithmetic on hand-made cases."""
 
 import math
+import re
 
+import numpy as np
 import pytest
 
 from ismb_lab.evaluation import Score, score
+from ismb_lab.matching import Prepared
+from ismb_lab.methods import Params, build_problem
+from ismb_lab.protocol import Case, format_protocol, protocol
+from ismb_lab.tuning import evaluate
 
 
 @pytest.mark.parametrize("pairs, targets, unknown, expected", [
@@ -42,15 +48,6 @@ def test_the_thesis_fig_5_10_rows_do_not_add_up_to_its_printed_total():
 
 
 # --- solvers in the protocol, on hand-made pairs -----------------------------------------------
-
-import re
-
-import numpy as np
-
-from ismb_lab.matching import Prepared
-from ismb_lab.methods import Params, build_problem
-from ismb_lab.protocol import Case, format_protocol, protocol
-from ismb_lab.tuning import evaluate
 
 
 def hand_case(offset, name):

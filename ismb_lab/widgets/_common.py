@@ -188,9 +188,17 @@ class Base:
 
 
 def button(description: str, css: str, tooltip: str = "", **kw) -> ipywidgets.Button:
+    """A button as wide as its label (ipywidgets' fixed width cuts long labels)."""
+    kw.setdefault("layout", ipywidgets.Layout(width="auto", min_width="fit-content"))
     b = ipywidgets.Button(description=description, tooltip=tooltip or description, **kw)
     b.add_class(css)
     return b
+
+
+def row(children) -> ipywidgets.HBox:
+    """A row of widgets that wraps onto the next line where the screen is too narrow
+    (a 1024 px classroom projector)."""
+    return ipywidgets.HBox(list(children), layout=ipywidgets.Layout(flex_flow="row wrap"))
 
 
 def with_class(widget, css: str):

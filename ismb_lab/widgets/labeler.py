@@ -426,7 +426,7 @@ class TargetLabeler(Base):
         if path is None:
             path = targets_path(pair_name or prepared.pair.left_sha256[:12], Path.cwd())
         self.model = LabelModel(prepared, path=path, answer_key=answer_key)
-        self.pane = Pane((9.0, 3.6), "ismb-stereo")
+        self.pane = Pane((8.2, 3.3), "ismb-stereo")
         self.panes = (self.pane,)
         self.ax = self.pane.fig.add_axes((0, 0, 1, 1))
         self.artists = draw_labels(self.ax, self.model)
@@ -437,7 +437,7 @@ class TargetLabeler(Base):
         self.load_button = button("Load", "ismb-load", "Load the pairs from the targets file",
                                   icon="folder-open")
         self.key_toggle = with_class(ipywidgets.ToggleButton(
-            description="Show answer key", disabled=True,
+            description="Show answer key", disabled=True, layout=ipywidgets.Layout(width="auto"),
             tooltip="Label a pair first, then compare your pairs with the ground truth"
             if answer_key is not None else "This pair has no answer key"), "ismb-answer-key")
         self.dirty_label = with_class(ipywidgets.HTML(""), "ismb-dirty")

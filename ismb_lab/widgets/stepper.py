@@ -17,7 +17,7 @@ from ..matching import MatchConfig, Prepared, prepare
 from ..methods import get_method
 from ..params import Params
 from ..solvers import to_matches
-from ._common import Base, Pane, button, draw_pair, pair_files, path_labels, update_pair, with_class
+from ._common import Base, Pane, button, draw_pair, pair_files, path_labels, row, update_pair, with_class
 
 __all__ = ["draw_energy", "draw_grid", "HopfieldStepper", "StepperModel", "update_energy", "update_grid"]
 
@@ -276,9 +276,9 @@ class HopfieldStepper(Base):
         self.reset_button.on_click(self.guard(lambda _: self.reset()))
         self.seed_field.observe(self.guard(lambda _: self.reset()), names="value")
         self.rule_box.observe(self.guard(lambda _: self.reset()), names="value")
-        bar = ipywidgets.HBox([self.step_button, self.step10_button, self.run_button, self.reset_button,
-                               self.seed_field, self.rule_box])
-        views = ipywidgets.HBox([self.grid_pane.widget, self.pair_pane.widget])
+        bar = row([self.step_button, self.step10_button, self.run_button, self.reset_button,
+                   self.seed_field, self.rule_box])
+        views = row([self.grid_pane.widget, self.pair_pane.widget])
         self.widget = with_class(ipywidgets.VBox([bar, self.status, views, self.energy_pane.widget,
                                                   self.log]), "ismb-stepper")
         self.refresh()
