@@ -18,6 +18,7 @@ from ..matching import MatchConfig, MatchResult, Prepared, match, prepare
 from ..methods import all_genes, get_method, method_names
 from ..params import THETA_C, Params
 from ..similarity import transfer
+from ..solvers import DEFAULT_SOLVER, SOLVERS, get_solver
 from ..targets import TargetSet, load_targets, snap
 from ._common import Base, Pane, draw_pair, pair_files, update_pair, with_class
 
@@ -50,8 +51,9 @@ class ExplorerModel:
     """
 
     def __init__(self, prepared: Prepared, method="III", params: Params | None = None, seed: int = 0,
-                 targets=None):
+                 targets=None, solver: str = DEFAULT_SOLVER):
         owner = "ExplorerModel"
+        self.solver = get_solver(solver, owner).name
         if not isinstance(prepared, Prepared):
             raise ParameterTypeError(message("prepared", owner, "a Prepared (see matching.prepare)", prepared))
         self.prepared = prepared
@@ -65,9 +67,22 @@ class ExplorerModel:
         self.score: Score | None = None
         self.rematch()
 
-    def set(self, *, method=None, params: Params | None = None, seed=None, **genes) -> "ExplorerModel":
-        """Change any of method, params (whole or gene by gene, e.g. ``theta_c=12``) and seed; rematch."""
+    def set(self, *, method=None, params: Params | None = None, seed=None, solver=None,
+            **genes) -> "ExplorerModel":
+        """Change any of method, params (whole or gene by gene, e.g. ``theta_c=12``), seed and
+        solver; rematch."""
         owner = "ExplorerModel.set"
+        before = (self.method, self.params, self.seed, self.solver)
+        try:
+            return self._set(owner, method, params, seed, solver, genes)
+        except Exception:
+            # e.g. the exact solver on a problem too large for it: keep the last working state
+            self.method, self.params, self.seed, self.solver = before
+            raise
+
+    def _set(self, owner, method, params, seed, solver, genes) -> "ExplorerModel":
+        if solver is not None:
+            self.solver = get_solver(solver, owner).name
         if method is not None:
             self.method = get_method(method).name
         if params is not None:
@@ -85,7 +100,8 @@ class ExplorerModel:
         return self.rematch()
 
     def rematch(self) -> "ExplorerModel":
-        self.result = match(prepared=self.prepared, method=self.method, params=self.params, seed=self.seed)
+        self.result = match(prepared=self.prepared, method=self.method, params=self.params, seed=self.seed,
+                            solver=self.solver)
         self.score = None if self.targets is None else score(self.result.pairs, self.targets)
         return self
 
@@ -95,7 +111,7 @@ class ExplorerModel:
 
     def describe(self) -> str:
         r = self.result
-        text = f"Method-{self.method}, seed {self.seed}: {len(r.pairs)} matches, E = {r.energy:.3f}"
+        text = f"Method-{self.method} ({self.solver}), seed {self.seed}: {len(r.pairs)} matches, E = {r.energy:.3f}"
         return text + (f"; {r.message}" if r.message else "")
 
     def score_text(self) -> str:
@@ -158,12 +174,12 @@ class ParameterExplorer(Base):
     Notes
     -----
     CSS classes: root ``ismb-explorer``; sliders ``ismb-theta-c``, ``ismb-theta-s``,
-    ``ismb-lambda-c``, ``ismb-lambda-s``; ``ismb-method``; ``ismb-seed``; ``ismb-score``;
+    ``ismb-lambda-c``, ``ismb-lambda-s``; ``ismb-method``; ``ismb-solver``; ``ismb-seed``; ``ismb-score``;
     figures ``ismb-matches`` and ``ismb-transfer``; ``ismb-status``; ``ismb-log``.
     """
 
     def __init__(self, left, right=None, *, method="III", params: Params | None = None, seed: int = 0,
-                 config: MatchConfig | None = None, targets=None):
+                 config: MatchConfig | None = None, targets=None, solver: str = DEFAULT_SOLVER):
         import ipywidgets
 
         super().__init__()
@@ -172,7 +188,7 @@ class ParameterExplorer(Base):
             if not isinstance(targets, TargetSet):
                 targets = load_targets(targets, pair=prepared.pair)
             targets = snap(targets, prepared.problem.left_xy, prepared.problem.right_xy).pairs
-        self.model = ExplorerModel(prepared, method, params, seed, targets)
+        self.model = ExplorerModel(prepared, method, params, seed, targets, solver)
         self.pair_pane = Pane((6.6, 2.6), "ismb-matches")
         self.transfer_pane = Pane((6.6, 2.2), "ismb-transfer")
         self.panes = (self.pair_pane, self.transfer_pane)
@@ -197,11 +213,15 @@ class ParameterExplorer(Base):
                                                           description="method"), "ismb-method")
         self.seed_field = with_class(ipywidgets.BoundedIntText(value=self.model.seed, min=0, max=2**31 - 1,
                                                                description="seed"), "ismb-seed")
+        self.solver_menu = with_class(ipywidgets.Dropdown(options=list(SOLVERS), value=self.model.solver,
+                                                          description="solver"), "ismb-solver")
         self.score_label = with_class(ipywidgets.HTML(""), "ismb-score")
+        self.solver_menu.observe(self.guard(lambda c: self._change(solver=c["new"])), names="value")
         self.method_menu.observe(self.guard(lambda c: self._change(method=c["new"])), names="value")
         self.seed_field.observe(self.guard(lambda c: self._change(seed=c["new"])), names="value")
         controls = ipywidgets.HBox([ipywidgets.VBox(list(self.sliders.values())),
-                                    ipywidgets.VBox([self.method_menu, self.seed_field])])
+                                    ipywidgets.VBox([self.method_menu, self.solver_menu, self.seed_field])],
+                                   layout=ipywidgets.Layout(flex_flow="row wrap"))
         self.widget = with_class(ipywidgets.VBox([controls, self.score_label, self.status,
                                                   self.pair_pane.widget, self.transfer_pane.widget,
                                                   self.log]), "ismb-explorer")
@@ -234,7 +254,13 @@ class ParameterExplorer(Base):
         self._change(**{gene: float(change["new"])})
 
     def _change(self, **what) -> None:
-        self.model.set(**what)
+        try:
+            self.model.set(**what)
+        finally:    # a refused change leaves the controls showing the state still in use
+            with self.syncing():
+                self.method_menu.value = self.model.method
+                self.solver_menu.value = self.model.solver
+                self.seed_field.value = self.model.seed
         self.refresh()
 
     def refresh(self) -> None:

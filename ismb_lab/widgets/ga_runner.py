@@ -32,8 +32,9 @@ from ..matching import MatchConfig
 from ..methods import get_method, save_params
 from ..params import Params
 from ..protocol import Case
+from ..solvers import DEFAULT_SOLVER, SOLVERS, get_solver
 from ..tuning import to_params, tune
-from ._common import Base, Pane, button, pair_files, with_class
+from ._common import Base, Pane, button, pair_files, row, with_class
 
 __all__ = ["as_cases", "case_from_folder", "chromosome_html", "draw_fitness", "GAModel", "GARunner",
            "update_fitness"]
@@ -81,6 +82,8 @@ class GAModel:
         A params file (as ``ismb-lab tune`` writes it) rewritten atomically whenever the
         best fitness improves, so that a kernel that is shut down, culled or killed
         mid-run leaves the best parameters so far on disk.
+    solver : str
+        How each chromosome's network is solved (a name in :data:`ismb_lab.solvers.SOLVERS`).
 
     Examples
     --------
@@ -98,7 +101,7 @@ class GAModel:
     """
 
     def __init__(self, cases, method="III", *, population: int | None = None, generations: int | None = None,
-                 seed: int = 0, save_to=None):
+                 seed: int = 0, save_to=None, solver: str = DEFAULT_SOLVER):
         owner = "GAModel"
         self.save_to = None if save_to is None else Path(save_to)
         if self.save_to is not None and not self.save_to.parent.is_dir():
@@ -106,6 +109,7 @@ class GAModel:
                                  f"Got {str(save_to)!r} instead.")
         self.cases = list(cases)
         self.method = get_method(method)
+        self.solver = get_solver(solver, owner).name
         self.ga = GAConfig().updated(owner, population=population, generations=generations)
         self.population, self.generations = self.ga.population, self.ga.generations
         self.seed = check_number(seed, "seed", owner, low=0, integer=True)
@@ -140,7 +144,7 @@ class GAModel:
         self._resume.set()
         self.status = "running"
         # it checks its arguments now, in the caller's thread
-        records = tune(self.cases, self.method, rng=self.seed, ga=self.ga, seed=self.seed)
+        records = tune(self.cases, self.method, rng=self.seed, ga=self.ga, seed=self.seed, solver=self.solver)
         self._thread = threading.Thread(target=self._work, args=(records,), name="ismb-ga", daemon=True)
         self._thread.start()
         return True
@@ -152,7 +156,7 @@ class GAModel:
                 self.history.append(record)
                 if improved and self.save_to is not None:
                     save_params(self.save_to, self.method.name, to_params(self.method, record.best_chromosome),
-                                fitness=record.best, generations=record.index, seed=self.seed,
+                                solver=self.solver, fitness=record.best, generations=record.index, seed=self.seed,
                                 targets=self.target)
                 for listener in list(self.listeners):
                     listener(record)
@@ -189,7 +193,7 @@ class GAModel:
 
     def describe(self) -> str:
         g = self.best
-        head = f"Method-{self.method.name} GA ({self.population} chromosomes, target fitness {self.target})"
+        head = f"Method-{self.method.name} ({self.solver}) GA ({self.population} chromosomes, target fitness {self.target})"
         if g is None:
             return f"{head}: {self.status}"
         text = (f"{head}: {self.status}, generation {g.index}/{self.generations}, best {g.best:g}, "
@@ -251,7 +255,7 @@ class GARunner(Base):
     ----------
     cases_or_folder : Case, folder, or a list of them
         Training pairs; a folder gives ``left.png``, ``right.png`` and ``answer_key.json``.
-    method, population, generations, seed
+    method, population, generations, seed, solver
         As in :func:`ismb_lab.tuning.tune` (seed: GA and update order).
     config : MatchConfig, optional
         Corner settings for folders.
@@ -264,18 +268,18 @@ class GARunner(Base):
     Notes
     -----
     CSS classes: root ``ismb-ga``; buttons ``ismb-start``, ``ismb-pause``, ``ismb-stop``,
-    ``ismb-apply``; ``ismb-progress``; figure ``ismb-fitness``; best chromosome
+    ``ismb-apply``; ``ismb-solver``; ``ismb-progress``; figure ``ismb-fitness``; best chromosome
     ``ismb-chromosome``; ``ismb-status``; ``ismb-log``.
     """
 
     def __init__(self, cases_or_folder, *, method="III", population: int | None = None,
                  generations: int | None = None, seed: int = 0, config: MatchConfig | None = None,
-                 redraw_every: float = 0.2, save_to=None):
+                 redraw_every: float = 0.2, save_to=None, solver: str = DEFAULT_SOLVER):
         import ipywidgets
 
         super().__init__()
         self.model = GAModel(as_cases(cases_or_folder, config), method, population=population,
-                             generations=generations, seed=seed, save_to=save_to)
+                             generations=generations, seed=seed, save_to=save_to, solver=solver)
         self.redraw_every = check_number(redraw_every, "redraw_every", "GARunner", low=0)
         self._apply: list[Callable[[Params], object]] = []
         self._lock = threading.Lock()
@@ -296,12 +300,16 @@ class GARunner(Base):
         self.progress = with_class(ipywidgets.IntProgress(value=0, min=0, max=self.model.generations,
                                                           description="generation"), "ismb-progress")
         self.chromosome = with_class(ipywidgets.HTML(""), "ismb-chromosome")
+        self.solver_menu = with_class(ipywidgets.Dropdown(options=list(SOLVERS), value=self.model.solver,
+                                                          description="solver",
+                                                          layout=ipywidgets.Layout(width="auto")), "ismb-solver")
+        self.solver_menu.observe(self.guard(lambda c: self.set_solver(c["new"])), names="value")
         self.start_button.on_click(self.guard(lambda _: self.start()))
         self.pause_button.on_click(self.guard(lambda _: self.toggle_pause()))
         self.stop_button.on_click(self.guard(lambda _: self.stop()))
         self.apply_button.on_click(self.guard(lambda _: self.apply()))
         self.model.listeners.append(self._on_generation)
-        bar = ipywidgets.HBox([self.start_button, self.pause_button, self.stop_button, self.apply_button])
+        bar = row([self.start_button, self.pause_button, self.stop_button, self.apply_button, self.solver_menu])
         self.widget = with_class(ipywidgets.VBox([bar, self.progress, self.status, self.pane.widget,
                                                   self.chromosome, self.log]), "ismb-ga")
         self.refresh()
@@ -318,6 +326,18 @@ class GARunner(Base):
         self._apply.append(callback)
 
     # --- actions ------------------------------------------------------------------------
+    def set_solver(self, name: str) -> None:
+        """Solve with `name` from the next Start on (refused while a run is going)."""
+        try:
+            if self.model.running:
+                raise ParameterError(message("solver", "GARunner.set_solver", "changed only while no GA "
+                                             "is running (Stop it first)", name))
+            self.model.solver = get_solver(name, "GARunner.set_solver").name
+        finally:
+            with self.syncing():
+                self.solver_menu.value = self.model.solver
+        self.say(self.model.describe())
+
     def start(self) -> bool:
         started = self.model.start()
         if not started:
@@ -386,6 +406,7 @@ class GARunner(Base):
         self.pause_button.description = "Resume" if self.model.status == "paused" else "Pause"
         self.pause_button.icon = "play" if self.model.status == "paused" else "pause"
         self.apply_button.disabled = self.model.best is None
+        self.solver_menu.disabled = running
 
     def refresh(self) -> None:
         with self._lock:

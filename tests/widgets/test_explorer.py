@@ -39,7 +39,36 @@ def test_method_and_seed_controls(explorer, prepared):
     explorer.seed_field.value = 7
     expected = match(prepared=prepared, method="I", params=THESIS_PARAMS["III"], seed=7)
     np.testing.assert_array_equal(explorer.model.pairs, expected.pairs)
-    assert "Method-I, seed 7" in explorer.status.value
+    assert "Method-I (network), seed 7" in explorer.status.value
+
+
+def test_solver_menu_rematches_with_that_solver(explorer, prepared):
+    explorer.solver_menu.value = "anneal"
+    expected = match(prepared=prepared, method="III", params=THESIS_PARAMS["III"], seed=0, solver="anneal")
+    assert explorer.model.solver == "anneal"
+    np.testing.assert_array_equal(explorer.model.pairs, expected.pairs)
+    assert "Method-III (anneal)" in explorer.status.value
+
+
+def test_a_refused_solver_keeps_the_last_state(explorer, monkeypatch):
+    import ismb_lab.widgets.explorer as module
+    from ismb_lab import ParameterError
+
+    before = explorer.model.pairs.copy()
+    real = module.match
+
+    def refuse_exact(**kw):
+        if kw["solver"] == "exact":
+            raise ParameterError("The 'net' parameter of exhaustive_minimum must be small. Got 900 instead.")
+        return real(**kw)
+
+    monkeypatch.setattr(module, "match", refuse_exact)
+    explorer.solver_menu.value = "exact"
+    assert "exhaustive_minimum" in str(explorer.log.outputs)
+    assert explorer.model.solver == "network" and explorer.solver_menu.value == "network"
+    np.testing.assert_array_equal(explorer.model.pairs, before)
+    explorer.sliders["theta_c"].value = 4.5      # still responds, with the solver in use
+    assert explorer.model.solver == "network" and explorer.params.theta_c == 4.5
 
 
 def test_set_params_rematches_once(explorer, monkeypatch):

@@ -161,3 +161,26 @@ def test_a_kernel_killed_mid_run_leaves_the_best_so_far(tmp_path):
         proc.kill()
     saved = json.loads(path.read_text())
     assert saved["method"] == "III" and saved["generations"] >= 0 and set(saved["params"]) >= {"theta_c"}
+
+
+def test_solver_menu_tunes_with_that_solver_and_records_it(case, tmp_path):
+    runner = GARunner(case, population=6, generations=3, seed=2, save_to=tmp_path / "p.json")
+    runner.solver_menu.value = "anneal"
+    assert runner.model.solver == "anneal" and "(anneal)" in runner.status.value
+    runner.start_button.click()
+    assert runner.wait(120) and runner.model.status == "finished"
+    expected = list(tune([case], "III", rng=2, population=6, generations=3, seed=2, solver="anneal"))
+    assert [g.best for g in runner.model.history] == [g.best for g in expected]
+    assert json.loads((tmp_path / "p.json").read_text())["solver"] == "anneal"
+
+
+def test_solver_cannot_change_mid_run(endless):
+    runner = GARunner(endless, population=6, generations=500, redraw_every=0.05)
+    slow(runner)
+    runner.start_button.click()
+    assert runner.solver_menu.disabled
+    with pytest.raises(ValueError, match="'solver' parameter of GARunner.set_solver"):
+        runner.set_solver("exact")
+    assert runner.model.solver == "network" and runner.solver_menu.value == "network"
+    runner.stop_button.click()
+    assert runner.wait(10) and not runner.solver_menu.disabled
