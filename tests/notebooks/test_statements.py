@@ -1,10 +1,12 @@
 """What a notebook's text says about a figure it computes is what its own output shows."""
 
 import re
+from pathlib import Path
 
 import pytest
 
 pytestmark = pytest.mark.notebook
+NOTEBOOKS = Path(__file__).resolve().parents[2] / "notebooks"
 
 
 def output_text(nb) -> str:
@@ -104,3 +106,33 @@ def test_05_shows_the_plateau_it_describes(run_notebook):
 def test_05_adds_up_the_thesis_fig_5_10(run_notebook):
     text = output_text(run_notebook("05_genetic_algorithm.ipynb"))
     assert "the entries add up to C/E/T = 139/13/150 (C/T 92.67%); the thesis prints 125/14/137" in text
+
+
+# --- symbols before use ----------------------------------------------------------------------
+_SYMBOLS = {"ΔY": r"ΔY|\\Delta Y", "Δd": r"Δd|\\Delta d", "ΔD": r"ΔD|\\Delta D",
+            "M": r"M_\{?ik|\$M\$", "S": r"S_\{?ik|\$S\$", "C": r"C_\{?ikjl|\$C\$",
+            "θ": r"θ|\\theta", "λ": r"λ|\\lambda"}
+_POINTER = "notebook 02 defines every symbol"
+
+
+def test_symbols_are_defined_before_their_first_use():
+    """02 defines every symbol of the energy in a cell before any other cell uses one; every
+    other notebook's first use of a symbol either defines it there or points to 02."""
+    import glob
+    import json
+    import re
+
+    for path in sorted(glob.glob(str(NOTEBOOKS / "0*.ipynb"))):
+        cells = ["".join(c["source"]) for c in json.loads(Path(path).read_text())["cells"]]
+        for symbol, pattern in _SYMBOLS.items():
+            first = next((n for n, text in enumerate(cells) if re.search(pattern, text)), None)
+            if first is None:
+                continue
+            if path.endswith("02_hopfield_network.ipynb"):
+                assert cells[first].startswith("### The symbols used below"), (symbol, first)
+                assert re.search(rf"({pattern})[^\n]{{0,12}}=|\*\*[^*]+\*\*", cells[first]), symbol
+                continue
+            earlier = "\n".join(cells[:first + 1])
+            defined = re.search(rf"({pattern})\s*(=|\(3-1[023]\),| is | are |\$?,? the )", cells[first])
+            assert defined or _POINTER in earlier.replace("\n", " ").lower(), \
+                f"{Path(path).name}: {symbol} first used in cell {first} without a definition or a pointer to 02"
