@@ -17,6 +17,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
+from scipy.spatial import cKDTree
 
 from ._validation import ParameterError, check_choice, check_number, check_points
 from .coords import euclidean_disparity
@@ -55,13 +56,18 @@ def left_neighbours(left_xy, *, radius: float = 20.0, shape: str = "box") -> np.
     radius = check_number(radius, "radius", "left_neighbours", low=0, low_open=True)
     check_choice(shape, "shape", "left_neighbours", ("box", "disc"))
     xy = check_points(left_xy, "left_xy", "left_neighbours")
-    diff = xy[:, None, :] - xy[None, :, :]
+    # A k-d tree offers every pair within a slightly larger reach (memory and time grow with
+    # the pairs, not with N²); the exact rule then decides, as a dense comparison would.
+    reach = radius * (1 + 1e-9) + 1e-9
+    pairs = cKDTree(xy).query_pairs(reach, p=np.inf if shape == "box" else 2, output_type="ndarray")
+    pairs = np.sort(pairs.astype(np.int64).reshape(-1, 2), axis=1)
+    diff = xy[pairs[:, 0]] - xy[pairs[:, 1]]
     if shape == "box":
-        near = np.all(np.abs(diff) < radius, axis=2)
+        near = np.all(np.abs(diff) < radius, axis=1)
     else:
-        near = np.hypot(diff[..., 0], diff[..., 1]) < radius
-    i, j = np.nonzero(np.triu(near, k=1))
-    return np.stack([i, j], axis=1).astype(np.int64)
+        near = np.hypot(diff[:, 0], diff[:, 1]) < radius
+    pairs = pairs[near]
+    return pairs[np.lexsort((pairs[:, 1], pairs[:, 0]))]
 
 
 @dataclass(frozen=True)

@@ -14,6 +14,7 @@ EXPECTED = {
     "bench_widgets.py": "TargetLabeler canvas click",
     "bench_evaluate.py": "identical reports for every jobs value: True",
     "bench_hub.py": "labeller click + redraw",
+    "bench_scale.py": "peak MB",
 }
 
 

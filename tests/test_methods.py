@@ -31,6 +31,19 @@ def test_dissimilarity_is_zero_for_equal_windows_and_ignores_brightness_offset()
     assert M[0, 1] == pytest.approx(hand)
 
 
+@pytest.mark.parametrize("size", [1, 3, 5, 11, 13, 21])
+def test_compiled_dissimilarity_equals_the_numpy_expression_bit_for_bit(size):
+    """M is the broadcast NumPy mean of |window differences| exactly, for windows below and
+    above NumPy's 128-term pairwise block, on images with non-integer grey levels."""
+    rng = np.random.default_rng(size)
+    left, right = rng.uniform(0, 255, (2, 80, 90))
+    lxy, rxy = rng.integers(0, 80, (23, 2)), rng.integers(0, 80, (31, 2))
+    lp = patches(left, lxy, size).reshape(len(lxy), -1)
+    rp = patches(right, rxy, size).reshape(len(rxy), -1)
+    expected = np.abs(lp[:, None, :] - rp[None, :, :]).mean(axis=2)
+    np.testing.assert_array_equal(mean_abs_difference(left, right, lxy, rxy, size), expected)
+
+
 def test_candidate_window_is_30_by_40_centred_shift_pixels_left():
     left = [[120.0, 100.0]]
     right = [[100 + dx, 100 + dy] for dx, dy in [(0, 0), (20, 15), (-20, -15), (20.5, 0), (0, 15.5)]]
@@ -74,6 +87,22 @@ def test_neighbourhood_rules():
     xy = [[0, 0], [19, 19], [0, 19.9], [20, 0]]
     assert left_neighbours(xy).tolist() == [[0, 1], [0, 2], [1, 2], [1, 3]]
     assert left_neighbours(xy, shape="disc").tolist() == [[0, 2], [1, 2], [1, 3]]
+
+
+@pytest.mark.parametrize("shape", ["box", "disc"])
+def test_neighbours_equal_the_dense_rule_on_and_off_the_border(shape):
+    """The k-d tree finds exactly the pairs of the all-pairs comparison, including points at
+    exactly the radius (not neighbours) and just inside it, on integer and sub-pixel grids."""
+    rng = np.random.default_rng(7)
+    grid = rng.integers(0, 200, (400, 2)).astype(float)
+    sub = rng.uniform(0, 200, (400, 2))
+    edge = np.array([[0, 0], [20, 0], [0, 20], [19.999999, 0], [12, 16], [12, 15.999]])
+    for xy in (grid, sub, edge):
+        diff = xy[:, None, :] - xy[None, :, :]
+        near = (np.all(np.abs(diff) < 20, axis=2) if shape == "box"
+                else np.hypot(diff[..., 0], diff[..., 1]) < 20)
+        expected = np.stack(np.nonzero(np.triu(near, k=1)), axis=1)
+        np.testing.assert_array_equal(left_neighbours(xy, shape=shape), expected)
 
 
 def test_methods_build_the_documented_energies():
