@@ -2,8 +2,11 @@
 
 Update order
 ------------
-Attempts visit neurons in a random order drawn from a numpy Generator in fixed
-blocks (:func:`visiting_order`), shared by both kernels.  Two stop rules:
+Attempts visit neurons in a random order drawn from a seed (:func:`visiting_order`):
+a SplitMix64 stream of 64-bit numbers, turned into a Fisher-Yates shuffle of the
+neurons at the start of every sweep.  The compiled kernel draws the same stream
+inside its loop, so a run allocates nothing per attempt and no Python object
+per sweep; both kernels visit the neurons in the same order.  Two stop rules:
 
 * ``"sweep"`` (default): a full random-order sweep over all neurons changes
   nothing.  That is an exact fixed point.
@@ -21,7 +24,6 @@ keeps every net input current after each flip.  Their weights are the integers o
 
 from __future__ import annotations
 
-import itertools
 import numbers
 from dataclasses import dataclass
 from typing import Iterator
@@ -30,49 +32,109 @@ import numba
 import numpy as np
 
 from ._validation import ParameterTypeError, check_choice, check_number, check_rng, message
-from .hopfield import RULES, SCALE, Network, Topology, _check_state, _energy, _Weights, _weights, energy
+from .hopfield import RULES, SCALE, Network, _check_state, _energy, _Weights, _weights, energy
 
 __all__ = ["KERNELS", "STOP_RULES", "iter_updates", "run", "RunResult", "Update", "visiting_order"]
 
 STOP_RULES = ("sweep", "stall")
 KERNELS = ("numba", "textbook")
-_BLOCK_SWEEPS = 4
 
-def visiting_order(rng: np.random.Generator, n: int, stop_rule: str) -> Iterator[np.ndarray]:
-    """Endless blocks of neuron indices to attempt, shared by both kernels.
+_GOLDEN, _MIX1, _MIX2 = 0x9E3779B97F4A7C15, 0xBF58476D1CE4E5B9, 0x94D049BB133111EB
+_MASK64 = (1 << 64) - 1
 
-    ``"sweep"``: each block holds 4 independent random permutations of ``range(n)``.
-    ``"stall"``: each block holds ``4 n`` indices drawn uniformly with replacement.
+
+class _Stream:
+    """SplitMix64 (Steele, Lea and Flood, 2014) with bounded draws, in plain Python.
+
+    :func:`_next` and :func:`_below` are the same steps compiled; the two agree
+    on every draw (``tests/test_hopfield.py``).
+    """
+
+    def __init__(self, seed: int):
+        self.state = seed & _MASK64
+
+    def next(self) -> int:
+        self.state = (self.state + _GOLDEN) & _MASK64
+        z = self.state
+        z = ((z ^ (z >> 30)) * _MIX1) & _MASK64
+        z = ((z ^ (z >> 27)) * _MIX2) & _MASK64
+        return z ^ (z >> 31)
+
+    def below(self, bound: int) -> int:
+        """Uniform in ``range(bound)``: the low bits of a draw, rejected when too large."""
+        mask = (1 << (bound - 1).bit_length()) - 1
+        while True:
+            x = self.next() & mask
+            if x < bound:
+                return x
+
+
+def visiting_order(seed: int, n: int, stop_rule: str) -> Iterator[np.ndarray]:
+    """Endless sweeps of neuron indices to attempt, one array of `n` per sweep.
+
+    ``"sweep"``: the previous sweep's order shuffled again (Fisher-Yates, from the
+    last position down), starting from ``0, 1, ..., n - 1``.
+    ``"stall"``: `n` indices drawn uniformly with replacement.
+    The compiled kernel of :func:`run` draws exactly these orders.
 
     Examples
     --------
-    >>> blocks = visiting_order(np.random.default_rng(0), 3, "sweep")
-    >>> sorted(next(blocks)[:3].tolist())
-    [0, 1, 2]
+    >>> sweeps = visiting_order(0, 5, "sweep")
+    >>> sorted(next(sweeps).tolist())
+    [0, 1, 2, 3, 4]
     """
-    base = np.tile(np.arange(n, dtype=np.int64), (_BLOCK_SWEEPS, 1))
+    stream = _Stream(seed)
+    order = list(range(n))
     while True:
         if stop_rule == "sweep":
-            yield rng.permuted(base, axis=1).ravel()
+            for t in range(n - 1, 0, -1):
+                j = stream.below(t + 1)
+                order[t], order[j] = order[j], order[t]
+            yield np.array(order, dtype=np.int64)
         else:
-            yield rng.integers(0, n, size=_BLOCK_SWEEPS * n, dtype=np.int64)
+            yield np.array([stream.below(n) for _ in range(n)], dtype=np.int64)
 
 
-def _remembered_orders(topology: Topology, seed: int, stop_rule: str) -> Iterator[np.ndarray]:
-    """:func:`visiting_order` of ``default_rng(seed)``, remembered on `topology` for reuse.
+_U64 = numba.types.uint64
+# numba freezes module globals as constants; as plain ints these would not fit an int64
+_GOLDEN_U, _MIX1_U, _MIX2_U = np.uint64(_GOLDEN), np.uint64(_MIX1), np.uint64(_MIX2)
 
-    The visiting order does not depend on the energy, so networks that share a
-    topology and a seed (a GA's population) draw it only once.
-    """
-    key = (seed, stop_rule)
-    if key not in topology._orders:
-        topology._orders[key] = ([], visiting_order(np.random.default_rng(seed), topology.n_neurons,
-                                                     stop_rule))
-    blocks, source = topology._orders[key]
-    for t in itertools.count():
-        if t == len(blocks):
-            blocks.append(next(source))
-        yield blocks[t]
+
+@numba.njit(cache=True)
+def _next(state):
+    """One SplitMix64 step: ``(new state, number)``, all arithmetic modulo 2**64."""
+    state = _U64(state + _GOLDEN_U)
+    z = state
+    z = _U64((z ^ (z >> _U64(30))) * _MIX1_U)
+    z = _U64((z ^ (z >> _U64(27))) * _MIX2_U)
+    return state, _U64(z ^ (z >> _U64(31)))
+
+
+@numba.njit(cache=True)
+def _below(state, bound):
+    """:meth:`_Stream.below`: ``(new state, a number in range(bound))``."""
+    mask = _U64(bound - 1)      # all ones from the highest set bit down
+    mask |= mask >> _U64(1)
+    mask |= mask >> _U64(2)
+    mask |= mask >> _U64(4)
+    mask |= mask >> _U64(8)
+    mask |= mask >> _U64(16)
+    mask |= mask >> _U64(32)
+    while True:
+        state, x = _next(state)
+        x = _U64(x & mask)
+        if x < _U64(bound):
+            return state, np.int64(x)
+
+
+def _seed_of(rng, owner: str) -> int:
+    """The stream's seed: the integer itself, or one draw from a Generator."""
+    if isinstance(rng, numbers.Integral) and not isinstance(rng, bool) and rng >= 0:
+        return int(rng)
+    if isinstance(rng, np.random.Generator):
+        return int(rng.integers(0, 2**63, dtype=np.int64))
+    check_rng(rng, "rng", owner)  # raises the standard error
+    raise AssertionError("unreachable")
 
 
 @dataclass(frozen=True)
@@ -135,16 +197,15 @@ def _net_input_textbook(a: int, y: list, w: _Weights) -> int:
 def _check_run_args(net, rng, state, stop_rule, rule, patience, max_sweeps, owner):
     if not isinstance(net, Network):
         raise ParameterTypeError(message("net", owner, "a Network", type(net).__name__))
-    check_choice(stop_rule, "stop_rule", owner, STOP_RULES)
-    check_choice(rule, "rule", owner, RULES)
-    check_number(patience, "patience", owner, low=1, integer=True)
-    check_number(max_sweeps, "max_sweeps", owner, low=1, integer=True)
+    # the common case (a GA makes thousands of runs) is checked in a few hundred nanoseconds
+    if not (stop_rule in STOP_RULES and rule in RULES and type(patience) is int and patience >= 1
+            and type(max_sweeps) is int and max_sweeps >= 1):
+        check_choice(stop_rule, "stop_rule", owner, STOP_RULES)
+        check_choice(rule, "rule", owner, RULES)
+        check_number(patience, "patience", owner, low=1, integer=True)
+        check_number(max_sweeps, "max_sweeps", owner, low=1, integer=True)
     y0 = net.initial_state() if state is None else _check_state(net, state, owner)
-    if isinstance(rng, np.random.Generator):
-        return visiting_order(rng, net.n_neurons, stop_rule), y0
-    if isinstance(rng, numbers.Integral) and not isinstance(rng, bool) and rng >= 0:
-        return _remembered_orders(net.topology, int(rng), stop_rule), y0
-    check_rng(rng, "rng", owner)  # raises the standard error
+    return _seed_of(rng, owner), y0
 
 
 def iter_updates(net: Network, *, rng=0, state=None, stop_rule: str = "sweep",
@@ -160,7 +221,8 @@ def iter_updates(net: Network, *, rng=0, state=None, stop_rule: str = "sweep",
     ----------
     net : Network
     rng : int or numpy.random.Generator
-        Seed or generator for the random visiting order.
+        Seed of the random visiting order (:func:`visiting_order`); a Generator
+        gives one seed per run, drawn from it.
     state : (n,) array_like of {0, 1}, optional
         Initial outputs; all candidates on by default (§3.3).
     stop_rule : {"sweep", "stall"}
@@ -187,8 +249,9 @@ def iter_updates(net: Network, *, rng=0, state=None, stop_rule: str = "sweep",
     >>> steps[-1].stop, steps[-1].energy
     ('sweep', 0.5)
     """
-    blocks, y0 = _check_run_args(net, rng, state, stop_rule, rule, patience, max_sweeps, "iter_updates")
-    return _updates(net, blocks, y0, stop_rule, rule, patience, max_sweeps)
+    seed, y0 = _check_run_args(net, rng, state, stop_rule, rule, patience, max_sweeps, "iter_updates")
+    return _updates(net, visiting_order(seed, net.n_neurons, stop_rule), y0, stop_rule, rule, patience,
+                    max_sweeps)
 
 
 def _updates(net, blocks, y0, stop_rule, rule, patience, max_sweeps):
@@ -261,9 +324,18 @@ _STOP_NAMES = {1: "sweep", 2: "stall", 3: "max_attempts"}
 
 
 @numba.njit(cache=True)
-def _initial_input(y, nb_ptr, nb_idx, nb_w, rows, cols, n_left, n_right, row_w, col_w,
-                   self_w, bias):
-    n = y.shape[0]
+def _solve(seed, sweep_rule, patience, max_attempts, y0, nb_ptr, nb_idx, nb_w, row_ptr, row_idx,
+           col_ptr, col_idx, rows, cols, row_w, col_w, self_w, bias, n_left, n_right, similarity,
+           pair_a, pair_b, pair_c, kappa, h):
+    """The whole run in one call: net inputs, the visiting order drawn from `seed` as
+    :func:`visiting_order` draws it, every net input kept current after each flip, and the
+    final energy.  Returns ``(state, stop code of _STOP_NAMES, attempts, flips, energy)``.
+
+    The stop tests are those of :func:`_updates`, in its order: with the sweep rule the
+    attempt limit is a whole number of sweeps, so both are tested at the end of a sweep,
+    the sweep rule first."""
+    n = y0.shape[0]
+    y = y0.astype(np.int64)
     row_sum = np.zeros(n_left, dtype=np.int64)
     col_sum = np.zeros(n_right, dtype=np.int64)
     for a in range(n):
@@ -276,57 +348,63 @@ def _initial_input(y, nb_ptr, nb_idx, nb_w, rows, cols, n_left, n_right, row_w, 
             s += nb_w[p] * y[nb_idx[p]]
         s += row_w * (row_sum[rows[a]] - y[a]) + col_w * (col_sum[cols[a]] - y[a])
         u[a] = s + self_w[a] * y[a]
-    return u
-
-
-@numba.njit(cache=True)
-def _run_block(order, y, u, counters, nb_ptr, nb_idx, nb_w, row_ptr, row_idx, col_ptr,
-               col_idx, rows, cols, row_w, col_w, self_w, sweep_rule, patience, max_attempts):
-    """Attempt the neurons in `order`, keeping every net input current after each flip.
-
-    counters = [attempts, changed in this sweep, unchanged in a row, flips].
-    Returns 0 when the block is used up, else the stop code of _STOP_NAMES.
-    """
-    n = y.shape[0]
-    for t in range(order.shape[0]):
-        a = order[t]
-        ua = u[a]
-        old = y[a]
-        new = old
-        if ua > 0:
-            new = 1
-        elif ua < 0:
-            new = 0
-        counters[0] += 1
-        if new != old:
-            d = np.int64(new) - np.int64(old)
-            y[a] = new
-            for p in range(nb_ptr[a], nb_ptr[a + 1]):
-                u[nb_idx[p]] += nb_w[p] * d
-            i = rows[a]
-            for p in range(row_ptr[i], row_ptr[i + 1]):
-                if row_idx[p] != a:
-                    u[row_idx[p]] += row_w * d
-            k = cols[a]
-            for p in range(col_ptr[k], col_ptr[k + 1]):
-                if col_idx[p] != a:
-                    u[col_idx[p]] += col_w * d
-            u[a] += self_w[a] * d
-            counters[1] += 1
-            counters[2] = 0
-            counters[3] += 1
-        else:
-            counters[2] += 1
+    order = np.arange(n)
+    state = _U64(seed)
+    attempts = flips = unchanged = 0
+    code = 0
+    while code == 0:
         if sweep_rule:
-            if counters[0] % n == 0:
-                if counters[1] == 0:
-                    return 1
-                counters[1] = 0
-        elif counters[2] >= patience:
-            return 2
-        if counters[0] >= max_attempts:
-            return 3
-    return 0
+            for t in range(n - 1, 0, -1):
+                state, j = _below(state, t + 1)
+                order[t], order[j] = order[j], order[t]
+        else:
+            for t in range(n):
+                state, order[t] = _below(state, n)
+        changed = 0
+        for t in range(n):
+            a = order[t]
+            ua = u[a]
+            old = y[a]
+            new = old
+            if ua > 0:
+                new = 1
+            elif ua < 0:
+                new = 0
+            attempts += 1
+            if new != old:
+                d = new - old
+                y[a] = new
+                for p in range(nb_ptr[a], nb_ptr[a + 1]):
+                    u[nb_idx[p]] += nb_w[p] * d
+                i = rows[a]
+                for p in range(row_ptr[i], row_ptr[i + 1]):
+                    if row_idx[p] != a:
+                        u[row_idx[p]] += row_w * d
+                k = cols[a]
+                for p in range(col_ptr[k], col_ptr[k + 1]):
+                    if col_idx[p] != a:
+                        u[col_idx[p]] += col_w * d
+                u[a] += self_w[a] * d
+                changed += 1
+                unchanged = 0
+            else:
+                unchanged += 1
+            if not sweep_rule:
+                if unchanged >= patience:
+                    code = 2
+                elif attempts >= max_attempts:
+                    code = 3
+                if code:
+                    break
+        flips += changed
+        if sweep_rule:
+            if changed == 0:
+                code = 1
+            elif attempts >= max_attempts:
+                code = 3
+    final = y.astype(np.uint8)
+    e = _energy(n_left, n_right, rows, cols, similarity, pair_a, pair_b, pair_c, final, kappa, h)
+    return final, code, attempts, flips, e
 
 
 def run(net: Network, *, rng=0, state=None, stop_rule: str = "sweep", rule: str = "exact",
@@ -356,27 +434,20 @@ def run(net: Network, *, rng=0, state=None, stop_rule: str = "sweep", rule: str 
     True
     """
     check_choice(kernel, "kernel", "run", KERNELS)
-    blocks, y0 = _check_run_args(net, rng, state, stop_rule, rule, patience, max_sweeps, "run")
+    seed, y0 = _check_run_args(net, rng, state, stop_rule, rule, patience, max_sweeps, "run")
     n = net.n_neurons
     if n == 0:
         return RunResult(y0, energy(net, y0), stop_rule, 0, 0)
     if kernel == "textbook":
         y, flips, last = y0.copy(), 0, None
-        for last in _updates(net, blocks, y0, stop_rule, rule, patience, max_sweeps):
+        for last in _updates(net, visiting_order(seed, n, stop_rule), y0, stop_rule, rule, patience,
+                             max_sweeps):
             y[last.neuron] = last.new
             flips += last.changed
         return RunResult(y, energy(net, y), last.stop, last.attempt + 1, flips)
     w = _weights(net, rule)
-    y = y0.astype(np.int64)
-    u = _initial_input(y, w.nb_ptr, w.nb_idx, w.nb_w, w.rows, w.cols, net.n_left, net.n_right,
-                       w.row_w, w.col_w, w.self_w, w.bias)
-    counters = np.zeros(4, dtype=np.int64)
-    for block in blocks:
-        code = _run_block(block, y, u, counters, w.nb_ptr, w.nb_idx, w.nb_w, w.row_ptr,
-                          w.row_idx, w.col_ptr, w.col_idx, w.rows, w.cols, w.row_w, w.col_w,
-                          w.self_w, stop_rule == "sweep", patience, max_sweeps * n)
-        if code:
-            state = y.astype(np.uint8)
-            e = _energy(net.n_left, net.n_right, net.rows, net.cols, net.similarity, net.pair_a,
-                        net.pair_b, net.pair_c, state, net.uniqueness, net.target_count)
-            return RunResult(state, e, _STOP_NAMES[code], int(counters[0]), int(counters[3]))
+    state, code, attempts, flips, e = _solve(
+        seed, stop_rule == "sweep", patience, max_sweeps * n, y0, w.nb_ptr, w.nb_idx, w.nb_w, w.row_ptr,
+        w.row_idx, w.col_ptr, w.col_idx, w.rows, w.cols, w.row_w, w.col_w, w.self_w, w.bias, net.n_left,
+        net.n_right, net.similarity, net.pair_a, net.pair_b, net.pair_c, net.uniqueness, net.target_count)
+    return RunResult(state, e, _STOP_NAMES[code], attempts, flips)

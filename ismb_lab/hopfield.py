@@ -165,12 +165,6 @@ class Topology:
                 raise ParameterError(message("pair_a", owner, "pairs of neurons on different rows and "
                                              "columns (C is zero when i == j or k == l)",
                                              "a shared row or column"))
-        object.__setattr__(self, "_orders", {})
-
-    def __getstate__(self):
-        # The visiting orders that ismb_lab.dynamics remembers here hold generators, which
-        # cannot be pickled (worker processes of the protocol); a copy draws them again.
-        return {**self.__dict__, "_orders": {}}
 
     @property
     def n_neurons(self) -> int:
@@ -191,6 +185,16 @@ class Topology:
         row_ptr, row_idx, _ = _csr(self.n_left, self.rows, idx)
         col_ptr, col_idx, _ = _csr(self.n_right, self.cols, idx)
         return _Layout(nb_ptr, nb_idx, nb_pair, row_ptr, row_idx, col_ptr, col_idx)
+
+    @cached_property
+    def crowding(self) -> tuple[int, int]:
+        """The most neurons sharing a neuron's row or column (itself included), and the most
+        neighbours of one neuron: what bounds a net input (:func:`_check_fits`)."""
+        lay = self.layout
+        if self.n_neurons == 0:
+            return 0, 0
+        crowd = (np.diff(lay.row_ptr)[self.rows] + np.diff(lay.col_ptr)[self.cols]).max()
+        return int(crowd), int(np.diff(lay.nb_ptr).max())
 
 
 @dataclass(frozen=True, eq=False)
@@ -335,8 +339,8 @@ def _check_fits(net: Network, lay) -> None:
     n = net.n_neurons
     if n == 0:
         return
-    crowd = (np.diff(lay.row_ptr)[net.rows] + np.diff(lay.col_ptr)[net.cols]).max()
-    bound = abs(net.match_bias) + 1 + 2 * net.uniqueness * (crowd + 1) + 2 * np.diff(lay.nb_ptr).max()
+    crowd, neighbours = net.topology.crowding
+    bound = abs(net.match_bias) + 1 + 2 * net.uniqueness * (crowd + 1) + 2 * neighbours
     if bound < MAX_INPUT:
         return
     rest = bound - abs(net.match_bias)
@@ -464,7 +468,9 @@ def _energy(n_left, n_right, rows, cols, similarity, pair_a, pair_b, pair_c, y, 
     # - sum_ik sum_jl C_ikjl y_ik y_jl: each stored pair stands for (a, b) and (b, a)
     compatibility = 0.0
     for p in range(pair_a.shape[0]):
-        compatibility -= 2.0 * pair_c[p] * y[pair_a[p]] * y[pair_b[p]]
+        # a pair with a neuron off adds a signed zero, which changes no sum: skip it
+        if y[pair_a[p]] and y[pair_b[p]]:
+            compatibility -= 2.0 * pair_c[p]
     row_sum = np.zeros(n_left)
     col_sum = np.zeros(n_right)
     similar = 0.0

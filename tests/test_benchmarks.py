@@ -9,7 +9,7 @@ import pytest
 
 BENCHMARKS = Path(__file__).resolve().parents[1] / "benchmarks"
 EXPECTED = {
-    "bench_hnn.py": "numba",
+    "bench_hnn.py": "per attempt",
     "bench_ga.py": "network runs",
     "bench_widgets.py": "TargetLabeler canvas click",
     "bench_evaluate.py": "identical reports for every jobs value: True",

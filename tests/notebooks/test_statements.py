@@ -15,14 +15,18 @@ def output_text(nb) -> str:
 
 
 def test_02_shows_the_literal_rule_failing(run_notebook):
-    text = output_text(run_notebook("02_hopfield_network.ipynb"))
+    nb = run_notebook("02_hopfield_network.ipynb")
+    text = output_text(nb)
     exact = re.search(r"exact: +\d+ attempts, energy rose (\d+) times.*stopped at a fixed point", text)
     thesis = re.search(r"thesis: +\d+ attempts, energy rose (\d+) times.*never reached a fixed point", text)
     assert exact and int(exact.group(1)) == 0, text
     assert thesis and int(thesis.group(1)) > 0, text
-    # the markdown says Methods I and III never settle under the thesis rule, Method-II always does
+    # the markdown says Methods I and III never settle under the thesis rule, and how often Method-II does
     assert re.search(r"Method-I: settled in 20/20 runs with the exact rule, 0/20 with the thesis rule", text)
-    assert re.search(r"Method-II: settled in 20/20 runs with the exact rule, 20/20 with the thesis rule", text)
+    second = re.search(r"Method-II: settled in 20/20 runs with the exact rule, (\d+)/20 with the thesis rule", text)
+    assert second and int(second.group(1)) >= 15, text
+    said = "".join("".join(c.source) for c in nb.cells if c.cell_type == "markdown").replace("\n", " ")
+    assert f"Method-II settles in {second.group(1)} of the 20 runs" in said
     assert re.search(r"Method-III: settled in 20/20 runs with the exact rule, 0/20 with the thesis rule", text)
 
 
