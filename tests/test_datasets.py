@@ -76,3 +76,54 @@ def test_the_middlebury_manifest_gives_four_labelled_rois():
         n_left = len(case.prepared.problem.left_xy)
         assert 20 <= n_left <= 30
         assert 5 <= len(case.targets) <= n_left
+
+
+# --- OpenCV's sample photos (Debian's opencv-doc, which CI installs) -------------------------
+import os  # noqa: E402
+
+from ismb_lab.datasets import (OPENCV_DATA_VARIABLE, SampleDataMissing, aloe, books,  # noqa: E402
+                               chessboard_pairs, opencv_samples)
+
+
+def _need_samples():
+    try:
+        return opencv_samples()
+    except SampleDataMissing:
+        if os.environ.get("CI") == "true":
+            raise       # CI installs opencv-doc: a missing install step must not hide as a skip
+        pytest.skip("opencv-doc is not installed")
+
+
+def test_aloe_ground_truth_carries_the_left_view_onto_the_right():
+    _need_samples()
+    for pair in (aloe(), aloe(320)):
+        ys, xs = np.nonzero(np.isfinite(pair.disparity))
+        xr = np.rint(xs - pair.disparity[ys, xs]).astype(int)
+        keep = xr >= 0
+        warped = np.abs(pair.left[ys[keep], xs[keep]] - pair.right[ys[keep], xr[keep]]).mean()
+        unwarped = np.abs(pair.left[ys[keep], xs[keep]] - pair.right[ys[keep], xs[keep]]).mean()
+        assert warped < 0.5 * unwarped, pair.name
+        assert 0 <= pair.left.min() and pair.left.max() <= 255
+    assert aloe().left.shape == (1110, 1282) and aloe(320).left.shape == (277, 320)
+
+
+def test_books_and_the_chessboard_rig():
+    _need_samples()
+    left, right = books()
+    assert left.shape == right.shape == (459, 612) and left.dtype == float
+    pairs = chessboard_pairs()
+    assert [n for n, _, _ in pairs] == ["01", "02", "03", "04", "05", "06", "07", "08", "09", "11", "12",
+                                          "13", "14"]
+    assert all(lf.shape == rt.shape == (480, 640) for _, lf, rt in pairs)
+
+
+def test_missing_samples_say_how_to_install_them(tmp_path, monkeypatch):
+    monkeypatch.setenv(OPENCV_DATA_VARIABLE, str(tmp_path))
+    with pytest.raises(SampleDataMissing, match="apt-get install opencv-doc.*ISMB_LAB_OPENCV_DATA"):
+        books()
+    with pytest.raises(FileNotFoundError, match=str(tmp_path / "nowhere")):
+        aloe(folder=tmp_path / "nowhere")
+    monkeypatch.delenv(OPENCV_DATA_VARIABLE)
+    _need_samples()
+    with pytest.raises(ParameterError, match="'width' parameter of aloe"):
+        aloe(5)
