@@ -22,17 +22,27 @@ How it works
    corners can be matched wrongly, at too large a disparity.
 3. *Objects.*  The remaining features are grouped by single linkage: two features
    are linked when they lie within ``link_px`` of each other (left image) and have
-   matches whose disparities differ by at most ``link_disparity_px``; an object is a
+   matches whose disparities differ by at most ``link_disparity_px``; a group is a
    connected component of these links (:func:`scipy.sparse.csgraph.connected_components`),
    so a car next to a box in the image but nearer stays apart from it.
-4. *An object's disparity.*  The network may give a feature several matches.  The
-   object's disparity is the disparity with the most matches of the object within
-   ``consensus_px`` (a fronto-parallel object has one disparity; ties go to the
-   band with the smallest spread); its ``mean_disparity`` is the mean of those
-   consensus matches.  Objects with fewer than ``min_features`` features among them
-   are dropped as noise.
-5. *Depth.*  Objects are ranked by mean disparity, largest (nearest) first.  Metric
-   depth is ``f B / d``; quantised disparities are off by up to ``quantisation_px``,
+4. *An object's disparity.*  The network may give a feature several matches.  In each
+   group, the disparity with the most matches within ``consensus_px`` (a
+   fronto-parallel object has one disparity; ties go to the band with the smallest
+   spread) makes one object of the features with a match in that band; those
+   features leave the group and the band search repeats on the rest, as long as a
+   band holds ``min_features`` features.  So two objects side by side, chained into
+   one group by a few in-between matches, come out as two (*peeling*).  Then two
+   objects whose median disparities differ by at most ``merge_disparity_px`` and
+   whose features come within ``merge_px`` of each other are one: the halves of a
+   sparsely textured 60 px box, which single linkage at 30 px splits, join again.
+   An object's ``mean_disparity`` is the mean of its consensus matches (a mean over
+   a 2 px band, so a wrong match far off cannot move it); its ``median_disparity``
+   the median of its features' disparities; its confidence is
+   ``n_features`` and ``disparity_spread`` (median absolute deviation).  Groups
+   whose best band has fewer than ``min_features`` features are dropped as noise:
+   two features that agree are kept, one is not.
+5. *Depth.*  Objects are ranked by their consensus disparity ``mean_disparity``,
+   largest (nearest) first.  Metric depth is ``f B / d``; quantised disparities are off by up to ``quantisation_px``,
    so the depth lies in ``[f B / (d + q), f B / (d - q)]`` (infinite far end when
    ``d <= q``).  Zero disparity is "at infinity", negative disparity "invalid":
    no depth, never a division by zero.
@@ -45,7 +55,7 @@ shifted vertically.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -74,6 +84,9 @@ class DepthConfig:
         Half width of the disparity band around an object's consensus disparity.
     min_features : int
         Fewest consensus features an object needs; smaller groups are dropped.
+    merge_px, merge_disparity_px : float
+        Two objects whose features come within ``merge_px`` of each other and whose
+        median disparities differ by at most ``merge_disparity_px`` are one object.
     in_front : bool
         Drop scene matches not in front of the local background disparity.
     local_px : float
@@ -100,6 +113,8 @@ class DepthConfig:
     link_disparity_px: float = 2.0
     consensus_px: float = 1.0
     min_features: int = 2
+    merge_px: float = 45.0
+    merge_disparity_px: float = 1.5
     in_front: bool = True
     local_px: float = 40.0
     focal_px: float = 300.0
@@ -109,7 +124,7 @@ class DepthConfig:
     def __post_init__(self):
         own = "DepthConfig"
         for name in ("position_tol_px", "disparity_tol_px", "consensus_px", "quantisation_px",
-                     "link_disparity_px"):
+                     "link_disparity_px", "merge_px", "merge_disparity_px"):
             object.__setattr__(self, name, check_number(getattr(self, name), name, own, low=0))
         for name in ("link_px", "local_px", "focal_px", "baseline_m"):
             object.__setattr__(self, name, check_number(getattr(self, name), name, own,
@@ -193,6 +208,13 @@ class DepthObject:
         Consensus matches (a feature may have several).
     outliers : int
         The object's matches off the consensus, not counted.
+    median_disparity : float
+        Median over its features of each feature's consensus disparity: the robust
+        disparity, which the mean of the consensus band agrees with to a fraction of a
+        pixel (default: `mean_disparity`).
+    disparity_spread : float
+        Median absolute deviation of the features' disparities from `median_disparity`,
+        pixels: with :attr:`n_features`, how far to trust the object.
     """
 
     rank: int
@@ -203,6 +225,17 @@ class DepthObject:
     features: np.ndarray
     n_matches: int
     outliers: int = 0
+    median_disparity: float | None = None
+    disparity_spread: float = 0.0
+
+    def __post_init__(self):
+        if self.median_disparity is None:
+            object.__setattr__(self, "median_disparity", self.mean_disparity)
+
+    @property
+    def n_features(self) -> int:
+        """How many features the object rests on (its confidence, with `disparity_spread`)."""
+        return len(self.features)
 
     @property
     def depth_m(self) -> float | None:
@@ -217,6 +250,8 @@ class DepthObject:
                 "depth_m": d.z, "depth_range_m": None if d.z is None else
                 [d.near, None if math.isinf(d.far) else d.far],
                 "depth_status": d.status, "n_matches": self.n_matches, "outliers": self.outliers,
+                "n_features": self.n_features, "median_disparity": self.median_disparity,
+                "disparity_spread": self.disparity_spread,
                 "features": [[float(x), float(y)] for x, y in self.features]}
 
 
@@ -318,6 +353,55 @@ def _local_background(xy, bxy, bd, radius: float) -> np.ndarray:
     return out
 
 
+def _peel(feature: np.ndarray, d: np.ndarray, config: DepthConfig) -> list:
+    """Consensus bands of one group, largest first: ``[(match mask, ...)]`` until too few features.
+
+    The band that most matches agree with is one object; its features leave the
+    group (with all their matches) and the rest is searched again, so that two
+    objects side by side at different depths, linked through a few in-between
+    matches, come out as two.
+    """
+    left = np.ones(len(d), dtype=bool)
+    bands = []
+    while left.sum():
+        inlier = np.zeros(len(d), dtype=bool)
+        inlier[left] = _consensus(d[left], config.consensus_px)
+        members = np.unique(feature[inlier])
+        if len(members) < config.min_features:
+            break
+        bands.append(inlier)
+        left &= ~np.isin(feature, members)
+    return bands
+
+
+def _merge(parts: list, config: DepthConfig) -> list:
+    """Union of parts (feature index arrays, median disparity, left xy) that are one object.
+
+    Two parts are one object when their median disparities differ by at most
+    ``merge_disparity_px`` and some feature of one lies within ``merge_px`` of
+    some feature of the other: the two halves of a sparsely textured object.
+    """
+    n = len(parts)
+    root = list(range(n))
+
+    def find(a):
+        while root[a] != a:
+            a = root[a]
+        return a
+
+    for a in range(n):
+        for b in range(a + 1, n):
+            if abs(parts[a][1] - parts[b][1]) > config.merge_disparity_px:
+                continue
+            gap = np.linalg.norm(parts[a][2][:, None, :] - parts[b][2][None, :, :], axis=2).min()
+            if gap <= config.merge_px:
+                root[find(b)] = find(a)
+    groups = {}
+    for a in range(n):
+        groups.setdefault(find(a), []).append(a)
+    return [np.concatenate([parts[a][0] for a in members]) for members in groups.values()]
+
+
 def _objects(feature, xy, d, config: DepthConfig) -> tuple[list, int]:
     """Group matches into objects; returns (objects near -> far, features dropped)."""
     features = np.unique(feature)
@@ -327,25 +411,33 @@ def _objects(feature, xy, d, config: DepthConfig) -> tuple[list, int]:
     labels = _clusters(np.array([first[f] for f in features]), [d[feature == f] for f in features],
                        config.link_px, config.link_disparity_px)
     label_of = dict(zip(features.tolist(), labels.tolist()))
-    found, dropped = [], 0
+    group = np.array([label_of[f] for f in feature.tolist()])
+    parts, used = [], set()
     for label in np.unique(labels):
-        sel = np.array([label_of[f] == label for f in feature.tolist()])
-        inlier = _consensus(d[sel], config.consensus_px)
-        members = np.unique(feature[sel][inlier])
-        if len(members) < config.min_features:
-            dropped += int(np.sum(labels == label))
-            continue
+        idx = np.flatnonzero(group == label)
+        for band in _peel(feature[idx], d[idx], config):
+            rows = idx[band]
+            members = np.unique(feature[rows])
+            used.update(members.tolist())
+            per_feature = [np.median(d[rows][feature[rows] == f]) for f in members]
+            parts.append((rows, float(np.median(per_feature)), np.array([first[f] for f in members])))
+    found = []
+    for rows in _merge(parts, config):
+        members = np.unique(feature[rows])
+        per_feature = np.array([np.median(d[rows][feature[rows] == f]) for f in members])
         pts = np.array([first[f] for f in members])
-        dd = d[sel][inlier]
+        dd = d[rows]
         mean = float(dd.mean())
+        median = float(np.median(per_feature))
+        own = np.isin(feature, members)
         found.append(DepthObject(0, tuple(float(v) for v in pts.mean(axis=0)), mean, float(dd.std()),
                                  metric_depth(mean, config.focal_px, config.baseline_m,
                                               config.quantisation_px),
-                                 _readonly(pts), int(inlier.sum()), int((~inlier).sum())))
+                                 _readonly(pts), int(len(rows)), int(own.sum() - len(rows)),
+                                 median, float(np.median(np.abs(per_feature - median)))))
     found.sort(key=lambda o: -o.mean_disparity)
-    ranked = [DepthObject(n, o.centroid_xy, o.mean_disparity, o.disparity_std, o.depth, o.features,
-                          o.n_matches, o.outliers) for n, o in enumerate(found, 1)]
-    return ranked, dropped
+    ranked = [replace(o, rank=n) for n, o in enumerate(found, 1)]
+    return ranked, len(features) - len(used)
 
 
 def depth_from_matches(background, scene, config: DepthConfig | None = None) -> DepthResult:

@@ -31,9 +31,23 @@ both views, so a surface point has the same radiance in both cameras.
 The package follows the data: :mod:`~ismb_lab.scenes.geometry` (the rig and its rays),
 :mod:`~ismb_lab.scenes.textures`, :mod:`~ismb_lab.scenes.primitives`,
 :mod:`~ismb_lab.scenes.render` (the two views and their ground truth) and
-:mod:`~ismb_lab.scenes.library` (the named scenes).
+:mod:`~ismb_lab.scenes.library` (the named scenes) and
+:mod:`~ismb_lab.scenes.families` (random layouts for the depth demo, with their truth).
 """
 
+from .families import (
+                       FAMILIES,
+                       LAYOUT_ROI,
+                       MIN_GAP_PX,
+                       Layout,
+                       ObjectTruth,
+                       border_scene,
+                       camera_scene,
+                       contrast_scene,
+                       object_ids,
+                       object_layout,
+                       repetitive_scene,
+)
 from .geometry import ROI, Rig
 from .library import (
                       CAR_DEPTH,
@@ -45,7 +59,7 @@ from .library import (
                       toy_car_layout,
                       toy_car_scene,
 )
-from .primitives import Box, Group, Plane, Primitive, cast
+from .primitives import Box, Cylinder, Group, Plane, Primitive, cast
 from .render import Scene, render, true_matches
 from .textures import Texture, random_texture
 
@@ -53,5 +67,7 @@ __all__ = [
     "Rig", "Texture", "random_texture", "Primitive", "Plane", "Box", "Group", "cast",
     "Scene", "render", "synthetic_scene", "true_matches", "ROI",
     "toy_car", "toy_car_layout", "lab_scene", "toy_car_scene", "realistic_scene",
-    "REALISTIC_COUNT", "CAR_DEPTH",
+    "REALISTIC_COUNT", "CAR_DEPTH", "Cylinder",
+    "FAMILIES", "LAYOUT_ROI", "MIN_GAP_PX", "Layout", "ObjectTruth", "object_layout", "object_ids",
+    "contrast_scene", "repetitive_scene", "border_scene", "camera_scene",
 ]

@@ -1,4 +1,5 @@
-"""Surfaces that rays can hit: :class:`Plane`, :class:`Box` and :class:`Group`, and :func:`cast`.
+"""Surfaces that rays can hit: :class:`Plane`, :class:`Box`, :class:`Cylinder` and :class:`Group`,
+and :func:`cast`.
 
 A new kind of surface needs only ``intersect``, ``normals`` and ``albedo`` (:class:`Primitive`).
 """
@@ -14,7 +15,7 @@ from .._validation import ParameterError, ParameterTypeError, check_number, mess
 from .geometry import EPS, _rays, _vector
 from .textures import Texture
 
-__all__ = ["Box", "cast", "Group", "Plane", "Primitive"]
+__all__ = ["Box", "cast", "Cylinder", "Group", "Plane", "Primitive"]
 
 # -------------------------------------------------------------------- primitives
 
@@ -205,6 +206,123 @@ class Box:
         for f in np.unique(face):
             sel = face == f
             out[sel] = self.textures[f](info[sel, :2])
+        return out
+
+
+@dataclass(frozen=True, eq=False)
+class Cylinder:
+    """A solid upright cylinder (axis along ``y``) with flat caps, seen from outside.
+
+    Parameters
+    ----------
+    centre_xz : (2,) array_like
+        ``(x, z)`` of the axis, metres.
+    radius : float
+        Radius in metres (> 0).
+    y_range : (2,) array_like
+        ``(y_top, y_bottom)`` with ``y_top < y_bottom`` (``y`` points down).
+    texture : Texture
+        The side's texture; its ``(u, v)`` are the arc length from the point
+        facing the cameras (``-z``), positive towards ``+x``, and ``y - y_top``.
+    cap : Texture, optional
+        Both caps' texture on ``(x - x_axis, z - z_axis)``; default plain ``texture.base``.
+    name : str
+        A label, e.g. ``"object 1"``.
+
+    Examples
+    --------
+    >>> can = Cylinder((0.0, 1.2), 0.1, (-0.1, 0.1), Texture(base=0.3))
+    >>> t, info = can.intersect([[0, 0, 0], [0, -1, 0]], [[0, 0, 1], [0, 1, 0]])
+    >>> t.round(3), info[:, 2], can.normals(info[:1]).round(3)   # the side; a cap, face 1
+    (array([1.1, inf]), array([ 0., nan]), array([[ 0.,  0., -1.]]))
+    """
+
+    centre_xz: np.ndarray
+    radius: float
+    y_range: tuple
+    texture: Texture
+    cap: Texture | None = None
+    name: str = ""
+
+    def __post_init__(self):
+        own = "Cylinder"
+        object.__setattr__(self, "centre_xz", _vector(self.centre_xz, "centre_xz", own, 2))
+        object.__setattr__(self, "radius", check_number(self.radius, "radius", own, low=0, low_open=True))
+        y = _vector(self.y_range, "y_range", own, 2)
+        if not y[1] > y[0]:
+            raise ParameterError(message("y_range", own, "(y_top, y_bottom) with y_top < y_bottom",
+                                         tuple(y)))
+        object.__setattr__(self, "y_range", (float(y[0]), float(y[1])))
+        _check_texture(self.texture, "texture", own)
+        cap = Texture(base=self.texture.base) if self.cap is None else self.cap
+        object.__setattr__(self, "cap", _check_texture(cap, "cap", own))
+        if not isinstance(self.name, str):
+            raise ParameterTypeError(message("name", own, "a str", self.name))
+
+    @property
+    def lo(self) -> np.ndarray:
+        """Lower corner of the bounding box."""
+        (x, z), r = self.centre_xz, self.radius
+        return np.array([x - r, self.y_range[0], z - r])
+
+    @property
+    def hi(self) -> np.ndarray:
+        """Upper corner of the bounding box."""
+        (x, z), r = self.centre_xz, self.radius
+        return np.array([x + r, self.y_range[1], z + r])
+
+    def intersect(self, origins, dirs) -> tuple[np.ndarray, np.ndarray]:
+        """First hits of rays from outside: ``(t, info)``, face 0 the side, 1 the top, 2 the bottom."""
+        origins, dirs, t, info, near = _misses(origins, dirs, self.lo, self.hi, "Cylinder.intersect")
+        if not len(near):
+            return t, info
+        o, d = origins[near], dirs[near]
+        (xc, zc), r = self.centre_xz, self.radius
+        ox, oz = o[:, 0] - xc, o[:, 2] - zc
+        a = d[:, 0] ** 2 + d[:, 2] ** 2
+        b = 2 * (d[:, 0] * ox + d[:, 2] * oz)
+        disc = b ** 2 - 4 * a * (ox ** 2 + oz ** 2 - r ** 2)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            ts = (-b - np.sqrt(disc)) / (2 * a)
+        ys = o[:, 1] + ts * d[:, 1]
+        side = (disc >= 0) & (a > 0) & (ts > EPS) & (ys >= self.y_range[0]) & (ys <= self.y_range[1])
+        best = np.where(side, ts, np.inf)
+        face = np.zeros(len(o))
+        for f, y in ((1.0, self.y_range[0]), (2.0, self.y_range[1])):
+            with np.errstate(divide="ignore", invalid="ignore"):
+                tc = (y - o[:, 1]) / d[:, 1]
+                px, pz = ox + tc * d[:, 0], oz + tc * d[:, 2]
+            cap = (np.abs(d[:, 1]) > 1e-15) & (tc > EPS) & (px ** 2 + pz ** 2 <= r ** 2) & (tc < best)
+            best = np.where(cap, tc, best)
+            face = np.where(cap, f, face)
+        hit = np.isfinite(best)
+        tf = np.where(hit, best, 0.0)
+        px, py, pz = ox + tf * d[:, 0], o[:, 1] + tf * d[:, 1], oz + tf * d[:, 2]
+        on_side = face == 0
+        u = np.where(on_side, r * np.arctan2(px, -pz), px)
+        v = np.where(on_side, py - self.y_range[0], pz)
+        t[near[hit]] = best[hit]
+        info[near[hit]] = np.stack([u, v, face], axis=1)[hit]
+        return t, info
+
+    def normals(self, info) -> np.ndarray:
+        """Outward unit normals: radial on the side, ``-y`` on the top, ``+y`` on the bottom."""
+        info = np.asarray(info, dtype=float)
+        angle = info[:, 0] / self.radius
+        out = np.stack([np.sin(angle), np.zeros(len(info)), -np.cos(angle)], axis=1)
+        out[info[:, 2] == 1] = (0.0, -1.0, 0.0)
+        out[info[:, 2] == 2] = (0.0, 1.0, 0.0)
+        return out
+
+    def albedo(self, info) -> np.ndarray:
+        """The side's texture at its ``(u, v)``, the cap's on the caps."""
+        info = np.asarray(info, dtype=float)
+        side = info[:, 2] == 0
+        out = np.empty(len(info))
+        if side.any():
+            out[side] = self.texture(info[side, :2])
+        if (~side).any():
+            out[~side] = self.cap(info[~side, :2])
         return out
 
 

@@ -44,13 +44,29 @@ def test_ranking_lists_objects_near_to_far(demo):
     for n, (line, obj) in enumerate(zip(lines, objects), 1):
         assert line.startswith(f"{n}. object at ({obj.centroid_xy[0]:.0f}, {obj.centroid_xy[1]:.0f}): ")
         assert f"d = {obj.mean_disparity:.1f} px, Z = {obj.depth_m:.2f} m ± " in line
+        assert line.endswith(f" ({obj.n_features} features, spread {obj.disparity_spread:.1f} px)")
+        assert obj.n_features == len(obj.features) >= 2 and obj.disparity_spread >= 0
     assert demo.ranking.value == demo.model.ranking_html()
     assert lines[0] in demo.ranking.value and "the box" in demo.ranking.value
     assert f"{len(objects)} objects" in demo.status.value
 
 
-def _object(rank, x, d):
-    return DepthObject(rank, (x, 100.0), d, 0.0, metric_depth(d), np.zeros((2, 2)), 2)
+def _object(rank, x, d, n=2, spread=0.0):
+    return DepthObject(rank, (x, 100.0), d, 0.0, metric_depth(d), np.zeros((n, 2)), n,
+                       disparity_spread=spread)
+
+
+def test_ranking_shows_how_many_features_each_object_rests_on_and_their_spread(demo):
+    from dataclasses import replace
+
+    model = demo.model
+    model.result = replace(model.result, objects=(_object(1, 80, 34.0, n=1), _object(2, 200, 25.0, 12, 0.5)))
+    first, second = model.ranking()
+    assert first.endswith("(1 feature, spread 0.0 px)")
+    assert second.endswith("(12 features, spread 0.5 px)")
+    assert model.objects[1].median_disparity == 25.0          # defaults to the mean
+    demo.ranking.value = model.ranking_html()
+    assert "12 features, spread 0.5 px" in demo.ranking.value
 
 
 def test_sentence_says_which_is_nearer_and_what_they_are_in_front_of(demo):
