@@ -34,8 +34,8 @@ def _epilog() -> str:
 
 
 def _commands():
-    from . import depth, evaluate, match, render, targets, tune
-    return (match, tune, evaluate, depth, render, targets)
+    from . import calibrate, depth, evaluate, match, rectify, render, targets, tune
+    return (match, tune, evaluate, depth, rectify, calibrate, render, targets)
 
 
 def __getattr__(name):

@@ -33,6 +33,9 @@ def add_parser(sub) -> None:
                     help=f"focal length in pixels (default: {calibration.focal_px:g}, the rendered rig's)")
     dp.add_argument("--baseline-m", type=float, default=None, metavar="B",
                     help=f"baseline in metres (default: {calibration.baseline_m:g}, the thesis' rig)")
+    dp.add_argument("--rig", type=Path, default=None, metavar="RIG.json",
+                    help="take F and B from a rig calibrated with 'ismb-lab calibrate' (the pairs must "
+                    "be rectified with it: 'ismb-lab rectify --rig')")
     dp.add_argument("--json", type=Path, default=None, metavar="OUT", help="write the objects as JSON")
     dp.add_argument("--plot", type=Path, default=None, metavar="OUT.png",
                     help="draw the scene's features by disparity with the ranked objects")
@@ -43,6 +46,14 @@ def run(args) -> int:
     from ..depth_demo import relative_depth
 
     calibration = {}
+    if args.rig is not None:
+        from .._files import check_input
+        from ..rig import load_rig
+
+        if args.focal_px is not None or args.baseline_m is not None:
+            raise UsageError("--rig gives the focal length and the baseline: leave out --focal-px and --baseline-m")
+        rig = load_rig(check_input(args.rig, what="--rig"))
+        calibration = {"focal_px": rig.focal_px, "baseline_m": rig.baseline_m}
     for name in ("focal_px", "baseline_m"):
         value = getattr(args, name)
         if value is not None:

@@ -1,0 +1,72 @@
+"""``ismb-lab rectify``: make a hand-held (or a calibrated rig's) stereo pair rectified."""
+
+from __future__ import annotations
+
+import os
+from pathlib import Path
+
+from .._files import atomic_write_bytes, atomic_write_text, check_input, check_output
+from ._guard import json_text
+
+__all__ = ["add_parser", "run"]
+
+FILES = ("left.png", "right.png", "rectify.json")
+
+
+def add_parser(sub) -> None:
+    from ..rectify import WORKING_SIDE
+
+    r = sub.add_parser("rectify", help="rectify a stereo pair (hand-held photos, or a calibrated rig's)",
+                       description="Find robust matches (SIFT, ratio test, mutual), estimate the "
+                       "fundamental matrix with RANSAC and rectify without calibration; with --rig, "
+                       "rectify exactly with a rig from 'ismb-lab calibrate'. Writes DIR/left.png, "
+                       "DIR/right.png and DIR/rectify.json (the row differences of the inliers after "
+                       f"rectification, the disparity range, the size). Photos are scaled to at most "
+                       f"{WORKING_SIDE} px on their longer side; EXIF orientation is honoured.")
+    r.add_argument("left", type=Path, help="left photo")
+    r.add_argument("right", type=Path, help="right photo")
+    r.add_argument("--out", dest="out_dir", type=Path, required=True, metavar="DIR",
+                   help="folder for left.png, right.png and rectify.json (made if missing)")
+    r.add_argument("--rig", type=Path, default=None, metavar="RIG.json",
+                   help="rectify with this calibrated rig instead of from matches")
+    r.set_defaults(run=run)
+
+
+def run(args) -> int:
+    import cv2
+    import numpy as np
+
+    from ..rectify import rectify_pair
+    from ._common import UsageError
+
+    if args.rig is not None:
+        check_input(args.rig, what="--rig")
+    folder = Path(args.out_dir)
+    if folder.exists() and not folder.is_dir():
+        raise UsageError(f"--out {str(folder)!r} is not a folder")
+    targets = [folder / name for name in FILES]
+    if folder.is_dir():        # before the work: never an input, a device or a read-only file
+        for path in targets:
+            check_output(path, inputs=[args.left, args.right] + ([args.rig] if args.rig else []),
+                         force=args.force, what=f"--out {path.name}")
+    else:                      # made after the work, so a refused pair leaves nothing behind
+        parent = folder.absolute().parent
+        if not parent.is_dir() or not os.access(parent, os.W_OK | os.X_OK):
+            raise UsageError(f"--out {str(folder)!r}: cannot make a folder in {str(parent)!r}")
+    if args.rig is not None:
+        from ..rig import load_rig
+
+        result = load_rig(args.rig).rectify(args.left, args.right)
+    else:
+        result = rectify_pair(args.left, args.right)
+    png = lambda image: cv2.imencode(".png", np.clip(np.rint(image), 0, 255).astype(np.uint8))[1].tobytes()
+    folder.mkdir(parents=True, exist_ok=True)
+    # the images first and the record last: a rectify.json always describes images beside it
+    atomic_write_bytes(targets[0], png(result.left))
+    atomic_write_bytes(targets[1], png(result.right))
+    atomic_write_text(targets[2], json_text(result.to_dict()))
+    lo, hi = result.disparity_range_px
+    print(f"{result.method}: {result.inliers} inliers, |dy| median {result.median_abs_dy_px:.2f} px, "
+          f"90th percentile {result.p90_abs_dy_px:.2f} px; disparities {lo:.1f} to {hi:.1f} px; "
+          f"{result.size[0]}x{result.size[1]} -> {folder}")
+    return 0

@@ -1,0 +1,342 @@
+"""Check and fix a hand-held stereo pair: robust matches, F with RANSAC, uncalibrated rectification.
+
+The network's candidate window (§3.3) assumes a *rectified* pair: a point and its partner on
+the same row.  Two phone photos taken a few centimetres apart are not: the camera turned and
+tilted between them.  This module measures how far a pair is from rectified and warps it so
+that it is:
+
+1. robust correspondences: SIFT keypoints (``cv2.SIFT_create``), matched both ways with
+   Lowe's ratio test and kept when each is the other's best (mutual);
+2. the fundamental matrix from them with RANSAC (OpenCV's MAGSAC variant), 1 px threshold;
+3. Hartley's uncalibrated rectification (``cv2.stereoRectifyUncalibrated``) of the inliers,
+   both images warped with the two homographies, then moved together so that the left
+   image's content starts at the top left and the right one horizontally so that 98% of the
+   disparities are positive, as the window of :class:`~ismb_lab.matching.MatchConfig` expects.
+
+The figures that say how well it worked, ``median_abs_dy_px`` and ``p90_abs_dy_px``, are
+measured on the inliers *after* rectification.  A pair whose inliers are already on the
+same rows (median ``|dy|`` at most 0.5 px, 90th percentile at most 1.5 px) is left exactly
+as it is (``method="already rectified"``).
+
+Photos are scaled down, both by the same factor, so that the longer side is at most
+:data:`WORKING_SIDE` pixels: the network works with a few hundred corners, and a 12-megapixel
+phone photo gains nothing but time and memory.  File inputs honour the EXIF orientation
+(OpenCV's ``IMREAD_COLOR`` applies it), and colour or alpha is converted to grey.
+"""
+
+from __future__ import annotations
+
+import json
+from dataclasses import dataclass, field
+
+import cv2
+import numpy as np
+
+from ._validation import ParameterError, ParameterTypeError, check_number, message
+from .io import _is_path, _read, _to_grey
+
+__all__ = ["WORKING_SIDE", "Correspondences", "Rectified", "load_photo", "robust_matches", "check_rectified",
+           "rectify_pair", "working_size"]
+
+#: Longest side, in pixels, that photos are scaled down to before anything else: Middlebury-
+#: sized pairs (Aloe, 1282 x 1110) stay whole, a 12-megapixel phone photo becomes 1600 x 1200.
+WORKING_SIDE = 1600
+#: Longest side of the copy that SIFT looks at (see :func:`robust_matches`).
+DETECT_SIDE = 1024
+#: Fewest RANSAC inliers that make a pair worth rectifying.
+MIN_INLIERS = 20
+_RATIO = 0.75
+
+
+def load_photo(source, name: str = "photo", owner: str = "load_photo") -> np.ndarray:
+    """A photo as a grey float image in ``[0, 255]``, EXIF orientation applied.
+
+    `source` is a path, the bytes of an image file (an upload) or an array (grey, RGB or RGBA).
+    """
+    return _photo(source, name, owner, None)[0]
+
+
+def _photo(source, name: str, owner: str, max_side: int | None) -> tuple[np.ndarray, float]:
+    """:func:`load_photo`, scaled down to `max_side` (area averaging) before it becomes float64
+    (a 12-megapixel colour photo as float64 takes 288 MB); also the factor used."""
+    if isinstance(source, np.ndarray):
+        grey = _to_grey(source, name, owner, bgr=False)
+        factor = 1.0 if max_side is None else working_size(grey.shape, max_side)
+        return _scale(grey, factor), factor
+    if isinstance(source, (bytes, bytearray, memoryview)):
+        image = cv2.imdecode(np.frombuffer(bytes(source), np.uint8), cv2.IMREAD_COLOR)
+        if image is None:
+            raise ParameterError(message(name, owner, "the bytes of an image file OpenCV can decode",
+                                         f"{len(source)} bytes it cannot decode"))
+    elif _is_path(source):
+        image = _read(str(source), name, owner)   # size limits, readable regular file, decodable
+        if image.dtype == np.uint8:
+            with open(source, "rb") as handle:    # again with IMREAD_COLOR, which applies EXIF
+                image = cv2.imdecode(np.frombuffer(handle.read(), np.uint8), cv2.IMREAD_COLOR)
+    else:
+        raise ParameterTypeError(message(name, owner, "a path, the bytes of an image file or an array", source))
+    if image.dtype == np.uint8 and image.ndim == 3:
+        image = cv2.cvtColor(image, cv2.COLOR_BGRA2GRAY if image.shape[2] == 4 else cv2.COLOR_BGR2GRAY)
+    factor = 1.0 if max_side is None else working_size(image.shape, max_side)
+    if image.dtype == np.uint8 and factor < 1.0:
+        size = (max(1, round(image.shape[1] * factor)), max(1, round(image.shape[0] * factor)))
+        small = cv2.resize(image.astype(np.float32), size, interpolation=cv2.INTER_AREA)
+        return np.clip(small.astype(float), 0.0, 255.0), factor
+    grey = _to_grey(image, name, owner, bgr=True)
+    return _scale(grey, factor), factor
+
+
+def working_size(shape, max_side: int = WORKING_SIDE) -> float:
+    """The factor (at most 1) that brings an image of `shape` within `max_side` pixels."""
+    return min(1.0, max_side / max(shape[:2]))
+
+
+def _scale(image: np.ndarray, factor: float) -> np.ndarray:
+    if factor >= 1.0:
+        return image
+    size = (max(1, round(image.shape[1] * factor)), max(1, round(image.shape[0] * factor)))
+    return cv2.resize(image.astype(np.float32), size, interpolation=cv2.INTER_AREA).astype(float)
+
+
+@dataclass(frozen=True, eq=False)
+class Correspondences:
+    """Matched points ``(x, y)`` of a left and a right image, row ``n`` with row ``n``."""
+
+    left_xy: np.ndarray
+    right_xy: np.ndarray
+
+    def __len__(self) -> int:
+        return len(self.left_xy)
+
+
+def robust_matches(left, right, *, max_features: int = 4000) -> Correspondences:
+    """SIFT keypoints matched both ways, kept when they pass the ratio test and are mutual.
+
+    Examples
+    --------
+    >>> rng = np.random.default_rng(0)
+    >>> img = cv2.GaussianBlur(rng.uniform(0, 255, (200, 240)), (0, 0), 2) * 3 % 255
+    >>> m = robust_matches(img[:, 10:], img[:, :-10])
+    >>> len(m) > 20, bool(np.allclose(m.left_xy[:, 0] - m.right_xy[:, 0], -10, atol=1))
+    (True, True)
+    """
+    max_features = check_number(max_features, "max_features", "robust_matches", low=8, integer=True)
+    sift = cv2.SIFT_create(nfeatures=max_features)
+    # SIFT doubles its input first: above DETECT_SIDE px it would hold several hundred MB of
+    # pyramid, so it looks at a copy of that size and the points are scaled back.
+    factor = working_size(np.shape(left), DETECT_SIDE)
+    as_u8 = lambda g: np.clip(np.rint(_scale(np.asarray(g, dtype=float), factor)), 0, 255).astype(np.uint8)
+    kl, dl = sift.detectAndCompute(as_u8(left), None)
+    kr, dr = sift.detectAndCompute(as_u8(right), None)
+    empty = Correspondences(np.zeros((0, 2)), np.zeros((0, 2)))
+    if dl is None or dr is None or len(kl) < 2 or len(kr) < 2:
+        return empty
+    matcher = cv2.BFMatcher(cv2.NORM_L2)
+
+    def passing(query, train):
+        return {m[0].queryIdx: m[0].trainIdx for m in matcher.knnMatch(query, train, k=2)
+                if len(m) == 2 and m[0].distance < _RATIO * m[1].distance}
+
+    forward, backward = passing(dl, dr), passing(dr, dl)
+    kept = sorted((q, t) for q, t in forward.items() if backward.get(t) == q)
+    if not kept:
+        return empty
+    back = lambda points: (np.array(points, dtype=float) + 0.5) / factor - 0.5   # pixel centres
+    return Correspondences(back([kl[q].pt for q, _ in kept]), back([kr[t].pt for _, t in kept]))
+
+
+def _dy_figures(left_xy, right_xy) -> dict:
+    """Row differences, and the disparity range of the matches within 2 px of their row
+    (2nd to 98th percentile: a few wrong matches remain on any pair)."""
+    dy = np.abs(left_xy[:, 1] - right_xy[:, 1])
+    d = (left_xy[:, 0] - right_xy[:, 0])[dy <= 2.0]
+    span = [float(np.percentile(d, 2)), float(np.percentile(d, 98))] if len(d) else [0.0, 0.0]
+    return {"median_abs_dy_px": float(np.median(dy)), "p90_abs_dy_px": float(np.percentile(dy, 90)),
+            "disparity_range_px": span}
+
+
+@dataclass(frozen=True, eq=False)
+class Rectified:
+    """A rectified pair and how it was made.
+
+    Attributes
+    ----------
+    left, right : (H, W) float ndarray
+        The rectified grey images, at the working size.
+    left_h, right_h : (3, 3) ndarray
+        Homographies from the (scaled) input images to these.
+    method : str
+        ``"already rectified"``, ``"uncalibrated"`` or ``"rig"``.
+    inliers : int
+        Correspondences consistent with the epipolar geometry (all matches when the pair
+        was already rectified).
+    median_abs_dy_px, p90_abs_dy_px : float
+        Row differences of those correspondences after rectification.
+    disparity_range_px : [float, float]
+        Their 2nd and 98th percentile of ``x_left - x_right``, after rectification.
+    scale : float
+        The factor the inputs were scaled by first (1: not scaled).
+    left_xy, right_xy : (n, 2) ndarray
+        The inliers, after rectification (for epipolar-line plots).
+    """
+
+    left: np.ndarray
+    right: np.ndarray
+    left_h: np.ndarray
+    right_h: np.ndarray
+    method: str
+    inliers: int
+    median_abs_dy_px: float
+    p90_abs_dy_px: float
+    disparity_range_px: list
+    scale: float
+    left_xy: np.ndarray = field(repr=False, default=None)
+    right_xy: np.ndarray = field(repr=False, default=None)
+
+    @property
+    def size(self) -> list:
+        return [int(self.left.shape[1]), int(self.left.shape[0])]
+
+    def to_dict(self) -> dict:
+        """What ``ismb-lab rectify`` writes to ``rectify.json``."""
+        return {"method": self.method, "inliers": self.inliers, "median_abs_dy_px": self.median_abs_dy_px,
+                "p90_abs_dy_px": self.p90_abs_dy_px, "disparity_range_px": list(self.disparity_range_px),
+                "size": self.size, "scale": self.scale, "working_side": WORKING_SIDE,
+                "left_homography": self.left_h.tolist(), "right_homography": self.right_h.tolist()}
+
+    def to_json(self) -> str:
+        return json.dumps(self.to_dict(), indent=2)
+
+
+def _inputs(left, right, owner: str, max_side: int):
+    """Both photos grey, of one size, scaled by one factor so the longer side is <= `max_side`."""
+    (left, factor), (right, other) = (_photo(left, "left", owner, max_side),
+                                      _photo(right, "right", owner, max_side))
+    if left.shape != right.shape or factor != other:
+        raise ParameterError(message("right", owner, "a photo of the left one's size (take both with one "
+                                     "camera and the same settings)",
+                                     f"{right.shape[1]}x{right.shape[0]} beside {left.shape[1]}x{left.shape[0]}"
+                                     + (" after scaling" if factor < 1 else "")))
+    return left, right, factor
+
+
+def _refuse_same(matches: Correspondences, owner: str) -> None:
+    if len(matches) and np.percentile(np.hypot(*(matches.left_xy - matches.right_xy).T), 90) < 0.5:
+        raise ParameterError(message("right", owner, "a photo taken after moving the camera a few centimetres "
+                                     "sideways", f"the left photo again (90% of {len(matches)} matches moved < 0.5 px)"))
+
+
+def _fundamental(matches: Correspondences, owner: str):
+    n = len(matches)
+    if n < MIN_INLIERS:
+        raise ParameterError(message("right", owner, "a second, sharp view of the left photo's textured scene "
+                                     f"(at least {MIN_INLIERS} robust matches)", f"{n} robust matches"))
+    method = getattr(cv2, "USAC_MAGSAC", cv2.FM_RANSAC)
+    F, mask = cv2.findFundamentalMat(matches.left_xy, matches.right_xy, method, 1.0, 0.999, 10000)
+    inliers = np.zeros(n, bool) if mask is None else mask.ravel().astype(bool)
+    if F is None or F.shape != (3, 3) or inliers.sum() < MIN_INLIERS:
+        raise ParameterError(message("right", owner, f"a view of the left photo's scene (at least {MIN_INLIERS} "
+                                     "matches agreeing on one epipolar geometry)",
+                                     f"{int(inliers.sum())} of {n} matches agreeing"))
+    # Parallax: with a baseline, points at different depths move differently, and no single
+    # homography carries the left points onto the right ones (the books pair: 37% within 1 px;
+    # a turned camera: 99%).
+    homography, fits = cv2.findHomography(matches.left_xy[inliers], matches.right_xy[inliers], cv2.RANSAC, 1.0)
+    if homography is not None and fits.mean() >= 0.9:
+        raise ParameterError(message("right", owner, "a view from a camera moved sideways, with parallax",
+                                     f"no parallax: one homography fits {fits.mean():.0%} of the matches (the "
+                                     "camera only turned, or the scene is flat)"))
+    return F, inliers
+
+
+def _transform(h, xy) -> np.ndarray:
+    return cv2.perspectiveTransform(np.asarray(xy, float).reshape(-1, 1, 2), h).reshape(-1, 2)
+
+
+def _place(h_left, h_right, left_xy, right_xy, shape):
+    """Move both homographies so the left content starts at (0, 0) and 98% of disparities are > 0."""
+    h, w = shape
+    corners = np.array([[0, 0], [w, 0], [w, h], [0, h]], float)
+    box = _transform(h_left, corners)
+    start = box.min(axis=0)
+    shift = np.array([[1, 0, -start[0]], [0, 1, -start[1]], [0, 0, 1]], float)
+    h_left, h_right = shift @ h_left, shift @ h_right
+    d = _transform(h_left, left_xy)[:, 0] - _transform(h_right, right_xy)[:, 0]
+    dx = 1.0 - np.percentile(d, 2)        # the 2nd percentile of the disparities at 1 px
+    h_right = np.array([[1, 0, -dx], [0, 1, 0], [0, 0, 1]], float) @ h_right
+    size = np.ceil(_transform(h_left, corners).max(axis=0)).astype(int)
+    return h_left, h_right, (int(min(size[0], 2 * w)), int(min(size[1], 2 * h)))
+
+
+def rectify_pair(left, right, *, max_side: int = WORKING_SIDE) -> Rectified:
+    """Rectify a hand-held stereo pair (see the module's description).
+
+    Parameters
+    ----------
+    left, right : path, bytes or ndarray
+        The photos, the left camera's first.  They must be of one size.
+    max_side : int
+        Scale both down so that the longer side is at most this (default :data:`WORKING_SIDE`).
+
+    Returns
+    -------
+    Rectified
+
+    Raises
+    ------
+    ParameterError
+        With one sentence: photos of different sizes, too few matches, the same photo twice,
+        no common epipolar geometry, or no parallax (the camera only turned).
+    """
+    owner = "rectify_pair"
+    max_side = check_number(max_side, "max_side", owner, low=64, integer=True)
+    left, right, factor = _inputs(left, right, owner, max_side)
+    matches = robust_matches(left, right)
+    _refuse_same(matches, owner)
+    F, inliers = _fundamental(matches, owner)
+    lxy, rxy = matches.left_xy[inliers], matches.right_xy[inliers]
+    figures = _dy_figures(lxy, rxy)
+    if figures["median_abs_dy_px"] <= 0.5 and figures["p90_abs_dy_px"] <= 1.5:
+        eye = np.eye(3)
+        return Rectified(left, right, eye, eye, "already rectified", int(inliers.sum()),
+                         figures["median_abs_dy_px"], figures["p90_abs_dy_px"], figures["disparity_range_px"],
+                         factor, lxy, rxy)
+    h, w = left.shape
+    ok, h_left, h_right = cv2.stereoRectifyUncalibrated(lxy, rxy, F, (w, h))
+    if not ok:
+        raise ParameterError(message("right", owner, "a view OpenCV's uncalibrated rectification accepts",
+                                     f"a pair it refused ({len(lxy)} inliers)"))
+    h_left, h_right, size = _place(h_left, h_right, lxy, rxy, (h, w))
+    warp = lambda image, hom: cv2.warpPerspective(image.astype(np.float32), hom, size, flags=cv2.INTER_LINEAR,
+                                                  borderMode=cv2.BORDER_CONSTANT, borderValue=0).astype(float)
+    lxy_r, rxy_r = _transform(h_left, lxy), _transform(h_right, rxy)
+    figures = _dy_figures(lxy_r, rxy_r)
+    return Rectified(np.clip(warp(left, h_left), 0, 255), np.clip(warp(right, h_right), 0, 255), h_left,
+                     h_right, "uncalibrated", int(inliers.sum()), figures["median_abs_dy_px"],
+                     figures["p90_abs_dy_px"], figures["disparity_range_px"], factor, lxy_r, rxy_r)
+
+
+def check_rectified(left, right, *, max_side: int = WORKING_SIDE) -> dict:
+    """How far a pair is from rectified, without warping it.
+
+    Returns the figures of :class:`Rectified` for the RANSAC inliers as they are, with
+    ``"matches"``, ``"inliers"``, ``"rectified"`` (the test :func:`rectify_pair` uses to leave
+    a pair alone), ``"problem"`` (why the pair cannot be rectified, or "") and the inlier
+    points ``"left_xy"``/``"right_xy"`` for drawing epipolar lines.
+    """
+    owner = "check_rectified"
+    left, right, _ = _inputs(left, right, owner, max_side)
+    matches = robust_matches(left, right)
+    out = {"matches": len(matches), "inliers": 0, "rectified": False, "problem": "",
+           "median_abs_dy_px": None, "p90_abs_dy_px": None, "disparity_range_px": None,
+           "left_xy": np.zeros((0, 2)), "right_xy": np.zeros((0, 2))}
+    try:
+        _refuse_same(matches, owner)
+        _, inliers = _fundamental(matches, owner)
+    except ParameterError as exc:
+        return {**out, "problem": str(exc)}
+    lxy, rxy = matches.left_xy[inliers], matches.right_xy[inliers]
+    figures = _dy_figures(lxy, rxy)
+    rectified = figures["median_abs_dy_px"] <= 0.5 and figures["p90_abs_dy_px"] <= 1.5
+    return {**out, **figures, "inliers": int(inliers.sum()), "rectified": bool(rectified),
+            "left_xy": lxy, "right_xy": rxy}

@@ -1,0 +1,268 @@
+"""Chessboard calibration of a fixed two-camera rig: intrinsics, baseline and rectification maps.
+
+A rig whose cameras do not move relative to each other is calibrated once from a few pairs
+of a printed chessboard: OpenCV finds the inner corners (``cv2.findChessboardCorners``,
+refined with ``cv2.cornerSubPix``), calibrates each camera (``cv2.calibrateCamera``), then
+the pair (``cv2.stereoCalibrate`` with those intrinsics fixed), and ``cv2.stereoRectify``
+turns the result into the two rectifying maps, the rectified focal length ``f`` (pixels)
+and the baseline ``B`` (metres).  Then depth is ``Z = f B / d`` for a disparity ``d``
+(:func:`ismb_lab.depth.metric_depth`).
+
+The board's square size sets the scale of everything metric: ``B`` and ``Z`` are
+proportional to it, and nothing else depends on it.
+"""
+
+from __future__ import annotations
+
+import json
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import cv2
+import numpy as np
+
+from ._validation import ParameterError, ParameterTypeError, check_number, message
+from .rectify import Rectified, _dy_figures, load_photo, robust_matches
+
+__all__ = ["BOARD", "SQUARE_M", "Rig", "board_depth", "calibrate_rig", "find_board", "load_rig"]
+
+#: Inner corners of OpenCV's sample board (columns, rows).
+BOARD = (9, 6)
+#: Square size assumed for OpenCV's sample board, in metres.  The sample does not state it
+#: (its calibration program takes the size as an argument and defaults to 1 unit); 25 mm is
+#: a common printed board and gives a baseline of a few centimetres, as the rig's two small
+#: cameras suggest.  Every metric result scales with it.
+SQUARE_M = 0.025
+#: Fewest pairs in which the board is found in both views for a calibration.
+MIN_PAIRS = 3
+_CRITERIA = (cv2.TERM_CRITERIA_EPS + cv2.TERM_CRITERIA_MAX_ITER, 100, 1e-6)
+
+
+def _u8(image) -> np.ndarray:
+    return np.clip(np.rint(np.asarray(image, dtype=float)), 0, 255).astype(np.uint8)
+
+
+def find_board(image, board=BOARD) -> np.ndarray | None:
+    """The board's inner corners ``(x, y)``, refined to sub-pixel, or None when not found."""
+    grey = _u8(image)
+    found, corners = cv2.findChessboardCorners(grey, tuple(board), cv2.CALIB_CB_ADAPTIVE_THRESH
+                                               + cv2.CALIB_CB_NORMALIZE_IMAGE)
+    if not found:
+        return None
+    corners = cv2.cornerSubPix(grey, corners, (11, 11), (-1, -1), _CRITERIA)
+    return corners.reshape(-1, 2).astype(float)
+
+
+def _board_points(board, square_m: float) -> np.ndarray:
+    cols, rows = board
+    grid = np.zeros((rows * cols, 3), np.float32)
+    grid[:, :2] = np.mgrid[0:cols, 0:rows].T.reshape(-1, 2) * square_m
+    return grid
+
+
+@dataclass(frozen=True, eq=False)
+class Rig:
+    """A calibrated rig (see the module's description).
+
+    Attributes
+    ----------
+    size : (int, int)
+        Image width and height the rig was calibrated at.
+    k_left, d_left, k_right, d_right : ndarray
+        Camera matrices and distortion coefficients.
+    rotation, translation : ndarray
+        The right camera's pose relative to the left one (metres).
+    rms : float
+        Reprojection error of the stereo calibration, in pixels.
+    board, square_m
+        The board used.
+    used, skipped : tuple of str
+        Names of the pairs used, and of those where the board was not found in both views.
+    """
+
+    size: tuple
+    k_left: np.ndarray
+    d_left: np.ndarray
+    k_right: np.ndarray
+    d_right: np.ndarray
+    rotation: np.ndarray
+    translation: np.ndarray
+    rms: float
+    board: tuple = BOARD
+    square_m: float = SQUARE_M
+    used: tuple = ()
+    skipped: tuple = ()
+    _rect: dict = field(default_factory=dict, repr=False)
+
+    def _rectification(self) -> dict:
+        if not self._rect:
+            r1, r2, p1, p2, q, _, _ = cv2.stereoRectify(self.k_left, self.d_left, self.k_right, self.d_right,
+                                                          tuple(self.size), self.rotation, self.translation,
+                                                          flags=cv2.CALIB_ZERO_DISPARITY, alpha=0)
+            self._rect.update(r1=r1, r2=r2, p1=p1, p2=p2, q=q)
+        return self._rect
+
+    @property
+    def focal_px(self) -> float:
+        """Focal length of the rectified views, in pixels."""
+        return float(self._rectification()["p1"][0, 0])
+
+    @property
+    def baseline_m(self) -> float:
+        """Distance between the two rectified camera centres, in metres."""
+        p2 = self._rectification()["p2"]
+        return float(abs(p2[0, 3] / p2[0, 0]))
+
+    def maps(self):
+        """The ``cv2.remap`` maps of the left and the right view."""
+        rect = self._rectification()
+        make = lambda k, d, r, p: cv2.initUndistortRectifyMap(k, d, r, p, tuple(self.size), cv2.CV_32FC1)
+        return (make(self.k_left, self.d_left, rect["r1"], rect["p1"]),
+                make(self.k_right, self.d_right, rect["r2"], rect["p2"]))
+
+    def rectify(self, left, right) -> Rectified:
+        """Rectify a pair of this rig exactly (no matching needed; the figures are measured
+        on robust matches afterwards).  A pair of another size is refused."""
+        owner = "Rig.rectify"
+        left, right = load_photo(left, "left", owner), load_photo(right, "right", owner)
+        for name, image in (("left", left), ("right", right)):
+            if (image.shape[1], image.shape[0]) != tuple(self.size):
+                raise ParameterError(message(name, owner, f"a {self.size[0]}x{self.size[1]} photo, the size the "
+                                             "rig was calibrated at", f"{image.shape[1]}x{image.shape[0]}"))
+        (lx, ly), (rx, ry) = self.maps()
+        warp = lambda image, mx, my: cv2.remap(image.astype(np.float32), mx, my, cv2.INTER_LINEAR).astype(float)
+        out_l, out_r = warp(left, lx, ly), warp(right, rx, ry)
+        matches = robust_matches(out_l, out_r)
+        figures = (_dy_figures(matches.left_xy, matches.right_xy) if len(matches) else
+                   {"median_abs_dy_px": float("nan"), "p90_abs_dy_px": float("nan"), "disparity_range_px": [0, 0]})
+        eye = np.eye(3)
+        return Rectified(out_l, out_r, eye, eye, "rig", len(matches), figures["median_abs_dy_px"],
+                         figures["p90_abs_dy_px"], figures["disparity_range_px"], 1.0, matches.left_xy,
+                         matches.right_xy)
+
+    def to_dict(self) -> dict:
+        return {"format": "ismb_lab-rig-v1", "size": list(self.size), "rms_px": self.rms,
+                "focal_px": self.focal_px, "baseline_m": self.baseline_m, "board": list(self.board),
+                "square_m": self.square_m, "used": list(self.used), "skipped": list(self.skipped),
+                "k_left": self.k_left.tolist(), "d_left": self.d_left.ravel().tolist(),
+                "k_right": self.k_right.tolist(), "d_right": self.d_right.ravel().tolist(),
+                "rotation": self.rotation.tolist(), "translation": self.translation.ravel().tolist()}
+
+    def to_json(self) -> str:
+        return json.dumps(self.to_dict(), indent=2)
+
+
+def load_rig(source) -> Rig:
+    """A rig from ``ismb-lab calibrate``'s JSON (a path or the text), validated."""
+    owner = "load_rig"
+    try:
+        text = Path(source).read_text() if not str(source).lstrip().startswith("{") else str(source)
+        data = json.loads(text)
+    except (OSError, ValueError) as exc:
+        raise ParameterError(message("source", owner, "a readable rig JSON file", f"{source} ({exc})")) from None
+    if not isinstance(data, dict) or data.get("format") != "ismb_lab-rig-v1":
+        raise ParameterError(message("source", owner, "a rig file written by 'ismb-lab calibrate' "
+                                     "(format ismb_lab-rig-v1)", str(source)))
+    try:
+        arr = lambda key, shape: np.asarray(data[key], dtype=float).reshape(shape)
+        rig = Rig(tuple(int(v) for v in data["size"]), arr("k_left", (3, 3)), arr("d_left", (1, -1)),
+                  arr("k_right", (3, 3)), arr("d_right", (1, -1)), arr("rotation", (3, 3)),
+                  arr("translation", (3, 1)), float(data["rms_px"]), tuple(data["board"]),
+                  float(data["square_m"]), tuple(data.get("used", ())), tuple(data.get("skipped", ())))
+    except (KeyError, TypeError, ValueError) as exc:
+        raise ParameterError(message("source", owner, "a complete rig file", f"{source} ({exc})")) from None
+    if not all(np.isfinite(a).all() for a in (rig.k_left, rig.k_right, rig.rotation, rig.translation)):
+        raise ParameterError(message("source", owner, "finite camera matrices", str(source)))
+    return rig
+
+
+def calibrate_rig(pairs, board=BOARD, square_m: float = SQUARE_M, progress=None) -> Rig:
+    """Calibrate a rig from chessboard pairs.
+
+    Parameters
+    ----------
+    pairs : sequence of (name, left, right)
+        Images as paths, bytes or grey arrays, all of one size.
+    board : (int, int)
+        Inner corners per row and per column.
+    square_m : float
+        Side of one square, in metres.
+    progress : callable, optional
+        Called once per pair (for a progress bar).
+
+    Returns
+    -------
+    Rig
+        Pairs where the board is not found in both views are skipped and named in
+        ``Rig.skipped``.
+
+    Raises
+    ------
+    ParameterError
+        Fewer than 3 usable pairs, or images of different sizes.
+    """
+    owner = "calibrate_rig"
+    square_m = check_number(square_m, "square_m", owner, low=0, low_open=True)
+    if (not isinstance(board, (tuple, list)) or len(board) != 2
+            or not all(isinstance(v, (int, np.integer)) and v >= 2 for v in board)):
+        raise ParameterTypeError(message("board", owner, "two integers >= 2 (inner corners per row, per column)",
+                                         board))
+    objects, left_points, right_points, used, skipped, size = [], [], [], [], [], None
+    grid = _board_points(board, square_m)
+    for name, left, right in pairs:
+        left, right = load_photo(left, f"left {name}", owner), load_photo(right, f"right {name}", owner)
+        here = (left.shape[1], left.shape[0])
+        if size is None:
+            size = here
+        if here != size or right.shape != left.shape:
+            raise ParameterError(message("pairs", owner, f"images all of one size ({size[0]}x{size[1]})",
+                                         f"pair {name}: {here[0]}x{here[1]} and {right.shape[1]}x{right.shape[0]}"))
+        found = find_board(left, board), find_board(right, board)
+        if progress is not None:
+            progress(name)
+        if found[0] is None or found[1] is None:
+            skipped.append(str(name))
+            continue
+        objects.append(grid)
+        left_points.append(found[0].astype(np.float32))
+        right_points.append(found[1].astype(np.float32))
+        used.append(str(name))
+    if len(used) < MIN_PAIRS:
+        raise ParameterError(message("pairs", owner, f"at least {MIN_PAIRS} pairs with the {board[0]}x{board[1]} "
+                                     "board found in both views", f"{len(used)} (skipped: {', '.join(skipped)})"))
+    _, k_l, d_l, _, _ = cv2.calibrateCamera(objects, left_points, size, None, None)
+    _, k_r, d_r, _, _ = cv2.calibrateCamera(objects, right_points, size, None, None)
+    rms, k_l, d_l, k_r, d_r, rotation, translation, _, _ = cv2.stereoCalibrate(
+        objects, left_points, right_points, k_l, d_l, k_r, d_r, size, criteria=_CRITERIA,
+        flags=cv2.CALIB_FIX_INTRINSIC)
+    return Rig(tuple(size), k_l, d_l, k_r, d_r, rotation, translation, float(rms), tuple(board), square_m,
+               tuple(used), tuple(skipped))
+
+
+def board_depth(rig: Rig, left, right) -> dict:
+    """The board's depth in a pair of `rig`, two ways, in the left rectified camera's frame.
+
+    ``"stereo"``: the board's corners found in both rectified views, ``Z = f B / d`` of each,
+    the median.  ``"pnp"``: the board's pose from ``cv2.solvePnP`` on the left view alone,
+    its corners' depths rotated into the rectified frame, the median.  The two use the rig
+    differently (disparity and baseline against the board's known size), so their
+    agreement checks the calibration.
+    """
+    owner = "board_depth"
+    rectified = rig.rectify(left, right)
+    corners = find_board(rectified.left, rig.board), find_board(rectified.right, rig.board)
+    if corners[0] is None or corners[1] is None:
+        raise ParameterError(message("left", owner, "a pair showing the whole board in both views",
+                                     "a pair where it was not found"))
+    disparity = corners[0][:, 0] - corners[1][:, 0]
+    stereo = rig.focal_px * rig.baseline_m / disparity
+    raw = find_board(load_photo(left, "left", owner), rig.board)
+    if raw is None:
+        raise ParameterError(message("left", owner, "a photo showing the whole board", "one where it was not found"))
+    grid = _board_points(rig.board, rig.square_m)
+    ok, rvec, tvec = cv2.solvePnP(grid, raw.astype(np.float32), rig.k_left, rig.d_left)
+    pose, _ = cv2.Rodrigues(rvec)
+    in_camera = grid @ pose.T + tvec.reshape(1, 3)
+    in_rectified = in_camera @ rig._rectification()["r1"].T
+    return {"stereo": float(np.median(stereo)), "pnp": float(np.median(in_rectified[:, 2])),
+            "disparity_px": [float(disparity.min()), float(disparity.max())]}

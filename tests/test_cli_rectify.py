@@ -1,0 +1,75 @@
+"""``ismb-lab rectify`` and ``ismb-lab calibrate``: what they write, and the inputs they refuse."""
+
+import json
+import os
+import subprocess
+import sys
+
+import pytest
+
+from ismb_lab.cli import main
+from ismb_lab.datasets import CHESSBOARD_PAIRS, SampleDataMissing, opencv_samples
+
+
+@pytest.fixture(scope="module")
+def data():
+    try:
+        return opencv_samples()
+    except SampleDataMissing:
+        if os.environ.get("CI") == "true":
+            raise
+        pytest.skip("opencv-doc is not installed")
+
+
+def cli(*args):
+    return subprocess.run([sys.executable, "-m", "ismb_lab.cli", *map(str, args)], capture_output=True, text=True,
+                          timeout=300)
+
+
+def test_rectify_writes_the_pair_and_its_figures(data, tmp_path):
+    out = tmp_path / "books"
+    assert main(["rectify", str(data / "left.jpg"), str(data / "right.jpg"), "--out", str(out)]) == 0
+    record = json.loads((out / "rectify.json").read_text())
+    assert {"method", "inliers", "median_abs_dy_px", "p90_abs_dy_px", "disparity_range_px", "size"} <= set(record)
+    assert record["method"] == "uncalibrated" and record["median_abs_dy_px"] <= 1.0
+    assert (out / "left.png").stat().st_size > 1000 and (out / "right.png").stat().st_size > 1000
+
+
+def test_refused_pairs_exit_2_in_one_line_and_write_nothing(data, tmp_path):
+    cases = [[data / "left.jpg", data / "left.jpg"],               # the same photo twice
+             [data / "left.jpg", data / "left01.jpg"],             # different sizes
+             [tmp_path / "missing.jpg", data / "right.jpg"]]
+    (tmp_path / "corrupt.jpg").write_bytes(b"\xff\xd8\xff\xe0garbage")
+    cases.append([tmp_path / "corrupt.jpg", data / "right.jpg"])
+    for n, (left, right) in enumerate(cases):
+        proc = cli("rectify", left, right, "--out", tmp_path / f"out{n}")
+        assert proc.returncode == 2, proc.stderr
+        assert proc.stderr.count("\n") == 1 and "Traceback" not in proc.stderr, proc.stderr
+        assert not (tmp_path / f"out{n}").exists()
+
+
+def test_calibrate_then_rectify_and_depth_with_the_rig(data, tmp_path):
+    files = [data / f"{side}{n}.jpg" for n in CHESSBOARD_PAIRS if n != "14" for side in ("left", "right")]
+    rig = tmp_path / "rig.json"
+    proc = cli("calibrate", *files, "--out", rig)
+    assert proc.returncode == 0, proc.stderr
+    record = json.loads(rig.read_text())
+    assert record["rms_px"] < 1.0 and record["baseline_m"] > 0 and record["focal_px"] > 0
+    assert "RMS reprojection error" in proc.stdout
+    assert main(["rectify", str(data / "left14.jpg"), str(data / "right14.jpg"), "--rig", str(rig),
+                 "--out", str(tmp_path / "held")]) == 0
+    assert json.loads((tmp_path / "held" / "rectify.json").read_text())["method"] == "rig"
+    proc = cli("rectify", data / "left.jpg", data / "right.jpg", "--rig", rig, "--out", tmp_path / "x")
+    assert proc.returncode == 2 and "640x480" in proc.stderr and not (tmp_path / "x").exists()
+
+
+def test_calibrate_refusals(data, tmp_path):
+    one = [data / "left01.jpg", data / "right01.jpg"]
+    for args, said in (([*one, "--out", tmp_path / "r.json"], "at least 3 pairs"),
+                       ([data / "left01.jpg", "--out", tmp_path / "r.json"], "in pairs"),
+                       ([*one, "--board", "9by6", "--out", tmp_path / "r.json"], "--board"),
+                       ([*one, "--square-m", "0", "--out", tmp_path / "r.json"], "--square-m"),
+                       ([*one, "--out", data / "left01.jpg"], "left01.jpg")):
+        proc = cli("calibrate", *args)
+        assert proc.returncode == 2 and said in proc.stderr and "Traceback" not in proc.stderr, proc.stderr
+    assert not (tmp_path / "r.json").exists()
