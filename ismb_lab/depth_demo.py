@@ -35,7 +35,7 @@ from ._validation import ParameterError, ParameterTypeError, check_number, messa
 from .depth import DepthConfig, DepthResult, depth_from_matches
 from .features import Corners, detect_corners, resolve_roi
 from .io import StereoPair, load_pair
-from .matching import MatchConfig, MatchResult, Prepared, match, prepare, shift_roi
+from .matching import MatchConfig, MatchResult, Prepared, auto_window, match, prepare, shift_roi
 from .methods import build_problem
 from .params import Params
 from .similarity import mean_abs_difference
@@ -190,6 +190,8 @@ def scene_match_config(background, scene, match_config=None):
     match_config = DEPTH_MATCH_CONFIG if match_config is None else match_config
     if not isinstance(match_config, MatchConfig):
         raise ParameterTypeError(message("match_config", own, "a MatchConfig", match_config))
+    if match_config.shift == "auto" and background is not None:
+        match_config = auto_window(_load(background, "background", own), match_config)
     for name, value in (("background", background), ("scene", scene)):
         if not isinstance(value, StereoPair):
             raise ParameterTypeError(message(name, own, "a StereoPair", value))
@@ -309,8 +311,10 @@ def scene_prepared(background, scene, match_config=None) -> Prepared:
     >>> p.config.roi, len(p.left_corners) > 20
     ((97, 127, 134, 49), True)
     """
-    config = scene_match_config(background, scene, match_config)
     base = DEPTH_MATCH_CONFIG if match_config is None else match_config
+    if isinstance(base, MatchConfig) and base.shift == "auto":
+        base = auto_window(background, base)
+    config = scene_match_config(background, scene, base)
     if config is base:
         return prepare(scene, None, config)
     roi = resolve_roi(base.roi, scene.shape)
@@ -395,6 +399,8 @@ def depth_match(pair, *, background=None, method: str = "III", params=None, matc
     match_config = DEPTH_MATCH_CONFIG if match_config is None else match_config
     if not isinstance(match_config, MatchConfig):
         raise ParameterTypeError(message("match_config", own, "a MatchConfig", match_config))
+    if match_config.shift == "auto" and background is not None:
+        match_config = auto_window(_load(background, "background", own), match_config)
     pair = _load(pair, "pair", own)
     if background is not None:
         prepared = scene_prepared(_load(background, "background", own), pair, match_config)
@@ -447,6 +453,8 @@ def relative_depth(background, scene, *, method: str = "III", params=None, match
     own = "relative_depth"
     get_solver(solver, own)
     bg, sc = _load(background, "background", own), _load(scene, "scene", own)
+    if isinstance(match_config, MatchConfig) and match_config.shift == "auto":
+        match_config = auto_window(bg, match_config)   # one window for both pairs, from the background
     _check_same_size(bg, sc, own)
     scene_config = scene_match_config(bg, sc, match_config)
     results = [depth_match(p, background=b, method=method, params=params, match_config=match_config,

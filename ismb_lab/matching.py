@@ -10,7 +10,7 @@
 from __future__ import annotations
 
 import json
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
@@ -25,7 +25,7 @@ from .params import Params
 from .similarity import mean_abs_difference
 from .solvers import DEFAULT_SOLVER, get_solver, solve, to_matches
 
-__all__ = ["MatchConfig", "MatchResult", "Prepared", "match", "prepare", "shift_roi"]
+__all__ = ["AUTO_MARGIN", "MatchConfig", "MatchResult", "Prepared", "auto_window", "match", "prepare", "shift_roi"]
 
 
 @dataclass(frozen=True)
@@ -45,7 +45,10 @@ class MatchConfig:
     patch_size : int
         Odd side of the window for ``M_ik`` (3-8).
     shift, window_height, window_width : float
-        The candidate window: ``30 x 40`` centred ``shift`` pixels left (§3.3).
+        The candidate window: ``30 x 40`` centred ``shift`` pixels left (§3.3).  ``shift="auto"``
+        sets it from the pair itself (:func:`auto_window`): :func:`prepare` centres the window
+        on the disparities of robust matches and widens it to hold them all; the
+        ``Prepared.config`` it returns holds the numbers chosen.
     neighbour_radius : float, neighbourhood : {"box", "disc"}
         Which left features interact (3-12, §3.3).
     right_roi : {"shifted", "same"}
@@ -63,7 +66,7 @@ class MatchConfig:
     harris_k: float = 0.04
     min_distance: int = 3
     patch_size: int = 11
-    shift: float = 20.0
+    shift: float | str = 20.0
     window_height: float = 30.0
     window_width: float = 40.0
     neighbour_radius: float = 20.0
@@ -84,7 +87,10 @@ class MatchConfig:
         size = check_number(self.patch_size, "patch_size", owner, low=1, integer=True)
         if size % 2 == 0:
             raise ParameterError(message("patch_size", owner, "an odd integer", size))
-        check_number(self.shift, "shift", owner)
+        if not (isinstance(self.shift, str) and self.shift == "auto"):
+            if isinstance(self.shift, str):
+                raise ParameterError(message("shift", owner, "a number of pixels or 'auto'", self.shift))
+            check_number(self.shift, "shift", owner)
         check_number(self.window_height, "window_height", owner, low=0, low_open=True)
         check_number(self.window_width, "window_width", owner, low=0, low_open=True)
         check_number(self.neighbour_radius, "neighbour_radius", owner, low=0, low_open=True)
@@ -99,6 +105,42 @@ class MatchConfig:
         border = int(np.ceil(3 * self.harris_sigma)) + 1
         side = max(self.patch_size, 2 * border + 1)
         return side, side
+
+
+#: Margin, in pixels, added on each side of the robust matches' disparity range by :func:`auto_window`.
+AUTO_MARGIN = 5.0
+
+
+def auto_window(pair, config: MatchConfig) -> MatchConfig:
+    """`config` with ``shift="auto"`` replaced by numbers measured on `pair`.
+
+    Robust matches (:func:`ismb_lab.rectify.robust_matches`) whose left point lies in the
+    ROI and whose rows differ by at most 2 px give the disparity range (2nd to 98th
+    percentile).  The window is centred on it, and widened to the range plus
+    :data:`AUTO_MARGIN` on each side when the range is wider than the window.
+
+    Raises
+    ------
+    ParameterError
+        Fewer than 8 such matches: the pair gives no range to go by.
+    """
+    from .rectify import robust_matches
+
+    if config.shift != "auto":
+        return config
+    matches = robust_matches(pair.left, pair.right)
+    x, y, w, h = resolve_roi(config.roi, pair.shape)
+    lxy, rxy = matches.left_xy, matches.right_xy
+    inside = ((lxy[:, 0] >= x) & (lxy[:, 0] < x + w) & (lxy[:, 1] >= y) & (lxy[:, 1] < y + h)
+              & (np.abs(lxy[:, 1] - rxy[:, 1]) <= 2.0)) if len(lxy) else np.zeros(0, bool)
+    d = lxy[inside, 0] - rxy[inside, 0]
+    if len(d) < 8:
+        raise ParameterError(message("shift", "MatchConfig", "a number of pixels when the pair has fewer than "
+                                     "8 robust matches on the same rows in the ROI ('auto' measures the "
+                                     "disparities)", f"'auto' with {len(d)} such matches"))
+    lo, hi = np.percentile(d, [2, 98])
+    width = max(float(config.window_width), float(hi - lo) + 2 * AUTO_MARGIN)
+    return replace(config, shift=round(float(lo + hi) / 2, 2), window_width=round(width, 2))
 
 
 def shift_roi(roi, shift: float, shape) -> tuple[int, int, int, int]:
@@ -147,6 +189,7 @@ def prepare(left, right, config: MatchConfig | None = None) -> Prepared:
         raise ParameterTypeError(message("config", "prepare", "a MatchConfig", config))
     pair = left if isinstance(left, StereoPair) and right is None else load_pair(
         left, right, min_shape=config.min_shape)
+    config = auto_window(pair, config)
     left_roi = resolve_roi(config.roi, pair.shape)
     right_roi = left_roi if config.right_roi == "same" else shift_roi(left_roi, config.shift, pair.shape)
     kwargs = dict(n_min=config.n_min, n_max=config.n_max, threshold=config.threshold,

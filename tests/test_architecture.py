@@ -221,4 +221,7 @@ def test_depth_command_writes_exactly_the_library_json(tmp_path):
     out = tmp_path / "d.json"
     assert main(["depth", *map(str, bg + cars), "--json", str(out)]) == 0
     expected = json.loads(json.dumps(relative_depth(bg, cars).to_dict()))
-    assert json.loads(out.read_text()) == expected and expected["objects"]
+    written = json.loads(out.read_text())
+    # the command adds the candidate window it used (the demo's own, as --shift was not given)
+    assert written.pop("candidate_window") == {"shift": 20.0, "width": 40.0, "height": 30.0, "auto": False}
+    assert written == expected and expected["objects"]

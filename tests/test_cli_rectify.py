@@ -73,3 +73,42 @@ def test_calibrate_refusals(data, tmp_path):
         proc = cli("calibrate", *args)
         assert proc.returncode == 2 and said in proc.stderr and "Traceback" not in proc.stderr, proc.stderr
     assert not (tmp_path / "r.json").exists()
+
+
+def test_shift_auto_measures_the_window_and_records_it(data, tmp_path):
+    import numpy as np
+
+    from ismb_lab.datasets import aloe
+    from ismb_lab.matching import MatchConfig, prepare
+
+    pair = aloe(320)
+    config = prepare(pair.left, pair.right, MatchConfig(shift="auto")).config
+    known = pair.disparity[np.isfinite(pair.disparity)]
+    lo, hi = np.percentile(known, [2, 98])
+    assert lo - 2 <= config.shift <= hi + 2                     # inside the true disparities
+    assert config.window_width >= 40
+    out = tmp_path / "m.json"
+    rect = tmp_path / "rect"
+    assert main(["rectify", str(data / "left.jpg"), str(data / "right.jpg"), "--out", str(rect)]) == 0
+    assert main(["match", str(rect / "left.png"), str(rect / "right.png"), "--shift", "auto", "--roi", "full",
+                 "--json", str(out)]) == 0
+    window = json.loads(out.read_text())["candidate_window"]
+    lo, hi = json.loads((rect / "rectify.json").read_text())["disparity_range_px"]
+    assert window["auto"] and window["width"] >= 40 and lo - 5 <= window["shift"] <= hi + 5
+    proc = cli("match", rect / "left.png", rect / "right.png", "--shift", "sideways")
+    assert proc.returncode == 2 and "--shift" in proc.stderr and "'auto'" in proc.stderr
+
+
+def test_shift_auto_needs_matches():
+    import numpy as np
+    import pytest as _pytest
+
+    from ismb_lab import ParameterError
+    from ismb_lab.matching import MatchConfig, prepare
+
+    flat = np.full((120, 160), 80.0)
+    flat[40:80, 50:110] = np.random.default_rng(0).uniform(0, 255, (40, 60))
+    with _pytest.raises(ParameterError, match="'shift' parameter of MatchConfig must be a number of pixels"):
+        prepare(flat, np.roll(flat, 40, axis=0), MatchConfig(shift="auto", n_min=5, n_max=10))
+    with _pytest.raises(ParameterError, match="a number of pixels or 'auto'"):
+        MatchConfig(shift="sideways")

@@ -23,7 +23,7 @@ from ..solvers import SOLVERS
 from ._guard import UsageError, interrupted, json_text
 
 __all__ = ["ParameterError", "ParameterTypeError", "Parser", "UsageError", "add_ga_options",
-           "add_matching_options", "add_feature_options", "add_solver_option", "ga_config",
+           "add_matching_options", "add_feature_options", "window_record", "add_solver_option", "ga_config",
            "gene_options", "match_config", "progress_bar", "resolve_params"]
 
 #: The method the commands use when neither --method nor a params file names one.
@@ -75,11 +75,28 @@ def add_solver_option(p: argparse.ArgumentParser, default: str) -> None:
                    help=f"how the energy is minimised ({text}) (default: {default})")
 
 
+def window_record(config: MatchConfig, auto: bool) -> dict:
+    """The candidate window a command used, for its JSON (``auto``: measured with ``--shift auto``)."""
+    return {"shift": float(config.shift), "width": float(config.window_width),
+            "height": float(config.window_height), "auto": bool(auto)}
+
+
+def _shift(text: str):
+    if text == "auto":
+        return text
+    try:
+        return float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"a number of pixels or 'auto', not {text!r}") from None
+
+
 def add_feature_options(p: argparse.ArgumentParser, base: MatchConfig) -> None:
     roi = base.roi if isinstance(base.roi, str) else ",".join(map(str, base.roi))
     p.add_argument("--roi", default=None, help=f"center | full | X,Y,W,H (default: {roi})")
-    p.add_argument("--shift", type=float, default=None, metavar="PX",
-                   help=f"expected disparity: centre of the candidate window (default: {base.shift:g})")
+    p.add_argument("--shift", type=_shift, default=None, metavar="PX|auto",
+                   help="expected disparity: centre of the candidate window; 'auto' measures it on the "
+                   "pair (robust matches) and widens the window to hold their range "
+                   f"(default: {base.shift:g})")
     p.add_argument("--n-min", type=int, default=None, help=f"fewest corners per image (default: {base.n_min})")
     p.add_argument("--n-max", type=int, default=None, help=f"most corners per image (default: {base.n_max})")
 

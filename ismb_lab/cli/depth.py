@@ -9,7 +9,7 @@ from .._files import atomic_write_text
 from ..depth import DepthConfig
 from ..depth_demo import DEPTH_MATCH_CONFIG, DEPTH_PARAMS, DEPTH_SOLVER
 from ._common import (UsageError, add_matching_options, add_solver_option, match_config, network_settings,
-                      resolve_params)
+                      resolve_params, window_record)
 from ._guard import json_text, save_figure
 
 __all__ = ["add_parser", "run"]
@@ -61,8 +61,16 @@ def run(args) -> int:
                 raise UsageError(f"--{name.replace('_', '-')} must be a finite number > 0, got {value:g}")
             calibration[name] = value
     method, params = resolve_params(args, defaults={"III": DEPTH_PARAMS})
+    config = match_config(args, DEPTH_MATCH_CONFIG)
+    if config.shift == "auto":
+        from ..io import load_pair
+        from ..matching import auto_window
+
+        config = auto_window(load_pair(args.bg_left, args.bg_right), config)
+        print(f"candidate window measured on the background pair: shift {config.shift:g} px, "
+              f"{config.window_width:g} x {config.window_height:g} px")
     result = relative_depth((args.bg_left, args.bg_right), (args.scene_left, args.scene_right),
-                            method=method, params=params, match_config=match_config(args, DEPTH_MATCH_CONFIG),
+                            method=method, params=params, match_config=config,
                             config=DepthConfig(**calibration), solver=args.solver or DEPTH_SOLVER,
                             **network_settings(args))
     for what, res in (("background", result.background), ("scene", result.scene)):
@@ -83,7 +91,8 @@ def run(args) -> int:
         print(f"#{obj.rank}  at ({x:.0f}, {y:.0f})  disparity {obj.mean_disparity:.2f} px  "
               f"depth {depth}  {len(obj.features)} features")
     if args.json is not None:
-        atomic_write_text(args.json, json_text(result.to_dict()))
+        atomic_write_text(args.json, json_text({**result.to_dict(),
+                                                "candidate_window": window_record(config, args.shift == "auto")}))
     if args.plot is not None:
         from matplotlib.figure import Figure
 

@@ -7,7 +7,8 @@ from pathlib import Path
 from .._files import atomic_write_text
 from ..matching import MatchConfig
 from ..solvers import DEFAULT_SOLVER
-from ._common import add_matching_options, add_solver_option, match_config, network_settings, resolve_params
+from ._common import (add_matching_options, add_solver_option, match_config, network_settings, resolve_params,
+                      window_record)
 from ._guard import json_text, save_figure
 
 __all__ = ["add_parser", "run"]
@@ -40,8 +41,12 @@ def run(args) -> int:
           f"energy {result.energy:.4f}, stopped by '{result.stop_rule}' "
           f"after {result.attempts} attempts")
     print(result.table())
+    window = window_record(prepared.config, args.shift == "auto")
+    if window["auto"]:
+        print(f"candidate window measured on the pair: shift {window['shift']:g} px, "
+              f"{window['width']:g} x {window['height']:g} px")
     if args.json is not None:
-        atomic_write_text(args.json, json_text(result.to_dict()))
+        atomic_write_text(args.json, json_text({**result.to_dict(), "candidate_window": window}))
     if args.plot is not None:
         from matplotlib.figure import Figure
 
