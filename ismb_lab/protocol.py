@@ -21,7 +21,7 @@ from pathlib import Path
 import numpy as np
 
 from ._validation import ParameterError, ParameterTypeError, check_number, message
-from .datasets import ground_truth_pairs, motorcycle
+from .datasets import aloe, ground_truth_pairs, motorcycle
 from .evaluation import Score, score
 from .genetic import GAConfig
 from .matching import MatchConfig, Prepared, prepare
@@ -33,7 +33,7 @@ from .solvers import DEFAULT_SOLVER, get_solver
 from .targets import load_targets, snap
 from .tuning import evaluate, to_params, tune
 
-__all__ = ["Case", "PairReport", "PeerReport", "ProtocolReport", "SolverReport", "Spread",
+__all__ = ["SOURCES", "Case", "PairReport", "PeerReport", "ProtocolReport", "SolverReport", "Spread",
            "format_protocol", "load_manifest", "protocol"]
 
 _NONE = Score(0, 0, 0, 0)
@@ -96,14 +96,20 @@ class Case:
         return cls(prepared, np.stack([left, truth[left]], axis=1).astype(np.int64), name=name)
 
 
+#: Built-in ground-truth pairs a manifest can name as ``"source"``: Middlebury Motorcycle
+#: (scikit-image) and Aloe (Debian's opencv-doc), both at the thesis' width of 320 px.
+SOURCES = {"middlebury-motorcycle": lambda: motorcycle(), "middlebury-aloe": lambda: aloe(320)}
+
+
 def load_manifest(path, config: MatchConfig | None = None) -> list[Case]:
     """Read an evaluation manifest into :class:`Case` objects.
 
     The manifest is JSON: ``{"pairs": [entry, ...]}``.  An entry is either a file pair,
     ``{"name", "left", "right", "targets", "roi", "shift"}`` (paths relative to the
     manifest; ``roi`` and ``shift`` optional), or a built-in ground-truth pair,
-    ``{"name", "source": "middlebury-motorcycle", "roi": [x, y, w, h]}``, whose targets
-    come from the ground-truth disparity (:func:`ismb_lab.datasets.ground_truth_pairs`).
+    ``{"name", "source": "middlebury-motorcycle", "roi": [x, y, w, h]}`` (or another name in
+    :data:`SOURCES`), whose targets come from the ground-truth disparity
+    (:func:`ismb_lab.datasets.ground_truth_pairs`).
     """
     path = Path(path)
     owner = f"the manifest '{path}'"
@@ -120,16 +126,21 @@ def load_manifest(path, config: MatchConfig | None = None) -> list[Case]:
     if not isinstance(entries, list) or not entries:
         raise ParameterError(message("pairs", owner, "a non-empty list of pair entries", entries))
     base = config or MatchConfig()
-    cases, moto = [], None
+    cases, loaded = [], {}
     for n, entry in enumerate(entries):
         if not isinstance(entry, dict):
             raise ParameterError(message(f"pairs[{n}]", owner, "an object", entry))
         cfg = replace(base, **{k: entry[k] for k in ("roi", "shift") if k in entry})
         name = str(entry.get("name", f"pair {n}"))
-        if entry.get("source") == "middlebury-motorcycle":
-            moto = moto or motorcycle()
-            prepared = prepare(moto.left, moto.right, cfg)
-            targets, unknown = ground_truth_pairs(moto.disparity, prepared.problem.left_xy,
+        if "source" in entry:
+            source = entry["source"]
+            if source not in SOURCES:
+                raise ParameterError(message(f"pairs[{n}].source", owner, "one of " + ", ".join(map(repr, SOURCES)),
+                                             source))
+            loaded[source] = loaded.get(source) or SOURCES[source]()
+            truth = loaded[source]
+            prepared = prepare(truth.left, truth.right, cfg)
+            targets, unknown = ground_truth_pairs(truth.disparity, prepared.problem.left_xy,
                                                   prepared.problem.right_xy)
             cases.append(Case(prepared, targets, unknown, name))
             continue

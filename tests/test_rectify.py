@@ -177,3 +177,16 @@ def test_pairs_without_the_board_are_skipped_and_too_few_refused(data):
 
 def test_opencv_data_constant_names_the_debian_folder():
     assert str(OPENCV_DATA) == "/usr/share/doc/opencv-doc/examples/data"
+
+
+def test_aloe_manifest_gives_ground_truth_cases(data, tmp_path):
+    from pathlib import Path
+
+    from ismb_lab.protocol import load_manifest
+
+    cases = load_manifest(Path(__file__).resolve().parents[1] / "manifests" / "aloe.json")
+    assert [c.name for c in cases][0] == "aloe top-left" and len(cases) == 4
+    assert all(len(c.targets) >= 3 for c in cases) and sum(len(c.unknown) for c in cases) > 0
+    (tmp_path / "m.json").write_text(json.dumps({"pairs": [{"source": "middlebury-teddy", "roi": [0, 0, 9, 9]}]}))
+    with pytest.raises(ParameterError, match="source' parameter of the manifest .* must be one of"):
+        load_manifest(tmp_path / "m.json")
