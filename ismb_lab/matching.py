@@ -116,7 +116,7 @@ def auto_window(pair, config: MatchConfig) -> MatchConfig:
 
     Robust matches (:func:`ismb_lab.rectify.robust_matches`) whose left point lies in the
     ROI and whose rows differ by at most 2 px give the disparity range (2nd to 98th
-    percentile).  The window is centred on it, and widened to the range plus
+    percentile); when fewer than 8 lie in the ROI, those of the whole image do.  The window is centred on it, and widened to the range plus
     :data:`AUTO_MARGIN` on each side when the range is wider than the window.
 
     Raises
@@ -133,11 +133,13 @@ def auto_window(pair, config: MatchConfig) -> MatchConfig:
     lxy, rxy = matches.left_xy, matches.right_xy
     inside = ((lxy[:, 0] >= x) & (lxy[:, 0] < x + w) & (lxy[:, 1] >= y) & (lxy[:, 1] < y + h)
               & (np.abs(lxy[:, 1] - rxy[:, 1]) <= 2.0)) if len(lxy) else np.zeros(0, bool)
+    if inside.sum() < 8:      # a small ROI: the whole pair's range is the best guess there is
+        inside = np.abs(lxy[:, 1] - rxy[:, 1]) <= 2.0 if len(lxy) else inside
     d = lxy[inside, 0] - rxy[inside, 0]
     if len(d) < 8:
         raise ParameterError(message("shift", "MatchConfig", "a number of pixels when the pair has fewer than "
-                                     "8 robust matches on the same rows in the ROI ('auto' measures the "
-                                     "disparities)", f"'auto' with {len(d)} such matches"))
+                                     "8 robust matches on the same rows ('auto' measures the disparities)",
+                                     f"'auto' with {len(d)} such matches"))
     lo, hi = np.percentile(d, [2, 98])
     width = max(float(config.window_width), float(hi - lo) + 2 * AUTO_MARGIN)
     return replace(config, shift=round(float(lo + hi) / 2, 2), window_width=round(width, 2))

@@ -7,7 +7,8 @@ from .depth_demo import DepthDemo, DepthModel
 from .explorer import ExplorerModel, ParameterExplorer
 from .ga_runner import GAModel, GARunner
 from .labeler import LabelModel, TargetLabeler
+from .photos import PhotoLoader, PhotoModel
 from .stepper import HopfieldStepper, StepperModel
 
 __all__ = ["DepthDemo", "DepthModel", "ExplorerModel", "GAModel", "GARunner", "HopfieldStepper",
-           "LabelModel", "ParameterExplorer", "StepperModel", "TargetLabeler"]
+           "LabelModel", "ParameterExplorer", "PhotoLoader", "PhotoModel", "StepperModel", "TargetLabeler"]

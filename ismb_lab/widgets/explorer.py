@@ -235,6 +235,18 @@ class ParameterExplorer(Base):
             kw.setdefault("targets", key)
         return cls(left, right, **kw)
 
+    @classmethod
+    def from_photos(cls, *, folder=".", **kw):
+        """A :class:`~ismb_lab.widgets.photos.PhotoLoader` whose "Use this pair" opens an explorer
+        on the saved (rectified) photos, with the dragged ROI and ``shift="auto"``."""
+        from .photos import PhotoLoader
+
+        def open_with(pair_folder, roi):
+            config = MatchConfig(roi=roi if roi is not None else "center", shift="auto")
+            return cls.from_folder(pair_folder, config=config, **kw)
+
+        return PhotoLoader(open_with, folder=folder)
+
     @property
     def params(self) -> Params:
         return self.model.params

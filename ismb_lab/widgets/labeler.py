@@ -468,6 +468,20 @@ class TargetLabeler(Base):
         return cls(left, right, path=path, config=config, answer_key=key if key.is_file() else None,
                    pair_name=Path(folder).resolve().name)
 
+    @classmethod
+    def from_photos(cls, *, folder=".", **kw):
+        """A :class:`~ismb_lab.widgets.photos.PhotoLoader` for two photos of one's own; "Use this
+        pair" saves them (rectified) to ``photos-<user>-<name>/`` in `folder` and opens a labeller
+        on them, with the ROI dragged on the left image and the candidate window measured on the
+        pair (``shift="auto"``).  Labels are saved against the saved images."""
+        from .photos import PhotoLoader
+
+        def open_with(pair_folder, roi):
+            config = MatchConfig(roi=roi if roi is not None else "center", shift="auto")
+            return cls.from_folder(pair_folder, config=config, **kw)
+
+        return PhotoLoader(open_with, folder=folder)
+
     # --- the model's operations, redrawn ----------------------------------------------
     @property
     def pairs(self) -> np.ndarray:

@@ -1,0 +1,307 @@
+"""A class's own stereo photos: upload, check, rectify, pick a ROI, then label, explore or match.
+
+:class:`PhotoModel` is the plain-Python model: two photos in, the rectification check
+(:func:`ismb_lab.rectify.check_rectified`) and, on request, the rectified pair
+(:func:`ismb_lab.rectify.rectify_pair`); :meth:`PhotoModel.save` writes the pair the
+student works on to a folder of their own (``photos-<user>-<name>/left.png``, ``right.png``
+and ``rectify.json``), so that labels saved against its images can be used again later.
+:class:`PhotoLoader` is the widget: a file-upload control (or a folder path), the pair with
+each match's row difference drawn as a line (the epipolar check: on a rectified pair every
+line is level), Rectify, a ROI dragged on the left image, and "Use this pair", which opens
+the widget it was made for (``TargetLabeler.from_photos()``,
+``ParameterExplorer.from_photos()``) on the saved pair.
+"""
+
+from __future__ import annotations
+
+import html
+import re
+from pathlib import Path
+from typing import Callable
+
+import numpy as np
+
+from .._files import atomic_write_bytes, atomic_write_text
+from .._validation import ParameterError, ParameterTypeError, message
+from ..classroom import user_name
+from ..rectify import Rectified, _inputs, check_rectified, rectify_pair
+from ._common import Base, Pane, button, grey_rgb, row, with_class
+
+__all__ = ["PhotoLoader", "PhotoModel"]
+
+_IMAGE = re.compile(r"\.(jpe?g|png|bmp|tiff?|webp)$", re.IGNORECASE)
+
+
+def _png(image) -> bytes:
+    import cv2
+
+    return cv2.imencode(".png", np.clip(np.rint(image), 0, 255).astype(np.uint8))[1].tobytes()
+
+
+class PhotoModel:
+    """Two photos on their way to a rectified pair in the student's own folder.
+
+    Parameters
+    ----------
+    folder : str or os.PathLike
+        Where :meth:`save` makes the pair's folder (default: the working folder).
+    user : str, optional
+        Whose folder (default :func:`ismb_lab.classroom.user_name`).
+
+    Examples
+    --------
+    >>> import cv2
+    >>> rng = np.random.default_rng(0)
+    >>> scene = cv2.GaussianBlur(rng.uniform(0, 255, (200, 260)), (0, 0), 2) * 3 % 255
+    >>> model = PhotoModel()
+    >>> model.set_photos(scene[:, 10:], scene[:, :-10], name="desk")   # a flat scene moved sideways
+    "these photos cannot be used: ... no parallax..."
+    """
+
+    def __init__(self, folder=".", user: str | None = None):
+        self.folder = Path(folder)
+        self.user = user_name() if user is None else str(user)
+        self.name = ""
+        self.left = self.right = None
+        self.check: dict | None = None
+        self.rectified: Rectified | None = None
+        self.roi: tuple | None = None
+        self.saved: Path | None = None
+        self.message = "upload two photos: the left camera's first"
+
+    @property
+    def ready(self) -> bool:
+        """Whether the pair (as shown) is rectified and can be used."""
+        return self.rectified is not None or bool(self.check and self.check["rectified"])
+
+    def set_photos(self, left, right, name: str = "photos") -> str:
+        """Load two photos (paths, file bytes or arrays) and check them; nothing is kept on failure."""
+        left, right, _ = _inputs(left, right, "PhotoModel.set_photos", 1600)
+        check = check_rectified(left, right)
+        self.left, self.right, self.check, self.rectified, self.roi, self.saved = left, right, check, None, None, None
+        self.name = re.sub(r"[^A-Za-z0-9._-]+", "-", str(name)).strip("-.") or "photos"
+        if check["problem"]:
+            self.message = f"these photos cannot be used: {check['problem']}"
+        elif check["rectified"]:
+            self.message = (f"already rectified: {check['inliers']} matches, |dy| median "
+                            f"{check['median_abs_dy_px']:.2f} px: choose a ROI (drag on the left image) "
+                            "and press 'Use this pair'")
+        else:
+            self.message = (f"not rectified: {check['inliers']} matches, |dy| median {check['median_abs_dy_px']:.1f} px "
+                            f"(90% below {check['p90_abs_dy_px']:.1f} px): press 'Rectify'")
+        return self.message
+
+    def rectify(self) -> str:
+        if self.left is None:
+            raise ParameterError(message("photos", "PhotoModel.rectify", "loaded first (set_photos)", None))
+        self.rectified = rectify_pair(self.left, self.right)
+        self.roi, self.saved = None, None
+        r = self.rectified
+        self.message = (f"rectified ({r.method}): {r.inliers} inliers, |dy| median {r.median_abs_dy_px:.2f} px, "
+                        f"90% below {r.p90_abs_dy_px:.2f} px; disparities {r.disparity_range_px[0]:.0f} to "
+                        f"{r.disparity_range_px[1]:.0f} px: choose a ROI and press 'Use this pair'")
+        return self.message
+
+    def current(self):
+        """The pair as it will be used: ``(left, right, left_xy, right_xy)`` of its matches."""
+        if self.rectified is not None:
+            r = self.rectified
+            return r.left, r.right, r.left_xy, r.right_xy
+        if self.left is None:
+            return None
+        return self.left, self.right, self.check["left_xy"], self.check["right_xy"]
+
+    def set_roi(self, x0, y0, x1, y1) -> tuple:
+        """The ROI from two corners of a dragged rectangle, clipped to the image."""
+        if self.left is None:
+            raise ParameterError(message("roi", "PhotoModel.set_roi", "set after the photos are loaded", None))
+        h, w = self.current()[0].shape
+        xs = sorted((int(np.clip(round(x0), 0, w)), int(np.clip(round(x1), 0, w))))
+        ys = sorted((int(np.clip(round(y0), 0, h)), int(np.clip(round(y1), 0, h))))
+        if xs[1] - xs[0] < 24 or ys[1] - ys[0] < 24:
+            raise ParameterError(message("roi", "PhotoModel.set_roi", "at least 24 x 24 pixels inside the image",
+                                         (xs[0], ys[0], xs[1] - xs[0], ys[1] - ys[0])))
+        self.roi = (xs[0], ys[0], xs[1] - xs[0], ys[1] - ys[0])
+        self.message = f"ROI {self.roi} (x, y, width, height)"
+        return self.roi
+
+    def save(self) -> Path:
+        """Write the pair used (rectified when it was) to ``photos-<user>-<name>/`` and return it."""
+        if not self.ready:
+            raise ParameterError(message("photos", "PhotoModel.save", "a rectified pair (press 'Rectify' first)",
+                                         self.message))
+        left, right, _, _ = self.current()
+        folder = self.folder / f"photos-{self.user}-{self.name}"
+        folder.mkdir(parents=True, exist_ok=True)
+        record = (self.rectified.to_dict() if self.rectified is not None else
+                  {k: v for k, v in self.check.items() if not k.endswith("_xy")} | {"method": "already rectified"})
+        record["roi"] = None if self.roi is None else list(self.roi)
+        atomic_write_bytes(folder / "left.png", _png(left))
+        atomic_write_bytes(folder / "right.png", _png(right))
+        import json
+
+        atomic_write_text(folder / "rectify.json", json.dumps(record, indent=2))
+        self.saved = folder
+        self.message = f"saved to {folder}"
+        return folder
+
+
+def draw_photos(ax, model: PhotoModel) -> dict:
+    """The pair side by side and one line per match (level when the pair is rectified)."""
+    from matplotlib.collections import LineCollection
+    from matplotlib.patches import Rectangle
+
+    ax.set_axis_off()
+    image = ax.imshow(np.zeros((2, 2, 3), np.uint8), interpolation="nearest")
+    lines = LineCollection([], linewidths=0.8, cmap="coolwarm")
+    lines.set_clim(0, 4)
+    ax.add_collection(lines)
+    roi = Rectangle((0, 0), 0, 0, fill=False, ec="yellow", lw=1.5, visible=False)
+    ax.add_patch(roi)
+    return {"image": image, "lines": lines, "roi": roi, "offset": 0.0}
+
+
+def update_photos(art: dict, model: PhotoModel) -> None:
+    pair = model.current()
+    if pair is None:
+        return
+    left, right, lxy, rxy = pair
+    gap = 8
+    both = np.full((left.shape[0], 2 * left.shape[1] + gap), 255.0)
+    both[:, :left.shape[1]] = left
+    both[:, left.shape[1] + gap:] = right
+    art["image"].set_data(grey_rgb(both))
+    art["image"].set_extent((-0.5, both.shape[1] - 0.5, both.shape[0] - 0.5, -0.5))
+    art["image"].axes.set_xlim(-0.5, both.shape[1] - 0.5)
+    art["image"].axes.set_ylim(both.shape[0] - 0.5, -0.5)
+    art["offset"] = offset = left.shape[1] + gap
+    segments = np.stack([lxy, rxy + [offset, 0]], axis=1) if len(lxy) else np.zeros((0, 2, 2))
+    art["lines"].set_segments(segments)
+    art["lines"].set_array(np.abs(lxy[:, 1] - rxy[:, 1]) if len(lxy) else np.zeros(0))
+    if model.roi is None:
+        art["roi"].set_visible(False)
+    else:
+        x, y, w, h = model.roi
+        art["roi"].set_bounds(x, y, w, h)
+        art["roi"].set_visible(True)
+
+
+class PhotoLoader(Base):
+    """Bring two photos of one's own: upload, check, rectify, pick the ROI, then use them.
+
+    Parameters
+    ----------
+    open_with : callable, optional
+        ``open_with(folder, roi) -> widget``: what "Use this pair" opens on the saved pair
+        (its ``.widget`` is shown below the loader).
+    folder, user
+        As in :class:`PhotoModel`.
+
+    Notes
+    -----
+    CSS classes: root ``ismb-photos``; upload ``ismb-upload``; folder field ``ismb-photo-folder``
+    and button ``ismb-open-folder``; figure ``ismb-photo-pair``; buttons ``ismb-rectify`` and
+    ``ismb-use``; the opened widget's area ``ismb-opened``; ``ismb-status``; ``ismb-log``.
+    """
+
+    def __init__(self, open_with: Callable | None = None, *, folder=".", user: str | None = None):
+        import ipywidgets
+
+        super().__init__()
+        if open_with is not None and not callable(open_with):
+            raise ParameterTypeError(message("open_with", "PhotoLoader", "a callable (folder, roi) -> widget",
+                                             open_with))
+        self.model = PhotoModel(folder, user)
+        self.open_with = open_with
+        self.opened = None
+        self.pane = Pane((8.2, 3.0), "ismb-photo-pair")
+        self.panes = (self.pane,)
+        self.ax = self.pane.fig.add_axes((0, 0, 1, 1))
+        self.artists = draw_photos(self.ax, self.model)
+        self.upload = with_class(ipywidgets.FileUpload(accept="image/*", multiple=True,
+                                                       description="Two photos"), "ismb-upload")
+        self.folder_field = with_class(ipywidgets.Text(placeholder="or a folder with left.* and right.*",
+                                                       layout=ipywidgets.Layout(width="22em")),
+                                       "ismb-photo-folder")
+        self.open_button = button("Open folder", "ismb-open-folder", icon="folder-open")
+        self.rectify_button = button("Rectify", "ismb-rectify", "Rectify the pair from its matches",
+                                     icon="magic", disabled=True)
+        self.use_button = button("Use this pair", "ismb-use", "Save the pair to your folder and open it",
+                                 icon="check", disabled=True)
+        self.area = with_class(ipywidgets.VBox([]), "ismb-opened")
+        self.upload.observe(self.guard(self._on_upload), names="value")
+        self.open_button.on_click(self.guard(lambda _: self.open_folder(self.folder_field.value)))
+        self.rectify_button.on_click(self.guard(lambda _: self.rectify()))
+        self.use_button.on_click(self.guard(lambda _: self.use()))
+        self._selector = None
+        if hasattr(self.pane.fig.canvas, "mpl_connect"):
+            from matplotlib.widgets import RectangleSelector
+
+            self._selector = RectangleSelector(self.ax, self.guard(self._on_drag), useblit=False,
+                                               button=[1], interactive=False, minspanx=5, minspany=5)
+        self.widget = with_class(ipywidgets.VBox([
+            row([self.upload, self.folder_field, self.open_button]), self.pane.widget,
+            row([self.rectify_button, self.use_button]), self.status, self.log, self.area]), "ismb-photos")
+        self.say(self.model.message)
+
+    # --- actions -----------------------------------------------------------------------------
+    def load(self, left, right, name: str = "photos") -> str:
+        try:
+            return self.model.set_photos(left, right, name)
+        finally:
+            self.refresh()
+
+    def _on_upload(self, change) -> None:
+        files = list(change["new"])
+        if len(files) != 2:
+            raise ParameterError(message("upload", "PhotoLoader", "two photos at once (the left camera's "
+                                         "first, or named left... and right...)", f"{len(files)} files"))
+        names = [f["name"] for f in files]
+        if "right" in names[0].lower() and "left" in names[1].lower():
+            files.reverse()
+        contents = [bytes(f["content"]) for f in files]
+        self.load(contents[0], contents[1], Path(files[0]["name"]).stem)
+
+    def open_folder(self, folder) -> str:
+        folder = Path(str(folder).strip()).expanduser()
+        found = {}
+        for side in ("left", "right"):
+            hits = sorted(p for p in folder.glob(f"{side}*") if _IMAGE.search(p.name)) if folder.is_dir() else []
+            if not hits:
+                raise ParameterError(message("folder", "PhotoLoader.open_folder", "a folder holding left.* and "
+                                             "right.* photos", str(folder)))
+            found[side] = hits[0]
+        return self.load(found["left"], found["right"], folder.name)
+
+    def rectify(self) -> str:
+        try:
+            return self.model.rectify()
+        finally:
+            self.refresh()
+
+    def _on_drag(self, press, release) -> None:
+        self.model.set_roi(press.xdata, press.ydata, release.xdata, release.ydata)
+        self.refresh()
+
+    def use(self):
+        """Save the pair to the student's folder and open `open_with` on it."""
+        folder = self.model.save()
+        self.refresh()
+        if self.open_with is not None:
+            self.opened = self.open_with(folder, self.model.roi)
+            self.area.children = (getattr(self.opened, "widget", self.opened),)
+            if hasattr(self.opened, "show"):
+                self.opened.show()
+        return self.opened
+
+    # --- view --------------------------------------------------------------------------------
+    def refresh(self) -> None:
+        update_photos(self.artists, self.model)
+        problem = bool(self.model.check and self.model.check["problem"])
+        self.rectify_button.disabled = self.model.left is None or self.model.ready or problem
+        self.use_button.disabled = not self.model.ready
+        self.say(self.model.message)
+        self.pane.draw()
+
+    def summary_html(self) -> str:
+        return html.escape(self.model.message)

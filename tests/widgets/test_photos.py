@@ -1,0 +1,95 @@
+"""Photos of one's own in the widgets: upload, check, rectify, ROI, use; without a browser."""
+
+import datetime
+import json
+import os
+
+import numpy as np
+import pytest
+from matplotlib.backend_bases import MouseEvent
+
+from ismb_lab.datasets import SampleDataMissing, opencv_samples
+from ismb_lab.io import image_sha256
+from ismb_lab.widgets import ParameterExplorer, PhotoLoader, TargetLabeler
+
+
+@pytest.fixture(scope="module")
+def data():
+    try:
+        return opencv_samples()
+    except SampleDataMissing:
+        if os.environ.get("CI") == "true":
+            raise
+        pytest.skip("opencv-doc is not installed")
+
+
+def upload(loader, *files):
+    loader.upload.value = tuple({"name": f.name, "type": "image/jpeg", "size": f.stat().st_size,
+                                 "content": memoryview(f.read_bytes()),
+                                 "last_modified": datetime.datetime.now(datetime.timezone.utc)} for f in files)
+
+
+def drag(loader, start, stop):
+    """A left-button drag on the left image, in data coordinates, through the canvas' events."""
+    canvas = loader.pane.fig.canvas
+    to_px = loader.ax.transData.transform
+    for name, point in (("button_press_event", start), ("motion_notify_event", stop),
+                        ("button_release_event", stop)):
+        x, y = to_px(point)
+        MouseEvent(name, canvas, x, y, button=1)._process()
+
+
+def test_upload_check_rectify_roi_use_and_label(data, tmp_path):
+    loader = TargetLabeler.from_photos(folder=tmp_path)
+    assert isinstance(loader, PhotoLoader) and loader.use_button.disabled
+    upload(loader, data / "right.jpg", data / "left.jpg")        # named: the order is fixed by the names
+    assert "not rectified" in loader.status.value and not loader.rectify_button.disabled
+    assert loader.use_button.disabled and loader.model.name == "left"
+    before = loader.model.check["median_abs_dy_px"]
+    loader.rectify_button.click()
+    assert "rectified (uncalibrated)" in loader.status.value and loader.model.rectified.median_abs_dy_px <= 1.0
+    assert before > 5 and not loader.use_button.disabled and loader.rectify_button.disabled
+    assert len(loader.artists["lines"].get_segments()) == loader.model.rectified.inliers
+    drag(loader, (300, 200), (700, 500))
+    assert loader.model.roi == (300, 200, 400, 300) and loader.artists["roi"].get_visible()
+    loader.use_button.click()
+    assert loader.errors == []
+    folder = tmp_path / f"photos-{loader.model.user}-left"
+    assert sorted(p.name for p in folder.iterdir()) == ["left.png", "rectify.json", "right.png"]
+    assert json.loads((folder / "rectify.json").read_text())["roi"] == [300, 200, 400, 300]
+    labeler = loader.opened
+    assert isinstance(labeler, TargetLabeler) and loader.area.children == (labeler.widget,)
+    assert labeler.model.prepared.config.roi == (300, 200, 400, 300)
+    assert labeler.model.prepared.config.shift != "auto"       # measured on the pair
+    x, y = labeler.model.left_xy[0]
+    labeler.click(x, y, side="left")
+    k = int(np.argmin(np.abs(labeler.model.right_xy[:, 1] - y) + np.abs(labeler.model.right_xy[:, 0] - x) * 0.01))
+    labeler.click(*labeler.model.right_xy[k], side="right")
+    path = labeler.save()
+    saved = json.loads(path.read_text())
+    assert len(saved["pairs"]) == 1 and saved["left_image_sha256"] == image_sha256(folder / "left.png")
+
+
+def test_an_already_rectified_pair_needs_no_rectify_and_explorer_opens(data, tmp_path):
+    loader = ParameterExplorer.from_photos(folder=tmp_path)
+    loader.load(data / "aloeL.jpg", data / "aloeR.jpg", "aloe")
+    assert "already rectified" in loader.status.value and loader.rectify_button.disabled
+    assert not loader.use_button.disabled
+    loader.use()
+    assert isinstance(loader.opened, ParameterExplorer) and loader.errors == []
+
+
+def test_bad_photos_are_refused_and_lose_nothing(data, tmp_path):
+    loader = TargetLabeler.from_photos(folder=tmp_path)
+    upload(loader, data / "left.jpg", data / "right.jpg")
+    kept = loader.model.left
+    upload(loader, data / "left.jpg")                                # one file
+    assert "two photos at once" in str(loader.log.outputs) and loader.model.left is kept
+    loader.load(data / "left.jpg", data / "left.jpg", "twice")       # the same photo twice
+    assert "cannot be used" in loader.status.value
+    assert loader.rectify_button.disabled and loader.use_button.disabled
+    loader.guard(loader.open_folder)(tmp_path / "nowhere")
+    assert "left.* and right.*" in str(loader.log.outputs)
+    with pytest.raises(ValueError, match="a rectified pair"):
+        loader.model.save()
+    assert not any(tmp_path.iterdir())
