@@ -6,7 +6,7 @@ as that student):
     jupyterhub -f deploy/jupyterhub_config.py
 
 Each student logs in with their own account on this machine (PAM), gets their own
-single-user JupyterLab, and on first login a copy of ``notebooks/`` and ``images/`` in
+single-user JupyterLab, and on first login a copy of ``notebooks/``, ``images/`` and ``manifests/`` in
 ``~/ismb_lab/``; JupyterLab opens ``00_start_here``.  Everything a student saves,
 their targets files included, stays in their own home folder.  See deploy/README.md for
 what to change for a real course.
@@ -37,7 +37,7 @@ c.Spawner.mem_limit = "1G"
 
 
 def copy_course(spawner) -> None:
-    """Give a student their own copy of the notebooks and images on first login."""
+    """Give a student their own copy of the notebooks, images and manifests on first login."""
     if hasattr(spawner, "home_dir_template"):      # SimpleLocalProcessSpawner: a folder per user
         home = Path(spawner.home_dir_template.format(username=spawner.user.name))
     else:
@@ -47,10 +47,10 @@ def copy_course(spawner) -> None:
     if target.exists():
         return
     target.mkdir(parents=True)
-    for name in ("notebooks", "images"):
+    for name in ("notebooks", "images", "manifests"):
         shutil.copytree(PROJECT / name, target / name,
                         ignore=shutil.ignore_patterns(".ipynb_checkpoints", "targets-*.json", "my_targets*.json",
-                                                     "params-*.json", "solutions"))
+                                                     "params-*.json", ".targets-*.lock", "photos-*", "solutions"))
     try:
         shutil.chown(target, spawner.user.name)
         for path in target.rglob("*"):

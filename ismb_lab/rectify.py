@@ -142,7 +142,11 @@ def robust_matches(left, right, *, max_features: int = 4000) -> Correspondences:
     if not kept:
         return empty
     back = lambda points: (np.array(points, dtype=float) + 0.5) / factor - 0.5   # pixel centres
-    return Correspondences(back([kl[q].pt for q, _ in kept]), back([kr[t].pt for _, t in kept]))
+    lxy, rxy = back([kl[q].pt for q, _ in kept]), back([kr[t].pt for _, t in kept])
+    # SIFT gives one point a keypoint per dominant orientation: keep each matched pair once
+    _, first = np.unique(np.round(np.hstack([lxy, rxy]), 3), axis=0, return_index=True)
+    first = np.sort(first)
+    return Correspondences(lxy[first], rxy[first])
 
 
 def _dy_figures(left_xy, right_xy) -> dict:

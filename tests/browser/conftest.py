@@ -124,11 +124,12 @@ def deadline(request):
 
 @pytest.fixture(scope="session")
 def workspace(tmp_path_factory):
-    """A copy of notebooks/ and images/ with the repository's layout."""
+    """A copy of notebooks/, images/ and manifests/ with the repository's layout."""
     root = tmp_path_factory.mktemp("lab")
     shutil.copytree(ROOT / "notebooks", root / "notebooks",
                     ignore=shutil.ignore_patterns(".ipynb_checkpoints", "my_targets*.json", "targets-*.json"))
     shutil.copytree(ROOT / "images", root / "images")
+    shutil.copytree(ROOT / "manifests", root / "manifests")
     return root
 
 

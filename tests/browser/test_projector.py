@@ -11,7 +11,7 @@ pytestmark = pytest.mark.browser
 
 DEADLINE_S = 600
 WIDGET_NOTEBOOKS = ["02_hopfield_network.ipynb", "04_label_targets.ipynb", "05_genetic_algorithm.ipynb",
-                    "06_parameter_explorer.ipynb", "07_toy_car_depth.ipynb"]
+                    "06_parameter_explorer.ipynb", "07_toy_car_depth.ipynb", "09_your_own_photos.ipynb"]
 
 _OVERFLOW = """() => {
   const out = [];

@@ -39,7 +39,8 @@ def drag(loader, start, stop):
         MouseEvent(name, canvas, x, y, button=1)._process()
 
 
-def test_upload_check_rectify_roi_use_and_label(data, tmp_path):
+def test_upload_check_rectify_roi_use_and_label(data, tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)         # the labeller's own targets file goes to the working folder
     loader = TargetLabeler.from_photos(folder=tmp_path)
     assert isinstance(loader, PhotoLoader) and loader.use_button.disabled
     upload(loader, data / "right.jpg", data / "left.jpg")        # named: the order is fixed by the names
@@ -70,7 +71,8 @@ def test_upload_check_rectify_roi_use_and_label(data, tmp_path):
     assert len(saved["pairs"]) == 1 and saved["left_image_sha256"] == image_sha256(folder / "left.png")
 
 
-def test_an_already_rectified_pair_needs_no_rectify_and_explorer_opens(data, tmp_path):
+def test_an_already_rectified_pair_needs_no_rectify_and_explorer_opens(data, tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)
     loader = ParameterExplorer.from_photos(folder=tmp_path)
     loader.load(data / "aloeL.jpg", data / "aloeR.jpg", "aloe")
     assert "already rectified" in loader.status.value and loader.rectify_button.disabled
@@ -79,7 +81,8 @@ def test_an_already_rectified_pair_needs_no_rectify_and_explorer_opens(data, tmp
     assert isinstance(loader.opened, ParameterExplorer) and loader.errors == []
 
 
-def test_bad_photos_are_refused_and_lose_nothing(data, tmp_path):
+def test_bad_photos_are_refused_and_lose_nothing(data, tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)
     loader = TargetLabeler.from_photos(folder=tmp_path)
     upload(loader, data / "left.jpg", data / "right.jpg")
     kept = loader.model.left
@@ -92,4 +95,4 @@ def test_bad_photos_are_refused_and_lose_nothing(data, tmp_path):
     assert "left.* and right.*" in str(loader.log.outputs)
     with pytest.raises(ValueError, match="a rectified pair"):
         loader.model.save()
-    assert not any(tmp_path.iterdir())
+    assert not any(p.name.startswith("photos-") for p in tmp_path.iterdir())
