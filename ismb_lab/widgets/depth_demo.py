@@ -18,7 +18,7 @@ import numpy as np
 
 from .._validation import ParameterTypeError, check_number, message
 from ..depth import DepthConfig, DepthObject, DepthResult
-from ..depth_demo import relative_depth
+from ..depth_demo import DEPTH_MATCH_CONFIG, relative_depth
 from ..io import StereoPair, load_pair
 from ..methods import get_method, method_names
 from ..params import Params
@@ -365,6 +365,36 @@ class DepthDemo(Base):
         owner = "DepthDemo.from_folders"
         pairs = [pair_files(f, owner)[:2] for f in (background_folder, scene_folder)]
         return cls(*pairs, **kw)
+
+    @classmethod
+    def from_photos(cls, *, folder=".", **kw):
+        """The §5.2.3 demo on photos of one's own, taken from two fixed camera positions: first
+        the empty scene (the background), then the same view with objects added.
+
+        A :class:`~ismb_lab.widgets.photos.PhotoLoader` takes the background pair (check,
+        rectify, ROI); "Use this pair" opens a second one for the scene pair, which is warped
+        with the background's rectification (same cameras, so nothing is estimated again);
+        its "Use this pair" opens the demo on both saved pairs, with the window measured on
+        the background (``shift="auto"``).
+        """
+        from .photos import PhotoLoader
+
+        def scene_loader(background_folder, roi):
+            rectified = first.model.rectified
+            shape = first.model.current()[0].shape
+            homographies = (None if rectified is None else
+                            (rectified.left_h, rectified.right_h, (shape[1], shape[0])))
+
+            def open_demo(scene_folder, _roi):
+                config = replace(DEPTH_MATCH_CONFIG, roi=roi if roi is not None else "center", shift="auto")
+                return cls.from_folders(background_folder, scene_folder, match_config=config, **kw)
+
+            return PhotoLoader(open_demo, folder=folder, role="scene", homographies=homographies,
+                               title="2. The same view with the objects added")
+
+        first = PhotoLoader(scene_loader, folder=folder, role="background",
+                            title="1. The empty scene (the background)")
+        return first
 
     def _on_control(self, _change) -> None:
         self.recompute()

@@ -47,6 +47,12 @@ class PhotoModel:
         Where :meth:`save` makes the pair's folder (default: the working folder).
     user : str, optional
         Whose folder (default :func:`ismb_lab.classroom.user_name`).
+    role : str
+        Added to the folder's name (e.g. ``"background"``), so two pairs of one upload name
+        do not share a folder.
+    homographies : (H_left, H_right, (width, height)), optional
+        A rectification found on another pair of the same two camera positions (the depth
+        demo's background): applied as it is, nothing is estimated.
 
     Examples
     --------
@@ -58,9 +64,11 @@ class PhotoModel:
     "these photos cannot be used: ... no parallax..."
     """
 
-    def __init__(self, folder=".", user: str | None = None):
+    def __init__(self, folder=".", user: str | None = None, role: str = "", homographies=None):
         self.folder = Path(folder)
         self.user = user_name() if user is None else str(user)
+        self.role = re.sub(r"[^A-Za-z0-9._-]+", "-", str(role)).strip("-.")
+        self.homographies = homographies
         self.name = ""
         self.left = self.right = None
         self.check: dict | None = None
@@ -80,6 +88,10 @@ class PhotoModel:
         check = check_rectified(left, right)
         self.left, self.right, self.check, self.rectified, self.roi, self.saved = left, right, check, None, None, None
         self.name = re.sub(r"[^A-Za-z0-9._-]+", "-", str(name)).strip("-.") or "photos"
+        if self.role:
+            self.name = f"{self.name}-{self.role}"
+        if self.homographies is not None:
+            return self.rectify()
         if check["problem"]:
             self.message = f"these photos cannot be used: {check['problem']}"
         elif check["rectified"]:
@@ -94,7 +106,10 @@ class PhotoModel:
     def rectify(self) -> str:
         if self.left is None:
             raise ParameterError(message("photos", "PhotoModel.rectify", "loaded first (set_photos)", None))
-        self.rectified = rectify_pair(self.left, self.right)
+        if self.homographies is not None:
+            self.rectified = _apply(self.left, self.right, *self.homographies)
+        else:
+            self.rectified = rectify_pair(self.left, self.right)
         self.roi, self.saved = None, None
         r = self.rectified
         self.message = (f"rectified ({r.method}): {r.inliers} inliers, |dy| median {r.median_abs_dy_px:.2f} px, "
@@ -144,6 +159,24 @@ class PhotoModel:
         self.saved = folder
         self.message = f"saved to {folder}"
         return folder
+
+
+def _apply(left, right, h_left, h_right, size) -> Rectified:
+    """Warp a pair with a known rectification; its figures are measured on new robust matches."""
+    import cv2
+
+    from ..rectify import _dy_figures, robust_matches
+
+    size = (int(size[0]), int(size[1]))
+    warp = lambda image, h: np.clip(cv2.warpPerspective(image.astype(np.float32), np.asarray(h, float), size)
+                                    .astype(float), 0, 255)
+    out_l, out_r = warp(left, h_left), warp(right, h_right)
+    m = robust_matches(out_l, out_r)
+    figures = (_dy_figures(m.left_xy, m.right_xy) if len(m) else
+               {"median_abs_dy_px": float("nan"), "p90_abs_dy_px": float("nan"), "disparity_range_px": [0.0, 0.0]})
+    return Rectified(out_l, out_r, np.asarray(h_left, float), np.asarray(h_right, float), "the background's",
+                     len(m), figures["median_abs_dy_px"], figures["p90_abs_dy_px"], figures["disparity_range_px"],
+                     1.0, m.left_xy, m.right_xy)
 
 
 def draw_photos(ax, model: PhotoModel) -> dict:
@@ -204,14 +237,16 @@ class PhotoLoader(Base):
     ``ismb-use``; the opened widget's area ``ismb-opened``; ``ismb-status``; ``ismb-log``.
     """
 
-    def __init__(self, open_with: Callable | None = None, *, folder=".", user: str | None = None):
+    def __init__(self, open_with: Callable | None = None, *, folder=".", user: str | None = None, role: str = "",
+                 homographies=None, title: str = ""):
         import ipywidgets
 
         super().__init__()
         if open_with is not None and not callable(open_with):
             raise ParameterTypeError(message("open_with", "PhotoLoader", "a callable (folder, roi) -> widget",
                                              open_with))
-        self.model = PhotoModel(folder, user)
+        self.model = PhotoModel(folder, user, role, homographies)
+        self.title = title
         self.open_with = open_with
         self.opened = None
         self.pane = Pane((8.2, 3.0), "ismb-photo-pair")
@@ -240,6 +275,7 @@ class PhotoLoader(Base):
             self._selector = RectangleSelector(self.ax, self.guard(self._on_drag), useblit=False,
                                                button=[1], interactive=False, minspanx=5, minspany=5)
         self.widget = with_class(ipywidgets.VBox([
+            ipywidgets.HTML(f"<b>{html.escape(title)}</b>" if title else ""),
             row([self.upload, self.folder_field, self.open_button]), self.pane.widget,
             row([self.rectify_button, self.use_button]), self.status, self.log, self.area]), "ismb-photos")
         self.say(self.model.message)

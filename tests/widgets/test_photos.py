@@ -96,3 +96,37 @@ def test_bad_photos_are_refused_and_lose_nothing(data, tmp_path, monkeypatch):
     with pytest.raises(ValueError, match="a rectified pair"):
         loader.model.save()
     assert not any(p.name.startswith("photos-") for p in tmp_path.iterdir())
+
+
+def test_depth_demo_from_photos_background_then_scene(tmp_path, monkeypatch):
+    """The rendered lab (empty) and toy-car pairs stand in for two pairs of photos taken from
+    one fixed pair of camera positions: both are rectified, so no rectification is needed."""
+    from pathlib import Path
+
+    from ismb_lab.widgets import DepthDemo
+
+    monkeypatch.chdir(tmp_path)
+    images = Path(__file__).resolve().parents[2] / "images"
+    first = DepthDemo.from_photos(folder=tmp_path)
+    first.load(images / "lab" / "left.png", images / "lab" / "right.png", "desk")
+    assert "already rectified" in first.status.value and not first.use_button.disabled
+    second = first.use()
+    assert isinstance(second, PhotoLoader) and first.model.saved.name.endswith("desk-background")
+    second.load(images / "toy_cars" / "left.png", images / "toy_cars" / "right.png", "desk")
+    demo = second.use()
+    assert isinstance(demo, DepthDemo) and demo.errors == [] and second.model.saved.name.endswith("desk-scene")
+    assert len(demo.model.result.objects) >= 1 and "features" in demo.ranking.value
+
+
+def test_the_scene_pair_takes_the_background_rectification(data, tmp_path):
+    from ismb_lab.widgets.photos import PhotoModel
+
+    background = PhotoModel(tmp_path, role="background")
+    background.set_photos(data / "left.jpg", data / "right.jpg", "books")
+    background.rectify()
+    r = background.rectified
+    scene = PhotoModel(tmp_path, role="scene", homographies=(r.left_h, r.right_h, r.left.shape[::-1]))
+    scene.set_photos(data / "left.jpg", data / "right.jpg", "books")
+    assert scene.ready and scene.rectified.method == "the background's"
+    np.testing.assert_array_equal(scene.rectified.left, r.left)
+    np.testing.assert_array_equal(scene.rectified.right, r.right)
