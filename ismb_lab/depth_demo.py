@@ -141,11 +141,21 @@ def changed_roi(background_left, scene_left, roi="center", *, threshold: float =
     >>> changed_roi(background, background) is None
     True
     """
-    own = "changed_roi"
-    bg = np.asarray(background_left, dtype=float)
-    sc = np.asarray(scene_left, dtype=float)
+    changed, (x, y, w, h), margin = _changed_in_roi(background_left, scene_left, roi, threshold, sigma, margin,
+                                                    "changed_roi", "scene_left")
+    rows, cols = np.nonzero(changed)
+    if not len(rows):
+        return None
+    return _grown_box(x, y, w, h, cols.min(), rows.min(), cols.max(), rows.max(), margin)
+
+
+def _changed_in_roi(background, scene, roi, threshold, sigma, margin, own: str, name: str):
+    """The pixels of `roi` whose smoothed difference exceeds `threshold`, the ROI and the margin
+    (checked), as :func:`changed_roi` and :func:`changed_regions` both use them."""
+    bg = np.asarray(background, dtype=float)
+    sc = np.asarray(scene, dtype=float)
     if bg.ndim != 2 or bg.shape != sc.shape:
-        raise ParameterError(message("scene_left", own, "a grey image of the background's shape "
+        raise ParameterError(message(name, own, "a grey image of the background's shape "
                                      f"{bg.shape}", f"shape {sc.shape}"))
     threshold = check_number(threshold, "threshold", own, low=0)
     sigma = check_number(sigma, "sigma", own, low=0)
@@ -154,11 +164,13 @@ def changed_roi(background_left, scene_left, roi="center", *, threshold: float =
     diff = np.abs(sc - bg)
     if sigma:
         diff = gaussian_filter(diff, sigma)
-    rows, cols = np.nonzero(diff[y:y + h, x:x + w] > threshold)
-    if not len(rows):
-        return None
-    x0, y0 = max(cols.min() - margin, 0), max(rows.min() - margin, 0)
-    x1, y1 = min(cols.max() + margin, w - 1), min(rows.max() + margin, h - 1)
+    return diff[y:y + h, x:x + w] > threshold, (x, y, w, h), margin
+
+
+def _grown_box(x, y, w, h, c0, r0, c1, r1, margin) -> tuple[int, int, int, int]:
+    """The box of ROI columns c0..c1 and rows r0..r1, grown by `margin` and clipped to the ROI."""
+    x0, y0 = max(c0 - margin, 0), max(r0 - margin, 0)
+    x1, y1 = min(c1 + margin, w - 1), min(r1 + margin, h - 1)
     return int(x + x0), int(y + y0), int(x1 - x0 + 1), int(y1 - y0 + 1)
 
 
@@ -225,29 +237,13 @@ def changed_regions(background_image, scene_image, roi="center", *, threshold: f
     from scipy.ndimage import find_objects, label
 
     own = "changed_regions"
-    bg = np.asarray(background_image, dtype=float)
-    sc = np.asarray(scene_image, dtype=float)
-    if bg.ndim != 2 or bg.shape != sc.shape:
-        raise ParameterError(message("scene_image", own, "a grey image of the background's shape "
-                                     f"{bg.shape}", f"shape {sc.shape}"))
-    threshold = check_number(threshold, "threshold", own, low=0)
-    sigma = check_number(sigma, "sigma", own, low=0)
-    margin = check_number(margin, "margin", own, low=0, integer=True)
     min_pixels = check_number(min_pixels, "min_pixels", own, low=1, integer=True)
-    x, y, w, h = resolve_roi(roi, bg.shape)
-    diff = np.abs(sc - bg)
-    if sigma:
-        diff = gaussian_filter(diff, sigma)
-    blobs, n = label(diff[y:y + h, x:x + w] > threshold, structure=np.ones((3, 3)))
+    changed, (x, y, w, h), margin = _changed_in_roi(background_image, scene_image, roi, threshold, sigma, margin,
+                                                    own, "scene_image")
+    blobs, n = label(changed, structure=np.ones((3, 3)))
     sizes = np.bincount(blobs.ravel(), minlength=n + 1)
-    boxes = []
-    for k, (rows, cols) in enumerate(find_objects(blobs), 1):
-        if sizes[k] < min_pixels:
-            continue
-        x0, y0 = max(cols.start - margin, 0), max(rows.start - margin, 0)
-        x1, y1 = min(cols.stop - 1 + margin, w - 1), min(rows.stop - 1 + margin, h - 1)
-        boxes.append((int(x + x0), int(y + y0), int(x1 - x0 + 1), int(y1 - y0 + 1)))
-    return sorted(boxes)
+    return sorted(_grown_box(x, y, w, h, cols.start, rows.start, cols.stop - 1, rows.stop - 1, margin)
+                  for k, (rows, cols) in enumerate(find_objects(blobs), 1) if sizes[k] >= min_pixels)
 
 
 def _changed(background_image, scene_image, grow: int) -> np.ndarray:

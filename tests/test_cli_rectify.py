@@ -1,24 +1,18 @@
 """``ismb-lab rectify`` and ``ismb-lab calibrate``: what they write, and the inputs they refuse."""
 
 import json
-import os
 import subprocess
 import sys
 
 import pytest
 
 from ismb_lab.cli import main
-from ismb_lab.datasets import CHESSBOARD_PAIRS, SampleDataMissing, opencv_samples
+from ismb_lab.datasets import CHESSBOARD_PAIRS
 
 
-@pytest.fixture(scope="module")
-def data():
-    try:
-        return opencv_samples()
-    except SampleDataMissing:
-        if os.environ.get("CI") == "true":
-            raise
-        pytest.skip("opencv-doc is not installed")
+@pytest.fixture(scope="session")
+def data(opencv_data):
+    return opencv_data
 
 
 def cli(*args):

@@ -1,7 +1,6 @@
 """A student's own photos in JupyterLab: upload two JPEGs, rectify, label a pair, save."""
 
 import json
-import os
 
 import matplotlib
 
@@ -12,7 +11,6 @@ import pytest  # noqa: E402
 from playwright.sync_api import expect  # noqa: E402
 
 from ismb_lab.classroom import user_name  # noqa: E402
-from ismb_lab.datasets import SampleDataMissing, opencv_samples  # noqa: E402
 
 pytestmark = pytest.mark.browser
 DEADLINE_S = 300
@@ -25,13 +23,8 @@ NOTEBOOK = {"cells": [{"cell_type": "code", "execution_count": None, "id": "phot
 
 
 @pytest.fixture
-def data():
-    try:
-        return opencv_samples()
-    except SampleDataMissing:
-        if os.environ.get("CI") == "true":
-            raise
-        pytest.skip("opencv-doc is not installed")
+def data(opencv_data):
+    return opencv_data
 
 
 def geometry(folder):

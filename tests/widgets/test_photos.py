@@ -2,25 +2,18 @@
 
 import datetime
 import json
-import os
 
 import numpy as np
 import pytest
 from matplotlib.backend_bases import MouseEvent
 
-from ismb_lab.datasets import SampleDataMissing, opencv_samples
 from ismb_lab.io import image_sha256
 from ismb_lab.widgets import ParameterExplorer, PhotoLoader, TargetLabeler
 
 
-@pytest.fixture(scope="module")
-def data():
-    try:
-        return opencv_samples()
-    except SampleDataMissing:
-        if os.environ.get("CI") == "true":
-            raise
-        pytest.skip("opencv-doc is not installed")
+@pytest.fixture(scope="session")
+def data(opencv_data):
+    return opencv_data
 
 
 def upload(loader, *files):
