@@ -35,8 +35,8 @@ import numpy as np
 from ._validation import ParameterError, ParameterTypeError, check_number, message
 from .io import _is_path, _read, _to_grey
 
-__all__ = ["WORKING_SIDE", "Correspondences", "Rectified", "load_photo", "robust_matches", "check_rectified",
-           "rectify_pair", "working_size"]
+__all__ = ["WORKING_SIDE", "Correspondences", "Rectified", "apply_rectification", "check_rectified", "load_photo",
+           "measured", "rectify_pair", "robust_matches", "working_size"]
 
 #: Longest side, in pixels, that photos are scaled down to before anything else: Middlebury-
 #: sized pairs (Aloe, 1282 x 1110) stay whole, a 12-megapixel phone photo becomes 1600 x 1200.
@@ -168,7 +168,8 @@ class Rectified:
     left, right : (H, W) float ndarray
         The rectified grey images, at the working size.
     left_h, right_h : (3, 3) ndarray
-        Homographies from the (scaled) input images to these.
+        Homographies from the (scaled) input images to these; the identity for a rig, whose
+        undistorting maps are not homographies (:meth:`ismb_lab.rig.Rig.maps`).
     method : str
         ``"already rectified"``, ``"uncalibrated"`` or ``"rig"``.
     inliers : int
@@ -318,6 +319,28 @@ def rectify_pair(left, right, *, max_side: int = WORKING_SIDE) -> Rectified:
     return Rectified(np.clip(warp(left, h_left), 0, 255), np.clip(warp(right, h_right), 0, 255), h_left,
                      h_right, "uncalibrated", int(inliers.sum()), figures["median_abs_dy_px"],
                      figures["p90_abs_dy_px"], figures["disparity_range_px"], factor, lxy_r, rxy_r)
+
+
+def apply_rectification(left, right, left_h, right_h, size) -> Rectified:
+    """Warp a pair with a rectification found on another pair of the same two camera positions
+    (the depth demo's background); its figures are measured on new robust matches.
+
+    ``size`` is the output ``(width, height)``; the method is ``"the background's"``.
+    """
+    size = (int(size[0]), int(size[1]))
+    warp = lambda image, h: np.clip(cv2.warpPerspective(np.asarray(image, np.float32), np.asarray(h, float), size)
+                                    .astype(float), 0, 255)
+    return measured(warp(left, left_h), warp(right, right_h), left_h, right_h, "the background's")
+
+
+def measured(left, right, left_h, right_h, method: str) -> Rectified:
+    """A pair rectified some other way, with its figures measured on new robust matches."""
+    matches = robust_matches(left, right)
+    figures = (_dy_figures(matches.left_xy, matches.right_xy) if len(matches) else
+               {"median_abs_dy_px": float("nan"), "p90_abs_dy_px": float("nan"), "disparity_range_px": [0.0, 0.0]})
+    return Rectified(left, right, np.asarray(left_h, float), np.asarray(right_h, float), method, len(matches),
+                     figures["median_abs_dy_px"], figures["p90_abs_dy_px"], figures["disparity_range_px"], 1.0,
+                     matches.left_xy, matches.right_xy)
 
 
 def check_rectified(left, right, *, max_side: int = WORKING_SIDE) -> dict:

@@ -22,7 +22,7 @@ import cv2
 import numpy as np
 
 from ._validation import ParameterError, ParameterTypeError, check_number, message
-from .rectify import Rectified, _dy_figures, load_photo, robust_matches
+from .rectify import Rectified, load_photo, measured
 
 __all__ = ["BOARD", "SQUARE_M", "Rig", "board_depth", "calibrate_rig", "find_board", "load_rig"]
 
@@ -131,14 +131,7 @@ class Rig:
                                              "rig was calibrated at", f"{image.shape[1]}x{image.shape[0]}"))
         (lx, ly), (rx, ry) = self.maps()
         warp = lambda image, mx, my: cv2.remap(image.astype(np.float32), mx, my, cv2.INTER_LINEAR).astype(float)
-        out_l, out_r = warp(left, lx, ly), warp(right, rx, ry)
-        matches = robust_matches(out_l, out_r)
-        figures = (_dy_figures(matches.left_xy, matches.right_xy) if len(matches) else
-                   {"median_abs_dy_px": float("nan"), "p90_abs_dy_px": float("nan"), "disparity_range_px": [0, 0]})
-        eye = np.eye(3)
-        return Rectified(out_l, out_r, eye, eye, "rig", len(matches), figures["median_abs_dy_px"],
-                         figures["p90_abs_dy_px"], figures["disparity_range_px"], 1.0, matches.left_xy,
-                         matches.right_xy)
+        return measured(warp(left, lx, ly), warp(right, rx, ry), np.eye(3), np.eye(3), "rig")
 
     def to_dict(self) -> dict:
         return {"format": "ismb_lab-rig-v1", "size": list(self.size), "rms_px": self.rms,

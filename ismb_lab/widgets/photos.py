@@ -24,7 +24,7 @@ import numpy as np
 from .._files import atomic_write_bytes, atomic_write_text
 from .._validation import ParameterError, ParameterTypeError, message
 from ..classroom import user_name
-from ..rectify import Rectified, _inputs, check_rectified, rectify_pair
+from ..rectify import Rectified, _inputs, apply_rectification, check_rectified, rectify_pair
 from ._common import Base, Pane, button, grey_rgb, row, with_class
 
 __all__ = ["PhotoLoader", "PhotoModel"]
@@ -107,7 +107,7 @@ class PhotoModel:
         if self.left is None:
             raise ParameterError(message("photos", "PhotoModel.rectify", "loaded first (set_photos)", None))
         if self.homographies is not None:
-            self.rectified = _apply(self.left, self.right, *self.homographies)
+            self.rectified = apply_rectification(self.left, self.right, *self.homographies)
         else:
             self.rectified = rectify_pair(self.left, self.right)
         self.roi, self.saved = None, None
@@ -159,24 +159,6 @@ class PhotoModel:
         self.saved = folder
         self.message = f"saved to {folder}"
         return folder
-
-
-def _apply(left, right, h_left, h_right, size) -> Rectified:
-    """Warp a pair with a known rectification; its figures are measured on new robust matches."""
-    import cv2
-
-    from ..rectify import _dy_figures, robust_matches
-
-    size = (int(size[0]), int(size[1]))
-    warp = lambda image, h: np.clip(cv2.warpPerspective(image.astype(np.float32), np.asarray(h, float), size)
-                                    .astype(float), 0, 255)
-    out_l, out_r = warp(left, h_left), warp(right, h_right)
-    m = robust_matches(out_l, out_r)
-    figures = (_dy_figures(m.left_xy, m.right_xy) if len(m) else
-               {"median_abs_dy_px": float("nan"), "p90_abs_dy_px": float("nan"), "disparity_range_px": [0.0, 0.0]})
-    return Rectified(out_l, out_r, np.asarray(h_left, float), np.asarray(h_right, float), "the background's",
-                     len(m), figures["median_abs_dy_px"], figures["p90_abs_dy_px"], figures["disparity_range_px"],
-                     1.0, m.left_xy, m.right_xy)
 
 
 def draw_photos(ax, model: PhotoModel) -> dict:
@@ -338,6 +320,3 @@ class PhotoLoader(Base):
         self.use_button.disabled = not self.model.ready
         self.say(self.model.message)
         self.pane.draw()
-
-    def summary_html(self) -> str:
-        return html.escape(self.model.message)
