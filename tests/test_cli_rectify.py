@@ -106,3 +106,31 @@ def test_shift_auto_needs_matches():
         prepare(flat, np.roll(flat, 40, axis=0), MatchConfig(shift="auto", n_min=5, n_max=10))
     with _pytest.raises(ParameterError, match="a number of pixels or 'auto'"):
         MatchConfig(shift="sideways")
+
+
+def test_depth_takes_f_and_b_from_a_rig_of_its_size(data, tmp_path):
+    from pathlib import Path
+
+    import cv2
+
+    from ismb_lab.rig import calibrate_rig
+    from ismb_lab.datasets import chessboard_pairs
+
+    rig = calibrate_rig(chessboard_pairs()[:5])
+    (tmp_path / "rig.json").write_text(rig.to_json())
+    images = Path(__file__).resolve().parents[1] / "images"
+    pairs = [images / "lab" / "left.png", images / "lab" / "right.png",
+             images / "toy_cars" / "left.png", images / "toy_cars" / "right.png"]
+    proc = cli("depth", *pairs, "--rig", tmp_path / "rig.json")
+    assert proc.returncode == 2 and "calibrated at 640x480, the images are 320x240" in proc.stderr
+    proc = cli("depth", *pairs, "--rig", tmp_path / "rig.json", "--focal-px", "300")
+    assert proc.returncode == 2 and "leave out --focal-px" in proc.stderr
+    big = []                                   # the same pairs at the rig's size
+    for path in pairs:
+        out = tmp_path / f"{path.parent.name}-{path.name}"
+        cv2.imwrite(str(out), cv2.resize(cv2.imread(str(path), cv2.IMREAD_UNCHANGED), (640, 480)))
+        big.append(out)
+    assert main(["depth", *map(str, big), "--rig", str(tmp_path / "rig.json"), "--json", str(tmp_path / "d.json")]) == 0
+    objects = json.loads((tmp_path / "d.json").read_text())["objects"]
+    assert objects and all(o["depth_m"] is None or o["depth_m"] == pytest.approx(
+        rig.focal_px * rig.baseline_m / o["mean_disparity"], rel=1e-6) for o in objects)

@@ -53,6 +53,13 @@ def run(args) -> int:
         if args.focal_px is not None or args.baseline_m is not None:
             raise UsageError("--rig gives the focal length and the baseline: leave out --focal-px and --baseline-m")
         rig = load_rig(check_input(args.rig, what="--rig"))
+        from ..io import load_image
+
+        shape = load_image(args.bg_left).shape
+        if (shape[1], shape[0]) != tuple(rig.size):
+            raise UsageError(f"--rig {str(args.rig)!r} was calibrated at {rig.size[0]}x{rig.size[1]}, the images are "
+                             f"{shape[1]}x{shape[0]}: its focal length in pixels does not apply (rectify the "
+                             "pairs with 'ismb-lab rectify --rig' first)")
         calibration = {"focal_px": rig.focal_px, "baseline_m": rig.baseline_m}
     for name in ("focal_px", "baseline_m"):
         value = getattr(args, name)
