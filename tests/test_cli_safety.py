@@ -391,3 +391,22 @@ def test_an_interrupt_swallowed_in_a_finaliser_prints_nothing(monkeypatch):
         assert interrupted()
     assert reports == [KeyboardInterrupt]
     assert not interrupted()
+
+
+def test_an_interrupt_printed_by_c_code_prints_nothing_after_a_signal(capfd):
+    """C code that reports an error with PyErr_Print (numpy's import_array does) echoes nothing."""
+    import ctypes
+
+    from ismb_lab.cli._guard import Interrupts
+
+    def c_code_prints(kind):
+        # PyRun_SimpleString reports the exception with PyErr_Print and returns -1.
+        assert ctypes.pythonapi.PyRun_SimpleString(f"raise {kind.__name__}".encode()) == -1
+        return capfd.readouterr().err
+
+    with Interrupts() as interrupts:
+        assert "KeyboardInterrupt" in c_code_prints(KeyboardInterrupt)   # no signal yet
+        interrupts.signum = signal.SIGINT
+        assert c_code_prints(KeyboardInterrupt) == ""
+        assert "ValueError" in c_code_prints(ValueError)   # only the signal's echoes are dropped
+    assert "KeyboardInterrupt" in c_code_prints(KeyboardInterrupt)

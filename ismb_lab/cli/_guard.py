@@ -84,6 +84,7 @@ class Interrupts:
         self.signum = None
         self._old = {}
         self._old_hook = None
+        self._old_excepthook = None
 
     def _unraisable(self, report):
         # A KeyboardInterrupt raised inside a __del__ or a callback cannot propagate: Python
@@ -91,6 +92,13 @@ class Interrupts:
         # reports are its echoes; the work stops at the next check of interrupted().
         if self.signum is None:
             self._old_hook(report)
+
+    def _excepthook(self, kind, value, trace):
+        # C code that calls PyErr_Print (numpy's import_array in an extension's init, for one)
+        # prints a KeyboardInterrupt raised inside an import it started, with no header, and
+        # goes on with an ImportError; after a signal that print is an echo as well.
+        if self.signum is None or not issubclass(kind, KeyboardInterrupt):
+            self._old_excepthook(kind, value, trace)
 
     def _handle(self, signum, frame):
         if self.signum is None:
@@ -105,6 +113,7 @@ class Interrupts:
                     continue
                 self._old[number] = signal.signal(number, self._handle)
         self._old_hook, sys.unraisablehook = sys.unraisablehook, self._unraisable
+        self._old_excepthook, sys.excepthook = sys.excepthook, self._excepthook
         _ACTIVE.append(self)
         return self
 
@@ -113,6 +122,7 @@ class Interrupts:
             signal.signal(number, old)
         self._old.clear()
         sys.unraisablehook = self._old_hook
+        sys.excepthook = self._old_excepthook
         _ACTIVE.remove(self)
         return False
 
