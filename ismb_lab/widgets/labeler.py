@@ -123,6 +123,13 @@ class LabelModel:
         """Whether the labels differ from the last save or load."""
         return tuple(self._pairs) != self._saved
 
+    @property
+    def state(self) -> str:
+        """``"unsaved"``, ``"saved"`` (as last saved or loaded here) or ``""`` (nothing yet)."""
+        if self.dirty:
+            return "unsaved"
+        return "saved" if self._base is not None else ""
+
     def rows(self) -> list[tuple]:
         """The table in the thesis' column order (:data:`COLUMNS`); features numbered from 1."""
         out = []
@@ -560,7 +567,8 @@ class TargetLabeler(Base):
         comparison = update_labels(self.artists, self.model, self.key_toggle.value)
         self.key_summary.value = "" if comparison is None else f"Answer key: {html.escape(str(comparison))}"
         self.table.value = pairs_html(self.model)
-        self.dirty_label.value = "* unsaved changes" if self.model.dirty else "saved"
+        # "saved" only once something was: a fresh labeller has nothing on disk to speak of
+        self.dirty_label.value = {"unsaved": "* unsaved changes", "saved": "saved", "": ""}[self.model.state]
         self.delete_button.disabled = self.model.selected is None
         self.undo_button.disabled = not self.model._history
         self.say(self.model.message)

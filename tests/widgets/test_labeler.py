@@ -115,6 +115,14 @@ def test_save_load_round_trip(labeler, tmp_path, prepared):
     assert "saved" == fresh.dirty_label.value
 
 
+def test_a_fresh_labeller_does_not_say_saved(labeler):
+    assert labeler.dirty_label.value == "" and labeler.model.state == ""
+    labeler.add_pair(0, 1)
+    assert labeler.model.state == "unsaved" and "*" in labeler.dirty_label.value
+    labeler.undo()
+    assert labeler.model.state == "" and labeler.dirty_label.value == ""
+
+
 @pytest.mark.parametrize("content", ["{not json", '{"version": 1, "pairs": [{"left_xy": [1, 2]}]}',
                                      '{"version": 1, "pairs": [{"left_xy": [1, 1], "right_xy": [2, 2]}]}'])
 def test_a_bad_file_keeps_the_labels(labeler, tmp_path, content):
