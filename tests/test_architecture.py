@@ -225,3 +225,11 @@ def test_depth_command_writes_exactly_the_library_json(tmp_path):
     # the command adds the candidate window it used (the demo's own, as --shift was not given)
     assert written.pop("candidate_window") == {"shift": 20.0, "width": 40.0, "height": 30.0, "auto": False}
     assert written == expected and expected["objects"]
+
+
+def test_the_code_notebooks_and_scripts_pass_the_linter():
+    """pyproject's ruff rules (unused imports, undefined names, ...) hold everywhere, notebooks included."""
+    root = PACKAGE.parent
+    done = subprocess.run([sys.executable, "-m", "ruff", "check", "--no-cache", "--quiet", str(root)],
+                          capture_output=True, text=True, cwd=root, timeout=120)
+    assert done.returncode == 0, done.stdout + done.stderr
