@@ -32,7 +32,7 @@ import numba
 import numpy as np
 
 from ._validation import ParameterTypeError, check_choice, check_number, check_rng, message
-from .hopfield import RULES, SCALE, Network, _check_state, _energy, _Weights, _weights, energy
+from .hopfield import PACKED, RULES, SCALE, Network, _check_state, _energy, _Weights, _weights, energy
 
 __all__ = ["KERNELS", "STOP_RULES", "iter_updates", "run", "RunResult", "Update", "visiting_order"]
 
@@ -129,6 +129,8 @@ def _below(state, bound):
 
 def _seed_of(rng, owner: str) -> int:
     """The stream's seed: the integer itself, or one draw from a Generator."""
+    if type(rng) is int and rng >= 0:   # the common case, before the slower general test
+        return rng
     if isinstance(rng, numbers.Integral) and not isinstance(rng, bool) and rng >= 0:
         return int(rng)
     if isinstance(rng, np.random.Generator):
@@ -194,7 +196,8 @@ def _net_input_textbook(a: int, y: list, w: _Weights) -> int:
     return u + w.self_w[a] * y[a]
 
 
-def _check_run_args(net, rng, state, stop_rule, rule, patience, max_sweeps, owner):
+def _check_run_args(net, rng, state, stop_rule, rule, patience, max_sweeps, owner, all_on=False):
+    """``(seed, initial state)``; with `all_on` the state is None when it is every neuron on."""
     if not isinstance(net, Network):
         raise ParameterTypeError(message("net", owner, "a Network", type(net).__name__))
     # the common case (a GA makes thousands of runs) is checked in a few hundred nanoseconds
@@ -204,7 +207,10 @@ def _check_run_args(net, rng, state, stop_rule, rule, patience, max_sweeps, owne
         check_choice(rule, "rule", owner, RULES)
         check_number(patience, "patience", owner, low=1, integer=True)
         check_number(max_sweeps, "max_sweeps", owner, low=1, integer=True)
-    y0 = net.initial_state() if state is None else _check_state(net, state, owner)
+    if state is None:
+        y0 = None if all_on else net.initial_state()
+    else:
+        y0 = _check_state(net, state, owner)
     return _seed_of(rng, owner), y0
 
 
@@ -323,19 +329,31 @@ class RunResult:
 _STOP_NAMES = {1: "sweep", 2: "stall", 3: "max_attempts"}
 
 
-@numba.njit(cache=True)
-def _solve(seed, sweep_rule, patience, max_attempts, y0, nb_ptr, nb_idx, nb_w, row_ptr, row_idx,
-           col_ptr, col_idx, rows, cols, row_w, col_w, self_w, bias, n_left, n_right, similarity,
-           pair_a, pair_b, pair_c, kappa, h):
-    """The whole run in one call: net inputs, the visiting order drawn from `seed` as
-    :func:`visiting_order` draws it, every net input kept current after each flip, and the
-    final energy.  Returns ``(state, stop code of _STOP_NAMES, attempts, flips, energy)``.
+# The compiled run takes the topology's integers in one buffer (Topology.packed) and the
+# network's in another (_Weights.values): a call into compiled code unboxes each array
+# argument separately, about 0.1 us apiece, which on a 20 x 20 ROI cost as much as the run.
+_NB_PTR, _NB_IDX, _ROW_PTR, _ROW_IDX, _COL_PTR, _COL_IDX, _ROWS, _COLS, _PAIR_A, _PAIR_B = range(len(PACKED))
 
-    The stop tests are those of :func:`_updates`, in its order: with the sweep rule the
-    attempt limit is a whole number of sweeps, so both are tested at the end of a sweep,
-    the sweep rule first."""
-    n = y0.shape[0]
-    y = y0.astype(np.int64)
+
+@numba.njit(cache=True)
+def _segment(packed, j):
+    return packed[packed[j]:packed[j + 1]]
+
+
+@numba.njit(cache=True)
+def _split(packed, values):
+    """``(nb_w, self_w, bias, u_on)``: the views of a :class:`_Weights` ``values`` buffer."""
+    m, n = packed[_NB_IDX + 1] - packed[_NB_IDX], packed[_ROWS + 1] - packed[_ROWS]
+    return values[:m], values[m:m + n], values[m + n:m + 2 * n], values[m + 2 * n:m + 3 * n]
+
+
+@numba.njit(cache=True)
+def _net_inputs(y, packed, values, row_w, col_w, n_left, n_right):
+    """Every net input of state `y` (fixed point)."""
+    nb_ptr, nb_idx = _segment(packed, _NB_PTR), _segment(packed, _NB_IDX)
+    rows, cols = _segment(packed, _ROWS), _segment(packed, _COLS)
+    nb_w, self_w, bias, _ = _split(packed, values)
+    n = y.shape[0]
     row_sum = np.zeros(n_left, dtype=np.int64)
     col_sum = np.zeros(n_right, dtype=np.int64)
     for a in range(n):
@@ -348,6 +366,50 @@ def _solve(seed, sweep_rule, patience, max_attempts, y0, nb_ptr, nb_idx, nb_w, r
             s += nb_w[p] * y[nb_idx[p]]
         s += row_w * (row_sum[rows[a]] - y[a]) + col_w * (col_sum[cols[a]] - y[a])
         u[a] = s + self_w[a] * y[a]
+    return u
+
+
+@numba.njit(cache=True)
+def _fill_all_on(u_on, packed, values, row_w, col_w):
+    """:func:`_net_inputs` of every neuron on, summing each neuron's weights in a row."""
+    nb_ptr, row_ptr, col_ptr = _segment(packed, _NB_PTR), _segment(packed, _ROW_PTR), _segment(packed, _COL_PTR)
+    rows, cols = _segment(packed, _ROWS), _segment(packed, _COLS)
+    nb_w, self_w, bias, _ = _split(packed, values)
+    for a in range(u_on.shape[0]):
+        s = bias[a] + self_w[a]
+        for p in range(nb_ptr[a], nb_ptr[a + 1]):
+            s += nb_w[p]
+        i, k = rows[a], cols[a]
+        u_on[a] = s + row_w * (row_ptr[i + 1] - row_ptr[i] - 1) + col_w * (col_ptr[k + 1] - col_ptr[k] - 1)
+
+
+@numba.njit(cache=True)
+def _solve(seed, sweep_rule, patience, max_attempts, y0, all_on, packed, values, similarity, pair_c,
+           n_left, n_right, row_w, col_w, kappa, h):
+    """The whole run in one call: net inputs, the visiting order drawn from `seed` as
+    :func:`visiting_order` draws it, every net input kept current after each flip, and the
+    final energy.  `packed` is :attr:`Topology.packed`, `values` the :class:`_Weights`
+    buffer; with `all_on` the run starts from every neuron on (and `y0` is not read), from
+    net inputs computed on the network's first such run and kept in `values`.  Returns ``(state, stop code of _STOP_NAMES, attempts, flips, energy)``.
+
+    The stop tests are those of :func:`_updates`, in its order: with the sweep rule the
+    attempt limit is a whole number of sweeps, so both are tested at the end of a sweep,
+    the sweep rule first."""
+    nb_ptr, nb_idx = _segment(packed, _NB_PTR), _segment(packed, _NB_IDX)
+    row_ptr, row_idx = _segment(packed, _ROW_PTR), _segment(packed, _ROW_IDX)
+    col_ptr, col_idx = _segment(packed, _COL_PTR), _segment(packed, _COL_IDX)
+    rows, cols = _segment(packed, _ROWS), _segment(packed, _COLS)
+    nb_w, self_w, _, u_on = _split(packed, values)
+    if all_on:
+        y = np.ones(u_on.shape[0], dtype=np.int64)
+        if values[-1] == 0:
+            _fill_all_on(u_on, packed, values, row_w, col_w)
+            values[-1] = 1
+        u = u_on.copy()
+    else:
+        y = y0.astype(np.int64)
+        u = _net_inputs(y, packed, values, row_w, col_w, n_left, n_right)
+    n = y.shape[0]
     order = np.arange(n)
     state = _U64(seed)
     attempts = flips = unchanged = 0
@@ -403,8 +465,12 @@ def _solve(seed, sweep_rule, patience, max_attempts, y0, nb_ptr, nb_idx, nb_w, r
             elif attempts >= max_attempts:
                 code = 3
     final = y.astype(np.uint8)
-    e = _energy(n_left, n_right, rows, cols, similarity, pair_a, pair_b, pair_c, final, kappa, h)
+    e = _energy(n_left, n_right, rows, cols, similarity, _segment(packed, _PAIR_A), _segment(packed, _PAIR_B),
+                pair_c, final, kappa, h)
     return final, code, attempts, flips, e
+
+
+_NO_STATE = np.zeros(0, dtype=np.uint8)
 
 
 def run(net: Network, *, rng=0, state=None, stop_rule: str = "sweep", rule: str = "exact",
@@ -434,7 +500,8 @@ def run(net: Network, *, rng=0, state=None, stop_rule: str = "sweep", rule: str 
     True
     """
     check_choice(kernel, "kernel", "run", KERNELS)
-    seed, y0 = _check_run_args(net, rng, state, stop_rule, rule, patience, max_sweeps, "run")
+    seed, y0 = _check_run_args(net, rng, state, stop_rule, rule, patience, max_sweeps, "run",
+                               all_on=kernel == "numba" and net.n_neurons > 0)
     n = net.n_neurons
     if n == 0:
         return RunResult(y0, energy(net, y0), stop_rule, 0, 0)
@@ -447,7 +514,7 @@ def run(net: Network, *, rng=0, state=None, stop_rule: str = "sweep", rule: str 
         return RunResult(y, energy(net, y), last.stop, last.attempt + 1, flips)
     w = _weights(net, rule)
     state, code, attempts, flips, e = _solve(
-        seed, stop_rule == "sweep", patience, max_sweeps * n, y0, w.nb_ptr, w.nb_idx, w.nb_w, w.row_ptr,
-        w.row_idx, w.col_ptr, w.col_idx, w.rows, w.cols, w.row_w, w.col_w, w.self_w, w.bias, net.n_left,
-        net.n_right, net.similarity, net.pair_a, net.pair_b, net.pair_c, net.uniqueness, net.target_count)
+        seed, stop_rule == "sweep", patience, max_sweeps * n, _NO_STATE if y0 is None else y0, y0 is None,
+        net.topology.packed, w.values, net.similarity, net.pair_c, net.n_left, net.n_right, w.row_w, w.col_w,
+        net.uniqueness, net.target_count)
     return RunResult(state, e, _STOP_NAMES[code], attempts, flips)

@@ -171,7 +171,7 @@ class Method:
         return Network._trusted(problem.topology, self.similarity(problem, params), c, self_c)
 
     def postprocess(self, problem: Problem, on: np.ndarray) -> np.ndarray:
-        """Which of the neurons that are on (indices `on`) stay matches; all, by default.
+        """Which of the neurons that are on (indices `on`) stay matches; all (`on` itself), by default.
 
         :func:`ismb_lab.solvers.to_matches` calls it.
         """

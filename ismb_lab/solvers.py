@@ -194,9 +194,12 @@ def to_matches(neurons, state, method=None) -> Matches:
     """
     state = np.asarray(state, dtype=np.uint8)
     on = np.flatnonzero(state)
-    if method is not None:
-        on = np.sort(method.postprocess(neurons, on))
+    kept = on if method is None else method.postprocess(neurons, on)
+    if kept is not on:   # a method that keeps every match returns `on` itself
+        on = np.sort(kept)
         state = np.zeros_like(state)
         state[on] = 1
-    pairs = np.stack([neurons.rows[on], neurons.cols[on]], axis=1).reshape(-1, 2)
-    return Matches(pairs.astype(np.int64, copy=False), state)
+    pairs = np.empty((len(on), 2), dtype=np.int64)
+    pairs[:, 0] = neurons.rows[on]
+    pairs[:, 1] = neurons.cols[on]
+    return Matches(pairs, state)

@@ -125,6 +125,20 @@ def test_kernels_agree_bit_for_bit(seed, stop_rule, rule):
     assert (fast.stop_rule, fast.attempts, fast.flips) == (slow.stop_rule, slow.attempts, slow.flips)
 
 
+@pytest.mark.parametrize("seed", range(10))
+def test_kernels_agree_from_a_given_state(seed):
+    """The compiled run starts from cached all-on inputs by default; a given state is summed anew."""
+    net = NETS[seed]
+    start = np.random.default_rng(seed).integers(0, 2, net.n_neurons).astype(np.uint8)
+    fast = run(net, rng=seed, state=start)
+    slow = run(net, rng=seed, state=start, kernel="textbook")
+    assert np.array_equal(fast.state, slow.state) and fast.energy == slow.energy == energy(net, slow.state)
+    assert (fast.attempts, fast.flips) == (slow.attempts, slow.flips)
+    ones = np.ones(net.n_neurons, dtype=np.uint8)
+    default, given = run(net, rng=seed), run(net, rng=seed, state=ones)
+    assert np.array_equal(default.state, given.state) and default.energy == given.energy
+
+
 def test_kernels_agree_on_large_networks():
     for seed in range(3):
         net = random_network(100 + seed, 60, 60, p_candidate=0.15, p_pair=0.3)
