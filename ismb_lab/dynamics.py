@@ -390,7 +390,8 @@ def _solve(seed, sweep_rule, patience, max_attempts, y0, all_on, packed, values,
     :func:`visiting_order` draws it, every net input kept current after each flip, and the
     final energy.  `packed` is :attr:`Topology.packed`, `values` the :class:`_Weights`
     buffer; with `all_on` the run starts from every neuron on (and `y0` is not read), from
-    net inputs computed on the network's first such run and kept in `values`.  Returns ``(state, stop code of _STOP_NAMES, attempts, flips, energy)``.
+    net inputs computed on the network's first such run and kept in `values`.
+    Returns ``(state, stop code of _STOP_NAMES, attempts, flips, energy)``.
 
     The stop tests are those of :func:`_updates`, in its order: with the sweep rule the
     attempt limit is a whole number of sweeps, so both are tested at the end of a sweep,

@@ -188,9 +188,9 @@ class Topology:
 
     @cached_property
     def packed(self) -> np.ndarray:
-        """The layout, ``rows``, ``cols``, ``pair_a`` and ``pair_b`` in one int64 buffer, for the compiled
-        run: segment j is ``packed[packed[j]:packed[j + 1]]``, in the order of
-        :data:`PACKED`.  One array crosses into compiled code faster than nine."""
+        """The layout, ``rows``, ``cols``, ``pair_a`` and ``pair_b`` in one int64 buffer, for
+        the compiled run: segment j is ``packed[packed[j]:packed[j + 1]]``, in the order of
+        :data:`PACKED`.  One array crosses into compiled code faster than ten."""
         lay = self.layout
         parts = (lay.nb_ptr, lay.nb_idx, lay.row_ptr, lay.row_idx, lay.col_ptr, lay.col_idx,
                  self.rows, self.cols, self.pair_a, self.pair_b)
