@@ -27,7 +27,9 @@ both peers on the development split, so the held-out split was run once for all 
 The repetitive family is where every method fails (held-out C/T: mutual-nn 55.6%, Hungarian
 63.7%, Method-III 41.1%, NM4 0.0%, NM 6.2%: the GA fitted on one repetitive pair switched
 nearly every neuron off); on contrast, border and cameras NM4 is within 0-6 points of the
-peers' C/T (held out, cameras: 95.4% against 93.4% and 95.4%).
+peers' C/T (held out, cameras: 95.4% against 93.4% and 95.4%). Notebook 08 draws one held-out
+repetitive layout (seed 930005) with each peer's and Method-III's matches, and the M values that
+mislead them.
 """
 
 from __future__ import annotations
