@@ -124,7 +124,7 @@ class LabelModel:
         return tuple(self._pairs) != self._saved
 
     @property
-    def state(self) -> str:
+    def save_status(self) -> str:
         """``"unsaved"``, ``"saved"`` (as last saved or loaded here) or ``""`` (nothing yet)."""
         if self.dirty:
             return "unsaved"
@@ -568,7 +568,7 @@ class TargetLabeler(Base):
         self.key_summary.value = "" if comparison is None else f"Answer key: {html.escape(str(comparison))}"
         self.table.value = pairs_html(self.model)
         # "saved" only once something was: a fresh labeller has nothing on disk to speak of
-        self.dirty_label.value = {"unsaved": "* unsaved changes", "saved": "saved", "": ""}[self.model.state]
+        self.dirty_label.value = {"unsaved": "* unsaved changes", "saved": "saved", "": ""}[self.model.save_status]
         self.delete_button.disabled = self.model.selected is None
         self.undo_button.disabled = not self.model._history
         self.say(self.model.message)

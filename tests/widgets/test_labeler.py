@@ -116,11 +116,11 @@ def test_save_load_round_trip(labeler, tmp_path, prepared):
 
 
 def test_a_fresh_labeller_does_not_say_saved(labeler):
-    assert labeler.dirty_label.value == "" and labeler.model.state == ""
+    assert labeler.dirty_label.value == "" and labeler.model.save_status == ""
     labeler.add_pair(0, 1)
-    assert labeler.model.state == "unsaved" and "*" in labeler.dirty_label.value
+    assert labeler.model.save_status == "unsaved" and "*" in labeler.dirty_label.value
     labeler.undo()
-    assert labeler.model.state == "" and labeler.dirty_label.value == ""
+    assert labeler.model.save_status == "" and labeler.dirty_label.value == ""
 
 
 @pytest.mark.parametrize("content", ["{not json", '{"version": 1, "pairs": [{"left_xy": [1, 2]}]}',
