@@ -386,7 +386,7 @@ def depth_match(pair, *, background=None, method: str = "III", params=None, matc
     >>> depth_match(lab_scene(0, supersample=1), solver="annealing")
     Traceback (most recent call last):
     ...
-    ismb_lab.ParameterError: The 'solver' parameter of depth_match must be one of 'network', 'anneal', 'exact'. Got 'annealing' instead.
+    ismb_lab.ParameterError: The 'solver' parameter of depth_match must be one of 'network', 'anneal', 'exact', 'assign'. Got 'annealing' instead.
     """
     own = "depth_match"
     get_solver(solver, own)

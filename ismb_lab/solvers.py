@@ -1,6 +1,6 @@
 """How a network's final state is found, and how a final state becomes matches.
 
-Three solvers minimise the same energy (3-15):
+Four solvers minimise the same energy (3-15):
 
 * ``"network"``: the thesis' discrete Hopfield network (:func:`ismb_lab.dynamics.run`),
   asynchronous flips from "all candidates on" to a fixed point; it honours the
@@ -10,6 +10,11 @@ Three solvers minimise the same energy (3-15):
 * ``"exact"``: the global minimum as a mixed-integer programme
   (:func:`ismb_lab.exact.milp_minimum`).  It ignores the seed, and refuses a
   problem it cannot solve within its time limit.
+* ``"assign"`` (beyond the thesis): the discrete network started not from "all on" but
+  from the one-to-one assignment of largest total similarity ``S`` (only pairs with
+  ``S > 0``, :func:`similarity_assignment`); the compatibility and uniqueness terms then
+  add and remove matches by exact descent.  The peers' Hungarian assignment
+  (:func:`ismb_lab.peers.hungarian`) is the same idea on ``M`` with a no-match cost.
 
 :data:`SOLVERS` is the one registry of them, which the command line, the library
 and the widgets read.  :func:`to_matches` is the one way from a final state to
@@ -19,7 +24,7 @@ matched ``(i, k)`` feature pairs, including a method's post-processing.
 >>> net = Network.from_arrays(1, 2, rows=[0, 0], cols=[0, 1], similarity=[0.5, -0.7],
 ...                           pair_a=[], pair_b=[], pair_c=[])
 >>> [solve(net, name).state.tolist() for name in SOLVERS]
-[[1, 0], [1, 0], [1, 0]]
+[[1, 0], [1, 0], [1, 0], [1, 0]]
 """
 
 from __future__ import annotations
@@ -35,8 +40,8 @@ from .exact import milp_minimum
 from .hopfield import RULES, Network
 from .dynamics import STOP_RULES, run
 
-__all__ = ["ANNEAL", "DEFAULT_SOLVER", "EXACT", "NETWORK", "SOLVERS", "Matches", "Solution", "Solver", "get_solver", "solve",
-           "solver_names", "to_matches"]
+__all__ = ["ANNEAL", "ASSIGN", "DEFAULT_SOLVER", "EXACT", "NETWORK", "SOLVERS", "Matches", "Solution", "Solver",
+           "get_solver", "similarity_assignment", "solve", "solver_names", "to_matches"]
 
 
 @dataclass(frozen=True, eq=False)
@@ -95,14 +100,49 @@ def _exact(net, seed, stop_rule, rule, kernel) -> Solution:
     return Solution(r.state, float(r.energy), EXACT, 0)
 
 
+def similarity_assignment(net: Network) -> np.ndarray:
+    """The state of the one-to-one assignment of largest total similarity.
+
+    Among candidate neurons with ``S > 0``, at most one per left and per right
+    feature, chosen to maximise the sum of ``S`` (:func:`scipy.optimize.linear_sum_assignment`);
+    the others are off.  It ignores the compatibility terms.
+
+    Examples
+    --------
+    >>> from ismb_lab.hopfield import Network
+    >>> net = Network.from_arrays(2, 2, rows=[0, 0, 1, 1], cols=[0, 1, 0, 1],
+    ...                           similarity=[0.9, 0.8, 0.7, -0.2], pair_a=[], pair_b=[], pair_c=[])
+    >>> similarity_assignment(net).tolist()     # 0.8 + 0.7 beats 0.9 alone
+    [0, 1, 1, 0]
+    """
+    from scipy.optimize import linear_sum_assignment
+
+    if not isinstance(net, Network):
+        raise ParameterTypeError(message("net", "similarity_assignment", "a Network", net))
+    gain = np.zeros((net.n_left, net.n_right))
+    good = net.similarity > 0
+    gain[net.rows[good], net.cols[good]] = net.similarity[good]
+    chosen = np.zeros((net.n_left, net.n_right), dtype=bool)
+    left, right = linear_sum_assignment(gain, maximize=True)
+    chosen[left, right] = gain[left, right] > 0
+    return chosen[net.rows, net.cols].astype(np.uint8)
+
+
+def _assign(net, seed, stop_rule, rule, kernel) -> Solution:
+    r = run(net, rng=seed, state=similarity_assignment(net), stop_rule=stop_rule, rule=rule, kernel=kernel)
+    return Solution(r.state, r.energy, r.stop_rule, r.attempts, r.converged)
+
+
 #: The solvers' names, for code that means one of them.
-NETWORK, ANNEAL, EXACT = "network", "anneal", "exact"
+NETWORK, ANNEAL, EXACT, ASSIGN = "network", "anneal", "exact", "assign"
 
 #: The solvers by name, in the order help texts list them.
 SOLVERS = {s.name: s for s in (
     Solver(NETWORK, "the thesis' discrete network: asynchronous flips to a fixed point", True, _network),
     Solver(ANNEAL, "mean-field annealing, then the discrete network from the rounded state", True, _anneal),
     Solver(EXACT, "the global minimum energy as a mixed-integer programme (small problems)", False, _exact),
+    Solver(ASSIGN, "the discrete network started from the assignment of largest total similarity "
+                   "(beyond the thesis)", True, _assign),
 )}
 
 #: The thesis' solver, the default everywhere except the depth demo.
@@ -113,7 +153,7 @@ def solver_names() -> tuple[str, ...]:
     """The registered solvers' names.
 
     >>> solver_names()
-    ('network', 'anneal', 'exact')
+    ('network', 'anneal', 'exact', 'assign')
     """
     return tuple(SOLVERS)
 
@@ -124,7 +164,7 @@ def get_solver(name, owner: str = "get_solver", parameter: str = "solver") -> So
     >>> get_solver("annealing")
     Traceback (most recent call last):
     ...
-    ismb_lab.ParameterError: The 'solver' parameter of get_solver must be one of 'network', 'anneal', 'exact'. Got 'annealing' instead.
+    ismb_lab.ParameterError: The 'solver' parameter of get_solver must be one of 'network', 'anneal', 'exact', 'assign'. Got 'annealing' instead.
     """
     return SOLVERS[check_choice(name, parameter, owner, solver_names())]
 
@@ -141,8 +181,8 @@ def solve(net: Network, solver: str = DEFAULT_SOLVER, *, seed: int = 0, stop_rul
     seed : int
         Update-order (and annealing) seed; the exact solver ignores it.
     stop_rule, rule, kernel
-        The discrete network's settings (:func:`ismb_lab.dynamics.run`); only the
-        ``"network"`` solver reads them.
+        The discrete network's settings (:func:`ismb_lab.dynamics.run`); the
+        ``"network"`` and ``"assign"`` solvers read them.
     owner : str
         The function named in error messages.
 
