@@ -396,19 +396,21 @@ def _solve(seed, sweep_rule, patience, max_attempts, y0, all_on, packed, values,
     The stop tests are those of :func:`_updates`, in its order: with the sweep rule the
     attempt limit is a whole number of sweeps, so both are tested at the end of a sweep,
     the sweep rule first."""
-    nb_ptr, nb_idx = _segment(packed, _NB_PTR), _segment(packed, _NB_IDX)
-    row_ptr, row_idx = _segment(packed, _ROW_PTR), _segment(packed, _ROW_IDX)
-    col_ptr, col_idx = _segment(packed, _COL_PTR), _segment(packed, _COL_IDX)
+    # indices read as unsigned: numba then skips the test for a negative (from-the-end) index
+    upacked = packed.view(np.uint64)
+    nb_ptr, nb_idx = _segment(packed, _NB_PTR), _segment(upacked, _NB_IDX)
+    row_ptr, row_idx = _segment(packed, _ROW_PTR), _segment(upacked, _ROW_IDX)
+    col_ptr, col_idx = _segment(packed, _COL_PTR), _segment(upacked, _COL_IDX)
     rows, cols = _segment(packed, _ROWS), _segment(packed, _COLS)
     nb_w, self_w, _, u_on = _split(packed, values)
     if all_on:
-        y = np.ones(u_on.shape[0], dtype=np.int64)
+        y = np.ones(u_on.shape[0], dtype=np.uint8)
         if values[-1] == 0:
             _fill_all_on(u_on, packed, values, row_w, col_w)
             values[-1] = 1
         u = u_on.copy()
     else:
-        y = y0.astype(np.int64)
+        y = y0.copy()
         u = _net_inputs(y, packed, values, row_w, col_w, n_left, n_right)
     n = y.shape[0]
     order = np.arange(n)
@@ -426,46 +428,58 @@ def _solve(seed, sweep_rule, patience, max_attempts, y0, all_on, packed, values,
         changed = 0
         for t in range(n):
             a = order[t]
-            ua = u[a]
-            old = y[a]
-            new = old
-            if ua > 0:
-                new = 1
-            elif ua < 0:
-                new = 0
             attempts += 1
-            if new != old:
-                d = new - old
-                y[a] = new
+            if y[a] == 1:
+                flip = u[a] < 0
+            else:
+                flip = u[a] > 0
+            if not flip:
+                unchanged += 1
+                if not sweep_rule:
+                    if unchanged >= patience:
+                        code = 2
+                    elif attempts >= max_attempts:
+                        code = 3
+                    if code:
+                        break
+                continue
+            # A flip of y_a by d adds W_ab d to every u_b: each sign has its own loop of
+            # plain additions or subtractions, and the uniqueness loops include `a` itself
+            # (corrected after them) so that they test nothing.  Integers: no rounding.
+            if y[a] == 1:
+                y[a] = 0
                 for p in range(nb_ptr[a], nb_ptr[a + 1]):
-                    u[nb_idx[p]] += nb_w[p] * d
+                    u[nb_idx[p]] -= nb_w[p]
                 i = rows[a]
                 for p in range(row_ptr[i], row_ptr[i + 1]):
-                    if row_idx[p] != a:
-                        u[row_idx[p]] += row_w * d
+                    u[row_idx[p]] -= row_w
                 k = cols[a]
                 for p in range(col_ptr[k], col_ptr[k + 1]):
-                    if col_idx[p] != a:
-                        u[col_idx[p]] += col_w * d
-                u[a] += self_w[a] * d
-                changed += 1
-                unchanged = 0
+                    u[col_idx[p]] -= col_w
+                u[a] += row_w + col_w - self_w[a]
             else:
-                unchanged += 1
-            if not sweep_rule:
-                if unchanged >= patience:
-                    code = 2
-                elif attempts >= max_attempts:
-                    code = 3
-                if code:
-                    break
+                y[a] = 1
+                for p in range(nb_ptr[a], nb_ptr[a + 1]):
+                    u[nb_idx[p]] += nb_w[p]
+                i = rows[a]
+                for p in range(row_ptr[i], row_ptr[i + 1]):
+                    u[row_idx[p]] += row_w
+                k = cols[a]
+                for p in range(col_ptr[k], col_ptr[k + 1]):
+                    u[col_idx[p]] += col_w
+                u[a] += self_w[a] - row_w - col_w
+            changed += 1
+            unchanged = 0
+            if not sweep_rule and attempts >= max_attempts:
+                code = 3
+                break
         flips += changed
         if sweep_rule:
             if changed == 0:
                 code = 1
             elif attempts >= max_attempts:
                 code = 3
-    final = y.astype(np.uint8)
+    final = y
     e = _energy(n_left, n_right, rows, cols, similarity, _segment(packed, _PAIR_A), _segment(packed, _PAIR_B),
                 pair_c, final, kappa, h)
     return final, code, attempts, flips, e

@@ -19,7 +19,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-__all__ = ["Score", "score"]
+__all__ = ["Score", "Scorer", "score"]
 
 
 @dataclass(frozen=True)
@@ -68,6 +68,46 @@ class Score:
         return f"{self.correct}/{self.wrong_partner}+{self.extra}/{self.targets}"
 
 
+class Scorer:
+    """:func:`score` against fixed targets, their look-ups built once.
+
+    A GA scores every chromosome's matches against the same targets; this keeps
+    the sets that :func:`score` would build on each call.
+
+    Parameters
+    ----------
+    targets : (t, 2) int array_like
+        Target ``(i, k)`` feature indices.
+    unknown : int array_like
+        Left features whose truth is unknown.
+
+    Examples
+    --------
+    >>> scorer = Scorer([[0, 0], [1, 1], [2, 2]], unknown=[4])
+    >>> str(scorer([[0, 0], [1, 2], [3, 3], [4, 4]])), str(scorer([[2, 2]]))
+    ('1/1+1/3', '1/0+0/3')
+    """
+
+    def __init__(self, targets, unknown=()):
+        targets = np.asarray(targets, dtype=np.int64).reshape(-1, 2)
+        self._wanted = frozenset(map(tuple, targets.tolist()))
+        self._has_target = frozenset(targets[:, 0].tolist())
+        self._skip = frozenset(np.asarray(unknown, dtype=np.int64).ravel().tolist())
+
+    def __call__(self, pairs) -> Score:
+        """The :class:`Score` of matched ``(i, k)`` pairs, an ``(m, 2)`` int array_like."""
+        wanted, has_target, skip = self._wanted, self._has_target, self._skip
+        correct = wrong = extra = 0
+        for i, k in np.asarray(pairs, dtype=np.int64).reshape(-1, 2).tolist():
+            if (i, k) in wanted:
+                correct += 1
+            elif i in has_target:
+                wrong += 1
+            elif i not in skip:
+                extra += 1
+        return Score(correct, wrong, extra, len(wanted))
+
+
 def score(pairs, targets, unknown=()) -> Score:
     """Compare matched feature pairs with target feature pairs.
 
@@ -89,17 +129,4 @@ def score(pairs, targets, unknown=()) -> Score:
     >>> str(score([[0, 0], [1, 2], [3, 3], [4, 4]], [[0, 0], [1, 1], [2, 2]], unknown=[4]))
     '1/1+1/3'
     """
-    pairs = np.asarray(pairs, dtype=np.int64).reshape(-1, 2)
-    targets = np.asarray(targets, dtype=np.int64).reshape(-1, 2)
-    wanted = {tuple(t) for t in targets.tolist()}
-    has_target = set(targets[:, 0].tolist())
-    skip = set(np.asarray(unknown, dtype=np.int64).ravel().tolist())
-    correct = wrong = extra = 0
-    for i, k in pairs.tolist():
-        if (i, k) in wanted:
-            correct += 1
-        elif i in has_target:
-            wrong += 1
-        elif i not in skip:
-            extra += 1
-    return Score(correct, wrong, extra, len(wanted))
+    return Scorer(targets, unknown)(pairs)

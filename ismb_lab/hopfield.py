@@ -83,10 +83,6 @@ SCALE = 2.0 ** 40
 RULES = ("exact", "thesis")
 
 
-def _quantise(x) -> np.ndarray:
-    return np.rint(np.asarray(x, dtype=float) * SCALE).astype(np.int64)
-
-
 def _csr(n: int, src: np.ndarray, dst: np.ndarray):
     """Compressed rows: for each source, its destinations; plus the sort order used."""
     order = np.lexsort((dst, src))
@@ -383,7 +379,8 @@ def _weights(net: Network, rule: str) -> _Weights:
     _check_fits(net, lay)
     values = _quantised(net.pair_c, lay.nb_pair, net.similarity, net.self_c, exact, SCALE,
                         net.match_bias, 2.0 * kappa)
-    unique = np.int64(_quantise(-2.0 * kappa if exact else -kappa))
+    # round() of a float rounds half to even, as np.rint does, to the same integer
+    unique = np.int64(round((-2.0 * kappa if exact else -kappa) * SCALE))
     m, n = len(lay.nb_pair), net.n_neurons
     w = _Weights(lay.nb_ptr, lay.nb_idx, values[:m], lay.row_ptr, lay.row_idx, lay.col_ptr, lay.col_idx,
                  net.rows, net.cols, unique, unique, values[m:m + n], values[m + n:m + 2 * n], values)

@@ -40,7 +40,8 @@ from __future__ import annotations
 
 import json
 from collections.abc import Mapping
-from dataclasses import dataclass, fields, replace
+from dataclasses import dataclass, field, fields, replace
+from functools import cached_property
 from pathlib import Path
 
 import numpy as np
@@ -86,10 +87,26 @@ class Problem:
     cols: np.ndarray
     pairs: NeuronPairs
     topology: Topology
+    # each method's X and self-X (Method._measures), kept: a GA asks for them on every chromosome
+    _measures: dict = field(default_factory=dict, init=False, repr=False, compare=False)
 
     @property
     def n_neurons(self) -> int:
         return len(self.rows)
+
+    def __getstate__(self) -> dict:
+        # a process pool gets the ingredients, not what this process derived from them
+        state = dict(self.__dict__)
+        state["_measures"] = {}
+        state.pop("neuron_dissimilarity", None)
+        return state
+
+    @cached_property
+    def neuron_dissimilarity(self) -> np.ndarray:
+        """``M_ik`` of every candidate neuron, in neuron order (read-only)."""
+        m = self.dissimilarity[self.rows, self.cols]
+        m.setflags(write=False)
+        return m
 
 
 def build_problem(left_xy, right_xy, dissimilarity, *, shift: float = 20.0,
@@ -152,7 +169,7 @@ class Method:
         return tuple(g.name for g in self.genes)
 
     def similarity(self, problem: Problem, params: Params) -> np.ndarray:
-        return transfer(problem.dissimilarity[problem.rows, problem.cols], params.theta_s, params.lambda_s)
+        return transfer(problem.neuron_dissimilarity, params.theta_s, params.lambda_s)
 
     def pair_measure(self, problem: Problem) -> np.ndarray:
         """``X`` for every interacting pair, and ``X`` of a neuron with itself."""
@@ -165,10 +182,21 @@ class Method:
         """The network whose energy (3-15) this method minimises."""
         if not isinstance(params, Params):
             raise ParameterTypeError(message("params", f"Method-{self.name}", "a Params instance", params))
-        c = transfer(self.pair_measure(problem), params.theta_c, params.lambda_c)
-        self_c = transfer(self.self_measure(problem), params.theta_c, params.lambda_c)
+        pair_x, self_x = self._measures(problem)
+        c = transfer(pair_x, params.theta_c, params.lambda_c)
+        self_c = transfer(self_x, params.theta_c, params.lambda_c)
         # Params are validated finite and transfer() maps finite input into [-1, 1].
         return Network._trusted(problem.topology, self.similarity(problem, params), c, self_c)
+
+    def _measures(self, problem: Problem) -> tuple[np.ndarray, np.ndarray]:
+        """:meth:`pair_measure` and :meth:`self_measure`, computed once per problem (read-only)."""
+        kept = problem._measures.get(self)
+        if kept is None:
+            kept = tuple(np.array(x, dtype=float) for x in (self.pair_measure(problem), self.self_measure(problem)))
+            for x in kept:
+                x.setflags(write=False)
+            problem._measures[self] = kept
+        return kept
 
     def postprocess(self, problem: Problem, on: np.ndarray) -> np.ndarray:
         """Which of the neurons that are on (indices `on`) stay matches; all (`on` itself), by default.
@@ -201,11 +229,11 @@ class MethodI(Method):
 
     def pair_measure(self, problem):
         p = problem.pairs
-        m = problem.dissimilarity[problem.rows, problem.cols]
+        m = problem.neuron_dissimilarity
         return p.dd + p.dD + 0.5 * (m[p.a] + m[p.b])
 
     def self_measure(self, problem):
-        return problem.dissimilarity[problem.rows, problem.cols]
+        return problem.neuron_dissimilarity
 
     def postprocess(self, problem, on):
         on = np.asarray(on, dtype=np.int64)

@@ -30,6 +30,8 @@ from ._validation import ParameterError, ParameterTypeError, check_choice, check
 
 __all__ = ["LAMBDA_C", "LAMBDA_S", "MATCH_BIAS", "THETA_C", "THETA_S", "Gene", "Params"]
 
+_INF = float("inf")
+
 
 @dataclass(frozen=True, repr=False)
 class Params:
@@ -61,6 +63,12 @@ class Params:
     match_bias: float | None = None
 
     def __post_init__(self):
+        # A GA builds one Params per chromosome: plain floats in range pass without a call.
+        t_c, t_s, l_c, l_s, beta = self.theta_c, self.theta_s, self.lambda_c, self.lambda_s, self.match_bias
+        if (type(t_c) is type(t_s) is type(l_c) is type(l_s) is float and 0.0 <= t_c < _INF
+                and 0.0 <= t_s < _INF and 0.0 < l_c < _INF and 0.0 < l_s < _INF
+                and (beta is None or type(beta) is float and -_INF < beta < _INF)):
+            return
         for f in fields(self):
             if f.name == "match_bias":
                 if self.match_bias is not None:

@@ -16,13 +16,14 @@ import numbers
 import signal
 from concurrent.futures import ProcessPoolExecutor
 from dataclasses import dataclass, field, replace
+from functools import cached_property
 from pathlib import Path
 
 import numpy as np
 
 from ._validation import ParameterError, ParameterTypeError, check_number, message
 from .datasets import aloe, ground_truth_pairs, motorcycle
-from .evaluation import Score, score
+from .evaluation import Score, Scorer, score
 from .genetic import GAConfig
 from .matching import MatchConfig, Prepared, prepare
 from .methods import get_method
@@ -62,6 +63,11 @@ class Case:
     unknown: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=np.int64))
     name: str = ""
     left_out: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=np.int64))
+
+    @cached_property
+    def scorer(self) -> Scorer:
+        """:func:`~ismb_lab.evaluation.score` against this case's targets, the look-ups built once."""
+        return Scorer(self.targets, self.unknown)
 
     @classmethod
     def from_files(cls, left, right, targets, config: MatchConfig | None = None,

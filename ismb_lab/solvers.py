@@ -193,9 +193,11 @@ def solve(net: Network, solver: str = DEFAULT_SOLVER, *, seed: int = 0, stop_rul
     chosen = get_solver(solver, owner)
     if not isinstance(net, Network):
         raise ParameterTypeError(message("net", owner, "a Network", net))
-    check_number(seed, "seed", owner, low=0, integer=True)
-    check_choice(stop_rule, "stop_rule", owner, STOP_RULES)
-    check_choice(rule, "rule", owner, RULES)
+    # a GA solves thousands of networks: the common arguments pass without a call
+    if not (type(seed) is int and seed >= 0 and stop_rule in STOP_RULES and rule in RULES):
+        check_number(seed, "seed", owner, low=0, integer=True)
+        check_choice(stop_rule, "stop_rule", owner, STOP_RULES)
+        check_choice(rule, "rule", owner, RULES)
     return chosen.solve(net, seed, stop_rule, rule, kernel)
 
 

@@ -13,19 +13,21 @@ A training pair is a :class:`ismb_lab.protocol.Case`, or anything else with a
 
 from __future__ import annotations
 
-from dataclasses import replace
+from dataclasses import fields
 from typing import Iterator, Sequence
 
 import numpy as np
 
 from ._validation import ParameterError, ParameterTypeError, check_number, message
-from .evaluation import Score, score
+from .evaluation import Score, Scorer
 from .genetic import Bounds, GAConfig, Generation, evolve
 from .methods import get_method
 from .params import Params
 from .solvers import DEFAULT_SOLVER, get_solver, solve, to_matches
 
 __all__ = ["Fitness", "evaluate", "gene_bounds", "to_chromosome", "to_params", "tune"]
+
+_FIELDS = tuple(f.name for f in fields(Params))
 
 
 def gene_bounds(method) -> Bounds:
@@ -55,7 +57,9 @@ def to_params(method, chromosome, base: Params | None = None) -> Params:
     if len(chromosome) != len(genes):
         raise ParameterError(message("chromosome", "to_params", f"{len(genes)} genes {genes}",
                                      chromosome.tolist()))
-    return replace(base or m.defaults, **dict(zip(genes, chromosome.tolist())))
+    values = {name: getattr(base or m.defaults, name) for name in _FIELDS}
+    values.update(zip(genes, chromosome.tolist()))
+    return Params(**values)  # dataclasses.replace(), in less time
 
 
 def to_chromosome(method, params: Params) -> np.ndarray:
@@ -78,7 +82,8 @@ def evaluate(cases: Sequence, method, params: Params, seed: int = 0,
     for case in cases:
         problem = case.prepared.problem
         state = solve(m.network(problem, params), solver, seed=seed, owner="evaluate").state
-        total = total + score(to_matches(problem, state, m).pairs, case.targets, case.unknown)
+        scorer = getattr(case, "scorer", None) or Scorer(case.targets, case.unknown)
+        total = total + scorer(to_matches(problem, state, m).pairs)
     return total
 
 

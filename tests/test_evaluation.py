@@ -6,7 +6,7 @@ import re
 import numpy as np
 import pytest
 
-from ismb_lab.evaluation import Score, score
+from ismb_lab.evaluation import Score, Scorer, score
 from ismb_lab.matching import Prepared
 from ismb_lab.methods import Params, build_problem
 from ismb_lab.protocol import Case, format_protocol, protocol
@@ -24,6 +24,9 @@ from ismb_lab.tuning import evaluate
 ])
 def test_cet_counts(pairs, targets, unknown, expected):
     assert str(score(pairs, targets, unknown)) == expected
+    scorer = Scorer(targets, unknown)   # built once, then used on several match sets
+    assert str(scorer(pairs)) == expected and str(scorer(pairs)) == expected
+    assert str(scorer(np.zeros((0, 2), dtype=int))) == f"0/0+0/{expected.rsplit('/', 1)[1]}"
 
 
 def test_rates_and_fitness():
@@ -70,6 +73,16 @@ def test_no_match_energy_leaves_the_partnerless_corner_unmatched_under_every_sol
         nm = evaluate([case], "NM", Params(**params.to_dict(), match_bias=0.0), solver=solver)
         assert str(nm) == "2/0+0/2", solver
         assert three.extra >= 1, solver          # exactly one match per row: corner 2 takes one
+
+
+def test_evaluate_scores_any_object_with_a_pair_and_targets_as_it_scores_a_case():
+    from types import SimpleNamespace
+
+    case = hand_case(0, "a")
+    plain = SimpleNamespace(prepared=case.prepared, targets=case.targets, unknown=case.unknown)
+    params = Params(theta_c=3.0, theta_s=20.0, lambda_c=1.0, lambda_s=0.5)
+    assert str(evaluate([plain], "III", params)) == str(evaluate([case], "III", params))
+    assert case.scorer is case.scorer
 
 
 def test_protocol_reports_annealed_and_exact_rows():

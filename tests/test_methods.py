@@ -205,3 +205,38 @@ def test_method_nm4_is_method_nm_with_the_match_bias_fixed_at_zero():
     assert get_method("NM4").gene_names == ("theta_c", "theta_s", "lambda_c", "lambda_s")
     with pytest.raises(TypeError, match="'params' parameter of Method-NM4"):
         get_method("NM4").network(problem, base.to_dict())
+
+
+@pytest.mark.parametrize("bad", [dict(theta_c=-1.0), dict(theta_s=-1e-300), dict(lambda_c=0.0),
+                                 dict(lambda_s=-0.0), dict(lambda_c=float("inf")),
+                                 dict(theta_c=float("-inf")), dict(match_bias=float("nan"))])
+def test_plain_floats_are_checked_as_strictly_as_any_number(bad):
+    # Params has a shortcut for plain floats in range; everything else takes the full check
+    with pytest.raises(ValueError, match=f"'{next(iter(bad))}' parameter of Params"):
+        Params(**bad)
+
+
+def test_params_store_plain_floats_whatever_number_type_they_are_given():
+    p = Params(theta_c=np.float64(3.5), theta_s=4, lambda_c=np.float32(0.5), lambda_s=2.0,
+               match_bias=np.int64(-1))
+    assert [type(v) for v in p.to_dict().values()] == [float] * 5
+    assert p == Params(theta_c=3.5, theta_s=4.0, lambda_c=0.5, lambda_s=2.0, match_bias=-1.0)
+
+
+def test_each_methods_measures_are_computed_once_per_problem_and_stay_in_this_process():
+    import pickle
+
+    problem = random_problem(6, 12)
+    for name in ("I", "III"):
+        method = get_method(name)
+        pair_x, self_x = method._measures(problem)
+        assert method._measures(problem)[0] is pair_x
+        assert np.array_equal(pair_x, method.pair_measure(problem))
+        assert np.array_equal(self_x, method.self_measure(problem))
+        assert not pair_x.flags.writeable and not self_x.flags.writeable
+    assert not problem.neuron_dissimilarity.flags.writeable
+    copy = pickle.loads(pickle.dumps(problem))
+    assert copy._measures == {} and "neuron_dissimilarity" not in vars(copy)
+    params = Params(theta_c=9.0, theta_s=20.0, lambda_c=0.7, lambda_s=0.3)
+    a, b = (get_method("III").network(p, params) for p in (problem, copy))
+    assert np.array_equal(a.pair_c, b.pair_c) and np.array_equal(a.similarity, b.similarity)
