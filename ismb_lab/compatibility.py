@@ -14,8 +14,10 @@ neighbour pairs are stored, as a sparse list ``(a, b)`` with ``a < b``.
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
+import numba
 import numpy as np
 from scipy.spatial import cKDTree
 
@@ -130,18 +132,37 @@ def neuron_pairs(left_xy, right_xy, rows, cols, neighbours) -> NeuronPairs:
         raise ParameterError("The 'rows' parameter of neuron_pairs must be sorted ascending. "
                          f"Got {rows.tolist()[:10]} instead.")
     counts = np.bincount(rows, minlength=len(lxy))
-    starts = np.concatenate([[0], np.cumsum(counts)[:-1]])
-    ci, cj = counts[nb[:, 0]], counts[nb[:, 1]]
-    sizes = ci * cj
-    pair_id = np.repeat(np.arange(len(nb)), sizes)
-    local = np.arange(sizes.sum()) - np.repeat(np.cumsum(sizes) - sizes, sizes)
-    a = starts[nb[pair_id, 0]] + local // cj[pair_id]
-    b = starts[nb[pair_id, 1]] + local % cj[pair_id]
-    keep = cols[a] != cols[b]
-    a, b = a[keep], b[keep]
+    starts = np.concatenate([[0], np.cumsum(counts)]).astype(np.int64)
     p, q = lxy[rows], rxy[cols]
-    disparity = euclidean_disparity(p, q)
-    dd = np.abs(disparity[a] - disparity[b])
-    dD = np.abs(np.hypot(*(p[a] - p[b]).T) - np.hypot(*(q[a] - q[b]).T))
-    dY = np.abs((q[a, 1] - p[a, 1]) - (q[b, 1] - p[b, 1]))
+    a, b, dd, dD, dY = _pairs(nb, starts, cols, p, q, euclidean_disparity(p, q))
     return NeuronPairs(a=a, b=b, dd=dd, dD=dD, dY=dY)
+
+
+@numba.njit(cache=True)
+def _pairs(nb, starts, cols, p, q, disparity):
+    """The pairs and their differences in one pass, the order and arithmetic of the NumPy
+    expressions they replace (``math.hypot`` compiles to the C library's, as ``np.hypot`` is):
+    at 1,000 corners the arrays of those expressions took 53 ms, this 15 ms (10.8 ms
+    of it the 848,000 hypot calls)."""
+    size = 0
+    for t in range(nb.shape[0]):
+        for u in range(starts[nb[t, 0]], starts[nb[t, 0] + 1]):
+            for v in range(starts[nb[t, 1]], starts[nb[t, 1] + 1]):
+                size += cols[u] != cols[v]
+    a = np.empty(size, dtype=np.int64)
+    b = np.empty(size, dtype=np.int64)
+    dd, dD, dY = np.empty(size), np.empty(size), np.empty(size)
+    m = 0
+    for t in range(nb.shape[0]):
+        i, j = nb[t, 0], nb[t, 1]
+        for u in range(starts[i], starts[i + 1]):
+            for v in range(starts[j], starts[j + 1]):
+                if cols[u] == cols[v]:
+                    continue
+                a[m], b[m] = u, v
+                dd[m] = abs(disparity[u] - disparity[v])
+                dD[m] = abs(math.hypot(p[u, 0] - p[v, 0], p[u, 1] - p[v, 1])
+                            - math.hypot(q[u, 0] - q[v, 0], q[u, 1] - q[v, 1]))
+                dY[m] = abs((q[u, 1] - p[u, 1]) - (q[v, 1] - p[v, 1]))
+                m += 1
+    return a, b, dd, dD, dY

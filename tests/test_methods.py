@@ -5,7 +5,7 @@ import itertools
 import numpy as np
 import pytest
 
-from ismb_lab.compatibility import left_neighbours
+from ismb_lab.compatibility import left_neighbours, neuron_pairs
 from ismb_lab.methods import THESIS_PARAMS, Params, build_problem, get_method
 from ismb_lab.similarity import candidate_mask, mean_abs_difference, patches, transfer
 from ismb_lab.solvers import to_matches
@@ -81,6 +81,41 @@ def test_sparse_pairs_equal_the_dense_definition_and_are_symmetric(seed):
     assert set(sparse) == set(dense)
     for key, value in dense.items():
         assert np.allclose(sparse[key], value) and np.allclose(dense[key[2:] + key[:2]], value)
+
+
+def numpy_pairs(lxy, rxy, rows, cols, nb):
+    """The vectorised expressions neuron_pairs once was, kept to check the compiled loop."""
+    counts = np.bincount(rows, minlength=len(lxy))
+    starts = np.concatenate([[0], np.cumsum(counts)[:-1]])
+    ci, cj = counts[nb[:, 0]], counts[nb[:, 1]]
+    sizes = ci * cj
+    pair_id = np.repeat(np.arange(len(nb)), sizes)
+    local = np.arange(sizes.sum()) - np.repeat(np.cumsum(sizes) - sizes, sizes)
+    a = starts[nb[pair_id, 0]] + local // cj[pair_id]
+    b = starts[nb[pair_id, 1]] + local % cj[pair_id]
+    keep = cols[a] != cols[b]
+    a, b = a[keep], b[keep]
+    p, q = lxy[rows], rxy[cols]
+    disparity = np.hypot(*(p - q).T)
+    return (a, b, np.abs(disparity[a] - disparity[b]),
+            np.abs(np.hypot(*(p[a] - p[b]).T) - np.hypot(*(q[a] - q[b]).T)),
+            np.abs((q[a, 1] - p[a, 1]) - (q[b, 1] - p[b, 1])))
+
+
+@pytest.mark.parametrize("seed", range(4))
+def test_compiled_pairs_equal_the_numpy_expressions_bit_for_bit(seed):
+    # sub-pixel points, some left features without candidates, crowded and empty rows
+    rng = np.random.default_rng(seed)
+    lxy = rng.uniform(0, 300, (150, 2))
+    rxy = np.concatenate([lxy[:120] + [-20, 0] + rng.normal(0, 2, (120, 2)), rng.uniform(0, 300, (40, 2))])
+    mask = candidate_mask(lxy, rxy)
+    rows, cols = (x.astype(np.int64) for x in np.nonzero(mask))
+    nb = left_neighbours(lxy)
+    got = neuron_pairs(lxy, rxy, rows, cols, nb)
+    expected = numpy_pairs(lxy, rxy, rows, cols, nb)
+    assert len(got) > 500 and np.bincount(rows, minlength=150).min() == 0
+    for name, want in zip(("a", "b", "dd", "dD", "dY"), expected):
+        np.testing.assert_array_equal(getattr(got, name), want, err_msg=name)
 
 
 def test_neighbourhood_rules():
