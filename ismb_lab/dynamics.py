@@ -111,15 +111,22 @@ def _next(state):
 
 
 @numba.njit(cache=True)
-def _below(state, bound):
-    """:meth:`_Stream.below`: ``(new state, a number in range(bound))``."""
-    mask = _U64(bound - 1)      # all ones from the highest set bit down
+def _ones_below(x):
+    """`x` with every bit under its highest set bit set: the mask of a draw below ``x + 1``."""
+    mask = _U64(x)
     mask |= mask >> _U64(1)
     mask |= mask >> _U64(2)
     mask |= mask >> _U64(4)
     mask |= mask >> _U64(8)
     mask |= mask >> _U64(16)
     mask |= mask >> _U64(32)
+    return mask
+
+
+@numba.njit(cache=True)
+def _below(state, bound):
+    """:meth:`_Stream.below`: ``(new state, a number in range(bound))``."""
+    mask = _ones_below(bound - 1)
     while True:
         state, x = _next(state)
         x = _U64(x & mask)
@@ -140,13 +147,7 @@ def _shuffle(order, state):
     t = order.shape[0] - 1
     if t < 1:
         return state
-    mask = _U64(t)
-    mask |= mask >> _U64(1)
-    mask |= mask >> _U64(2)
-    mask |= mask >> _U64(4)
-    mask |= mask >> _U64(8)
-    mask |= mask >> _U64(16)
-    mask |= mask >> _U64(32)
+    mask = _ones_below(t)
     while t > 0:
         state, x = _next(state)
         x &= mask
