@@ -359,8 +359,12 @@ class GARunner(Base):
         self.say(self.model.describe())
 
     def stop(self) -> None:
-        self.model.stop()
-        self.say("stopping after the current generation")
+        # The watcher writes the final status once the run has ended, under this lock: a
+        # run still alive here has not had it yet, so this line never hides "stopped".
+        with self._lock:
+            if self.model.running:
+                self.say("stopping after the current generation")
+            self.model.stop()
 
     def wait(self, timeout: float | None = None) -> bool:
         """Wait until the run and its final redraw are done; True if nothing is left running."""
@@ -396,7 +400,10 @@ class GARunner(Base):
         self.model.wait()
         if self.model.error is not None:
             self.report(self.model.error)
-        self.refresh()
+        try:
+            self.refresh()
+        except Exception as exc:  # noqa: BLE001 - in this thread it would be lost, and the status stale
+            self.report(exc)
 
     def _buttons(self) -> None:
         running = self.model.running and self.model.status in ("running", "paused")

@@ -61,6 +61,27 @@ def test_stop_mid_run_ends_the_thread(endless):
     assert not runner.start_button.disabled and runner.stop_button.disabled
 
 
+def test_stop_after_the_run_ended_keeps_its_final_status(case):
+    # Stop pressed as the run ends: the run's last word stays (it used to be replaced by
+    # "stopping after the current generation", for good)
+    runner = GARunner(case, population=6, generations=3)
+    runner.start()
+    assert runner.wait(60) and runner.model.status == "finished"
+    final = runner.status.value
+    runner.stop_button.click()   # a click the browser sent before the button was disabled
+    assert runner.status.value == final and "finished, generation" in final
+
+
+def test_a_failing_final_redraw_lands_in_the_log(case, monkeypatch):
+    # only the watcher thread redraws here (no redraw during the run); its error must show
+    runner = GARunner(case, population=6, generations=2, redraw_every=1e9)
+    monkeypatch.setattr(runner.pane, "draw", lambda: (_ for _ in ()).throw(RuntimeError("no canvas")))
+    runner.start()
+    assert runner.wait(60) and runner.model.error is None
+    assert "Error: no canvas" in runner.status.value
+    assert any("RuntimeError: no canvas" in o.get("text", "") for o in runner.log.outputs)
+
+
 def test_pause_holds_the_run_and_resume_continues(endless):
     runner = GARunner(endless, population=6, generations=500)
     slow(runner, 0.01)
