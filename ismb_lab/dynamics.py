@@ -141,7 +141,7 @@ def _shuffle(order, state):
     The same draws as ``_below(state, t + 1)`` for ``t = n - 1, ..., 1``, without a branch
     on the draw: a rejected number leaves ``t`` where it is (its swap is with itself), and
     the mask drops a bit when ``t`` falls below its upper half.  A rejection was a
-    mispredicted branch, and those had taken half of a 200 x 200 run's time in drawing.
+    mispredicted branch, and drawing had taken a third of a 200 x 200 run.
     """
     state = _U64(state)
     t = order.shape[0] - 1

@@ -49,7 +49,7 @@ def _pairs(rows, cols) -> np.ndarray:
 def _candidate_costs(problem: Problem) -> np.ndarray:
     """``M`` on candidate neurons, ``inf`` elsewhere."""
     cost = np.full(problem.dissimilarity.shape, np.inf)
-    cost[problem.rows, problem.cols] = problem.dissimilarity[problem.rows, problem.cols]
+    cost[problem.rows, problem.cols] = problem.neuron_dissimilarity
     return cost
 
 
