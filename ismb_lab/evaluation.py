@@ -17,7 +17,10 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+import numba
 import numpy as np
+
+from ._validation import ParameterError, message
 
 __all__ = ["Score", "Scorer", "score"]
 
@@ -106,6 +109,61 @@ class Scorer:
             elif i not in skip:
                 extra += 1
         return Score(correct, wrong, extra, len(wanted))
+
+    @property
+    def targets(self) -> int:
+        """T: the number of distinct targets."""
+        return len(self._wanted)
+
+    def neuron_codes(self, rows, cols) -> np.ndarray:
+        """What a match of each candidate neuron ``(rows[a], cols[a])`` would count as.
+
+        For a GA that scores thousands of states of the same neurons: code the
+        neurons once, then :meth:`count` the matched ones.
+
+        Returns
+        -------
+        codes : (n,) uint8 ndarray
+            1 correct, 2 wrong partner, 3 extra, 0 not counted (unknown truth).
+
+        Examples
+        --------
+        >>> scorer = Scorer([[0, 0], [1, 1], [2, 2]], unknown=[4])
+        >>> codes = scorer.neuron_codes(rows=[0, 1, 3, 4], cols=[0, 2, 3, 4])
+        >>> codes.tolist(), str(scorer.count(codes, [0, 1, 2, 3]))
+        ([1, 2, 3, 0], '1/1+1/3')
+        """
+        wanted, has_target, skip = self._wanted, self._has_target, self._skip
+        rows = np.asarray(rows, dtype=np.int64).ravel().tolist()
+        cols = np.asarray(cols, dtype=np.int64).ravel().tolist()
+        return np.array([1 if (i, k) in wanted else 2 if i in has_target else 0 if i in skip else 3
+                         for i, k in zip(rows, cols)], dtype=np.uint8)
+
+    def count(self, codes: np.ndarray, matched) -> Score:
+        """The :class:`Score` of the matched neurons (indices into `codes`, each at most once),
+        the same as calling the scorer on their ``(i, k)`` pairs."""
+        codes, matched = np.asarray(codes, dtype=np.uint8), np.asarray(matched, dtype=np.int64).ravel()
+        correct, wrong, extra = _tally(codes, matched)
+        if correct < 0:
+            raise ParameterError(message("matched", "Scorer.count", f"indices in [0, {len(codes)})",
+                                         matched))
+        return Score(correct, wrong, extra, len(self._wanted))
+
+
+@numba.njit(cache=True)
+def _tally(codes, matched):
+    correct = wrong = extra = 0
+    for a in matched:
+        if a < 0 or a >= codes.shape[0]:
+            return -1, 0, 0
+        code = codes[a]
+        if code == 1:
+            correct += 1
+        elif code == 2:
+            wrong += 1
+        elif code == 3:
+            extra += 1
+    return correct, wrong, extra
 
 
 def score(pairs, targets, unknown=()) -> Score:

@@ -69,6 +69,13 @@ class Case:
         """:func:`~ismb_lab.evaluation.score` against this case's targets, the look-ups built once."""
         return Scorer(self.targets, self.unknown)
 
+    @cached_property
+    def neuron_codes(self) -> np.ndarray:
+        """:meth:`Scorer.neuron_codes <ismb_lab.evaluation.Scorer.neuron_codes>` of this
+        case's candidate neurons, for scoring many states of them."""
+        problem = self.prepared.problem
+        return self.scorer.neuron_codes(problem.rows, problem.cols)
+
     @classmethod
     def from_files(cls, left, right, targets, config: MatchConfig | None = None,
                    name: str | None = None, check_hash: bool = True) -> "Case":

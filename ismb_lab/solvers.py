@@ -41,7 +41,7 @@ from .hopfield import RULES, Network
 from .dynamics import STOP_RULES, run
 
 __all__ = ["ANNEAL", "ASSIGN", "DEFAULT_SOLVER", "EXACT", "NETWORK", "SOLVERS", "Matches", "Solution", "Solver",
-           "get_solver", "similarity_assignment", "solve", "solver_names", "to_matches"]
+           "get_solver", "matched_neurons", "similarity_assignment", "solve", "solver_names", "to_matches"]
 
 
 @dataclass(frozen=True, eq=False)
@@ -208,6 +208,22 @@ class Matches(NamedTuple):
     state: np.ndarray
 
 
+def matched_neurons(state, neurons=None, method=None) -> np.ndarray:
+    """Indices of the neurons that are matches in a final state, sorted: those that are on,
+    less any that `method`'s :meth:`~ismb_lab.methods.Method.postprocess` drops.
+
+    :func:`to_matches` turns them into feature pairs; a GA that only counts them stops here.
+
+    Examples
+    --------
+    >>> matched_neurons(np.array([1, 0, 0, 1], dtype=np.uint8)).tolist()
+    [0, 3]
+    """
+    on = np.flatnonzero(np.asarray(state, dtype=np.uint8))
+    kept = on if method is None else method.postprocess(neurons, on)
+    return on if kept is on else np.sort(kept)   # a method that keeps every match returns `on` itself
+
+
 def to_matches(neurons, state, method=None) -> Matches:
     """The matched ``(i, k)`` feature pairs of a final state: the one place this is done.
 
@@ -235,10 +251,8 @@ def to_matches(neurons, state, method=None) -> Matches:
     [[0, 0], [1, 1]]
     """
     state = np.asarray(state, dtype=np.uint8)
-    on = np.flatnonzero(state)
-    kept = on if method is None else method.postprocess(neurons, on)
-    if kept is not on:   # a method that keeps every match returns `on` itself
-        on = np.sort(kept)
+    on = matched_neurons(state, neurons, method)
+    if method is not None:
         state = np.zeros_like(state)
         state[on] = 1
     pairs = np.empty((len(on), 2), dtype=np.int64)

@@ -19,11 +19,11 @@ from typing import Iterator, Sequence
 import numpy as np
 
 from ._validation import ParameterError, ParameterTypeError, check_number, message
-from .evaluation import Score, Scorer
+from .evaluation import Score, Scorer, _tally as _count
 from .genetic import Bounds, GAConfig, Generation, evolve
 from .methods import get_method
 from .params import Params
-from .solvers import DEFAULT_SOLVER, get_solver, solve, to_matches
+from .solvers import DEFAULT_SOLVER, get_solver, matched_neurons, solve
 
 __all__ = ["Fitness", "evaluate", "gene_bounds", "to_chromosome", "to_params", "tune"]
 
@@ -78,13 +78,29 @@ def evaluate(cases: Sequence, method, params: Params, seed: int = 0,
     """The summed C/E/T of `params` over `cases`, each solved by `solver` with `seed`."""
     m = get_method(method)
     get_solver(solver, "evaluate")
-    total = Score(0, 0, 0, 0)
+    correct = wrong = extra = targets = 0
     for case in cases:
-        problem = case.prepared.problem
-        state = solve(m.network(problem, params), solver, seed=seed, owner="evaluate").state
-        scorer = getattr(case, "scorer", None) or Scorer(case.targets, case.unknown)
-        total = total + scorer(to_matches(problem, state, m).pairs)
-    return total
+        c, w, e = _tally(case, m, params, seed, solver)
+        correct, wrong, extra = correct + c, wrong + w, extra + e
+        targets += (getattr(case, "scorer", None) or Scorer(case.targets, case.unknown)).targets
+    return Score(correct, wrong, extra, targets)
+
+
+def _tally(case, m, params: Params, seed: int, solver: str) -> tuple[int, int, int]:
+    """C, wrong partner and extra of one case: the score of
+    :func:`~ismb_lab.solvers.to_matches`' pairs, counted over neurons coded once per case
+    (:meth:`~ismb_lab.evaluation.Scorer.neuron_codes`)."""
+    problem = case.prepared.problem
+    state = solve(m.network(problem, params), solver, seed=seed, owner="evaluate").state
+    codes = getattr(case, "neuron_codes", None)
+    if codes is None:
+        codes = Scorer(case.targets, case.unknown).neuron_codes(problem.rows, problem.cols)
+    kept = np.asarray(matched_neurons(state, problem, m), dtype=np.int64)
+    counts = _count(codes, kept)
+    if counts[0] < 0:
+        raise ParameterError(message("method", "evaluate", f"a postprocess that keeps neuron indices in "
+                                     f"[0, {len(codes)})", kept))
+    return counts
 
 
 class Fitness:
@@ -118,9 +134,16 @@ class Fitness:
 
     def __call__(self, population: np.ndarray) -> np.ndarray:
         # fitnesses are integers: their sum is exact, so this is np.mean's value
-        return np.array([sum(evaluate(self.cases, self.method, self.params(c), self.seed + s,
-                                      self.solver).fitness for s in range(self.seeds)) / self.seeds
-                         for c in np.atleast_2d(population)], dtype=float)
+        return np.array([sum(self._fitness(self.params(c), self.seed + s) for s in range(self.seeds))
+                         / self.seeds for c in np.atleast_2d(population)], dtype=float)
+
+    def _fitness(self, params: Params, seed: int) -> int:
+        """``evaluate(...).fitness``, without building the Score."""
+        total = 0
+        for case in self.cases:
+            correct, wrong, extra = _tally(case, self.method, params, seed, self.solver)
+            total += correct - wrong - extra
+        return total
 
 
 def tune(cases: Sequence, method="III", *, rng=0, ga: GAConfig | None = None, seed: int = 0,

@@ -10,7 +10,9 @@ from ismb_lab.evaluation import Score, Scorer, score
 from ismb_lab.matching import Prepared
 from ismb_lab.methods import Params, build_problem
 from ismb_lab.protocol import Case, format_protocol, protocol
-from ismb_lab.tuning import evaluate
+from ismb_lab import ParameterError
+from ismb_lab.scenes import synthetic_scene
+from ismb_lab.tuning import Fitness, evaluate, to_chromosome
 
 
 @pytest.mark.parametrize("pairs, targets, unknown, expected", [
@@ -83,6 +85,8 @@ def test_evaluate_scores_any_object_with_a_pair_and_targets_as_it_scores_a_case(
     params = Params(theta_c=3.0, theta_s=20.0, lambda_c=1.0, lambda_s=0.5)
     assert str(evaluate([plain], "III", params)) == str(evaluate([case], "III", params))
     assert case.scorer is case.scorer
+    twice = SimpleNamespace(prepared=case.prepared, targets=np.repeat(case.targets, 2, axis=0), unknown=())
+    assert str(evaluate([twice], "III", params)) == str(evaluate([case], "III", params))  # T counts a target once
 
 
 def test_protocol_reports_annealed_and_exact_rows():
@@ -149,3 +153,57 @@ def test_protocol_on_two_processes_reports_exactly_what_one_process_does():
     assert two == one and two.to_dict() == one.to_dict()
     with pytest.raises(TypeError, match="'rng' parameter of protocol must be an integer seed"):
         protocol(cases, "NM4", jobs=2, rng=np.random.default_rng(0))
+
+
+def test_counting_coded_neurons_scores_every_state_as_their_pairs_do():
+    rng = np.random.default_rng(5)
+    rows, cols = np.nonzero(rng.random((12, 14)) < 0.4)
+    targets = np.stack([np.arange(0, 12, 2), rng.integers(0, 14, 6)], axis=1)
+    scorer = Scorer(targets, unknown=[1, 4, 5])
+    codes = scorer.neuron_codes(rows, cols)
+    assert set(codes.tolist()) == {0, 1, 2, 3}
+    for _ in range(200):
+        on = np.flatnonzero(rng.random(len(rows)) < rng.random())
+        assert scorer.count(codes, on) == scorer(np.stack([rows[on], cols[on]], axis=1))
+    assert str(scorer.count(codes, [])) == f"0/0+0/{len(targets)}"
+
+
+@pytest.mark.parametrize("matched", [[-1], [0, 10**6]])
+def test_counting_refuses_an_index_outside_the_neurons(matched):
+    scorer = Scorer([[0, 0]])
+    with pytest.raises(ParameterError, match=r"'matched'.*\[0, 3\)"):
+        scorer.count(scorer.neuron_codes([0, 0, 1], [0, 1, 1]), matched)
+
+
+@pytest.mark.parametrize("method", ["I", "II", "III", "NM", "NM4"])
+def test_evaluate_is_the_score_of_to_matches_pairs_for_every_method(method):
+    from ismb_lab.methods import get_method
+    from ismb_lab.solvers import solve, to_matches
+
+    case = Case.from_scene(synthetic_scene(seed=7))
+    problem, m = case.prepared.problem, get_method(method)
+    for theta_c in (2.0, 20.0, 60.0):
+        params = Params(theta_c=theta_c, lambda_c=0.5, match_bias=0.0)
+        for seed in (0, 1):
+            state = solve(m.network(problem, params), seed=seed).state
+            expected = score(to_matches(problem, state, m).pairs, case.targets, case.unknown)
+            assert evaluate([case], method, params, seed=seed) == expected
+            fitness = Fitness([case], method, seed=seed, base=params)
+            assert fitness(to_chromosome(method, params)[None, :])[0] == expected.fitness
+
+
+def test_a_postprocess_that_invents_neurons_is_named():
+    from ismb_lab.methods import MethodIII, register_method, unregister_method
+
+    class Stray(MethodIII):
+        name, description = "STRAY", "keeps a neuron that does not exist"
+
+        def postprocess(self, problem, on):
+            return np.append(on, problem.n_neurons)
+
+    register_method(Stray())
+    try:
+        with pytest.raises(ParameterError, match="'method'.*postprocess"):
+            evaluate([hand_case(0, "a")], "STRAY", Params())
+    finally:
+        unregister_method("STRAY")
