@@ -1,0 +1,32 @@
+"""scripts/matching_families.py on a few layouts: it runs, and its pooled figures agree with its spreads."""
+
+import importlib.util
+import re
+from pathlib import Path
+
+SCRIPT = Path(__file__).resolve().parents[1] / "scripts" / "matching_families.py"
+
+
+def load_script():
+    spec = importlib.util.spec_from_file_location("matching_families", SCRIPT)
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
+
+
+def test_pooled_figures_lie_within_their_spread_over_ga_and_update_seeds(capsys):
+    load_script().main(["--count", "4", "--generations", "2", "--ga-seeds", "2",
+                        "--variants", "NM4:network", "III:assign:assign"])
+    out = capsys.readouterr().out
+    pooled = out.split("pooled over the families")[1]
+    for variant in ("NM4:network", "III:assign:assign"):
+        block = pooled.split(f"{variant}:")[1].split("\n  ", 3)
+        recall, precision = map(float, re.findall(r"([\d.]+)%", block[0])[:2])
+        for line in block[1:3]:
+            low_r, high_r, low_p, high_p = map(float, re.findall(r"([\d.]+)-([\d.]+)%", line)[0]
+                                               + re.findall(r"([\d.]+)-([\d.]+)%", line)[1])
+            assert low_r - 0.05 <= recall <= high_r + 0.05, line
+            assert low_p - 0.05 <= precision <= high_p + 0.05, line
+    assert "over GA seeds" in pooled and "over update seeds" in pooled
+    assert re.search(r"mutual-nn: C/T +[\d.]+% +precision", pooled)
+    assert re.search(r"hungarian: C/T +[\d.]+% +precision", pooled)
