@@ -70,7 +70,7 @@ development split figures of every variant tried (first 40 layouts = seeds 1000-
     half the time (0.24 s per layout); one layout more is within noise, not chosen
     --method NM4 (its own default parameters, not fitted)          120: 3/120 (2.5%)
     --method NM4 --solver assign                                   120: 5/120 (4.2%)
-    NM4 with Method-III's parameters breaks every layout into spurious fragments; a fair
+    NM4 with Method-III's thesis parameters breaks every layout into spurious fragments; a fair
     trial needs parameters fitted for it (scripts/fit_depth_params.py), not done
 """
 
