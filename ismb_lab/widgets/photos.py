@@ -4,7 +4,8 @@
 (:func:`ismb_lab.rectify.check_rectified`) and, on request, the rectified pair
 (:func:`ismb_lab.rectify.rectify_pair`); :meth:`PhotoModel.save` writes the pair the
 student works on to a folder of their own (``photos-<user>-<name>/left.png``, ``right.png``
-and ``rectify.json``), so that labels saved against its images can be used again later.
+and ``rectify.json``), so that labels saved against its images can be used again later;
+another pair uploaded under the same name gets a folder of its own (``...-2``).
 :class:`PhotoLoader` is the widget: a file-upload control (or a folder path), the pair with
 each match's row difference drawn as a line (the epipolar check: on a rectified pair every
 line is level), Rectify, a ROI dragged on the left image, and "Use this pair", which opens
@@ -15,6 +16,7 @@ the widget it was made for (``TargetLabeler.from_photos()``,
 from __future__ import annotations
 
 import html
+import itertools
 import re
 from pathlib import Path
 from typing import Callable
@@ -141,24 +143,43 @@ class PhotoModel:
         return self.roi
 
     def save(self) -> Path:
-        """Write the pair used (rectified when it was) to ``photos-<user>-<name>/`` and return it."""
+        """Write the pair used (rectified when it was) to ``photos-<user>-<name>/`` and return it.
+
+        A folder of that name that holds another pair is left as it is (labels may rest on its
+        images): the pair goes to ``photos-<user>-<name>-2/``, ``-3/``, ... instead.  The same
+        pair saved again (another ROI, say) reuses its folder.
+        """
         if not self.ready:
             raise ParameterError(message("photos", "PhotoModel.save", "a rectified pair (press 'Rectify' first)",
                                          self.message))
         left, right, _, _ = self.current()
-        folder = self.folder / f"photos-{self.user}-{self.name}"
+        images = {"left.png": _png(left), "right.png": _png(right)}
+        folder = self._folder_for(images)
         folder.mkdir(parents=True, exist_ok=True)
         record = (self.rectified.to_dict() if self.rectified is not None else
                   {k: v for k, v in self.check.items() if not k.endswith("_xy")} | {"method": "already rectified"})
         record["roi"] = None if self.roi is None else list(self.roi)
-        atomic_write_bytes(folder / "left.png", _png(left))
-        atomic_write_bytes(folder / "right.png", _png(right))
+        for name, data in images.items():
+            atomic_write_bytes(folder / name, data)
         import json
 
         atomic_write_text(folder / "rectify.json", json.dumps(record, indent=2))
         self.saved = folder
         self.message = f"saved to {folder}"
         return folder
+
+    def _folder_for(self, images: dict) -> Path:
+        """The first of ``photos-<user>-<name>``, ``...-2``, ... that is new or holds these images."""
+        base = f"photos-{self.user}-{self.name}"
+        for n in itertools.count(1):
+            folder = self.folder / (base if n == 1 else f"{base}-{n}")
+            if not folder.exists() and not folder.is_symlink():
+                return folder
+            if folder.is_symlink() or not folder.is_dir():
+                continue
+            if all(not (folder / name).exists() or ((folder / name).is_file() and (folder / name).read_bytes() == data)
+                   for name, data in images.items()):
+                return folder
 
 
 def draw_photos(ax, model: PhotoModel) -> dict:

@@ -123,3 +123,35 @@ def test_the_scene_pair_takes_the_background_rectification(data, tmp_path):
     assert scene.ready and scene.rectified.method == "the background's"
     np.testing.assert_array_equal(scene.rectified.left, r.left)
     np.testing.assert_array_equal(scene.rectified.right, r.right)
+
+
+def test_another_pair_under_a_used_name_gets_its_own_folder_and_the_first_is_kept(tmp_path):
+    from ismb_lab.scenes import synthetic_scene
+    from ismb_lab.widgets.photos import PhotoModel
+
+    first, second = synthetic_scene(seed=0), synthetic_scene(seed=1)
+    model = PhotoModel(folder=tmp_path, user="ann")
+    model.set_photos(first.left, first.right, "desk")
+    kept = model.save()
+    assert kept == tmp_path / "photos-ann-desk"
+    files = {p.name: p.read_bytes() for p in kept.iterdir()}
+
+    model.set_roi(10, 10, 100, 90)                     # the same pair again: its own folder, new ROI
+    assert model.save() == kept
+    assert json.loads((kept / "rectify.json").read_text())["roi"] == [10, 10, 90, 80]
+    assert (kept / "left.png").read_bytes() == files["left.png"]
+
+    model.set_photos(second.left, second.right, "desk")   # another pair, the same name
+    assert model.save() == tmp_path / "photos-ann-desk-2"
+    assert (kept / "left.png").read_bytes() == files["left.png"]
+    assert (kept / "right.png").read_bytes() == files["right.png"]
+    assert (tmp_path / "photos-ann-desk-2" / "left.png").read_bytes() != files["left.png"]
+
+    (tmp_path / "photos-ann-note").write_text("mine")     # a file, and a link to a folder, are not used
+    elsewhere = tmp_path / "elsewhere"
+    elsewhere.mkdir()
+    (tmp_path / "photos-ann-link").symlink_to(elsewhere, target_is_directory=True)
+    for name in ("note", "link"):
+        model.set_photos(first.left, first.right, name)
+        assert model.save() == tmp_path / f"photos-ann-{name}-2"
+    assert (tmp_path / "photos-ann-note").read_text() == "mine" and not any(elsewhere.iterdir())
