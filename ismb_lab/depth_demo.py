@@ -42,7 +42,7 @@ from .similarity import mean_abs_difference
 from .solvers import ANNEAL, get_solver
 
 __all__ = ["DEPTH_MATCH_CONFIG", "DEPTH_PARAMS", "DEPTH_SOLVER", "MASK_GROW", "REGION_CORNERS",
-           "changed_regions", "changed_roi", "depth_match",
+           "changed_regions", "changed_roi", "depth_match", "depth_pairs",
            "layout_match_config", "relative_depth", "scene_match_config",
            "scene_prepared"]
 
@@ -390,8 +390,11 @@ def depth_match(pair, *, background=None, method: str = "III", params=None, matc
     """
     own = "depth_match"
     get_solver(solver, own)
-    if params is None and method == "III":
-        params = DEPTH_PARAMS
+    return _match(_prepared(pair, background, match_config, own), method, params, seed, solver, network)
+
+
+def _prepared(pair, background, match_config, own: str) -> Prepared:
+    """:func:`depth_match`'s corners and energy ingredients of `pair`."""
     match_config = DEPTH_MATCH_CONFIG if match_config is None else match_config
     if not isinstance(match_config, MatchConfig):
         raise ParameterTypeError(message("match_config", own, "a MatchConfig", match_config))
@@ -399,15 +402,47 @@ def depth_match(pair, *, background=None, method: str = "III", params=None, matc
         match_config = auto_window(_load(background, "background", own), match_config)
     pair = _load(pair, "pair", own)
     if background is not None:
-        prepared = scene_prepared(_load(background, "background", own), pair, match_config)
-    else:
-        prepared = prepare(pair, None, match_config)
+        return scene_prepared(_load(background, "background", own), pair, match_config)
+    return prepare(pair, None, match_config)
+
+
+def _match(prepared: Prepared, method, params, seed, solver, network: dict) -> MatchResult:
+    if params is None and method == "III":
+        params = DEPTH_PARAMS
     return match(method=method, params=params, seed=seed, solver=solver, prepared=prepared, **network)
+
+
+def depth_pairs(background, scene, match_config=None) -> tuple[Prepared, Prepared]:
+    """The background and scene pairs prepared as :func:`relative_depth` prepares them.
+
+    Corners, ``M`` and the geometry do not depend on the method, the parameters, the
+    seed or the tolerances: pass the result as ``relative_depth(..., prepared=...)``
+    to change those without preparing the pairs again.
+
+    Parameters
+    ----------
+    background, scene, match_config
+        As in :func:`relative_depth`.
+
+    Returns
+    -------
+    (Prepared, Prepared)
+        The background pair's and the scene pair's.
+    """
+    return _depth_pairs(background, scene, match_config, "depth_pairs")
+
+
+def _depth_pairs(background, scene, match_config, own: str) -> tuple[Prepared, Prepared]:
+    bg, sc = _load(background, "background", own), _load(scene, "scene", own)
+    if isinstance(match_config, MatchConfig) and match_config.shift == "auto":
+        match_config = auto_window(bg, match_config)   # one window for both pairs, from the background
+    _check_same_size(bg, sc, own)
+    return _prepared(bg, None, match_config, own), _prepared(sc, bg, match_config, own)
 
 
 def relative_depth(background, scene, *, method: str = "III", params=None, match_config=None,
                    config: DepthConfig | None = None, seed: int = 0,
-                   solver: str = DEPTH_SOLVER, **network) -> DepthResult:
+                   solver: str = DEPTH_SOLVER, prepared=None, **network) -> DepthResult:
     """Match a background pair and a scene pair, and rank the scene's new objects by depth.
 
     Parameters
@@ -430,6 +465,10 @@ def relative_depth(background, scene, *, method: str = "III", params=None, match
         Update-order seed of both runs.
     solver : str
         How the energy is solved (see :func:`depth_match`).
+    prepared : (Prepared, Prepared), optional
+        Both pairs already prepared by :func:`depth_pairs` with these images and
+        `match_config` (which are then not read again): a change of method, parameters,
+        seed or tolerances need not find the corners again.
     **network
         The discrete network's settings, as in :func:`depth_match`.
 
@@ -448,13 +487,11 @@ def relative_depth(background, scene, *, method: str = "III", params=None, match
     """
     own = "relative_depth"
     get_solver(solver, own)
-    bg, sc = _load(background, "background", own), _load(scene, "scene", own)
-    if isinstance(match_config, MatchConfig) and match_config.shift == "auto":
-        match_config = auto_window(bg, match_config)   # one window for both pairs, from the background
-    _check_same_size(bg, sc, own)
-    scene_config = scene_match_config(bg, sc, match_config)
-    results = [depth_match(p, background=b, method=method, params=params, match_config=match_config,
-                           seed=seed, solver=solver, **network)
-               for p, b in ((bg, None), (sc, bg))]
-    return replace(depth_from_matches(*results, config),
-                   scene_roi=resolve_roi(scene_config.roi, sc.shape))
+    if prepared is None:
+        prepared = _depth_pairs(background, scene, match_config, own)
+    elif not (isinstance(prepared, tuple) and len(prepared) == 2 and all(isinstance(p, Prepared) for p in prepared)):
+        raise ParameterTypeError(message("prepared", own, "None or the (background, scene) pair of Prepared "
+                                         "that depth_pairs returns", prepared))
+    results = [_match(p, method, params, seed, solver, network) for p in prepared]
+    scene_roi = resolve_roi(prepared[1].config.roi, prepared[1].pair.shape)
+    return replace(depth_from_matches(*results, config), scene_roi=scene_roi)

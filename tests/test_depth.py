@@ -13,6 +13,7 @@ from ismb_lab.depth_demo import (
     DEPTH_PARAMS,
     changed_roi,
     depth_match,
+    depth_pairs,
     relative_depth,
     scene_match_config,
 )
@@ -194,3 +195,16 @@ def test_bad_input_names_the_parameter(make, name, error):
     error = {ValueError: ParameterError, TypeError: ParameterTypeError}[error]
     with pytest.raises(error, match=rf"^The '{name}' parameter of \w[\w.]* must be .* Got .* instead\.$"):
         make()
+
+
+def test_pairs_prepared_once_give_what_preparing_them_each_time_gives(committed):
+    _, fresh = committed
+    lab = tuple(IMAGES / "lab" / n for n in ("left.png", "right.png"))
+    cars = tuple(IMAGES / "toy_cars" / n for n in ("left.png", "right.png"))
+    prepared = depth_pairs(lab, cars)
+    assert relative_depth(lab, cars, prepared=prepared).to_dict() == fresh.to_dict()
+    for seed, method in ((3, "III"), (1, "II")):
+        assert (relative_depth(lab, cars, seed=seed, method=method, prepared=prepared).to_dict()
+                == relative_depth(lab, cars, seed=seed, method=method).to_dict())
+    with pytest.raises(ParameterTypeError, match="'prepared' parameter of relative_depth"):
+        relative_depth(lab, cars, prepared=prepared[:1])

@@ -18,7 +18,7 @@ import numpy as np
 
 from .._validation import ParameterTypeError, check_number, message
 from ..depth import DepthConfig, DepthObject, DepthResult
-from ..depth_demo import DEPTH_MATCH_CONFIG, relative_depth
+from ..depth_demo import DEPTH_MATCH_CONFIG, depth_pairs, relative_depth
 from ..io import StereoPair, load_pair
 from ..methods import get_method, method_names
 from ..params import Params
@@ -95,6 +95,8 @@ class DepthModel:
         self.params = self._check_params(params, owner)
         self.config = self._check_config(DepthConfig() if config is None else config, owner)
         self.seed = check_number(seed, "seed", owner, low=0, integer=True)
+        # corners and M do not depend on the controls: found once, reused by every recompute
+        self.prepared = depth_pairs(self.background, self.scene, match_config)
         self.result: DepthResult = self._compute(self.method, self.params, self.seed, self.config)
 
     @staticmethod
@@ -111,7 +113,8 @@ class DepthModel:
 
     def _compute(self, method, params, seed, config) -> DepthResult:
         return relative_depth(self.background, self.scene, method=method, params=params,
-                              match_config=self.match_config, config=config, seed=seed)
+                              match_config=self.match_config, config=config, seed=seed,
+                              prepared=self.prepared)
 
     def set(self, *, method=None, params: Params | None = None, seed=None, config=None,
             **tolerances) -> "DepthModel":

@@ -34,6 +34,23 @@ def test_model_computes_what_relative_depth_computes():
     assert model.result.to_dict() == expected(method="II", seed=4, config=model.config)
 
 
+def test_a_seed_change_does_not_find_the_corners_again(monkeypatch):
+    import ismb_lab.depth_demo as depth_demo
+
+    model = DepthModel(IMAGES / "lab", IMAGES / "toy_cars")
+    prepared = model.prepared
+
+    def refuse(*args, **kwargs):
+        raise AssertionError("the pairs were prepared again")
+
+    monkeypatch.setattr(depth_demo, "prepare", refuse)
+    monkeypatch.setattr(depth_demo, "scene_prepared", refuse)
+    model.set(seed=5, method="II", position_tol_px=4.0)
+    monkeypatch.undo()
+    assert model.prepared is prepared
+    assert model.result.to_dict() == expected(method="II", seed=5, config=model.config)
+
+
 def test_ranking_lists_objects_near_to_far(demo):
     objects = demo.model.objects
     assert demo.objects is objects
