@@ -17,7 +17,8 @@ Protocol.  Every choice of :mod:`ismb_lab.depth` and :mod:`ismb_lab.depth_demo` 
 the development split (seeds ``DEV_START`` onwards).  ``--held-out`` runs the held-out
 split (seeds ``HELD_OUT_START`` onwards), drawn after those choices and run once.
 
-Measured (120 layouts each, about 0.5 s per layout on one core):
+Measured (120 layouts each, about 0.5 s per layout on one core then; 0.3 s since the
+annealing is compiled, with the same figures):
 
     split (seeds)            all     contrast repetitive border  cameras  2 obj   3 obj
     development (1000-)      79/120  23/30    6/30       25/30   25/30    43/60   36/60
