@@ -208,15 +208,18 @@ class Matches(NamedTuple):
     state: np.ndarray
 
 
-def matched_neurons(state, neurons=None, method=None) -> np.ndarray:
+def matched_neurons(neurons, state, method=None) -> np.ndarray:
     """Indices of the neurons that are matches in a final state, sorted: those that are on,
     less any that `method`'s :meth:`~ismb_lab.methods.Method.postprocess` drops.
 
     :func:`to_matches` turns them into feature pairs; a GA that only counts them stops here.
+    The arguments are :func:`to_matches`'.
 
     Examples
     --------
-    >>> matched_neurons(np.array([1, 0, 0, 1], dtype=np.uint8)).tolist()
+    >>> from ismb_lab.methods import build_problem
+    >>> p = build_problem([[100, 50], [110, 50]], [[80, 51], [90, 51]], np.zeros((2, 2)))
+    >>> matched_neurons(p, [1, 0, 0, 1]).tolist()
     [0, 3]
     """
     on = np.flatnonzero(np.asarray(state, dtype=np.uint8))
@@ -251,7 +254,7 @@ def to_matches(neurons, state, method=None) -> Matches:
     [[0, 0], [1, 1]]
     """
     state = np.asarray(state, dtype=np.uint8)
-    on = matched_neurons(state, neurons, method)
+    on = matched_neurons(neurons, state, method)
     if method is not None:
         state = np.zeros_like(state)
         state[on] = 1

@@ -19,7 +19,7 @@ from typing import Iterator, Sequence
 import numpy as np
 
 from ._validation import ParameterError, ParameterTypeError, check_number, message
-from .evaluation import Score, Scorer, _tally as _count
+from .evaluation import Score, Scorer, _tally
 from .genetic import Bounds, GAConfig, Generation, evolve
 from .methods import get_method
 from .params import Params
@@ -80,13 +80,13 @@ def evaluate(cases: Sequence, method, params: Params, seed: int = 0,
     get_solver(solver, "evaluate")
     correct = wrong = extra = targets = 0
     for case in cases:
-        c, w, e = _tally(case, m, params, seed, solver)
+        c, w, e = _counts(case, m, params, seed, solver)
         correct, wrong, extra = correct + c, wrong + w, extra + e
         targets += (getattr(case, "scorer", None) or Scorer(case.targets, case.unknown)).targets
     return Score(correct, wrong, extra, targets)
 
 
-def _tally(case, m, params: Params, seed: int, solver: str) -> tuple[int, int, int]:
+def _counts(case, m, params: Params, seed: int, solver: str) -> tuple[int, int, int]:
     """C, wrong partner and extra of one case: the score of
     :func:`~ismb_lab.solvers.to_matches`' pairs, counted over neurons coded once per case
     (:meth:`~ismb_lab.evaluation.Scorer.neuron_codes`)."""
@@ -95,8 +95,8 @@ def _tally(case, m, params: Params, seed: int, solver: str) -> tuple[int, int, i
     codes = getattr(case, "neuron_codes", None)
     if codes is None:
         codes = Scorer(case.targets, case.unknown).neuron_codes(problem.rows, problem.cols)
-    kept = np.asarray(matched_neurons(state, problem, m), dtype=np.int64)
-    counts = _count(codes, kept)
+    kept = np.asarray(matched_neurons(problem, state, m), dtype=np.int64)
+    counts = _tally(codes, kept)
     if counts[0] < 0:
         raise ParameterError(message("method", "evaluate", f"a postprocess that keeps neuron indices in "
                                      f"[0, {len(codes)})", kept))
@@ -141,7 +141,7 @@ class Fitness:
         """``evaluate(...).fitness``, without building the Score."""
         total = 0
         for case in self.cases:
-            correct, wrong, extra = _tally(case, self.method, params, seed, self.solver)
+            correct, wrong, extra = _counts(case, self.method, params, seed, self.solver)
             total += correct - wrong - extra
         return total
 
