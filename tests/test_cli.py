@@ -158,6 +158,21 @@ def test_tune_writes_what_match_reads(pair, targets, tmp_path, capsys):
     assert json.loads(matched.read_text())["params"] == data["params"]
 
 
+def test_tune_scores_each_chromosome_over_fit_seeds_as_the_library_does(pair, targets, tmp_path):
+    from ismb_lab.protocol import Case
+    from ismb_lab.tuning import to_params, tune
+
+    out = tmp_path / "p.json"
+    assert main(["tune", *map(str, pair), str(targets), "--generations", "6", "--seed", "3",
+                 "--fit-seeds", "3", "--solver", "anneal", "--out", str(out)]) == 0
+    data = json.loads(out.read_text())
+    assert data["fit_seeds"] == 3 and data["solver"] == "anneal"
+    case = Case.from_files(*pair, targets)
+    last = list(tune([case], "III", rng=3, generations=6, solver="anneal", seeds=3))[-1]
+    assert data["params"] == to_params("III", last.best_chromosome).to_dict()
+    assert data["fitness"] == last.best
+
+
 def test_tune_is_reproducible_and_the_seed_matters(pair, targets, tmp_path):
     runs = []
     for name, seed in (("a", 5), ("b", 5), ("c", 6)):
@@ -245,6 +260,8 @@ def test_a_real_ctrl_c_stops_tune_cleanly(pair, targets, tmp_path):
     (lambda p, t, g: ["tune", p[0], p[1], t / "empty.json"], "no target"),
     (lambda p, t, g: ["tune", p[0], p[1], g, "--population", "1"], "'population'"),
     (lambda p, t, g: ["tune", p[0], p[1], g, "--generations", "0"], "'generations'"),
+    (lambda p, t, g: ["tune", p[0], p[1], g, "--fit-seeds", "0"], "'seeds'"),
+    (lambda p, t, g: ["tune", p[0], p[1], g, "--fit-seeds", "101"], "--fit-seeds 101 is above the limit"),
     (lambda p, t, g: ["evaluate", t / "missing_manifest.json"], "existing file"),
     (lambda p, t, g: ["evaluate", t / "missing_manifest.json", "--ga-seed", "-1"], "--ga-seed must be"),
     (lambda p, t, g: ["evaluate", t / "manifest_missing_file.json"], "existing file"),
@@ -330,7 +347,7 @@ def test_evaluate_on_two_processes_writes_the_same_report_as_on_one(manifest, tm
 
 def test_help_of_tune_and_evaluate():
     for command, options in (("tune", ("--method", "--generations", "--population", "--seed", "--roi",
-                                       "--shift", "--n-min", "--n-max", "--out")),
+                                       "--shift", "--n-min", "--n-max", "--out", "--solver", "--fit-seeds")),
                              ("evaluate", ("--method", "--train", "--seeds", "--peers", "--json", "--ga-seed",
                                            "--held-out-only"))):
         proc = run_cli(command, "--help")

@@ -15,8 +15,8 @@ from ._common import (DEFAULT_METHOD, UsageError, add_feature_options, add_ga_op
 
 __all__ = ["add_parser", "run"]
 
-#: The GA seed :func:`ismb_lab.tuning.tune` uses by default.
-GA_SEED = default_of(tuning.tune, "rng")
+#: The GA seed and the fitness's update-order seeds that :func:`ismb_lab.tuning.tune` uses by default.
+GA_SEED, FIT_SEEDS = default_of(tuning.tune, "rng"), default_of(tuning.tune, "seeds")
 
 
 def add_parser(sub) -> None:
@@ -31,6 +31,9 @@ def add_parser(sub) -> None:
     add_ga_options(t)
     t.add_argument("--seed", type=int, default=None, help=f"seed of the GA (default: {GA_SEED})")
     add_solver_option(t, DEFAULT_SOLVER)
+    t.add_argument("--fit-seeds", type=int, default=None, metavar="N",
+                   help=f"update-order seeds averaged in each GA fitness (default: {FIT_SEEDS}); more "
+                   "seeds favour parameters that do not work for one visiting order only")
     add_feature_options(t, MatchConfig())
     t.add_argument("--out", type=Path, default=Path("params.json"), metavar="PARAMS.json",
                    help="where to write the parameters (default: %(default)s)")
@@ -40,6 +43,7 @@ def add_parser(sub) -> None:
 def run(args) -> int:
     method, solver, ga = args.method or DEFAULT_METHOD, args.solver or DEFAULT_SOLVER, ga_config(args)
     seed = GA_SEED if args.seed is None else args.seed
+    fit_seeds = FIT_SEEDS if args.fit_seeds is None else args.fit_seeds
     case = Case.from_files(args.left, args.right, args.targets, match_config(args),
                            check_hash=not args.no_hash_check)
     if len(case.left_out):
@@ -48,7 +52,7 @@ def run(args) -> int:
     if len(case.targets) == 0:
         raise UsageError(f"{args.targets}: no target pair lies on the corners found "
                          f"({len(case.left_out)} targets, {len(case.prepared.problem.left_xy)} left corners)")
-    records = tuning.tune([case], method, rng=seed, ga=ga, solver=solver)
+    records = tuning.tune([case], method, rng=seed, ga=ga, solver=solver, seeds=fit_seeds)
     best, interrupted = None, False
     with progress_bar(ga.generations + 1, f"Method-{method} GA") as bar:
         try:
@@ -61,7 +65,7 @@ def run(args) -> int:
         raise KeyboardInterrupt
     params = tuning.to_params(method, best.best_chromosome)
     save_params(args.out, method, params, solver=solver, fitness=best.best, generations=best.index,
-                seed=seed, targets=len(case.targets), interrupted=interrupted)
+                seed=seed, fit_seeds=fit_seeds, targets=len(case.targets), interrupted=interrupted)
     result = tuning.evaluate([case], method, params, solver=solver)
     print(f"Method-{method} ({solver}): best fitness {best.best:g} of {len(case.targets)} after "
           f"{best.index} generations; C/E/T {result}; parameters {params.to_dict()}")
