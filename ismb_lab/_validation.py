@@ -154,3 +154,16 @@ def check_rng(rng, name: str = "rng", owner: str = "function") -> np.random.Gene
             raise ParameterError(message(name, owner, "a non-negative integer seed or a numpy Generator", rng))
         return np.random.default_rng(int(rng))
     raise ParameterTypeError(message(name, owner, "a non-negative integer seed or a numpy Generator", rng))
+
+
+def readonly(values) -> np.ndarray:
+    """A float copy of `values` that cannot be written to (for frozen records).
+
+    Examples
+    --------
+    >>> readonly([1, 2]).flags.writeable
+    False
+    """
+    arr = np.array(values, dtype=float)
+    arr.flags.writeable = False
+    return arr

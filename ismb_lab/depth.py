@@ -20,7 +20,22 @@ How it works
    This drops wrong matches and background corners that the background pair did not
    match right.  The smallest, not the median, because whole groups of background
    corners can be matched wrongly, at too large a disparity.
-3. *Objects.*  The remaining features are grouped by single linkage: two features
+3. *Objects.*  With :class:`~ismb_lab.silhouettes.Silhouettes` (what :func:`ismb_lab.depth_demo.relative_depth`
+   passes; ``DepthConfig.grouping``), an object is a blob of the left image where the
+   scene differs from the background, and its disparity is the shift that lays that
+   blob on the right image's blob of change (its silhouette disparity, whole pixels).
+   The features on the blob (``silhouette_grow_px`` around it) with matches within
+   ``silhouette_tol_px`` of that shift give the object's disparity (their consensus
+   band); a blob none of whose matches agree is still an object, found by its outline
+   alone (``n_features == 0``).  A silhouette is trusted only when the two blobs
+   overlap well (Dice ``>= silhouette_score``) and, with ``in_front``, when its shift
+   exceeds the smallest background disparity by more than ``disparity_tol_px`` (a
+   sliver of an object that looks like the wall can fit a shift behind it); otherwise
+   -- two objects touching in one blob, say -- its features are grouped as below.  So a striped object matched one
+   period off, or cut into bands, stays one object at its true disparity, and a
+   feature off every blob is not an object.
+
+   Without silhouettes the remaining features are grouped by single linkage: two features
    are linked when they lie within ``link_px`` of each other (left image) and have
    matches whose disparities differ by at most ``link_disparity_px``; a group is a
    connected component of these links (:func:`scipy.sparse.csgraph.connected_components`),
@@ -59,10 +74,14 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from ._validation import ParameterTypeError, check_number, message
+from ._validation import ParameterError, ParameterTypeError, check_choice, check_number, message, readonly
 from .matching import MatchResult
+from .silhouettes import Silhouettes
 
-__all__ = ["Depth", "DepthConfig", "DepthObject", "DepthResult", "depth_from_matches", "metric_depth"]
+__all__ = ["GROUPINGS", "Depth", "DepthConfig", "DepthObject", "DepthResult", "depth_from_matches", "metric_depth"]
+
+#: How objects are found: by the blobs of change of both images, or by the features alone.
+GROUPINGS = ("silhouettes", "features")
 
 
 @dataclass(frozen=True)
@@ -91,6 +110,18 @@ class DepthConfig:
         Drop scene matches not in front of the local background disparity.
     local_px : float
         Radius of the local background around a scene match.
+    grouping : {"silhouettes", "features"}
+        How :func:`ismb_lab.depth_demo.relative_depth` finds objects: by the blobs of
+        change of both images (:class:`~ismb_lab.silhouettes.Silhouettes`, the default), or by the features
+        alone (steps 3-4 of the module's docstring without silhouettes, as before).
+    silhouette_tol_px : float
+        Largest difference between a match's disparity and its blob's silhouette
+        disparity for the match to count.
+    silhouette_score : float
+        Least Dice overlap (0-1) of the left blob and the shifted right one for the
+        silhouette to decide the object alone.
+    silhouette_grow_px : int
+        A feature within this many pixels of a blob lies on it (corners sit on outlines).
     focal_px, baseline_m : float
         Focal length in pixels and baseline in metres (> 0); the defaults are
         :class:`ismb_lab.scenes.Rig`'s (the thesis' 10 cm rig).
@@ -117,6 +148,10 @@ class DepthConfig:
     merge_disparity_px: float = 1.5
     in_front: bool = True
     local_px: float = 40.0
+    grouping: str = "silhouettes"
+    silhouette_tol_px: float = 3.0
+    silhouette_score: float = 0.9
+    silhouette_grow_px: int = 3
     focal_px: float = 300.0
     baseline_m: float = 0.10
     quantisation_px: float = 0.5
@@ -124,13 +159,18 @@ class DepthConfig:
     def __post_init__(self):
         own = "DepthConfig"
         for name in ("position_tol_px", "disparity_tol_px", "consensus_px", "quantisation_px",
-                     "link_disparity_px", "merge_px", "merge_disparity_px"):
+                     "link_disparity_px", "merge_px", "merge_disparity_px", "silhouette_tol_px"):
             object.__setattr__(self, name, check_number(getattr(self, name), name, own, low=0))
         for name in ("link_px", "local_px", "focal_px", "baseline_m"):
             object.__setattr__(self, name, check_number(getattr(self, name), name, own,
                                                         low=0, low_open=True))
         object.__setattr__(self, "min_features",
                            check_number(self.min_features, "min_features", own, low=1, integer=True))
+        object.__setattr__(self, "silhouette_grow_px",
+                           check_number(self.silhouette_grow_px, "silhouette_grow_px", own, low=0, integer=True))
+        object.__setattr__(self, "silhouette_score",
+                           check_number(self.silhouette_score, "silhouette_score", own, low=0, high=1))
+        check_choice(self.grouping, "grouping", own, GROUPINGS)
         if not isinstance(self.in_front, bool):
             raise ParameterTypeError(message("in_front", own, "True or False", self.in_front))
 
@@ -215,6 +255,13 @@ class DepthObject:
     disparity_spread : float
         Median absolute deviation of the features' disparities from `median_disparity`,
         pixels: with :attr:`n_features`, how far to trust the object.
+    silhouette_disparity : float or None
+        The shift that lays the object's blob of change on the right image's
+        (:class:`~ismb_lab.silhouettes.Silhouettes`), or None when the object was found by its features alone.
+        An object with no features (``n_features == 0``) was found by its outline
+        alone and has this as its disparity.
+    silhouette_score : float or None
+        Dice overlap of the two blobs at that shift (1 = the same outline).
     """
 
     rank: int
@@ -227,6 +274,8 @@ class DepthObject:
     outliers: int = 0
     median_disparity: float | None = None
     disparity_spread: float = 0.0
+    silhouette_disparity: float | None = None
+    silhouette_score: float | None = None
 
     def __post_init__(self):
         if self.median_disparity is None:
@@ -252,6 +301,7 @@ class DepthObject:
                 "depth_status": d.status, "n_matches": self.n_matches, "outliers": self.outliers,
                 "n_features": self.n_features, "median_disparity": self.median_disparity,
                 "disparity_spread": self.disparity_spread,
+                "silhouette_disparity": self.silhouette_disparity, "silhouette_score": self.silhouette_score,
                 "features": [[float(x), float(y)] for x, y in self.features]}
 
 
@@ -283,6 +333,8 @@ class DepthResult:
     scene_roi : (x, y, w, h) or None
         The box in which the scene pair's corners were sought (:func:`changed_roi`),
         when :func:`relative_depth` made the result.
+    silhouettes : Silhouettes or None
+        The blobs of change that grouped the objects, or None when the features alone did.
     """
 
     objects: tuple
@@ -298,6 +350,7 @@ class DepthResult:
     config: DepthConfig
     message: str = ""
     scene_roi: tuple | None = None
+    silhouettes: Silhouettes | None = None
 
     def to_dict(self) -> dict:
         """The JSON of ``ismb-lab depth --json``: objects near -> far and the counts."""
@@ -306,14 +359,9 @@ class DepthResult:
                 "behind_background": self.behind_background, "dropped": self.dropped,
                 "background_objects": [o.to_dict() for o in self.background_objects],
                 "focal_px": self.config.focal_px, "baseline_m": self.config.baseline_m,
+                "grouping": self.config.grouping if self.silhouettes is not None else "features",
                 "scene_roi": None if self.scene_roi is None else list(self.scene_roi),
                 "message": self.message}
-
-
-def _readonly(arr) -> np.ndarray:
-    arr = np.array(arr, dtype=float)
-    arr.flags.writeable = False
-    return arr
 
 
 def _matches(result) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -402,45 +450,81 @@ def _merge(parts: list, config: DepthConfig) -> list:
     return [np.concatenate([parts[a][0] for a in members]) for members in groups.values()]
 
 
-def _objects(feature, xy, d, config: DepthConfig) -> tuple[list, int]:
-    """Group matches into objects; returns (objects near -> far, features dropped)."""
+def _object(rows, feature, first, d, config: DepthConfig, centroid=None, silhouette=(None, None)) -> DepthObject:
+    """One object from its consensus matches `rows` (positions of `feature` and `d`)."""
+    members = np.unique(feature[rows])
+    per_feature = np.array([np.median(d[rows][feature[rows] == f]) for f in members])
+    pts = np.array([first[f] for f in members]).reshape(-1, 2)
+    dd = d[rows]
+    mean = float(dd.mean()) if len(dd) else float(silhouette[0])
+    median = float(np.median(per_feature)) if len(per_feature) else mean
+    if centroid is None:
+        centroid = pts.mean(axis=0)
+    return DepthObject(0, tuple(float(v) for v in centroid), mean, float(dd.std()) if len(dd) else 0.0,
+                       metric_depth(mean, config.focal_px, config.baseline_m, config.quantisation_px),
+                       readonly(pts), int(len(rows)), int(np.isin(feature, members).sum() - len(rows)),
+                       median, float(np.median(np.abs(per_feature - median))) if len(per_feature) else 0.0,
+                       *silhouette)
+
+
+def _on_blobs(xy, silhouettes: Silhouettes, grow: int) -> np.ndarray:
+    """Blob label of each left position: the blob within `grow` pixels (0: none)."""
+    from scipy.ndimage import grey_dilation
+
+    labels = silhouettes.labels
+    if grow:
+        # Where two grown blobs meet, a pixel goes to the one it lies on, then the larger label.
+        labels = np.where(labels > 0, labels, grey_dilation(labels, size=2 * grow + 1))
+    h, w = labels.shape
+    ix = np.clip(np.round(xy).astype(int).reshape(-1, 2), 0, [w - 1, h - 1])
+    return labels[ix[:, 1], ix[:, 0]]
+
+
+def _objects(feature, xy, d, config: DepthConfig, silhouettes: Silhouettes | None = None,
+             trusted=None) -> tuple[list, int]:
+    """Group matches into objects; returns (objects near -> far, features dropped).
+
+    With `silhouettes`, blob ``k`` is one object when ``trusted[k - 1]``."""
     features = np.unique(feature)
-    if not len(features):
+    if not len(features) and silhouettes is None:
         return [], 0
     first = {f: xy[feature == f][0] for f in features}
-    labels = _clusters(np.array([first[f] for f in features]), [d[feature == f] for f in features],
-                       config.link_px, config.link_disparity_px)
-    label_of = dict(zip(features.tolist(), labels.tolist()))
-    group = np.array([label_of[f] for f in feature.tolist()])
-    parts, used = [], set()
-    for label in np.unique(labels):
-        idx = np.flatnonzero(group == label)
+    found, parts, used = [], [], set()
+    groups = []
+    if silhouettes is None:
+        labels = _clusters(np.array([first[f] for f in features]).reshape(-1, 2),
+                           [d[feature == f] for f in features], config.link_px, config.link_disparity_px)
+        label_of = dict(zip(features.tolist(), labels.tolist()))
+        group = np.array([label_of[f] for f in feature.tolist()], dtype=int)
+        groups = [np.flatnonzero(group == label) for label in np.unique(labels)]
+    else:
+        blob = _on_blobs(xy, silhouettes, config.silhouette_grow_px)
+        for k in range(1, len(silhouettes) + 1):
+            idx = np.flatnonzero(blob == k)
+            if not trusted[k - 1]:
+                groups.append(idx)    # two objects in one blob, or a poor outline: the features decide
+                continue
+            dk = float(silhouettes.disparity[k - 1])
+            near = idx[np.abs(d[idx] - dk) <= config.silhouette_tol_px]
+            rows = near[_consensus(d[near], config.consensus_px)] if len(near) else near
+            used.update(np.unique(feature[rows]).tolist())
+            found.append(_object(rows, feature, first, d, config, silhouettes.centroid_xy[k - 1],
+                                 (dk, float(silhouettes.score[k - 1]))))
+    for idx in groups:
         for band in _peel(feature[idx], d[idx], config):
             rows = idx[band]
             members = np.unique(feature[rows])
             used.update(members.tolist())
             per_feature = [np.median(d[rows][feature[rows] == f]) for f in members]
             parts.append((rows, float(np.median(per_feature)), np.array([first[f] for f in members])))
-    found = []
-    for rows in _merge(parts, config):
-        members = np.unique(feature[rows])
-        per_feature = np.array([np.median(d[rows][feature[rows] == f]) for f in members])
-        pts = np.array([first[f] for f in members])
-        dd = d[rows]
-        mean = float(dd.mean())
-        median = float(np.median(per_feature))
-        own = np.isin(feature, members)
-        found.append(DepthObject(0, tuple(float(v) for v in pts.mean(axis=0)), mean, float(dd.std()),
-                                 metric_depth(mean, config.focal_px, config.baseline_m,
-                                              config.quantisation_px),
-                                 _readonly(pts), int(len(rows)), int(own.sum() - len(rows)),
-                                 median, float(np.median(np.abs(per_feature - median)))))
+    found += [_object(rows, feature, first, d, config) for rows in _merge(parts, config)]
     found.sort(key=lambda o: -o.mean_disparity)
     ranked = [replace(o, rank=n) for n, o in enumerate(found, 1)]
     return ranked, len(features) - len(used)
 
 
-def depth_from_matches(background, scene, config: DepthConfig | None = None) -> DepthResult:
+def depth_from_matches(background, scene, config: DepthConfig | None = None,
+                       silhouettes: Silhouettes | None = None) -> DepthResult:
     """Objects of `scene` that are not in `background`, ranked near -> far.
 
     Parameters
@@ -448,6 +532,10 @@ def depth_from_matches(background, scene, config: DepthConfig | None = None) -> 
     background, scene : MatchResult
         Matches of the background pair and of the scene pair (same view, same size).
     config : DepthConfig, optional
+    silhouettes : Silhouettes, optional
+        The scene's blobs of change (:func:`ismb_lab.silhouettes.silhouettes`): each
+        trusted blob is one object (step 3 of the module's docstring).  Without them
+        the features alone are grouped, whatever ``config.grouping`` says.
 
     Returns
     -------
@@ -469,6 +557,14 @@ def depth_from_matches(background, scene, config: DepthConfig | None = None) -> 
     for name, value in (("background", background), ("scene", scene)):
         if not isinstance(value, MatchResult):
             raise ParameterTypeError(message(name, own, "a MatchResult", value))
+    if silhouettes is not None:
+        if not isinstance(silhouettes, Silhouettes):
+            raise ParameterTypeError(message("silhouettes", own, "None or a Silhouettes", silhouettes))
+        h, w = silhouettes.labels.shape
+        if len(scene.left_xy) and not (np.all(scene.left_xy >= 0) and scene.left_xy[:, 0].max() < w
+                                       and scene.left_xy[:, 1].max() < h):
+            raise ParameterError(message("silhouettes", own, "labels as large as the scene's images "
+                                         "(every scene feature on them)", f"labels of {w}x{h} (width x height)"))
     bf, bxy, bd = _matches(background)
     sf, sxy, sd = _matches(scene)
     background_objects, _ = _objects(bf, bxy, bd, config)
@@ -484,7 +580,14 @@ def depth_from_matches(background, scene, config: DepthConfig | None = None) -> 
         behind = keep & (sd <= _local_background(sxy, bxy, bd, config.local_px)
                          + config.disparity_tol_px)
     keep &= ~behind
-    objects, dropped = _objects(sf[keep], sxy[keep], sd[keep], config)
+    trusted = None
+    if silhouettes is not None:
+        # An object stands in front of what was there: an outline at the background's
+        # disparity or behind it is a poor outline (a sliver that looks like the wall).
+        trusted = silhouettes.score >= config.silhouette_score
+        if config.in_front and len(bd):
+            trusted &= silhouettes.disparity > bd.min() + config.disparity_tol_px
+    objects, dropped = _objects(sf[keep], sxy[keep], sd[keep], config, silhouettes, trusted)
 
     note = ""
     if not len(sf):
@@ -498,7 +601,7 @@ def depth_from_matches(background, scene, config: DepthConfig | None = None) -> 
                 "on a disparity")
     first = {f: xy for f, xy in zip(sf.tolist(), sxy)}
     return DepthResult(tuple(objects), tuple(background_objects), int(len(removed)),
-                       int(behind.sum()), dropped, _readonly(sxy[keep].reshape(-1, 2)),
-                       _readonly(sd[keep]), _readonly(np.array([first[f] for f in removed.tolist()]
+                       int(behind.sum()), dropped, readonly(sxy[keep].reshape(-1, 2)),
+                       readonly(sd[keep]), readonly(np.array([first[f] for f in removed.tolist()]
                                                                ).reshape(-1, 2)),
-                       background, scene, config, note)
+                       background, scene, config, note, silhouettes=silhouettes)

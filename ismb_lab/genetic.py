@@ -37,16 +37,10 @@ from typing import Callable, Iterator
 
 import numpy as np
 
-from ._validation import ParameterError, ParameterTypeError, check_number, check_rng, message
+from ._validation import ParameterError, ParameterTypeError, check_number, check_rng, message, readonly
 
 __all__ = ["Bounds", "GAConfig", "Generation", "arithmetic_crossover", "batch", "elite", "evolve",
            "initial_population", "next_generation", "random_mutation", "tournament"]
-
-
-def _readonly(values) -> np.ndarray:
-    arr = np.array(values, dtype=float)
-    arr.flags.writeable = False
-    return arr
 
 
 @dataclass(frozen=True)
@@ -128,7 +122,7 @@ class Bounds:
         for name, value in (("low", self.low), ("high", self.high)):
             rule = "a non-empty 1-D array of finite numbers" + (", as long as low" if name == "high" else "")
             try:
-                arr = _readonly(value)
+                arr = readonly(value)
             except (TypeError, ValueError):
                 raise ParameterTypeError(message(name, "Bounds", rule, value)) from None
             if arr.ndim != 1 or arr.size == 0 or arr.size != size or not np.all(np.isfinite(arr)):
@@ -176,7 +170,7 @@ class Generation:
     def __post_init__(self):
         for name in ("best_chromosome", "population", "fitness"):
             if getattr(self, name) is not None:
-                object.__setattr__(self, name, _readonly(getattr(self, name)))
+                object.__setattr__(self, name, readonly(getattr(self, name)))
 
 
 def _check_bounds(bounds, owner: str) -> Bounds:

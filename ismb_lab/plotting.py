@@ -8,7 +8,7 @@ from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["GAP", "plot_depth", "plot_matches", "side_by_side"]
+__all__ = ["GAP", "outlines", "plot_depth", "plot_matches", "side_by_side"]
 
 GAP = 8  # pixels between the left and right image in side-by-side views
 
@@ -71,12 +71,33 @@ def plot_matches(ax, left, right, left_xy, right_xy, pairs, *, numbers: bool = T
     return {"image": image, "left_points": lp, "right_points": rp, "lines": lines, "labels": labels}
 
 
+def outlines(labels: np.ndarray) -> list:
+    """The outer outline of every blob of `labels` (> 0) as a closed polygon of pixel centres.
+
+    Examples
+    --------
+    >>> labels = np.zeros((6, 6), dtype=int)
+    >>> labels[1:4, 2:5] = 1
+    >>> [p.tolist() for p in outlines(labels)]
+    [[[2.0, 1.0], [2.0, 3.0], [4.0, 3.0], [4.0, 1.0], [2.0, 1.0]]]
+    """
+    import cv2
+
+    labels = np.asarray(labels)
+    polygons = []
+    for k in np.unique(labels[labels > 0]):
+        found, _ = cv2.findContours((labels == k).astype(np.uint8), cv2.RETR_EXTERNAL, cv2.CHAIN_APPROX_SIMPLE)
+        polygons += [np.vstack([c[:, 0, :], c[:1, 0, :]]).astype(float) for c in found]
+    return polygons
+
+
 def plot_depth(ax, left, result, *, cmap: str = "plasma") -> dict:
     """Draw Fig. 5.14: the scene's left image, its new features coloured by disparity.
 
     Features removed as background are small grey crosses; every object is labelled
     with its rank (1 = nearest) and its depth; a dashed box shows where the scene's
-    corners were sought, when the result knows it.
+    corners were sought, when the result knows it, and cyan outlines the blobs of
+    change that grouped the objects, when they did.
 
     Parameters
     ----------
@@ -88,12 +109,19 @@ def plot_depth(ax, left, result, *, cmap: str = "plasma") -> dict:
     Returns
     -------
     artists : dict
-        ``image``, ``features`` (the scatter of kept matches), ``removed``, ``labels``
-        and ``box`` (None without ``result.scene_roi``).
+        ``image``, ``features`` (the scatter of kept matches), ``removed``, ``labels``,
+        ``box`` (None without ``result.scene_roi``) and ``outlines`` (None without
+        ``result.silhouettes``).
     """
     from matplotlib.patches import Rectangle
 
     image = ax.imshow(left, cmap="gray", vmin=0, vmax=255)
+    from matplotlib.collections import LineCollection
+
+    drawn = None
+    if getattr(result, "silhouettes", None) is not None:
+        drawn = ax.add_collection(LineCollection(outlines(result.silhouettes.labels), colors="cyan",
+                                                 linewidths=0.8))
     removed, = ax.plot(*np.asarray(result.removed_xy).reshape(-1, 2).T, "x", color="0.6", ms=5)
     xy = np.asarray(result.kept_xy).reshape(-1, 2)
     features = ax.scatter(xy[:, 0], xy[:, 1], c=result.kept_disparity, cmap=cmap, s=28,
@@ -109,4 +137,5 @@ def plot_depth(ax, left, result, *, cmap: str = "plasma") -> dict:
         x, y, w, h = result.scene_roi
         box = ax.add_patch(Rectangle((x - 0.5, y - 0.5), w, h, fill=False, ec="yellow", lw=0.8, ls="--"))
     ax.set_axis_off()
-    return {"image": image, "features": features, "removed": removed, "labels": labels, "box": box}
+    return {"image": image, "features": features, "removed": removed, "labels": labels, "box": box,
+            "outlines": drawn}

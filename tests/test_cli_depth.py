@@ -40,6 +40,26 @@ def test_depth_ranks_the_left_car_first_and_writes_json_and_plot(tmp_path):
     assert len(rows) == len(objects) and rows[0].startswith("#1 ")
     image = cv2.imread(str(plot))
     assert image is not None and image.shape[0] > 100
+    # Each car is one blob of change, and its features agree with the blob's shift.
+    assert data["grouping"] == "silhouettes"
+    for o, row in zip(objects, rows):
+        assert o["silhouette_score"] >= 0.9 and abs(o["mean_disparity"] - o["silhouette_disparity"]) <= 3
+        assert row.endswith(f"outline {o['silhouette_disparity']:.0f} px")
+
+
+def test_grouping_by_features_alone_is_the_thesis_variant(tmp_path):
+    out = tmp_path / "d.json"
+    proc = subprocess.run([sys.executable, "-m", "ismb_lab.cli", "depth", *map(str, BG + CARS),
+                           "--grouping", "features", "--json", str(out)],
+                          capture_output=True, text=True, timeout=300)
+    assert proc.returncode == 0, proc.stderr
+    data = json.loads(out.read_text())
+    assert data["grouping"] == "features" and len(data["objects"]) == 2
+    assert all(o["silhouette_disparity"] is None for o in data["objects"])
+    assert [o["depth_m"] for o in data["objects"]] == pytest.approx([0.885, 1.183], rel=0.10)
+    bad = subprocess.run([sys.executable, "-m", "ismb_lab.cli", "depth", *map(str, BG + CARS),
+                          "--grouping", "blobs"], capture_output=True, text=True, timeout=300)
+    assert bad.returncode == 2 and "--grouping" in bad.stderr and "Traceback" not in bad.stderr
 
 
 def test_calibration_options_scale_the_depth(tmp_path):
@@ -86,6 +106,24 @@ def test_no_matches_says_so_and_exits_2(tmp_path, capsys):
     assert main(["depth", *map(str, BG), *paths]) == 2
     err = capsys.readouterr().err
     assert "no matches in the scene pair" in err and err.count("\n") == 1
+
+
+def test_a_plain_background_is_a_note_with_silhouettes_and_an_error_without(tmp_path, capsys):
+    rng = np.random.default_rng(3)
+    wall = np.full((240, 320), 100.0)                  # no corners at all
+    left, right = wall.copy(), wall.copy()
+    left[100:150, 120:170] = right[100:150, 100:150] = rng.integers(0, 2, (50, 50)) * 200.0 + 20
+    paths = [write(tmp_path / f"{n}.png", a) for n, a in (("bl", wall), ("br", wall), ("sl", left),
+                                                        ("sr", right))]
+    out = tmp_path / "d.json"
+    assert main(["depth", *paths, "--json", str(out)]) == 0
+    printed = capsys.readouterr().out
+    assert "note: no matches in the background pair" in printed
+    (obj,) = json.loads(out.read_text())["objects"]
+    assert obj["silhouette_disparity"] == 20.0 and abs(obj["mean_disparity"] - 20.0) <= 1
+    assert main(["depth", *paths, "--grouping", "features"]) == 2
+    err = capsys.readouterr().err
+    assert "no matches in the background pair" in err and err.count("\n") == 1
 
 
 def test_missing_file_exits_2(tmp_path, capsys):

@@ -6,7 +6,7 @@ import math
 from pathlib import Path
 
 from .._files import atomic_write_text
-from ..depth import DepthConfig
+from ..depth import GROUPINGS, DepthConfig
 from ..depth_demo import DEPTH_MATCH_CONFIG, DEPTH_PARAMS, DEPTH_SOLVER
 from ._common import (UsageError, add_matching_options, add_solver_option, match_config, network_settings,
                       resolve_params, window_record)
@@ -19,7 +19,10 @@ def add_parser(sub) -> None:
     dp = sub.add_parser("depth", help="rank the objects added to a background by depth (§5.2.3)",
                         description="Match a background pair and a scene pair of the same view, "
                         "remove the scene's background features and rank the objects left "
-                        "near -> far, with metric depth Z = f B / d. Defaults: Method-III with "
+                        "near -> far, with metric depth Z = f B / d. An object is a blob where the "
+                        "scene's left image differs from the background's, at the shift that lays it "
+                        "on the right image's blob, refined by the features that agree "
+                        "(--grouping features: the features alone, as the thesis). Defaults: Method-III with "
                         "the parameters fitted on images/lab (scripts/fit_depth_params.py) and "
                         f"{DEPTH_MATCH_CONFIG.n_min} to {DEPTH_MATCH_CONFIG.n_max} corners per image; "
                         "the scene's corners are sought in the part of the ROI where its left image "
@@ -36,6 +39,10 @@ def add_parser(sub) -> None:
     dp.add_argument("--rig", type=Path, default=None, metavar="RIG.json",
                     help="take F and B from a rig calibrated with 'ismb-lab calibrate' (the pairs must "
                     "be rectified with it: 'ismb-lab rectify --rig')")
+    dp.add_argument("--grouping", choices=GROUPINGS, default=calibration.grouping,
+                    help="find the objects by their blobs of change in both images, each at the shift "
+                    "that lays the left blob on the right one, refined by the features on it "
+                    "(silhouettes, the default), or by the features alone as the thesis does (features)")
     dp.add_argument("--json", type=Path, default=None, metavar="OUT", help="write the objects as JSON")
     dp.add_argument("--plot", type=Path, default=None, metavar="OUT.png",
                     help="draw the scene's features by disparity with the ranked objects")
@@ -78,11 +85,16 @@ def run(args) -> int:
               f"{config.window_width:g} x {config.window_height:g} px")
     result = relative_depth((args.bg_left, args.bg_right), (args.scene_left, args.scene_right),
                             method=method, params=params, match_config=config,
-                            config=DepthConfig(**calibration), solver=args.solver or DEPTH_SOLVER,
+                            config=DepthConfig(grouping=args.grouping, **calibration),
+                            solver=args.solver or DEPTH_SOLVER,
                             **network_settings(args))
     for what, res in (("background", result.background), ("scene", result.scene)):
         if not len(res.pairs):
-            raise UsageError(f"no matches in the {what} pair" + (f": {res.message}" if res.message else ""))
+            why = f"no matches in the {what} pair" + (f": {res.message}" if res.message else "")
+            if what == "scene" or result.silhouettes is None:
+                raise UsageError(why)
+            # A plain wall has no corners: nothing to remove, the blobs of change still find the objects.
+            print(f"note: {why}; no scene feature is removed as background")
     print(f"Method-{method} ({result.scene.solver}): {len(result.background.pairs)} background matches, "
           f"{len(result.scene.pairs)} scene matches; {result.background_removed} scene features "
           "removed as background")
@@ -95,8 +107,9 @@ def run(args) -> int:
         else:
             far = "inf" if obj.depth.far == float("inf") else f"{obj.depth.far:.3f}"
             depth = f"{obj.depth_m:.3f} m ({obj.depth.near:.3f}-{far})"
+        outline = "" if obj.silhouette_disparity is None else f", outline {obj.silhouette_disparity:.0f} px"
         print(f"#{obj.rank}  at ({x:.0f}, {y:.0f})  disparity {obj.mean_disparity:.2f} px  "
-              f"depth {depth}  {len(obj.features)} features")
+              f"depth {depth}  {len(obj.features)} features{outline}")
     if args.json is not None:
         atomic_write_text(args.json, json_text({**result.to_dict(),
                                                 "candidate_window": window_record(config, args.shift == "auto")}))

@@ -18,13 +18,14 @@ import numpy as np
 
 from .._validation import ParameterTypeError, check_number, message
 from ..depth import DepthConfig, DepthObject, DepthResult
-from ..depth_demo import DEPTH_MATCH_CONFIG, depth_pairs, relative_depth
+from ..depth_demo import DEPTH_MATCH_CONFIG, depth_pairs, pair_silhouettes, relative_depth
 from ..io import StereoPair, load_pair
 from ..methods import get_method, method_names
 from ..params import Params
+from ..plotting import outlines
 from ._common import Base, Pane, button, grey_rgb, pair_files, path_labels, with_class
 
-__all__ = ["CMAP", "TOLERANCES", "depth_text", "DepthDemo", "DepthModel", "disparity_limits",
+__all__ = ["CMAP", "GROUPING_LABELS", "TOLERANCES", "depth_text", "support_text", "DepthDemo", "DepthModel", "disparity_limits",
            "draw_background", "draw_scene", "label_positions", "load_stereo", "update_background",
            "update_scene"]
 
@@ -32,6 +33,8 @@ __all__ = ["CMAP", "TOLERANCES", "depth_text", "DepthDemo", "DepthModel", "dispa
 TOLERANCES = {"position_tol_px": "same place (px)", "disparity_tol_px": "same disparity (px)",
               "local_px": "local background (px)"}
 CMAP = "plasma"
+#: The choices of "objects by": blobs of change in both images, or the thesis' features alone.
+GROUPING_LABELS = (("outlines and features", "silhouettes"), ("features only (thesis)", "features"))
 
 
 def load_stereo(value, name: str, owner: str) -> StereoPair:
@@ -95,8 +98,9 @@ class DepthModel:
         self.params = self._check_params(params, owner)
         self.config = self._check_config(DepthConfig() if config is None else config, owner)
         self.seed = check_number(seed, "seed", owner, low=0, integer=True)
-        # corners and M do not depend on the controls: found once, reused by every recompute
+        # corners, M and the blobs of change do not depend on the controls: found once, reused
         self.prepared = depth_pairs(self.background, self.scene, match_config)
+        self.silhouettes = pair_silhouettes(self.prepared)
         self.result: DepthResult = self._compute(self.method, self.params, self.seed, self.config)
 
     @staticmethod
@@ -114,7 +118,7 @@ class DepthModel:
     def _compute(self, method, params, seed, config) -> DepthResult:
         return relative_depth(self.background, self.scene, method=method, params=params,
                               match_config=self.match_config, config=config, seed=seed,
-                              prepared=self.prepared)
+                              prepared=self.prepared, silhouettes=self.silhouettes)
 
     def set(self, *, method=None, params: Params | None = None, seed=None, config=None,
             **tolerances) -> "DepthModel":
@@ -145,15 +149,14 @@ class DepthModel:
 
     def ranking(self) -> list[str]:
         """One line per object, nearest first, with what it rests on, e.g.
-        ``1. object at (98, 163): d = 33.9 px, Z = 0.88 m ± 0.01 (13 features, spread 0.0 px)``.
+        ``1. object at (98, 163): d = 33.9 px, Z = 0.88 m ± 0.01 (13 features, spread 0.0 px;
+        outline 34 px)`` (:func:`support_text`).
 
         The spread is the median absolute deviation of the features' disparities: an
         object on 2 features with spread 0 is as consistent as it can be, but rests on little.
         """
         return [f"{o.rank}. object at ({o.centroid_xy[0]:.0f}, {o.centroid_xy[1]:.0f}): "
-                f"d = {o.mean_disparity:.1f} px, {depth_text(o)} "
-                f"({o.n_features} feature{'s' if o.n_features != 1 else ''}, "
-                f"spread {o.disparity_spread:.1f} px)"
+                f"d = {o.mean_disparity:.1f} px, {depth_text(o)} ({support_text(o)})"
                 for o in self.result.objects]
 
     def sentence(self) -> str:
@@ -167,7 +170,7 @@ class DepthModel:
             near, far = objects
             side = "left" if near.centroid_xy[0] < far.centroid_xy[0] else "right"
             other = "right" if side == "left" else "left"
-            text = (f"The {side} object is nearer to the cameras than the {other} one: its features have "
+            text = (f"The {side} object is nearer to the cameras than the {other} one: it has "
                     f"the larger disparity ({near.mean_disparity:.1f} px > {far.mean_disparity:.1f} px)")
         else:
             text = (f"The object at ({_xy(objects[0])}) is the nearest ({objects[0].mean_disparity:.1f} px) "
@@ -220,6 +223,26 @@ def depth_text(obj: DepthObject) -> str:
     return f"Z = {d.z:.2f} m ± {(d.far - d.near) / 2:.2f}"
 
 
+def support_text(obj: DepthObject) -> str:
+    """What an object rests on: ``13 features, spread 0.0 px; outline 34 px``, or
+    ``outline only: 22 px, overlap 0.98`` when no feature's disparity agrees with its outline's.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from ismb_lab.depth import DepthObject, metric_depth
+    >>> support_text(DepthObject(1, (0.0, 0.0), 22.0, 0.0, metric_depth(22.0), np.zeros((0, 2)), 0,
+    ...                          silhouette_disparity=22.0, silhouette_score=0.98))
+    'outline only: 22 px, overlap 0.98'
+    """
+    if obj.n_features == 0 and obj.silhouette_disparity is not None:
+        return f"outline only: {obj.silhouette_disparity:.0f} px, overlap {obj.silhouette_score:.2f}"
+    text = f"{obj.n_features} feature{'s' if obj.n_features != 1 else ''}, spread {obj.disparity_spread:.1f} px"
+    if obj.silhouette_disparity is not None:
+        text += f"; outline {obj.silhouette_disparity:.0f} px"
+    return text
+
+
 # --- view -------------------------------------------------------------------------------
 
 def disparity_limits(model: DepthModel) -> tuple[float, float]:
@@ -251,10 +274,14 @@ def update_background(art: dict, model: DepthModel) -> None:
 
 def draw_scene(ax, cax, model: DepthModel) -> dict:
     """Fig. 5.14: the scene's left image, background features crossed out, new ones by disparity,
-    and (dashed) the box where the scene's corners were sought."""
+    (dashed) the box where the scene's corners were sought, and (cyan) the blobs of change
+    that group the objects, when they do."""
     from matplotlib.patches import Rectangle
 
     ax.imshow(grey_rgb(model.scene.left), interpolation="nearest")
+    from matplotlib.collections import LineCollection
+
+    drawn = ax.add_collection(LineCollection([], colors="cyan", linewidths=0.8, visible=False))
     removed, = ax.plot([], [], "x", color="0.75", alpha=0.7, ms=4, mew=1)
     features = ax.scatter([], [], c=[], cmap=CMAP, s=30, edgecolors="white", linewidths=0.6)
     box = ax.add_patch(Rectangle((0, 0), 0, 0, fill=False, ec="yellow", lw=0.8, ls="--", visible=False))
@@ -262,7 +289,8 @@ def draw_scene(ax, cax, model: DepthModel) -> dict:
     bar = ax.figure.colorbar(features, cax=cax) if cax is not None else ax.figure.colorbar(features, ax=ax)
     bar.set_label("disparity (px)", fontsize=8)
     bar.ax.tick_params(labelsize=7)
-    return {"ax": ax, "removed": removed, "features": features, "box": box, "labels": None}
+    return {"ax": ax, "removed": removed, "features": features, "box": box, "outlines": drawn,
+            "labels": None}
 
 
 def update_scene(art: dict, model: DepthModel) -> None:
@@ -275,6 +303,10 @@ def update_scene(art: dict, model: DepthModel) -> None:
         x, y, w, h = r.scene_roi
         art["box"].set_bounds(x - 0.5, y - 0.5, w, h)
     art["box"].set_visible(r.scene_roi is not None)
+    if r.silhouettes is not None and r.silhouettes is not art.get("outlined"):
+        art["outlines"].set_segments(outlines(r.silhouettes.labels))
+        art["outlined"] = r.silhouettes
+    art["outlines"].set_visible(r.silhouettes is not None)
     if art["labels"] is not None:
         art["labels"].remove()
     strings = [f"#{o.rank} " + (f"{o.depth_m:.2f} m" if o.depth_m is not None else o.depth.status)
@@ -339,6 +371,9 @@ class DepthDemo(Base):
         self.seed_field = with_class(ipywidgets.BoundedIntText(value=self.model.seed, min=0, max=2**31 - 1,
                                                                description="seed", layout={"width": "160px"}),
                                      "ismb-seed")
+        self.grouping_menu = with_class(ipywidgets.Dropdown(options=GROUPING_LABELS, value=self.model.config.grouping,
+                                                            description="objects by", layout={"width": "240px"}),
+                                        "ismb-grouping")
         self.recompute_button = button("Recompute", "ismb-recompute", "Match both pairs again", icon="refresh")
         self.sliders = {}
         defaults = _tolerance_defaults()
@@ -354,8 +389,10 @@ class DepthDemo(Base):
         self.ranking = with_class(ipywidgets.HTML(""), "ismb-ranking")
         self.method_menu.observe(self.guard(self._on_control), names="value")
         self.seed_field.observe(self.guard(self._on_control), names="value")
+        self.grouping_menu.observe(self.guard(self._on_control), names="value")
         self.recompute_button.on_click(self.guard(lambda _: self.recompute()))
-        controls = ipywidgets.HBox([ipywidgets.VBox([self.method_menu, self.seed_field, self.recompute_button]),
+        controls = ipywidgets.HBox([ipywidgets.VBox([self.method_menu, self.seed_field, self.grouping_menu,
+                                                     self.recompute_button]),
                                     ipywidgets.VBox(list(self.sliders.values()))])
         views = ipywidgets.HBox([self.background_pane.widget, self.scene_pane.widget])
         self.widget = with_class(ipywidgets.VBox([controls, self.status, self.ranking, views, self.log]),
@@ -409,7 +446,7 @@ class DepthDemo(Base):
         """
         try:
             self.model.set(method=self.method_menu.value, seed=self.seed_field.value,
-                           **{name: s.value for name, s in self.sliders.items()})
+                           grouping=self.grouping_menu.value, **{name: s.value for name, s in self.sliders.items()})
         except Exception:
             self._sync_controls()
             raise
@@ -419,6 +456,7 @@ class DepthDemo(Base):
         with self.syncing():
             self.method_menu.value = self.model.method
             self.seed_field.value = self.model.seed
+            self.grouping_menu.value = self.model.config.grouping
             for name, s in self.sliders.items():
                 s.value = getattr(self.model.config, name)
 

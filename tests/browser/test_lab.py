@@ -138,5 +138,11 @@ def test_toy_car_ranking_appears(open_notebook, ui, artifacts):
     expect(ranking).to_contain_text("1. object at", timeout=60_000)
     expect(ranking).to_contain_text("Z = ")
     expect(ranking).to_contain_text("nearer")
+    expect(ranking).to_contain_text("outline")            # objects by their blobs of change
     ui.wait_sized(page, root.locator(".ismb-scene canvas").first)
     root.screenshot(path=artifacts / "07_toy_car_depth.png")
+    root.locator(".ismb-grouping select").select_option(label="features only (thesis)")
+    expect(ranking).not_to_contain_text("outline", timeout=60_000)
+    expect(ranking).to_contain_text("2. object at")
+    root.locator(".ismb-grouping select").select_option(label="outlines and features")
+    expect(ranking).to_contain_text("outline", timeout=60_000)

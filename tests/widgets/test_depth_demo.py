@@ -61,7 +61,8 @@ def test_ranking_lists_objects_near_to_far(demo):
     for n, (line, obj) in enumerate(zip(lines, objects), 1):
         assert line.startswith(f"{n}. object at ({obj.centroid_xy[0]:.0f}, {obj.centroid_xy[1]:.0f}): ")
         assert f"d = {obj.mean_disparity:.1f} px, Z = {obj.depth_m:.2f} m ± " in line
-        assert line.endswith(f" ({obj.n_features} features, spread {obj.disparity_spread:.1f} px)")
+        assert line.endswith(f" ({obj.n_features} features, spread {obj.disparity_spread:.1f} px; "
+                             f"outline {obj.silhouette_disparity:.0f} px)")
         assert obj.n_features == len(obj.features) >= 2 and obj.disparity_spread >= 0
     assert demo.ranking.value == demo.model.ranking_html()
     assert lines[0] in demo.ranking.value and "the box" in demo.ranking.value
@@ -82,8 +83,13 @@ def test_ranking_shows_how_many_features_each_object_rests_on_and_their_spread(d
     assert first.endswith("(1 feature, spread 0.0 px)")
     assert second.endswith("(12 features, spread 0.5 px)")
     assert model.objects[1].median_disparity == 25.0          # defaults to the mean
+    outline = replace(_object(3, 140, 20.0, n=0), silhouette_disparity=20.0, silhouette_score=0.97)
+    shifted = replace(_object(1, 80, 34.4, n=3), silhouette_disparity=34.0, silhouette_score=0.99)
+    model.result = replace(model.result, objects=(shifted, outline))
+    assert model.ranking()[0].endswith("(3 features, spread 0.0 px; outline 34 px)")
+    assert model.ranking()[1].endswith("(outline only: 20 px, overlap 0.97)")
     demo.ranking.value = model.ranking_html()
-    assert "12 features, spread 0.5 px" in demo.ranking.value
+    assert "outline only: 20 px, overlap 0.97" in demo.ranking.value
 
 
 def test_sentence_says_which_is_nearer_and_what_they_are_in_front_of(demo):
@@ -125,6 +131,18 @@ def test_controls_recompute_and_redraw(demo):
     before = demo.model.result
     demo.recompute_button.click()
     assert demo.model.result is not before and demo.model.result.to_dict() == before.to_dict()
+    assert demo.model.result.silhouettes is demo.model.silhouettes      # found once, at the start
+    outlines = demo.scene_artists["outlines"]
+    labels = demo.model.result.silhouettes.labels
+    assert outlines.get_visible() and len(outlines.get_segments()) == labels.max() == len(r.objects)
+    for polygon in outlines.get_segments():       # each runs along one blob's edge
+        x, y = np.rint(polygon).astype(int).T
+        assert len(set(labels[y, x].tolist())) == 1 and labels[y[0], x[0]] > 0
+    demo.grouping_menu.value = "features"
+    assert not outlines.get_visible()
+    config = DepthConfig(position_tol_px=4.0, grouping="features")
+    assert demo.model.result.to_dict() == expected(seed=3, method="II", config=config)
+    assert all(o.silhouette_disparity is None for o in demo.model.objects)
 
 
 def test_bad_input_is_logged_and_state_kept():
@@ -154,6 +172,7 @@ def test_static_figure_and_css(demo):
     assert "ismb-depth" in demo.widget._dom_classes
     for w, css in ((demo.ranking, "ismb-ranking"), (demo.seed_field, "ismb-seed"),
                    (demo.method_menu, "ismb-method"), (demo.recompute_button, "ismb-recompute"),
+                   (demo.grouping_menu, "ismb-grouping"),
                    (demo.sliders["disparity_tol_px"], "ismb-disparity-tol-px"),
                    (demo.status, "ismb-status"), (demo.log, "ismb-log")):
         assert css in w._dom_classes

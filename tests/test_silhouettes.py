@@ -1,0 +1,171 @@
+"""Objects found by their blobs of change (silhouettes) and refined by their features."""
+
+import numpy as np
+import pytest
+
+from ismb_lab import ParameterError, ParameterTypeError
+from ismb_lab.depth import DepthConfig, depth_from_matches
+from ismb_lab.silhouettes import Silhouettes, silhouettes
+from ismb_lab.io import load_pair
+from ismb_lab.matching import MatchResult
+from ismb_lab.params import Params
+
+H, W = 240, 320
+
+
+def wall(seed=0):
+    return np.random.default_rng(seed).uniform(0, 120, (H, W))
+
+
+def pairs_with(objects, seed=0):
+    """Background and scene pairs of a textured wall; `objects` are (x0, x1, y0, y1, d) rectangles of
+    grey 255 at left columns x0..x1-1, drawn d pixels further left in the right image (clipped)."""
+    background = wall(seed)
+    left, right = background.copy(), background.copy()
+    for x0, x1, y0, y1, d in objects:
+        left[y0:y1, max(x0, 0):min(x1, W)] = 255.0
+        right[y0:y1, max(x0 - d, 0):min(x1 - d, W)] = 255.0
+    return load_pair(background, background), load_pair(left, right)
+
+
+def test_each_blob_gets_the_shift_that_lays_it_on_the_right_image():
+    bg, sc = pairs_with([(60, 100, 60, 110, 25), (180, 230, 120, 170, 12)])
+    s = silhouettes(bg, sc)
+    assert len(s) == 2 and s.disparity.tolist() == [25.0, 12.0]
+    assert s.score.min() > 0.95
+    assert s.centroid_xy[0, 0] < s.centroid_xy[1, 0]           # numbered left to right
+    assert set(np.unique(s.labels)) == {0, 1, 2}
+    assert s.labels[85, 80] == 1 and s.labels[145, 205] == 2 and s.labels[20, 20] == 0
+
+
+@pytest.mark.parametrize("x0, x1", [(-30, 50), (280, 350)])
+def test_objects_across_the_image_border_are_compared_where_both_images_see_them(x0, x1):
+    bg, sc = pairs_with([(x0, x1, 80, 140, 20)])
+    s = silhouettes(bg, sc, roi=(0, 0, W, H))
+    assert s.disparity.tolist() == [20.0] and s.score[0] > 0.95
+    # One best shift, not a tie that the order of trying decides.
+    backwards = silhouettes(bg, sc, roi=(0, 0, W, H), shifts=range(40, -1, -1))
+    assert backwards.disparity.tolist() == [20.0]
+    if x0 < 0:    # the blob touches the left edge: without padding every larger shift fits as well
+        assert silhouettes(bg, sc, roi=(0, 0, W, H), shifts=range(40, -1, -1), pad_px=0, sigma=0).disparity[0] > 20
+        assert silhouettes(bg, sc, roi=(0, 0, W, H), shifts=range(40, -1, -1), sigma=0).disparity[0] == 20
+
+
+def test_an_object_cut_in_two_where_it_looks_like_the_wall_is_one():
+    bg, sc = pairs_with([(150, 200, 80, 140, 22)])
+    # A band of the object looks exactly like the wall behind it, in both images.
+    left, right = sc.left.copy(), sc.right.copy()
+    left[:, 170:180] = bg.left[:, 170:180]
+    right[:, 148:158] = bg.right[:, 148:158]
+    cut = load_pair(left, right)
+    apart = silhouettes(bg, cut, merge_disparity_px=0, merge_gap_px=0)
+    whole = silhouettes(bg, cut)
+    assert len(apart) == 2 and apart.disparity.tolist() == [22.0, 22.0]
+    assert len(whole) == 1 and whole.disparity.tolist() == [22.0] and whole.score[0] > 0.95
+
+
+def test_blobs_outside_the_roi_and_specks_are_not_objects():
+    bg, sc = pairs_with([(150, 190, 100, 140, 22), (30, 33, 30, 33, 5)])
+    assert len(silhouettes(bg, sc, roi=(0, 0, 100, 100), min_pixels=50)) == 0
+    assert len(silhouettes(bg, sc, roi=(0, 0, 100, 100), min_pixels=5)) == 1
+    assert len(silhouettes(bg, bg)) == 0
+
+
+def test_silhouettes_bad_input_names_the_parameter():
+    bg, sc = pairs_with([(150, 190, 100, 140, 22)])
+    with pytest.raises(ParameterError, match="'shifts' parameter of silhouettes"):
+        silhouettes(bg, sc, shifts=[])
+    with pytest.raises(ParameterTypeError, match="'background' parameter of silhouettes"):
+        silhouettes((bg.left, bg.right), sc)
+    with pytest.raises(ParameterError, match="'scene' parameter of silhouettes"):
+        silhouettes(bg, load_pair(sc.left[:200], sc.right[:200]))
+    with pytest.raises(ParameterError, match="'min_pixels' parameter of silhouettes"):
+        silhouettes(bg, sc, min_pixels=0)
+    with pytest.raises(ParameterError, match="'grouping' parameter of DepthConfig"):
+        DepthConfig(grouping="blobs")
+    with pytest.raises(ParameterError, match="'silhouette_score' parameter of DepthConfig"):
+        DepthConfig(silhouette_score=1.5)
+    with pytest.raises(ParameterError, match="'labels' parameter of Silhouettes"):
+        Silhouettes(np.zeros((4, 4)), [], [], np.zeros((0, 2)))
+    with pytest.raises(ParameterError, match="'disparity' parameter of Silhouettes"):
+        Silhouettes(np.ones((4, 4), dtype=int), [1.0, 2.0], [1.0], [[0.0, 0.0]])
+
+
+def result(left_xy, right_xy):
+    left_xy, right_xy = np.asarray(left_xy, float), np.asarray(right_xy, float)
+    return MatchResult("III", Params(), 0, "sweep", 0.0, 0, left_xy, right_xy,
+                       np.column_stack([np.arange(len(left_xy))] * 2))
+
+
+def matches(points):
+    """Matches of left points (x, y, d): the right point is d pixels left."""
+    p = np.asarray(points, float)
+    return result(p[:, :2], p[:, :2] - np.column_stack([p[:, 2], np.zeros(len(p))]))
+
+
+def blob_labels(*boxes):
+    labels = np.zeros((H, W), dtype=np.int32)
+    for k, (x0, x1, y0, y1) in enumerate(boxes, 1):
+        labels[y0:y1, x0:x1] = k
+    return labels
+
+
+def test_a_trusted_blob_is_one_object_at_the_disparity_its_features_agree_on_with_its_outline():
+    background = matches([(x, y, 6.0) for x in range(20, 300, 40) for y in (20, 220)])
+    scene = matches([(105, 105, 22.0), (115, 110, 22.0), (125, 125, 21.0), (135, 130, 22.0),   # object A
+                     (110, 120, 30.0), (120, 130, 30.0), (130, 105, 30.0),                    # A, one period off
+                     (205, 105, 26.0), (215, 120, 26.0), (225, 130, 26.0),                    # B, all off
+                     (60, 60, 18.0), (62, 66, 18.0),                                          # on no blob
+                     (255, 105, 10.0), (265, 115, 10.0), (275, 125, 10.0)])                   # C
+    labels = blob_labels((100, 140, 100, 140), (200, 230, 100, 140), (250, 280, 100, 140), (290, 300, 100, 140))
+    sil = Silhouettes(labels, [22.0, 14.0, 11.0, -2.0], [0.98, 0.97, 0.5, 0.95],
+                      [[120.0, 120.0], [215.0, 120.0], [265.0, 120.0], [295.0, 120.0]])
+    r = depth_from_matches(background, scene, DepthConfig(), sil)
+    a, b, c = r.objects
+    assert (a.rank, a.n_features, a.silhouette_disparity, a.centroid_xy) == (1, 4, 22.0, (120.0, 120.0))
+    assert a.mean_disparity == pytest.approx(np.mean([22, 22, 21, 22])) and a.silhouette_score == 0.98
+    # B: no feature agrees with its outline, so the outline alone places it.
+    assert (b.n_features, b.mean_disparity, b.silhouette_disparity, b.n_matches) == (0, 14.0, 14.0, 0)
+    # C's outline is not trusted (two objects touching, say): its features decide, as without outlines.
+    assert (c.n_features, c.mean_disparity, c.silhouette_disparity) == (3, 10.0, None)
+    # The last outline lies behind the wall: a sliver that looks like the wall, not an object ...
+    assert r.silhouettes is sil and r.to_dict()["grouping"] == "silhouettes"
+    # ... unless objects need not stand in front of the background.
+    behind = depth_from_matches(background, scene, DepthConfig(in_front=False), sil)
+    assert [o.silhouette_disparity for o in behind.objects][-1] == -2.0
+    assert r.to_dict()["objects"][1]["silhouette_disparity"] == 14.0
+    # Without outlines the off-period bands and the stray pair are objects of their own.
+    alone = depth_from_matches(background, scene, DepthConfig())
+    assert len(alone.objects) > 3 and alone.to_dict()["grouping"] == "features"
+    assert all(o.silhouette_disparity is None for o in alone.objects)
+
+
+def test_silhouettes_must_cover_the_scene():
+    background = matches([(20, 20, 6.0), (60, 20, 6.0)])
+    scene = matches([(300, 200, 20.0), (305, 205, 20.0)])
+    small = Silhouettes(np.zeros((100, 100), dtype=np.int32), [], [], np.zeros((0, 2)))
+    with pytest.raises(ParameterError, match="'silhouettes' parameter of depth_from_matches"):
+        depth_from_matches(background, scene, None, small)
+    with pytest.raises(ParameterTypeError, match="'silhouettes' parameter of depth_from_matches"):
+        depth_from_matches(background, scene, None, np.zeros((H, W), dtype=int))
+
+
+def test_silhouettes_found_once_give_what_finding_them_each_time_gives():
+    from ismb_lab.depth_demo import depth_pairs, pair_silhouettes, relative_depth
+    from ismb_lab.scenes import object_layout
+    from ismb_lab.depth_demo import layout_match_config
+
+    layout = object_layout(1001, 2, family="repetitive")
+    config = layout_match_config(layout)
+    prepared = depth_pairs(layout.background, layout.scene, config)
+    blobs = pair_silhouettes(prepared)
+    once = relative_depth(layout.background, layout.scene, match_config=config, prepared=prepared,
+                          silhouettes=blobs)
+    each = relative_depth(layout.background, layout.scene, match_config=config)
+    assert once.silhouettes is blobs and once.to_dict() == each.to_dict()
+    np.testing.assert_array_equal(each.silhouettes.labels, blobs.labels)
+    features = relative_depth(layout.background, layout.scene, match_config=config, prepared=prepared,
+                              silhouettes=blobs, config=DepthConfig(grouping="features"))
+    assert features.silhouettes is None
+    with pytest.raises(ParameterTypeError, match="'silhouettes' parameter of relative_depth"):
+        relative_depth(layout.background, layout.scene, prepared=prepared, silhouettes=blobs.labels)
