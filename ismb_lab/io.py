@@ -17,7 +17,7 @@ import numpy as np
 from ._validation import ParameterError, ParameterTypeError, check_number, message
 
 __all__ = ["MAX_PIXELS", "PIXELS_VARIABLE", "image_sha256", "load_image", "load_pair", "max_pixels",
-           "StereoPair"]
+           "png_bytes", "save_image", "StereoPair"]
 
 _ARRAY_TAG = b"ismb_lab-array-v1\n"
 
@@ -306,3 +306,35 @@ def load_pair(left, right, *, min_shape=(1, 1)) -> StereoPair:
             for side, src in (("left", left), ("right", right))}
     return StereoPair(images["left"], images["right"], image_sha256(left), image_sha256(right),
                       path["left"], path["right"])
+
+
+def png_bytes(image) -> bytes:
+    """A grey image as 8-bit PNG bytes: rounded to whole grey levels and clipped to 0-255.
+
+    Examples
+    --------
+    >>> import cv2, numpy as np
+    >>> data = png_bytes(np.full((2, 2), 300.4))
+    >>> data[1:4], cv2.imdecode(np.frombuffer(data, np.uint8), cv2.IMREAD_UNCHANGED).tolist()
+    (b'PNG', [[255, 255], [255, 255]])
+    """
+    ok, data = cv2.imencode(".png", np.clip(np.rint(np.asarray(image, dtype=float)), 0, 255).astype(np.uint8))
+    if not ok:  # pragma: no cover - OpenCV fails here only on an empty image
+        raise ParameterError(message("image", "png_bytes", "a non-empty grey image", np.shape(image)))
+    return data.tobytes()
+
+
+def save_image(path, image):
+    """Write a grey image as an 8-bit PNG at `path`, atomically (a crash leaves the old file or
+    the new one, never half of one); returns the path.
+
+    Examples
+    --------
+    >>> import tempfile, pathlib, numpy as np
+    >>> path = save_image(pathlib.Path(tempfile.mkdtemp()) / "grey.png", np.full((3, 4), 127.6))
+    >>> load_image(path).shape, float(load_image(path)[0, 0])
+    ((3, 4), 128.0)
+    """
+    from ._files import atomic_write_bytes
+
+    return atomic_write_bytes(path, png_bytes(image))

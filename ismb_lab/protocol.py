@@ -35,7 +35,7 @@ from .targets import load_targets, snap
 from .tuning import evaluate, to_params, tune
 
 __all__ = ["SOURCES", "Case", "PairReport", "PeerReport", "ProtocolReport", "SolverReport", "Spread",
-           "format_protocol", "load_manifest", "protocol"]
+           "family_cases", "format_protocol", "load_manifest", "protocol"]
 
 _NONE = Score(0, 0, 0, 0)
 
@@ -107,6 +107,33 @@ class Case:
         truth = true_matches(scene, prepared.problem.left_xy, prepared.problem.right_xy)
         left = np.flatnonzero(truth >= 0)
         return cls(prepared, np.stack([left, truth[left]], axis=1).astype(np.int64), name=name)
+
+
+def family_cases(family: str, start: int, count: int) -> list:
+    """The cases of one scene family's split: layouts ``start .. start + count - 1``.
+
+    Layout ``seed`` of the family has ``2 + seed % 2`` objects
+    (:func:`ismb_lab.scenes.object_layout`), matched in its ROI with its window shift; a
+    layout with fewer than 3 targets is left out.  The first case is the training pair:
+    the first with at least 8 targets (``scripts/matching_families.py``'s protocol).
+
+    Examples
+    --------
+    >>> cases = family_cases("cameras", 2300, 3)
+    >>> len(cases[0].targets) >= 8, cases[0].name.startswith("cameras ")
+    (True, True)
+    """
+    from .scenes import object_layout
+
+    cases = []
+    for seed in range(start, start + count):
+        layout = object_layout(seed, 2 + seed % 2, family=family)
+        case = Case.from_scene(layout.scene, MatchConfig(roi=layout.roi, shift=layout.shift),
+                               name=f"{family} {seed}")
+        if len(case.targets) >= 3:
+            cases.append(case)
+    first = next((i for i, c in enumerate(cases) if len(c.targets) >= 8), 0)
+    return [cases[first]] + cases[:first] + cases[first + 1:]
 
 
 #: Built-in ground-truth pairs a manifest can name as ``"source"``: Middlebury Motorcycle

@@ -38,7 +38,8 @@ class Silhouettes:
         Blob ``k``'s silhouette disparity at index ``k - 1``: the whole-pixel shift
         ``x_left - x_right`` with the largest Dice overlap.
     score : (n,) ndarray
-        That overlap, 0-1.
+        That overlap, 0-1; 0 for a blob that covers more than half of the ROI, which is a
+        change of the light or of the view rather than an object.
     centroid_xy : (n, 2) ndarray
         Mean left-image ``(x, y)`` of each blob's pixels.
     """
@@ -116,7 +117,7 @@ def _best_shift(mask: np.ndarray, rows: slice, cols: slice, right: np.ndarray, s
 
 def silhouettes(background, scene, roi="center", *, shifts=range(0, 41), threshold: float = 8.0,
                 sigma: float = 1.0, min_pixels: int = 20, pad_px: int = 8, merge_gap_px: int = 10,
-                merge_disparity_px: float = 1.0) -> Silhouettes:
+                merge_disparity_px: float = 1.0, max_fraction: float = 0.5) -> Silhouettes:
     """Blobs of change of the scene's left image, each with the shift that lays it on the right's.
 
     Where the scene pair differs from the background pair is where the objects are, in
@@ -148,6 +149,9 @@ def silhouettes(background, scene, roi="center", *, shifts=range(0, 41), thresho
         Columns on each side of a blob's box that the overlap counts as well.
     merge_gap_px, merge_disparity_px : float
         See above.
+    max_fraction : float
+        A blob that covers more of the ROI than this is no object's outline but a change
+        of the light or of the view: its score is 0, so its features are grouped alone.
 
     Returns
     -------
@@ -179,6 +183,7 @@ def silhouettes(background, scene, roi="center", *, shifts=range(0, 41), thresho
     merge_gap_px = check_number(merge_gap_px, "merge_gap_px", own, low=0, integer=True)
     pad_px = check_number(pad_px, "pad_px", own, low=0, integer=True)
     merge_disparity_px = check_number(merge_disparity_px, "merge_disparity_px", own, low=0)
+    max_fraction = check_number(max_fraction, "max_fraction", own, low=0, high=1, low_open=True)
     try:
         shifts = [int(d) for d in shifts]
     except (TypeError, ValueError):
@@ -217,6 +222,8 @@ def silhouettes(background, scene, roi="center", *, shifts=range(0, 41), thresho
     for k, j in enumerate(order, 1):
         labels[masks[j]] = k
         dice, d, _ = measure(masks[j])
+        if np.count_nonzero(masks[j][y:y + h, x:x + w]) > max_fraction * w * h:
+            dice = 0.0          # the whole view changed (another light, a moved camera): no outline
         disparity.append(d)
         score.append(dice)
     centroid = [centroids[j] for j in order]

@@ -147,25 +147,12 @@ from __future__ import annotations
 import argparse
 import time
 
-from ismb_lab.matching import MatchConfig
-from ismb_lab.protocol import Case, protocol
-from ismb_lab.scenes import FAMILIES, object_layout
+from ismb_lab.protocol import family_cases, protocol
+from ismb_lab.scenes import FAMILIES
 from ismb_lab.solvers import DEFAULT_SOLVER
 
 DEV_START, HELD_OUT_START = 2000, 930_000
 VARIANTS = ("III:network", "NM4:anneal", "NM:network")
-
-
-def family_cases(family: str, start: int, count: int) -> list:
-    cases = []
-    for seed in range(start, start + count):
-        layout = object_layout(seed, 2 + seed % 2, family=family)
-        case = Case.from_scene(layout.scene, MatchConfig(roi=layout.roi, shift=layout.shift),
-                               name=f"{family} {seed}")
-        if len(case.targets) >= 3:
-            cases.append(case)
-    first = next((i for i, c in enumerate(cases) if len(c.targets) >= 8), 0)
-    return [cases[first]] + cases[:first] + cases[first + 1:]
 
 
 def figures(scores) -> tuple[int, int, int]:

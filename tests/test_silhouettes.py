@@ -169,3 +169,23 @@ def test_silhouettes_found_once_give_what_finding_them_each_time_gives():
     assert features.silhouettes is None
     with pytest.raises(ParameterTypeError, match="'silhouettes' parameter of relative_depth"):
         relative_depth(layout.background, layout.scene, prepared=prepared, silhouettes=blobs.labels)
+
+
+@pytest.mark.parametrize("gain, offset", [(1.15, 0.0), (0.85, -10.0)])
+def test_a_change_of_light_over_the_whole_view_is_no_outline(gain, offset):
+    """The toy-car scene photographed in another light: every pixel changed, so the one blob is
+    no object, and the features find the two cars as they do without outlines."""
+    from ismb_lab.depth_demo import depth_pairs, pair_silhouettes, relative_depth
+    from ismb_lab.scenes import lab_scene, toy_car_scene
+
+    bg, sc = lab_scene(0), toy_car_scene(0)
+    scene = load_pair(np.clip(sc.left * gain + offset, 0, 255), np.clip(sc.right * gain + offset, 0, 255))
+    prepared = depth_pairs(load_pair(bg.left, bg.right), scene)
+    blobs = pair_silhouettes(prepared)
+    assert len(blobs) == 1 and blobs.score.tolist() == [0.0]
+    by_outline = relative_depth(None, None, prepared=prepared, silhouettes=blobs)
+    by_features = relative_depth(None, None, prepared=prepared, config=DepthConfig(grouping="features"))
+    assert len(by_outline.objects) == 2
+    assert [o.mean_disparity for o in by_outline.objects] == [o.mean_disparity for o in by_features.objects]
+    with pytest.raises(ParameterError, match="'max_fraction' parameter of silhouettes"):
+        silhouettes(load_pair(bg.left, bg.right), scene, max_fraction=0)

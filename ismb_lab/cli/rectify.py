@@ -33,9 +33,7 @@ def add_parser(sub) -> None:
 
 
 def run(args) -> int:
-    import cv2
-    import numpy as np
-
+    from ..io import png_bytes
     from ..rectify import rectify_pair
     from ._common import UsageError
 
@@ -59,11 +57,10 @@ def run(args) -> int:
         result = load_rig(args.rig).rectify(args.left, args.right)
     else:
         result = rectify_pair(args.left, args.right)
-    png = lambda image: cv2.imencode(".png", np.clip(np.rint(image), 0, 255).astype(np.uint8))[1].tobytes()
     folder.mkdir(parents=True, exist_ok=True)
     # the images first and the record last: a rectify.json always describes images beside it
-    atomic_write_bytes(targets[0], png(result.left))
-    atomic_write_bytes(targets[1], png(result.right))
+    atomic_write_bytes(targets[0], png_bytes(result.left))
+    atomic_write_bytes(targets[1], png_bytes(result.right))
     atomic_write_text(targets[2], json_text(result.to_dict()))
     lo, hi = result.disparity_range_px
     print(f"{result.method}: {result.inliers} inliers, |dy| median {result.median_abs_dy_px:.2f} px, "

@@ -26,18 +26,13 @@ import numpy as np
 from .._files import atomic_write_bytes, atomic_write_text
 from .._validation import ParameterError, ParameterTypeError, message
 from ..classroom import user_name
+from ..io import png_bytes
 from ..rectify import Rectified, _inputs, apply_rectification, check_rectified, rectify_pair
 from ._common import Base, Pane, button, grey_rgb, row, with_class
 
 __all__ = ["PhotoLoader", "PhotoModel"]
 
 _IMAGE = re.compile(r"\.(jpe?g|png|bmp|tiff?|webp)$", re.IGNORECASE)
-
-
-def _png(image) -> bytes:
-    import cv2
-
-    return cv2.imencode(".png", np.clip(np.rint(image), 0, 255).astype(np.uint8))[1].tobytes()
 
 
 class PhotoModel:
@@ -153,7 +148,7 @@ class PhotoModel:
             raise ParameterError(message("photos", "PhotoModel.save", "a rectified pair (press 'Rectify' first)",
                                          self.message))
         left, right, _, _ = self.current()
-        images = {"left.png": _png(left), "right.png": _png(right)}
+        images = {"left.png": png_bytes(left), "right.png": png_bytes(right)}
         folder = self._folder_for(images)
         folder.mkdir(parents=True, exist_ok=True)
         record = (self.rectified.to_dict() if self.rectified is not None else
