@@ -17,7 +17,7 @@ import numpy as np
 from ._validation import ParameterError, ParameterTypeError, check_number, message
 
 __all__ = ["MAX_PIXELS", "PIXELS_VARIABLE", "image_sha256", "load_image", "load_pair", "max_pixels",
-           "png_bytes", "save_image", "StereoPair"]
+           "png_bytes", "save_image", "save_pair", "StereoPair"]
 
 _ARRAY_TAG = b"ismb_lab-array-v1\n"
 
@@ -338,3 +338,40 @@ def save_image(path, image):
     from ._files import atomic_write_bytes
 
     return atomic_write_bytes(path, png_bytes(image))
+
+
+def save_pair(left, right, parent, name: str):
+    """Write a pair as ``left.png`` and ``right.png`` into ``parent/name``, never over another pair.
+
+    A folder ``name`` that holds other images is left as it is (labels may rest on them):
+    the pair goes to ``name-2``, ``name-3``, ... instead, the first that is new or holds
+    these very images (the same pair saved again reuses its folder).  A file or a link of
+    that name is skipped.  Each image is written atomically.  Returns the folder.
+
+    Examples
+    --------
+    >>> import tempfile, pathlib, numpy as np
+    >>> parent = pathlib.Path(tempfile.mkdtemp())
+    >>> a, b = np.zeros((4, 4)), np.full((4, 4), 9.0)
+    >>> [save_pair(*p, parent, "books").name for p in ((a, b), (a, b), (b, a))]
+    ['books', 'books', 'books-2']
+    """
+    import itertools
+    from pathlib import Path
+
+    from ._files import atomic_write_bytes
+
+    images = {"left.png": png_bytes(left), "right.png": png_bytes(right)}
+    for n in itertools.count(1):
+        folder = Path(parent) / (name if n == 1 else f"{name}-{n}")
+        if not folder.exists() and not folder.is_symlink():
+            break
+        if folder.is_symlink() or not folder.is_dir():
+            continue
+        if all(not (folder / f).exists() or ((folder / f).is_file() and (folder / f).read_bytes() == data)
+               for f, data in images.items()):
+            break
+    folder.mkdir(parents=True, exist_ok=True)
+    for f, data in images.items():
+        atomic_write_bytes(folder / f, data)
+    return folder

@@ -16,17 +16,16 @@ the widget it was made for (``TargetLabeler.from_photos()``,
 from __future__ import annotations
 
 import html
-import itertools
 import re
 from pathlib import Path
 from typing import Callable
 
 import numpy as np
 
-from .._files import atomic_write_bytes, atomic_write_text
+from .._files import atomic_write_text
 from .._validation import ParameterError, ParameterTypeError, message
 from ..classroom import user_name
-from ..io import png_bytes
+from ..io import save_pair
 from ..rectify import Rectified, _inputs, apply_rectification, check_rectified, rectify_pair
 from ._common import Base, Pane, button, grey_rgb, row, with_class
 
@@ -148,33 +147,16 @@ class PhotoModel:
             raise ParameterError(message("photos", "PhotoModel.save", "a rectified pair (press 'Rectify' first)",
                                          self.message))
         left, right, _, _ = self.current()
-        images = {"left.png": png_bytes(left), "right.png": png_bytes(right)}
-        folder = self._folder_for(images)
-        folder.mkdir(parents=True, exist_ok=True)
         record = (self.rectified.to_dict() if self.rectified is not None else
                   {k: v for k, v in self.check.items() if not k.endswith("_xy")} | {"method": "already rectified"})
         record["roi"] = None if self.roi is None else list(self.roi)
-        for name, data in images.items():
-            atomic_write_bytes(folder / name, data)
+        folder = save_pair(left, right, self.folder, f"photos-{self.user}-{self.name}")
         import json
 
         atomic_write_text(folder / "rectify.json", json.dumps(record, indent=2))
         self.saved = folder
         self.message = f"saved to {folder}"
         return folder
-
-    def _folder_for(self, images: dict) -> Path:
-        """The first of ``photos-<user>-<name>``, ``...-2``, ... that is new or holds these images."""
-        base = f"photos-{self.user}-{self.name}"
-        for n in itertools.count(1):
-            folder = self.folder / (base if n == 1 else f"{base}-{n}")
-            if not folder.exists() and not folder.is_symlink():
-                return folder
-            if folder.is_symlink() or not folder.is_dir():
-                continue
-            if all(not (folder / name).exists() or ((folder / name).is_file() and (folder / name).read_bytes() == data)
-                   for name, data in images.items()):
-                return folder
 
 
 def draw_photos(ax, model: PhotoModel) -> dict:
