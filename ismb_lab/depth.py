@@ -20,8 +20,9 @@ How it works
    This drops wrong matches and background corners that the background pair did not
    match right.  The smallest, not the median, because whole groups of background
    corners can be matched wrongly, at too large a disparity.
-3. *Objects.*  With :class:`~ismb_lab.silhouettes.Silhouettes` (what :func:`ismb_lab.depth_demo.relative_depth`
-   passes; ``DepthConfig.grouping``), an object is a blob of the left image where the
+3. *Objects.*  With :class:`~ismb_lab.silhouettes.Silhouettes` (what
+   :func:`ismb_lab.depth_demo.relative_depth` passes; ``DepthConfig.grouping``), an
+   object is a blob of the left image where the
    scene differs from the background, and its disparity is the shift that lays that
    blob on the right image's blob of change (its silhouette disparity, whole pixels).
    The features on the blob (``silhouette_grow_px`` around it) with matches within
@@ -31,9 +32,9 @@ How it works
    overlap well (Dice ``>= silhouette_score``) and, with ``in_front``, when its shift
    exceeds the smallest background disparity by more than ``disparity_tol_px`` (a
    sliver of an object that looks like the wall can fit a shift behind it); otherwise
-   -- two objects touching in one blob, say -- its features are grouped as below.  So a striped object matched one
-   period off, or cut into bands, stays one object at its true disparity, and a
-   feature off every blob is not an object.
+   -- two objects touching in one blob, say -- its features are grouped as below.  So
+   a striped object matched one period off, or cut into bands, stays one object at its
+   true disparity, and a feature off every blob is not an object.
 
    Without silhouettes the remaining features are grouped by single linkage: two features
    are linked when they lie within ``link_px`` of each other (left image) and have
@@ -112,8 +113,9 @@ class DepthConfig:
         Radius of the local background around a scene match.
     grouping : {"silhouettes", "features"}
         How :func:`ismb_lab.depth_demo.relative_depth` finds objects: by the blobs of
-        change of both images (:class:`~ismb_lab.silhouettes.Silhouettes`, the default), or by the features
-        alone (steps 3-4 of the module's docstring without silhouettes, as before).
+        change of both images (:class:`~ismb_lab.silhouettes.Silhouettes`, the default),
+        or by the features alone (steps 3-4 of the module's docstring without
+        silhouettes, as the thesis does).
     silhouette_tol_px : float
         Largest difference between a match's disparity and its blob's silhouette
         disparity for the match to count.
@@ -257,7 +259,8 @@ class DepthObject:
         pixels: with :attr:`n_features`, how far to trust the object.
     silhouette_disparity : float or None
         The shift that lays the object's blob of change on the right image's
-        (:class:`~ismb_lab.silhouettes.Silhouettes`), or None when the object was found by its features alone.
+        (:class:`~ismb_lab.silhouettes.Silhouettes`), or None when the object was found
+        by its features alone.
         An object with no features (``n_features == 0``) was found by its outline
         alone and has this as its disparity.
     silhouette_score : float or None

@@ -16,8 +16,8 @@ the background removal has work to do; where nothing changed, or everything did
 The figures behind this choice are in ``benchmarks/README.md``.
 
 *Objects by their outlines* (beyond the thesis).  The same differences, in the left and
-in the right image, are the objects' outlines: :func:`ismb_lab.silhouettes.silhouettes` gives each left blob of
-change the shift that lays it on the right image's blobs, and
+in the right image, are the objects' outlines: :func:`ismb_lab.silhouettes.silhouettes`
+gives each left blob of change the shift that lays it on the right image's blobs, and
 :func:`ismb_lab.depth.depth_from_matches` makes each well-fitting blob one object at the
 disparity its agreeing features give (``DepthConfig.grouping``; ``"features"`` is the
 thesis' grouping).  On random object layouts (``scripts/depth_layouts.py``) this ranks 119
@@ -151,7 +151,7 @@ def changed_roi(background_left, scene_left, roi="center", *, threshold: float =
     True
     """
     changed, (x, y, w, h), margin = changed_in_roi(background_left, scene_left, roi, threshold, sigma, margin,
-                                                    "changed_roi", "scene_left")
+                                                   "changed_roi", "scene_left")
     rows, cols = np.nonzero(changed)
     if not len(rows):
         return None
@@ -230,7 +230,7 @@ def changed_regions(background_image, scene_image, roi="center", *, threshold: f
     own = "changed_regions"
     min_pixels = check_number(min_pixels, "min_pixels", own, low=1, integer=True)
     changed, (x, y, w, h), margin = changed_in_roi(background_image, scene_image, roi, threshold, sigma, margin,
-                                                    own, "scene_image")
+                                                   own, "scene_image")
     blobs, n = label(changed, structure=np.ones((3, 3)))
     sizes = np.bincount(blobs.ravel(), minlength=n + 1)
     return sorted(_grown_box(x, y, w, h, cols.start, rows.start, cols.stop - 1, rows.stop - 1, margin)
@@ -490,11 +490,11 @@ def relative_depth(background, scene, *, method: str = "III", params=None, match
     config = DepthConfig() if config is None else config
     if not isinstance(config, DepthConfig):
         raise ParameterTypeError(message("config", own, "a DepthConfig", config))
-    results = [_match(p, method, params, seed, solver, network) for p in prepared]
-    scene_roi = resolve_roi(prepared[1].config.roi, prepared[1].pair.shape)
     if silhouettes is not None and not isinstance(silhouettes, Silhouettes):
         raise ParameterTypeError(message("silhouettes", own, "None or the Silhouettes that pair_silhouettes "
                                          "returns", silhouettes))
+    results = [_match(p, method, params, seed, solver, network) for p in prepared]
+    scene_roi = resolve_roi(prepared[1].config.roi, prepared[1].pair.shape)
     blobs = None
     if config.grouping == "silhouettes":
         blobs = pair_silhouettes(prepared) if silhouettes is None else silhouettes
@@ -502,8 +502,18 @@ def relative_depth(background, scene, *, method: str = "III", params=None, match
 
 
 def pair_silhouettes(prepared) -> Silhouettes:
-    """:func:`~ismb_lab.silhouettes.silhouettes` of two pairs prepared by :func:`depth_pairs`: the background's ROI,
-    and the shifts of the scene's candidate window (whole pixels)."""
+    """:func:`~ismb_lab.silhouettes.silhouettes` of two pairs prepared by :func:`depth_pairs`.
+
+    The blobs are sought in the background's ROI, at the whole-pixel shifts of the scene's
+    candidate window (the disparities the matcher may find).
+
+    Examples
+    --------
+    >>> from ismb_lab.scenes import lab_scene, toy_car_scene
+    >>> blobs = pair_silhouettes(depth_pairs(lab_scene(0), toy_car_scene(0)))
+    >>> blobs.disparity.tolist()        # the two cars, near one first (left to right)
+    [33.0, 25.0]
+    """
     (background, scene), config = (p.pair for p in prepared), prepared[1].config
     half = float(config.window_width) / 2
     shifts = range(int(np.floor(config.shift - half)), int(np.ceil(config.shift + half)) + 1)

@@ -70,8 +70,23 @@ class Silhouettes:
 
 
 def changed_in_roi(background, scene, roi, threshold, sigma, margin, own: str, name: str):
-    """The pixels of `roi` whose smoothed difference exceeds `threshold`, the ROI and the margin
-    (checked), as :func:`changed_roi` and :func:`changed_regions` both use them."""
+    """The pixels of `roi` whose smoothed difference exceeds `threshold`, the ROI and the margin.
+
+    The one test of "changed" behind :func:`silhouettes` and
+    :func:`ismb_lab.depth_demo.changed_roi` / :func:`~ismb_lab.depth_demo.changed_regions`:
+    the absolute difference of two grey images, Gaussian-smoothed with `sigma`, above
+    `threshold` grey levels.  Bad values are named as parameters of `own`; `name` is the
+    parameter that holds `scene`.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> background = np.zeros((6, 8))
+    >>> scene = background.copy(); scene[2:4, 3:5] = 50.0
+    >>> changed, roi, margin = changed_in_roi(background, scene, "full", 8.0, 0.0, 0, "demo", "scene")
+    >>> int(changed.sum()), roi
+    (4, (0, 0, 8, 6))
+    """
     bg = np.asarray(background, dtype=float)
     sc = np.asarray(scene, dtype=float)
     if bg.ndim != 2 or bg.shape != sc.shape:
@@ -121,8 +136,8 @@ def silhouettes(background, scene, roi="center", *, shifts=range(0, 41), thresho
     """Blobs of change of the scene's left image, each with the shift that lays it on the right's.
 
     Where the scene pair differs from the background pair is where the objects are, in
-    both images: the same changed pixels as :func:`changed_regions` (whole image, the
-    blobs that reach into `roi`), and the right image's changed pixels.  A blob's
+    both images: the same changed pixels as :func:`ismb_lab.depth_demo.changed_regions`
+    (whole image, the blobs that reach into `roi`), and the right image's changed pixels.  A blob's
     silhouette disparity is the shift ``d`` in `shifts` with the largest Dice overlap
     between the blob and the right image's changed pixels ``d`` pixels left, counted over
     the columns both images have (an object across the image border is seen in part).
@@ -140,9 +155,9 @@ def silhouettes(background, scene, roi="center", *, shifts=range(0, 41), thresho
     roi : str or (x, y, w, h)
         Where the objects may be, as :attr:`ismb_lab.matching.MatchConfig.roi`.
     shifts : iterable of int
-        Disparities to try (:func:`relative_depth`: the candidate window's).
+        Disparities to try (:func:`ismb_lab.depth_demo.relative_depth`: the candidate window's).
     threshold, sigma : float
-        As :func:`changed_roi`.
+        As :func:`ismb_lab.depth_demo.changed_roi`.
     min_pixels : int
         Smaller blobs are camera noise.
     pad_px : int
@@ -178,7 +193,8 @@ def silhouettes(background, scene, roi="center", *, shifts=range(0, 41), thresho
         if not isinstance(value, StereoPair):
             raise ParameterTypeError(message(name, own, "a StereoPair", value))
     if background.shape != scene.shape:
-        raise ParameterError(message("scene", own, "images of the background's size", f"images of shape {scene.shape}"))
+        raise ParameterError(message("scene", own, "images of the background's size",
+                                     f"images of shape {scene.shape}"))
     min_pixels = check_number(min_pixels, "min_pixels", own, low=1, integer=True)
     merge_gap_px = check_number(merge_gap_px, "merge_gap_px", own, low=0, integer=True)
     pad_px = check_number(pad_px, "pad_px", own, low=0, integer=True)

@@ -25,9 +25,9 @@ from ..params import Params
 from ..plotting import outlines
 from ._common import Base, Pane, button, grey_rgb, pair_files, path_labels, with_class
 
-__all__ = ["CMAP", "GROUPING_LABELS", "TOLERANCES", "depth_text", "support_text", "DepthDemo", "DepthModel", "disparity_limits",
-           "draw_background", "draw_scene", "label_positions", "load_stereo", "update_background",
-           "update_scene"]
+__all__ = ["CMAP", "GROUPING_LABELS", "TOLERANCES", "depth_text", "support_text", "DepthDemo",
+           "DepthModel", "disparity_limits", "draw_background", "draw_scene", "label_positions",
+           "load_stereo", "update_background", "update_scene"]
 
 #: The DepthConfig fields of the background removal that get a slider, with their labels.
 TOLERANCES = {"position_tol_px": "same place (px)", "disparity_tol_px": "same disparity (px)",
