@@ -191,46 +191,56 @@ def _pairwise_sum(a, n):
 
 
 @numba.njit(cache=True)
-def _block_abs_difference_sum(x, y):
-    """``_block_sum(abs(x - y))`` without the intermediate row: the same additions in the
-    same order, for windows of at most 128 pixels."""
-    n = x.shape[0]
-    if n < 8:
-        s = 0.0
-        for t in range(n):
-            s += abs(x[t] - y[t])
-        return s
-    r0, r1, r2, r3 = abs(x[0] - y[0]), abs(x[1] - y[1]), abs(x[2] - y[2]), abs(x[3] - y[3])
-    r4, r5, r6, r7 = abs(x[4] - y[4]), abs(x[5] - y[5]), abs(x[6] - y[6]), abs(x[7] - y[7])
-    stop = n - n % 8
-    for t in range(8, stop, 8):
-        r0 += abs(x[t] - y[t])
-        r1 += abs(x[t + 1] - y[t + 1])
-        r2 += abs(x[t + 2] - y[t + 2])
-        r3 += abs(x[t + 3] - y[t + 3])
-        r4 += abs(x[t + 4] - y[t + 4])
-        r5 += abs(x[t + 5] - y[t + 5])
-        r6 += abs(x[t + 6] - y[t + 6])
-        r7 += abs(x[t + 7] - y[t + 7])
-    s = ((r0 + r1) + (r2 + r3)) + ((r4 + r5) + (r6 + r7))
-    for t in range(stop, n):
-        s += abs(x[t] - y[t])
-    return s
-
-
-@numba.njit(cache=True)
 def _mean_abs_difference(lp, rp):
     n_left, d = lp.shape
-    out = np.empty((n_left, rp.shape[0]))
-    row = np.empty(d)
-    for i in range(n_left):
-        for k in range(rp.shape[0]):
-            if d <= 128:
-                out[i, k] = _block_abs_difference_sum(lp[i], rp[k]) / d
-            else:
+    if d > 128:
+        out = np.empty((n_left, rp.shape[0]))
+        row = np.empty(d)
+        for i in range(n_left):
+            for k in range(rp.shape[0]):
                 for t in range(d):
                     row[t] = abs(lp[i, t] - rp[k, t])
                 out[i, k] = _pairwise_sum(row, d) / d
+        return out
+    return _mean_abs_difference_small(lp, rp)
+
+
+@numba.njit(cache=True)
+def _mean_abs_difference_small(lp, rp):
+    """``M`` for windows of at most 128 pixels, summed as :func:`_block_sum` sums: eight
+    partial sums, one per pixel index modulo 8, then the rest.
+
+    Each left window is compared with every right window at once, pixel by pixel: the
+    right windows are stored pixel-major, so the innermost loop runs over right windows
+    in a row of memory and compiles to vector instructions.  Per pair the additions are
+    the same, in the same order (``0.0 + v`` is ``v`` for the first term).  One pair at a
+    time, with its eight sums in registers, had taken 82 ms at 1,000 x 1,000 corners.
+    """
+    n_left, d = lp.shape
+    n_right = rp.shape[0]
+    by_pixel = np.ascontiguousarray(rp.T)
+    out = np.empty((n_left, n_right))
+    partial = np.empty((8, n_right))
+    stop = d - d % 8 if d >= 8 else 0
+    for i in range(n_left):
+        x, o = lp[i], out[i]
+        partial[:] = 0.0
+        for t in range(stop):
+            xt, r, acc = x[t], by_pixel[t], partial[t % 8]
+            for k in range(n_right):
+                acc[k] += abs(xt - r[k])
+        if stop:
+            for k in range(n_right):
+                o[k] = (((partial[0, k] + partial[1, k]) + (partial[2, k] + partial[3, k]))
+                        + ((partial[4, k] + partial[5, k]) + (partial[6, k] + partial[7, k])))
+        else:
+            o[:] = 0.0
+        for t in range(stop, d):
+            xt, r = x[t], by_pixel[t]
+            for k in range(n_right):
+                o[k] += abs(xt - r[k])
+        for k in range(n_right):
+            o[k] /= d
     return out
 
 
