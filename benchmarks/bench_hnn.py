@@ -60,7 +60,7 @@ def main(argv=None) -> None:
     scale = 0.02 if smoke else 1.0
     method, params = get_method("III"), THESIS_PARAMS["III"]
     print(f"{'problem':>22} {'corners':>7} {'neurons':>7} {'pairs':>7} {'attempts':>8} {'textbook':>10} "
-          f"{'numba, median (p10-p90)':>27} {'per attempt':>11} {'ratio':>6} {'build+numba':>11}")
+          f"{'numba, median (p10-p90)':>27} {'per attempt':>11} {'ratio':>6} {'+energy':>9} {'build+numba':>11}")
     for name, problem in problems(smoke):
         net = method.network(problem, params)
         run(net)  # compile outside the timing
@@ -69,14 +69,16 @@ def main(argv=None) -> None:
         slow = statistics.median(seconds(lambda s: run(net, rng=s, kernel="textbook"),
                                          max(3, int((7 if problem.n_neurons > 300 else 31) * scale))))
         fast = seconds(lambda s: run(net, rng=10_000 + s), many)      # a new seed every run
+        with_energy = statistics.median(seconds(lambda s: run(net, rng=20_000 + s).energy, many))
         full = statistics.median(seconds(lambda s: run(method.network(problem, params), rng=s), many))
         size = f"{len(problem.left_xy)}x{len(problem.right_xy)}"
         median = statistics.median(fast)
         print(f"{name:>22} {size:>7} {problem.n_neurons:>7} {2 * len(problem.pairs):>7} {attempts:>8.0f} "
               f"{slow * 1e3:>8.2f}ms {spread(fast):>27} {median / attempts * 1e9:>9.1f}ns "
-              f"{slow / median:>5.0f}x {full * 1e6:>9.1f}us")
+              f"{slow / median:>5.0f}x {with_energy * 1e6:>7.1f}us {full * 1e6:>9.1f}us")
     print("pairs: non-zero compatibility weights (both directions); attempts: median per run; "
-          "numba: a new update-order seed every run; build+numba: the network built from the "
+          "numba: a new update-order seed every run; +energy: the same with the final energy read "
+          "(RunResult.energy is computed when first read); build+numba: the network built from the "
           "problem and parameters, then run")
 
 

@@ -25,14 +25,15 @@ keeps every net input current after each flip.  Their weights are the integers o
 from __future__ import annotations
 
 import numbers
-from dataclasses import dataclass
+from dataclasses import dataclass, field
+from functools import cached_property
 from typing import Iterator
 
 import numba
 import numpy as np
 
 from ._validation import ParameterTypeError, check_choice, check_number, check_rng, message
-from .hopfield import PACKED, RULES, SCALE, Network, _check_state, _energy, _Weights, _weights, energy
+from .hopfield import PACKED, RULES, SCALE, Network, _check_state, _Weights, _weights, _energy_of, energy
 
 __all__ = ["KERNELS", "STOP_RULES", "iter_updates", "run", "RunResult", "Update", "visiting_order"]
 
@@ -139,23 +140,23 @@ def _shuffle(order, state):
     """Shuffle `order` in place as :func:`visiting_order`'s sweep does, and return the new state.
 
     The same draws as ``_below(state, t + 1)`` for ``t = n - 1, ..., 1``, without a branch
-    on the draw: a rejected number leaves ``t`` where it is (its swap is with itself), and
-    the mask drops a bit when ``t`` falls below its upper half.  A rejection was a
-    mispredicted branch, and drawing had taken a third of a 200 x 200 run.
+    on the draw: a rejected number leaves ``t`` where it is (its swap is with itself).  The
+    mask changes only when ``t`` falls to the next power of two, so the inner loop keeps it
+    fixed and carries only ``t`` from one draw to the next.  A rejection had been a
+    mispredicted branch, and then the mask's update the longest chain of the loop.
     """
     state = _U64(state)
     t = order.shape[0] - 1
-    if t < 1:
-        return state
-    mask = _ones_below(t)
     while t > 0:
-        state, x = _next(state)
-        x &= mask
-        accept = x <= _U64(t)
-        j = np.int64(x) if accept else t
-        order[t], order[j] = order[j], order[t]
-        t -= np.int64(accept)
-        mask >>= _U64((mask >> _U64(1)) >= _U64(t))
+        mask = _ones_below(t)
+        low = np.int64(mask >> _U64(1))   # the mask holds while t is above its lower half
+        while t > low:
+            state, x = _next(state)
+            x &= mask
+            accept = x <= _U64(t)
+            j = np.int64(x) if accept else t
+            order[t], order[j] = order[j], order[t]
+            t -= np.int64(accept)
     return state
 
 
@@ -208,7 +209,7 @@ class Update:
 
 
 def _as_lists(w: _Weights) -> _Weights:
-    return _Weights(*(x.tolist() if isinstance(x, np.ndarray) else int(x) for x in w))
+    return _Weights(*(x.tolist() if isinstance(x, np.ndarray) else int(x) for x in w[:-1]), ())
 
 
 def _net_input_textbook(a: int, y: list, w: _Weights) -> int:
@@ -338,19 +339,36 @@ class RunResult:
     ----------
     state : (n,) uint8 ndarray
         Final outputs of the candidate neurons.
-    energy : float
-        Energy (3-15) of the final state, from :func:`energy`.
     stop_rule : str
         What stopped the run: ``"sweep"``, ``"stall"`` or ``"max_attempts"``.
     attempts, flips : int
         Update attempts made and outputs changed.
+    net : Network
+        The network that ran.
+    energy : float
+        Energy (3-15) of the final state, from :func:`energy`.  It is computed when first
+        read: the thousands of runs of a GA never read it, and at 200 x 200 corners it
+        costs a sixth of a run.
     """
 
     state: np.ndarray
-    energy: float
     stop_rule: str
     attempts: int
     flips: int
+    net: Network = field(repr=False)
+
+    @cached_property
+    def energy(self) -> float:
+        return _energy_of(self.net, self.state)
+
+    @classmethod
+    def _of(cls, state, stop_rule, attempts, flips, net) -> "RunResult":
+        """The same record without the frozen ``__init__``'s five ``object.__setattr__``
+        calls (0.6 us, a tenth of a 20 x 20 run)."""
+        r = object.__new__(cls)
+        d = r.__dict__
+        d["state"], d["stop_rule"], d["attempts"], d["flips"], d["net"] = state, stop_rule, attempts, flips, net
+        return r
 
     @property
     def converged(self) -> bool:
@@ -364,7 +382,7 @@ _STOP_NAMES = {1: "sweep", 2: "stall", 3: "max_attempts"}
 # The compiled run takes the topology's integers in one buffer (Topology.packed) and the
 # network's in another (_Weights.values): a call into compiled code unboxes each array
 # argument separately, about 0.1 us apiece, which on a 20 x 20 ROI cost as much as the run.
-_NB_PTR, _NB_IDX, _ROW_PTR, _ROW_IDX, _COL_PTR, _COL_IDX, _ROWS, _COLS, _PAIR_A, _PAIR_B = range(len(PACKED))
+_NB_PTR, _ROW_PTR, _COL_PTR, _NEURONS, _NB_IDX = range(len(PACKED))
 
 
 @numba.njit(cache=True)
@@ -373,79 +391,99 @@ def _segment(packed, j):
 
 
 @numba.njit(cache=True)
+def _neighbours(packed):
+    """The 32-bit neighbour indices (``nb_idx`` of the layout)."""
+    m = packed[packed[_NB_PTR + 1] - 1]   # the last entry of nb_ptr
+    return _segment(packed, _NB_IDX).view(np.uint32)[:m]
+
+
+@numba.njit(cache=True)
 def _split(packed, values):
-    """``(nb_w, self_w, bias, u_on)``: the views of a :class:`_Weights` ``values`` buffer."""
-    m, n = packed[_NB_IDX + 1] - packed[_NB_IDX], packed[_ROWS + 1] - packed[_ROWS]
+    """``(nb_w, self_w, bias, c_on)``: the views of a :class:`_Weights` ``values`` buffer."""
+    m, n = packed[packed[_NB_PTR + 1] - 1], packed[_NEURONS + 1] - packed[_NEURONS]
     return values[:m], values[m:m + n], values[m + n:m + 2 * n], values[m + 2 * n:m + 3 * n]
 
 
 @numba.njit(cache=True)
-def _net_inputs(y, packed, values, row_w, col_w, n_left, n_right):
-    """Every net input of state `y` (fixed point)."""
-    nb_ptr, nb_idx = _segment(packed, _NB_PTR), _segment(packed, _NB_IDX)
-    rows, cols = _segment(packed, _ROWS), _segment(packed, _COLS)
-    nb_w, self_w, bias, _ = _split(packed, values)
-    n = y.shape[0]
-    row_sum = np.zeros(n_left, dtype=np.int64)
-    col_sum = np.zeros(n_right, dtype=np.int64)
-    for a in range(n):
-        row_sum[rows[a]] += y[a]
-        col_sum[cols[a]] += y[a]
-    u = np.empty(n, dtype=np.int64)
-    for a in range(n):
+def _neighbour_inputs(y, packed, values):
+    """``bias_a + sum_b W_ab y_b`` over the neighbours of every neuron: the net inputs
+    without the uniqueness and self terms (fixed point)."""
+    nb_ptr, nb_idx = _segment(packed, _NB_PTR), _neighbours(packed)
+    nb_w, _, bias, _ = _split(packed, values)
+    c = np.empty(y.shape[0], dtype=np.int64)
+    for a in range(y.shape[0]):
         s = bias[a]
         for p in range(nb_ptr[a], nb_ptr[a + 1]):
             s += nb_w[p] * y[nb_idx[p]]
-        s += row_w * (row_sum[rows[a]] - y[a]) + col_w * (col_sum[cols[a]] - y[a])
-        u[a] = s + self_w[a] * y[a]
-    return u
+        c[a] = s
+    return c
 
 
 @numba.njit(cache=True)
-def _fill_all_on(u_on, packed, values, row_w, col_w):
-    """:func:`_net_inputs` of every neuron on, summing each neuron's weights in a row."""
-    nb_ptr, row_ptr, col_ptr = _segment(packed, _NB_PTR), _segment(packed, _ROW_PTR), _segment(packed, _COL_PTR)
-    rows, cols = _segment(packed, _ROWS), _segment(packed, _COLS)
-    nb_w, self_w, bias, _ = _split(packed, values)
-    for a in range(u_on.shape[0]):
-        s = bias[a] + self_w[a]
+def _fill_all_on(c_on, packed, values):
+    """:func:`_neighbour_inputs` of every neuron on, summing each neuron's weights in a row."""
+    nb_ptr = _segment(packed, _NB_PTR)
+    nb_w, _, bias, _ = _split(packed, values)
+    for a in range(c_on.shape[0]):
+        s = bias[a]
         for p in range(nb_ptr[a], nb_ptr[a + 1]):
             s += nb_w[p]
-        i, k = rows[a], cols[a]
-        u_on[a] = s + row_w * (row_ptr[i + 1] - row_ptr[i] - 1) + col_w * (col_ptr[k + 1] - col_ptr[k] - 1)
+        c_on[a] = s
 
 
 @numba.njit(cache=True)
-def _solve(seed, sweep_rule, patience, max_attempts, y0, all_on, packed, values, similarity, pair_c,
-           n_left, n_right, row_w, col_w, kappa, h):
+def _solve(seed, sweep_rule, patience, max_attempts, y0, all_on, packed, values):
     """The whole run in one call: net inputs, the visiting order drawn from `seed` as
-    :func:`visiting_order` draws it, every net input kept current after each flip, and the
-    final energy.  `packed` is :attr:`Topology.packed`, `values` the :class:`_Weights`
-    buffer; with `all_on` the run starts from every neuron on (and `y0` is not read), from
-    net inputs computed on the network's first such run and kept in `values`.
-    Returns ``(state, stop code of _STOP_NAMES, attempts, flips, energy)``.
+    :func:`visiting_order` draws it, and every net input kept current after each flip.
+    `packed` is :attr:`Topology.packed`, `values` the :class:`_Weights` buffer; with
+    `all_on` the run starts from every neuron on (and `y0` is not read), from neighbour
+    inputs computed on the network's first such run and kept in `values`.
+    Returns ``(state, stop code of _STOP_NAMES, attempts, flips)``.
+
+    A net input is ``u_a = c_a + row_w (R_i - y_a) + col_w (K_k - y_a) + self_w_a y_a``:
+    ``c_a`` sums the bias and the neighbours (:func:`_neighbour_inputs`), ``R_i`` and
+    ``K_k`` count the neurons on in the row and column of ``a``.  A flip then updates
+    ``c`` at its neighbours and two counts, where pushing the uniqueness weights to every
+    neuron of the row and column had taken a tenth of the updates.  The same integers as
+    (3-20) summed term by term, so the same decisions.
 
     The stop tests are those of :func:`_updates`, in its order: with the sweep rule the
     attempt limit is a whole number of sweeps, so both are tested at the end of a sweep,
     the sweep rule first."""
     # indices read as unsigned: numba then skips the test for a negative (from-the-end) index
-    upacked = packed.view(np.uint64)
-    nb_ptr, nb_idx = _segment(packed, _NB_PTR), _segment(upacked, _NB_IDX)
-    row_ptr, row_idx = _segment(packed, _ROW_PTR), _segment(upacked, _ROW_IDX)
-    col_ptr, col_idx = _segment(packed, _COL_PTR), _segment(upacked, _COL_IDX)
-    rows, cols = _segment(packed, _ROWS), _segment(packed, _COLS)
-    nb_w, self_w, _, u_on = _split(packed, values)
+    nb_ptr, nb_idx = _segment(packed, _NB_PTR), _neighbours(packed)
+    row_ptr, col_ptr = _segment(packed, _ROW_PTR), _segment(packed, _COL_PTR)
+    neurons = _segment(packed, _NEURONS).view(np.uint32)   # i, k of each neuron, side by side
+    nb_w, self_w, _, c_on = _split(packed, values)
+    row_w, col_w = values[-3], values[-2]
+    n, n_left, n_right = self_w.shape[0], row_ptr.shape[0] - 1, col_ptr.shape[0] - 1
+    # one allocation for the visiting order, the neighbour inputs and the counts
+    work = np.empty(2 * n + n_left + n_right, dtype=np.int64)
+    order, c = work[:n], work[n:2 * n]
+    on_in_row, on_in_col = work[2 * n:2 * n + n_left], work[2 * n + n_left:]
     if all_on:
-        y = np.ones(u_on.shape[0], dtype=np.uint8)
+        y = np.ones(n, dtype=np.uint8)
         if values[-1] == 0:
-            _fill_all_on(u_on, packed, values, row_w, col_w)
+            _fill_all_on(c_on, packed, values)
             values[-1] = 1
-        u = u_on.copy()
+        c[:] = c_on
+        c += self_w
+        for i in range(n_left):
+            on_in_row[i] = row_ptr[i + 1] - row_ptr[i]
+        for k in range(n_right):
+            on_in_col[k] = col_ptr[k + 1] - col_ptr[k]
     else:
         y = y0.copy()
-        u = _net_inputs(y, packed, values, row_w, col_w, n_left, n_right)
-    n = y.shape[0]
-    order = np.arange(n)
+        c[:] = _neighbour_inputs(y, packed, values)
+        for a in range(n):
+            c[a] += self_w[a] * y[a]
+        on_in_row[:] = 0
+        on_in_col[:] = 0
+        for a in range(n):
+            on_in_row[neurons[2 * a]] += y[a]
+            on_in_col[neurons[2 * a + 1]] += y[a]
+    for t in range(n):
+        order[t] = t
     state = _U64(seed)
     attempts = flips = unchanged = 0
     code = 0
@@ -459,10 +497,11 @@ def _solve(seed, sweep_rule, patience, max_attempts, y0, all_on, packed, values,
         for t in range(n):
             a = order[t]
             attempts += 1
+            i, k, ya = neurons[2 * a], neurons[2 * a + 1], np.int64(y[a])
+            ua = c[a] + row_w * (on_in_row[i] - ya) + col_w * (on_in_col[k] - ya)
             # flip when on with u < 0 or off with u > 0, without a branch on y: on a random
             # visiting order that branch is mispredicted about half the time
-            ua = u[a]
-            flip = (ua != 0) & ((ua > 0) ^ (y[a] == 1))
+            flip = (ua != 0) & ((ua > 0) ^ (ya == 1))
             if not flip:
                 unchanged += 1
                 if not sweep_rule:
@@ -473,31 +512,22 @@ def _solve(seed, sweep_rule, patience, max_attempts, y0, all_on, packed, values,
                     if code:
                         break
                 continue
-            # A flip of y_a by d adds W_ab d to every u_b: each sign has its own loop of
-            # plain additions or subtractions, and the uniqueness loops include `a` itself
-            # (corrected after them) so that they test nothing.  Integers: no rounding.
-            if y[a] == 1:
+            # a flip of y_a by d adds W_ab d to every c_b: each sign has its own loop of
+            # plain additions or subtractions.  Integers: no rounding.
+            if ya == 1:
                 y[a] = 0
                 for p in range(nb_ptr[a], nb_ptr[a + 1]):
-                    u[nb_idx[p]] -= nb_w[p]
-                i = rows[a]
-                for p in range(row_ptr[i], row_ptr[i + 1]):
-                    u[row_idx[p]] -= row_w
-                k = cols[a]
-                for p in range(col_ptr[k], col_ptr[k + 1]):
-                    u[col_idx[p]] -= col_w
-                u[a] += row_w + col_w - self_w[a]
+                    c[nb_idx[p]] -= nb_w[p]
+                on_in_row[i] -= 1
+                on_in_col[k] -= 1
+                c[a] -= self_w[a]
             else:
                 y[a] = 1
                 for p in range(nb_ptr[a], nb_ptr[a + 1]):
-                    u[nb_idx[p]] += nb_w[p]
-                i = rows[a]
-                for p in range(row_ptr[i], row_ptr[i + 1]):
-                    u[row_idx[p]] += row_w
-                k = cols[a]
-                for p in range(col_ptr[k], col_ptr[k + 1]):
-                    u[col_idx[p]] += col_w
-                u[a] += self_w[a] - row_w - col_w
+                    c[nb_idx[p]] += nb_w[p]
+                on_in_row[i] += 1
+                on_in_col[k] += 1
+                c[a] += self_w[a]
             changed += 1
             unchanged = 0
             if not sweep_rule and attempts >= max_attempts:
@@ -509,10 +539,7 @@ def _solve(seed, sweep_rule, patience, max_attempts, y0, all_on, packed, values,
                 code = 1
             elif attempts >= max_attempts:
                 code = 3
-    final = y
-    e = _energy(n_left, n_right, rows, cols, similarity, _segment(packed, _PAIR_A), _segment(packed, _PAIR_B),
-                pair_c, final, kappa, h)
-    return final, code, attempts, flips, e
+    return y, code, attempts, flips
 
 
 _NO_STATE = np.zeros(0, dtype=np.uint8)
@@ -544,22 +571,33 @@ def run(net: Network, *, rng=0, state=None, stop_rule: str = "sweep", rule: str 
     >>> np.array_equal(run(net, rng=1, kernel="textbook").state, r.state)
     True
     """
-    check_choice(kernel, "kernel", "run", KERNELS)
-    seed, y0 = _check_run_args(net, rng, state, stop_rule, rule, patience, max_sweeps, "run",
-                               all_on=kernel == "numba" and net.n_neurons > 0)
+    # the common call of a GA's thousands of runs, checked and run in about a microsecond
+    if (kernel == "numba" and state is None and type(net) is Network and type(rng) is int and rng >= 0
+            and stop_rule in STOP_RULES and rule in RULES and type(patience) is int and patience >= 1
+            and type(max_sweeps) is int and max_sweeps >= 1):
+        w = net._weights.get(rule) or _weights(net, rule)
+        n = w.self_w.shape[0]
+        if n:
+            y, code, attempts, flips = _solve(rng, stop_rule == "sweep", patience, max_sweeps * n,
+                                              _NO_STATE, True, *w.run_args)
+            return RunResult._of(y, _STOP_NAMES[code], attempts, flips, net)
+    if kernel not in KERNELS:
+        check_choice(kernel, "kernel", "run", KERNELS)
+    if not isinstance(net, Network):
+        raise ParameterTypeError(message("net", "run", "a Network", type(net).__name__))
     n = net.n_neurons
+    seed, y0 = _check_run_args(net, rng, state, stop_rule, rule, patience, max_sweeps, "run",
+                               all_on=kernel == "numba" and n > 0)
     if n == 0:
-        return RunResult(y0, energy(net, y0), stop_rule, 0, 0)
+        return RunResult(y0, stop_rule, 0, 0, net)
     if kernel == "textbook":
         y, flips, last = y0.copy(), 0, None
         for last in _updates(net, visiting_order(seed, n, stop_rule), y0, stop_rule, rule, patience,
                              max_sweeps):
             y[last.neuron] = last.new
             flips += last.changed
-        return RunResult(y, energy(net, y), last.stop, last.attempt + 1, flips)
-    w = _weights(net, rule)
-    state, code, attempts, flips, e = _solve(
-        seed, stop_rule == "sweep", patience, max_sweeps * n, _NO_STATE if y0 is None else y0, y0 is None,
-        net.topology.packed, w.values, net.similarity, net.pair_c, net.n_left, net.n_right, w.row_w, w.col_w,
-        net.uniqueness, net.target_count)
-    return RunResult(state, e, _STOP_NAMES[code], attempts, flips)
+        return RunResult(y, last.stop, last.attempt + 1, flips, net)
+    state, code, attempts, flips = _solve(seed, stop_rule == "sweep", patience, max_sweeps * n,
+                                          _NO_STATE if y0 is None else y0, y0 is None,
+                                          *_weights(net, rule).run_args)
+    return RunResult._of(state, _STOP_NAMES[code], attempts, flips, net)

@@ -29,7 +29,8 @@ matched ``(i, k)`` feature pairs, including a method's post-processing.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
+from functools import cached_property
 from typing import Callable, NamedTuple
 
 import numpy as np
@@ -37,7 +38,7 @@ import numpy as np
 from ._validation import ParameterTypeError, check_choice, check_number, message
 from .annealing import anneal
 from .exact import milp_minimum
-from .hopfield import RULES, Network
+from .hopfield import RULES, Network, _energy_of
 from .dynamics import STOP_RULES, run
 
 __all__ = ["ANNEAL", "ASSIGN", "DEFAULT_SOLVER", "EXACT", "NETWORK", "SOLVERS", "Matches", "Solution", "Solver",
@@ -52,23 +53,38 @@ class Solution:
     ----------
     state : (n,) uint8 ndarray
         Outputs of the candidate neurons, before any post-processing.
-    energy : float
-        Energy (3-15) of `state`.
     stop_rule : str
         What stopped it: the network's ``"sweep"``, ``"stall"`` or ``"max_attempts"``,
         else the solver's name.
     attempts : int
         Update attempts of the discrete network (annealing: of its polishing run;
         exact: 0).
+    net : Network
+        The network solved.
     converged : bool
         False only when the network hit its attempt limit.
+    energy : float
+        Energy (3-15) of `state` (:func:`ismb_lab.hopfield.energy`), computed when first
+        read: a GA solves thousands of networks and reads none.
     """
 
     state: np.ndarray
-    energy: float
     stop_rule: str
     attempts: int
+    net: Network = field(repr=False)
     converged: bool = True
+
+    @cached_property
+    def energy(self) -> float:
+        return _energy_of(self.net, self.state)
+
+    @classmethod
+    def _of(cls, state, stop_rule, attempts, net, converged) -> "Solution":
+        """The same record without the frozen ``__init__``'s ``object.__setattr__`` calls."""
+        s = object.__new__(cls)
+        d = s.__dict__
+        d["state"], d["stop_rule"], d["attempts"], d["net"], d["converged"] = state, stop_rule, attempts, net, converged
+        return s
 
 
 @dataclass(frozen=True)
@@ -87,17 +103,17 @@ class Solver:
 
 def _network(net, seed, stop_rule, rule, kernel) -> Solution:
     r = run(net, rng=seed, stop_rule=stop_rule, rule=rule, kernel=kernel)
-    return Solution(r.state, r.energy, r.stop_rule, r.attempts, r.converged)
+    return Solution._of(r.state, r.stop_rule, r.attempts, net, r.converged)
 
 
 def _anneal(net, seed, stop_rule, rule, kernel) -> Solution:
     r = anneal(net, rng=seed)
-    return Solution(r.state, float(r.energy), ANNEAL, 0)
+    return Solution(r.state, ANNEAL, 0, net)
 
 
 def _exact(net, seed, stop_rule, rule, kernel) -> Solution:
     r = milp_minimum(net)
-    return Solution(r.state, float(r.energy), EXACT, 0)
+    return Solution(r.state, EXACT, 0, net)
 
 
 def similarity_assignment(net: Network) -> np.ndarray:
@@ -130,7 +146,7 @@ def similarity_assignment(net: Network) -> np.ndarray:
 
 def _assign(net, seed, stop_rule, rule, kernel) -> Solution:
     r = run(net, rng=seed, state=similarity_assignment(net), stop_rule=stop_rule, rule=rule, kernel=kernel)
-    return Solution(r.state, r.energy, r.stop_rule, r.attempts, r.converged)
+    return Solution(r.state, r.stop_rule, r.attempts, net, r.converged)
 
 
 #: The solvers' names, for code that means one of them.

@@ -185,10 +185,10 @@ def test_compiled_stream_draws_what_the_python_stream_draws():
             assert int(x) == py.below(bound) and 0 <= int(x) < bound
 
 
-@pytest.mark.parametrize("n", [0, 1, 2, 3, 5, 8, 9, 58, 1024, 1025])
+@pytest.mark.parametrize("n", [0, 1, 2, 3, 4, 5, 8, 9, 16, 17, 58, 1024, 1025])
 def test_compiled_shuffle_makes_the_sweeps_of_visiting_order(n):
     # the branch-free shuffle against the plain Fisher-Yates of the textbook stream, sizes
-    # at and just past powers of two (where the mask drops a bit), several sweeps in a row
+    # at and just past powers of two (where the mask changes), several sweeps in a row
     from ismb_lab.dynamics import _Stream, _shuffle, visiting_order
 
     for seed in (0, 7, 2**63 - 1):
