@@ -51,9 +51,9 @@ from ._validation import ParameterError, ParameterTypeError, check_choice, messa
 from .compatibility import NeuronPairs, left_neighbours, neuron_pairs
 from .hopfield import Network, Topology
 from .params import LAMBDA_C, LAMBDA_S, MATCH_BIAS, THETA_C, THETA_S, Gene, Params
-from .similarity import candidate_mask, transfer
+from .similarity import candidate_mask, no_match_cut, transfer
 
-__all__ = ["all_genes", "Method", "MethodI", "MethodII", "MethodIII", "MethodNM", "MethodNM4",
+__all__ = ["all_genes", "Method", "MethodI", "MethodII", "MethodIII", "MethodNM", "MethodNM3", "MethodNM4",
            "Problem", "THESIS_PARAMS", "build_problem", "get_method", "load_params", "method_names",
            "register_method", "save_params", "unregister_method"]
 
@@ -99,6 +99,7 @@ class Problem:
         state = dict(self.__dict__)
         state["_measures"] = {}
         state.pop("neuron_dissimilarity", None)
+        state.pop("no_match_cut", None)
         return state
 
     @cached_property
@@ -107,6 +108,11 @@ class Problem:
         m = self.dissimilarity[self.rows, self.cols]
         m.setflags(write=False)
         return m
+
+    @cached_property
+    def no_match_cut(self) -> float:
+        """Half the median of ``M`` (:func:`ismb_lab.similarity.no_match_cut`)."""
+        return no_match_cut(self.dissimilarity)
 
 
 def build_problem(left_xy, right_xy, dissimilarity, *, shift: float = 20.0,
@@ -162,6 +168,8 @@ class Method:
     defaults: Params = Params()
     #: Parameters the method runs with whatever ``params`` says (Method-NM4: a match bias of 0).
     fixed: dict = {}
+    #: Parameters the method sets from each image pair, whatever ``params`` says (Method-NM3: theta_s).
+    derived: tuple = ()
     description: str = ""
 
     @property
@@ -333,6 +341,36 @@ class MethodNM4(MethodNM):
         return super().network(problem, replace(params, **self.fixed))
 
 
+class MethodNM3(MethodNM4):
+    """Method-NM4 with ``theta_s`` set from each image pair: three genes.
+
+    ``theta_s`` is the pair's no-match cut, half the median of ``M`` over all
+    feature pairs (:attr:`Problem.no_match_cut`, the cut the peer matchers use):
+    the dissimilarity of a typical wrong match in this pair's own contrast.  A
+    camera's gain or a scene's texture moves ``M``, and the cut moves with it;
+    the GA fits ``theta_c``, ``lambda_c`` and ``lambda_s``, and a ``theta_s`` in
+    `params` is not used.
+
+    Examples
+    --------
+    >>> p = build_problem([[100, 50], [110, 50]], [[80, 51], [90, 51]], [[2.0, 40.0], [40.0, 3.0]])
+    >>> m = get_method("NM3")
+    >>> p.no_match_cut, m.gene_names
+    (10.75, ('theta_c', 'lambda_c', 'lambda_s'))
+    >>> bool(np.array_equal(m.network(p, Params(theta_s=1.0)).similarity,
+    ...                     m.network(p, Params(theta_s=50.0)).similarity))
+    True
+    """
+
+    name, section = "NM3", "beyond the thesis (README)"
+    genes = (THETA_C, LAMBDA_C, LAMBDA_S)
+    derived = ("theta_s",)
+    description = "Method-NM4 with theta_s from the pair (half the median of M), three genes"
+
+    def similarity(self, problem: Problem, params: Params) -> np.ndarray:
+        return transfer(problem.neuron_dissimilarity, problem.no_match_cut, params.lambda_s)
+
+
 _METHODS: dict[str, Method] = {}
 
 
@@ -398,7 +436,7 @@ def method_names() -> tuple[str, ...]:
     Examples
     --------
     >>> method_names()
-    ('I', 'II', 'III', 'NM', 'NM4')
+    ('I', 'II', 'III', 'NM', 'NM4', 'NM3')
     """
     return tuple(_METHODS)
 
@@ -424,10 +462,10 @@ class _Defaults(Mapping):
 #: placeholders; Method-NM's entry is a neutral start for its GA rather than a fitted result.
 THESIS_PARAMS = _Defaults()
 
-for _method in (MethodI(), MethodII(), MethodIII(), MethodNM(), MethodNM4()):
+for _method in (MethodI(), MethodII(), MethodIII(), MethodNM(), MethodNM4(), MethodNM3()):
     register_method(_method)
 def get_method(name) -> Method:
-    """Look a method up by name: ``"I"``, ``"II"``, ``"III"``, ``"NM"`` or ``"NM4"`` (a ``Method`` passes through).
+    """Look a method up by name: ``"I"``, ``"II"``, ``"III"``, ``"NM"``, ``"NM4"`` or ``"NM3"`` (a ``Method`` passes through).
 
     Examples
     --------
@@ -436,7 +474,7 @@ def get_method(name) -> Method:
     >>> get_method("V")
     Traceback (most recent call last):
     ...
-    ismb_lab.ParameterError: The 'method' parameter of get_method must be one of 'I', 'II', 'III', 'NM', 'NM4'. Got 'V' instead.
+    ismb_lab.ParameterError: The 'method' parameter of get_method must be one of 'I', 'II', 'III', 'NM', 'NM4', 'NM3'. Got 'V' instead.
     """
     if isinstance(name, Method):
         return name

@@ -242,12 +242,8 @@ def graph_matching(problem, method="III", params=None, *, solver="rrwm",
 
 
 def default_no_match_cost(problem) -> float:
-    """The no-match cut of :data:`PEERS`: half the median of ``M`` over all feature pairs.
-
-    Nearly all feature pairs are unrelated, so the median of ``M`` is the
-    dissimilarity of a typical wrong match in this image pair's own contrast;
-    a match must be clearly better than that.  On the synthetic scenes it is
-    19-21 grey levels (true matches 3-11), near the thesis' ``theta_s = 24``.
+    """The no-match cut of :data:`PEERS`: half the median of ``M`` over all feature pairs
+    (:func:`ismb_lab.similarity.no_match_cut`).
 
     Examples
     --------
@@ -256,8 +252,7 @@ def default_no_match_cost(problem) -> float:
     >>> default_no_match_cost(p)
     10.75
     """
-    M = _check_problem(problem, "default_no_match_cost").dissimilarity
-    return max(float(np.median(M)) / 2, np.finfo(float).eps) if M.size else 1.0
+    return _check_problem(problem, "default_no_match_cost").no_match_cut
 
 
 def _mnn(problem, method="III", params=None):

@@ -147,6 +147,8 @@ CASES = [
     ("match-nm4-bias-option", lambda w: ["match", *_pair(w), "--method", "NM4", "--match-bias", "5"],
      "match_bias", {}),
     ("match-iii-bias-option", lambda w: ["match", *_pair(w), "--match-bias", "1"], "match_bias", {}),
+    ("match-nm3-theta-s-option", lambda w: ["match", *_pair(w), "--method", "NM3", "--theta-s", "5"],
+     "theta_s", {}),
     ("match-n-max-limit", lambda w: ["match", *_pair(w), "--n-max", "5000"], "ISMB_LAB_MAX_CORNERS", {}),
     ("match-bad-pixel-limit", lambda w: ["match", *_pair(w)], "ISMB_LAB_MAX_PIXELS",
      {"ISMB_LAB_MAX_PIXELS": "many"}),

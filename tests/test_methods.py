@@ -275,3 +275,28 @@ def test_each_methods_measures_are_computed_once_per_problem_and_stay_in_this_pr
     params = Params(theta_c=9.0, theta_s=20.0, lambda_c=0.7, lambda_s=0.3)
     a, b = (get_method("III").network(p, params) for p in (problem, copy))
     assert np.array_equal(a.pair_c, b.pair_c) and np.array_equal(a.similarity, b.similarity)
+
+
+def test_nm3_sets_theta_s_from_the_pair_and_is_nm4_at_that_value():
+    """Method-NM3 is Method-NM4 with theta_s = half the median of M, whatever params say."""
+    from dataclasses import replace
+
+    from ismb_lab.params import Params
+    from ismb_lab.peers import default_no_match_cost
+
+    rng = np.random.default_rng(3)
+    lxy = rng.uniform(20, 200, (12, 2))
+    rxy = lxy - [15.0, 0.0] + rng.normal(0, 0.5, (12, 2))
+    p = build_problem(lxy, rxy, rng.uniform(0, 60, (12, 12)))
+    assert p.no_match_cut == np.median(p.dissimilarity) / 2 == default_no_match_cost(p)
+    nm3, nm4 = get_method("NM3"), get_method("NM4")
+    assert "theta_s" not in nm3.gene_names and nm3.derived == ("theta_s",)
+    params = Params(theta_c=12.0, theta_s=3.0, lambda_c=2.0, lambda_s=0.5)
+    a = nm3.network(p, params)
+    b = nm4.network(p, replace(params, theta_s=p.no_match_cut))
+    c = nm4.network(p, params)
+    assert np.array_equal(a.similarity, b.similarity) and np.array_equal(a.pair_c, b.pair_c)
+    assert a.match_bias == 0.0 and not np.array_equal(a.similarity, c.similarity)
+    # a camera's gain scales M, and the cut with it: S does not change
+    q = build_problem(lxy, rxy, 2.0 * p.dissimilarity)
+    assert np.allclose(nm3.network(q, replace(params, lambda_s=0.25)).similarity, a.similarity)

@@ -136,6 +136,10 @@ def resolve_params(args, defaults=None):
     if params is None:
         params = (defaults or {}).get(method, get_method(method).defaults)
     given = {k: getattr(args, k) for k in gene_options() if getattr(args, k) is not None}
+    for name in get_method(method).derived:
+        if name in given:
+            raise UsageError(f"--{name.replace('_', '-')} is not used by Method-{method}, which sets {name} "
+                             f"from each image pair (half the median of M); drop it")
     try:
         params = replace(params, **given)
     except (ParameterError, ParameterTypeError) as exc:
