@@ -23,7 +23,7 @@ from .io import StereoPair, load_pair
 from .methods import Problem, build_problem, get_method
 from .params import Params
 from .similarity import mean_abs_difference
-from .solvers import DEFAULT_SOLVER, get_solver, solve, to_matches
+from .solvers import DEFAULT_SOLVER, get_solver, one_match_per_corner, solve, to_matches
 
 __all__ = ["AUTO_MARGIN", "MatchConfig", "MatchResult", "Prepared", "auto_window", "match", "prepare", "shift_roi"]
 
@@ -232,6 +232,8 @@ class MatchResult:
         Final outputs of the candidate neurons, after the method's post-processing.
     solver : str
         Which of :data:`ismb_lab.solvers.SOLVERS` found the state.
+    one_to_one : bool
+        Whether the matches passed :func:`~ismb_lab.solvers.one_match_per_corner`.
     """
 
     method: str
@@ -247,6 +249,7 @@ class MatchResult:
     n_candidates: int = 0
     state: np.ndarray = field(default=None, repr=False)
     solver: str = DEFAULT_SOLVER
+    one_to_one: bool = False
 
     @property
     def left_match_xy(self) -> np.ndarray:
@@ -282,6 +285,7 @@ class MatchResult:
         return {
             "method": self.method,
             "solver": self.solver,
+            "one_to_one": self.one_to_one,
             "params": self.params.to_dict(),
             "seed": self.seed,
             "energy": self.energy,
@@ -312,7 +316,7 @@ def _xy_list(xy):
 def match(left=None, right=None, method="III", params: Params | None = None, *,
           config: MatchConfig | None = None, seed: int = 0, solver: str = DEFAULT_SOLVER,
           stop_rule: str = "sweep", rule: str = "exact", kernel: str = "numba",
-          prepared: Prepared | None = None) -> MatchResult:
+          prepared: Prepared | None = None, one_to_one: bool = False) -> MatchResult:
     """Match the Harris corners of a stereo pair with the Hopfield network.
 
     Parameters
@@ -333,6 +337,9 @@ def match(left=None, right=None, method="III", params: Params | None = None, *,
         The discrete network's settings, see :func:`ismb_lab.dynamics.run`.
     prepared : Prepared, optional
         Reuse corners and geometry from :func:`prepare`.
+    one_to_one : bool
+        Keep at most one match per corner afterwards, the most similar
+        (:func:`~ismb_lab.solvers.one_match_per_corner`).
 
     Returns
     -------
@@ -346,6 +353,8 @@ def match(left=None, right=None, method="III", params: Params | None = None, *,
     check_number(seed, "seed", "match", low=0, integer=True)
     check_choice(stop_rule, "stop_rule", "match", STOP_RULES)
     check_choice(rule, "rule", "match", RULES)
+    if not isinstance(one_to_one, bool):
+        raise ParameterTypeError(message("one_to_one", "match", "True or False", one_to_one))
     if prepared is None:
         prepared = prepare(left, right, config)
     elif not isinstance(prepared, Prepared):
@@ -354,9 +363,13 @@ def match(left=None, right=None, method="III", params: Params | None = None, *,
     result = solve(m.network(problem, params), solver, seed=seed, stop_rule=stop_rule, rule=rule,
                    kernel=kernel, owner="match")
     found = to_matches(problem, result.state, m)
+    if one_to_one:
+        kept = np.zeros_like(found.state)
+        kept[one_match_per_corner(problem, np.flatnonzero(found.state))] = 1
+        found = to_matches(problem, kept)
     return MatchResult(m.name, params, int(seed), result.stop_rule, result.energy, result.attempts,
                        problem.left_xy, problem.right_xy, found.pairs, _explain(prepared, result),
-                       problem.n_neurons, found.state, solver)
+                       problem.n_neurons, found.state, solver, one_to_one)
 
 
 def _explain(prepared: Prepared, result) -> str:

@@ -266,6 +266,9 @@ class ProtocolReport:
         The held-out pairs' pooled score, one per update-order seed.
     peers : dict of str to PeerReport
     solvers : dict of str to SolverReport
+    one_to_one : bool
+        Whether the network's matches were scored after
+        :func:`~ismb_lab.solvers.one_match_per_corner`.
     """
 
     method: str
@@ -276,13 +279,14 @@ class ProtocolReport:
     solver: str = DEFAULT_SOLVER
     peers: dict = field(default_factory=dict)
     solvers: dict = field(default_factory=dict)
+    one_to_one: bool = False
 
     def to_dict(self) -> dict:
         """The JSON of ``ismb-lab evaluate --json``."""
         def figures(s: Score) -> dict:
             return {"cet": str(s), "recall": s.recall, "precision": s.precision}
 
-        return {"method": self.method, "solver": self.solver, "train": self.train,
+        return {"method": self.method, "solver": self.solver, "one_to_one": self.one_to_one, "train": self.train,
                 "params": self.params.to_dict(),
                 "seeds": len(self.held_out),
                 "pairs": [{"name": r.name, "testing": [str(s) for s in r.testing],
@@ -297,7 +301,7 @@ class ProtocolReport:
 def protocol(cases, method="III", *, train: int = 0, seeds: int = 5, ga: GAConfig | None = None,
              rng=0, peers: bool = False, progress=None, solver: str = DEFAULT_SOLVER, solvers=(),
              fit_solver: str = DEFAULT_SOLVER, fit_seeds: int = 1, fit_all: bool = True, jobs: int = 1,
-             **settings) -> ProtocolReport:
+             one_to_one: bool = False, **settings) -> ProtocolReport:
     """Fig. 5.10's protocol: GA-fit on each pair ("training") and on one pair applied to all
     the others ("testing"), every network figure over `seeds` update-order seeds.
 
@@ -336,6 +340,9 @@ def protocol(cases, method="III", *, train: int = 0, seeds: int = 5, ga: GAConfi
         same for every `jobs`: each fit starts from the integer seed `rng` (a
         Generator is accepted only with ``jobs=1``), and with ``jobs > 1`` `progress`
         is called once per finished fit, with its last generation.
+    one_to_one : bool
+        Score the matches after :func:`~ismb_lab.solvers.one_match_per_corner` (the
+        network's figures, not the peers' or the GA's fitness).
 
     Returns
     -------
@@ -352,6 +359,8 @@ def protocol(cases, method="III", *, train: int = 0, seeds: int = 5, ga: GAConfi
     main = get_solver(solver, own)
     fit_solver = get_solver(fit_solver, own, "fit_solver").name
     fit_seeds = check_number(fit_seeds, "fit_seeds", own, low=1, integer=True)
+    if not isinstance(one_to_one, bool):
+        raise ParameterTypeError(message("one_to_one", own, "True or False", one_to_one))
     solvers = (solvers,) if isinstance(solvers, str) else tuple(solvers)
     chosen = [get_solver(name, own, "solvers") for name in solvers]
     if any(s.name == main.name for s in chosen):
@@ -375,7 +384,7 @@ def protocol(cases, method="III", *, train: int = 0, seeds: int = 5, ga: GAConfi
                 if progress:
                     progress(cases[n].name, fits[n][1])
         tested = fits[train][0]
-        task = (method, tested, runs, main.name, [(o.name, o.seeded) for o in chosen], seeds, peers)
+        task = (method, tested, runs, main.name, [(o.name, o.seeded) for o in chosen], seeds, peers, one_to_one)
         owns = [fits[n][0] if n in fits else None for n in range(len(cases))]
         if pool is None:
             scored = [_score_pair(c, p, *task) for c, p in zip(cases, owns)]
@@ -396,7 +405,8 @@ def protocol(cases, method="III", *, train: int = 0, seeds: int = 5, ga: GAConfi
     for name in PEERS if peers else ():
         per_pair = tuple(s["peers"][name] for s in scored)
         peer_reports[name] = PeerReport(per_pair, sum((p for n, p in enumerate(per_pair) if n != train), _NONE))
-    return ProtocolReport(method, tested, train, rows, held_out, main.name, peer_reports, solver_reports)
+    return ProtocolReport(method, tested, train, rows, held_out, main.name, peer_reports, solver_reports,
+                          one_to_one)
 
 
 def _fit(case, method, rng, ga, fit_solver, fit_seeds, progress=None):
@@ -408,12 +418,12 @@ def _fit(case, method, rng, ga, fit_solver, fit_seeds, progress=None):
     return to_params(method, last.best_chromosome), last
 
 
-def _score_pair(case, own_params, method, tested, runs, solver, others, seeds, peers) -> dict:
+def _score_pair(case, own_params, method, tested, runs, solver, others, seeds, peers, one_to_one) -> dict:
     """One pair's scores: tested and own parameters, other solvers and peers."""
-    out = {"testing": tuple(evaluate([case], method, tested, s, solver) for s in runs),
+    out = {"testing": tuple(evaluate([case], method, tested, s, solver, one_to_one) for s in runs),
            "training": None if own_params is None else tuple(
-               evaluate([case], method, own_params, s, solver) for s in runs),
-           "solvers": {name: tuple(evaluate([case], method, tested, s, name)
+               evaluate([case], method, own_params, s, solver, one_to_one) for s in runs),
+           "solvers": {name: tuple(evaluate([case], method, tested, s, name, one_to_one)
                                    for s in (range(seeds) if seeded else range(1)))
                        for name, seeded in others},
            "peers": {}}
@@ -465,8 +475,8 @@ def format_protocol(report: ProtocolReport) -> str:
     Each line that shows a count shows that count's own percentages; the mean and
     range over the update-order seeds come on a line of their own.
     """
-    lines = [f"Method-{report.method} ({report.solver}), parameters fitted on pair {report.train}: "
-             f"{report.params}",
+    lines = [f"Method-{report.method} ({report.solver}{', one match per corner' if report.one_to_one else ''}), "
+             f"parameters fitted on pair {report.train}: {report.params}",
              "Per pair, update-order seed 0 (C/wrong+extra/T):"]
     for n, row in enumerate(report.rows):
         mark = " (training pair)" if n == report.train else ""

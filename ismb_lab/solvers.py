@@ -42,7 +42,8 @@ from .hopfield import RULES, Network, _energy_of
 from .dynamics import STOP_RULES, run
 
 __all__ = ["ANNEAL", "ASSIGN", "DEFAULT_SOLVER", "EXACT", "NETWORK", "SOLVERS", "Matches", "Solution", "Solver",
-           "get_solver", "matched_neurons", "similarity_assignment", "solve", "solver_names", "to_matches"]
+           "get_solver", "matched_neurons", "one_match_per_corner", "similarity_assignment", "solve",
+           "solver_names", "to_matches"]
 
 
 @dataclass(frozen=True, eq=False)
@@ -241,6 +242,49 @@ def matched_neurons(neurons, state, method=None) -> np.ndarray:
     on = np.flatnonzero(np.asarray(state, dtype=np.uint8))
     kept = on if method is None else method.postprocess(neurons, on)
     return on if kept is on else np.sort(kept)   # a method that keeps every match returns `on` itself
+
+
+def one_match_per_corner(problem, on) -> np.ndarray:
+    """Of the matched neurons `on`, at most one per left and per right corner: the most similar.
+
+    The neurons are taken by increasing ``M`` (ties by index), and one is kept when
+    neither of its corners has a kept match yet.  The "at most one" term of Methods NM,
+    NM4 and NM3 makes a second match costly, but where two wrong matches support each
+    other a solver can leave both on; this step removes them after solving.  It is a
+    decoding option for testing (``match(..., one_to_one=True)``,
+    ``ismb-lab match --one-to-one``); the GA's fitness does not apply it.
+
+    Parameters
+    ----------
+    problem : Problem
+        Anything with ``rows``, ``cols`` and ``neuron_dissimilarity``.
+    on : (m,) int array_like
+        Indices of the matched neurons (:func:`matched_neurons`).
+
+    Returns
+    -------
+    kept : (m',) int ndarray
+        Sorted.
+
+    Examples
+    --------
+    >>> from ismb_lab.methods import build_problem
+    >>> p = build_problem([[100, 50], [110, 50]], [[80, 51], [90, 51]], [[2.0, 40.0], [30.0, 3.0]])
+    >>> one_match_per_corner(p, [0, 1, 3]).tolist()   # left corner 0 twice: M 2 beats M 40
+    [0, 3]
+    """
+    on = np.asarray(on, dtype=np.int64)
+    if len(on) < 2:
+        return on
+    rows, cols = problem.rows, problem.cols
+    left_used, right_used, kept = set(), set(), []
+    for a in on[np.lexsort((on, problem.neuron_dissimilarity[on]))].tolist():
+        i, k = int(rows[a]), int(cols[a])
+        if i not in left_used and k not in right_used:
+            left_used.add(i)
+            right_used.add(k)
+            kept.append(a)
+    return np.sort(np.array(kept, dtype=np.int64))
 
 
 def to_matches(neurons, state, method=None) -> Matches:

@@ -23,7 +23,7 @@ from .evaluation import Score, Scorer, _tally
 from .genetic import Bounds, GAConfig, Generation, evolve
 from .methods import get_method
 from .params import Params
-from .solvers import DEFAULT_SOLVER, get_solver, matched_neurons, solve
+from .solvers import DEFAULT_SOLVER, get_solver, matched_neurons, one_match_per_corner, solve
 
 __all__ = ["Fitness", "evaluate", "gene_bounds", "to_chromosome", "to_params", "tune"]
 
@@ -74,19 +74,22 @@ def to_chromosome(method, params: Params) -> np.ndarray:
 
 
 def evaluate(cases: Sequence, method, params: Params, seed: int = 0,
-             solver: str = DEFAULT_SOLVER) -> Score:
-    """The summed C/E/T of `params` over `cases`, each solved by `solver` with `seed`."""
+             solver: str = DEFAULT_SOLVER, one_to_one: bool = False) -> Score:
+    """The summed C/E/T of `params` over `cases`, each solved by `solver` with `seed`; with
+    `one_to_one`, the matches pass :func:`~ismb_lab.solvers.one_match_per_corner` first."""
     m = get_method(method)
     get_solver(solver, "evaluate")
+    if not isinstance(one_to_one, bool):
+        raise ParameterTypeError(message("one_to_one", "evaluate", "True or False", one_to_one))
     correct = wrong = extra = targets = 0
     for case in cases:
-        c, w, e = _counts(case, m, params, seed, solver)
+        c, w, e = _counts(case, m, params, seed, solver, one_to_one)
         correct, wrong, extra = correct + c, wrong + w, extra + e
         targets += (getattr(case, "scorer", None) or Scorer(case.targets, case.unknown)).targets
     return Score(correct, wrong, extra, targets)
 
 
-def _counts(case, m, params: Params, seed: int, solver: str) -> tuple[int, int, int]:
+def _counts(case, m, params: Params, seed: int, solver: str, one_to_one: bool = False) -> tuple[int, int, int]:
     """C, wrong partner and extra of one case: the score of
     :func:`~ismb_lab.solvers.to_matches`' pairs, counted over neurons coded once per case
     (:meth:`~ismb_lab.evaluation.Scorer.neuron_codes`)."""
@@ -96,6 +99,8 @@ def _counts(case, m, params: Params, seed: int, solver: str) -> tuple[int, int, 
     if codes is None:
         codes = Scorer(case.targets, case.unknown).neuron_codes(problem.rows, problem.cols)
     kept = np.asarray(matched_neurons(problem, state, m), dtype=np.int64)
+    if one_to_one:
+        kept = one_match_per_corner(problem, kept)
     counts = _tally(codes, kept)
     if counts[0] < 0:
         raise ParameterError(message("method", "evaluate", f"a postprocess that keeps neuron indices in "

@@ -303,7 +303,7 @@ def _images(case, folder: Path) -> list:
 
 
 def cli_held_out(cases, method: str, solver: str, fit_solver: str, ga_seed: int, fit_seeds: int,
-                 generations: int, folder: Path) -> list:
+                 generations: int, folder: Path, one_to_one: bool = False) -> list:
     """The protocol through the command line alone: ``ismb-lab tune`` on the training pair's
     images and targets, then ``ismb-lab match --params-file`` on each other pair for update
     seeds 0-2.  Returns the held-out figures ``[(C, E, T)]``, one per update seed."""
@@ -320,7 +320,7 @@ def cli_held_out(cases, method: str, solver: str, fit_solver: str, ga_seed: int,
         for n, case in enumerate(cases[1:], 1):
             out = folder / f"match-{n}.json"
             _cli("match", *_images(case, folder / f"test-{n}"), "--params-file", params, "--solver", solver,
-                 "--seed", seed, *_window(case), "--json", out, "--force")
+                 "--seed", seed, *_window(case), "--json", out, "--force", *(["--one-to-one"] if one_to_one else []))
             p = case.prepared.problem
             index = ({tuple(xy): i for i, xy in enumerate(p.left_xy.tolist())},
                      {tuple(xy): k for k, xy in enumerate(p.right_xy.tolist())})
@@ -343,6 +343,8 @@ def main(argv=None) -> None:
                         help="update-order seeds the GA scores each chromosome over (default 1)")
     parser.add_argument("--jobs", type=int, default=1, help="worker processes of each protocol (default 1)")
     parser.add_argument("--variants", nargs="+", default=VARIANTS, metavar="METHOD:SOLVER[:FIT_SOLVER]")
+    parser.add_argument("--one-to-one", action="store_true",
+                        help="score the network's matches after one match per corner (match --one-to-one)")
     parser.add_argument("--cli", action="store_true",
                         help="one variant through 'ismb-lab tune' and 'ismb-lab match' themselves, on PNG files")
     args = parser.parse_args(argv)
@@ -362,7 +364,8 @@ def main(argv=None) -> None:
                 rows = [0, 0, 0]
                 for ga_seed in range(args.ga_seeds):
                     for cet in cli_held_out(cases, method, solver, fit[0] if fit else DEFAULT_SOLVER, ga_seed,
-                                            args.fit_seeds, args.generations, Path(folder) / family):
+                                            args.fit_seeds, args.generations, Path(folder) / family,
+                                            args.one_to_one):
                         rows = [a + b for a, b in zip(rows, cet)]
                 total = [a + b for a, b in zip(total, rows)]
                 print(f"{family:>10} {args.variants[0]} through the CLI: {rate(*rows)}", flush=True)
@@ -380,7 +383,8 @@ def main(argv=None) -> None:
                 # only the training pair's fit is tested on the others: fit_all=False fits it alone
                 report = protocol(cases, method, peers=ga_seed == 0, generations=args.generations, seeds=3,
                                   solver=solver, fit_solver=fit[0] if fit else DEFAULT_SOLVER, rng=ga_seed,
-                                  fit_seeds=args.fit_seeds, fit_all=False, jobs=args.jobs)
+                                  fit_seeds=args.fit_seeds, fit_all=False, jobs=args.jobs,
+                                  one_to_one=args.one_to_one)
                 add(rows, variant, figures(report.held_out))
                 add(per_seed, (variant, "GA", ga_seed), figures(report.held_out))
                 for run, s in enumerate(report.held_out):

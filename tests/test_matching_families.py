@@ -34,14 +34,14 @@ def test_pooled_figures_lie_within_their_spread_over_ga_and_update_seeds(capsys)
     assert re.search(r"hungarian: C/T +[\d.]+% +precision", pooled)
 
 
-@pytest.mark.parametrize("method", ["NM3", "NM4"])
-def test_the_command_line_alone_gives_the_library_protocol_figures(tmp_path, method):
+@pytest.mark.parametrize("method, one_to_one", [("NM3", True), ("NM4", False)])
+def test_the_command_line_alone_gives_the_library_protocol_figures(tmp_path, method, one_to_one):
     from ismb_lab.protocol import family_cases, protocol
 
     script = load_script()
     cases = family_cases("cameras", 2300, 3)
-    cli = script.cli_held_out(cases, method, "anneal", "anneal", 0, 2, 5, tmp_path)
+    cli = script.cli_held_out(cases, method, "anneal", "anneal", 0, 2, 5, tmp_path, one_to_one)
     report = protocol(cases, method, generations=5, seeds=3, solver="anneal", fit_solver="anneal", rng=0,
-                      fit_seeds=2, fit_all=False)
+                      fit_seeds=2, fit_all=False, one_to_one=one_to_one)
     assert cli == [script.figures([s]) for s in report.held_out]
     assert sum(t for _, _, t in cli) > 0

@@ -71,3 +71,83 @@ def test_assign_is_everywhere_a_solver_is_offered(capsys):
 def test_similarity_assignment_names_its_argument():
     with pytest.raises(ParameterTypeError, match="'net' parameter of similarity_assignment"):
         similarity_assignment("not a network")
+
+
+def test_one_match_per_corner_keeps_the_most_similar_of_each_corner():
+    from ismb_lab.methods import build_problem
+    from ismb_lab.solvers import one_match_per_corner
+
+    rng = np.random.default_rng(5)
+    for _ in range(30):
+        lxy = rng.uniform(0, 60, (8, 2))
+        rxy = lxy - [10.0, 0.0] + rng.normal(0, 3, (8, 2))
+        p = build_problem(lxy, rxy, rng.integers(0, 8, (8, 8)).astype(float), window_width=80, window_height=60)
+        on = np.flatnonzero(rng.random(p.n_neurons) < 0.5)
+        kept = one_match_per_corner(p, on)
+        assert set(kept.tolist()) <= set(on.tolist()) and np.all(np.diff(kept) > 0)
+        assert len(set(p.rows[kept].tolist())) == len(kept) == len(set(p.cols[kept].tolist()))
+        m = p.neuron_dissimilarity
+        for a in set(on.tolist()) - set(kept.tolist()):
+            # dropped only for a kept neuron on the same corner that comes first: smaller M, or equal M and index
+            rivals = kept[(p.rows[kept] == p.rows[a]) | (p.cols[kept] == p.cols[a])]
+            assert any((m[b], b) < (m[a], a) for b in rivals)
+        untouched = on[[np.sum(p.rows[on] == p.rows[a]) == 1 and np.sum(p.cols[on] == p.cols[a]) == 1 for a in on]]
+        assert set(untouched.tolist()) <= set(kept.tolist())
+
+
+def test_one_to_one_in_match_the_cli_and_evaluate():
+
+    from ismb_lab.matching import match, prepare
+    from ismb_lab.params import Params
+    from ismb_lab.protocol import Case
+    from ismb_lab.scenes import synthetic_scene
+    from ismb_lab.solvers import matched_neurons, one_match_per_corner, to_matches
+    from ismb_lab.tuning import evaluate
+    from ismb_lab.evaluation import score
+
+    scene = synthetic_scene(seed=3)
+    prepared = prepare(scene.left, scene.right)
+    params = Params(theta_c=60.0, theta_s=24.0, lambda_c=2.0, lambda_s=2.0)   # strong support: corners matched twice
+    plain = match(method="III", params=params, prepared=prepared, seed=0)
+    single = match(method="III", params=params, prepared=prepared, seed=0, one_to_one=True)
+    assert len(plain.pairs) > len(set(plain.pairs[:, 0].tolist()))
+    assert len(single.pairs) == len(set(single.pairs[:, 0].tolist())) == len(set(single.pairs[:, 1].tolist()))
+    assert {tuple(x) for x in single.pairs.tolist()} < {tuple(x) for x in plain.pairs.tolist()}
+    assert single.to_dict()["one_to_one"] is True and plain.to_dict()["one_to_one"] is False
+    with pytest.raises(TypeError, match="'one_to_one' parameter of match"):
+        match(method="III", prepared=prepared, one_to_one="yes")
+    # evaluate scores what match returns, the GA's fitness is not changed
+    case = Case.from_scene(scene)
+    p = case.prepared.problem
+    state = solve(get_method_network(p, params), "network", seed=0).state
+    kept = one_match_per_corner(p, matched_neurons(p, state))
+    by_hand = score(np.stack([p.rows[kept], p.cols[kept]], axis=1), case.targets, case.unknown)
+    assert evaluate([case], "III", params, 0, "network", one_to_one=True) == by_hand
+    assert evaluate([case], "III", params, 0, "network") == score(to_matches(p, state).pairs, case.targets,
+                                                                  case.unknown)
+
+
+def get_method_network(problem, params):
+    from ismb_lab.methods import get_method
+
+    return get_method("III").network(problem, params)
+
+
+def test_match_one_to_one_on_the_command_line(tmp_path):
+    import json
+
+    import cv2
+
+    from ismb_lab.scenes import synthetic_scene
+
+    scene = synthetic_scene(seed=3)
+    paths = []
+    for name, image in (("l.png", scene.left), ("r.png", scene.right)):
+        cv2.imwrite(str(tmp_path / name), np.clip(np.rint(image), 0, 255).astype(np.uint8))
+        paths.append(str(tmp_path / name))
+    out = tmp_path / "m.json"
+    assert main(["match", *paths, "--theta-c", "60", "--one-to-one", "--json", str(out)]) == 0
+    data = json.loads(out.read_text())
+    lefts = [m["left"] for m in data["matches"]]
+    rights = [m["right"] for m in data["matches"]]
+    assert data["one_to_one"] is True and len(lefts) == len(set(lefts)) == len(set(rights)) > 0

@@ -32,6 +32,8 @@ def add_parser(sub) -> None:
                    help=f"update-order seeds per figure (default: {DEFAULTS['seeds']})")
     add_ga_options(e)
     e.add_argument("--peers", action="store_true", help="also score the peer matchers")
+    e.add_argument("--one-to-one", action="store_true",
+                   help="score the network's matches after keeping at most one per corner (the most similar)")
     add_solver_option(e, DEFAULT_SOLVER)
     e.add_argument("--solvers", nargs="*", choices=tuple(SOLVERS), default=(),
                    help="also solve the tested energies these other ways")
@@ -89,7 +91,8 @@ def run(args) -> int:
                                    ("rng", args.ga_seed), ("solver", args.solver),
                                    ("fit_solver", args.fit_solver)) if v is not None}
         report = protocol(cases, method, ga=ga, peers=args.peers, progress=progress,
-                          solvers=tuple(args.solvers), fit_all=not args.held_out_only, jobs=jobs, **given)
+                          solvers=tuple(args.solvers), fit_all=not args.held_out_only, jobs=jobs,
+                          one_to_one=args.one_to_one, **given)
     except KeyboardInterrupt:
         return best.save(args.json)
     finally:

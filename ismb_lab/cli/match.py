@@ -22,6 +22,8 @@ def add_parser(sub) -> None:
     m.add_argument("right", type=Path, help="right image file")
     add_matching_options(m, MatchConfig())
     add_solver_option(m, DEFAULT_SOLVER)
+    m.add_argument("--one-to-one", action="store_true",
+                   help="keep at most one match per corner after solving, the most similar (smallest M)")
     m.add_argument("--json", type=Path, default=None, metavar="OUT", help="write the result as JSON")
     m.add_argument("--plot", type=Path, default=None, metavar="OUT.png",
                    help="draw the pair with features and match lines")
@@ -34,8 +36,9 @@ def run(args) -> int:
     method, params = resolve_params(args)
     prepared = prepare(args.left, args.right, match_config(args))
     result = match(method=method, params=params, prepared=prepared, solver=args.solver or DEFAULT_SOLVER,
-                   **network_settings(args))
-    print(f"Method-{result.method} ({result.solver})  params {params.to_dict()}  seed {result.seed}")
+                   one_to_one=args.one_to_one, **network_settings(args))
+    after = ", one match per corner" if result.one_to_one else ""
+    print(f"Method-{result.method} ({result.solver}{after})  params {params.to_dict()}  seed {result.seed}")
     print(f"{len(result.left_xy)} left / {len(result.right_xy)} right corners, "
           f"{result.n_candidates} candidate neurons, {len(result.pairs)} matches, "
           f"energy {result.energy:.4f}, stopped by '{result.stop_rule}' "
