@@ -440,12 +440,13 @@ def _solve(seed, sweep_rule, patience, max_attempts, y0, all_on, packed, values)
     inputs computed on the network's first such run and kept in `values`.
     Returns ``(state, stop code of _STOP_NAMES, attempts, flips)``.
 
-    A net input is ``u_a = c_a + row_w (R_i - y_a) + col_w (K_k - y_a) + self_w_a y_a``:
-    ``c_a`` sums the bias and the neighbours (:func:`_neighbour_inputs`), ``R_i`` and
-    ``K_k`` count the neurons on in the row and column of ``a``.  A flip then updates
-    ``c`` at its neighbours and two counts, where pushing the uniqueness weights to every
-    neuron of the row and column had taken a tenth of the updates.  The same integers as
-    (3-20) summed term by term, so the same decisions.
+    A net input is ``u_a = c_a + row_w (R_i - y_a) + col_w (K_k - y_a)``: ``c_a`` sums the
+    bias, the neighbours (:func:`_neighbour_inputs`) and the thesis rule's self term
+    ``self_w_a y_a``; ``R_i`` and ``K_k`` count the neurons on in the row and column of
+    ``a``.  A flip then updates ``c`` at its neighbours and itself, and two counts, where
+    pushing the uniqueness weights to every neuron of the row and column had taken a tenth
+    of the updates.  The same integers as (3-20) summed term by term, so the same
+    decisions.
 
     The stop tests are those of :func:`_updates`, in its order: with the sweep rule the
     attempt limit is a whole number of sweeps, so both are tested at the end of a sweep,
