@@ -1,6 +1,8 @@
 """Fixtures every test tier shares."""
 
+import importlib.util
 import os
+from pathlib import Path
 
 import pytest
 
@@ -17,3 +19,17 @@ def opencv_data():
         if os.environ.get("CI") == "true":
             raise
         pytest.skip("opencv-doc is not installed")
+
+
+@pytest.fixture(scope="session")
+def load_script():
+    """Import a file of ``scripts/`` as a module: ``load_script("depth_layouts")``."""
+    folder = Path(__file__).resolve().parents[1] / "scripts"
+
+    def load(name):
+        spec = importlib.util.spec_from_file_location(name, folder / f"{name}.py")
+        module = importlib.util.module_from_spec(spec)
+        spec.loader.exec_module(module)
+        return module
+
+    return load

@@ -8,25 +8,15 @@ the update order are seeded, so the figure repeats exactly on one machine; the m
 one layout allows for another BLAS or numpy build turning one borderline match.
 """
 
-import importlib.util
 import time
-from pathlib import Path
 
 import numpy as np
 
-SCRIPT = Path(__file__).resolve().parents[1] / "scripts" / "depth_layouts.py"
 MEASURED, MARGIN, COUNT = 12, 1, 12
 
 
-def load_script():
-    spec = importlib.util.spec_from_file_location("depth_layouts", SCRIPT)
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
-    return module
-
-
-def test_twelve_fixed_layouts_rank_as_measured_within_thirty_seconds():
-    script = load_script()
+def test_twelve_fixed_layouts_rank_as_measured_within_thirty_seconds(load_script):
+    script = load_script("depth_layouts")
     start = time.perf_counter()
     verdicts = []
     for n in range(COUNT):
@@ -45,12 +35,12 @@ def test_twelve_fixed_layouts_rank_as_measured_within_thirty_seconds():
     assert verdicts.count("ok") >= MEASURED - MARGIN, verdicts
 
 
-def test_verdicts_name_what_went_wrong():
+def test_verdicts_name_what_went_wrong(load_script):
     from dataclasses import replace
 
     from ismb_lab.depth import DepthObject, metric_depth
 
-    script = load_script()
+    script = load_script("depth_layouts")
     layout, result, _ = script.run_layout(script.DEV_START, 0)
 
     def at(truth, d):
@@ -67,8 +57,8 @@ def test_verdicts_name_what_went_wrong():
     assert script.verdict(layout, replace(result, objects=(stray, at(near, 20), at(far, 10)))) == "spurious"
 
 
-def test_the_command_line_ranks_as_the_library_does(tmp_path):
-    script = load_script()
+def test_the_command_line_ranks_as_the_library_does(tmp_path, load_script):
+    script = load_script("depth_layouts")
     for n in (1, 2):                    # a repetitive layout and one across the image border
         layout, result, what = script.run_layout(script.DEV_START + n, n)
         _, cli, cli_what = script.run_layout_cli(script.DEV_START + n, n, tmp_path, method="III",

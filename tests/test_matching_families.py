@@ -1,24 +1,13 @@
 """scripts/matching_families.py on a few layouts: it runs, and its pooled figures agree with its spreads."""
 
-import importlib.util
 import re
-from pathlib import Path
 
 import pytest
 
-SCRIPT = Path(__file__).resolve().parents[1] / "scripts" / "matching_families.py"
 
-
-def load_script():
-    spec = importlib.util.spec_from_file_location("matching_families", SCRIPT)
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
-    return module
-
-
-def test_pooled_figures_lie_within_their_spread_over_ga_and_update_seeds(capsys):
-    load_script().main(["--count", "4", "--generations", "2", "--ga-seeds", "2",
-                        "--variants", "NM4:network", "III:assign:assign"])
+def test_pooled_figures_lie_within_their_spread_over_ga_and_update_seeds(capsys, load_script):
+    load_script("matching_families").main(["--count", "4", "--generations", "2", "--ga-seeds", "2",
+                                           "--variants", "NM4:network", "III:assign:assign"])
     out = capsys.readouterr().out
     pooled = out.split("pooled over the families")[1]
     for variant in ("NM4:network", "III:assign:assign"):
@@ -35,10 +24,10 @@ def test_pooled_figures_lie_within_their_spread_over_ga_and_update_seeds(capsys)
 
 
 @pytest.mark.parametrize("method, one_to_one", [("NM3", True), ("NM4", False)])
-def test_the_command_line_alone_gives_the_library_protocol_figures(tmp_path, method, one_to_one):
+def test_the_command_line_alone_gives_the_library_protocol_figures(tmp_path, method, one_to_one, load_script):
     from ismb_lab.protocol import family_cases, protocol
 
-    script = load_script()
+    script = load_script("matching_families")
     cases = family_cases("cameras", 2300, 3)
     cli = script.cli_held_out(cases, method, "anneal", "anneal", 0, 2, 5, tmp_path, one_to_one)
     report = protocol(cases, method, generations=5, seeds=3, solver="anneal", fit_solver="anneal", rng=0,

@@ -1,28 +1,16 @@
 """scripts/matching_trials.py's cleanups on one pair: each keeps a subset, one match per corner."""
 
-import importlib.util
-from pathlib import Path
-
 import numpy as np
 
-SCRIPT = Path(__file__).resolve().parents[1] / "scripts" / "matching_trials.py"
 
-
-def load_script():
-    spec = importlib.util.spec_from_file_location("matching_trials", SCRIPT)
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
-    return module
-
-
-def test_every_cleanup_keeps_a_subset_and_the_one_per_corner_ones_are_one_per_corner():
+def test_every_cleanup_keeps_a_subset_and_the_one_per_corner_ones_are_one_per_corner(load_script):
     from ismb_lab.matching import prepare
     from ismb_lab.methods import get_method
     from ismb_lab.params import Params
     from ismb_lab.scenes import synthetic_scene
     from ismb_lab.solvers import matched_neurons, one_match_per_corner, solve
 
-    script = load_script()
+    script = load_script("matching_trials")
     scene = synthetic_scene(seed=3)
     p = prepare(scene.left, scene.right).problem
     m = get_method("III")
