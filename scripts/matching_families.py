@@ -281,6 +281,19 @@ and for the variants it was chosen among:
     border                98.3 / 93.3     98.3 / 93.1     88.9 / 83.1     94.5 / 93.6   95.9 / 94.1
     cameras               96.4 / 89.3     96.4 / 72.0     77.7 / 71.9     92.5 / 93.9   95.5 / 95.0
 
+The variants tried this stop and not chosen, run once on the same split afterwards (nothing was
+chosen from these):
+
+    python scripts/matching_trials.py cleanups --method NM4 --seeds-from 1010000   # 81 s
+    python scripts/matching_trials.py fitted-cleanup --seeds-from 1010000          # 259 s
+
+    NM4:anneal:anneal (the earlier choice)          91.1 / 82.5
+      one match per corner by u / evidence / S / M  90.4 / 87.9, 90.5 / 88.1, 91.1 / 88.6, 91.1 / 88.6
+      by |dy| / assignment / drop doubled           90.1 / 87.6, 90.7 / 88.1, 83.0 / 87.9
+      u, then S > 0 / > -0.5 / > -0.9               85.4 / 92.4, 85.7 / 92.3, 86.4 / 92.3
+      u, then M < 1.5 / 2 theta_s                   88.3 / 91.9, 89.4 / 91.4
+    NM3, one match per corner inside the fitness    93.3 / 87.0
+
 The chosen variant beats both peers on both figures pooled: C/T 2.3 points above Hungarian and
 8.4 above mutual-nn, precision 4.6 points above mutual-nn and 5.6 above Hungarian.  Not in every
 family: on contrast its C/T is 3.1 points below Hungarian's, and on cameras its precision is
