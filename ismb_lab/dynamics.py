@@ -399,85 +399,66 @@ def _neighbours(packed):
 
 @numba.njit(cache=True)
 def _split(packed, values):
-    """``(nb_w, self_w, bias, c_on)``: the views of a :class:`_Weights` ``values`` buffer."""
+    """``(nb_w, self_w, bias)``: the views of a :class:`_Weights` ``values`` buffer."""
     m, n = packed[packed[_NB_PTR + 1] - 1], packed[_NEURONS + 1] - packed[_NEURONS]
-    return values[:m], values[m:m + n], values[m + n:m + 2 * n], values[m + 2 * n:m + 3 * n]
+    return values[:m], values[m:m + n], values[m + n:m + 2 * n]
 
 
 @numba.njit(cache=True)
-def _neighbour_inputs(y, packed, values):
-    """``bias_a + sum_b W_ab y_b`` over the neighbours of every neuron: the net inputs
-    without the uniqueness and self terms (fixed point)."""
-    nb_ptr, nb_idx = _segment(packed, _NB_PTR), _neighbours(packed)
-    nb_w, _, bias, _ = _split(packed, values)
-    c = np.empty(y.shape[0], dtype=np.int64)
+def _inputs_of(y, c, nb_ptr, nb_idx, nb_w, self_w, bias):
+    """Fill ``c`` with ``bias_a + self_w_a y_a + sum_b W_ab y_b``, pushing the weights of the
+    neurons on: after a first sweep from every neuron on, a few percent are left."""
     for a in range(y.shape[0]):
-        s = bias[a]
-        for p in range(nb_ptr[a], nb_ptr[a + 1]):
-            s += nb_w[p] * y[nb_idx[p]]
-        c[a] = s
-    return c
-
-
-@numba.njit(cache=True)
-def _fill_all_on(c_on, packed, values):
-    """:func:`_neighbour_inputs` of every neuron on, summing each neuron's weights in a row."""
-    nb_ptr = _segment(packed, _NB_PTR)
-    nb_w, _, bias, _ = _split(packed, values)
-    for a in range(c_on.shape[0]):
-        s = bias[a]
-        for p in range(nb_ptr[a], nb_ptr[a + 1]):
-            s += nb_w[p]
-        c_on[a] = s
+        c[a] = bias[a] + self_w[a] * y[a]
+    for a in range(y.shape[0]):
+        if y[a]:
+            for p in range(nb_ptr[a], nb_ptr[a + 1]):
+                c[nb_idx[p]] += nb_w[p]
 
 
 @numba.njit(cache=True)
 def _solve(seed, sweep_rule, patience, max_attempts, y0, all_on, packed, values):
-    """The whole run in one call: net inputs, the visiting order drawn from `seed` as
-    :func:`visiting_order` draws it, and every net input kept current after each flip.
+    """The whole run in one call: the visiting order drawn from `seed` as
+    :func:`visiting_order` draws it, and every net input computed exactly.
     `packed` is :attr:`Topology.packed`, `values` the :class:`_Weights` buffer; with
-    `all_on` the run starts from every neuron on (and `y0` is not read), from neighbour
-    inputs computed on the network's first such run and kept in `values`.
+    `all_on` the run starts from every neuron on (and `y0` is not read).
     Returns ``(state, stop code of _STOP_NAMES, attempts, flips)``.
 
     A net input is ``u_a = c_a + row_w (R_i - y_a) + col_w (K_k - y_a)``: ``c_a`` sums the
-    bias, the neighbours (:func:`_neighbour_inputs`) and the thesis rule's self term
-    ``self_w_a y_a``; ``R_i`` and ``K_k`` count the neurons on in the row and column of
-    ``a``.  A flip then updates ``c`` at its neighbours and itself, and two counts, where
-    pushing the uniqueness weights to every neuron of the row and column had taken a tenth
-    of the updates.  The same integers as (3-20) summed term by term, so the same
-    decisions.
+    bias, the neighbours and the thesis rule's self term ``self_w_a y_a``; ``R_i`` and
+    ``K_k`` count the neurons on in the row and column of ``a``, where pushing the
+    uniqueness weights to every neuron of the row and column had taken a tenth of the
+    updates.  The same integers as (3-20) summed term by term, so the same decisions.
+
+    The first sweep pulls: each attempt sums its neuron's neighbours afresh, and a flip
+    changes only ``y`` and the counts.  From every neuron on, nine in ten neurons flip in
+    that sweep, and pushing each flip to its neighbours had cost more than the sums.
+    Later sweeps flip a few neurons each, so they keep every ``c`` current instead:
+    :func:`_inputs_of` fills it once, and a flip adds its weights to its neighbours.
 
     The stop tests are those of :func:`_updates`, in its order: with the sweep rule the
     attempt limit is a whole number of sweeps, so both are tested at the end of a sweep,
     the sweep rule first."""
-    # indices read as unsigned: numba then skips the test for a negative (from-the-end) index
-    nb_ptr, nb_idx = _segment(packed, _NB_PTR), _neighbours(packed)
+    # indices read as unsigned: numba then skips the test for a negative (from-the-end)
+    # index, which in the loops over neighbours had cost a quarter of a run
+    nb_ptr, nb_idx = _segment(packed, _NB_PTR).view(np.uint64), _neighbours(packed)
     row_ptr, col_ptr = _segment(packed, _ROW_PTR), _segment(packed, _COL_PTR)
     neurons = _segment(packed, _NEURONS).view(np.uint32)   # i, k of each neuron, side by side
-    nb_w, self_w, _, c_on = _split(packed, values)
-    row_w, col_w = values[-3], values[-2]
+    nb_w, self_w, bias = _split(packed, values)
+    row_w, col_w = values[-2], values[-1]
     n, n_left, n_right = self_w.shape[0], row_ptr.shape[0] - 1, col_ptr.shape[0] - 1
     # one allocation for the visiting order, the neighbour inputs and the counts
     work = np.empty(2 * n + n_left + n_right, dtype=np.int64)
-    order, c = work[:n], work[n:2 * n]
+    order, c = work[:n].view(np.uint64), work[n:2 * n]
     on_in_row, on_in_col = work[2 * n:2 * n + n_left], work[2 * n + n_left:]
     if all_on:
         y = np.ones(n, dtype=np.uint8)
-        if values[-1] == 0:
-            _fill_all_on(c_on, packed, values)
-            values[-1] = 1
-        c[:] = c_on
-        c += self_w
         for i in range(n_left):
             on_in_row[i] = row_ptr[i + 1] - row_ptr[i]
         for k in range(n_right):
             on_in_col[k] = col_ptr[k + 1] - col_ptr[k]
     else:
         y = y0.copy()
-        c[:] = _neighbour_inputs(y, packed, values)
-        for a in range(n):
-            c[a] += self_w[a] * y[a]
         on_in_row[:] = 0
         on_in_col[:] = 0
         for a in range(n):
@@ -488,6 +469,7 @@ def _solve(seed, sweep_rule, patience, max_attempts, y0, all_on, packed, values)
     state = _U64(seed)
     attempts = flips = unchanged = 0
     code = 0
+    pull = True
     while code == 0:
         if sweep_rule:
             state = _shuffle(order, state)
@@ -498,8 +480,14 @@ def _solve(seed, sweep_rule, patience, max_attempts, y0, all_on, packed, values)
         for t in range(n):
             a = order[t]
             attempts += 1
-            i, k, ya = neurons[2 * a], neurons[2 * a + 1], np.int64(y[a])
-            ua = c[a] + row_w * (on_in_row[i] - ya) + col_w * (on_in_col[k] - ya)
+            i, k, ya = neurons[a + a], neurons[a + a + _U64(1)], np.int64(y[a])
+            if pull:
+                ca = bias[a] + self_w[a] * ya
+                for p in range(nb_ptr[a], nb_ptr[a + _U64(1)]):
+                    ca += nb_w[p] * y[nb_idx[p]]
+            else:
+                ca = c[a]
+            ua = ca + row_w * (on_in_row[i] - ya) + col_w * (on_in_col[k] - ya)
             # flip when on with u < 0 or off with u > 0, without a branch on y: on a random
             # visiting order that branch is mispredicted about half the time
             flip = (ua != 0) & ((ua > 0) ^ (ya == 1))
@@ -513,18 +501,22 @@ def _solve(seed, sweep_rule, patience, max_attempts, y0, all_on, packed, values)
                     if code:
                         break
                 continue
+            if pull:
+                y[a] = 1 - ya
+                on_in_row[i] += 1 - 2 * ya
+                on_in_col[k] += 1 - 2 * ya
             # a flip of y_a by d adds W_ab d to every c_b: each sign has its own loop of
             # plain additions or subtractions.  Integers: no rounding.
-            if ya == 1:
+            elif ya == 1:
                 y[a] = 0
-                for p in range(nb_ptr[a], nb_ptr[a + 1]):
+                for p in range(nb_ptr[a], nb_ptr[a + _U64(1)]):
                     c[nb_idx[p]] -= nb_w[p]
                 on_in_row[i] -= 1
                 on_in_col[k] -= 1
                 c[a] -= self_w[a]
             else:
                 y[a] = 1
-                for p in range(nb_ptr[a], nb_ptr[a + 1]):
+                for p in range(nb_ptr[a], nb_ptr[a + _U64(1)]):
                     c[nb_idx[p]] += nb_w[p]
                 on_in_row[i] += 1
                 on_in_col[k] += 1
@@ -540,6 +532,9 @@ def _solve(seed, sweep_rule, patience, max_attempts, y0, all_on, packed, values)
                 code = 1
             elif attempts >= max_attempts:
                 code = 3
+        if pull and code == 0:
+            _inputs_of(y, c, nb_ptr, nb_idx, nb_w, self_w, bias)
+            pull = False
     return y, code, attempts, flips
 
 

@@ -327,9 +327,7 @@ class _Weights(NamedTuple):
     """Fixed-point weights of one rule, in the layout the kernels read.
 
     ``nb_w``, ``self_w`` and ``bias`` are views of ``values``, one buffer laid out as
-    ``nb_w | self_w | bias | c_on | row_w | col_w | ready``: the compiled run fills ``c_on``,
-    the neighbour inputs with every neuron on, the first time it starts from there, and sets
-    ``ready`` to 1.
+    ``nb_w | self_w | bias | row_w | col_w``.
     """
 
     nb_ptr: np.ndarray
@@ -398,10 +396,10 @@ def _weights(net: Network, rule: str) -> _Weights:
 
 @numba.njit(cache=True)
 def _quantised(pair_c, nb_pair, similarity, self_c, exact, scale, match_bias, self_penalty, unique):
-    """The ``values`` buffer of :class:`_Weights`, ``c_on`` and ``ready`` left at 0."""
+    """The ``values`` buffer of :class:`_Weights`."""
     m, n = nb_pair.shape[0], similarity.shape[0]
-    values = np.zeros(m + 3 * n + 3, dtype=np.int64)
-    values[-3] = values[-2] = unique
+    values = np.zeros(m + 2 * n + 2, dtype=np.int64)
+    values[-2] = values[-1] = unique
     nb_w, self_w, bias = values[:m], values[m:m + n], values[m + n:m + 2 * n]
     for p in range(m):
         c = pair_c[nb_pair[p]]
