@@ -27,13 +27,13 @@ from __future__ import annotations
 import numbers
 from dataclasses import dataclass, field
 from functools import cached_property
-from typing import Iterator
+from typing import Iterator, NamedTuple
 
 import numba
 import numpy as np
 
 from ._validation import ParameterTypeError, check_choice, check_number, check_rng, message
-from .hopfield import PACKED, RULES, SCALE, Network, _check_state, _Weights, _weights, _energy_of, energy
+from .hopfield import NB_SHIFT, PACKED, RULES, SCALE, Network, _check_state, _Weights, _weights, _energy_of, energy
 
 __all__ = ["KERNELS", "STOP_RULES", "iter_updates", "run", "RunResult", "Update", "visiting_order"]
 
@@ -208,11 +208,30 @@ class Update:
         return self.old != self.new
 
 
-def _as_lists(w: _Weights) -> _Weights:
-    return _Weights(*(x.tolist() if isinstance(x, np.ndarray) else int(x) for x in w[:-1]), ())
+class _Lists(NamedTuple):
+    """What the textbook kernel reads of :class:`_Weights`, as Python lists and ints."""
+
+    nb_ptr: list
+    nb_idx: list
+    nb_w: list
+    row_ptr: list
+    row_idx: list
+    col_ptr: list
+    col_idx: list
+    rows: list
+    cols: list
+    row_w: int
+    col_w: int
+    self_w: list
+    bias: list
 
 
-def _net_input_textbook(a: int, y: list, w: _Weights) -> int:
+def _as_lists(w: _Weights) -> _Lists:
+    return _Lists(*(x.tolist() if isinstance(x, np.ndarray) else int(x)
+                    for x in (getattr(w, name) for name in _Lists._fields)))
+
+
+def _net_input_textbook(a: int, y: list, w: _Lists) -> int:
     """(3-19)/(3-20): u_ik = sum_j sum_l W_ikjl y_jl + I_ik, term by term (fixed point)."""
     u = w.bias[a]
     for p in range(w.nb_ptr[a], w.nb_ptr[a + 1]):  # neighbours j of i, and their l != k
@@ -382,7 +401,8 @@ _STOP_NAMES = {1: "sweep", 2: "stall", 3: "max_attempts"}
 # The compiled run takes the topology's integers in one buffer (Topology.packed) and the
 # network's in another (_Weights.values): a call into compiled code unboxes each array
 # argument separately, about 0.1 us apiece, which on a 20 x 20 ROI cost as much as the run.
-_NB_PTR, _ROW_PTR, _COL_PTR, _NEURONS, _NB_IDX = range(len(PACKED))
+_NB_PTR, _ROW_PTR, _COL_PTR, _NEURONS = range(len(PACKED))
+_INDEX = (1 << NB_SHIFT) - 1   # an entry's low bits: the neighbour's index
 
 
 @numba.njit(cache=True)
@@ -391,21 +411,14 @@ def _segment(packed, j):
 
 
 @numba.njit(cache=True)
-def _neighbours(packed):
-    """The 32-bit neighbour indices (``nb_idx`` of the layout)."""
-    m = packed[packed[_NB_PTR + 1] - 1]   # the last entry of nb_ptr
-    return _segment(packed, _NB_IDX).view(np.uint32)[:m]
-
-
-@numba.njit(cache=True)
 def _split(packed, values):
-    """``(nb_w, self_w, bias)``: the views of a :class:`_Weights` ``values`` buffer."""
+    """``(entries, self_w, bias)``: the views of a :class:`_Weights` ``values`` buffer."""
     m, n = packed[packed[_NB_PTR + 1] - 1], packed[_NEURONS + 1] - packed[_NEURONS]
     return values[:m], values[m:m + n], values[m + n:m + 2 * n]
 
 
 @numba.njit(cache=True)
-def _inputs_of(y, c, nb_ptr, nb_idx, nb_w, self_w, bias):
+def _inputs_of(y, c, nb_ptr, entries, self_w, bias):
     """Fill ``c`` with ``bias_a + self_w_a y_a + sum_b W_ab y_b``, pushing the weights of the
     neurons on: after a first sweep from every neuron on, a few percent are left."""
     for a in range(y.shape[0]):
@@ -413,7 +426,8 @@ def _inputs_of(y, c, nb_ptr, nb_idx, nb_w, self_w, bias):
     for a in range(y.shape[0]):
         if y[a]:
             for p in range(nb_ptr[a], nb_ptr[a + 1]):
-                c[nb_idx[p]] += nb_w[p]
+                x = entries[p]
+                c[x & _INDEX] += x >> NB_SHIFT
 
 
 @numba.njit(cache=True)
@@ -441,10 +455,10 @@ def _solve(seed, sweep_rule, patience, max_attempts, y0, all_on, packed, values)
     the sweep rule first."""
     # indices read as unsigned: numba then skips the test for a negative (from-the-end)
     # index, which in the loops over neighbours had cost a quarter of a run
-    nb_ptr, nb_idx = _segment(packed, _NB_PTR).view(np.uint64), _neighbours(packed)
+    nb_ptr = _segment(packed, _NB_PTR).view(np.uint64)
     row_ptr, col_ptr = _segment(packed, _ROW_PTR), _segment(packed, _COL_PTR)
     neurons = _segment(packed, _NEURONS).view(np.uint32)   # i, k of each neuron, side by side
-    nb_w, self_w, bias = _split(packed, values)
+    entries, self_w, bias = _split(packed, values)
     row_w, col_w = values[-2], values[-1]
     n, n_left, n_right = self_w.shape[0], row_ptr.shape[0] - 1, col_ptr.shape[0] - 1
     # one allocation for the visiting order, the neighbour inputs and the counts
@@ -484,7 +498,8 @@ def _solve(seed, sweep_rule, patience, max_attempts, y0, all_on, packed, values)
             if pull:
                 ca = bias[a] + self_w[a] * ya
                 for p in range(nb_ptr[a], nb_ptr[a + _U64(1)]):
-                    ca += nb_w[p] * y[nb_idx[p]]
+                    x = entries[p]
+                    ca += (x >> NB_SHIFT) * y[x & _INDEX]
             else:
                 ca = c[a]
             ua = ca + row_w * (on_in_row[i] - ya) + col_w * (on_in_col[k] - ya)
@@ -510,14 +525,16 @@ def _solve(seed, sweep_rule, patience, max_attempts, y0, all_on, packed, values)
             elif ya == 1:
                 y[a] = 0
                 for p in range(nb_ptr[a], nb_ptr[a + _U64(1)]):
-                    c[nb_idx[p]] -= nb_w[p]
+                    x = entries[p]
+                    c[x & _INDEX] -= x >> NB_SHIFT
                 on_in_row[i] -= 1
                 on_in_col[k] -= 1
                 c[a] -= self_w[a]
             else:
                 y[a] = 1
                 for p in range(nb_ptr[a], nb_ptr[a + _U64(1)]):
-                    c[nb_idx[p]] += nb_w[p]
+                    x = entries[p]
+                    c[x & _INDEX] += x >> NB_SHIFT
                 on_in_row[i] += 1
                 on_in_col[k] += 1
                 c[a] += self_w[a]
@@ -533,7 +550,7 @@ def _solve(seed, sweep_rule, patience, max_attempts, y0, all_on, packed, values)
             elif attempts >= max_attempts:
                 code = 3
         if pull and code == 0:
-            _inputs_of(y, c, nb_ptr, nb_idx, nb_w, self_w, bias)
+            _inputs_of(y, c, nb_ptr, entries, self_w, bias)
             pull = False
     return y, code, attempts, flips
 

@@ -77,10 +77,14 @@ import numpy as np
 
 from ._validation import ParameterError, ParameterTypeError, check_choice, check_number, message
 
-__all__ = ["MAX_INPUT", "RULES", "SCALE", "energy", "hopfield_form", "Network", "Topology"]
+__all__ = ["MAX_INPUT", "MAX_NEURONS", "RULES", "SCALE", "energy", "hopfield_form", "Network", "Topology"]
 
 SCALE = 2.0 ** 40
 RULES = ("exact", "thesis")
+#: Bits of a neighbour's index in a packed weight entry (:class:`_Weights`).
+NB_SHIFT = 21
+#: The most candidate neurons a network holds: one more needs a 22-bit index.
+MAX_NEURONS = 1 << NB_SHIFT
 
 
 def _csr(n: int, src: np.ndarray, dst: np.ndarray):
@@ -142,6 +146,8 @@ class Topology:
         for name in ("rows", "cols", "pair_a", "pair_b"):
             object.__setattr__(self, name, np.asarray(getattr(self, name), dtype=np.int64).ravel())
         n, rows, cols, a, b = self.n_neurons, self.rows, self.cols, self.pair_a, self.pair_b
+        if n > MAX_NEURONS:
+            raise ParameterError(message("rows", owner, f"at most {MAX_NEURONS:,} candidate neurons", n))
         if len(cols) != n:
             raise ParameterError(message("cols", owner, f"of length {n} like 'rows'", f"length {len(cols)}"))
         if len(b) != len(a):
@@ -186,15 +192,11 @@ class Topology:
     def packed(self) -> np.ndarray:
         """What the compiled run reads of the layout, in one int64 buffer: segment j is
         ``packed[packed[j]:packed[j + 1]]``, in the order of :data:`PACKED`.  One array
-        crosses into compiled code faster than six.  The neighbour indices are 32-bit, two to
-        a word: a flip's updates stream through them, and at 200 x 200 corners half the bytes
-        made the updates a quarter faster."""
+        crosses into compiled code faster than five.  The neighbour indices travel with the
+        weights, in :class:`_Weights` ``values``."""
         lay = self.layout
-        idx = lay.nb_idx.astype(np.uint32)
-        if len(idx) % 2:
-            idx = np.append(idx, np.uint32(0))
         neurons = np.stack([self.rows, self.cols], axis=1).astype(np.uint32).reshape(-1)
-        parts = (lay.nb_ptr, lay.row_ptr, lay.col_ptr, neurons.view(np.int64), idx.view(np.int64))
+        parts = (lay.nb_ptr, lay.row_ptr, lay.col_ptr, neurons.view(np.int64))
         starts = len(parts) + 1 + np.cumsum([0] + [len(x) for x in parts])
         return np.concatenate([starts, *parts]).astype(np.int64)
 
@@ -262,6 +264,9 @@ class Network:
                 raise ParameterError(message(name, owner, f"of length {length}", f"length {len(values)}"))
             if not np.all(np.isfinite(values)):
                 raise ParameterError(message(name, owner, "finite", "NaN or infinite values"))
+            # the fixed-point weights and the overflow bound of _check_fits rely on it
+            if len(values) and np.abs(values).max() > 1:
+                raise ParameterError(message(name, owner, "values in [-1, 1]", values[np.abs(values) > 1][:3].tolist()))
             object.__setattr__(self, name, values)
         object.__setattr__(self, "_weights", {})
 
@@ -320,19 +325,22 @@ class Network:
 
 
 #: The segments of :attr:`Topology.packed`, in order.
-PACKED = ("nb_ptr", "row_ptr", "col_ptr", "neurons", "nb_idx")
+PACKED = ("nb_ptr", "row_ptr", "col_ptr", "neurons")
 
 
 class _Weights(NamedTuple):
     """Fixed-point weights of one rule, in the layout the kernels read.
 
-    ``nb_w``, ``self_w`` and ``bias`` are views of ``values``, one buffer laid out as
-    ``nb_w | self_w | bias | row_w | col_w``.
+    ``self_w`` and ``bias`` are views of ``values``, one buffer laid out as
+    ``entries | self_w | bias | row_w | col_w``.  Entry ``p`` holds the weight ``nb_w[p]``
+    shifted left by :data:`NB_SHIFT` bits and the neighbour's index ``nb_idx[p]`` in those
+    low bits: a flip's updates read one word per neighbour instead of two, which at 200 x
+    200 corners made them a fifth faster.  A weight is at most ``2 * SCALE = 2**41`` in
+    size (C lies in [-1, 1]), so it fits the 43 bits left with its sign.
     """
 
     nb_ptr: np.ndarray
     nb_idx: np.ndarray
-    nb_w: np.ndarray
     row_ptr: np.ndarray
     row_idx: np.ndarray
     col_ptr: np.ndarray
@@ -345,6 +353,11 @@ class _Weights(NamedTuple):
     bias: np.ndarray
     values: np.ndarray
     run_args: tuple  # the compiled run's last arguments: (Topology.packed, values)
+
+    @property
+    def nb_w(self) -> np.ndarray:
+        """The neighbour weights, unpacked from ``values``."""
+        return self.values[:len(self.nb_idx)] >> NB_SHIFT
 
 
 #: Largest net input the 64-bit fixed point holds with room to spare: 2**62 / SCALE, about 4.2e6.
@@ -384,10 +397,10 @@ def _weights(net: Network, rule: str) -> _Weights:
     _check_fits(net, lay)
     # round() of a float rounds half to even, as np.rint does, to the same integer
     unique = np.int64(round((-2.0 * kappa if exact else -kappa) * SCALE))
-    values = _quantised(net.pair_c, lay.nb_pair, net.similarity, net.self_c, exact, SCALE,
+    values = _quantised(net.pair_c, lay.nb_pair, lay.nb_idx, net.similarity, net.self_c, exact, SCALE,
                         net.match_bias, 2.0 * kappa, unique)
     m, n = len(lay.nb_pair), net.n_neurons
-    w = _Weights(lay.nb_ptr, lay.nb_idx, values[:m], lay.row_ptr, lay.row_idx, lay.col_ptr, lay.col_idx,
+    w = _Weights(lay.nb_ptr, lay.nb_idx, lay.row_ptr, lay.row_idx, lay.col_ptr, lay.col_idx,
                  net.rows, net.cols, unique, unique, values[m:m + n], values[m + n:m + 2 * n], values,
                  (net.topology.packed, values))
     net._weights[rule] = w
@@ -395,15 +408,15 @@ def _weights(net: Network, rule: str) -> _Weights:
 
 
 @numba.njit(cache=True)
-def _quantised(pair_c, nb_pair, similarity, self_c, exact, scale, match_bias, self_penalty, unique):
+def _quantised(pair_c, nb_pair, nb_idx, similarity, self_c, exact, scale, match_bias, self_penalty, unique):
     """The ``values`` buffer of :class:`_Weights`."""
     m, n = nb_pair.shape[0], similarity.shape[0]
     values = np.zeros(m + 2 * n + 2, dtype=np.int64)
     values[-2] = values[-1] = unique
-    nb_w, self_w, bias = values[:m], values[m:m + n], values[m + n:m + 2 * n]
+    entries, self_w, bias = values[:m], values[m:m + n], values[m + n:m + 2 * n]
     for p in range(m):
         c = pair_c[nb_pair[p]]
-        nb_w[p] = np.int64(np.rint((2.0 * c if exact else c) * scale))
+        entries[p] = (np.int64(np.rint((2.0 * c if exact else c) * scale)) << NB_SHIFT) | nb_idx[p]
     for a in range(n):
         bias[a] = np.int64(np.rint((match_bias + similarity[a]) * scale))
         if not exact:

@@ -3,7 +3,7 @@
 import numpy as np
 import pytest
 
-from ismb_lab.hopfield import Network, energy, hopfield_form
+from ismb_lab.hopfield import MAX_NEURONS, SCALE, Network, Topology, _weights, energy, hopfield_form
 from ismb_lab.dynamics import iter_updates, run
 
 
@@ -270,12 +270,40 @@ def test_run_rejects_bad_arguments(kwargs, error, words):
     (dict(similarity=[np.nan, 0]), "'similarity'"),
     (dict(pair_a=[0], pair_b=[1], pair_c=[0.5]), "shared row"),
     (dict(similarity=[0.0]), "'similarity'"),
+    (dict(similarity=[0.5, -1.5]), r"'similarity'.*in \[-1, 1\]. Got \[-1.5\]"),
+    (dict(self_c=[1.01, 0.0]), r"'self_c'.*in \[-1, 1\]"),
 ])
 def test_network_rejects_inconsistent_arrays(kwargs, words):
     base = dict(rows=[0, 0], cols=[0, 1], similarity=[0.0, 0.0], pair_a=[], pair_b=[], pair_c=[])
     base.update(kwargs)
     with pytest.raises(ValueError, match=words):
         Network.from_arrays(2, 2, **base)
+
+
+def test_network_rejects_a_compatibility_outside_its_range():
+    with pytest.raises(ValueError, match=r"'pair_c'.*in \[-1, 1\]. Got \[2.5\]"):
+        Network.from_arrays(2, 2, rows=[0, 1], cols=[0, 1], similarity=[0.0, 0.0],
+                            pair_a=[0], pair_b=[1], pair_c=[2.5])
+
+
+def test_topology_refuses_more_neurons_than_an_entry_can_index():
+    n = MAX_NEURONS + 1
+    with pytest.raises(ValueError, match="'rows'.*at most 2,097,152 candidate neurons. Got 2097153"):
+        Topology(1, n, np.zeros(n, dtype=np.int64), np.arange(n), [], [])
+
+
+def test_packed_entries_hold_the_extreme_weights_and_indices():
+    """C = +-1 gives the largest weights, +-2**41 under the exact rule; the entries give them
+    back with every neighbour's index, and both kernels then agree."""
+    net = random_network(7, 40, 40, p_candidate=0.3, p_pair=0.4)
+    extreme = np.where(np.arange(net.n_pairs) % 2, 1.0, -1.0)
+    net = Network(net.topology, net.similarity, extreme, net.self_c)
+    for rule, size in (("exact", 2.0 * SCALE), ("thesis", SCALE)):
+        w = _weights(net, rule)
+        assert np.array_equal(np.abs(w.nb_w), np.full(2 * net.n_pairs, size, dtype=np.int64))
+        assert np.array_equal(w.values[:2 * net.n_pairs] & (MAX_NEURONS - 1), w.nb_idx)
+        fast, slow = run(net, rng=3, rule=rule), run(net, rng=3, rule=rule, kernel="textbook")
+        assert np.array_equal(fast.state, slow.state) and fast.attempts == slow.attempts
 
 
 # --- Beyond the thesis: a uniqueness strength kappa and a match bias beta --------------------
