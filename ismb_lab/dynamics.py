@@ -17,9 +17,10 @@ Both give up after ``max_sweeps * n`` attempts (stop rule ``"max_attempts"``).
 
 Two kernels make the same decisions: the readable "textbook" one of
 :func:`iter_updates`, which re-sums (3-20) at every attempt and yields an
-:class:`Update` record each time, and the compiled one of :func:`run`, which
-keeps every net input current after each flip.  Their weights are the integers of
-:mod:`ismb_lab.hopfield`, so they agree bit for bit.
+:class:`Update` record each time, and the compiled one of :func:`run`, which sums
+the inputs afresh in the first sweep and keeps them current after each flip from
+then on.  Their weights are the integers of :mod:`ismb_lab.hopfield`, so they agree
+bit for bit.
 """
 
 from __future__ import annotations
@@ -401,7 +402,7 @@ _STOP_NAMES = {1: "sweep", 2: "stall", 3: "max_attempts"}
 # The compiled run takes the topology's integers in one buffer (Topology.packed) and the
 # network's in another (_Weights.values): a call into compiled code unboxes each array
 # argument separately, about 0.1 us apiece, which on a 20 x 20 ROI cost as much as the run.
-_NB_PTR, _ROW_PTR, _COL_PTR, _NEURONS = range(len(PACKED))
+_NB_PTR, _ROW_PTR, _COL_PTR, _NEURONS, _COL_IDX = range(len(PACKED))
 _INDEX = (1 << NB_SHIFT) - 1   # an entry's low bits: the neighbour's index
 
 
@@ -418,16 +419,19 @@ def _split(packed, values):
 
 
 @numba.njit(cache=True)
-def _inputs_of(y, c, nb_ptr, entries, self_w, bias):
-    """Fill ``c`` with ``bias_a + self_w_a y_a + sum_b W_ab y_b``, pushing the weights of the
-    neurons on: after a first sweep from every neuron on, a few percent are left."""
+def _inputs_of(y, u, nb_ptr, entries, self_w, bias, neurons, on_in_row, on_in_col, row_w, col_w):
+    """Fill ``u`` with every net input: ``bias_a + self_w_a y_a + sum_b W_ab y_b`` and the
+    uniqueness terms, pushing the weights of the neurons on (after a first sweep from
+    every neuron on, a few percent are left)."""
     for a in range(y.shape[0]):
-        c[a] = bias[a] + self_w[a] * y[a]
+        ya = np.int64(y[a])
+        u[a] = (bias[a] + self_w[a] * ya + row_w * (on_in_row[neurons[2 * a]] - ya)
+                + col_w * (on_in_col[neurons[2 * a + 1]] - ya))
     for a in range(y.shape[0]):
         if y[a]:
             for p in range(nb_ptr[a], nb_ptr[a + 1]):
                 x = entries[p]
-                c[x & _INDEX] += x >> NB_SHIFT
+                u[x & _INDEX] += x >> NB_SHIFT
 
 
 @numba.njit(cache=True)
@@ -440,15 +444,16 @@ def _solve(seed, sweep_rule, patience, max_attempts, y0, all_on, packed, values)
 
     A net input is ``u_a = c_a + row_w (R_i - y_a) + col_w (K_k - y_a)``: ``c_a`` sums the
     bias, the neighbours and the thesis rule's self term ``self_w_a y_a``; ``R_i`` and
-    ``K_k`` count the neurons on in the row and column of ``a``, where pushing the
-    uniqueness weights to every neuron of the row and column had taken a tenth of the
-    updates.  The same integers as (3-20) summed term by term, so the same decisions.
+    ``K_k`` count the neurons on in the row and column of ``a``.  The same integers as
+    (3-20) summed term by term, so the same decisions.
 
-    The first sweep pulls: each attempt sums its neuron's neighbours afresh, and a flip
-    changes only ``y`` and the counts.  From every neuron on, nine in ten neurons flip in
-    that sweep, and pushing each flip to its neighbours had cost more than the sums.
-    Later sweeps flip a few neurons each, so they keep every ``c`` current instead:
-    :func:`_inputs_of` fills it once, and a flip adds its weights to its neighbours.
+    The first sweep pulls: each attempt sums its neuron's neighbours afresh and reads the
+    two counts, and a flip changes only ``y`` and the counts.  From every neuron on, nine
+    in ten neurons flip in that sweep, and pushing each flip to its neighbours had cost
+    more than the sums.  Later sweeps flip a few neurons each, so they keep every ``u``
+    current instead (:func:`_inputs_of` fills it once): a flip adds its weights to its
+    neighbours and the uniqueness weight to its row and column, and an attempt reads one
+    number.  Reading ``u_a`` from its parts had cost three times as much per attempt.
 
     The stop tests are those of :func:`_updates`, in its order: with the sweep rule the
     attempt limit is a whole number of sweeps, so both are tested at the end of a sweep,
@@ -456,14 +461,15 @@ def _solve(seed, sweep_rule, patience, max_attempts, y0, all_on, packed, values)
     # indices read as unsigned: numba then skips the test for a negative (from-the-end)
     # index, which in the loops over neighbours had cost a quarter of a run
     nb_ptr = _segment(packed, _NB_PTR).view(np.uint64)
-    row_ptr, col_ptr = _segment(packed, _ROW_PTR), _segment(packed, _COL_PTR)
+    row_ptr, col_ptr = _segment(packed, _ROW_PTR).view(np.uint64), _segment(packed, _COL_PTR).view(np.uint64)
+    col_idx = _segment(packed, _COL_IDX).view(np.uint64)
     neurons = _segment(packed, _NEURONS).view(np.uint32)   # i, k of each neuron, side by side
     entries, self_w, bias = _split(packed, values)
     row_w, col_w = values[-2], values[-1]
     n, n_left, n_right = self_w.shape[0], row_ptr.shape[0] - 1, col_ptr.shape[0] - 1
-    # one allocation for the visiting order, the neighbour inputs and the counts
+    # one allocation for the visiting order, the net inputs and the counts
     work = np.empty(2 * n + n_left + n_right, dtype=np.int64)
-    order, c = work[:n].view(np.uint64), work[n:2 * n]
+    order, u = work[:n].view(np.uint64), work[n:2 * n]
     on_in_row, on_in_col = work[2 * n:2 * n + n_left], work[2 * n + n_left:]
     if all_on:
         y = np.ones(n, dtype=np.uint8)
@@ -494,15 +500,15 @@ def _solve(seed, sweep_rule, patience, max_attempts, y0, all_on, packed, values)
         for t in range(n):
             a = order[t]
             attempts += 1
-            i, k, ya = neurons[a + a], neurons[a + a + _U64(1)], np.int64(y[a])
+            ya = np.int64(y[a])
             if pull:
-                ca = bias[a] + self_w[a] * ya
+                i, k = neurons[a + a], neurons[a + a + _U64(1)]
+                ua = bias[a] + self_w[a] * ya + row_w * (on_in_row[i] - ya) + col_w * (on_in_col[k] - ya)
                 for p in range(nb_ptr[a], nb_ptr[a + _U64(1)]):
                     x = entries[p]
-                    ca += (x >> NB_SHIFT) * y[x & _INDEX]
+                    ua += (x >> NB_SHIFT) * y[x & _INDEX]
             else:
-                ca = c[a]
-            ua = ca + row_w * (on_in_row[i] - ya) + col_w * (on_in_col[k] - ya)
+                ua = u[a]
             # flip when on with u < 0 or off with u > 0, without a branch on y: on a random
             # visiting order that branch is mispredicted about half the time
             flip = (ua != 0) & ((ua > 0) ^ (ya == 1))
@@ -520,24 +526,32 @@ def _solve(seed, sweep_rule, patience, max_attempts, y0, all_on, packed, values)
                 y[a] = 1 - ya
                 on_in_row[i] += 1 - 2 * ya
                 on_in_col[k] += 1 - 2 * ya
-            # a flip of y_a by d adds W_ab d to every c_b: each sign has its own loop of
-            # plain additions or subtractions.  Integers: no rounding.
+            # a flip of y_a by d adds W_ab d to every u_b of a neighbour, and row_w d or
+            # col_w d to every other neuron of its row and column (the row's neurons are
+            # consecutive); its own u_a changes only by its self term.  Each sign has its
+            # own loops of plain additions or subtractions.  Integers: no rounding.
             elif ya == 1:
                 y[a] = 0
+                i, k = neurons[a + a], neurons[a + a + _U64(1)]
                 for p in range(nb_ptr[a], nb_ptr[a + _U64(1)]):
                     x = entries[p]
-                    c[x & _INDEX] -= x >> NB_SHIFT
-                on_in_row[i] -= 1
-                on_in_col[k] -= 1
-                c[a] -= self_w[a]
+                    u[x & _INDEX] -= x >> NB_SHIFT
+                for b in range(row_ptr[i], row_ptr[i + _U64(1)]):
+                    u[b] -= row_w
+                for q in range(col_ptr[k], col_ptr[k + _U64(1)]):
+                    u[col_idx[q]] -= col_w
+                u[a] += row_w + col_w - self_w[a]
             else:
                 y[a] = 1
+                i, k = neurons[a + a], neurons[a + a + _U64(1)]
                 for p in range(nb_ptr[a], nb_ptr[a + _U64(1)]):
                     x = entries[p]
-                    c[x & _INDEX] += x >> NB_SHIFT
-                on_in_row[i] += 1
-                on_in_col[k] += 1
-                c[a] += self_w[a]
+                    u[x & _INDEX] += x >> NB_SHIFT
+                for b in range(row_ptr[i], row_ptr[i + _U64(1)]):
+                    u[b] += row_w
+                for q in range(col_ptr[k], col_ptr[k + _U64(1)]):
+                    u[col_idx[q]] += col_w
+                u[a] += self_w[a] - row_w - col_w
             changed += 1
             unchanged = 0
             if not sweep_rule and attempts >= max_attempts:
@@ -550,7 +564,7 @@ def _solve(seed, sweep_rule, patience, max_attempts, y0, all_on, packed, values)
             elif attempts >= max_attempts:
                 code = 3
         if pull and code == 0:
-            _inputs_of(y, c, nb_ptr, entries, self_w, bias)
+            _inputs_of(y, u, nb_ptr, entries, self_w, bias, neurons, on_in_row, on_in_col, row_w, col_w)
             pull = False
     return y, code, attempts, flips
 

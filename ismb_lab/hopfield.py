@@ -196,7 +196,7 @@ class Topology:
         weights, in :class:`_Weights` ``values``."""
         lay = self.layout
         neurons = np.stack([self.rows, self.cols], axis=1).astype(np.uint32).reshape(-1)
-        parts = (lay.nb_ptr, lay.row_ptr, lay.col_ptr, neurons.view(np.int64))
+        parts = (lay.nb_ptr, lay.row_ptr, lay.col_ptr, neurons.view(np.int64), lay.col_idx)
         starts = len(parts) + 1 + np.cumsum([0] + [len(x) for x in parts])
         return np.concatenate([starts, *parts]).astype(np.int64)
 
@@ -325,7 +325,7 @@ class Network:
 
 
 #: The segments of :attr:`Topology.packed`, in order.
-PACKED = ("nb_ptr", "row_ptr", "col_ptr", "neurons")
+PACKED = ("nb_ptr", "row_ptr", "col_ptr", "neurons", "col_idx")
 
 
 class _Weights(NamedTuple):
