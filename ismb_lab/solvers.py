@@ -35,7 +35,7 @@ from typing import Callable, NamedTuple
 
 import numpy as np
 
-from ._validation import ParameterTypeError, check_choice, check_number, message
+from ._validation import ParameterError, ParameterTypeError, check_choice, check_number, message
 from .annealing import anneal
 from .exact import milp_minimum
 from .hopfield import RULES, Network, _energy_of
@@ -244,11 +244,11 @@ def matched_neurons(neurons, state, method=None) -> np.ndarray:
     return on if kept is on else np.sort(kept)   # a method that keeps every match returns `on` itself
 
 
-def one_match_per_corner(problem, on) -> np.ndarray:
+def one_match_per_corner(problem, on, key=None) -> np.ndarray:
     """Of the matched neurons `on`, at most one per left and per right corner: the most similar.
 
-    The neurons are taken by increasing ``M`` (ties by index), and one is kept when
-    neither of its corners has a kept match yet.  The "at most one" term of Methods NM,
+    The neurons are taken by increasing ``M`` (or `key`; ties by index), and one is kept
+    when neither of its corners has a kept match yet.  The "at most one" term of Methods NM,
     NM4 and NM3 makes a second match costly, but where two wrong matches support each
     other a solver can leave both on; this step removes them after solving.  It is a
     decoding option for testing (``match(..., one_to_one=True)``,
@@ -260,6 +260,8 @@ def one_match_per_corner(problem, on) -> np.ndarray:
         Anything with ``rows``, ``cols`` and ``neuron_dissimilarity``.
     on : (m,) int array_like
         Indices of the matched neurons (:func:`matched_neurons`).
+    key : (m,) float array_like, optional
+        The order in which they are taken, smallest first (default: their ``M``).
 
     Returns
     -------
@@ -274,11 +276,18 @@ def one_match_per_corner(problem, on) -> np.ndarray:
     [0, 3]
     """
     on = np.asarray(on, dtype=np.int64)
+    if key is None:
+        key = problem.neuron_dissimilarity[on]
+    else:
+        key = np.asarray(key, dtype=float).ravel()
+        if len(key) != len(on):
+            raise ParameterError(message("key", "one_match_per_corner",
+                                         f"of length {len(on)}, one value per matched neuron", f"length {len(key)}"))
     if len(on) < 2:
         return on
     rows, cols = problem.rows, problem.cols
     left_used, right_used, kept = set(), set(), []
-    for a in on[np.lexsort((on, problem.neuron_dissimilarity[on]))].tolist():
+    for a in on[np.lexsort((on, key))].tolist():
         i, k = int(rows[a]), int(cols[a])
         if i not in left_used and k not in right_used:
             left_used.add(i)

@@ -60,17 +60,6 @@ def fits(method: str, start: int):
             yield family, ga_seed, cases, report.params
 
 
-def greedy(on, key, rows, cols) -> np.ndarray:
-    """One match per corner, taking `on` by increasing `key` (ties by index)."""
-    left, right, kept = set(), set(), []
-    for a in on[np.lexsort((on, key))].tolist():
-        if rows[a] not in left and cols[a] not in right:
-            left.add(rows[a])
-            right.add(cols[a])
-            kept.append(a)
-    return np.sort(np.array(kept, dtype=np.int64))
-
-
 def cleaned(problem, net, state, method, params) -> dict:
     """Each cleanup's kept neurons."""
     on = np.asarray(matched_neurons(problem, state, method), dtype=np.int64)
@@ -81,9 +70,11 @@ def cleaned(problem, net, state, method, params) -> dict:
     u, evidence = bias + W @ state, bias + support @ state
     M, S = problem.neuron_dissimilarity, net.similarity
     dy = np.abs(problem.right_xy[cols, 1] - problem.left_xy[rows, 1])
-    out = {"none": on, "u": greedy(on, -u[on], rows, cols), "evidence": greedy(on, -evidence[on], rows, cols),
-           "S": greedy(on, -S[on], rows, cols), "M": one_match_per_corner(problem, on),
-           "dy": greedy(on, dy[on], rows, cols)}
+    def greedy(key):
+        return one_match_per_corner(problem, on, key)
+
+    out = {"none": on, "u": greedy(-u[on]), "evidence": greedy(-evidence[on]),
+           "S": greedy(-S[on]), "M": one_match_per_corner(problem, on), "dy": greedy(dy[on])}
     left, right = np.bincount(rows[on], minlength=len(problem.left_xy)), np.bincount(cols[on], minlength=len(problem.right_xy))
     out["drop doubled"] = on[(left[rows[on]] == 1) & (right[cols[on]] == 1)]
     if len(on):

@@ -95,6 +95,20 @@ def test_one_match_per_corner_keeps_the_most_similar_of_each_corner():
         assert set(untouched.tolist()) <= set(kept.tolist())
 
 
+def test_one_match_per_corner_takes_any_order_and_checks_it():
+    from ismb_lab.methods import build_problem
+    from ismb_lab.solvers import one_match_per_corner
+
+    # left corner 0 has two matches: neuron 0 (M 2) and neuron 1 (M 40)
+    p = build_problem([[100, 50], [110, 50]], [[80, 51], [90, 51]], [[2.0, 40.0], [30.0, 3.0]])
+    assert one_match_per_corner(p, [0, 1, 3]).tolist() == [0, 3]
+    assert one_match_per_corner(p, [0, 1, 3], key=[5.0, 0.0, 1.0]).tolist() == [1]   # 1 first: 3 and 0 share its corners
+    assert one_match_per_corner(p, [0, 1, 3], key=[1.0, 1.0, 0.0]).tolist() == [0, 3]  # a tie: index 0
+    with pytest.raises(ValueError, match=r"'key' parameter of one_match_per_corner must be of length 3, "
+                                         r"one value per matched neuron. Got 'length 2'"):
+        one_match_per_corner(p, [0, 1, 3], key=[1.0, 2.0])
+
+
 def test_one_to_one_in_match_the_cli_and_evaluate():
 
     from ismb_lab.matching import match, prepare
