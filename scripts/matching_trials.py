@@ -70,11 +70,8 @@ def cleaned(problem, net, state, method, params) -> dict:
     u, evidence = bias + W @ state, bias + support @ state
     M, S = problem.neuron_dissimilarity, net.similarity
     dy = np.abs(problem.right_xy[cols, 1] - problem.left_xy[rows, 1])
-    def greedy(key):
-        return one_match_per_corner(problem, on, key)
-
-    out = {"none": on, "u": greedy(-u[on]), "evidence": greedy(-evidence[on]),
-           "S": greedy(-S[on]), "M": one_match_per_corner(problem, on), "dy": greedy(dy[on])}
+    orders = {"u": -u[on], "evidence": -evidence[on], "S": -S[on], "M": M[on], "dy": dy[on]}
+    out = {"none": on} | {name: one_match_per_corner(problem, on, key) for name, key in orders.items()}
     left, right = np.bincount(rows[on], minlength=len(problem.left_xy)), np.bincount(cols[on], minlength=len(problem.right_xy))
     out["drop doubled"] = on[(left[rows[on]] == 1) & (right[cols[on]] == 1)]
     if len(on):
