@@ -2,11 +2,13 @@
 
 * :func:`targets_path` names each student's own targets file, from the user
   (``JUPYTERHUB_USER`` on a hub, else the login name) and the pair, so thirty
-  students on one server never write the same file.
+  students on one server never write the same file.  Voilà without a hub serves every
+  visitor under one login (:func:`voila_without_hub`): there the labeller asks for a name.
 * :func:`save_merging` saves under a lock and merges with whatever another process
   saved since we last read the file (a three-way merge): nobody's pair is lost.
-* :func:`pool` pools a class's files into one targets set and reports where the
-  students disagree, and how each agrees with an answer key.
+* :func:`pool` pools a class's files into one targets set, one vote per student (the
+  folders of :func:`collected`, as ``nbgrader collect`` leaves them), and reports where
+  the students disagree, and how each agrees with an answer key.
 
 Pairs are compared by their coordinates (:mod:`ismb_lab.coords`), rounded to 1e-6 px.
 """
@@ -27,7 +29,8 @@ import numpy as np
 from ._validation import ParameterError, ParameterTypeError, check_number, message
 from .targets import TargetSet, load_targets, save_targets
 
-__all__ = ["collected", "Merged", "Pool", "pool", "save_merging", "targets_path", "user_name"]
+__all__ = ["collected", "Merged", "Pool", "pool", "save_merging", "targets_path", "user_name",
+           "voila_without_hub"]
 
 _UNSAFE = re.compile(r"[^A-Za-z0-9._-]+")
 
@@ -39,6 +42,17 @@ def user_name() -> str:
     """
     name = os.environ.get("JUPYTERHUB_USER") or getpass.getuser() or "student"
     return _UNSAFE.sub("-", name).strip("-.") or "student"
+
+
+def voila_without_hub() -> bool:
+    """Whether this kernel serves a Voilà page with no hub behind it: one login for every
+    visitor, so the login name does not say who is labelling.
+
+    Voilà puts the request's CGI-like variables, ``SERVER_SOFTWARE=voila/...`` among them,
+    into each page's kernel environment.
+    """
+    return (os.environ.get("SERVER_SOFTWARE", "").startswith("voila")
+            and not os.environ.get("JUPYTERHUB_USER"))
 
 
 def targets_path(pair: str, folder=".", user: str | None = None) -> Path:
