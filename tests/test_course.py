@@ -171,3 +171,40 @@ def test_a_lock_file_is_private_to_its_owner(tmp_path):
         assert stat.S_IMODE(lock.stat().st_mode) == 0o600
     finally:
         os.umask(old)
+
+
+def test_the_assignment_source_is_generated_from_the_notebook(tmp_path):
+    from ismb_lab.course import course_images, make_source
+
+    folder = make_source(tmp_path / "course")
+    assert (folder / "04_label_targets.ipynb").read_bytes() == (
+        IMAGES.parent / "notebooks" / "04_label_targets.ipynb").read_bytes()
+    assert course_images("synthetic", folder) == folder / "images" / "synthetic"
+    (folder / "stale.txt").write_text("hand-edited")
+    assert make_source(tmp_path / "course") == folder and not (folder / "stale.txt").exists()
+    assert [p.name for p in (tmp_path / "course" / "source").iterdir()] == ["labels"]
+    # a notebook without nbgrader metadata is refused, and the old source stays
+    repo = tmp_path / "repo"
+    (repo / "notebooks").mkdir(parents=True)
+    (repo / "notebooks" / "04_label_targets.ipynb").write_text('{"cells": [{"metadata": {}}]}')
+    (repo / "images").symlink_to(IMAGES)
+    with pytest.raises(ValueError, match="unique grade_id"):
+        make_source(tmp_path / "course", repo=repo)
+    assert (folder / "04_label_targets.ipynb").is_file()
+
+
+def test_a_submission_is_private_and_filed_under_its_owner(tmp_path):
+    import pwd
+
+    from ismb_lab.course_exchange import OwnerCollect, PrivateSubmit
+
+    work = tmp_path / "sub" / "labels"
+    work.mkdir(parents=True)
+    (work / "targets-ann-lab.json").write_text("{}")
+    PrivateSubmit().set_perms(str(tmp_path / "sub"), 0o644, 0o755)
+    assert stat.S_IMODE((work / "targets-ann-lab.json").stat().st_mode) == 0o640
+    assert stat.S_IMODE(work.stat().st_mode) & 0o007 == 0
+    claimed = tmp_path / "somebody+labels+2026-11-25 21:00:00.000000 UTC+abc"
+    claimed.mkdir()
+    record = OwnerCollect()._path_to_record(str(claimed))
+    assert record["username"] == pwd.getpwuid(os.getuid()).pw_name
