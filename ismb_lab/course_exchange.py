@@ -12,9 +12,11 @@ from __future__ import annotations
 
 import os
 import pwd
+import shutil
 
 from nbgrader.exchange.default.collect import ExchangeCollect
 from nbgrader.exchange.default.submit import ExchangeSubmit
+from nbgrader.utils import ignore_patterns
 
 __all__ = ["OwnerCollect", "PrivateSubmit"]
 
@@ -34,6 +36,31 @@ class PrivateSubmit(ExchangeSubmit):
 
     def set_perms(self, dest, fileperms, dirperms):
         super().set_perms(dest, FILE_MODE, FOLDER_MODE)
+
+    def do_copy(self, src, dest, log=None):
+        """Copy into a submission folder made here, inside ``inbound/``.
+
+        nbgrader's copy ends by giving the submission folder the mode of the student's
+        folder, which drops the set-group-id bit it had from ``inbound/`` (a student is not
+        in the teacher's group); ``timestamp.txt`` and ``submission_secret.txt``, written
+        next, would then have the student's group and, private, be unreadable to the
+        teacher.  Made here, the folder keeps the bit; subfolders are nbgrader's copies.
+        """
+        if os.path.dirname(os.path.abspath(dest)) != os.path.abspath(self.inbound_path):
+            return super().do_copy(src, dest, log)     # the student's own cache copy
+        limit = 1000 * self.coursedir.max_dir_size
+        if self.get_size(src) > limit:
+            raise RuntimeError(f"Directory size is too big. Size is {self.get_size(src)}, maximum size is {limit}")
+        names = os.listdir(src)
+        skip = ignore_patterns(exclude=self.coursedir.ignore, include=self.coursedir.include,
+                               max_file_size=self.coursedir.max_file_size, log=self.log)(src, names)
+        os.mkdir(dest)
+        for name in sorted(set(names) - set(skip)):
+            source, target = os.path.join(src, name), os.path.join(dest, name)
+            if os.path.isdir(source):
+                super().do_copy(source, target)
+            else:
+                shutil.copy2(source, target)
 
     def copy_files(self):
         super().copy_files()

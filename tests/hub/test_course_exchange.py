@@ -68,11 +68,13 @@ def test_a_class_hands_in_labels_and_the_teacher_pools_them(accounts, student_py
         for student in (ann, bob, cy):
             run(student, "nbgrader fetch_assignment labels")
             assert (student.home / "labels" / "images" / "synthetic" / "left.png").is_file()
-        label = f"(cd labels && python -c {shlex.quote(LABEL)})"
-        run(ann, f"{label} 0:0 1:1 2:2 && nbgrader submit labels")         # ann submits twice,
-        run(ann, f"{label} 3:3 4:4 6:6 && nbgrader submit labels")         # the last one counts
-        run(bob, f"{label} 0:1 1:0 2:2 3:3 5:6 && nbgrader submit labels")  # swaps 0/1; 5 -> 6's right
-        run(cy, f"{label} 0:0 1:1 2:2")
+        def label(pairs):
+            return f"(cd labels && python -c {shlex.quote(LABEL)} {pairs})"
+
+        run(ann, label("0:0 1:1 2:2") + " && nbgrader submit labels")         # ann submits twice,
+        run(ann, label("3:3 4:4 6:6") + " && nbgrader submit labels")         # the last one counts
+        run(bob, label("0:1 1:0 2:2 3:3 5:6") + " && nbgrader submit labels")  # swaps 0/1; 5 -> 6's right
+        run(cy, label("0:0 1:1 2:2"))
         # cy also hands in a renamed copy of ann's file: it counts for cy, once
         copy = cy.home / "labels" / "targets-copy-synthetic.json"
         shutil.copyfile(ann.home / "labels" / f"targets-{ann.name}-synthetic.json", copy)
