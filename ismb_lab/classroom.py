@@ -2,11 +2,13 @@
 
 * :func:`targets_path` names each student's own targets file, from the user
   (``JUPYTERHUB_USER`` on a hub, else the login name) and the pair, so thirty
-  students on one server never write the same file.
+  students on one server never write the same file.  Voilà without a hub serves every
+  visitor under one login (:func:`voila_without_hub`): there the labeller asks for a name.
 * :func:`save_merging` saves under a lock and merges with whatever another process
   saved since we last read the file (a three-way merge): nobody's pair is lost.
-* :func:`pool` pools a class's files into one targets set and reports where the
-  students disagree, and how each agrees with an answer key.
+* :func:`pool` pools a class's files into one targets set, one vote per student (the
+  folders of :func:`collected`, as ``nbgrader collect`` leaves them), and reports where
+  the students disagree, and how each agrees with an answer key.
 
 Pairs are compared by their coordinates (:mod:`ismb_lab.coords`), rounded to 1e-6 px.
 """
@@ -18,15 +20,17 @@ import fcntl
 import getpass
 import os
 import re
+from collections import Counter
 from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 
-from ._validation import ParameterError, ParameterTypeError, message
+from ._validation import ParameterError, ParameterTypeError, check_number, message
 from .targets import TargetSet, load_targets, save_targets
 
-__all__ = ["Merged", "Pool", "pool", "save_merging", "targets_path", "user_name"]
+__all__ = ["collected", "Merged", "Pool", "pool", "save_merging", "targets_path", "user_name",
+           "voila_without_hub"]
 
 _UNSAFE = re.compile(r"[^A-Za-z0-9._-]+")
 
@@ -38,6 +42,17 @@ def user_name() -> str:
     """
     name = os.environ.get("JUPYTERHUB_USER") or getpass.getuser() or "student"
     return _UNSAFE.sub("-", name).strip("-.") or "student"
+
+
+def voila_without_hub() -> bool:
+    """Whether this kernel serves a Voilà page with no hub behind it: one login for every
+    visitor, so the login name does not say who is labelling.
+
+    Voilà puts the request's CGI-like variables, ``SERVER_SOFTWARE=voila/...`` among them,
+    into each page's kernel environment.
+    """
+    return (os.environ.get("SERVER_SOFTWARE", "").startswith("voila")
+            and not os.environ.get("JUPYTERHUB_USER"))
 
 
 def targets_path(pair: str, folder=".", user: str | None = None) -> Path:
@@ -64,9 +79,18 @@ def _keys(targets: TargetSet | None) -> dict:
 
 @contextlib.contextmanager
 def _locked(path: Path):
-    """An exclusive lock beside `path` (``.name.lock``), released on exit."""
+    """An exclusive lock beside `path` (``.name.lock``, mode 0600), released on exit.
+
+    Only its owner can open the lock file, so no other user can hold a student's lock
+    (and block their saves); a lock left world-readable by an older version is tightened.
+    """
     lock = path.with_name(f".{path.name}.lock")
-    with open(lock, "a+") as handle:
+    fd = os.open(lock, os.O_RDWR | os.O_CREAT | getattr(os, "O_NOFOLLOW", 0) | getattr(os, "O_CLOEXEC", 0),
+                 0o600)
+    with open(fd, "r+") as handle:
+        info = os.fstat(fd)
+        if info.st_uid == os.geteuid() and info.st_mode & 0o077:
+            os.fchmod(fd, 0o600)
         fcntl.flock(handle, fcntl.LOCK_EX)
         try:
             yield
@@ -147,34 +171,124 @@ class Pool:
     Attributes
     ----------
     targets : TargetSet
-        One pair per left point that the students who labelled it agree on (a strict
-        majority of them); each pair's extras say who labelled it.
+        The pairs the students agree on: a pair is kept when it has a strict majority
+        among the students who gave its left point a partner, and among those who gave
+        its right point one, and at least ``min_votes`` students; each pair's extras
+        say who labelled it.  So no corner has two partners.
     disagreements : list of dict
-        Left points whose students named different partners, with each partner's votes.
+        Left points whose students named different partners, with each partner's votes
+        (key ``left_xy``); then right points that students gave different left partners
+        (key ``right_xy``, many-to-one across the class), where the left points agree.
     students : dict of str to dict
-        Per file: its number of pairs and, with an answer key, how many of them are in
-        the key (within ``tol`` px) and the share of the key it covers.
+        Per student: their number of pairs (one ballot, however many files) and, with an
+        answer key, how many of them are in the key (within ``tol`` px) and the share of
+        the key it covers; ``files`` when they handed in more than one, ``many_to_one``
+        when some of their pairs gave a corner two partners (those pairs got no vote).
+    min_votes : int
     """
 
     targets: TargetSet
     disagreements: list
     students: dict
+    min_votes: int = 1
 
     def report(self) -> str:
-        lines = [f"{len(self.targets)} pooled pairs from {len(self.students)} files; "
-                 f"{len(self.disagreements)} left points with disagreeing partners"]
+        files = sum(s.get("files", 1) for s in self.students.values())
+        source = (f"{files} files" if files == len(self.students)
+                  else f"{len(self.students)} students ({files} files)")
+        lefts = sum("left_xy" in d for d in self.disagreements)
+        rights = len(self.disagreements) - lefts
+        lines = [f"{len(self.targets)} pooled pairs from {source}; "
+                 f"{lefts} left points with disagreeing partners"
+                 + (f"; {rights} right points given several left partners (dropped)" if rights else "")
+                 + (f"; at least {self.min_votes} votes per pair" if self.min_votes > 1 else "")]
         for name, s in self.students.items():
             extra = (f", {s['in_key']} of them in the answer key ({s['key_share']:.0%} of the key)"
                      if "in_key" in s else "")
+            extra += (f"; {s['many_to_one']} pairs dropped: a corner given two partners"
+                      if s.get("many_to_one") else "")
             lines.append(f"  {name}: {s['pairs']} pairs{extra}")
         for d in self.disagreements:
             votes = "; ".join(f"{r} by {', '.join(who)}" for r, who in d["partners"].items())
-            lines.append(f"  left {d['left_xy']}: {votes}")
+            side = "left" if "left_xy" in d else "right"
+            lines.append(f"  {side} {d[side + '_xy']}: {votes}")
         return "\n".join(lines)
 
 
-def pool(paths, answer_key: TargetSet | None = None, tol: float = 1.5) -> Pool:
-    """Pool the targets files of a class (all for the same two images).
+def collected(folder, pattern: str = "targets-*.json") -> dict:
+    """The targets files of a collected class, by student: ``{student: [paths]}``.
+
+    `folder` is nbgrader's ``submitted/`` folder (or the course folder holding it): one
+    folder per student, named by nbgrader from who handed the work in, with the files
+    anywhere below it (``submitted/<student>/labels/targets-....json``).  The student is
+    the folder's name, never something read from a file.
+
+    >>> import tempfile, pathlib
+    >>> course = pathlib.Path(tempfile.mkdtemp())
+    >>> for who in ("ann", "bob"):
+    ...     (course / "submitted" / who / "labels").mkdir(parents=True)
+    ...     _ = save_targets(course / "submitted" / who / "labels" / f"targets-{who}-lab.json",
+    ...                      TargetSet([[1, 1]], [[0, 1]]))
+    >>> {k: [p.name for p in v] for k, v in collected(course).items()}
+    {'ann': ['targets-ann-lab.json'], 'bob': ['targets-bob-lab.json']}
+    """
+    root = Path(folder)
+    if not root.is_dir():
+        raise ParameterError(message("folder", "collected", "an existing folder", str(root)))
+    if (root / "submitted").is_dir():
+        root = root / "submitted"
+    found = {}
+    for student in sorted(p for p in root.iterdir() if p.is_dir() and not p.name.startswith(".")):
+        files = sorted(p for p in student.rglob(pattern) if p.is_file() and not p.is_symlink()
+                       and not any(part.startswith(".") for part in p.relative_to(student).parts))
+        if files:
+            found[student.name] = files
+    if not found:
+        raise ParameterError(message("folder", "collected", f"a folder of students' folders holding "
+                                     f"{pattern!r} files", str(folder)))
+    return found
+
+
+def _point(xy) -> tuple:
+    return tuple(np.round(xy, 6).tolist())
+
+
+def _ballot(targets: list) -> tuple[dict, int]:
+    """One student's vote: the union of their files' pairs; a corner they gave two partners
+    (across files or within one) gets no vote from them.  Returns ``({left: right}, dropped)``."""
+    pairs = {(_point(p), _point(q)) for t in targets for p, q in zip(t.left_xy, t.right_xy)}
+    lefts = Counter(p for p, _ in pairs)
+    rights = Counter(q for _, q in pairs)
+    ballot = {p: q for p, q in sorted(pairs) if lefts[p] == 1 and rights[q] == 1}
+    return ballot, len(pairs) - len(ballot)
+
+
+def _disagreements(by_left: dict, by_right: dict) -> list:
+    """Left points with disagreeing partners, then right points given several left partners
+    whose left points are not already listed (two students each pairing another left corner
+    with the same right one: many-to-one across the class)."""
+    lefts = [{"left_xy": list(p), "partners": {str(list(q)): who for q, who in partners.items()}}
+             for p, partners in by_left.items() if len(partners) > 1]
+    rights = [{"right_xy": list(q), "partners": {str(list(p)): who for p, who in partners.items()}}
+              for q, partners in by_right.items()
+              if len(partners) > 1 and all(len(by_left[p]) == 1 for p in partners)]
+    return lefts + rights
+
+
+def pool(paths, answer_key: TargetSet | None = None, tol: float = 1.5, *, min_votes: int = 1) -> Pool:
+    """Pool the targets files of a class (all for the same two images), one vote per student.
+
+    Parameters
+    ----------
+    paths : sequence of path, or dict of str to sequence of path
+        The files; a dict (e.g. :func:`collected`) names the student of each group of files.
+        Files given as a list vote by file name (stem): the same file collected twice
+        votes once.
+    answer_key : TargetSet, optional
+    tol : float
+        Answer-key tolerance in pixels.
+    min_votes : int
+        How many students must agree on a pair, on top of the strict majority.
 
     Examples
     --------
@@ -185,43 +299,55 @@ def pool(paths, answer_key: TargetSet | None = None, tol: float = 1.5) -> Pool:
     >>> p = pool(sorted(folder.glob("*.json")))
     >>> p.targets.right_xy.tolist(), len(p.disagreements)
     ([[5.0, 10.0]], 1)
+    >>> len(pool(sorted(folder.glob("*.json")), min_votes=3).targets)
+    0
     """
-    paths = [Path(p) for p in paths]
-    if not paths:
+    min_votes = check_number(min_votes, "min_votes", "pool", low=1, integer=True)
+    if isinstance(paths, dict):
+        groups = {str(k): [Path(p) for p in v] for k, v in paths.items()}
+    else:
+        groups = {}
+        for p in map(Path, paths):
+            groups.setdefault(p.stem, []).append(p)
+    files = [p for group in groups.values() for p in group]
+    if not files or not all(groups.values()):
         raise ParameterError(message("paths", "pool", "one or more targets files", paths))
-    sets = {str(p): load_targets(p) for p in paths}
+    sets = {p: load_targets(p) for p in files}
     hashes = {(t.left_sha256, t.right_sha256) for t in sets.values()} - {(None, None)}
     if len(hashes) > 1:
         raise ParameterError(message("paths", "pool", "targets files for the same two images",
                                      f"files for {len(hashes)} different image pairs"))
-    votes: dict = {}
-    for name, t in sets.items():
-        for p, q in zip(t.left_xy, t.right_xy):
-            left, right = tuple(np.round(p, 6).tolist()), tuple(np.round(q, 6).tolist())
-            votes.setdefault(left, {}).setdefault(right, []).append(Path(name).stem)
-    lefts, rights, extras, disagreements = [], [], [], []
-    for left, partners in votes.items():
-        counts = sorted(((len(who), right) for right, who in partners.items()), reverse=True)
-        labelled = sum(c for c, _ in counts)
-        if len(partners) > 1:
-            disagreements.append({"left_xy": list(left), "partners": {str(list(r)): who
-                                                                      for r, who in partners.items()}})
-        if counts[0][0] * 2 > labelled:
-            lefts.append(left)
-            rights.append(counts[0][1])
-            extras.append({"labelled_by": partners[counts[0][1]], "of": labelled})
+    by_left, by_right, students = {}, {}, {}
+    for name, group in groups.items():
+        ballot, dropped = _ballot([sets[p] for p in group])
+        for left, right in ballot.items():
+            by_left.setdefault(left, {}).setdefault(right, []).append(name)
+            by_right.setdefault(right, {}).setdefault(left, []).append(name)
+        students[name] = _student(ballot, answer_key, tol)
+        students[name].update({"files": len(group)} if len(group) > 1 else {})
+        students[name].update({"many_to_one": dropped} if dropped else {})
+    rows = []
+    for left, partners in by_left.items():
+        for right, who in partners.items():
+            n = len(who)
+            if (n >= min_votes and 2 * n > sum(map(len, partners.values()))
+                    and 2 * n > sum(map(len, by_right[right].values()))):
+                rows.append((left, right, {"labelled_by": who, "of": sum(map(len, partners.values()))}))
     first = next(iter(sets.values()))
-    pooled = TargetSet(np.reshape(lefts, (-1, 2)), np.reshape(rights, (-1, 2)), first.left_sha256,
-                       first.right_sha256, meta={"pooled_from": [Path(p).name for p in paths]},
-                       extras=extras)
-    students = {}
-    for name, t in sets.items():
-        s = {"pairs": len(t)}
-        if answer_key is not None:
-            hit = [bool(np.any((np.linalg.norm(answer_key.left_xy - p, axis=1) <= tol)
-                               & (np.linalg.norm(answer_key.right_xy - q, axis=1) <= tol)))
-                   for p, q in zip(t.left_xy, t.right_xy)]
-            s["in_key"] = int(sum(hit))
-            s["key_share"] = s["in_key"] / len(answer_key) if len(answer_key) else float("nan")
-        students[Path(name).stem] = s
-    return Pool(pooled, disagreements, students)
+    pooled = TargetSet(np.reshape([r[0] for r in rows], (-1, 2)), np.reshape([r[1] for r in rows], (-1, 2)),
+                       first.left_sha256, first.right_sha256,
+                       meta={"pooled_from": [str(p.name) for p in files], "min_votes": min_votes},
+                       extras=[r[2] for r in rows])
+    disagreements = _disagreements(by_left, by_right)
+    return Pool(pooled, disagreements, students, min_votes)
+
+
+def _student(ballot: dict, answer_key: TargetSet | None, tol: float) -> dict:
+    s = {"pairs": len(ballot)}
+    if answer_key is not None:
+        hit = [bool(np.any((np.linalg.norm(answer_key.left_xy - np.asarray(p), axis=1) <= tol)
+                           & (np.linalg.norm(answer_key.right_xy - np.asarray(q), axis=1) <= tol)))
+               for p, q in ballot.items()]
+        s["in_key"] = int(sum(hit))
+        s["key_share"] = s["in_key"] / len(answer_key) if len(answer_key) else float("nan")
+    return s

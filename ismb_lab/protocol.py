@@ -31,7 +31,7 @@ from .params import Params
 from .peers import PEERS
 from .scenes import true_matches
 from .solvers import DEFAULT_SOLVER, get_solver
-from .targets import load_targets, snap
+from .targets import check_one_to_one, load_targets, snap
 from .tuning import evaluate, to_params, tune
 
 __all__ = ["SOURCES", "Case", "PairReport", "PeerReport", "ProtocolReport", "SolverReport", "Spread",
@@ -82,11 +82,13 @@ class Case:
         """A case from two image files and a targets file (as the labeller saves it).
 
         The targets are checked against the images' hashes (unless not `check_hash`) and
-        snapped to the corners that `config` finds.
+        snapped to the corners that `config` finds.  A file that gives a corner two partners
+        is refused (:func:`ismb_lab.targets.check_one_to_one`): no fitness can reach both.
         """
         prepared = prepare(left, right, config)
-        snapped = snap(load_targets(targets, pair=prepared.pair, check_hash=check_hash), prepared.problem.left_xy,
-                       prepared.problem.right_xy)
+        target_set = check_one_to_one(load_targets(targets, pair=prepared.pair, check_hash=check_hash),
+                                      str(targets), "Case.from_files")
+        snapped = snap(target_set, prepared.problem.left_xy, prepared.problem.right_xy)
         left_out = np.union1d(snapped.missing_left, snapped.missing_right).astype(np.int64)
         return cls(prepared, snapped.pairs.astype(np.int64), name=str(left) if name is None else name,
                    left_out=left_out)

@@ -27,8 +27,8 @@ from ._files import atomic_write_text
 from ._validation import ParameterError, ParameterTypeError, check_number, check_points, message
 from .io import StereoPair
 
-__all__ = ["VERSION", "load_targets", "save_targets", "snap", "Snapped", "targets_from_matches",
-           "TargetSet"]
+__all__ = ["VERSION", "check_one_to_one", "load_targets", "many_to_one", "save_targets", "snap", "Snapped",
+           "targets_from_matches", "TargetSet"]
 
 VERSION = 1
 _HASHES = ("left_image_sha256", "right_image_sha256")
@@ -293,6 +293,46 @@ def load_targets(path, *, pair: StereoPair | None = None, shape=None,
         if (bad := np.flatnonzero((xy[:, 0] > w - 1) | (xy[:, 1] > h - 1))).size:
             raise ParameterError(message(f"pairs[{bad[0]}].{key}", source, f"inside the {h}x{w} image "
                                          f"(0 <= x <= {w - 1}, 0 <= y <= {h - 1})", _plain(xy[bad[0]])))
+    return targets
+
+
+def many_to_one(targets: TargetSet) -> np.ndarray:
+    """Indices of the pairs whose left or right point another pair also uses (rounded to 1e-6 px).
+
+    One right corner given two left partners (or one left corner two right ones) cannot
+    both be true: the network pairs each corner once.
+
+    >>> many_to_one(TargetSet([[10, 10], [20, 10], [30, 10]], [[5, 10], [5, 10], [25, 10]])).tolist()
+    [0, 1]
+    """
+    if not isinstance(targets, TargetSet):
+        raise ParameterTypeError(message("targets", "many_to_one", "a TargetSet", targets))
+    shared = np.zeros(len(targets), dtype=bool)
+    for xy in (targets.left_xy, targets.right_xy):
+        _, inverse, counts = np.unique(np.round(xy, 6), axis=0, return_inverse=True, return_counts=True)
+        shared |= counts[inverse.reshape(-1)] > 1
+    return np.flatnonzero(shared)
+
+
+def check_one_to_one(targets: TargetSet, source: str, owner: str) -> TargetSet:
+    """Refuse targets that give a corner two partners, naming the first such pairs and the fix.
+
+    >>> check_one_to_one(TargetSet([[10, 10], [20, 10]], [[5, 10], [5, 10]]), "t.json", "tune")
+    Traceback (most recent call last):
+    ismb_lab.ParameterError: The targets file 't.json' given to tune must pair each corner once. Got pairs[0] ...
+    """
+    bad = many_to_one(targets)
+    if bad.size:
+        j = int(bad[0])
+        side = "right" if (np.round(targets.right_xy[bad], 6) == np.round(targets.right_xy[j], 6)).all(
+            axis=1).sum() > 1 else "left"
+        other = int(next(k for k in bad[1:] if (np.round(getattr(targets, f"{side}_xy")[k], 6)
+                                                == np.round(getattr(targets, f"{side}_xy")[j], 6)).all()))
+        raise ParameterError(f"The targets file {source!r} given to {owner} must pair each corner once. "
+                             f"Got pairs[{j}] and pairs[{other}] sharing the {side} point "
+                             f"{_plain(getattr(targets, f'{side}_xy')[j])} ({bad.size} pairs share a "
+                             f"corner) instead; 'ismb-lab targets merge {source} --out FIXED.json' "
+                             "drops them")
     return targets
 
 

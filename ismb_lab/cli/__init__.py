@@ -34,8 +34,8 @@ def _epilog() -> str:
 
 
 def _commands():
-    from . import calibrate, depth, evaluate, match, rectify, render, targets, tune
-    return (match, tune, evaluate, depth, rectify, calibrate, render, targets)
+    from . import calibrate, course, depth, evaluate, match, rectify, render, targets, tune
+    return (match, tune, evaluate, depth, rectify, calibrate, render, targets, course)
 
 
 def __getattr__(name):

@@ -9,6 +9,15 @@ from ._common import UsageError
 
 __all__ = ["add_parser", "run"]
 
+MERGE_HELP = ("Pool the targets files of a class (all for the same two images), one vote per student. "
+              "Give the files, or the one folder that 'nbgrader collect' filled (the course's "
+              "submitted/ folder, or the course folder holding it): there the student is the name of "
+              "their folder, and all the files a student handed in make one vote. A student's pairs "
+              "that give a corner two partners get no vote. A pair is kept when a strict majority "
+              "of the students who labelled its left corner, and of those who labelled its right "
+              "corner, agree on it, and at least --min-votes students do. Prints every "
+              "disagreement and, with --answer-key, each student's agreement with the key.")
+
 
 def add_parser(sub) -> None:
     t = sub.add_parser("targets", help="work with targets files (merge a class's labels)",
@@ -16,29 +25,52 @@ def add_parser(sub) -> None:
     actions = t.add_subparsers(dest="action", metavar="ACTION", parser_class=type(t))
     actions.required = True
     m = actions.add_parser("merge", help="pool several students' targets files into one",
-                           description="Pool the targets files of a class (all for the same two images): "
-                           "a left point's pair is kept when a strict majority of the students who "
-                           "labelled it agree on its partner. Prints every disagreement and, with "
-                           "--answer-key, each student's agreement with the key.")
-    m.add_argument("files", type=Path, nargs="+", metavar="TARGETS.json", help="the students' files")
+                           description=MERGE_HELP)
+    m.add_argument("files", type=Path, nargs="+", metavar="TARGETS.json|SUBMITTED/",
+                   help="the students' files, or the folder 'nbgrader collect' filled")
     m.add_argument("--out", type=Path, required=True, metavar="ALL.json", help="where to write the pooled targets")
     m.add_argument("--answer-key", type=Path, default=None, metavar="KEY.json",
                    help="ground-truth targets of the same images (e.g. images/synthetic/answer_key.json)")
+    m.add_argument("--min-votes", type=int, default=1, metavar="N",
+                   help="students that must agree on a pair, on top of the strict majority of those "
+                   "who labelled it (default 1: students label different corners, so a floor would "
+                   "drop the corners few of them found; raise it to 2 or 3 for a class)")
+    m.add_argument("--pattern", default="targets-*.json", metavar="GLOB",
+                   help="the files to take from a collected folder (default 'targets-*.json'; "
+                   "e.g. 'targets-*-synthetic.json' for one pair)")
     m.set_defaults(run=run)
+
+
+def _inputs(args) -> tuple[list, object]:
+    """The input files, and what :func:`~ismb_lab.classroom.pool` takes (a list or, for a
+    collected folder, ``{student: files}``)."""
+    from ..classroom import collected
+
+    folders = [p for p in args.files if p.is_dir()]
+    if not folders:
+        if len(set(p.resolve() for p in args.files)) != len(args.files):
+            raise UsageError("the same targets file is named twice")
+        return list(args.files), list(args.files)
+    if len(args.files) > 1:
+        raise UsageError(f"give either targets files or one collected folder, not both "
+                         f"({str(folders[0])!r} is a folder)")
+    groups = collected(folders[0], args.pattern)
+    return [p for group in groups.values() for p in group], groups
 
 
 def run(args) -> int:
     from ..classroom import pool
     from ..targets import load_targets, save_targets
 
-    inputs = list(args.files) + ([args.answer_key] if args.answer_key is not None else [])
+    if args.min_votes < 1:
+        raise UsageError(f"--min-votes must be 1 or more, not {args.min_votes}")
+    files, source = _inputs(args)
+    inputs = files + ([args.answer_key] if args.answer_key is not None else [])
     for path in inputs:
         check_input(path, what="a targets file")
     check_output(args.out, inputs=inputs, force=getattr(args, "force", False), what="--out")
-    if len(set(p.resolve() for p in args.files)) != len(args.files):
-        raise UsageError("the same targets file is named twice")
     key = None if args.answer_key is None else load_targets(args.answer_key)
-    pooled = pool(args.files, answer_key=key)
+    pooled = pool(source, answer_key=key, min_votes=args.min_votes)
     print(pooled.report())
     save_targets(args.out, pooled.targets)
     print(f"written to {args.out}")

@@ -23,7 +23,7 @@ import numpy as np
 from .._validation import ParameterError, ParameterTypeError, check_choice, check_number, message
 from ..matching import MatchConfig, Prepared, prepare
 from ..plotting import GAP, plot_matches
-from ..classroom import save_merging, targets_path
+from ..classroom import save_merging, targets_path, voila_without_hub
 from ..targets import TargetSet, load_targets, snap, targets_from_matches
 from ._common import Base, Pane, button, grey_rgb, number_labels, pair_files, with_class
 
@@ -73,6 +73,10 @@ class LabelModel:
         A click snaps to the nearest feature within this many pixels.
     key_tol : float
         Answer-key points snap to features within this many pixels.
+    exclusive : bool
+        Refuse to save into an existing file that this model did not load or save
+        first, instead of merging with it: on a page many visitors share (Voilà without
+        a hub) an existing file may be another visitor's.
 
     Examples
     --------
@@ -88,8 +92,11 @@ class LabelModel:
     """
 
     def __init__(self, prepared: Prepared, *, path=None, answer_key: TargetSet | None = None,
-                 snap_radius: float = 8.0, key_tol: float = 3.0):
+                 snap_radius: float = 8.0, key_tol: float = 3.0, exclusive: bool = False):
         owner = "LabelModel"
+        if not isinstance(exclusive, bool):
+            raise ParameterTypeError(message("exclusive", owner, "True or False", exclusive))
+        self.exclusive = exclusive
         if not isinstance(prepared, Prepared):
             raise ParameterTypeError(message("prepared", owner, "a Prepared (see matching.prepare)", prepared))
         if answer_key is not None and not isinstance(answer_key, TargetSet):
@@ -287,12 +294,16 @@ class LabelModel:
         """
         path = self._path(path, "LabelModel.save")
         base = self._base if self._base is not None and path == self._base_path else None
+        if self.exclusive and base is None and path.exists():
+            raise ParameterError(f"The 'path' parameter of LabelModel.save must be a new file or one "
+                                 f"this page loaded. Got {str(path)!r}, which holds labels this page "
+                                 "did not load, instead: Load them if they are yours, or use another name")
         merged = save_merging(path, self.targets(), base)
         snapped = snap(merged.targets, self.left_xy, self.right_xy)
         self._pairs = sorted(set(map(tuple, snapped.pairs.tolist())))
         self._saved = tuple(self._pairs)
         self._base, self._base_path = merged.targets, path
-        others = (f"; kept {merged.kept_from_disk} pairs saved there by someone else"
+        others = (f"; kept {merged.kept_from_disk} pairs saved to it meanwhile from another tab"
                   if merged.kept_from_disk else "")
         self._say(f"saved {len(self._pairs)} pairs to {path}{others}")
         return path
@@ -404,8 +415,12 @@ class TargetLabeler(Base):
         The image pair.
     path : str or os.PathLike, optional
         The targets file of Save and Load.  By default each student gets their own,
-        ``targets-<user>-<pair>.json`` in the working folder
-        (:func:`ismb_lab.classroom.targets_path`), shown above the buttons.
+        ``targets-<user>-<pair>.json`` in the working folder (the notebook's: inside the
+        assignment that nbgrader fetched, so that ``nbgrader submit`` hands it in; see
+        :func:`ismb_lab.classroom.targets_path`), shown above the buttons.  Under Voilà
+        without a hub every visitor shares one login, so the labeller asks for a name
+        (box ``ismb-name``) before it saves, and never merges into a file that page did
+        not load.
     pair_name : str, optional
         The pair's name in that default file name (default: the folder's name for
         :meth:`from_folder`, else the first 12 hex digits of the left image's hash).
@@ -430,9 +445,11 @@ class TargetLabeler(Base):
         prepared = left if isinstance(left, Prepared) else prepare(left, right, config)
         if answer_key is not None and not isinstance(answer_key, TargetSet):
             answer_key = load_targets(answer_key, pair=prepared.pair)
-        if path is None:
-            path = targets_path(pair_name or prepared.pair.left_sha256[:12], Path.cwd())
-        self.model = LabelModel(prepared, path=path, answer_key=answer_key)
+        self.pair_name = pair_name or prepared.pair.left_sha256[:12]
+        ask = path is None and voila_without_hub()
+        if path is None and not ask:
+            path = targets_path(self.pair_name, Path.cwd())
+        self.model = LabelModel(prepared, path=path, answer_key=answer_key, exclusive=ask)
         self.pane = Pane((8.2, 3.3), "ismb-stereo")
         self.panes = (self.pane,)
         self.ax = self.pane.fig.add_axes((0, 0, 1, 1))
@@ -448,8 +465,14 @@ class TargetLabeler(Base):
             tooltip="Label a pair first, then compare your pairs with the ground truth"
             if answer_key is not None else "This pair has no answer key"), "ismb-answer-key")
         self.dirty_label = with_class(ipywidgets.HTML(""), "ismb-dirty")
-        self.path_label = with_class(ipywidgets.HTML(
-            f"your targets file: <code>{html.escape(str(self.model.path))}</code>"), "ismb-path")
+        self.path_label = with_class(ipywidgets.HTML(""), "ismb-path")
+        self.name_box = None
+        if ask:
+            self.name_box = with_class(ipywidgets.Text(
+                description="Your name:", placeholder="type it before you save",
+                style={"description_width": "initial"}), "ismb-name")
+            self.name_box.observe(self.guard(lambda change: self.set_name(change["new"])), names="value")
+        self._show_path()
         self.key_summary = with_class(ipywidgets.HTML(""), "ismb-key-summary")
         self.table = with_class(ipywidgets.HTML(""), "ismb-pairs")
 
@@ -462,7 +485,8 @@ class TargetLabeler(Base):
 
         bar = ipywidgets.HBox([self.undo_button, self.delete_button, self.save_button,
                                self.load_button, self.key_toggle, self.dirty_label])
-        self.widget = with_class(ipywidgets.VBox([self.pane.widget, self.path_label, bar, self.status,
+        head = [self.name_box, self.path_label] if self.name_box is not None else [self.path_label]
+        self.widget = with_class(ipywidgets.VBox([self.pane.widget, *head, bar, self.status,
                                                   self.key_summary,
                                                   self.table, self.log]), "ismb-labeler")
         self.refresh()
@@ -514,9 +538,24 @@ class TargetLabeler(Base):
         self.refresh()
         return done
 
+    def set_name(self, name: str) -> None:
+        """Choose the visitor's own targets file by their name (Voilà without a hub)."""
+        if not isinstance(name, str):
+            raise ParameterTypeError(message("name", "TargetLabeler.set_name", "a str", name))
+        self.model.path = targets_path(self.pair_name, Path.cwd(), user=name) if name.strip() else None
+        self._show_path()
+
+    def _show_path(self) -> None:
+        self.path_label.value = ("type your name to choose your targets file" if self.model.path is None
+                                 else f"your targets file: <code>{html.escape(str(self.model.path))}</code>")
+
     def save(self, path=None) -> Path:
         """Save (raising on failure, after saying so in the status line)."""
         try:
+            if path is None and self.model.path is None and self.name_box is not None:
+                raise ParameterError("The 'name' parameter of TargetLabeler.save must be typed in the "
+                                     "'Your name' box first: this page serves every visitor, and your "
+                                     "labels are saved under your name. Got '' instead.")
             return self.model.save(path)
         except Exception as exc:
             self.model.message = (f"save failed, the file on disk is unchanged and your "

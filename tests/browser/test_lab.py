@@ -75,7 +75,18 @@ def test_voila_label_targets(voila, ui, page, workspace, artifacts):
     page.goto(base, timeout=120_000)
     root = page.locator(".ismb-labeler")
     root.wait_for(timeout=120_000)
-    ui.label_one_pair(page, root, workspace)
+    left_xy, right_xy = ui.label_one_pair(page, root, workspace)
+    # Voila without a hub serves every visitor under one login: a save needs the visitor's name
+    root.locator("button.ismb-save").click()
+    expect(root.locator(".ismb-status")).to_contain_text("'Your name' box", timeout=20_000)
+    mine = workspace / "notebooks" / "targets-visitor-one-synthetic.json"
+    assert not mine.exists()
+    root.locator(".ismb-name input").fill("visitor one")
+    expect(root.locator(".ismb-path")).to_contain_text(mine.name, timeout=20_000)
+    root.locator("button.ismb-save").click()
+    expect(root.locator(".ismb-dirty")).to_have_text("saved", timeout=20_000)
+    saved = json.loads(mine.read_text())
+    assert [(p["left_xy"], p["right_xy"]) for p in saved["pairs"]] == [(list(left_xy), list(right_xy))]
     root.screenshot(path=artifacts / "voila_04_label_targets.png")
 
 

@@ -1,0 +1,24 @@
+"""The class's nbgrader course: handing out notebooks and collecting the students' work.
+
+Students' servers and the teacher's shell find this file through JUPYTER_CONFIG_PATH
+(deploy/course/README.md). Only two values are meant to change, by environment variable:
+
+* ISMB_COURSE_ID: the course's id (default ``ismb_lab``);
+* ISMB_NBGRADER_EXCHANGE: the exchange folder every account reaches
+  (default ``/srv/nbgrader/exchange``; created by the teacher's setup, README).
+"""
+
+import os
+
+c = get_config()  # noqa: F821  (nbgrader's config loader provides it)
+
+c.CourseDirectory.course_id = os.environ.get("ISMB_COURSE_ID", "ismb_lab")
+c.Exchange.root = os.environ.get("ISMB_NBGRADER_EXCHANGE", "/srv/nbgrader/exchange")
+# A fetched assignment lands in ./labels, where the notebook's labeller saves its targets file.
+c.Exchange.path_includes_course = False
+# Lock files and half-written temporary files of a save are not work to hand in.
+c.CourseDirectory.ignore = [".ipynb_checkpoints", "*.pyc", "__pycache__", "feedback", ".*.lock", ".*.tmp"]
+# Submissions readable by their owner and the teacher's group only, filed under the account
+# that handed them in (ismb_lab/course_exchange.py).
+c.ExchangeFactory.submit = "ismb_lab.course_exchange.PrivateSubmit"
+c.ExchangeFactory.collect = "ismb_lab.course_exchange.OwnerCollect"
