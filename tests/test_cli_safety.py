@@ -1,5 +1,6 @@
 """Outputs that never destroy anything, signals that stop the work cleanly, crashes gone."""
 
+import functools
 import json
 import os
 import shutil
@@ -211,6 +212,7 @@ def test_a_swallowed_ctrl_c_still_stops_tune(lab, hard_targets, tmp_path, monkey
 
     real_tune = ismb_lab.tuning.tune
 
+    @functools.wraps(real_tune)   # the same signature, whose defaults the command reads
     def swallowing(*args, **kwargs):
         for n, record in enumerate(real_tune(*args, **kwargs)):
             if n == 2:

@@ -32,6 +32,7 @@ A targets file holds at most :data:`ismb_lab.targets.MAX_PAIRS` pairs in
 
 from __future__ import annotations
 
+import inspect
 import json
 import math
 import os
@@ -96,12 +97,13 @@ def _defaults(command: str) -> dict:
     if command == "depth":
         from ..depth_demo import DEPTH_MATCH_CONFIG
         values["n_max"] = DEPTH_MATCH_CONFIG.n_max
-    if command == "tune":
-        from .tune import FIT_SEEDS
-        values["fit_seeds"] = FIT_SEEDS
+    if command == "tune":   # the library's defaults, which the commands fall back to
+        from ..tuning import tune
+        values["fit_seeds"] = inspect.signature(tune).parameters["seeds"].default
     if command == "evaluate":
-        from .evaluate import DEFAULTS
-        values.update(seeds=DEFAULTS["seeds"], fit_seeds=DEFAULTS["fit_seeds"])
+        from ..protocol import protocol
+        given = inspect.signature(protocol).parameters
+        values.update(seeds=given["seeds"].default, fit_seeds=given["fit_seeds"].default)
     return values
 
 
