@@ -99,12 +99,17 @@ def _defaults(command: str) -> dict:
         values["n_max"] = DEPTH_MATCH_CONFIG.n_max
     if command == "tune":   # the library's defaults, which the commands fall back to
         from ..tuning import tune
-        values["fit_seeds"] = inspect.signature(tune).parameters["seeds"].default
+        values["fit_seeds"] = _keyword_default(tune, "seeds")
     if command == "evaluate":
         from ..protocol import protocol
-        given = inspect.signature(protocol).parameters
-        values.update(seeds=given["seeds"].default, fit_seeds=given["fit_seeds"].default)
+        values.update(seeds=_keyword_default(protocol, "seeds"), fit_seeds=_keyword_default(protocol, "fit_seeds"))
     return values
+
+
+def _keyword_default(function, name: str):
+    """The default of `function`'s keyword `name`; None for a stand-in without it (a test's)."""
+    parameter = inspect.signature(function).parameters.get(name)
+    return None if parameter is None else parameter.default
 
 
 def _bound(args, usage_error) -> None:
