@@ -290,12 +290,13 @@ def load_targets(path, *, pair: StereoPair | None = None, shape=None,
     try:
         with open(path, "rb") as handle:   # at most one byte more than allowed
             raw = handle.read(MAX_BYTES + 1)
-        if len(raw) > MAX_BYTES:
-            raise _path_error(path, owner, f"a targets file of at most {MAX_BYTES} bytes "
-                              f"({MAX_PAIRS} pairs at most)")
-        data = json.loads(raw.decode("utf-8"))
     except OSError as exc:   # FileNotFoundError: "No such file or directory"
         raise _path_error(path, owner, f"a readable targets file ({exc.strerror or exc})") from None
+    if len(raw) > MAX_BYTES:
+        raise _path_error(path, owner, f"a targets file of at most {MAX_BYTES} bytes ({MAX_PAIRS} pairs "
+                          "at most)")
+    try:
+        data = json.loads(raw.decode("utf-8"))
     except ValueError as exc:   # JSONDecodeError names line, column and char; or bad UTF-8
         raise _path_error(path, owner, f"a targets file (it is not valid JSON: {exc})") from None
     if not isinstance(data, dict):

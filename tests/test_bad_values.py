@@ -72,8 +72,9 @@ def test_a_targets_file_over_the_byte_bound_is_refused_before_parsing(tmp_path, 
         raise AssertionError("the file was parsed")
 
     monkeypatch.setattr(json, "loads", no_parsing)
-    with pytest.raises(ParameterError, match=f"at most {MAX_BYTES} bytes"):
+    with pytest.raises(ParameterError, match=f"at most {MAX_BYTES} bytes") as info:
         load_targets(path)
+    assert str(info.value).count("must be") == 1 and "JSON" not in str(info.value)
 
 
 def test_more_pairs_than_the_bound_are_refused_before_they_are_checked():
