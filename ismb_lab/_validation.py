@@ -97,10 +97,11 @@ def check_number(value, name: str, owner: str, *, low=None, high=None,
     """
     kind = "an integer" if integer else "a finite number"
     rule = kind
+    bound = lambda b: _shown_int(b) if isinstance(b, int) else b   # noqa: E731
     if low is not None:
-        rule += f" {'>' if low_open else '>='} {low}"
+        rule += f" {'>' if low_open else '>='} {bound(low)}"
     if high is not None:
-        rule += f"{' and' if low is not None else ''} <= {high}"
+        rule += f"{' and' if low is not None else ''} <= {bound(high)}"
     if type(value) not in (float, int) and (isinstance(value, bool) or not isinstance(value, numbers.Real)):
         raise ParameterTypeError(message(name, owner, rule, value))
     if integer:

@@ -123,3 +123,11 @@ def test_a_degenerate_rig_is_refused_naming_the_field(tmp_path, change, field):
                   **arrays}
         with pytest.raises(ParameterError, match=f"'{field}' parameter of Rig"):
             Rig(rms=0.3, **fields)
+
+
+def test_a_bound_of_400_digits_is_shown_by_its_size():
+    from ismb_lab.matching import MatchConfig
+
+    with pytest.raises(ParameterError) as info:
+        MatchConfig(n_min=HUGE)
+    assert "an integer >= an integer of 400 digits" in str(info.value) and len(str(info.value)) < 200
