@@ -62,9 +62,10 @@ def _pillow(data: bytes, name: str, pillow: str):
             warnings.simplefilter("ignore")
             with Image.open(io.BytesIO(data), formats=[pillow]) as image:   # the header only
                 return image.size
-    except Exception as exc:   # noqa: BLE001  Pillow raises many kinds on a broken header
-        if type(exc).__name__ == "DecompressionBombError":   # over 179 million pixels
-            return (1 << 16, 1 << 16)
+    except Image.DecompressionBombError:   # Pillow gives no size above 2 * MAX_IMAGE_PIXELS
+        raise HeaderError(f"a {name} file whose header declares more than {2 * Image.MAX_IMAGE_PIXELS} "
+                          "pixels") from None
+    except Exception:   # noqa: BLE001  Pillow raises many kinds on a broken header
         raise HeaderError(f"a {name} file whose header cannot be read") from None
 
 

@@ -243,3 +243,24 @@ def test_uploaded_bytes_pass_the_same_header_check(monkeypatch):
     with pytest.raises(ValueError) as info:
         load_photo(b"", "left")
     says(info, "'left'", "the file is empty")
+
+
+def test_a_header_pillow_will_not_size_is_refused_in_words(tmp_path, monkeypatch):
+    import struct
+
+    def bmp(width, height):
+        return b"BM" + struct.pack("<IHHI", 54, 0, 0, 54) + struct.pack("<IiiHHIIiiII", 40, width, height, 1, 24,
+                                                                        0, 0, 0, 0, 0, 0)
+
+    path = tmp_path / "huge.bmp"
+    path.write_bytes(bmp(20000, 20000))
+    no_decoding(monkeypatch)
+    monkeypatch.setenv("ISMB_LAB_MAX_PIXELS", str(1 << 30))
+    with pytest.raises(ValueError) as info:
+        load_image(path)
+    says(info, "BMP file whose header declares more than")
+    path.write_bytes(bmp(9000, 9000))
+    monkeypatch.setenv("ISMB_LAB_MAX_PIXELS", "1000000")
+    with pytest.raises(ValueError) as info:
+        load_image(path)
+    says(info, "header says 9000x9000")
