@@ -251,6 +251,7 @@ CASES = [
      {"ISMB_LAB_MAX_GENERATIONS": "9" * 400}),
     ("match-corner-limit-400-digits", lambda w: ["match", *_pair(w), "--n-max", "40"], "ISMB_LAB_MAX_CORNERS",
      {"ISMB_LAB_MAX_CORNERS": "9" * 400}),
+    ("tune-generations-400-digits", lambda w: _tune(w, "--generations", "9" * 400), "an integer of 400 digits", {}),
     ("match-seed-10**30", lambda w: ["match", *_pair(w), "--seed", str(10**30)], "2**63 - 1", {}),
     ("depth-seed-2**64", lambda w: _depth(w, "--seed", str(2**64)), "2**63 - 1", {}),
     ("tune-seed-10**30", lambda w: _tune(w, "--seed", str(10**30), "--generations", "1"), "2**63 - 1", {}),

@@ -43,7 +43,8 @@ from pathlib import Path
 
 from .._files import atomic_write_bytes, check_input, check_output
 
-__all__ = ["LIMITS", "MOST", "Interrupts", "UsageError", "interrupted", "json_text", "limit", "preflight", "save_figure"]
+__all__ = ["LIMITS", "MOST", "Interrupts", "UsageError", "interrupted", "json_text", "limit", "preflight",
+           "save_figure"]
 
 class UsageError(Exception):
     """A mistake in the command line or its files, reported in one line."""
@@ -82,9 +83,16 @@ def limit(name: str) -> int:
     # Compared as text first: int() of thousands of digits is slow, then refused anyway.
     value = int(raw) if raw.isascii() and raw.isdigit() and len(raw) <= len(str(MOST)) else 0
     if not 1 <= value <= MOST:
-        shown = raw if len(raw) <= 40 else raw[:37] + "..."
-        raise UsageError(f"{variable} must be a whole number from 1 to {MOST}, got {shown!r}")
+        raise UsageError(f"{variable} must be a whole number from 1 to {MOST}, got {_short(raw)!r}")
     return value
+
+
+def _short(text) -> str:
+    """`text` (or a number) cut to 40 characters, for a one-line message."""
+    if isinstance(text, int):
+        from .._validation import _shown_int
+        return _shown_int(text)
+    return text if len(text) <= 40 else text[:37] + "..."
 
 
 def _defaults(command: str) -> dict:
@@ -102,7 +110,8 @@ def _defaults(command: str) -> dict:
         values["fit_seeds"] = _keyword_default(tune, "seeds")
     if command == "evaluate":
         from ..protocol import protocol
-        values.update(seeds=_keyword_default(protocol, "seeds"), fit_seeds=_keyword_default(protocol, "fit_seeds"))
+        values.update(seeds=_keyword_default(protocol, "seeds"),
+                      fit_seeds=_keyword_default(protocol, "fit_seeds"))
     return values
 
 
@@ -121,8 +130,8 @@ def _bound(args, usage_error) -> None:
         value, most = getattr(args, name), limit(name)
         if value is not None:
             if value > most:
-                raise usage_error(f"{option} {value} is above the limit of {most} {what}; "
-                                  f"set {variable}={value} to allow it")
+                hint = f"set {variable}={value} to allow it" if value <= MOST else f"a limit is at most {MOST}"
+                raise usage_error(f"{option} {_short(value)} is above the limit of {most} {what}; {hint}")
             continue
         defaults = _defaults(getattr(args, "command", "")) if defaults is None else defaults
         default = defaults.get(name)
@@ -255,7 +264,8 @@ def preflight(args, usage_error) -> None:
     """Check the limits, inputs and outputs of a parsed command line before its work starts.
 
     An option left out whose default is above its limit is set to the limit here (see
-    the module's description).  Raises `usage_error` (or :class:`ismb_lab._files.OutputError`) with a one-line message.
+    the module's description).  Raises `usage_error` (or :class:`ismb_lab._files.OutputError`)
+    with a one-line message.
     """
     _bound(args, usage_error)
     inputs = [getattr(args, a) for a in INPUTS if getattr(args, a, None) is not None]
