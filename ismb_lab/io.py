@@ -149,7 +149,9 @@ def load_image(source, name: str = "image") -> np.ndarray:
     Parameters
     ----------
     source : str, os.PathLike or array_like
-        A file OpenCV can read (read unchanged: 8 or 16 bit, grey, BGR or BGRA),
+        An image file (read unchanged: 8 or 16 bit, grey, BGR or BGRA) in a format
+        whose size is read from its header before decoding (PNG, JPEG, BMP, TIFF,
+        WebP, Sun raster, PBM/PGM/PPM, PFM, Radiance HDR: see :mod:`ismb_lab._header`),
         or an array: ``(H, W)`` grey, or ``(H, W, 3)`` RGB / ``(H, W, 4)`` RGBA.
         ``uint8`` values are used as they are, ``uint16`` values are scaled by
         ``255 / 65535``, float values must already be finite and in ``[0, 255]``.
@@ -166,7 +168,8 @@ def load_image(source, name: str = "image") -> np.ndarray:
     Raises
     ------
     ValueError
-        A missing or undecodable file, a bad shape, or float values that are not
+        A missing, empty or undecodable file, one in another format, one over the pixel
+        limit (:func:`max_pixels`, read from its header), a bad shape, or float values that are not
         finite or lie outside ``[0, 255]``.
     TypeError
         Any dtype other than ``uint8``, ``uint16`` or floating point (``bool`` included).
