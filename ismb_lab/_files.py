@@ -11,6 +11,10 @@ Outputs never destroy anything:
 * a folder is always refused, and so is an output that is one of the inputs;
 * a read-only file is refused unless ``force=True``.
 
+A command that rewrites a whole tree of its own files (``ismb-lab render``) checks each
+with :func:`check_replace` instead: there a link, a device, a FIFO or a read-only file is
+always refused, since nobody named it.
+
 After the rename the folder is flushed to disk too (``fsync``), so the new name
 survives a power cut.
 """
@@ -22,7 +26,8 @@ import stat
 import tempfile
 from pathlib import Path
 
-__all__ = ["OutputError", "atomic_write_bytes", "atomic_write_text", "check_input", "check_output"]
+__all__ = ["OutputError", "atomic_write_bytes", "atomic_write_text", "check_input", "check_output",
+           "check_replace"]
 
 
 class OutputError(ValueError):
@@ -213,3 +218,40 @@ def check_output(path, *, inputs=(), force: bool = False, what: str = "output") 
     os.close(fd)
     os.unlink(probe)
     return path
+
+
+def check_replace(path, *, what: str = "output") -> Path:
+    """Check that `path` is new, or a regular, writable file that a rename may replace.
+
+    Stricter than :func:`check_output`: a symbolic link is refused (never written
+    through), and so are a device, a FIFO, a socket, a folder and a read-only file, with
+    no ``force``.  For a tree of files that a command rewrites as a whole, where the user
+    named the folder, not the files.  A file whose folder does not exist yet passes.
+
+    Examples
+    --------
+    >>> import tempfile, pathlib
+    >>> folder = pathlib.Path(tempfile.mkdtemp())
+    >>> (folder / "link.png").symlink_to(folder / "elsewhere.png")
+    >>> check_replace(folder / "link.png", what="render")
+    Traceback (most recent call last):
+    ...
+    ismb_lab._files.OutputError: render '.../link.png' is a symbolic link, which is never written through or replaced; remove it first
+    """
+    path = Path(path)
+    shown = f"{what} {str(path)!r}"
+    try:
+        st = path.lstat()
+    except FileNotFoundError:
+        st = None
+    except OSError as exc:
+        raise OutputError(f"{shown}: {exc.strerror or exc}") from None
+    if st is not None and stat.S_ISLNK(st.st_mode):
+        raise OutputError(f"{shown} is a symbolic link, which is never written through or replaced; "
+                          "remove it first")
+    if st is not None and not stat.S_ISREG(st.st_mode):
+        raise OutputError(f"{shown} is {_kind(st.st_mode)}, which an output never replaces")
+    if st is not None and (not st.st_mode & 0o222 or not os.access(path, os.W_OK)):
+        raise OutputError(f"{shown} is a read-only file, which is never replaced; make it writable "
+                          "or remove it first")
+    return check_output(path, what=what) if path.parent.is_dir() else path

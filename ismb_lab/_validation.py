@@ -15,6 +15,13 @@ import numbers
 import numpy as np
 
 
+class _ShownAs(str):
+    """Text shown as it is in a message (not quoted)."""
+
+    def __repr__(self) -> str:
+        return str(self)
+
+
 class ParameterError(ValueError):
     """A parameter value breaks its rule.  The command line reports it in one line."""
 
@@ -27,8 +34,27 @@ class ParameterTypeError(TypeError):
     __module__ = "ismb_lab"
 
 
+#: The largest seed: an update-order stream's state is a 64-bit integer, and seeds are
+#: taken as non-negative int64 (numpy's Generator takes any of them too).
+MAX_SEED = 2**63 - 1
+
+
+def _shown_int(value: int) -> str:
+    # repr() of an int over 4300 digits raises ValueError; the size is what matters then.
+    size = abs(value)
+    digits = int((max(size.bit_length(), 1) - 1) * math.log10(2)) + 1
+    digits += size >= 10**digits
+    return repr(value) if digits <= 40 else f"an integer of {digits} digits"
+
+
 def message(name: str, owner: str, rule: str, value) -> str:
-    """Return the package's one error message format (on one line)."""
+    """Return the package's one error message format (on one line).
+
+    >>> message("seed", "match", "an integer", 10**5000)
+    "The 'seed' parameter of match must be an integer. Got an integer of 5001 digits instead."
+    """
+    if isinstance(value, numbers.Integral) and not isinstance(value, bool):
+        value = _ShownAs(_shown_int(int(value)))
     if isinstance(value, np.ndarray) and value.ndim > 1:
         shown = f"an array of shape {value.shape} and dtype {value.dtype}"
     else:
@@ -71,10 +97,11 @@ def check_number(value, name: str, owner: str, *, low=None, high=None,
     """
     kind = "an integer" if integer else "a finite number"
     rule = kind
+    bound = lambda b: _shown_int(b) if isinstance(b, int) else b   # noqa: E731
     if low is not None:
-        rule += f" {'>' if low_open else '>='} {low}"
+        rule += f" {'>' if low_open else '>='} {bound(low)}"
     if high is not None:
-        rule += f"{' and' if low is not None else ''} <= {high}"
+        rule += f"{' and' if low is not None else ''} <= {bound(high)}"
     if type(value) not in (float, int) and (isinstance(value, bool) or not isinstance(value, numbers.Real)):
         raise ParameterTypeError(message(name, owner, rule, value))
     if integer:
@@ -85,7 +112,10 @@ def check_number(value, name: str, owner: str, *, low=None, high=None,
                 raise ParameterTypeError(message(name, owner, rule, value))
         value = int(value)
     else:
-        value = float(value)
+        try:
+            value = float(value)
+        except OverflowError:   # an int of hundreds of digits
+            raise ParameterError(message(name, owner, rule, value)) from None
         if not math.isfinite(value):
             raise ParameterError(message(name, owner, rule, value))
     if low is not None and (value <= low if low_open else value < low):
@@ -125,6 +155,8 @@ def check_points(points, name: str, owner: str) -> np.ndarray:
     rule = "an (N, 2) array of finite (x, y) coordinates"
     try:
         arr = np.asarray(points, dtype=float)
+    except OverflowError:   # an int of hundreds of digits
+        raise ParameterError(message(name, owner, rule, "an array with a number too large for a float")) from None
     except (TypeError, ValueError):
         raise ParameterTypeError(message(name, owner, rule, points)) from None
     if arr.size == 0:
@@ -149,11 +181,12 @@ def check_rng(rng, name: str = "rng", owner: str = "function") -> np.random.Gene
     """
     if isinstance(rng, np.random.Generator):
         return rng
+    rule = f"an integer seed from 0 to {MAX_SEED} (2**63 - 1) or a numpy Generator"
     if isinstance(rng, numbers.Integral) and not isinstance(rng, bool):
-        if rng < 0:
-            raise ParameterError(message(name, owner, "a non-negative integer seed or a numpy Generator", rng))
+        if not 0 <= rng <= MAX_SEED:
+            raise ParameterError(message(name, owner, rule, rng))
         return np.random.default_rng(int(rng))
-    raise ParameterTypeError(message(name, owner, "a non-negative integer seed or a numpy Generator", rng))
+    raise ParameterTypeError(message(name, owner, rule, rng))
 
 
 def readonly(values) -> np.ndarray:

@@ -33,7 +33,7 @@ from typing import Iterator, NamedTuple
 import numba
 import numpy as np
 
-from ._validation import ParameterTypeError, check_choice, check_number, check_rng, message
+from ._validation import MAX_SEED, ParameterTypeError, check_choice, check_number, check_rng, message
 from .hopfield import NB_SHIFT, PACKED, RULES, SCALE, Network, _check_state, _Weights, _weights, _energy_of, energy
 
 __all__ = ["KERNELS", "STOP_RULES", "iter_updates", "run", "RunResult", "Update", "visiting_order"]
@@ -163,9 +163,9 @@ def _shuffle(order, state):
 
 def _seed_of(rng, owner: str) -> int:
     """The stream's seed: the integer itself, or one draw from a Generator."""
-    if type(rng) is int and rng >= 0:   # the common case, before the slower general test
+    if type(rng) is int and 0 <= rng <= MAX_SEED:   # the common case, before the slower general test
         return rng
-    if isinstance(rng, numbers.Integral) and not isinstance(rng, bool) and rng >= 0:
+    if isinstance(rng, numbers.Integral) and not isinstance(rng, bool) and 0 <= rng <= MAX_SEED:
         return int(rng)
     if isinstance(rng, np.random.Generator):
         return int(rng.integers(0, 2**63, dtype=np.int64))
@@ -599,9 +599,9 @@ def run(net: Network, *, rng=0, state=None, stop_rule: str = "sweep", rule: str 
     True
     """
     # the common call of a GA's thousands of runs, checked and run in about a microsecond
-    if (kernel == "numba" and state is None and type(net) is Network and type(rng) is int and rng >= 0
-            and stop_rule in STOP_RULES and rule in RULES and type(patience) is int and patience >= 1
-            and type(max_sweeps) is int and max_sweeps >= 1):
+    if (kernel == "numba" and state is None and type(net) is Network and type(rng) is int
+            and 0 <= rng <= MAX_SEED and stop_rule in STOP_RULES and rule in RULES
+            and type(patience) is int and patience >= 1 and type(max_sweeps) is int and max_sweeps >= 1):
         w = net._weights.get(rule) or _weights(net, rule)
         n = w.self_w.shape[0]
         if n:

@@ -24,7 +24,7 @@ from .scenes import (REALISTIC_COUNT, Scene, lab_scene, realistic_scene, synthet
 from .targets import save_targets, targets_from_matches
 
 __all__ = ["ANSWER_KEY", "DISPARITY_SCALE", "SNAP_PX", "answer_key", "decode_disparity",
-           "encode_disparity", "render_gallery", "write_manifest", "write_pair", "write_scene"]
+           "encode_disparity", "gallery_files", "render_gallery", "write_manifest", "write_pair", "write_scene"]
 
 DISPARITY_SCALE = 256.0
 
@@ -189,6 +189,22 @@ def _car_info(scene: Scene) -> list:
     return [{"name": p.name, "x_centre_m": round(float((p.lo[0] + p.hi[0]) / 2), 6),
              "z_front_m": round(float(p.parts[0].lo[2]), 6)}
             for p in scene.primitives if hasattr(p, "parts")]
+
+
+PAIR_FILES = ("left.png", "right.png", "disparity.png", "scene.json", ANSWER_KEY)
+
+
+def gallery_files(out="images") -> list[Path]:
+    """Every file :func:`render_gallery` writes into `out`, known before anything is rendered.
+
+    >>> [p.as_posix() for p in gallery_files("images")][:2]
+    ['images/synthetic/left.png', 'images/synthetic/right.png']
+    """
+    out = Path(out)
+    pairs = ["synthetic", "lab", "toy_cars"] + [f"realistic/{n:02d}" for n in range(1, REALISTIC_COUNT + 1)]
+    files = [out / pair / name for pair in pairs for name in PAIR_FILES]
+    files += [out / name / "manifest.json" for name in ("lab", "toy_cars", "realistic")]
+    return files + [out / name / "README.md" for name in _READMES]
 
 
 def render_gallery(out="images") -> list[Path]:

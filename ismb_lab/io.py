@@ -7,7 +7,6 @@ Every image in the package is a C-contiguous ``float64`` array of grey values in
 from __future__ import annotations
 
 import hashlib
-import io
 import os
 from dataclasses import dataclass
 
@@ -16,7 +15,7 @@ import numpy as np
 
 from ._validation import ParameterError, ParameterTypeError, check_number, message
 
-__all__ = ["MAX_PIXELS", "PIXELS_VARIABLE", "image_sha256", "load_image", "load_pair", "max_pixels",
+__all__ = ["MAX_PIXELS", "MOST_PIXELS", "PIXELS_VARIABLE", "decode", "image_sha256", "load_image", "load_pair", "max_pixels",
            "png_bytes", "save_image", "save_pair", "StereoPair"]
 
 _ARRAY_TAG = b"ismb_lab-array-v1\n"
@@ -37,11 +36,15 @@ def _path_error(name: str, owner: str, why: str, path: str) -> ParameterError:
 #: (grey, the Harris products, the response): ``ismb-lab match`` on a 4000x3000 pair
 #: peaked at 1.18 GB resident, about 90 bytes a pixel, so 25 million pixels is about 2.3 GB.
 MAX_PIXELS = 25_000_000
+#: The most that ISMB_LAB_MAX_PIXELS may allow: OpenCV's own default limit (2**30 pixels).
+MOST_PIXELS = 1 << 30
 PIXELS_VARIABLE = "ISMB_LAB_MAX_PIXELS"
 
 
 def max_pixels() -> int:
     """The pixel limit in force: ``ISMB_LAB_MAX_PIXELS`` if set, else :data:`MAX_PIXELS`.
+
+    The variable must be a whole number from 1 to :data:`MOST_PIXELS`.
 
     >>> max_pixels() >= 1
     True
@@ -49,64 +52,61 @@ def max_pixels() -> int:
     raw = os.environ.get(PIXELS_VARIABLE, "").strip()
     if not raw:
         return MAX_PIXELS
-    try:
-        value = int(raw)
-    except ValueError:
-        value = 0
-    if value < 1:
-        raise ParameterError(f"The environment variable ISMB_LAB_MAX_PIXELS must be a whole number "
-                             f">= 1. Got {raw!r} instead.")
+    # Compared as text first: int() of thousands of digits is slow, then refused anyway.
+    value = int(raw) if raw.isascii() and raw.isdigit() and len(raw) <= len(str(MOST_PIXELS)) else 0
+    if not 1 <= value <= MOST_PIXELS:
+        shown = raw if len(raw) <= 40 else raw[:37] + "..."
+        raise ParameterError(f"The environment variable {PIXELS_VARIABLE} must be a whole number from 1 to "
+                             f"{MOST_PIXELS} (OpenCV's own limit). Got {shown!r} instead.")
     return value
 
 
-def _header_size(data: bytes):
-    """``(width, height)`` from an image file's header without decoding it, or None if unknown."""
-    if data[:8] == b"\x89PNG\r\n\x1a\n" and data[12:16] == b"IHDR":
-        return int.from_bytes(data[16:20], "big"), int.from_bytes(data[20:24], "big")
+def _too_large(error, what: str, limit: int) -> ParameterError:
+    return error(f"at most {limit} pixels, and {what}; set the environment variable "
+                 f"{PIXELS_VARIABLE} to allow more")
+
+
+def decode(data: bytes, flags: int, error) -> np.ndarray:
+    """Decode an image file's bytes with ``cv2.imdecode``, only once its header shows a size
+    within :func:`max_pixels` (see :mod:`ismb_lab._header` for the formats read).
+
+    `error(why)` makes the exception raised, e.g. one that names the file.
+    """
+    from ._header import HeaderError, image_size
+
+    limit = max_pixels()
     try:
-        import warnings
-
-        from PIL import Image
-        with warnings.catch_warnings():
-            warnings.simplefilter("ignore")
-            with Image.open(io.BytesIO(data)) as im:   # reads the header only
-                return im.size
-    except Exception as exc:   # noqa: BLE001  not a format Pillow knows: OpenCV decides
-        if type(exc).__name__ == "DecompressionBombError":   # over 179 million pixels
-            return (1 << 16, 1 << 16)
-        return None
-
-
-def _too_large(path: str, name: str, owner: str, what: str, limit: int) -> ParameterError:
-    return _path_error(name, owner, f"at most {limit} pixels, and {what}; set the environment "
-                       f"variable ISMB_LAB_MAX_PIXELS to allow more", path)
+        kind, width, height = image_size(data)
+    except HeaderError as exc:
+        raise error(str(exc)) from None
+    if width * height > limit:
+        raise _too_large(error, f"its header says {width}x{height}", limit)
+    image = cv2.imdecode(np.frombuffer(data, dtype=np.uint8), flags)
+    if image is None:
+        raise error(f"OpenCV cannot decode it as a {kind} image")
+    if image.shape[0] * image.shape[1] > limit:
+        raise _too_large(error, f"it is {image.shape[1]}x{image.shape[0]}", limit)
+    return image
 
 
-def _read(path: str, name: str, owner: str) -> np.ndarray:
+def _read(path: str, name: str, owner: str, flags: int = cv2.IMREAD_UNCHANGED) -> np.ndarray:
+    error = lambda why: _path_error(name, owner, why, path)   # noqa: E731
     if not os.path.exists(path):
-        raise _path_error(name, owner, "the file does not exist", path)
+        raise error("the file does not exist")
     if not os.path.isfile(path):   # a folder, a device, a FIFO: never opened
-        raise _path_error(name, owner, "it is not a file", path)
+        raise error("it is not a file")
     limit = max_pixels()
     # The largest honest file of `limit` pixels: 16-bit RGBA, uncompressed, plus headers.
     most_bytes = 8 * limit + (1 << 20)
     size = os.path.getsize(path)
     if size > most_bytes:
-        raise _too_large(path, name, owner, f"a file of {size} bytes holds more", limit)
+        raise _too_large(error, f"a file of {size} bytes holds more", limit)
     try:   # bytes read here, so any file name works (cv2.imread crashes on non-UTF-8 names)
         with open(path, "rb") as handle:
             data = handle.read(most_bytes + 1)
     except OSError as exc:
-        raise _path_error(name, owner, exc.strerror or str(exc), path) from None
-    header = _header_size(data)
-    if header is not None and header[0] * header[1] > limit:
-        raise _too_large(path, name, owner, f"its header says {header[0]}x{header[1]}", limit)
-    image = cv2.imdecode(np.frombuffer(data, dtype=np.uint8), cv2.IMREAD_UNCHANGED)
-    if image is None:
-        raise _path_error(name, owner, "OpenCV cannot decode it as an image", path)
-    if image.shape[0] * image.shape[1] > limit:
-        raise _too_large(path, name, owner, f"it is {image.shape[1]}x{image.shape[0]}", limit)
-    return image
+        raise error(exc.strerror or str(exc)) from None
+    return decode(data, flags, error)
 
 
 def _to_grey(image, name: str, owner: str, *, bgr: bool) -> np.ndarray:
@@ -149,7 +149,9 @@ def load_image(source, name: str = "image") -> np.ndarray:
     Parameters
     ----------
     source : str, os.PathLike or array_like
-        A file OpenCV can read (read unchanged: 8 or 16 bit, grey, BGR or BGRA),
+        An image file (read unchanged: 8 or 16 bit, grey, BGR or BGRA) in a format
+        whose size is read from its header before decoding (PNG, JPEG, BMP, TIFF,
+        WebP, Sun raster, PBM/PGM/PPM, PFM, Radiance HDR: see :mod:`ismb_lab._header`),
         or an array: ``(H, W)`` grey, or ``(H, W, 3)`` RGB / ``(H, W, 4)`` RGBA.
         ``uint8`` values are used as they are, ``uint16`` values are scaled by
         ``255 / 65535``, float values must already be finite and in ``[0, 255]``.
@@ -166,7 +168,8 @@ def load_image(source, name: str = "image") -> np.ndarray:
     Raises
     ------
     ValueError
-        A missing or undecodable file, a bad shape, or float values that are not
+        A missing, empty or undecodable file, one in another format, one over the pixel
+        limit (:func:`max_pixels`, read from its header), a bad shape, or float values that are not
         finite or lie outside ``[0, 255]``.
     TypeError
         Any dtype other than ``uint8``, ``uint16`` or floating point (``bool`` included).

@@ -14,7 +14,7 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
-from ._validation import ParameterError, ParameterTypeError, check_choice, check_number, message
+from ._validation import MAX_SEED, ParameterError, ParameterTypeError, check_choice, check_number, message
 from .coords import euclidean_disparity, horizontal_disparity
 from .features import Corners, detect_corners, resolve_roi
 from .hopfield import RULES
@@ -330,7 +330,7 @@ def match(left=None, right=None, method="III", params: Params | None = None, *,
     config : MatchConfig, optional
         Corners, candidate window and neighbourhood settings.
     seed : int
-        Seed of the random update order (and of annealing).
+        Seed of the random update order (and of annealing), from 0 to 2**63 - 1.
     solver : str
         How the energy is minimised, a name in :data:`ismb_lab.solvers.SOLVERS`.
     stop_rule, rule, kernel
@@ -350,7 +350,7 @@ def match(left=None, right=None, method="III", params: Params | None = None, *,
     if not isinstance(params, Params):
         raise ParameterTypeError(message("params", "match", "a Params instance", params))
     get_solver(solver, "match")   # the settings are checked before the images are read
-    check_number(seed, "seed", "match", low=0, integer=True)
+    check_number(seed, "seed", "match", low=0, high=MAX_SEED, integer=True)
     check_choice(stop_rule, "stop_rule", "match", STOP_RULES)
     check_choice(rule, "rule", "match", RULES)
     if not isinstance(one_to_one, bool):

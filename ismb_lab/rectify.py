@@ -33,7 +33,7 @@ import cv2
 import numpy as np
 
 from ._validation import ParameterError, ParameterTypeError, check_number, message
-from .io import _is_path, _read, _to_grey
+from .io import _is_path, _read, _to_grey, decode
 
 __all__ = ["WORKING_SIDE", "Correspondences", "Rectified", "apply_rectification", "check_rectified", "load_photo",
            "measured", "rectify_pair", "robust_matches", "working_size"]
@@ -64,15 +64,13 @@ def _photo(source, name: str, owner: str, max_side: int | None) -> tuple[np.ndar
         factor = 1.0 if max_side is None else working_size(grey.shape, max_side)
         return _scale(grey, factor), factor
     if isinstance(source, (bytes, bytearray, memoryview)):
-        image = cv2.imdecode(np.frombuffer(bytes(source), np.uint8), cv2.IMREAD_COLOR)
-        if image is None:
-            raise ParameterError(message(name, owner, "the bytes of an image file OpenCV can decode",
-                                         f"{len(source)} bytes it cannot decode"))
+        rule = "the bytes of an image file OpenCV can decode"
+        error = lambda why: ParameterError(message(name, owner, rule, f"{len(source)} bytes: {why}"))  # noqa: E731
+        image = decode(bytes(source), cv2.IMREAD_COLOR, error)   # the size limit, from the header
     elif _is_path(source):
         image = _read(str(source), name, owner)   # size limits, readable regular file, decodable
-        if image.dtype == np.uint8:
-            with open(source, "rb") as handle:    # again with IMREAD_COLOR, which applies EXIF
-                image = cv2.imdecode(np.frombuffer(handle.read(), np.uint8), cv2.IMREAD_COLOR)
+        if image.dtype == np.uint8:               # again with IMREAD_COLOR, which applies EXIF
+            image = _read(str(source), name, owner, cv2.IMREAD_COLOR)
     else:
         raise ParameterTypeError(message(name, owner, "a path, the bytes of an image file or an array", source))
     if image.dtype == np.uint8 and image.ndim == 3:

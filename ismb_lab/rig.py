@@ -94,6 +94,9 @@ class Rig:
     skipped: tuple = ()
     _rect: dict = field(default_factory=dict, repr=False)
 
+    def __post_init__(self):
+        _check_rig(self, "Rig")
+
     def _rectification(self) -> dict:
         if not self._rect:
             r1, r2, p1, p2, q, _, _ = cv2.stereoRectify(self.k_left, self.d_left, self.k_right, self.d_right,
@@ -145,6 +148,40 @@ class Rig:
         return json.dumps(self.to_dict(), indent=2)
 
 
+def _check_camera(k, d, name: str, owner: str) -> None:
+    rule = "a camera matrix [[fx, 0, cx], [0, fy, cy], [0, 0, 1]] with finite fx, fy > 0 and cx, cy"
+    k = np.asarray(k, dtype=float)
+    if (k.shape != (3, 3) or not np.isfinite(k).all() or not (k[0, 0] > 0 and k[1, 1] > 0)
+            or not np.allclose(k[2], (0, 0, 1)) or k[1, 0] != 0):
+        raise ParameterError(message(f"k_{name}", owner, rule, k.tolist()))
+    d = np.asarray(d, dtype=float)
+    if d.size not in (4, 5, 8, 12, 14) or not np.isfinite(d).all():
+        raise ParameterError(message(f"d_{name}", owner, "4, 5, 8, 12 or 14 finite distortion "
+                                     "coefficients", d.ravel().tolist()))
+
+
+def _check_rig(rig: Rig, owner: str) -> None:
+    """Refuse a rig that cannot rectify: it would give black images or a crash, not an error."""
+    size = rig.size
+    if (len(size) != 2 or not all(isinstance(v, (int, np.integer)) and 1 <= v <= 1 << 16 for v in size)):
+        raise ParameterError(message("size", owner, f"(width, height), whole numbers from 1 to {1 << 16}",
+                                     tuple(size)))
+    for name, k, d in (("left", rig.k_left, rig.d_left), ("right", rig.k_right, rig.d_right)):
+        _check_camera(k, d, name, owner)
+    r = np.asarray(rig.rotation, dtype=float)
+    if r.shape != (3, 3) or not np.isfinite(r).all() or not np.allclose(r @ r.T, np.eye(3), atol=1e-6) \
+            or not np.linalg.det(r) > 0:
+        raise ParameterError(message("rotation", owner, "a 3x3 rotation matrix", r.tolist()))
+    t = np.asarray(rig.translation, dtype=float)
+    if t.size != 3 or not np.isfinite(t).all() or not np.linalg.norm(t) > 0:
+        raise ParameterError(message("translation", owner, "a finite (x, y, z) offset of the right camera, "
+                                     "not zero (a baseline > 0)", t.ravel().tolist()))
+    if not (np.isfinite(rig.focal_px) and rig.focal_px > 0 and np.isfinite(rig.baseline_m)
+            and rig.baseline_m > 0):
+        raise ParameterError(message("k_left", owner, "cameras that rectify to a finite focal length > 0",
+                                     f"focal length {rig.focal_px} px, baseline {rig.baseline_m} m"))
+
+
 def load_rig(source) -> Rig:
     """A rig from ``ismb-lab calibrate``'s JSON (a path or the text), validated."""
     owner = "load_rig"
@@ -162,10 +199,10 @@ def load_rig(source) -> Rig:
                   arr("k_right", (3, 3)), arr("d_right", (1, -1)), arr("rotation", (3, 3)),
                   arr("translation", (3, 1)), float(data["rms_px"]), tuple(data["board"]),
                   float(data["square_m"]), tuple(data.get("used", ())), tuple(data.get("skipped", ())))
-    except (KeyError, TypeError, ValueError) as exc:
+    except ParameterError as exc:   # a degenerate rig: name the file
+        raise ParameterError(str(exc).replace("of Rig", f"of the rig file {str(source)!r}")) from None
+    except (KeyError, TypeError, ValueError, OverflowError) as exc:
         raise ParameterError(message("source", owner, "a complete rig file", f"{source} ({exc})")) from None
-    if not all(np.isfinite(a).all() for a in (rig.k_left, rig.k_right, rig.rotation, rig.translation)):
-        raise ParameterError(message("source", owner, "finite camera matrices", str(source)))
     return rig
 
 

@@ -71,7 +71,38 @@ def make_workspace(folder: Path, huge: bool = True) -> Path:
     (folder / "sub").mkdir()
     if huge:
         big_png(folder / "huge.png", 20000, 20000)
+    make_issue25_inputs(folder)
     return folder
+
+
+def make_issue25_inputs(folder: Path) -> None:
+    """Empty and header-only images, numbers of 400 digits, degenerate rigs, render's output
+    folders with a link, a FIFO and a read-only file, and oversized targets files."""
+    (folder / "empty.png").write_bytes(b"")
+    (folder / "huge.hdr").write_bytes(b"#?RADIANCE\nFORMAT=32-bit_rle_rgbe\n\n-Y 12000 +X 12000\n")
+    huge = int("9" * 400)
+    targets = json.loads((folder / "targets.json").read_text())
+    targets["pairs"][0]["left_xy"][0] = huge
+    (folder / "targets_400_digits.json").write_text(json.dumps(targets))
+    (folder / "params_400_digits.json").write_text(json.dumps({"method": "III", "params": {"theta_c": huge}}))
+    pairs = [{"left_xy": [n % 300, n // 300], "right_xy": [n % 300, n // 300]} for n in range(10_001)]
+    (folder / "targets_many_pairs.json").write_text(json.dumps({"version": 1, "pairs": pairs}))
+    (folder / "targets_5mb.json").write_text(json.dumps(targets) + " " * (5 << 20))
+    rig = {"format": "ismb_lab-rig-v1", "size": [320, 240], "rms_px": 0.3, "board": [9, 6], "square_m": 0.025,
+           "k_left": [[300, 0, 160], [0, 300, 120], [0, 0, 1]], "d_left": [0, 0, 0, 0, 0],
+           "k_right": [[300, 0, 160], [0, 300, 120], [0, 0, 1]], "d_right": [0, 0, 0, 0, 0],
+           "rotation": [[1, 0, 0], [0, 1, 0], [0, 0, 1]], "translation": [-0.1, 0, 0]}
+    zero = [[0, 0, 0]] * 3
+    for name, change in (("zero_k", {"k_left": zero, "k_right": zero}), ("nan_d", {"d_left": [float("nan")] * 5}),
+                         ("zero_baseline", {"translation": [0, 0, 0]}), ("400_digits", {"size": [huge, 240]})):
+        (folder / f"rig_{name}.json").write_text(json.dumps({**rig, **change}))
+    for kind in ("link", "fifo", "readonly", "folder_link"):
+        (folder / f"render_{kind}" / "lab").mkdir(parents=True)
+    (folder / "render_link" / "lab" / "left.png").symlink_to(folder / "existing.json")
+    os.mkfifo(folder / "render_fifo" / "lab" / "left.png")
+    shutil.copy(folder / "L.png", folder / "render_readonly" / "lab" / "left.png")
+    (folder / "render_readonly" / "lab" / "left.png").chmod(0o444)
+    (folder / "render_folder_link" / "toy_cars").symlink_to(folder / "sub")
 
 
 def snapshot(folder: Path) -> dict:
@@ -136,7 +167,7 @@ CASES = [
     ("match-left-fifo", lambda w: ["match", w / "fifo", w / "R.png"], "FIFO", {}),
     ("match-left-device", lambda w: ["match", w / "null_device", w / "R.png"], "device", {}),
     ("match-left-folder", lambda w: ["match", w / "sub", w / "R.png"], "folder", {}),
-    ("match-left-text", lambda w: ["match", w / "text.png", w / "R.png"], "decode", {}),
+    ("match-left-text", lambda w: ["match", w / "text.png", w / "R.png"], "not an image file", {}),
     ("match-left-huge-png", lambda w: ["match", w / "huge.png", w / "R.png"], "ISMB_LAB_MAX_PIXELS", {}),
     ("match-params-fifo", lambda w: ["match", *_pair(w), "--params-file", w / "fifo"], "FIFO", {}),
     ("match-params-dev-zero", lambda w: ["match", *_pair(w), "--params-file", "/dev/zero"], "device", {}),
@@ -197,13 +228,60 @@ CASES = [
     ("depth-n-max-limit", lambda w: _depth(w, "--n-max", "5000"), "ISMB_LAB_MAX_CORNERS", {}),
     # render
     ("render-out-is-a-file", lambda w: ["render", "--out", w / "existing.json"], "not a folder", {}),
+    # issue 25: empty images, in every command that reads one
+    ("match-left-empty", lambda w: ["match", w / "empty.png", w / "R.png"], "the file is empty", {}),
+    ("tune-right-empty", lambda w: ["tune", w / "L.png", w / "empty.png", w / "targets.json"],
+     "the file is empty", {}),
+    ("depth-scene-empty", lambda w: ["depth", *_pair(w), w / "empty.png", w / "R.png"], "the file is empty", {}),
+    ("rectify-left-empty", lambda w: ["rectify", w / "empty.png", w / "R.png", "--out", w / "rect"],
+     "the file is empty", {}),
+    ("calibrate-photo-empty", lambda w: ["calibrate", *[w / "empty.png", w / "R.png"] * 3, "--out", w / "rig.json"],
+     "the file is empty", {}),
+    # a header that declares 12000 x 12000 pixels: refused before decoding
+    ("match-left-huge-hdr", lambda w: ["match", w / "huge.hdr", w / "R.png"], "header says 12000x12000", {}),
+    ("rectify-left-huge-hdr", lambda w: ["rectify", w / "huge.hdr", w / "R.png", "--out", w / "rect"],
+     "header says 12000x12000", {}),
+    # numbers of 400 digits
+    ("tune-targets-400-digits", lambda w: ["tune", *_pair(w), w / "targets_400_digits.json"], "pairs[0].left_xy", {}),
+    ("match-params-400-digits", lambda w: ["match", *_pair(w), "--params-file", w / "params_400_digits.json"],
+     "theta_c", {}),
+    ("match-pixel-limit-400-digits", lambda w: ["match", *_pair(w)], "ISMB_LAB_MAX_PIXELS",
+     {"ISMB_LAB_MAX_PIXELS": "9" * 400}),
+    ("tune-generation-limit-400-digits", lambda w: _tune(w), "ISMB_LAB_MAX_GENERATIONS",
+     {"ISMB_LAB_MAX_GENERATIONS": "9" * 400}),
+    ("match-corner-limit-400-digits", lambda w: ["match", *_pair(w), "--n-max", "40"], "ISMB_LAB_MAX_CORNERS",
+     {"ISMB_LAB_MAX_CORNERS": "9" * 400}),
+    ("tune-generations-400-digits", lambda w: _tune(w, "--generations", "9" * 400), "an integer of 400 digits", {}),
+    ("match-seed-10**30", lambda w: ["match", *_pair(w), "--seed", str(10**30)], "2**63 - 1", {}),
+    ("depth-seed-2**64", lambda w: _depth(w, "--seed", str(2**64)), "2**63 - 1", {}),
+    ("tune-seed-10**30", lambda w: _tune(w, "--seed", str(10**30), "--generations", "1"), "2**63 - 1", {}),
+    # degenerate rigs
+    ("rectify-rig-zero-k", lambda w: ["rectify", *_pair(w), "--rig", w / "rig_zero_k.json", "--out", w / "rect"],
+     "'k_left'", {}),
+    ("rectify-rig-nan-distortion", lambda w: ["rectify", *_pair(w), "--rig", w / "rig_nan_d.json",
+                                              "--out", w / "rect"], "'d_left'", {}),
+    ("rectify-rig-zero-baseline", lambda w: ["rectify", *_pair(w), "--rig", w / "rig_zero_baseline.json",
+                                             "--out", w / "rect"], "'translation'", {}),
+    ("rectify-rig-400-digits", lambda w: ["rectify", *_pair(w), "--rig", w / "rig_400_digits.json",
+                                          "--out", w / "rect"], "'size'", {}),
+    ("depth-rig-zero-baseline", lambda w: _depth(w, "--rig", w / "rig_zero_baseline.json"), "'translation'", {}),
+    # render's output folder
+    ("render-link-in-out", lambda w: ["render", "--out", w / "render_link"], "symbolic link", {}),
+    ("render-fifo-in-out", lambda w: ["render", "--out", w / "render_fifo"], "FIFO", {}),
+    ("render-readonly-in-out", lambda w: ["render", "--out", w / "render_readonly"], "read-only", {}),
+    ("render-folder-link-in-out", lambda w: ["render", "--out", w / "render_folder_link"], "symbolic link", {}),
+    # targets files of unbounded size
+    ("tune-targets-too-many-pairs", lambda w: ["tune", *_pair(w), w / "targets_many_pairs.json"],
+     "at most 10000 pairs", {}),
+    ("tune-targets-too-many-bytes", lambda w: ["tune", *_pair(w), w / "targets_5mb.json"], "4194304 bytes", {}),
 ]
 
 
 def test_the_sweep_is_large_enough():
     assert len(CASES) >= 40
     assert len({c[0] for c in CASES}) == len(CASES)
-    assert {c[1](Path("/w"))[0] for c in CASES} == {"match", "tune", "evaluate", "depth", "render"}
+    assert {c[1](Path("/w"))[0] for c in CASES} == {"match", "tune", "evaluate", "depth", "render", "rectify",
+                                                     "calibrate"}
 
 
 @pytest.mark.parametrize("make_args, words, env", [c[1:] for c in CASES], ids=[c[0] for c in CASES])

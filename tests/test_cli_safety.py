@@ -1,5 +1,6 @@
 """Outputs that never destroy anything, signals that stop the work cleanly, crashes gone."""
 
+import functools
 import json
 import os
 import shutil
@@ -211,6 +212,7 @@ def test_a_swallowed_ctrl_c_still_stops_tune(lab, hard_targets, tmp_path, monkey
 
     real_tune = ismb_lab.tuning.tune
 
+    @functools.wraps(real_tune)   # the same signature, whose defaults the command reads
     def swallowing(*args, **kwargs):
         for n, record in enumerate(real_tune(*args, **kwargs)):
             if n == 2:
@@ -335,10 +337,13 @@ def test_the_pixel_limit_reads_the_header_and_can_be_raised(tmp_path, monkeypatc
 def test_help_lists_every_limit():
     from ismb_lab.cli import build_parser
     from ismb_lab.cli._guard import LIMITS
-    from ismb_lab.io import MAX_PIXELS
+    from ismb_lab.io import MAX_PIXELS, MOST_PIXELS
+    from ismb_lab.targets import MAX_BYTES, MAX_PAIRS
 
     epilog = " ".join(build_parser().epilog.split())
-    assert f"<= {MAX_PIXELS} (ISMB_LAB_MAX_PIXELS)" in epilog
+    assert f"<= {MAX_PIXELS} (ISMB_LAB_MAX_PIXELS, at most {MOST_PIXELS})" in epilog
+    assert f"targets files <= {MAX_PAIRS} pairs and {MAX_BYTES} bytes" in epilog
+    assert "a default above it is lowered to it with a note" in epilog
     for variable, default, _, option in LIMITS.values():
         assert f"{option} <= {default} ({variable})" in epilog
 
@@ -410,3 +415,83 @@ def test_an_interrupt_printed_by_c_code_prints_nothing_after_a_signal(capfd):
         assert c_code_prints(KeyboardInterrupt) == ""
         assert "ValueError" in c_code_prints(ValueError)   # only the signal's echoes are dropped
     assert "KeyboardInterrupt" in c_code_prints(KeyboardInterrupt)
+
+
+# --- limits bound the defaults too (issue 25) ---
+
+def preflighted(argv, monkeypatch, **env):
+    from ismb_lab.cli import build_parser
+    from ismb_lab.cli._guard import UsageError, preflight
+
+    for name, value in env.items():
+        monkeypatch.setenv(name, value)
+    args = build_parser().parse_args([str(a) for a in argv])
+    preflight(args, UsageError)
+    return args
+
+
+@pytest.mark.parametrize("argv, env, name, value", [
+    (["tune", "L", "R", "T"], {"ISMB_LAB_MAX_GENERATIONS": "5"}, "generations", 5),
+    (["tune", "L", "R", "T"], {"ISMB_LAB_MAX_POPULATION": "7"}, "population", 7),
+    (["match", "L", "R"], {"ISMB_LAB_MAX_CORNERS": "25"}, "n_max", 25),
+    (["depth", "L", "R", "L", "R"], {"ISMB_LAB_MAX_CORNERS": "25"}, "n_max", 25),
+    (["evaluate", "M"], {"ISMB_LAB_MAX_SEEDS": "2"}, "seeds", 2),
+    (["evaluate", "M"], {"ISMB_LAB_MAX_GENERATIONS": "5"}, "generations", 5),
+])
+def test_a_default_above_its_limit_is_lowered_to_it_with_a_note(monkeypatch, capsys, argv, env, name, value):
+    args = preflighted(argv, monkeypatch, **env)
+    assert getattr(args, name) == value
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and err.startswith("ismb-lab: note:") and f"{next(iter(env))}={value}" in err
+
+
+def test_a_default_within_its_limit_stays_the_library_default(monkeypatch, capsys):
+    args = preflighted(["tune", "L", "R", "T"], monkeypatch, ISMB_LAB_MAX_GENERATIONS="100000")
+    assert args.generations is None and capsys.readouterr().err == ""
+
+
+def test_tune_without_options_runs_within_a_lowered_generation_limit(lab, tmp_path, monkeypatch, capsys):
+    monkeypatch.setenv("ISMB_LAB_MAX_GENERATIONS", "2")
+    out = tmp_path / "p.json"
+    assert main(["tune", *map(str, lab), "--out", str(out)]) == 0
+    assert json.loads(out.read_text())["generations"] <= 2
+    assert "using --generations 2" in capsys.readouterr().err
+
+
+@pytest.mark.parametrize("value", ["9" * 400, "0", "1000000001", "five"])
+def test_every_limit_variable_is_a_bounded_whole_number(monkeypatch, value):
+    from ismb_lab.cli._guard import LIMITS, UsageError, limit
+
+    for name, (variable, *_) in LIMITS.items():
+        monkeypatch.setenv(variable, value)
+        with pytest.raises(UsageError, match=f"{variable} must be a whole number from 1 to 1000000000"):
+            limit(name)
+
+
+# --- render replaces only the regular files it writes ---
+
+def test_render_knows_every_file_it_writes_before_rendering():
+    from ismb_lab.gallery import gallery_files
+
+    images = ROOT / "images"
+    committed = {p for p in images.rglob("*") if p.is_file() and p != images / "README.md"}
+    assert set(gallery_files(images)) == committed
+
+
+def test_render_replaces_its_regular_files_and_refuses_a_device(tmp_path):
+    from ismb_lab._files import OutputError
+    from ismb_lab.cli.render import check_outputs
+    from ismb_lab.gallery import gallery_files
+
+    for path in gallery_files(tmp_path):
+        path.parent.mkdir(parents=True, exist_ok=True)
+        path.write_bytes(b"an earlier render")
+    check_outputs(tmp_path)   # the normal use: render again into images/
+    victim = gallery_files(tmp_path)[-1]
+    victim.unlink()
+    try:
+        os.mknod(victim, stat.S_IFCHR | 0o666, os.makedev(1, 3))
+    except (PermissionError, OSError):
+        pytest.skip("cannot make a character device here (mknod needs root)")
+    with pytest.raises(OutputError, match="character device"):
+        check_outputs(tmp_path)

@@ -120,7 +120,7 @@ def test_text_file_named_png_is_not_an_image(tmp_path):
     path.write_text("not a picture")
     with pytest.raises(ValueError) as info:
         load_pair(np.zeros((3, 3)), path)
-    says(info, "'right'", str(path), "cannot decode")
+    says(info, "'right'", str(path), "not an image file of a format read here")
 
 
 def test_sizes_must_match_and_reach_the_minimum():
@@ -148,3 +148,119 @@ def test_bad_arrays_are_refused_with_the_received_value(array, exc, fragment):
     with pytest.raises(exc) as info:
         load_pair(array, np.zeros((2, 2)))
     says(info, "'left'", "load_pair", fragment)
+
+
+# --- the pixel limit is read from the header, before anything decodes (issue 25) ---
+
+def hdr_header(width, height):
+    """A Radiance header declaring width x height pixels, and no pixel data."""
+    return b"#?RADIANCE\nFORMAT=32-bit_rle_rgbe\n\n-Y %d +X %d\n" % (height, width)
+
+
+def no_decoding(monkeypatch):
+    def refuse(*args):
+        raise AssertionError("cv2.imdecode was called")
+    monkeypatch.setattr(cv2, "imdecode", refuse)
+
+
+def test_an_empty_file_is_refused_in_words(tmp_path):
+    path = tmp_path / "empty.png"
+    path.write_bytes(b"")
+    with pytest.raises(ValueError) as info:
+        load_image(path)
+    says(info, "'image'", str(path), "the file is empty")
+
+
+def test_a_huge_radiance_header_is_refused_before_decoding(tmp_path, monkeypatch):
+    path = tmp_path / "huge.hdr"
+    path.write_bytes(hdr_header(12000, 12000))
+    no_decoding(monkeypatch)
+    with pytest.raises(ValueError) as info:
+        load_image(path)
+    says(info, "header says 12000x12000", "ISMB_LAB_MAX_PIXELS")
+
+
+def test_radiance_lines_are_read_in_opencvs_pieces():
+    from ismb_lab._header import image_size
+
+    # OpenCV reads header lines 127 bytes at a time: the newline after a 127-byte line is
+    # an empty line to it, so the size it uses is the next line, not the later one.
+    data = b"#?RADIANCE\n" + b"A" * 127 + b"\n-Y 12000 +X 12000\n\n-Y 1 +X 1\n"
+    assert image_size(data) == ("Radiance HDR", 12000, 12000)
+    assert image_size(b"#?RGBE\nFORMAT=32-bit_rle_rgbe\n\n-Y 99999999999999999999 +X 1\n")[1:] == (
+        1, 99999999999999999999)
+
+
+ENCODED = [(".png", 1), (".jpg", 1), (".bmp", 1), (".tiff", 1), (".webp", 3), (".pgm", 1), (".pbm", 1),
+           (".ppm", 3), (".pfm", 1), (".pfm", 3), (".sr", 1), (".hdr", 3)]
+
+
+@pytest.mark.parametrize("ext, channels", ENCODED, ids=[f"{e}-{c}" for e, c in ENCODED])
+def test_every_format_read_gives_opencvs_size_from_its_header(ext, channels):
+    from ismb_lab._header import image_size
+
+    image = (np.arange(7 * 12 * channels).reshape(7, 12, channels) % 251).astype(np.uint8).squeeze()
+    if ext in (".pfm", ".hdr"):
+        image = image.astype(np.float32)
+    ok, data = cv2.imencode(ext, image)
+    assert ok
+    assert image_size(data.tobytes())[1:] == (12, 7)
+    assert cv2.imdecode(data, cv2.IMREAD_UNCHANGED).shape[:2] == (7, 12)
+
+
+@pytest.mark.parametrize("data, words", [
+    (b"GIF89a\x0c\x00\x07\x00", "GIF"), (b"\x00\x00\x00\x0cjP  \r\n\x87\n", "JPEG 2000"),
+    (b"P7\nWIDTH 4\n", "PAM"), (b"\x00\x00\x00\x1cftypavif", "AVIF"), (b"v/1\x01", "OpenEXR"),
+    (b"#?RADIANCE\nFORMAT=32-bit_rle_rgbe\n\n+X 4 -Y 4\n", "'-Y height +X width'"),
+    (b"\x89PNG\r\n\x1a\n", "IHDR"), (b"P5 # no size", "width and height"),
+    (b"\xff\xd8\xff\xe0 broken", "JPEG file whose header cannot be read")])
+def test_formats_without_a_readable_size_are_refused_before_decoding(tmp_path, monkeypatch, data, words):
+    path = tmp_path / "image"
+    path.write_bytes(data)
+    no_decoding(monkeypatch)
+    with pytest.raises(ValueError) as info:
+        load_image(path)
+    says(info, words)
+
+
+@pytest.mark.parametrize("value", ["9" * 400, "0", "-5", "2e6", str((1 << 30) + 1)])
+def test_the_pixel_variable_is_bounded(monkeypatch, value):
+    from ismb_lab.io import max_pixels
+
+    monkeypatch.setenv("ISMB_LAB_MAX_PIXELS", value)
+    with pytest.raises(ValueError) as info:
+        max_pixels()
+    says(info, "ISMB_LAB_MAX_PIXELS", "from 1 to 1073741824")
+
+
+def test_uploaded_bytes_pass_the_same_header_check(monkeypatch):
+    from ismb_lab.rectify import load_photo
+
+    no_decoding(monkeypatch)
+    with pytest.raises(ValueError) as info:
+        load_photo(hdr_header(12000, 12000), "left")
+    says(info, "'left'", "header says 12000x12000")
+    with pytest.raises(ValueError) as info:
+        load_photo(b"", "left")
+    says(info, "'left'", "the file is empty")
+
+
+def test_a_header_pillow_will_not_size_is_refused_in_words(tmp_path, monkeypatch):
+    import struct
+
+    def bmp(width, height):
+        return b"BM" + struct.pack("<IHHI", 54, 0, 0, 54) + struct.pack("<IiiHHIIiiII", 40, width, height, 1, 24,
+                                                                        0, 0, 0, 0, 0, 0)
+
+    path = tmp_path / "huge.bmp"
+    path.write_bytes(bmp(20000, 20000))
+    no_decoding(monkeypatch)
+    monkeypatch.setenv("ISMB_LAB_MAX_PIXELS", str(1 << 30))
+    with pytest.raises(ValueError) as info:
+        load_image(path)
+    says(info, "BMP file whose header declares more than")
+    path.write_bytes(bmp(9000, 9000))
+    monkeypatch.setenv("ISMB_LAB_MAX_PIXELS", "1000000")
+    with pytest.raises(ValueError) as info:
+        load_image(path)
+    says(info, "header says 9000x9000")

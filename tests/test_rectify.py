@@ -84,7 +84,7 @@ def test_photos_of_any_kind_load_grey(data, tmp_path):
     assert np.array_equal(load_photo(rgba), load_photo(rgba[:, :, :3]))
     assert np.array_equal(load_photo((data / "left.jpg").read_bytes()), load_photo(data / "left.jpg"))
     (tmp_path / "bad.jpg").write_bytes(b"\xff\xd8\xff\xe0 not a jpeg")
-    with pytest.raises(ParameterError, match="'left' parameter of rectify_pair.*cannot decode"):
+    with pytest.raises(ParameterError, match="'left' parameter of rectify_pair.*JPEG file whose header cannot be read"):
         rectify_pair(tmp_path / "bad.jpg", data / "right.jpg")
     # EXIF orientation: a JPEG that says "rotate 90 degrees" loads upright
     exif_rotated = _with_orientation((data / "left.jpg").read_bytes(), 6)

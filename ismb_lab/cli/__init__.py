@@ -26,11 +26,15 @@ from ._guard import LIMITS, Interrupts, preflight
 __all__ = ["COMMANDS", "UsageError", "build_parser", "main"]
 
 def _epilog() -> str:
-    from ..io import MAX_PIXELS, PIXELS_VARIABLE
+    from ..io import MAX_PIXELS, MOST_PIXELS, PIXELS_VARIABLE
+    from ..targets import MAX_BYTES, MAX_PAIRS
+    from ._guard import MOST
 
-    return ("limits (raise one by setting its environment variable): " + "; ".join(
+    return (f"limits (each set by its environment variable, a whole number from 1 to {MOST}; a value typed "
+            "above its limit is refused, a default above it is lowered to it with a note): " + "; ".join(
         f"{option} <= {default} ({variable})" for variable, default, _, option in LIMITS.values())
-        + f"; pixels per image <= {MAX_PIXELS} ({PIXELS_VARIABLE})")
+        + f"; pixels per image <= {MAX_PIXELS} ({PIXELS_VARIABLE}, at most {MOST_PIXELS}); targets files "
+        f"<= {MAX_PAIRS} pairs and {MAX_BYTES} bytes (fixed)")
 
 
 def _commands():

@@ -59,8 +59,8 @@ def add_matching_options(p: argparse.ArgumentParser, base: MatchConfig) -> None:
     p.add_argument("--params-file", type=Path, default=None, metavar="P.json",
                    help='parameters as {"method": ..., "params": {...}}, e.g. from ismb-lab tune')
     add_feature_options(p, base)
-    p.add_argument("--seed", type=int, default=None,
-                   help=f"seed of the update order (default: {default_of(match, 'seed')})")
+    p.add_argument("--seed", type=seed, default=None,
+                   help=f"seed of the update order, 0 to 2**63 - 1 (default: {default_of(match, 'seed')})")
     p.add_argument("--stop-rule", choices=STOP_RULES, default=None,
                    help="sweep: a full sweep without change; stall: 200 idle attempts "
                    f"(default: {default_of(match, 'stop_rule')})")
@@ -79,6 +79,23 @@ def window_record(config: MatchConfig, auto: bool) -> dict:
     """The candidate window a command used, for its JSON (``auto``: measured with ``--shift auto``)."""
     return {"shift": float(config.shift), "width": float(config.window_width),
             "height": float(config.window_height), "auto": bool(auto)}
+
+
+def seed(text: str) -> int:
+    """An argparse type: a seed from 0 to :data:`ismb_lab._validation.MAX_SEED` (2**63 - 1).
+
+    >>> seed("7")
+    7
+    """
+    from .._validation import MAX_SEED
+
+    text = text.strip()
+    value = int(text) if text.isascii() and text.isdigit() and len(text) <= len(str(MAX_SEED)) else -1
+    if not 0 <= value <= MAX_SEED:
+        shown = text if len(text) <= 40 else text[:37] + "..."
+        raise argparse.ArgumentTypeError(f"a seed is a whole number from 0 to {MAX_SEED} (2**63 - 1), "
+                                         f"not {shown!r}")
+    return value
 
 
 def _shift(text: str):

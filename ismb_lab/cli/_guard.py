@@ -7,7 +7,7 @@
 * :func:`json_text` and :func:`save_figure`: every JSON and plot output is
   written atomically through :func:`ismb_lab._files.atomic_write_bytes`.
 
-Limits (each raised by an environment variable; ``ismb-lab --help`` lists them):
+Limits (each raised, or lowered, by an environment variable; ``ismb-lab --help`` lists them):
 
 =========================  =========  =============================================
 variable                   default    what it bounds
@@ -18,10 +18,21 @@ ISMB_LAB_MAX_POPULATION    1000       ``--population`` of the GA
 ISMB_LAB_MAX_GENERATIONS   100000     ``--generations`` of the GA
 ISMB_LAB_MAX_SEEDS         100        ``--seeds`` and ``--fit-seeds`` of evaluate
 =========================  =========  =============================================
+
+Each variable is a whole number from 1 to :data:`MOST` (ISMB_LAB_MAX_PIXELS: to
+:data:`ismb_lab.io.MOST_PIXELS`).  A limit bounds what a command would use, typed or
+not: a value typed above it is refused in one line, and an option left out whose
+default is above it (``ISMB_LAB_MAX_GENERATIONS=5`` against tune's 500 generations) is
+lowered to the limit, with a note on stderr.  So a teacher can lower a limit for a
+class, and a plain ``ismb-lab tune`` still runs, within it.
+
+A targets file holds at most :data:`ismb_lab.targets.MAX_PAIRS` pairs in
+:data:`ismb_lab.targets.MAX_BYTES` bytes (fixed, not a variable).
 """
 
 from __future__ import annotations
 
+import inspect
 import json
 import math
 import os
@@ -32,7 +43,8 @@ from pathlib import Path
 
 from .._files import atomic_write_bytes, check_input, check_output
 
-__all__ = ["LIMITS", "Interrupts", "UsageError", "interrupted", "json_text", "limit", "preflight", "save_figure"]
+__all__ = ["LIMITS", "MOST", "Interrupts", "UsageError", "interrupted", "json_text", "limit", "preflight",
+           "save_figure"]
 
 class UsageError(Exception):
     """A mistake in the command line or its files, reported in one line."""
@@ -54,19 +66,79 @@ OUTPUTS = {"json": "--json", "plot": "--plot", "out": "--out"}
 _ACTIVE: list = []
 
 
+#: The most any ISMB_LAB_MAX_* variable but ISMB_LAB_MAX_PIXELS may be set to.
+MOST = 1_000_000_000
+
+
 def limit(name: str) -> int:
-    """The limit in force for `name` (a key of :data:`LIMITS`), from the environment or the default."""
+    """The limit in force for `name` (a key of :data:`LIMITS`), from the environment or the default.
+
+    >>> limit("generations") >= 1
+    True
+    """
     variable, default = LIMITS[name][:2]
-    raw = os.environ.get(variable)
-    if raw is None or raw.strip() == "":
+    raw = (os.environ.get(variable) or "").strip()
+    if raw == "":
         return default
-    try:
-        value = int(raw)
-    except ValueError:
-        value = 0
-    if value < 1:
-        raise UsageError(f"{variable} must be a whole number >= 1, got {raw!r}")
+    # Compared as text first: int() of thousands of digits is slow, then refused anyway.
+    value = int(raw) if raw.isascii() and raw.isdigit() and len(raw) <= len(str(MOST)) else 0
+    if not 1 <= value <= MOST:
+        raise UsageError(f"{variable} must be a whole number from 1 to {MOST}, got {_short(raw)!r}")
     return value
+
+
+def _short(text) -> str:
+    """`text` (or a number) cut to 40 characters, for a one-line message."""
+    if isinstance(text, int):
+        from .._validation import _shown_int
+        return _shown_int(text)
+    return text if len(text) <= 40 else text[:37] + "..."
+
+
+def _defaults(command: str) -> dict:
+    """What each limited option of `command` is when it is left out."""
+    from ..genetic import GAConfig
+    from ..matching import MatchConfig
+
+    ga = GAConfig()
+    values = {"n_max": MatchConfig().n_max, "population": ga.population, "generations": ga.generations}
+    if command == "depth":
+        from ..depth_demo import DEPTH_MATCH_CONFIG
+        values["n_max"] = DEPTH_MATCH_CONFIG.n_max
+    if command == "tune":   # the library's defaults, which the commands fall back to
+        from ..tuning import tune
+        values["fit_seeds"] = _keyword_default(tune, "seeds")
+    if command == "evaluate":
+        from ..protocol import protocol
+        values.update(seeds=_keyword_default(protocol, "seeds"),
+                      fit_seeds=_keyword_default(protocol, "fit_seeds"))
+    return values
+
+
+def _keyword_default(function, name: str):
+    """The default of `function`'s keyword `name`; None for a stand-in without it (a test's)."""
+    parameter = inspect.signature(function).parameters.get(name)
+    return None if parameter is None else parameter.default
+
+
+def _bound(args, usage_error) -> None:
+    """Refuse a typed value above its limit; lower a default above it, with a note."""
+    defaults = None
+    for name, (variable, _, what, option) in LIMITS.items():
+        if not hasattr(args, name):
+            continue
+        value, most = getattr(args, name), limit(name)
+        if value is not None:
+            if value > most:
+                hint = f"set {variable}={value} to allow it" if value <= MOST else f"a limit is at most {MOST}"
+                raise usage_error(f"{option} {_short(value)} is above the limit of {most} {what}; {hint}")
+            continue
+        defaults = _defaults(getattr(args, "command", "")) if defaults is None else defaults
+        default = defaults.get(name)
+        if default is not None and default > most:
+            setattr(args, name, most)
+            print(f"ismb-lab: note: {option} defaults to {default}, above {variable}={most}: "
+                  f"using {option} {most}", file=sys.stderr)
 
 
 class Interrupts:
@@ -191,13 +263,11 @@ def _manifest_files(path) -> list:
 def preflight(args, usage_error) -> None:
     """Check the limits, inputs and outputs of a parsed command line before its work starts.
 
-    Raises `usage_error` (or :class:`ismb_lab._files.OutputError`) with a one-line message.
+    An option left out whose default is above its limit is set to the limit here (see
+    the module's description).  Raises `usage_error` (or :class:`ismb_lab._files.OutputError`)
+    with a one-line message.
     """
-    for name, (variable, _, what, option) in LIMITS.items():
-        value = getattr(args, name, None)
-        if isinstance(value, int) and value > limit(name):
-            raise usage_error(f"{option} {value} is above the limit of {limit(name)} {what}; "
-                              f"set {variable}={value} to allow it")
+    _bound(args, usage_error)
     inputs = [getattr(args, a) for a in INPUTS if getattr(args, a, None) is not None]
     for attr in INPUTS:
         if getattr(args, attr, None) is not None:

@@ -15,9 +15,30 @@ def add_parser(sub) -> None:
     r.set_defaults(run=run)
 
 
+def check_outputs(out: Path) -> None:
+    """Before rendering: every file render writes is new or a regular, writable file, and every
+    folder on the way below `out` is a real folder (no link, device, FIFO or read-only file)."""
+    from .._files import OutputError, check_replace
+    from ..gallery import gallery_files
+
+    checked = set()
+    for path in gallery_files(out):
+        folders = [f for f in path.relative_to(out).parents if f != Path(".")]
+        for folder in reversed(folders):
+            if folder in checked:
+                continue
+            checked.add(folder)
+            where = out / folder
+            if where.is_symlink() or (where.exists() and not where.is_dir()):
+                kind = "a symbolic link" if where.is_symlink() else "not a folder"
+                raise OutputError(f"--out {str(where)!r} is {kind}; render writes only into real folders")
+        check_replace(path, what="--out")
+
+
 def run(args) -> int:
     from ..gallery import render_gallery
 
+    check_outputs(Path(args.out))
     for path in render_gallery(args.out):
         print(path)
     return 0
