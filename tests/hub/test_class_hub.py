@@ -184,7 +184,9 @@ import glob, os, sys, time
 home, stop, targets = os.path.expanduser("~"), sys.argv[1], sys.argv[2:]
 swaps, end = 0, time.monotonic() + 120
 while not os.path.exists(stop) and time.monotonic() < end:
-    for place in [home + "/ismb_lab"] + glob.glob(home + "/.ismb_lab-*/notebooks"):
+    # The folders the copy is writing: its parts, in the private building folder or in place.
+    places = glob.glob(home + "/.ismb_lab-*") + [home + "/ismb_lab"]
+    for place in [p + "/" + part for p in places for part in ("notebooks", "images", "manifests")]:
         target = targets[swaps % len(targets)]
         try:
             if os.path.isdir(place) and not os.path.islink(place):
@@ -268,8 +270,9 @@ def test_real_accounts_log_in_to_private_copies_with_culling_and_a_memory_limit(
     url, (ann, bob, cat) = class_hub["url"], class_hub["students"]
     limit = hub_start.parse_size(MEM_LIMIT)
 
-    # A process of cat's keeps swapping ~/ismb_lab (and the copy's folders) for symbolic links
-    # to a root-only folder and an /etc-like one while cat's server starts.
+    # A process of cat's keeps swapping the folders the copy writes for symbolic links to a
+    # root-only folder and an /etc-like one while cat's server starts (a link in place of
+    # ~/ismb_lab itself: test_hub_start.py).
     shared = class_hub["shared"]
     secret, etc = Path(tempfile.mkdtemp(prefix="ismb-secret-")), Path(tempfile.mkdtemp(prefix="ismb-etc-"))
     try:
