@@ -80,17 +80,21 @@ class Accounts:
         out = subprocess.run(["pgrep", "-u", str(account.uid)], capture_output=True, text=True)
         return [int(p) for p in out.stdout.split()]
 
+    def stop_processes(self, account: Account) -> None:
+        """TERM, then KILL, every process of `account` (by its PIDs, never by name)."""
+        for sig in (signal.SIGTERM, signal.SIGKILL):
+            for pid in self.processes(account):
+                try:
+                    os.kill(pid, sig)
+                except ProcessLookupError:
+                    pass
+            deadline = time.monotonic() + 5
+            while self.processes(account) and time.monotonic() < deadline:
+                time.sleep(0.1)
+
     def remove_all(self) -> None:
         for account in self.made:
-            for sig in (signal.SIGTERM, signal.SIGKILL):
-                for pid in self.processes(account):
-                    try:
-                        os.kill(pid, sig)
-                    except ProcessLookupError:
-                        pass
-                deadline = time.monotonic() + 5
-                while self.processes(account) and time.monotonic() < deadline:
-                    time.sleep(0.1)
+            self.stop_processes(account)
             for top in (Path("/tmp"), Path("/var/tmp"), Path("/dev/shm")):
                 for entry in top.iterdir() if top.is_dir() else ():
                     try:
@@ -140,11 +144,13 @@ def student_python():
     folder = Path(tempfile.mkdtemp(prefix="ismb-hub-venv-"))
     try:
         folder.chmod(0o755)
+        started = time.monotonic()
         venv = folder / "venv"
         subprocess.run([str(SYSTEM_PYTHON), "-m", "venv", str(venv)], check=True)
         pip = [str(venv / "bin" / "python"), "-m", "pip", "install", "--quiet"]
         subprocess.run(pip + [f"{ROOT}[hub]"], check=True, timeout=900)
         subprocess.run(["chmod", "-R", "a+rX", str(folder)], check=True)
+        print(f"the students' venv was built in {time.monotonic() - started:.0f} s")
         yield venv
     finally:
         shutil.rmtree(folder, ignore_errors=True)
