@@ -102,6 +102,9 @@ c.JupyterHub.spawner_class = CourseSpawner
 c.Spawner.cmd = [str(VENV / "bin" / "python"), "-m", "ismb_lab.hub_start", "serve"]
 c.Spawner.environment = {
     "ISMB_HUB_COURSE": str(COURSE),
+    # nbgrader's course and exchange (deploy/course/), teacher tools hidden: staged by hub_start.
+    "JUPYTER_CONFIG_PATH": str(COURSE / "config"),
+    **{name: os.environ[name] for name in ("ISMB_COURSE_ID", "ISMB_NBGRADER_EXCHANGE") if name in os.environ},
     "PATH": f"{VENV / 'bin'}:/usr/local/bin:/usr/bin:/bin",
     # Activity reports often enough for the culler's timeout.
     "JUPYTERHUB_ACTIVITY_INTERVAL": str(max(5, min(300, CULL_TIMEOUT // 4))),

@@ -8,7 +8,9 @@ link the student swaps in mid-copy leads only where the student could write anyw
 
 The teacher prepares the course folder once with ``python -m ismb_lab.hub_start stage
 REPOSITORY COURSE``: the notebooks, images and manifests, without solutions, labels or
-lock files, readable by everyone.
+lock files, readable by everyone, and ``COURSE/config``, the folder the hub puts on the
+students' ``JUPYTER_CONFIG_PATH``: the course's ``nbgrader_config.py`` (its exchange, from
+``deploy/course/``) and a page config that hides nbgrader's teacher tools from students.
 
 Memory: :func:`make_cgroups` (run by the hub, as root) gives each student a memory and
 a CPU cgroup (cgroup v1) where the machine has them; :func:`enter` (run in the new
@@ -21,6 +23,7 @@ from __future__ import annotations
 
 import argparse
 import errno
+import json
 import os
 import pwd
 import re
@@ -32,7 +35,7 @@ from pathlib import Path
 
 from ._validation import ParameterError, message
 
-__all__ = ["PARTS", "IGNORE", "parse_size", "stage", "copy_course", "cgroup_dirs", "make_cgroups",
+__all__ = ["PARTS", "IGNORE", "TEACHER_TOOLS", "parse_size", "stage", "copy_course", "cgroup_dirs", "make_cgroups",
            "enter", "remove_cgroups", "main"]
 
 #: What a student gets a copy of.
@@ -40,6 +43,9 @@ PARTS = ("notebooks", "images", "manifests")
 #: Never copied: teachers' solutions, anyone's labels, parameters, lock files and photos.
 IGNORE = (".ipynb_checkpoints", "targets-*.json", "my_targets*.json", "params-*.json", ".targets-*.lock",
           "photos-*", "solutions")
+#: nbgrader's JupyterLab plugins that only a teacher's course folder can use.
+TEACHER_TOOLS = ("@jupyter/nbgrader:formgrader", "@jupyter/nbgrader:create-assignment",
+                 "@jupyter/nbgrader:course-list")
 #: The folder in each home, and the cgroup folder that holds one cgroup per student.
 COPY = "ismb_lab"
 CGROUP_GROUP = "ismb-hub"
@@ -85,11 +91,22 @@ def stage(repository, course) -> list[str]:
         raise ParameterError(message("repository", "stage", "a folder with notebooks/ in it", str(source)))
     course.mkdir(parents=True)
     copied = _copy_parts(source, course)
+    if (source / "deploy" / "course" / "nbgrader_config.py").is_file():
+        _stage_config(source / "deploy" / "course", course / "config")
+        copied.append("config")
     for folder, dirs, files in os.walk(course):
         os.chmod(folder, 0o755)
         for name in files:
             os.chmod(os.path.join(folder, name), 0o644)
     return copied
+
+
+def _stage_config(course_config: Path, target: Path) -> None:
+    """The students' Jupyter config folder: the course's nbgrader config, teacher tools hidden."""
+    (target / "labconfig").mkdir(parents=True)
+    shutil.copy(course_config / "nbgrader_config.py", target / "nbgrader_config.py")
+    page = {"disabledExtensions": {name: True for name in TEACHER_TOOLS}}
+    (target / "labconfig" / "page_config.json").write_text(json.dumps(page, indent=1) + "\n")
 
 
 def _private_folder(path: Path) -> bool:

@@ -326,6 +326,13 @@ def test_real_accounts_log_in_to_private_copies_with_culling_and_a_memory_limit(
         assert all(p.lstat().st_uid == student.uid for p in copy.rglob("*"))
     for student in (ann, bob, cat):
         assert root_owned(student.home) == []
+
+    # The course's nbgrader config reaches the students' servers, with the teacher's tools
+    # hidden from their JupyterLab and the Assignments tab kept.
+    page = sessions[ann.name].http.get(f"{url}/user/{ann.name}/lab", timeout=30).text
+    found = re.search(r'<script id="jupyter-config-data" type="application/json">(.*?)</script>', page, re.S)
+    disabled = json.loads(found.group(1))["disabledExtensions"]
+    assert set(hub_start.TEACHER_TOOLS) <= set(disabled) and "@jupyter/nbgrader:assignment-list" not in disabled
     for reader, owner in ((bob, ann), (ann, bob), (cat, ann)):
         for command in (f"cat {owner.home}/ismb_lab/notebooks/04_label_targets.ipynb",
                         f"ls {owner.home}/ismb_lab"):

@@ -1,5 +1,6 @@
 """ismb_lab.hub_start without a hub: staging, the student's copy, sizes and cgroup folders."""
 
+import json
 import os
 import stat
 from pathlib import Path
@@ -89,3 +90,19 @@ def test_no_memory_controller_means_no_cgroups(tmp_path):
     (tmp_path / "plain" / "memory").mkdir(parents=True)      # a folder, not a cgroup file system
     assert hub_start.make_cgroups("student", 2**30, root=tmp_path / "plain") == []
     assert not (tmp_path / "plain" / "memory" / "ismb-hub" / "student").exists()
+
+
+def test_stage_puts_the_course_config_beside_the_copy_never_into_it(repository, tmp_path):
+    (repository / "deploy" / "course").mkdir(parents=True)
+    (repository / "deploy" / "course" / "nbgrader_config.py").write_text("c = get_config()\n")
+    course = tmp_path / "course"
+    assert hub_start.main(["stage", str(repository), str(course)]) == 0
+    config = course / "config"
+    assert (config / "nbgrader_config.py").read_text() == "c = get_config()\n"
+    page = json.loads((config / "labconfig" / "page_config.json").read_text())
+    assert set(page["disabledExtensions"]) == set(hub_start.TEACHER_TOOLS)
+    assert stat.S_IMODE((config / "nbgrader_config.py").stat().st_mode) == 0o644
+    home = tmp_path / "home"
+    home.mkdir()
+    hub_start.copy_course(course, home)
+    assert not (home / hub_start.COPY / "config").exists()
