@@ -21,7 +21,7 @@ import sys
 
 from .. import __version__
 from .._files import OutputError
-from ._guard import LIMITS, Interrupts, preflight
+from ._guard import LIMITS, Interrupts, interrupted_line, preflight
 
 __all__ = ["COMMANDS", "UsageError", "build_parser", "main"]
 
@@ -80,8 +80,7 @@ def _cli_words(text: str) -> str:
 
 
 def _interrupted(interrupts) -> int:
-    how = "" if interrupts.signum in (None, 2) else f" ({interrupts.name})"
-    print(f"ismb-lab: interrupted{how}", file=sys.stderr)
+    print(interrupted_line(), file=sys.stderr)
     return interrupts.exit_code
 
 

@@ -12,6 +12,7 @@ from ..solvers import DEFAULT_SOLVER
 from .. import tuning
 from ._common import (DEFAULT_METHOD, UsageError, add_feature_options, add_ga_options, add_method_option,
                       add_solver_option, default_of, ga_config, match_config, progress_bar)
+from ._guard import deferred_signals, interrupted, interrupted_line, is_interruption
 
 __all__ = ["add_parser", "run"]
 
@@ -23,7 +24,8 @@ def add_parser(sub) -> None:
     t = sub.add_parser("tune", help="fit the parameters to target pairs with the GA (ch. 4)",
                        description="Fit a method's parameters to the target pairs of one image pair "
                        "with the real-coded GA, and write them for 'ismb-lab match --params-file'. "
-                       "Ctrl-C stops early and still writes the best parameters so far.")
+                       "Ctrl-C (or SIGTERM, SIGHUP) stops early and still writes the best parameters "
+                       "so far; if no generation had finished, its one line says nothing was saved.")
     t.add_argument("left", type=Path, help="left image file")
     t.add_argument("right", type=Path, help="right image file")
     t.add_argument("targets", type=Path, help="target pairs (JSON, as saved by the labeller)")
@@ -40,7 +42,51 @@ def add_parser(sub) -> None:
     t.set_defaults(run=run)
 
 
+class _Fit:
+    """What a run of the GA has to keep: its last generation, and whether the file is written."""
+
+    def __init__(self, args, method, solver, seed, fit_seeds, targets):
+        self.out, self.method, self.solver = args.out, method, solver
+        self.extra = {"seed": seed, "fit_seeds": fit_seeds, "targets": targets}
+        self.last, self.written = None, False
+
+    def write(self, interrupted: bool):
+        """Write the last generation's best parameters (a signal meanwhile waits); return them."""
+        params = tuning.to_params(self.method, self.last.best_chromosome)
+        with deferred_signals():
+            save_params(self.out, self.method, params, solver=self.solver, fitness=self.last.best,
+                        generations=self.last.index, **self.extra, interrupted=interrupted)
+            self.written = True
+        return params
+
+
 def run(args) -> int:
+    fit = []
+    try:
+        return _run(args, fit)
+    except BaseException as exc:
+        if not is_interruption(exc):
+            raise
+        with deferred_signals():   # a second signal cannot cut the write or the line short
+            print(interrupted_line(_keep(fit[0] if fit else None)), file=sys.stderr)
+        return 130
+
+
+def _keep(fit) -> str:
+    """After a signal: write the best parameters so far unless written; say what was saved."""
+    if fit is not None and fit.written:
+        return f"the parameters were written to {fit.out}"
+    if fit is None or fit.last is None:
+        return "nothing was saved: no GA generation had finished"
+    try:
+        fit.write(interrupted=True)
+    except OSError as exc:
+        return f"nothing was saved: cannot write {fit.out}: {exc.strerror or exc}"
+    return (f"the best parameters so far were written to {fit.out} (fitness {fit.last.best:g} "
+            f"after {fit.last.index} generations)")
+
+
+def _run(args, fit: list) -> int:
     method, solver, ga = args.method or DEFAULT_METHOD, args.solver or DEFAULT_SOLVER, ga_config(args)
     seed = GA_SEED if args.seed is None else args.seed
     fit_seeds = FIT_SEEDS if args.fit_seeds is None else args.fit_seeds
@@ -52,25 +98,18 @@ def run(args) -> int:
     if len(case.targets) == 0:
         raise UsageError(f"{args.targets}: no target pair lies on the corners found "
                          f"({len(case.left_out)} targets, {len(case.prepared.problem.left_xy)} left corners)")
+    fit.append(_Fit(args, method, solver, seed, fit_seeds, len(case.targets)))
     records = tuning.tune([case], method, rng=seed, ga=ga, solver=solver, seeds=fit_seeds)
-    best, interrupted = None, False
     with progress_bar(ga.generations + 1, f"Method-{method} GA") as bar:
-        try:
-            for best in records:
-                bar.update(1)
-                bar.set_postfix(best=f"{best.best:g}", mean=f"{best.mean:.2f}", target=len(case.targets))
-        except KeyboardInterrupt:
-            interrupted = True
-    if best is None:
+        for fit[0].last in records:
+            bar.update(1)
+            bar.set_postfix(best=f"{fit[0].last.best:g}", mean=f"{fit[0].last.mean:.2f}",
+                            target=len(case.targets))
+    params, best = fit[0].write(interrupted=False), fit[0].last
+    if interrupted():   # a signal came during the write, which finished first
         raise KeyboardInterrupt
-    params = tuning.to_params(method, best.best_chromosome)
-    save_params(args.out, method, params, solver=solver, fitness=best.best, generations=best.index,
-                seed=seed, fit_seeds=fit_seeds, targets=len(case.targets), interrupted=interrupted)
     result = tuning.evaluate([case], method, params, solver=solver)
     print(f"Method-{method} ({solver}): best fitness {best.best:g} of {len(case.targets)} after "
           f"{best.index} generations; C/E/T {result}; parameters {params.to_dict()}")
     print(f"written to {args.out}")
-    if interrupted:
-        print("ismb-lab: interrupted; the best parameters so far were written", file=sys.stderr)
-        return 130
     return 0
