@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import os
+import sys
 from pathlib import Path
 
 from .._files import atomic_write_text
@@ -10,7 +11,7 @@ from ..protocol import format_protocol, load_manifest, protocol
 from ..solvers import DEFAULT_SOLVER, SOLVERS
 from ._common import (DEFAULT_METHOD, BestSoFar, UsageError, add_ga_options, add_method_option,
                       add_solver_option, default_of, ga_config, progress_bar)
-from ._guard import json_text
+from ._guard import deferred_signals, interrupted, interrupted_line, is_interruption, json_text
 
 __all__ = ["add_parser", "run"]
 
@@ -49,14 +50,27 @@ def add_parser(sub) -> None:
                    "rows' 'Training' column is skipped)")
     e.add_argument("--jobs", type=int, default=None, metavar="N",
                    help=f"worker processes for the GA fits and the scores; the report is the same for "
-                   f"every N (default: all cores, {available_cores()} here)")
-    e.add_argument("--json", type=Path, default=None, metavar="OUT", help="write the report as JSON")
+                   f"every N (default: all cores, {available_cores()} here); the workers end with "
+                   "the command, however it ends")
+    e.add_argument("--json", type=Path, default=None, metavar="OUT",
+                   help="write the report as JSON; when a signal stops the run, OUT gets the best "
+                   "parameters so far, marked \"interrupted\": true (with --jobs above 1, of the last "
+                   "fit that finished), or nothing, as the one line on stderr says")
     e.set_defaults(run=run)
 
 
 def available_cores() -> int:
     """The cores this process may run on."""
     return len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else os.cpu_count() or 1
+
+
+def _stopped(best, path, unit: str) -> int:
+    """After a signal: write the best parameters so far to `path`, or say that nothing was saved."""
+    if best.record is None:
+        where = f" to {path}" if path is not None else ""
+        print(interrupted_line(f"nothing was written{where}: no GA {unit} had finished"), file=sys.stderr)
+        return 130
+    return best.save(path)
 
 
 def run(args) -> int:
@@ -93,13 +107,21 @@ def run(args) -> int:
         report = protocol(cases, method, ga=ga, peers=args.peers, progress=progress,
                           solvers=tuple(args.solvers), fit_all=not args.held_out_only, jobs=jobs,
                           one_to_one=args.one_to_one, **given)
-    except KeyboardInterrupt:
-        return best.save(args.json)
+    except BaseException as exc:
+        if not is_interruption(exc):
+            raise
+        with deferred_signals():   # a second signal cannot cut the write or the line short
+            return _stopped(best, args.json, "fit" if jobs > 1 else "generation")
     finally:
         for bar in bars.values():
             bar.close()
-    print(format_protocol(report))
-    if args.json is not None:
-        data = {**report.to_dict(), "ga_seed": given.get("rng", DEFAULTS["rng"])}
-        atomic_write_text(args.json, json_text(data))
+    with deferred_signals():   # the work is done: a signal now waits for its report
+        print(format_protocol(report))
+        if args.json is not None:
+            data = {**report.to_dict(), "ga_seed": given.get("rng", DEFAULTS["rng"])}
+            atomic_write_text(args.json, json_text(data))
+    if interrupted():
+        done = "the report is complete" + (f" and written to {args.json}" if args.json is not None else "")
+        print(interrupted_line(done), file=sys.stderr)
+        return 130
     return 0
