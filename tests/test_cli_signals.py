@@ -148,3 +148,42 @@ def test_a_signal_after_the_write_says_the_file_is_there(lab, tmp_path, monkeypa
     assert tune(lab, out, "--generations", "2") == 128 + signal.SIGTERM
     assert f"the parameters were written to {out}" in one_line(capsys)
     assert json.loads(out.read_text())["interrupted"] is False
+
+
+@pytest.fixture
+def manifest(lab, tmp_path):
+    entry = {"left": "left.png", "right": "right.png", "targets": "hard.json"}
+    path = tmp_path / "m.json"
+    path.write_text(json.dumps({"pairs": [{**entry, "name": "a"}, {**entry, "name": "b"}]}))
+    return str(path)
+
+
+def evaluate(manifest, out):
+    return main(["evaluate", manifest, "--jobs", "1", "--seeds", "1", "--population", "6",
+                 "--generations", "400", "--json", str(out)])
+
+
+@pytest.mark.parametrize("call", [1, 6 * 3 + 2])
+def test_evaluate_signalled_inside_the_network_run_keeps_the_best_so_far(manifest, tmp_path, monkeypatch,
+                                                                        capsys, call):
+    signal_on_call(monkeypatch, ismb_lab.tuning, "solve", call, like_numba=True)
+    out = tmp_path / "report.json"
+    assert evaluate(manifest, out) == 128 + signal.SIGTERM
+    line = one_line(capsys)
+    if call == 1:
+        assert line == (f"ismb-lab: interrupted (SIGTERM); nothing was written to {out}: "
+                        "no GA generation had finished")
+        assert not out.exists()
+    else:
+        report = json.loads(out.read_text())
+        assert report["interrupted"] is True and report["fitted_on"] == "a" and report["generations"] >= 1
+        assert "best parameters so far" in line, line
+
+
+def test_evaluate_signalled_while_writing_its_report_finishes_it(manifest, tmp_path, monkeypatch, capsys):
+    out = tmp_path / "report.json"
+    signal_on_call(monkeypatch, ismb_lab._files.os, "replace", 1)
+    assert main(["evaluate", manifest, "--jobs", "1", "--seeds", "1", "--population", "6",
+                 "--generations", "2", "--json", str(out)]) == 128 + signal.SIGTERM
+    assert f"the report is complete and written to {out}" in one_line(capsys)
+    assert "interrupted" not in json.loads(out.read_text())
