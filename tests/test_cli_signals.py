@@ -18,6 +18,8 @@ from pathlib import Path
 import pytest
 
 import ismb_lab._files
+import ismb_lab.cli.evaluate  # noqa: F401  (imported before any test wraps a function of tuning,
+import ismb_lab.cli.tune  # noqa: F401     which ismb_lab.protocol binds by name at its import)
 import ismb_lab.tuning
 from ismb_lab.cli import main
 
@@ -91,6 +93,17 @@ def test_before_the_first_generation_the_line_says_nothing_was_saved(lab, tmp_pa
     assert tune(lab, out, "--generations", "400") == 128 + signal.SIGTERM
     line = one_line(capsys)
     assert line.startswith("ismb-lab: interrupted (SIGTERM)") and "nothing was saved" in line, line
+    assert not out.exists()
+
+
+def test_before_the_command_runs_the_line_says_nothing_was_saved(lab, tmp_path, monkeypatch, capsys):
+    import ismb_lab.cli
+
+    calls = signal_on_call(monkeypatch, ismb_lab.cli, "preflight", 1, signal.SIGINT)
+    out = tmp_path / "params.json"
+    assert tune(lab, out, "--generations", "400") == 130
+    assert len(calls) == 1
+    assert one_line(capsys) == "ismb-lab: interrupted; nothing was saved"
     assert not out.exists()
 
 

@@ -83,8 +83,9 @@ def _cli_words(text: str) -> str:
     return text.replace("or pass check_hash=False", "or give --no-hash-check to 'ismb-lab tune'")
 
 
-def _interrupted(interrupts) -> int:
-    print(interrupted_line(), file=sys.stderr)
+def _interrupted(interrupts, running: bool) -> int:
+    # Before its command runs, nothing has been written; once it runs, the command says what it kept.
+    print(interrupted_line("" if running else "nothing was saved"), file=sys.stderr)
     return interrupts.exit_code
 
 
@@ -158,7 +159,7 @@ def main(argv=None) -> int:
 
 
 def _main(argv, interrupts) -> int:
-    usage_errors, args = (OutputError, OSError), None
+    usage_errors, args, running = (OutputError, OSError), None, False
     with interrupts:
         try:
             from ._common import ParameterError, ParameterTypeError, UsageError
@@ -166,17 +167,18 @@ def _main(argv, interrupts) -> int:
             usage_errors += (UsageError, ParameterError, ParameterTypeError)
             args = build_parser().parse_args(argv)
             preflight(args, UsageError)
+            running = True
             code = args.run(args)
             if code == 130 and interrupts.signum is not None:
                 return interrupts.exit_code   # the command said "interrupted": say by which signal
             return code
         except KeyboardInterrupt:
-            return _interrupted(interrupts)
+            return _interrupted(interrupts, running)
         except Exception as exc:
             # A signal inside a C extension (numba's compiler, an import) can surface as a
             # SystemError or another exception: it is still an interruption, not a crash.
             if interrupts.signum is not None:
-                return _interrupted(interrupts)
+                return _interrupted(interrupts, running)
             if isinstance(exc, usage_errors):
                 print(f"ismb-lab: error: {_cli_words(str(exc))}", file=sys.stderr)
             elif isinstance(exc, RecursionError):

@@ -64,25 +64,40 @@ def available_cores() -> int:
     return len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else os.cpu_count() or 1
 
 
-def _stopped(best, path, unit: str) -> int:
-    """After a signal: write the best parameters so far to `path`, or say that nothing was saved."""
-    if best.record is None:
-        where = f" to {path}" if path is not None else ""
-        print(interrupted_line(f"nothing was written{where}: no GA {unit} had finished"), file=sys.stderr)
-        return 130
-    return best.save(path)
-
-
 def run(args) -> int:
     if args.ga_seed is not None and args.ga_seed < 0:
         raise UsageError(f"--ga-seed must be an integer >= 0, got {args.ga_seed}")
     jobs = available_cores() if args.jobs is None else args.jobs
     if jobs < 1:
         raise UsageError(f"--jobs must be an integer >= 1, got {jobs}")
+    best, reported = BestSoFar(args.method or DEFAULT_METHOD), []
+    try:
+        return _run(args, jobs, best, reported)
+    except BaseException as exc:
+        if not is_interruption(exc):
+            raise
+        with deferred_signals():   # a second signal cannot cut the write or the line short
+            return _stopped(best, args.json, "fit" if jobs > 1 else "generation", reported)
+
+
+def _stopped(best, path, unit: str, reported) -> int:
+    """After a signal: say that the report is out, or write the best parameters so far to
+    `path`, or say that nothing was written."""
+    where = f" to {path}" if path is not None else ""
+    if reported:
+        print(interrupted_line(f"the report is complete{' and written' + where if where else ''}"),
+              file=sys.stderr)
+    elif best.record is None:
+        print(interrupted_line(f"nothing was written{where}: no GA {unit} had finished"), file=sys.stderr)
+    else:
+        return best.save(path)
+    return 130
+
+
+def _run(args, jobs: int, best, reported: list) -> int:
     ga = ga_config(args)
     cases = load_manifest(args.manifest)
-    bars, method = {}, args.method or DEFAULT_METHOD
-    best = BestSoFar(method)
+    bars, method = {}, best.method
 
     def progress(name, record):
         best(name, record)
@@ -100,18 +115,13 @@ def run(args) -> int:
         bars[name].update(1)
         bars[name].set_postfix(best=f"{record.best:g}", mean=f"{record.mean:.2f}")
 
+    given = {k: v for k, v in (("train", args.train), ("seeds", args.seeds), ("fit_seeds", args.fit_seeds),
+                               ("rng", args.ga_seed), ("solver", args.solver),
+                               ("fit_solver", args.fit_solver)) if v is not None}
     try:
-        given = {k: v for k, v in (("train", args.train), ("seeds", args.seeds), ("fit_seeds", args.fit_seeds),
-                                   ("rng", args.ga_seed), ("solver", args.solver),
-                                   ("fit_solver", args.fit_solver)) if v is not None}
         report = protocol(cases, method, ga=ga, peers=args.peers, progress=progress,
                           solvers=tuple(args.solvers), fit_all=not args.held_out_only, jobs=jobs,
                           one_to_one=args.one_to_one, **given)
-    except BaseException as exc:
-        if not is_interruption(exc):
-            raise
-        with deferred_signals():   # a second signal cannot cut the write or the line short
-            return _stopped(best, args.json, "fit" if jobs > 1 else "generation")
     finally:
         for bar in bars.values():
             bar.close()
@@ -120,8 +130,7 @@ def run(args) -> int:
         if args.json is not None:
             data = {**report.to_dict(), "ga_seed": given.get("rng", DEFAULTS["rng"])}
             atomic_write_text(args.json, json_text(data))
+        reported.append(True)
     if interrupted():
-        done = "the report is complete" + (f" and written to {args.json}" if args.json is not None else "")
-        print(interrupted_line(done), file=sys.stderr)
-        return 130
+        raise KeyboardInterrupt
     return 0
