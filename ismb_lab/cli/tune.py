@@ -45,38 +45,41 @@ def add_parser(sub) -> None:
 class _Fit:
     """What a run of the GA has to keep: its last generation, and whether the file is written."""
 
-    def __init__(self, args, method, solver, seed, fit_seeds, targets):
-        self.out, self.method, self.solver = args.out, method, solver
-        self.extra = {"seed": seed, "fit_seeds": fit_seeds, "targets": targets}
-        self.last, self.written = None, False
+    def __init__(self, args):
+        self.out, self.method = args.out, args.method or DEFAULT_METHOD
+        self.solver = args.solver or DEFAULT_SOLVER
+        self.seed = GA_SEED if args.seed is None else args.seed
+        self.fit_seeds = FIT_SEEDS if args.fit_seeds is None else args.fit_seeds
+        self.targets, self.last, self.written = 0, None, False
 
     def write(self, interrupted: bool):
         """Write the last generation's best parameters (a signal meanwhile waits); return them."""
         params = tuning.to_params(self.method, self.last.best_chromosome)
         with deferred_signals():
             save_params(self.out, self.method, params, solver=self.solver, fitness=self.last.best,
-                        generations=self.last.index, **self.extra, interrupted=interrupted)
+                        generations=self.last.index, seed=self.seed, fit_seeds=self.fit_seeds,
+                        targets=self.targets, interrupted=interrupted)
             self.written = True
         return params
 
 
 def run(args) -> int:
-    fit = []
+    fit = _Fit(args)
     try:
         return _run(args, fit)
     except BaseException as exc:
         if not is_interruption(exc):
             raise
         with deferred_signals():   # a second signal cannot cut the write or the line short
-            print(interrupted_line(_keep(fit[0] if fit else None)), file=sys.stderr)
+            print(interrupted_line(_keep(fit)), file=sys.stderr)
         return 130
 
 
-def _keep(fit) -> str:
+def _keep(fit: _Fit) -> str:
     """After a signal: write the best parameters so far unless written; say what was saved."""
-    if fit is not None and fit.written:
+    if fit.written:
         return f"the parameters were written to {fit.out}"
-    if fit is None or fit.last is None:
+    if fit.last is None:
         return "nothing was saved: no GA generation had finished"
     try:
         fit.write(interrupted=True)
@@ -86,10 +89,8 @@ def _keep(fit) -> str:
             f"after {fit.last.index} generations)")
 
 
-def _run(args, fit: list) -> int:
-    method, solver, ga = args.method or DEFAULT_METHOD, args.solver or DEFAULT_SOLVER, ga_config(args)
-    seed = GA_SEED if args.seed is None else args.seed
-    fit_seeds = FIT_SEEDS if args.fit_seeds is None else args.fit_seeds
+def _run(args, fit: _Fit) -> int:
+    method, solver, ga = fit.method, fit.solver, ga_config(args)
     case = Case.from_files(args.left, args.right, args.targets, match_config(args),
                            check_hash=not args.no_hash_check)
     if len(case.left_out):
@@ -98,18 +99,17 @@ def _run(args, fit: list) -> int:
     if len(case.targets) == 0:
         raise UsageError(f"{args.targets}: no target pair lies on the corners found "
                          f"({len(case.left_out)} targets, {len(case.prepared.problem.left_xy)} left corners)")
-    fit.append(_Fit(args, method, solver, seed, fit_seeds, len(case.targets)))
-    records = tuning.tune([case], method, rng=seed, ga=ga, solver=solver, seeds=fit_seeds)
+    fit.targets = len(case.targets)
+    records = tuning.tune([case], method, rng=fit.seed, ga=ga, solver=solver, seeds=fit.fit_seeds)
     with progress_bar(ga.generations + 1, f"Method-{method} GA") as bar:
-        for fit[0].last in records:
+        for fit.last in records:
             bar.update(1)
-            bar.set_postfix(best=f"{fit[0].last.best:g}", mean=f"{fit[0].last.mean:.2f}",
-                            target=len(case.targets))
-    params, best = fit[0].write(interrupted=False), fit[0].last
+            bar.set_postfix(best=f"{fit.last.best:g}", mean=f"{fit.last.mean:.2f}", target=fit.targets)
+    params, best = fit.write(interrupted=False), fit.last
     if interrupted():   # a signal came during the write, which finished first
         raise KeyboardInterrupt
     result = tuning.evaluate([case], method, params, solver=solver)
-    print(f"Method-{method} ({solver}): best fitness {best.best:g} of {len(case.targets)} after "
+    print(f"Method-{method} ({solver}): best fitness {best.best:g} of {fit.targets} after "
           f"{best.index} generations; C/E/T {result}; parameters {params.to_dict()}")
     print(f"written to {args.out}")
     return 0
