@@ -11,7 +11,6 @@ set``, chained to the KeyboardInterrupt; the network hook raises it the same way
 
 import functools
 import json
-import shutil
 import signal
 from pathlib import Path
 
@@ -23,20 +22,11 @@ import ismb_lab.cli.tune  # noqa: F401     which ismb_lab.protocol binds by name
 import ismb_lab.tuning
 from ismb_lab.cli import main
 
-LAB = Path(__file__).resolve().parent.parent / "images" / "lab"
-
 
 @pytest.fixture
-def lab(tmp_path):
-    """images/lab's pair, and targets with two partners swapped: the GA never reaches the
-    target fitness, so it stops only when told."""
-    for name in ("left.png", "right.png"):
-        shutil.copy(LAB / name, tmp_path / name)
-    data = json.loads((LAB / "answer_key.json").read_text())
-    p = data["pairs"]
-    p[0]["right_xy"], p[1]["right_xy"] = p[1]["right_xy"], p[0]["right_xy"]
-    (tmp_path / "hard.json").write_text(json.dumps(data))
-    return [str(tmp_path / n) for n in ("left.png", "right.png", "hard.json")]
+def lab(hard_lab):
+    """The pair and targets the GA never fits exactly: it stops only when told."""
+    return hard_lab
 
 
 def signal_on_call(monkeypatch, owner, name, n, sig=signal.SIGTERM, like_numba=False):
@@ -164,11 +154,8 @@ def test_a_signal_after_the_write_says_the_file_is_there(lab, tmp_path, monkeypa
 
 
 @pytest.fixture
-def manifest(lab, tmp_path):
-    entry = {"left": "left.png", "right": "right.png", "targets": "hard.json"}
-    path = tmp_path / "m.json"
-    path.write_text(json.dumps({"pairs": [{**entry, "name": "a"}, {**entry, "name": "b"}]}))
-    return str(path)
+def manifest(hard_manifest):
+    return str(hard_manifest)
 
 
 def evaluate(manifest, out):

@@ -7,9 +7,7 @@ last step of its start (:func:`ismb_lab.protocol._start_worker`), so the signal 
 sent when the workers are known to have started: no timing.
 """
 
-import json
 import os
-import shutil
 import signal
 import subprocess
 import sys
@@ -19,7 +17,6 @@ from pathlib import Path
 import pytest
 
 ROOT = Path(__file__).resolve().parent.parent
-LAB = ROOT / "images" / "lab"
 
 pytestmark = pytest.mark.skipif(not sys.platform.startswith("linux"), reason="needs Linux /proc")
 
@@ -104,28 +101,13 @@ def test_leaving_the_pool_by_an_interrupt_ends_its_workers():
 
 
 @pytest.fixture
-def manifest(tmp_path):
-    """Two pairs whose targets the GA can never fit exactly: each fit runs all its generations."""
-    for name in ("left.png", "right.png"):
-        shutil.copy(LAB / name, tmp_path / name)
-    data = json.loads((LAB / "answer_key.json").read_text())
-    p = data["pairs"]
-    p[0]["right_xy"], p[1]["right_xy"] = p[1]["right_xy"], p[0]["right_xy"]
-    (tmp_path / "hard.json").write_text(json.dumps(data))
-    entry = {"left": "left.png", "right": "right.png", "targets": "hard.json"}
-    path = tmp_path / "m.json"
-    path.write_text(json.dumps({"pairs": [{**entry, "name": "a"}, {**entry, "name": "b"}]}))
-    return path
-
-
-@pytest.fixture
-def evaluate(manifest, tmp_path):
+def evaluate(hard_manifest, tmp_path):
     """``ismb-lab evaluate --jobs 2`` with fits that run for hours; everything it left is killed.
 
     Its stderr goes to a file: a worker that outlived it would hold a pipe open."""
     out, log = tmp_path / "report.json", tmp_path / "stderr.txt"
     with open(log, "w") as stderr:
-        proc = subprocess.Popen([sys.executable, "-m", "ismb_lab.cli", "evaluate", str(manifest), "--jobs",
+        proc = subprocess.Popen([sys.executable, "-m", "ismb_lab.cli", "evaluate", str(hard_manifest), "--jobs",
                                  "2", "--seeds", "1", "--generations", "100000", "--json", str(out)],
                                 stdout=subprocess.DEVNULL, stderr=stderr, cwd=ROOT,
                                 preexec_fn=lambda: signal.signal(signal.SIGTERM, signal.SIG_DFL))
