@@ -7,6 +7,8 @@ the value received.
 
 __version__ = "0.1.0"
 
+from . import _numba  # noqa: E402,F401  (before any kernel: numba needs a folder it can cache in)
+
 __all__ = ["ParameterError", "ParameterTypeError", "__version__"]
 
 

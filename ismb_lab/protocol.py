@@ -10,10 +10,13 @@ optionally scores other solvers of the same energy and the peer matchers of
 
 from __future__ import annotations
 
+import ctypes
 import json
 import multiprocessing
 import numbers
+import os
 import signal
+import sys
 from concurrent.futures import ProcessPoolExecutor
 from dataclasses import dataclass, field, replace
 from functools import cached_property
@@ -435,13 +438,56 @@ def _score_pair(case, own_params, method, tested, runs, solver, others, seeds, p
     return out
 
 
-def _ignore_interrupts() -> None:
-    # Ctrl-C reaches the whole process group; the parent stops the pool and reports once.
+_PR_SET_PDEATHSIG = 1   # from <linux/prctl.h>
+
+
+def _start_worker(parent: int) -> None:
+    """A worker's first step: die with its parent, and leave Ctrl-C to the parent.
+
+    Ctrl-C reaches the whole process group; the parent stops the pool and reports once.
+    SIGINT is ignored last: a worker whose SIGINT is ignored also asked to die with its parent.
+    """
+    _die_with_parent(parent)
     signal.signal(signal.SIGINT, signal.SIG_IGN)
 
 
+def _die_with_parent(parent: int) -> None:
+    """On Linux, ask the kernel for SIGKILL when the parent dies, however it dies (SIGKILL too).
+
+    Elsewhere the parent's :class:`_workers` stops the pool when interrupted, and a worker
+    left without a parent ends when it next reads from the pool.
+    """
+    if not sys.platform.startswith("linux"):
+        return
+    try:
+        libc = ctypes.CDLL(None, use_errno=True)
+        failed = libc.prctl(_PR_SET_PDEATHSIG, signal.SIGKILL, 0, 0, 0) != 0
+    except (OSError, AttributeError):
+        return
+    if not failed and os.getppid() != parent:   # it died before the request: no signal will come
+        os._exit(1)
+
+
+def _stop_workers(pool: ProcessPoolExecutor) -> None:
+    """Terminate the pool's workers now: a task they run is not waited for."""
+    stop = getattr(pool, "terminate_workers", None)   # Python 3.14
+    if stop is not None:
+        stop()
+        return
+    for process in list((pool._processes or {}).values()):
+        if process.is_alive():
+            process.terminate()
+
+
 class _workers:
-    """A process pool for ``jobs > 1`` (fresh interpreters: no state shared with the caller)."""
+    """A process pool for ``jobs > 1`` (fresh interpreters: no state shared with the caller).
+
+    Its workers die with the process that made them: an exception leaving the ``with``
+    block (Ctrl-C, a signal, an error) terminates them before it goes on, and on Linux
+    the kernel kills them if that process dies (``PR_SET_PDEATHSIG``), even by SIGKILL.
+    The pool is made, and its workers started, by the thread that enters the block; they
+    die if that thread ends, so enter it from a thread that outlives the pool.
+    """
 
     def __init__(self, jobs: int):
         self.jobs, self.pool = jobs, None
@@ -449,12 +495,14 @@ class _workers:
     def __enter__(self):
         if self.jobs > 1:
             self.pool = ProcessPoolExecutor(self.jobs, mp_context=multiprocessing.get_context("spawn"),
-                                            initializer=_ignore_interrupts)
+                                            initializer=_start_worker, initargs=(os.getpid(),))
         return self.pool
 
     def __exit__(self, kind, *_):
         if self.pool is not None:
-            self.pool.shutdown(wait=kind is None, cancel_futures=kind is not None)
+            if kind is not None:
+                _stop_workers(self.pool)
+            self.pool.shutdown(wait=True, cancel_futures=kind is not None)
         return False
 
 

@@ -33,3 +33,31 @@ def load_script():
         return module
 
     return load
+
+
+@pytest.fixture
+def hard_lab(tmp_path):
+    """images/lab's pair copied, with targets whose first two partners are swapped: the GA never
+    reaches the target fitness, so a fit stops only when told.  [left, right, hard.json] as str."""
+    import json
+    import shutil
+
+    lab = Path(__file__).resolve().parent.parent / "images" / "lab"
+    for name in ("left.png", "right.png"):
+        shutil.copy(lab / name, tmp_path / name)
+    data = json.loads((lab / "answer_key.json").read_text())
+    p = data["pairs"]
+    p[0]["right_xy"], p[1]["right_xy"] = p[1]["right_xy"], p[0]["right_xy"]
+    (tmp_path / "hard.json").write_text(json.dumps(data))
+    return [str(tmp_path / n) for n in ("left.png", "right.png", "hard.json")]
+
+
+@pytest.fixture
+def hard_manifest(hard_lab, tmp_path):
+    """A manifest of two pairs, "a" and "b", both :func:`hard_lab`'s."""
+    import json
+
+    entry = {"left": "left.png", "right": "right.png", "targets": "hard.json"}
+    path = tmp_path / "m.json"
+    path.write_text(json.dumps({"pairs": [{**entry, "name": "a"}, {**entry, "name": "b"}]}))
+    return path

@@ -10,6 +10,10 @@ a device, a FIFO or a read-only file unless ``--force``; symbolic links are writ
 through, never replaced).  SIGINT, SIGTERM and SIGHUP stop the work alike; the exit
 code is 128 + the signal's number (130 for Ctrl-C).
 
+A closed stdout or stderr (``ismb-lab match ... | head``) is not an error: what is
+printed after the reader left is dropped, the command's files are still written, and
+the exit code is the command's own (0 when it succeeded).
+
 The command modules are imported when the parser is built, not when this package
 is, so that a signal during start-up already finds the handlers of :func:`main`.
 """
@@ -21,7 +25,7 @@ import sys
 
 from .. import __version__
 from .._files import OutputError
-from ._guard import LIMITS, Interrupts, preflight
+from ._guard import LIMITS, Interrupts, interrupted_line, preflight
 
 __all__ = ["COMMANDS", "UsageError", "build_parser", "main"]
 
@@ -83,10 +87,61 @@ def _cli_words(text: str) -> str:
     return text.replace("or pass check_hash=False", "or give --no-hash-check to 'ismb-lab tune'")
 
 
-def _interrupted(interrupts) -> int:
-    how = "" if interrupts.signum in (None, 2) else f" ({interrupts.name})"
-    print(f"ismb-lab: interrupted{how}", file=sys.stderr)
+def _interrupted(interrupts, running: bool) -> int:
+    # Before its command runs, nothing has been written; once it runs, the command says what it kept.
+    print(interrupted_line("" if running else "nothing was saved"), file=sys.stderr)
     return interrupts.exit_code
+
+
+class _ReaderMayLeave:
+    """A stand-in for sys.stdout or sys.stderr that drops what is printed once the reader of
+    its pipe has gone (a BrokenPipeError), instead of failing the command."""
+
+    def __init__(self, stream):
+        self._stream = stream
+
+    def write(self, text):
+        try:
+            return self._stream.write(text)
+        except BrokenPipeError:
+            self._to_devnull()
+            return len(text)
+
+    def flush(self):
+        try:
+            self._stream.flush()
+        except BrokenPipeError:
+            self._to_devnull()
+
+    def _to_devnull(self):
+        # What is still buffered, and the interpreter's own flush at exit, go to /dev/null.
+        devnull = os.open(os.devnull, os.O_WRONLY)
+        try:
+            os.dup2(devnull, self._stream.fileno())
+        finally:
+            os.close(devnull)
+
+    def __getattr__(self, name):
+        return getattr(self._stream, name)
+
+
+class _closed_pipes_tolerated:
+    """``with _closed_pipes_tolerated():`` sys.stdout and sys.stderr as :class:`_ReaderMayLeave`."""
+
+    NAMES = ("stdout", "stderr")
+
+    def __enter__(self):
+        self._old = {name: getattr(sys, name) for name in self.NAMES}
+        for name, stream in self._old.items():
+            if stream is not None:
+                setattr(sys, name, _ReaderMayLeave(stream))
+
+    def __exit__(self, *exc):
+        for name, stream in self._old.items():
+            if stream is not None:
+                getattr(sys, name).flush()
+                setattr(sys, name, stream)
+        return False
 
 
 def main(argv=None) -> int:
@@ -98,7 +153,8 @@ def main(argv=None) -> int:
     itself with SIGINT at exit instead of returning 130.
     """
     interrupts = Interrupts()
-    code = _main(argv, interrupts)
+    with _closed_pipes_tolerated():
+        code = _main(argv, interrupts)
     if argv is None and interrupts.signum is not None:
         sys.stdout.flush()
         sys.stderr.flush()
@@ -107,7 +163,7 @@ def main(argv=None) -> int:
 
 
 def _main(argv, interrupts) -> int:
-    usage_errors, args = (OutputError, OSError), None
+    usage_errors, args, running = (OutputError, OSError), None, False
     with interrupts:
         try:
             from ._common import ParameterError, ParameterTypeError, UsageError
@@ -115,17 +171,18 @@ def _main(argv, interrupts) -> int:
             usage_errors += (UsageError, ParameterError, ParameterTypeError)
             args = build_parser().parse_args(argv)
             preflight(args, UsageError)
+            running = True
             code = args.run(args)
             if code == 130 and interrupts.signum is not None:
                 return interrupts.exit_code   # the command said "interrupted": say by which signal
             return code
         except KeyboardInterrupt:
-            return _interrupted(interrupts)
+            return _interrupted(interrupts, running)
         except Exception as exc:
             # A signal inside a C extension (numba's compiler, an import) can surface as a
             # SystemError or another exception: it is still an interruption, not a crash.
             if interrupts.signum is not None:
-                return _interrupted(interrupts)
+                return _interrupted(interrupts, running)
             if isinstance(exc, usage_errors):
                 print(f"ismb-lab: error: {_cli_words(str(exc))}", file=sys.stderr)
             elif isinstance(exc, RecursionError):

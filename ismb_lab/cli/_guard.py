@@ -1,7 +1,9 @@
 """What every ``ismb-lab`` command gets before and around its work.
 
 * :class:`Interrupts`: SIGINT, SIGTERM and SIGHUP all stop the work like Ctrl-C,
-  and the exit code is ``128 + signal number`` (130, 143, 129).
+  and the exit code is ``128 + signal number`` (130, 143, 129).  Within
+  :func:`deferred_signals` (the write of what an interrupted command keeps) a signal
+  is only recorded, so that a second one cannot cut that write short.
 * :func:`preflight`: the limits, the inputs (regular files only) and the outputs
   (:func:`ismb_lab._files.check_output`) are checked before any long work starts.
 * :func:`json_text` and :func:`save_figure`: every JSON and plot output is
@@ -43,8 +45,8 @@ from pathlib import Path
 
 from .._files import atomic_write_bytes, check_input, check_output
 
-__all__ = ["LIMITS", "MOST", "Interrupts", "UsageError", "interrupted", "json_text", "limit", "preflight",
-           "save_figure"]
+__all__ = ["LIMITS", "MOST", "Interrupts", "UsageError", "deferred_signals", "interrupted", "interrupted_line",
+           "is_interruption", "json_text", "limit", "preflight", "save_figure"]
 
 class UsageError(Exception):
     """A mistake in the command line or its files, reported in one line."""
@@ -145,7 +147,8 @@ class Interrupts:
     """Within ``with Interrupts() as i:``, SIGINT, SIGTERM and SIGHUP raise KeyboardInterrupt.
 
     The first signal is kept in ``i.signum``; :func:`interrupted` tells long loops
-    that one came, even if a C extension swallowed the KeyboardInterrupt.
+    that one came, even if a C extension swallowed the KeyboardInterrupt.  While
+    ``i.deferring`` is true a signal is recorded and nothing is raised.
     Handlers are installed only in the main thread, and a signal that was ignored
     when the process started (``nohup``) stays ignored.
     """
@@ -154,6 +157,7 @@ class Interrupts:
 
     def __init__(self):
         self.signum = None
+        self.deferring = False
         self._old = {}
         self._old_hook = None
         self._old_excepthook = None
@@ -175,7 +179,8 @@ class Interrupts:
     def _handle(self, signum, frame):
         if self.signum is None:
             self.signum = signum
-        raise KeyboardInterrupt
+        if not self.deferring:
+            raise KeyboardInterrupt
 
     def __enter__(self):
         if threading.current_thread() is threading.main_thread():
@@ -211,6 +216,41 @@ class Interrupts:
 def interrupted() -> bool:
     """True once a signal reached the innermost active :class:`Interrupts`."""
     return bool(_ACTIVE) and _ACTIVE[-1].signum is not None
+
+
+def is_interruption(exc: BaseException) -> bool:
+    """Whether `exc` is how a signal surfaced: a KeyboardInterrupt, or, once a signal came,
+    any exception (one raised inside a C extension such as numba's dispatcher reaches
+    Python as ``SystemError: ... returned a result with an exception set``)."""
+    return isinstance(exc, KeyboardInterrupt) or (isinstance(exc, Exception) and interrupted())
+
+
+def interrupted_line(outcome: str = "") -> str:
+    """The one line an interrupted command prints: which signal, and what became of its output.
+
+    >>> interrupted_line("nothing was saved")
+    'ismb-lab: interrupted; nothing was saved'
+    """
+    signum = _ACTIVE[-1].signum if _ACTIVE else None
+    how = "" if signum in (None, signal.SIGINT) else f" ({signal.Signals(signum).name})"
+    return f"ismb-lab: interrupted{how}" + (f"; {outcome}" if outcome else "")
+
+
+class deferred_signals:
+    """Within ``with deferred_signals():`` a signal is recorded (see :func:`interrupted`) but
+    raises nothing: the block runs to its end.  Outside an :class:`Interrupts` it does nothing."""
+
+    def __enter__(self):
+        self._interrupts = _ACTIVE[-1] if _ACTIVE else None
+        self._was = self._interrupts is not None and self._interrupts.deferring
+        if self._interrupts is not None:
+            self._interrupts.deferring = True
+        return self
+
+    def __exit__(self, *exc):
+        if self._interrupts is not None:
+            self._interrupts.deferring = self._was
+        return False
 
 
 def _plain(value):

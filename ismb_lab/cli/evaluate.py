@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import os
+import sys
 from pathlib import Path
 
 from .._files import atomic_write_text
@@ -10,7 +11,7 @@ from ..protocol import format_protocol, load_manifest, protocol
 from ..solvers import DEFAULT_SOLVER, SOLVERS
 from ._common import (DEFAULT_METHOD, BestSoFar, UsageError, add_ga_options, add_method_option,
                       add_solver_option, default_of, ga_config, progress_bar)
-from ._guard import json_text
+from ._guard import deferred_signals, interrupted, interrupted_line, is_interruption, json_text
 
 __all__ = ["add_parser", "run"]
 
@@ -49,8 +50,12 @@ def add_parser(sub) -> None:
                    "rows' 'Training' column is skipped)")
     e.add_argument("--jobs", type=int, default=None, metavar="N",
                    help=f"worker processes for the GA fits and the scores; the report is the same for "
-                   f"every N (default: all cores, {available_cores()} here)")
-    e.add_argument("--json", type=Path, default=None, metavar="OUT", help="write the report as JSON")
+                   f"every N (default: all cores, {available_cores()} here); the workers end with "
+                   "the command, however it ends")
+    e.add_argument("--json", type=Path, default=None, metavar="OUT",
+                   help="write the report as JSON; when a signal stops the run, OUT gets the best "
+                   "parameters so far, marked \"interrupted\": true (with --jobs above 1, of the last "
+                   "fit that finished), or nothing, as the one line on stderr says")
     e.set_defaults(run=run)
 
 
@@ -65,10 +70,34 @@ def run(args) -> int:
     jobs = available_cores() if args.jobs is None else args.jobs
     if jobs < 1:
         raise UsageError(f"--jobs must be an integer >= 1, got {jobs}")
+    best, reported = BestSoFar(args.method or DEFAULT_METHOD), []
+    try:
+        return _run(args, jobs, best, reported)
+    except BaseException as exc:
+        if not is_interruption(exc):
+            raise
+        with deferred_signals():   # a second signal cannot cut the write or the line short
+            return _stopped(best, args.json, "fit" if jobs > 1 else "generation", reported)
+
+
+def _stopped(best, path, unit: str, reported) -> int:
+    """After a signal: say that the report is out, or write the best parameters so far to
+    `path`, or say that nothing was written."""
+    where = f" to {path}" if path is not None else ""
+    if reported:
+        print(interrupted_line(f"the report is complete{' and written' + where if where else ''}"),
+              file=sys.stderr)
+    elif best.record is None:
+        print(interrupted_line(f"nothing was written{where}: no GA {unit} had finished"), file=sys.stderr)
+    else:
+        return best.save(path)
+    return 130
+
+
+def _run(args, jobs: int, best, reported: list) -> int:
     ga = ga_config(args)
     cases = load_manifest(args.manifest)
-    bars, method = {}, args.method or DEFAULT_METHOD
-    best = BestSoFar(method)
+    bars, method = {}, best.method
 
     def progress(name, record):
         best(name, record)
@@ -86,20 +115,22 @@ def run(args) -> int:
         bars[name].update(1)
         bars[name].set_postfix(best=f"{record.best:g}", mean=f"{record.mean:.2f}")
 
+    given = {k: v for k, v in (("train", args.train), ("seeds", args.seeds), ("fit_seeds", args.fit_seeds),
+                               ("rng", args.ga_seed), ("solver", args.solver),
+                               ("fit_solver", args.fit_solver)) if v is not None}
     try:
-        given = {k: v for k, v in (("train", args.train), ("seeds", args.seeds), ("fit_seeds", args.fit_seeds),
-                                   ("rng", args.ga_seed), ("solver", args.solver),
-                                   ("fit_solver", args.fit_solver)) if v is not None}
         report = protocol(cases, method, ga=ga, peers=args.peers, progress=progress,
                           solvers=tuple(args.solvers), fit_all=not args.held_out_only, jobs=jobs,
                           one_to_one=args.one_to_one, **given)
-    except KeyboardInterrupt:
-        return best.save(args.json)
     finally:
         for bar in bars.values():
             bar.close()
-    print(format_protocol(report))
-    if args.json is not None:
-        data = {**report.to_dict(), "ga_seed": given.get("rng", DEFAULTS["rng"])}
-        atomic_write_text(args.json, json_text(data))
+    with deferred_signals():   # the work is done: a signal now waits for its report
+        print(format_protocol(report))
+        if args.json is not None:
+            data = {**report.to_dict(), "ga_seed": given.get("rng", DEFAULTS["rng"])}
+            atomic_write_text(args.json, json_text(data))
+        reported.append(True)
+    if interrupted():
+        raise KeyboardInterrupt
     return 0

@@ -12,6 +12,7 @@ from ..solvers import DEFAULT_SOLVER
 from .. import tuning
 from ._common import (DEFAULT_METHOD, UsageError, add_feature_options, add_ga_options, add_method_option,
                       add_solver_option, default_of, ga_config, match_config, progress_bar)
+from ._guard import deferred_signals, interrupted, interrupted_line, is_interruption
 
 __all__ = ["add_parser", "run"]
 
@@ -23,7 +24,8 @@ def add_parser(sub) -> None:
     t = sub.add_parser("tune", help="fit the parameters to target pairs with the GA (ch. 4)",
                        description="Fit a method's parameters to the target pairs of one image pair "
                        "with the real-coded GA, and write them for 'ismb-lab match --params-file'. "
-                       "Ctrl-C stops early and still writes the best parameters so far.")
+                       "Ctrl-C (or SIGTERM, SIGHUP) stops early and still writes the best parameters "
+                       "so far; if no generation had finished, its one line says nothing was saved.")
     t.add_argument("left", type=Path, help="left image file")
     t.add_argument("right", type=Path, help="right image file")
     t.add_argument("targets", type=Path, help="target pairs (JSON, as saved by the labeller)")
@@ -40,10 +42,55 @@ def add_parser(sub) -> None:
     t.set_defaults(run=run)
 
 
+class _Fit:
+    """What a run of the GA has to keep: its last generation, and whether the file is written."""
+
+    def __init__(self, args):
+        self.out, self.method = args.out, args.method or DEFAULT_METHOD
+        self.solver = args.solver or DEFAULT_SOLVER
+        self.seed = GA_SEED if args.seed is None else args.seed
+        self.fit_seeds = FIT_SEEDS if args.fit_seeds is None else args.fit_seeds
+        self.targets, self.last, self.written = 0, None, False
+
+    def write(self, interrupted: bool):
+        """Write the last generation's best parameters (a signal meanwhile waits); return them."""
+        params = tuning.to_params(self.method, self.last.best_chromosome)
+        with deferred_signals():
+            save_params(self.out, self.method, params, solver=self.solver, fitness=self.last.best,
+                        generations=self.last.index, seed=self.seed, fit_seeds=self.fit_seeds,
+                        targets=self.targets, interrupted=interrupted)
+            self.written = True
+        return params
+
+
 def run(args) -> int:
-    method, solver, ga = args.method or DEFAULT_METHOD, args.solver or DEFAULT_SOLVER, ga_config(args)
-    seed = GA_SEED if args.seed is None else args.seed
-    fit_seeds = FIT_SEEDS if args.fit_seeds is None else args.fit_seeds
+    fit = _Fit(args)
+    try:
+        return _run(args, fit)
+    except BaseException as exc:
+        if not is_interruption(exc):
+            raise
+        with deferred_signals():   # a second signal cannot cut the write or the line short
+            print(interrupted_line(_keep(fit)), file=sys.stderr)
+        return 130
+
+
+def _keep(fit: _Fit) -> str:
+    """After a signal: write the best parameters so far unless written; say what was saved."""
+    if fit.written:
+        return f"the parameters were written to {fit.out}"
+    if fit.last is None:
+        return "nothing was saved: no GA generation had finished"
+    try:
+        fit.write(interrupted=True)
+    except OSError as exc:
+        return f"nothing was saved: cannot write {fit.out}: {exc.strerror or exc}"
+    return (f"the best parameters so far were written to {fit.out} (fitness {fit.last.best:g} "
+            f"after {fit.last.index} generations)")
+
+
+def _run(args, fit: _Fit) -> int:
+    method, solver, ga = fit.method, fit.solver, ga_config(args)
     case = Case.from_files(args.left, args.right, args.targets, match_config(args),
                            check_hash=not args.no_hash_check)
     if len(case.left_out):
@@ -52,25 +99,17 @@ def run(args) -> int:
     if len(case.targets) == 0:
         raise UsageError(f"{args.targets}: no target pair lies on the corners found "
                          f"({len(case.left_out)} targets, {len(case.prepared.problem.left_xy)} left corners)")
-    records = tuning.tune([case], method, rng=seed, ga=ga, solver=solver, seeds=fit_seeds)
-    best, interrupted = None, False
+    fit.targets = len(case.targets)
+    records = tuning.tune([case], method, rng=fit.seed, ga=ga, solver=solver, seeds=fit.fit_seeds)
     with progress_bar(ga.generations + 1, f"Method-{method} GA") as bar:
-        try:
-            for best in records:
-                bar.update(1)
-                bar.set_postfix(best=f"{best.best:g}", mean=f"{best.mean:.2f}", target=len(case.targets))
-        except KeyboardInterrupt:
-            interrupted = True
-    if best is None:
+        for fit.last in records:
+            bar.update(1)
+            bar.set_postfix(best=f"{fit.last.best:g}", mean=f"{fit.last.mean:.2f}", target=fit.targets)
+    params, best = fit.write(interrupted=False), fit.last
+    if interrupted():   # a signal came during the write, which finished first
         raise KeyboardInterrupt
-    params = tuning.to_params(method, best.best_chromosome)
-    save_params(args.out, method, params, solver=solver, fitness=best.best, generations=best.index,
-                seed=seed, fit_seeds=fit_seeds, targets=len(case.targets), interrupted=interrupted)
     result = tuning.evaluate([case], method, params, solver=solver)
-    print(f"Method-{method} ({solver}): best fitness {best.best:g} of {len(case.targets)} after "
+    print(f"Method-{method} ({solver}): best fitness {best.best:g} of {fit.targets} after "
           f"{best.index} generations; C/E/T {result}; parameters {params.to_dict()}")
     print(f"written to {args.out}")
-    if interrupted:
-        print("ismb-lab: interrupted; the best parameters so far were written", file=sys.stderr)
-        return 130
     return 0

@@ -1,0 +1,93 @@
+"""The kernels import, and cache, for a user who can write neither beside the package nor in HOME.
+
+Each case runs a fresh interpreter on a copy of the package.  Its two default cache
+places are made unwritable in a way that holds for root as well, who ignores file
+modes: the copy's ``__pycache__`` is a regular file (no folder can be made there) and
+HOME is a regular file (nor under it).  A read-only mode would not stop root, and the
+interpreter under /work/main/.venv cannot be run by an unprivileged account.
+"""
+
+import json
+import os
+import shutil
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+ROOT = Path(__file__).resolve().parent.parent
+
+pytestmark = pytest.mark.skipif(not hasattr(os, "getuid"), reason="POSIX users")
+
+PROBE = """
+import json, os
+import numpy as np
+import ismb_lab.dynamics, ismb_lab.similarity
+from numba.core import config
+ismb_lab.similarity._block_sum(np.arange(3.0), 0, 3)   # compiles, and writes its cache
+print(json.dumps({"variable": os.environ.get("NUMBA_CACHE_DIR"), "config": config.CACHE_DIR}))
+"""
+
+
+@pytest.fixture
+def nowhere(tmp_path):
+    """An environment and a copy of the package where numba's default cache places cannot be written."""
+    site = tmp_path / "site"
+    shutil.copytree(ROOT / "ismb_lab", site / "ismb_lab", ignore=shutil.ignore_patterns("__pycache__"))
+    (site / "ismb_lab" / "__pycache__").write_text("not a folder\n")
+    home = tmp_path / "home"
+    home.write_text("not a folder\n")
+    temp = tmp_path / "temp"
+    temp.mkdir()
+    env = {k: v for k, v in os.environ.items() if k not in ("NUMBA_CACHE_DIR", "XDG_CACHE_HOME")}
+    env.update(PYTHONPATH=str(site), HOME=str(home), TMPDIR=str(temp), PYTHONDONTWRITEBYTECODE="1")
+    return env, temp
+
+
+def probe(env):
+    proc = subprocess.run([sys.executable, "-c", PROBE], env=env, capture_output=True, text=True,
+                          timeout=300, cwd=env["TMPDIR"])
+    assert proc.returncode == 0, proc.stderr
+    return json.loads(proc.stdout.splitlines()[-1])
+
+
+def test_with_nowhere_to_cache_the_kernels_use_a_private_temporary_folder(nowhere):
+    env, temp = nowhere
+    folder = temp / f"ismb_lab-numba-{os.getuid()}"
+    assert probe(env) == {"variable": str(folder), "config": str(folder)}
+    assert folder.stat().st_mode & 0o777 == 0o700
+    assert list(folder.rglob("*.nbi"))   # the cache index was written there
+    assert probe(env)["config"] == str(folder)   # and the next run uses it again
+
+
+def test_a_fallback_folder_that_others_may_write_to_is_never_used(nowhere):
+    env, temp = nowhere
+    shared = temp / f"ismb_lab-numba-{os.getuid()}"
+    shared.mkdir()
+    shared.chmod(0o777)
+    used = Path(probe(env)["config"])
+    assert used != shared and used.parent == temp and used.stat().st_mode & 0o777 == 0o700
+    assert not any(shared.iterdir())
+
+
+def test_a_numba_cache_dir_that_is_set_always_wins(nowhere, tmp_path):
+    env, temp = nowhere
+    mine = tmp_path / "mine"
+    env["NUMBA_CACHE_DIR"] = str(mine)
+    assert probe(env) == {"variable": str(mine), "config": str(mine)}
+    assert list(mine.rglob("*.nbi")) and not list(temp.iterdir())
+
+
+def test_where_numba_can_cache_nothing_is_changed(tmp_path):
+    env = {k: v for k, v in os.environ.items() if k != "NUMBA_CACHE_DIR"}
+    env.update(HOME=str(tmp_path), TMPDIR=str(tmp_path))   # a writable HOME, as most users have
+    site = tmp_path / "site"
+    shutil.copytree(ROOT / "ismb_lab", site / "ismb_lab", ignore=shutil.ignore_patterns("__pycache__"))
+    (site / "ismb_lab").chmod(0o555)   # not beside the package (for a user other than root) ...
+    env["PYTHONPATH"] = str(site)
+    try:
+        assert probe(env) == {"variable": None, "config": ""}   # ... numba's own places serve
+    finally:
+        (site / "ismb_lab").chmod(0o755)
+    assert not list(tmp_path.glob("ismb_lab-numba-*"))
