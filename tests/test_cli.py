@@ -263,7 +263,7 @@ def test_a_real_ctrl_c_stops_tune_cleanly(pair, targets, tmp_path):
     (lambda p, t, g: ["tune", p[0], p[1], g, "--fit-seeds", "0"], "'seeds'"),
     (lambda p, t, g: ["tune", p[0], p[1], g, "--fit-seeds", "101"], "--fit-seeds 101 is above the limit"),
     (lambda p, t, g: ["evaluate", t / "missing_manifest.json"], "existing file"),
-    (lambda p, t, g: ["evaluate", t / "missing_manifest.json", "--ga-seed", "-1"], "--ga-seed must be"),
+    (lambda p, t, g: ["evaluate", t / "missing_manifest.json", "--ga-seed", "-1"], "argument --ga-seed: a seed"),
     (lambda p, t, g: ["evaluate", t / "manifest_missing_file.json"], "existing file"),
 ])
 def test_tune_and_evaluate_bad_input(pair, targets, tmp_path, capsys, make_args, words):

@@ -254,7 +254,9 @@ CASES = [
     ("tune-generations-400-digits", lambda w: _tune(w, "--generations", "9" * 400), "an integer of 400 digits", {}),
     ("match-seed-10**30", lambda w: ["match", *_pair(w), "--seed", str(10**30)], "2**63 - 1", {}),
     ("depth-seed-2**64", lambda w: _depth(w, "--seed", str(2**64)), "2**63 - 1", {}),
-    ("tune-seed-10**30", lambda w: _tune(w, "--seed", str(10**30), "--generations", "1"), "2**63 - 1", {}),
+    ("tune-seed-10**30", lambda w: _tune(w, "--seed", str(10**30), "--generations", "1"), "argument --seed", {}),
+    ("evaluate-ga-seed-10**30", lambda w: ["evaluate", w / "manifest.json", "--ga-seed", str(10**30)],
+     "argument --ga-seed", {}),
     # degenerate rigs
     ("rectify-rig-zero-k", lambda w: ["rectify", *_pair(w), "--rig", w / "rig_zero_k.json", "--out", w / "rect"],
      "'k_left'", {}),

@@ -9,7 +9,7 @@ from pathlib import Path
 from .._files import atomic_write_text
 from ..protocol import format_protocol, load_manifest, protocol
 from ..solvers import DEFAULT_SOLVER, SOLVERS
-from ._common import (DEFAULT_METHOD, BestSoFar, UsageError, add_ga_options, add_method_option,
+from ._common import (DEFAULT_METHOD, BestSoFar, UsageError, add_ga_options, add_method_option, seed,
                       add_solver_option, default_of, ga_config, progress_bar)
 from ._guard import deferred_signals, interrupted, interrupted_line, is_interruption, json_text
 
@@ -42,7 +42,7 @@ def add_parser(sub) -> None:
                    help=f"how the GA solves each network while fitting (default: {DEFAULT_SOLVER})")
     e.add_argument("--fit-seeds", type=int, default=None, metavar="N",
                    help=f"update-order seeds averaged in each GA fitness (default: {DEFAULTS['fit_seeds']})")
-    e.add_argument("--ga-seed", type=int, default=None, metavar="N",
+    e.add_argument("--ga-seed", type=seed, default=None, metavar="N",
                    help=f"seed of the GA (default: {DEFAULTS['rng']}); a small training pair can "
                    "leave the GA on a plateau, so compare a few")
     e.add_argument("--held-out-only", action="store_true",
@@ -65,8 +65,6 @@ def available_cores() -> int:
 
 
 def run(args) -> int:
-    if args.ga_seed is not None and args.ga_seed < 0:
-        raise UsageError(f"--ga-seed must be an integer >= 0, got {args.ga_seed}")
     jobs = available_cores() if args.jobs is None else args.jobs
     if jobs < 1:
         raise UsageError(f"--jobs must be an integer >= 1, got {jobs}")

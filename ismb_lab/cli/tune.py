@@ -10,7 +10,7 @@ from ..methods import save_params
 from ..protocol import Case
 from ..solvers import DEFAULT_SOLVER
 from .. import tuning
-from ._common import (DEFAULT_METHOD, UsageError, add_feature_options, add_ga_options, add_method_option,
+from ._common import (DEFAULT_METHOD, UsageError, add_feature_options, seed, add_ga_options, add_method_option,
                       add_solver_option, default_of, ga_config, match_config, progress_bar)
 from ._guard import deferred_signals, interrupted, interrupted_line, is_interruption
 
@@ -31,7 +31,7 @@ def add_parser(sub) -> None:
     t.add_argument("targets", type=Path, help="target pairs (JSON, as saved by the labeller)")
     add_method_option(t, DEFAULT_METHOD)
     add_ga_options(t)
-    t.add_argument("--seed", type=int, default=None, help=f"seed of the GA (default: {GA_SEED})")
+    t.add_argument("--seed", type=seed, default=None, help=f"seed of the GA (default: {GA_SEED})")
     add_solver_option(t, DEFAULT_SOLVER)
     t.add_argument("--fit-seeds", type=int, default=None, metavar="N",
                    help=f"update-order seeds averaged in each GA fitness (default: {FIT_SEEDS}); more "
