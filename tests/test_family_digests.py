@@ -21,7 +21,7 @@ import numpy as np
 import pytest
 
 from ismb_lab.protocol import family_cases
-from ismb_lab.scenes import object_layout
+from ismb_lab.scenes import Family, Look, object_layout, register_family, unregister_family
 
 FIXTURE = Path(__file__).with_name("data") / "family_digests.json"
 RECORDED = ("contrast", "repetitive", "border", "cameras")
@@ -72,6 +72,20 @@ def recorded():
 @pytest.mark.parametrize("k, family", list(enumerate(RECORDED)))
 def test_the_recorded_families_draw_their_layouts_bit_for_bit(recorded, k, family):
     assert family_digests(family, k) == recorded[family]
+
+
+def test_a_new_family_leaves_the_recorded_layouts_as_they_were(recorded):
+    extra = register_family(Family("striped cameras", "Striped objects, unsteady cameras", Look(
+        texture=lambda rng: "stripes",
+        camera=lambda rng: {"gain": float(rng.uniform(0.8, 1.2)), "offset": 5.0, "noise_std": 2.0})))
+    try:
+        for family in RECORDED:
+            object_layout(3, 3, family=extra.name)         # drawn in between: no state is shared
+            again = {f"{seed} {2 + seed % 2}": layout_digests(object_layout(seed, 2 + seed % 2, family=family))
+                     for seed in SEEDS[:2]}
+            assert again == {key: recorded[family][key] for key in again}
+    finally:
+        unregister_family(extra.name)
 
 
 def test_the_fixture_records_every_layout_it_claims():
