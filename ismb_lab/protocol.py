@@ -117,7 +117,8 @@ class Case:
 def family_cases(family: str, start: int, count: int) -> list:
     """The cases of one scene family's split: layouts ``start .. start + count - 1``.
 
-    Layout ``seed`` of the family has ``2 + seed % 2`` objects
+    `family` is a registered family's name (:func:`ismb_lab.scenes.families`).  Layout ``seed`` of
+    the family has ``2 + seed % 2`` objects
     (:func:`ismb_lab.scenes.object_layout`), matched in its ROI with its window shift; a
     layout with fewer than 3 targets is left out.  The first case is the training pair:
     the first with at least 8 targets (``scripts/matching_families.py``'s protocol).
@@ -128,8 +129,9 @@ def family_cases(family: str, start: int, count: int) -> list:
     >>> len(cases[0].targets) >= 8, cases[0].name.startswith("cameras ")
     (True, True)
     """
-    from .scenes import object_layout
+    from .scenes import get_family, object_layout
 
+    family = get_family(family, "family_cases").name
     cases = []
     for seed in range(start, start + count):
         layout = object_layout(seed, 2 + seed % 2, family=family)

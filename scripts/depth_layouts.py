@@ -63,7 +63,7 @@ import numpy as np
 
 from ismb_lab.depth import DepthConfig
 from ismb_lab.depth_demo import DEPTH_SOLVER, layout_match_config, relative_depth
-from ismb_lab.scenes import FAMILIES, object_layout
+from ismb_lab.scenes import families, object_layout
 
 VARIANTS = """
 development split figures of every variant tried (first 40 layouts = seeds 1000-1039;
@@ -124,7 +124,8 @@ MARGIN_PX = 4.0
 
 def layout_of(seed: int, n: int):
     """Layout number `n` of a split: its family and object count follow `n`, the rest `seed`."""
-    return object_layout(seed, 2 + (n // 4) % 2, family=FAMILIES[n % len(FAMILIES)])
+    names = families()
+    return object_layout(seed, 2 + (n // len(names)) % 2, family=names[n % len(names)])
 
 
 def assign(layout, result) -> list:
@@ -238,7 +239,7 @@ def main(argv=None) -> int:
           + (", through ismb-lab depth" if args.cli else "")
           + (f", {', '.join(args.set)}" if args.set else "") + f": {elapsed:.0f} s "
           f"({elapsed / max(args.count, 1):.2f} s per layout)")
-    for key in ("all", *FAMILIES, "2 objects", "3 objects"):
+    for key in ("all", *families(), "2 objects", "3 objects"):
         if key in by:
             ok, total = by[key]
             print(f"  {key:<12} {ok:>4} / {total:<4} ranked correctly ({100 * ok / total:.1f}%)")

@@ -339,12 +339,18 @@ import numpy as np
 from ismb_lab.evaluation import score
 from ismb_lab.io import save_image
 from ismb_lab.protocol import family_cases, protocol
-from ismb_lab.scenes import FAMILIES
+from ismb_lab.scenes import families
 from ismb_lab.solvers import DEFAULT_SOLVER
 from ismb_lab.targets import save_targets, targets_from_matches
 
 DEV_START, HELD_OUT_START = 2000, 930_000
 VARIANTS = ("III:network", "NM4:anneal", "NM:network")
+
+
+def family_sets(start: int, count: int) -> dict:
+    """Every registered family's cases, the `n`-th family of :func:`~ismb_lab.scenes.families`
+    drawn from seed ``start + 100 n`` on (:func:`~ismb_lab.protocol.family_cases`)."""
+    return {f: family_cases(f, start + 100 * n, count) for n, f in enumerate(families())}
 
 
 def figures(scores) -> tuple[int, int, int]:
@@ -417,7 +423,7 @@ def main(argv=None) -> None:
         parser.error("--cli runs one variant")
     start = args.seeds_from if args.seeds_from is not None else HELD_OUT_START if args.held_out else DEV_START
     began = time.perf_counter()
-    sets = {f: family_cases(f, start + 100 * n, args.count) for n, f in enumerate(FAMILIES)}
+    sets = family_sets(start, args.count)
     print(f"{'held-out' if args.held_out else 'development'} split, seeds from {start}, "
           f"{args.ga_seeds} GA seed(s), 3 update-order seeds: "
           + ", ".join(f"{f} {len(c)} pairs / {sum(len(x.targets) for x in c)} targets" for f, c in sets.items()))

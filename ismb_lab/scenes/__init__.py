@@ -32,21 +32,28 @@ The package follows the data: :mod:`~ismb_lab.scenes.geometry` (the rig and its 
 :mod:`~ismb_lab.scenes.textures`, :mod:`~ismb_lab.scenes.primitives`,
 :mod:`~ismb_lab.scenes.render` (the two views and their ground truth) and
 :mod:`~ismb_lab.scenes.library` (the named scenes) and
-:mod:`~ismb_lab.scenes.families` (random layouts for the depth demo, with their truth).
+:mod:`~ismb_lab.scenes.layouts` (the registered families of random layouts for the depth demo,
+with their truth, drawn by :mod:`~ismb_lab.scenes.design`).
 """
 
-from .families import (
+from .design import Look, Placement
+from .layouts import (
                        FAMILIES,
                        LAYOUT_ROI,
                        MIN_GAP_PX,
+                       Family,
                        Layout,
                        ObjectTruth,
                        border_scene,
                        camera_scene,
                        contrast_scene,
+                       families,
+                       get_family,
                        object_ids,
                        object_layout,
+                       register_family,
                        repetitive_scene,
+                       unregister_family,
 )
 from .geometry import ROI, Rig
 from .library import (
@@ -70,4 +77,5 @@ __all__ = [
     "REALISTIC_COUNT", "CAR_DEPTH", "Cylinder",
     "FAMILIES", "LAYOUT_ROI", "MIN_GAP_PX", "Layout", "ObjectTruth", "object_layout", "object_ids",
     "contrast_scene", "repetitive_scene", "border_scene", "camera_scene",
+    "Family", "Look", "Placement", "families", "get_family", "register_family", "unregister_family",
 ]

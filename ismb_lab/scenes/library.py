@@ -1,8 +1,10 @@
 """The named scenes: the synthetic test scene, the lab and toy cars of §5.2.3, the realistic pairs.
 
-A new family of scenes is a function here (or in a module beside this one) that
+A new named scene is a function here (or in a module beside this one) that
 composes :mod:`~ismb_lab.scenes.primitives` and :mod:`~ismb_lab.scenes.textures` and calls
-:func:`~ismb_lab.scenes.render.render`.
+:func:`~ismb_lab.scenes.render.render`.  A new family of random object layouts is one
+:class:`~ismb_lab.scenes.Family`, added with :func:`~ismb_lab.scenes.register_family`
+(:mod:`~ismb_lab.scenes.layouts`).
 """
 
 from __future__ import annotations

@@ -1,0 +1,442 @@
+"""Families of depth-demo scenes: textured objects in front of a textured wall, with exact truth.
+
+Each family draws two or three objects (boxes and upright cylinders) standing at
+distinct depths in front of a wall, renders the *scene* pair and the *background*
+pair (the same wall without the objects, a second photograph: fresh camera noise),
+and records which object is nearest.
+
+A family is a registered :class:`Family`: a name, a one-line description and a
+:class:`~ismb_lab.scenes.design.Look`, the few choices in which its layouts differ from the
+common design of :func:`~ismb_lab.scenes.design.draw_objects`.  :func:`register_family` adds
+one, :func:`families` lists them in registration order, and :func:`object_layout`, the
+protocol (:func:`ismb_lab.protocol.family_cases`) and ``scripts/matching_families.py`` and
+``scripts/depth_layouts.py`` draw whatever is registered.  The library registers four, which
+exercise the §5.2.3 depth demo (:func:`ismb_lab.depth_demo.relative_depth`) where it is weak:
+
+``"contrast"``
+    Objects of varied size, some with low-contrast textures in front of a
+    high-contrast wall, or the reverse (a high-contrast object, a quiet wall).
+``"repetitive"``
+    Stripes and tiles with a period of 7 to 13 px, on the objects and often on
+    the wall, so that several candidates in the 40 px window look alike.
+``"border"``
+    One box straddles the left image border (its left edge 8 px beyond it to 4 px
+    inside), so that its left part is out
+    of the right view; objects stand 2 to 6 px apart, so that a nearer object on
+    the right hides part of its neighbour in the right view; and in half the
+    layouts another object leaves the left image on the right.
+``"cameras"``
+    Camera noise of 2 to 4 grey levels, and a right camera with gain 0.75 to 1.3
+    and offset -20 to +20 (the left camera has gain 1, offset 0).
+
+Random streams
+--------------
+A layout is drawn from its family's stream for the seed, :meth:`Family.stream`.  A new
+family's stream is its own: numpy's ``SeedSequence(seed, spawn_key=(k,))`` with ``k`` taken
+from the SHA-256 of the family's name, so it depends neither on the registration order nor
+on the other families, and no seed of it repeats another family's draws.  The four families
+above (:data:`FAMILIES`) keep the stream they had before families were registered objects,
+``numpy.random.default_rng(seed)`` itself, so their recorded layouts and figures stay bit
+for bit (``tests/test_family_digests.py``).  A Generator passed instead of a seed is used as
+it is, for every family.
+
+Geometry of every layout (the default :class:`~ismb_lab.scenes.Rig`: 320 x 240
+images, ``f B = 30`` px m, so ``d = 30 / Z``):
+
+* the wall has disparity 5 to 9 px (3.3 to 6 m);
+* every object has a disparity in 10 to 26 px, at least :data:`MIN_GAP_PX` = 3 px
+  from every other object's and from the wall's: ranking is meaningful, since
+  3 px is six times the half-pixel quantisation of integer corners;
+* objects are 32 to 64 px wide and 36 to 68 px tall (cylinders a little
+  narrower), side by side in the ROI :data:`LAYOUT_ROI` = ``(40, 40, 240, 160)``;
+* the candidate window's shift is the middle of the layout's disparity range
+  (wall to nearest object), so every true match lies inside the 40 px window;
+  :attr:`Layout.shift` records it.
+
+A family function returns the scene (or, with ``empty=True``, the background) as a
+:class:`~ismb_lab.scenes.Scene`; its ``primitives`` are the wall, then the objects,
+each named (``"object 1"`` ... from left to right), so that :func:`object_ids` tells
+which object every pixel sees.  :func:`object_layout` returns both pairs with the
+truth (:class:`Layout`).  Randomness comes only from the seed or Generator passed in.
+
+>>> lay = object_layout(0, 3, family="contrast")
+>>> [o.rank for o in lay.objects], lay.family, lay.roi
+([1, 2, 3], 'contrast', (40, 40, 240, 160))
+>>> bool(np.all(np.diff([o.disparity for o in lay.objects]) <= -MIN_GAP_PX))
+True
+"""
+
+from __future__ import annotations
+
+import hashlib
+from dataclasses import dataclass
+
+import numpy as np
+
+from .._validation import ParameterError, ParameterTypeError, check_choice, check_number, check_rng, message
+from .design import HIGH, LAYOUT_ROI, LOW, MIN_GAP_PX, Design, Look, ObjectTruth, Placement, draw_objects
+from .geometry import Rig
+from .primitives import cast
+from .render import Scene, render
+
+__all__ = ["FAMILIES", "LAYOUT_ROI", "MIN_GAP_PX", "Family", "Layout", "ObjectTruth", "border_scene",
+           "camera_scene", "contrast_scene", "families", "get_family", "object_ids", "object_layout",
+           "register_family", "repetitive_scene", "unregister_family"]
+
+FAMILIES = ("contrast", "repetitive", "border", "cameras")
+"""The four families the library registers, in order; their stream is the seed itself.
+
+:func:`families` lists every registered family."""
+
+
+def _name_key(name: str) -> int:
+    """A 64-bit number from `name`, the same in every process (``hash`` is salted per process)."""
+    return int.from_bytes(hashlib.sha256(name.encode("utf-8")).digest()[:8], "little")
+
+
+@dataclass(frozen=True)
+class Family:
+    """A scene family: its name, what it is for, and how its layouts differ from the common design.
+
+    Attributes
+    ----------
+    name : str
+        What :func:`object_layout`, the protocol and the scripts call it.
+    description : str
+        One line.
+    look : Look
+        The hooks of :func:`~ismb_lab.scenes.design.draw_objects` it changes.
+
+    Examples
+    --------
+    >>> from ismb_lab.scenes.design import Look
+    >>> dim = Family("dim", "A darker right camera", Look(camera=lambda rng: {
+    ...     "gain": float(rng.uniform(0.5, 0.6)), "offset": 0.0, "noise_std": 1.0}))
+    >>> dim.name, dim.draw(dim.stream(0), 2, Rig()).camera["gain"] < 0.6
+    ('dim', True)
+    """
+
+    name: str
+    description: str
+    look: Look = Look()
+
+    def __post_init__(self):
+        if not isinstance(self.name, str) or not self.name.strip():
+            raise ParameterTypeError(message("name", "Family", "a non-empty string", self.name))
+        if not isinstance(self.description, str):
+            raise ParameterTypeError(message("description", "Family", "a string", self.description))
+        if not isinstance(self.look, Look):
+            raise ParameterTypeError(message("look", "Family", "a Look", self.look))
+
+    def stream(self, seed, owner: str = "Family.stream") -> np.random.Generator:
+        """The family's random stream for `seed` (a Generator is returned as it is).
+
+        Examples
+        --------
+        >>> mine = Family("mine", "").stream(0).integers(1000, size=3)
+        >>> bool(np.array_equal(mine, np.random.default_rng(0).integers(1000, size=3)))
+        False
+        >>> contrast = get_family("contrast").stream(0).integers(1000, size=3)
+        >>> bool(np.array_equal(contrast, np.random.default_rng(0).integers(1000, size=3)))
+        True
+        """
+        rng = check_rng(seed, "seed", owner)
+        if isinstance(seed, np.random.Generator) or self.name in FAMILIES:
+            return rng
+        return np.random.default_rng(np.random.SeedSequence(int(seed), spawn_key=(_name_key(self.name),)))
+
+    def draw(self, rng: np.random.Generator, n_objects: int, rig: Rig) -> Design:
+        """One layout's design, drawn from `rng` (see :func:`~ismb_lab.scenes.design.draw_objects`)."""
+        return draw_objects(rng, n_objects, rig, self.look)
+
+
+_FAMILIES: dict[str, Family] = {}
+
+
+def register_family(family: Family) -> Family:
+    """Add a family to the registry that :func:`object_layout`, the protocol and the scripts read.
+
+    Its name must be new.  Returns `family`.
+
+    Examples
+    --------
+    >>> register_family(Family("plain", "The common design, nothing changed")).name
+    'plain'
+    >>> families()[-1], object_layout(0, 2, family="plain").family
+    ('plain', 'plain')
+    >>> unregister_family("plain"); "plain" in families()
+    False
+    """
+    own = "register_family"
+    if not isinstance(family, Family):
+        raise ParameterTypeError(message("family", own, "a Family", family))
+    if family.name in _FAMILIES:
+        raise ParameterError(message("family", own, "a family with a new name", f"name {family.name!r}"))
+    _FAMILIES[family.name] = family
+    return family
+
+
+def unregister_family(name: str) -> None:
+    """Remove a family added by :func:`register_family`."""
+    check_choice(name, "name", "unregister_family", families())
+    del _FAMILIES[name]
+
+
+def families() -> tuple[str, ...]:
+    """The registered families' names, in registration order (the order the scripts cycle through).
+
+    Examples
+    --------
+    >>> families()
+    ('contrast', 'repetitive', 'border', 'cameras')
+    """
+    return tuple(_FAMILIES)
+
+
+def get_family(name, owner: str = "get_family", parameter: str = "family") -> Family:
+    """Look a registered family up by name.
+
+    Examples
+    --------
+    >>> get_family("border").description.split(",")[0]
+    'One box across the left image border'
+    >>> get_family("stripes")
+    Traceback (most recent call last):
+    ...
+    ismb_lab.ParameterError: The 'family' parameter of get_family must be one of 'contrast', 'repetitive', 'border', 'cameras'. Got 'stripes' instead.
+    """
+    return _FAMILIES[check_choice(name, parameter, owner, families())]
+
+
+# ------------------------------------------------------------------ the library's families
+
+def _contrast_wall(rng, mode: str) -> tuple:
+    return "posters", LOW if mode == "high-on-low" else HIGH
+
+
+def _contrast_object(rng, mode: str) -> str:
+    drawn = rng.choice(["low", "high"])     # even when the mode decides: the recorded layouts have this draw
+    return {"low-on-high": "low", "high-on-low": "high"}.get(mode, drawn)
+
+
+def _repetitive_wall(rng, mode: str) -> tuple:
+    return rng.choice(["stripes", "tiles", "posters"]), HIGH
+
+
+def _stripes_or_tiles(rng) -> str:
+    return rng.choice(["stripes", "tiles"])
+
+
+def _across_the_borders(rng, widths) -> Placement:
+    rx, _, rw, _ = LAYOUT_ROI
+    widths = np.array(widths, float)
+    lo = float(rng.uniform(-8, 4))                     # a box across the image's left edge,
+    widths[0] = rx - lo + rng.uniform(22, 36)          # 22-36 px inside the ROI
+    right = bool(rng.random() < 0.5) and len(widths) > 1
+    hi = rx + rw - 2
+    if right:                                          # and one across the right edge
+        hi = float(rng.uniform(300, 318))
+        widths[-1] = hi - (rx + rw) + rng.uniform(22, 36)
+    return Placement(lo, hi, (2.0, 6.0), widths, pin_left=True, pin_right=right)
+
+
+def _unsteady_cameras(rng) -> dict:
+    return {"gain": float(rng.uniform(0.75, 1.3)), "offset": float(rng.uniform(-20, 20)),
+            "noise_std": float(rng.uniform(2.0, 4.0))}
+
+
+for _family in (
+        Family("contrast", "Objects of varied size, of low contrast before a busy wall or the reverse",
+               Look(wall=_contrast_wall, contrast=_contrast_object)),
+        Family("repetitive", "Striped and tiled objects, often before a striped or tiled wall",
+               Look(wall=_repetitive_wall, texture=_stripes_or_tiles)),
+        Family("border", "One box across the left image border, neighbours 2 to 6 px apart, "
+               "in half the layouts one across the right border", Look(placement=_across_the_borders)),
+        Family("cameras", "Camera noise of 2 to 4 grey levels, the right camera's gain and offset off",
+               Look(camera=_unsteady_cameras))):
+    register_family(_family)
+
+
+# ------------------------------------------------------------------ layouts
+
+
+@dataclass(frozen=True, eq=False)
+class Layout:
+    """One random layout: the background and scene pairs and the truth.
+
+    Attributes
+    ----------
+    family : str
+    seed : int or None
+        The seed it was drawn from (None when drawn from a Generator).
+    background, scene : Scene
+        The empty view and the view with the objects (same wall, same cameras, fresh noise).
+    objects : tuple of ObjectTruth
+        Nearest first.
+    wall_disparity : float
+    shift : float
+        Candidate-window shift for this layout (``MatchConfig.shift``), pixels.
+    roi : (x, y, w, h)
+        :data:`LAYOUT_ROI`.
+    """
+
+    family: str
+    seed: int | None
+    background: Scene
+    scene: Scene
+    objects: tuple
+    wall_disparity: float
+    shift: float
+    roi: tuple = LAYOUT_ROI
+
+    @property
+    def order(self) -> tuple:
+        """Object names nearest first."""
+        return tuple(o.name for o in self.objects)
+
+
+def _check(seed, family, n_objects, supersample, owner):
+    check_rng(seed, "seed", owner)
+    fam = get_family(family, owner)
+    n = check_number(n_objects, "n_objects", owner, low=2, high=3, integer=True)
+    s = check_number(supersample, "supersample", owner, low=1, high=8, integer=True)
+    return fam.stream(seed, owner), fam, n, s
+
+
+def _render(design: Design, rig: Rig, empty: bool, supersample: int) -> Scene:
+    prims = [design.wall] + ([] if empty else list(design.objects))
+    return render(prims, rig, seed=design.noise[0 if empty else 1], supersample=supersample,
+                  **design.camera)
+
+
+def _family_scene(family: str, owner: str, seed, n_objects, empty, supersample) -> Scene:
+    rng, fam, n, s = _check(seed, family, n_objects, supersample, owner)
+    if not isinstance(empty, bool):
+        raise ParameterTypeError(message("empty", owner, "True or False", empty))
+    rig = Rig()
+    return _render(fam.draw(rng, n, rig), rig, empty, s)
+
+
+_DOC = """{what}
+
+    Parameters
+    ----------
+    seed : int or numpy.random.Generator
+        Draws the layout, the textures and then the cameras' noise.
+    n_objects : {{2, 3}}
+    empty : bool
+        Render the background instead: the same wall and cameras without the
+        objects, with fresh noise (a second photograph).
+    supersample : int
+        Rays per pixel side (see :func:`~ismb_lab.scenes.render`).
+
+    Returns
+    -------
+    Scene
+        ``primitives`` are the wall and then the objects, left to right; use
+        :func:`object_layout` for the truth.
+
+    Examples
+    --------
+    >>> scene = {name}(0)
+    >>> [getattr(p, "name", "wall") for p in scene.primitives]
+    ['wall', 'object 1', 'object 2']
+    >>> len({name}(0, empty=True).primitives)
+    1
+    """
+
+
+def contrast_scene(seed=0, *, n_objects: int = 2, empty: bool = False, supersample: int = 1) -> Scene:
+    return _family_scene("contrast", "contrast_scene", seed, n_objects, empty, supersample)
+
+
+def repetitive_scene(seed=0, *, n_objects: int = 2, empty: bool = False, supersample: int = 1) -> Scene:
+    return _family_scene("repetitive", "repetitive_scene", seed, n_objects, empty, supersample)
+
+
+def border_scene(seed=0, *, n_objects: int = 2, empty: bool = False, supersample: int = 1) -> Scene:
+    return _family_scene("border", "border_scene", seed, n_objects, empty, supersample)
+
+
+def camera_scene(seed=0, *, n_objects: int = 2, empty: bool = False, supersample: int = 1) -> Scene:
+    return _family_scene("cameras", "camera_scene", seed, n_objects, empty, supersample)
+
+
+contrast_scene.__doc__ = _DOC.format(
+    name="contrast_scene", what="Boxes and cylinders of varied size and contrast in front of a wall "
+    "(the ``\"contrast\"`` family).")
+repetitive_scene.__doc__ = _DOC.format(
+    name="repetitive_scene", what="Striped and tiled objects, often before a striped or tiled wall "
+    "(``\"repetitive\"``).")
+border_scene.__doc__ = _DOC.format(
+    name="border_scene", what="An object across the left image border, partly out of the right view, "
+    "and neighbours close enough to hide each other in one view (``\"border\"``).")
+camera_scene.__doc__ = _DOC.format(
+    name="camera_scene", what="Noisy cameras with different gain and offset (``\"cameras\"``).")
+
+
+def object_layout(seed, n_objects: int = 2, *, family: str = "contrast", supersample: int = 1) -> Layout:
+    """A random layout of two or three objects at distinct depths, both pairs rendered, with its truth.
+
+    Parameters
+    ----------
+    seed : int or numpy.random.Generator
+        Everything random is drawn from the family's stream for it (:meth:`Family.stream`):
+        the same seed gives bit-identical images.
+    n_objects : {2, 3}
+    family : str
+        A registered family's name (:func:`families`); see the module's docstring.
+    supersample : int
+        Rays per pixel side.
+
+    Returns
+    -------
+    Layout
+        ``scene`` is what the family function returns for `seed`, ``background``
+        what it returns with ``empty=True``.
+
+    Examples
+    --------
+    >>> lay = object_layout(7, 2, family="border")
+    >>> lay.objects[0].disparity - lay.objects[1].disparity >= MIN_GAP_PX
+    True
+    >>> o = min(lay.objects, key=lambda o: o.box_xy[0])      # the one across the left border
+    >>> x, y = int(o.box_xy[0]) + 1, int(o.centre_xy[1])
+    >>> bool(lay.scene.occluded[y, x]), float(lay.scene.disparity[y, x])   # out of the right view
+    (True, nan)
+    >>> object_layout(7, 4)
+    Traceback (most recent call last):
+    ...
+    ismb_lab.ParameterError: The 'n_objects' parameter of object_layout must be an integer >= 2 and <= 3. Got 4 instead.
+    """
+    own = "object_layout"
+    rng, fam, n, s = _check(seed, family, n_objects, supersample, own)
+    rig = Rig()
+    design = fam.draw(rng, n, rig)
+    top = max(o.disparity for o in design.truth)
+    shift = float(round((design.wall_disparity + top) / 2))
+    return Layout(fam.name, seed if isinstance(seed, (int, np.integer)) else None,
+                  _render(design, rig, True, s), _render(design, rig, False, s), design.truth,
+                  design.wall_disparity, shift)
+
+
+def object_ids(scene: Scene) -> np.ndarray:
+    """Which primitive each left pixel centre sees: an ``(H, W)`` index into ``scene.primitives``.
+
+    -1 where no surface.  For the families, 0 is the wall and ``k`` is ``"object k"``.
+
+    Examples
+    --------
+    >>> lay = object_layout(0, 2)
+    >>> ids = object_ids(lay.scene)
+    >>> o = lay.objects[0]
+    >>> int(ids[int(o.centre_xy[1]), int(o.centre_xy[0])]) == o.index, int(ids[5, 5])
+    (True, 0)
+    """
+    if not isinstance(scene, Scene):
+        raise ParameterTypeError(message("scene", "object_ids", "a Scene", scene))
+    rig = scene.rig
+    gy, gx = np.mgrid[0:rig.height, 0:rig.width]
+    o, d = rig.rays_left(np.stack([gx.ravel(), gy.ravel()], axis=1).astype(float))
+    return cast(scene.primitives, o, d)[1].reshape(rig.height, rig.width)
+
