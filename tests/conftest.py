@@ -1,4 +1,8 @@
-"""Fixtures every test tier shares."""
+"""Fixtures every test tier shares.
+
+Chromium lives here, not in tests/browser/: the browser tests and the real-account hub test
+share one Playwright instance per session (Playwright's sync API refuses to start a second
+one in the same thread while the first runs)."""
 
 import importlib.util
 import os
@@ -7,6 +11,31 @@ from pathlib import Path
 import pytest
 
 from ismb_lab.datasets import SampleDataMissing, opencv_samples
+
+CHROMIUM = Path("/usr/bin/chromium")
+ARGS = ["--headless", "--no-sandbox", "--disable-gpu", "--disable-quic", "--no-first-run",
+        "--disable-background-networking", "--disable-component-update", "--disable-sync"]
+
+
+@pytest.fixture(scope="session")
+def chromium():
+    """Chromium's path: missing fails under CI=true (so a broken install cannot hide), else skips."""
+    if not CHROMIUM.exists():
+        text = f"{CHROMIUM} is missing (install it: apt-get install -y chromium)"
+        if os.environ.get("CI", "").lower() in ("1", "true", "yes"):
+            pytest.fail(text)
+        pytest.skip(text)
+    return str(CHROMIUM)
+
+
+@pytest.fixture(scope="session")
+def browser(chromium):
+    from playwright.sync_api import sync_playwright
+
+    with sync_playwright() as p:
+        b = p.chromium.launch(executable_path=chromium, args=ARGS)
+        yield b
+        b.close()
 
 
 @pytest.fixture(scope="session")

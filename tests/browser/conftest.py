@@ -23,9 +23,6 @@ import pytest
 
 ROOT = Path(__file__).resolve().parents[2]
 ARTIFACTS = ROOT / "test-artifacts"
-CHROMIUM = Path("/usr/bin/chromium")
-ARGS = ["--headless", "--no-sandbox", "--disable-gpu", "--disable-quic", "--no-first-run",
-        "--disable-background-networking", "--disable-component-update", "--disable-sync"]
 
 
 def _free_port() -> int:
@@ -74,27 +71,6 @@ def _stop(proc: subprocess.Popen) -> None:
 def free_port():
     """``free_port()``: a free TCP port on 127.0.0.1."""
     return _free_port
-
-
-@pytest.fixture(scope="session")
-def chromium():
-    """Chromium's path: missing fails under CI=true (so a broken install cannot hide), else skips."""
-    if not CHROMIUM.exists():
-        text = f"{CHROMIUM} is missing (install it: apt-get install -y chromium)"
-        if os.environ.get("CI", "").lower() in ("1", "true", "yes"):
-            pytest.fail(text)
-        pytest.skip(text)
-    return str(CHROMIUM)
-
-
-@pytest.fixture(scope="session")
-def browser(chromium):
-    from playwright.sync_api import sync_playwright
-
-    with sync_playwright() as p:
-        b = p.chromium.launch(executable_path=chromium, args=ARGS)
-        yield b
-        b.close()
 
 
 @pytest.fixture

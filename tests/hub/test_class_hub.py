@@ -425,8 +425,8 @@ def shlex_quote(text: str) -> str:
 # --- one student in Chromium, through the real login form --------------------------------
 
 def _browser_helpers():
-    """tests/browser/conftest.py's Chromium fixtures and page actions, loaded by path (the
-    two folders' conftests do not see each other)."""
+    """tests/browser/conftest.py's page actions, loaded by path (the two folders' conftests do
+    not see each other); Chromium itself is the session's one, from tests/conftest.py."""
     import importlib.util
 
     spec = importlib.util.spec_from_file_location("ismb_browser_helpers", ROOT / "tests" / "browser" / "conftest.py")
@@ -436,7 +436,7 @@ def _browser_helpers():
 
 
 _browser = _browser_helpers()
-chromium, browser, ui = _browser.chromium, _browser.browser, _browser.ui
+ui = _browser.ui
 LAB_SETTINGS = {"@jupyterlab/apputils-extension/notification.jupyterlab-settings":
                 {"fetchNews": "false", "checkForUpdates": False},
                 "@jupyterlab/notebook-extension/tracker.jupyterlab-settings": {"windowingMode": "none"}}
