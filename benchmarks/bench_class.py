@@ -26,16 +26,19 @@ Measured, in order:
 1. **start-up:** all servers asked for at once (``POST /hub/api/users/NAME/server``);
    the time until each answers 200 on ``/user/NAME/api/status``;
 2. **memory, idle:** each single-user server's resident memory (RSS) and its own share
-   (USS, not shared with other processes), read with psutil;
-3. **notebook 04** run by every student at once, cell by cell (Run All), then each
-   student's server + kernel memory;
+   (USS, not shared with other processes), read with psutil, and how far the machine's
+   available memory fell;
+3. **notebook 04** opened and run by every student at once, cell by cell (Run All), then
+   each student's server + kernel memory;
 4. **one execution while the others idle:** one student repeats a labeller click with its
    redraw, and a one-line cell, median and 90th percentile (round trip through the proxy,
    and the click's time inside the kernel);
 5. **a burst:** ``--burst`` students click at the same moment, each ``--repeats`` times;
 6. **saves at once:** ``--savers`` students label pairs of their own and press Save
    (``labeler.save()`` in their kernel) at the same moment, three rounds; each student's
-   targets file must hold exactly the pairs that student saved, else the script exits 1.
+   targets file must hold exactly the pairs that student saved, else the script exits 1;
+7. **notebook 05** (its GA cells as committed) opened by one student beside notebook 04:
+   that kernel's memory.
 
 Out of CI: only ``--smoke`` runs in ``tests/test_benchmarks.py``.
 """
@@ -273,8 +276,9 @@ class Client:
             raise RuntimeError(f"{name}: no kernel ({reply.code}): {reply.body[:500]!r}")
         kernel_id = json.loads(reply.body)["kernel"]["id"]
         ws_url = self.hub.url.replace("http", "ws", 1) + f"/user/{name}/api/kernels/{kernel_id}/channels"
-        conn = await websocket_connect(HTTPRequest(ws_url, headers={"Authorization": f"token {self.hub.token}"}),
-                                       max_message_size=256 * 2**20)
+        request = HTTPRequest(ws_url, headers={"Authorization": f"token {self.hub.token}"},
+                              connect_timeout=180, request_timeout=180)
+        conn = await websocket_connect(request, max_message_size=256 * 2**20)
         return Kernel(name, kernel_id, conn)
 
 
@@ -350,6 +354,13 @@ async def run_notebook(kernel: Kernel, cells: list) -> float:
         await kernel.run_ok(code)
     await kernel.run_ok("import json, time")
     return time.perf_counter() - t0
+
+
+async def open_and_run(client: Client, name: str, cells: list, t0: float) -> tuple:
+    """`name` opens notebook 04 and runs it; (their kernel, seconds from `t0` until done)."""
+    kernel = await client.open_kernel(name)
+    await run_notebook(kernel, cells)
+    return kernel, time.perf_counter() - t0
 
 
 # --- processes and memory ----------------------------------------------------------------
@@ -496,33 +507,37 @@ def machine() -> str:
 
 
 async def class_starts(hub: Hub, client: Client, names: list, timeout: float) -> None:
+    import psutil
+
+    available = psutil.virtual_memory().available
     ready = await start_up(client, names, timeout)
     print(f"start-up: {len(names)} servers asked for at once, all answered 200 in {max(ready):.1f} s "
           f"(first {min(ready):.1f} s, median {statistics.median(ready):.1f} s)")
     idle = memory_per_student(hub.proc.pid, with_kernel=False)
+    fell = (available - psutil.virtual_memory().available) / 2**20
     print(f"memory, idle single-user server: RSS {mb(v[0] for v in idle.values())}, "
-          f"USS {mb(v[1] for v in idle.values())}")
+          f"USS {mb(v[1] for v in idle.values())}; available memory fell {fell:.0f} MB during start-up")
 
 
 async def class_runs_04(hub: Hub, client: Client, names: list) -> list:
     """Every student opens notebook 04 and runs it, all at once; returns their kernels."""
     import psutil
 
-    available = psutil.virtual_memory().available
-    kernels = await asyncio.gather(*(client.open_kernel(n) for n in names))
-    cells = notebook_cells(hub.homes / names[0])
-    took = await asyncio.gather(*(run_notebook(k, cells) for k in kernels))
-    print(f"notebook 04, run by all {len(names)} at once: all done in {max(took):.1f} s "
-          f"(median {statistics.median(took):.1f} s)")
+    available, cells, t0 = psutil.virtual_memory().available, notebook_cells(hub.homes / names[0]), time.perf_counter()
+    kernels, took = zip(*await asyncio.gather(*(open_and_run(client, n, cells, t0) for n in names)))
+    print(f"notebook 04 opened and run by all {len(names)} at once: all done {max(took):.1f} s after asking "
+          f"(first {min(took):.1f} s, median {statistics.median(took):.1f} s)")
     after = memory_per_student(hub.proc.pid, with_kernel=True)
     rss, uss = [v[0] for v in after.values()], [v[1] for v in after.values()]
-    print(f"memory after notebook 04, server + kernel: RSS {mb(rss)}, USS {mb(uss)}")
+    alone = [kernel_mb(hub.proc.pid, k) for k in kernels]
+    print(f"memory after notebook 04, server + kernel: RSS {mb(rss)}, USS {mb(uss)}; the kernel alone: "
+          f"RSS {mb(v[0] for v in alone)}, USS {mb(v[1] for v in alone)}")
     side = hub_side_mb(hub.proc.pid)
     fell = (available - psutil.virtual_memory().available) / 2**20
     print(f"hub, proxy and services: RSS {side:.0f} MB")
     print(f"the class of {len(names)}: RSS {sum(rss) + side:.0f} MB in all, USS {sum(uss):.0f} MB for the "
           f"students; available memory fell {fell:.0f} MB while the kernels started and ran notebook 04")
-    return kernels
+    return list(kernels)
 
 
 async def latency(kernels: list, repeats: int, burst: int) -> None:
@@ -595,7 +610,11 @@ def main(argv=None) -> int:
         print(f"course copy: {(time.perf_counter() - t0) / args.students:.2f} s per student "
               "(made before start-up, not in its figure)")
         with running_hub(work) as hub:
-            status = asyncio.run(measure(hub, args))
+            try:
+                status = asyncio.run(measure(hub, args))
+            except Exception:
+                print(f"the hub's log ends:\n{hub.log.read_text()[-4000:]}", file=sys.stderr)
+                raise
     print(f"after: {machine()}")
     return status
 
