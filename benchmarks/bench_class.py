@@ -15,6 +15,8 @@ config of this script's own that changes only what a benchmark must change:
 * the server command (this environment's ``jupyterhub.singleuser``, ``--allow-root`` as
   root, the home as root folder) and no ``pre_spawn_hook``: each home gets its copy of
   ``notebooks/``, ``images/`` and ``manifests/`` before start-up (timed on its own);
+* a numba cache in each home, as students get who cannot write into the venv: every
+  kernel compiles the numba kernels on its first run, as in a class's first lesson;
 * a service of its own, with a token, that asks the hub's REST API for the servers.
 
 No browser: each student's own single-user server runs their kernel, driven through the
@@ -161,6 +163,7 @@ c.Spawner.cmd = [{sys.executable!r}, "-m", "jupyterhub.singleuser"]
 c.Spawner.args = {args!r}
 c.Spawner.notebook_dir = "~"
 c.Spawner.pre_spawn_hook = None
+c.Spawner.environment.update({{"NUMBA_CACHE_DIR": lambda spawner: spawner.home_dir + "/.cache/numba"}})
 c.JupyterHub.services.append({{"name": "bench-class", "api_token": {token!r}}})
 c.JupyterHub.load_roles.append({{"name": "bench-class", "services": ["bench-class"],
     "scopes": ["admin:users", "admin:servers", "access:servers"]}})
