@@ -389,13 +389,13 @@ def student_processes(hub_pid: int) -> tuple:
     return students, others
 
 
-def rss_uss(processes) -> tuple:
-    """Summed RSS and USS of `processes`, in MB."""
-    rss = uss = 0.0
+def usage(processes) -> tuple:
+    """Summed RSS and USS (MB) of `processes`, and the CPU time (s) they have used so far."""
+    rss = uss = cpu = 0.0
     for p in processes:
-        info = p.memory_full_info()
-        rss, uss = rss + info.rss / 2**20, uss + info.uss / 2**20
-    return rss, uss
+        info, times = p.memory_full_info(), p.cpu_times()
+        rss, uss, cpu = rss + info.rss / 2**20, uss + info.uss / 2**20, cpu + times.user + times.system
+    return rss, uss, cpu
 
 
 def memory_per_student(hub_pid: int, with_kernel: bool) -> dict:
@@ -403,19 +403,19 @@ def memory_per_student(hub_pid: int, with_kernel: bool) -> dict:
     out = {}
     for name, entry in students.items():
         procs = [entry["server"]] + (entry["kernels"] if with_kernel else [])
-        out[name] = rss_uss([p for p in procs if p is not None])
+        out[name] = usage([p for p in procs if p is not None])
     return out
 
 
-def kernel_mb(hub_pid: int, kernel: "Kernel") -> tuple:
-    """RSS and USS (MB) of `kernel`'s process, found by its connection file's name."""
+def kernel_usage(hub_pid: int, kernel: "Kernel") -> tuple:
+    """:func:`usage` of `kernel`'s process, found by its connection file's name."""
     students, _ = student_processes(hub_pid)
     procs = [p for p in students[kernel.name]["kernels"] if any(kernel.id in a for a in p.cmdline())]
-    return rss_uss(procs)
+    return usage(procs)
 
 
 def hub_side_mb(hub_pid: int) -> float:
-    return rss_uss(student_processes(hub_pid)[1])[0]
+    return usage(student_processes(hub_pid)[1])[0]
 
 
 # --- the phases ----------------------------------------------------------------------------
@@ -520,6 +520,7 @@ async def class_starts(hub: Hub, client: Client, names: list, timeout: float) ->
     fell = (available - psutil.virtual_memory().available) / 2**20
     print(f"memory, idle single-user server: RSS {mb(v[0] for v in idle.values())}, "
           f"USS {mb(v[1] for v in idle.values())}; available memory fell {fell:.0f} MB during start-up")
+    print(f"CPU time of a server's start: {spread((v[2] for v in idle.values()), 1, 's')}")
 
 
 async def class_runs_04(hub: Hub, client: Client, names: list) -> list:
@@ -532,14 +533,16 @@ async def class_runs_04(hub: Hub, client: Client, names: list) -> list:
           f"(first {min(took):.1f} s, median {statistics.median(took):.1f} s)")
     after = memory_per_student(hub.proc.pid, with_kernel=True)
     rss, uss = [v[0] for v in after.values()], [v[1] for v in after.values()]
-    alone = [kernel_mb(hub.proc.pid, k) for k in kernels]
+    alone = [kernel_usage(hub.proc.pid, k) for k in kernels]
     print(f"memory after notebook 04, server + kernel: RSS {mb(rss)}, USS {mb(uss)}; the kernel alone: "
           f"RSS {mb(v[0] for v in alone)}, USS {mb(v[1] for v in alone)}")
+    print(f"CPU time of a kernel's start and notebook 04: {spread((v[2] for v in alone), 1, 's')}")
     side = hub_side_mb(hub.proc.pid)
     fell = (available - psutil.virtual_memory().available) / 2**20
     print(f"hub, proxy and services: RSS {side:.0f} MB")
     print(f"the class of {len(names)}: RSS {sum(rss) + side:.0f} MB in all, USS {sum(uss):.0f} MB for the "
-          f"students; available memory fell {fell:.0f} MB while the kernels started and ran notebook 04")
+          f"students; available memory fell {fell:.0f} MB while the kernels started and ran notebook 04 "
+          "(every process on the machine moves this figure)")
     return list(kernels)
 
 
@@ -570,9 +573,10 @@ async def one_runs_05(hub: Hub, client: Client, name: str) -> None:
     """One student also opens notebook 05 (its GA cells as committed), beside notebook 04."""
     kernel = await client.open_kernel(name, NOTEBOOK_05)
     took = await run_notebook(kernel, notebook_cells(hub.homes / name, NOTEBOOK_05))
-    rss, uss = kernel_mb(hub.proc.pid, kernel)
+    rss, uss, cpu = kernel_usage(hub.proc.pid, kernel)
     total = memory_per_student(hub.proc.pid, with_kernel=True)[name]
-    print(f"notebook 05 run by {name} in {took:.1f} s: its kernel RSS {rss:.0f} MB (USS {uss:.0f} MB); "
+    print(f"notebook 05 run by {name} in {took:.1f} s ({cpu:.1f} s CPU): its kernel RSS {rss:.0f} MB "
+          f"(USS {uss:.0f} MB); "
           f"{name} with both notebooks open: RSS {total[0]:.0f} MB, USS {total[1]:.0f} MB")
 
 
