@@ -3,8 +3,9 @@
     python benchmarks/bench_class.py [--students 30] [--repeats 30] [--savers 10] [--burst 5]
     python benchmarks/bench_class.py --smoke        # two students, a few repeats
 
-The hub runs ``deploy/jupyterhub_config.py``, loaded with ``load_subconfig`` by a small
-config of this script's own that changes only what a benchmark must change:
+The hub runs ``deploy/jupyterhub_config.py``, with its ``ISMB_HUB_*`` settings (ports,
+state folder, venv, course, users) pointed at this run, loaded with ``load_subconfig`` by a
+small config of this script's own that changes only what a benchmark must change:
 
 * where it listens: 127.0.0.1, free ports for the hub, ``hub_port`` and the proxy's API;
 * where its state goes (database, cookie secret, proxy PID): a temporary folder;
@@ -12,8 +13,8 @@ config of this script's own that changes only what a benchmark must change:
   thirty OS accounts, and a venv outside ``/root`` that they can run, are too heavy for a
   benchmark.  ``tests/hub/`` tests the real-account hub.  So every server here runs as
   the user who starts the script, with a home folder under the temporary folder;
-* the server command (this environment's ``jupyterhub.singleuser``, ``--allow-root`` as
-  root, the home as root folder) and no ``pre_spawn_hook``: each home gets its copy of
+* the server command (this environment's ``jupyterhub.singleuser``; the deployment's
+  arguments plus ``--allow-root`` as root; the home as root folder) and no ``pre_spawn_hook``: each home gets its copy of
   ``notebooks/``, ``images/`` and ``manifests/`` before start-up (timed on its own);
 * a numba cache in each home, as students get who cannot write into the venv: every
   kernel compiles the numba kernels on its first run, as in a class's first lesson;
@@ -160,7 +161,7 @@ c.Authenticator.allow_all = True
 c.JupyterHub.spawner_class = "simple"
 c.SimpleLocalProcessSpawner.home_dir_template = {str(work / "homes" / "{username}")!r}
 c.Spawner.cmd = [{sys.executable!r}, "-m", "jupyterhub.singleuser"]
-c.Spawner.args = {args!r}
+c.Spawner.args.extend({args!r})
 c.Spawner.notebook_dir = "~"
 c.Spawner.pre_spawn_hook = None
 c.Spawner.environment.update({{"NUMBA_CACHE_DIR": lambda spawner: spawner.home_dir + "/.cache/numba"}})
@@ -211,20 +212,30 @@ def stop(proc: subprocess.Popen) -> None:
             pass
 
 
+def deploy_settings(work: Path, ports: tuple, students: list) -> dict:
+    """The deployment's own settings (deploy/README.md's ``ISMB_HUB_*``) for this run, so that
+    loading its config checks and creates nothing outside `work`."""
+    port, hub_port, api_port = ports
+    return {"ISMB_HUB_IP": "127.0.0.1", "ISMB_HUB_PORT": str(port), "ISMB_HUB_HUB_PORT": str(hub_port),
+            "ISMB_HUB_API_PORT": str(api_port), "ISMB_HUB_STATE": str(work / "state"),
+            "ISMB_HUB_VENV": sys.prefix, "ISMB_HUB_COURSE": str(ROOT), "ISMB_HUB_USERS": " ".join(students)}
+
+
 @contextmanager
-def running_hub(work: Path):
+def running_hub(work: Path, students: list):
     """Start the hub in `work` (its cwd, state and homes) and stop it, whatever happens."""
-    token, port = secrets.token_hex(32), free_port()
+    token, ports = secrets.token_hex(32), (free_port(), free_port(), free_port())
     config = work / "bench_config.py"
-    config.write_text(hub_config(work, token, (port, free_port(), free_port()), proxy_command()))
+    config.write_text(hub_config(work, token, ports, proxy_command()))
     log = work / "hub.log"
     path = os.pathsep.join(filter(None, [str(ROOT), os.environ.get("PYTHONPATH")]))
-    env = dict(os.environ, PYTHONPATH=path, JUPYTER_RUNTIME_DIR=str(work / "runtime"), MPLBACKEND="Agg")
+    env = dict(os.environ, PYTHONPATH=path, JUPYTER_RUNTIME_DIR=str(work / "runtime"), MPLBACKEND="Agg",
+               **deploy_settings(work, ports, students))
     with open(log, "w") as out:
         proc = subprocess.Popen([sys.executable, "-m", "jupyterhub", "-f", str(config)], cwd=work,
                                 env=env, stdout=out, stderr=subprocess.STDOUT)
     try:
-        url = f"http://127.0.0.1:{port}"
+        url = f"http://127.0.0.1:{ports[0]}"
         wait_healthy(proc, url, log)
         yield Hub(proc, url, token, work / "homes", log)
     finally:
@@ -367,8 +378,11 @@ async def open_and_run(client: Client, name: str, cells: list, t0: float) -> tup
 
 
 # --- processes and memory ----------------------------------------------------------------
-def student_processes(hub_pid: int) -> tuple:
-    """({student: {"server": Process, "kernels": [Process]}}, [the hub's other processes])."""
+def student_processes(hub_pid: int, names) -> tuple:
+    """({student: {"server": Process, "kernels": [Process]}}, [the hub's other processes]).
+
+    A process is a student's when its ``JUPYTERHUB_USER`` is one of `names` (the hub's
+    services have one too)."""
     import psutil
 
     students, others = {}, [psutil.Process(hub_pid)]
@@ -378,7 +392,7 @@ def student_processes(hub_pid: int) -> tuple:
             kernel = any("ipykernel" in part for part in p.cmdline())
         except (psutil.NoSuchProcess, psutil.AccessDenied):
             continue
-        if name is None:
+        if name not in names:
             others.append(p)
         else:
             entry = students.setdefault(name, {"server": None, "kernels": []})
@@ -398,8 +412,8 @@ def usage(processes) -> tuple:
     return rss, uss, cpu
 
 
-def memory_per_student(hub_pid: int, with_kernel: bool) -> dict:
-    students, _ = student_processes(hub_pid)
+def memory_per_student(hub_pid: int, names, with_kernel: bool) -> dict:
+    students, _ = student_processes(hub_pid, names)
     out = {}
     for name, entry in students.items():
         procs = [entry["server"]] + (entry["kernels"] if with_kernel else [])
@@ -409,19 +423,19 @@ def memory_per_student(hub_pid: int, with_kernel: bool) -> dict:
 
 def kernel_usage(hub_pid: int, kernel: "Kernel") -> tuple:
     """:func:`usage` of `kernel`'s process, found by its connection file's name."""
-    students, _ = student_processes(hub_pid)
+    students, _ = student_processes(hub_pid, [kernel.name])
     procs = [p for p in students[kernel.name]["kernels"] if any(kernel.id in a for a in p.cmdline())]
     return usage(procs)
 
 
-def hub_side_mb(hub_pid: int) -> float:
-    return usage(student_processes(hub_pid)[1])[0]
+def hub_side_mb(hub_pid: int, names) -> float:
+    return usage(student_processes(hub_pid, names)[1])[0]
 
 
 # --- the phases ----------------------------------------------------------------------------
 async def start_up(client: Client, names: list, timeout: float) -> list:
     reply = await client.call("POST", "/hub/api/users", {"usernames": names})
-    if reply.code != 201:
+    if reply.code not in (201, 409):      # 409: all exist already (the config's allowed users)
         raise RuntimeError(f"the hub answered {reply.code} when asked for the users: {reply.body!r}")
     t0 = time.perf_counter()
     return await asyncio.gather(*(client.start_server(n, t0, timeout) for n in names))
@@ -516,7 +530,7 @@ async def class_starts(hub: Hub, client: Client, names: list, timeout: float) ->
     ready = await start_up(client, names, timeout)
     print(f"start-up: {len(names)} servers asked for at once, all answered 200 in {max(ready):.1f} s "
           f"(first {min(ready):.1f} s, median {statistics.median(ready):.1f} s)")
-    idle = memory_per_student(hub.proc.pid, with_kernel=False)
+    idle = memory_per_student(hub.proc.pid, names, with_kernel=False)
     fell = (available - psutil.virtual_memory().available) / 2**20
     print(f"memory, idle single-user server: RSS {mb(v[0] for v in idle.values())}, "
           f"USS {mb(v[1] for v in idle.values())}; available memory fell {fell:.0f} MB during start-up")
@@ -531,13 +545,13 @@ async def class_runs_04(hub: Hub, client: Client, names: list) -> list:
     kernels, took = zip(*await asyncio.gather(*(open_and_run(client, n, cells, t0) for n in names)))
     print(f"notebook 04 opened and run by all {len(names)} at once: all done {max(took):.1f} s after asking "
           f"(first {min(took):.1f} s, median {statistics.median(took):.1f} s)")
-    after = memory_per_student(hub.proc.pid, with_kernel=True)
+    after = memory_per_student(hub.proc.pid, names, with_kernel=True)
     rss, uss = [v[0] for v in after.values()], [v[1] for v in after.values()]
     alone = [kernel_usage(hub.proc.pid, k) for k in kernels]
     print(f"memory after notebook 04, server + kernel: RSS {mb(rss)}, USS {mb(uss)}; the kernel alone: "
           f"RSS {mb(v[0] for v in alone)}, USS {mb(v[1] for v in alone)}")
     print(f"CPU time of a kernel's start and notebook 04: {spread((v[2] for v in alone), 1, 's')}")
-    side = hub_side_mb(hub.proc.pid)
+    side = hub_side_mb(hub.proc.pid, names)
     fell = (available - psutil.virtual_memory().available) / 2**20
     print(f"hub, proxy and services: RSS {side:.0f} MB")
     print(f"the class of {len(names)}: RSS {sum(rss) + side:.0f} MB in all, USS {sum(uss):.0f} MB for the "
@@ -574,14 +588,13 @@ async def one_runs_05(hub: Hub, client: Client, name: str) -> None:
     kernel = await client.open_kernel(name, NOTEBOOK_05)
     took = await run_notebook(kernel, notebook_cells(hub.homes / name, NOTEBOOK_05))
     rss, uss, cpu = kernel_usage(hub.proc.pid, kernel)
-    total = memory_per_student(hub.proc.pid, with_kernel=True)[name]
+    total = memory_per_student(hub.proc.pid, [name], with_kernel=True)[name]
     print(f"notebook 05 run by {name} in {took:.1f} s ({cpu:.1f} s CPU): its kernel RSS {rss:.0f} MB "
           f"(USS {uss:.0f} MB); "
           f"{name} with both notebooks open: RSS {total[0]:.0f} MB, USS {total[1]:.0f} MB")
 
 
-async def measure(hub: Hub, args) -> int:
-    names = [f"student{n:02d}" for n in range(1, args.students + 1)]
+async def measure(hub: Hub, names: list, args) -> int:
     client = Client(hub, args.students)
     await class_starts(hub, client, names, args.timeout)
     kernels = await class_runs_04(hub, client, names)
@@ -612,13 +625,14 @@ def main(argv=None) -> int:
     with tempfile.TemporaryDirectory(prefix="bench-class-") as tmp:
         work = Path(tmp)
         t0 = time.perf_counter()
-        for n in range(1, args.students + 1):
-            stage_course(work / "homes" / f"student{n:02d}")
+        names = [f"student{n:02d}" for n in range(1, args.students + 1)]
+        for name in names:
+            stage_course(work / "homes" / name)
         print(f"course copy: {(time.perf_counter() - t0) / args.students:.2f} s per student "
               "(made before start-up, not in its figure)")
-        with running_hub(work) as hub:
+        with running_hub(work, names) as hub:
             try:
-                status = asyncio.run(measure(hub, args))
+                status = asyncio.run(measure(hub, names, args))
             except Exception:
                 print(f"the hub's log ends:\n{hub.log.read_text()[-4000:]}", file=sys.stderr)
                 raise
