@@ -358,10 +358,10 @@ def depth_match(pair, *, background=None, method: str = "III", params=None, matc
     method, params, match_config, seed
         As in :func:`relative_depth` (``params`` default: :data:`DEPTH_PARAMS` for
         Method-III).
-    solver : str
-        A name in :data:`ismb_lab.solvers.SOLVERS` (default :data:`DEPTH_SOLVER`).
+    solver : str or Solver
+        A name in :data:`ismb_lab.solvers.SOLVERS` or a configured solver (default :data:`DEPTH_SOLVER`).
     **network
-        ``stop_rule``, ``rule`` or ``kernel`` of the discrete network
+        Options of the solver (e.g. ``stop_rule``, ``rule`` or ``kernel`` of the discrete network)
         (:func:`ismb_lab.matching.match`).
 
     Returns
@@ -373,15 +373,15 @@ def depth_match(pair, *, background=None, method: str = "III", params=None, matc
     >>> from ismb_lab.scenes import lab_scene
     >>> m = depth_match(lab_scene(0, supersample=1))
     >>> m.solver, m.stop_rule, len(m.pairs) > 10
-    ('anneal', 'anneal', True)
+    ('anneal', 'sweep', True)
     >>> depth_match(lab_scene(0, supersample=1), solver="annealing")
     Traceback (most recent call last):
     ...
     ismb_lab.ParameterError: The 'solver' parameter of depth_match must be one of 'network', 'anneal', 'exact', 'assign'. Got 'annealing' instead.
     """
     own = "depth_match"
-    get_solver(solver, own)
-    return _match(_prepared(pair, background, match_config, own), method, params, seed, solver, network)
+    solver = get_solver(solver, own, **network)
+    return _match(_prepared(pair, background, match_config, own), method, params, seed, solver)
 
 
 def _prepared(pair, background, match_config, own: str) -> Prepared:
@@ -397,10 +397,10 @@ def _prepared(pair, background, match_config, own: str) -> Prepared:
     return prepare(pair, None, match_config)
 
 
-def _match(prepared: Prepared, method, params, seed, solver, network: dict) -> MatchResult:
+def _match(prepared: Prepared, method, params, seed, solver) -> MatchResult:
     if params is None and method == "III":
         params = DEPTH_PARAMS
-    return match(method=method, params=params, seed=seed, solver=solver, prepared=prepared, **network)
+    return match(method=method, params=params, seed=seed, solver=solver, prepared=prepared)
 
 
 def depth_pairs(background, scene, match_config=None) -> tuple[Prepared, Prepared]:
@@ -481,7 +481,7 @@ def relative_depth(background, scene, *, method: str = "III", params=None, match
     ismb_lab.ParameterError: The 'scene' parameter of relative_depth must be images of the background's size 80x60 (width x height). Got 'images of size 80x50' instead.
     """
     own = "relative_depth"
-    get_solver(solver, own)
+    solver = get_solver(solver, own, **network)
     if prepared is None:
         prepared = _depth_pairs(background, scene, match_config, own)
     elif not (isinstance(prepared, tuple) and len(prepared) == 2 and all(isinstance(p, Prepared) for p in prepared)):
@@ -493,7 +493,7 @@ def relative_depth(background, scene, *, method: str = "III", params=None, match
     if silhouettes is not None and not isinstance(silhouettes, Silhouettes):
         raise ParameterTypeError(message("silhouettes", own, "None or the Silhouettes that pair_silhouettes "
                                          "returns", silhouettes))
-    results = [_match(p, method, params, seed, solver, network) for p in prepared]
+    results = [_match(p, method, params, seed, solver) for p in prepared]
     scene_roi = resolve_roi(prepared[1].config.roi, prepared[1].pair.shape)
     blobs = None
     if config.grouping == "silhouettes":
