@@ -44,7 +44,7 @@ from .depth import DepthConfig, DepthResult, depth_from_matches
 from .features import Corners, detect_corners, resolve_roi
 from .io import StereoPair, load_pair
 from .matching import MatchConfig, MatchResult, Prepared, auto_window, match, prepare, shift_roi
-from .methods import build_problem
+from .methods import DEFAULT_METHOD, build_problem, get_method
 from .params import Params
 from .similarity import mean_abs_difference
 from .silhouettes import Silhouettes, changed_in_roi, silhouettes
@@ -67,6 +67,9 @@ DEPTH_MATCH_CONFIG = MatchConfig(n_min=40, n_max=60)
 #: give many extra matches on rendered scenes.
 DEPTH_PARAMS = Params(theta_c=1.945540697133651, theta_s=13.577571706866182,
                       lambda_c=7.143116184828514, lambda_s=6.966076587109354)
+
+#: The method :data:`DEPTH_PARAMS` were fitted for.
+DEPTH_METHOD = "III"
 
 #: Corners per blob of change in the scene pair (:func:`scene_prepared`): at least, at most.
 REGION_CORNERS = (20, 40)
@@ -343,7 +346,7 @@ def _load(value, name: str, owner: str) -> StereoPair:
                                      "paths, or an object with .left and .right", value))
 
 
-def depth_match(pair, *, background=None, method: str = "III", params=None, match_config=None,
+def depth_match(pair, *, background=None, method=DEFAULT_METHOD, params=None, match_config=None,
                 seed: int = 0, solver: str = DEPTH_SOLVER, **network) -> MatchResult:
     """Match one stereo pair as the depth demo does.
 
@@ -398,7 +401,7 @@ def _prepared(pair, background, match_config, own: str) -> Prepared:
 
 
 def _match(prepared: Prepared, method, params, seed, solver) -> MatchResult:
-    if params is None and method == "III":
+    if params is None and get_method(method).name == DEPTH_METHOD:
         params = DEPTH_PARAMS
     return match(method=method, params=params, seed=seed, solver=solver, prepared=prepared)
 
@@ -431,7 +434,7 @@ def _depth_pairs(background, scene, match_config, own: str) -> tuple[Prepared, P
     return _prepared(bg, None, match_config, own), _prepared(sc, bg, match_config, own)
 
 
-def relative_depth(background, scene, *, method: str = "III", params=None, match_config=None,
+def relative_depth(background, scene, *, method=DEFAULT_METHOD, params=None, match_config=None,
                    config: DepthConfig | None = None, seed: int = 0,
                    solver: str = DEPTH_SOLVER, prepared=None, silhouettes: Silhouettes | None = None,
                    **network) -> DepthResult:

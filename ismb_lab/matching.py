@@ -18,7 +18,7 @@ from ._validation import MAX_SEED, ParameterError, ParameterTypeError, check_cho
 from .coords import euclidean_disparity, horizontal_disparity
 from .features import Corners, detect_corners, resolve_roi
 from .io import StereoPair, load_pair
-from .methods import Problem, build_problem, get_method
+from .methods import DEFAULT_METHOD, Problem, build_problem, get_method
 from .params import Params
 from .similarity import mean_abs_difference
 from .solvers import DEFAULT_SOLVER, get_solver, one_match_per_corner, solve, to_matches
@@ -311,7 +311,7 @@ def _xy_list(xy):
     return xy.tolist()
 
 
-def match(left=None, right=None, method="III", params: Params | None = None, *,
+def match(left=None, right=None, method=DEFAULT_METHOD, params: Params | None = None, *,
           config: MatchConfig | None = None, seed: int = 0, solver=DEFAULT_SOLVER,
           stop_rule: str | None = None, rule: str | None = None, kernel: str | None = None,
           prepared: Prepared | None = None, one_to_one: bool = False) -> MatchResult:

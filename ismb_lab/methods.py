@@ -54,7 +54,7 @@ from .params import LAMBDA_C, LAMBDA_S, MATCH_BIAS, THETA_C, THETA_S, Gene, Para
 from .similarity import candidate_mask, no_match_cut, transfer
 
 __all__ = ["all_genes", "Method", "MethodI", "MethodII", "MethodIII", "MethodNM", "MethodNM3", "MethodNM4",
-           "Problem", "THESIS_PARAMS", "build_problem", "get_method", "load_params", "method_names",
+           "DEFAULT_METHOD", "Problem", "THESIS_PARAMS", "build_problem", "get_method", "load_params", "method_names",
            "register_method", "save_params", "unregister_method"]
 
 
@@ -464,6 +464,10 @@ THESIS_PARAMS = _Defaults()
 
 for _method in (MethodI(), MethodII(), MethodIII(), MethodNM(), MethodNM4(), MethodNM3()):
     register_method(_method)
+
+#: The method used wherever none is named: the thesis' own, Method-III.  The one place
+#: the default is declared; every function and command refers to this name.
+DEFAULT_METHOD = MethodIII.name
 def get_method(name) -> Method:
     """Look a method up by name: ``"I"``, ``"II"``, ``"III"``, ``"NM"``, ``"NM4"`` or ``"NM3"`` (a ``Method`` passes through).
 
@@ -505,7 +509,7 @@ def load_params(path, method: str | None = None) -> tuple[str | None, Params]:
     """Read a params file: its method (None if it names none) and its parameters.
 
     Values the file leaves out take the defaults of its method, else of `method`,
-    else of Method-III.  Extra top-level keys are allowed; unknown parameter names
+    else of :data:`DEFAULT_METHOD`.  Extra top-level keys are allowed; unknown parameter names
     and values out of range are errors that name the file.
     """
     own = "load_params"
@@ -527,6 +531,6 @@ def load_params(path, method: str | None = None) -> tuple[str | None, Params]:
         if named is None:
             raise ParameterError(message("method", f"{own}('{path}')", "one of "
                                          + ", ".join(repr(n) for n in method_names()), data["method"]))
-    base = get_method(named or method or "III").defaults
+    base = get_method(named or method or DEFAULT_METHOD).defaults
     merged = {**base.to_dict(), **data["params"]}
     return named, Params.from_dict(merged, owner=f"{own}('{path}')")

@@ -29,7 +29,7 @@ from .datasets import aloe, ground_truth_pairs, motorcycle
 from .evaluation import Score, Scorer, score
 from .genetic import GAConfig
 from .matching import MatchConfig, Prepared, prepare
-from .methods import get_method
+from .methods import DEFAULT_METHOD, get_method
 from .params import Params
 from .peers import PEERS
 from .scenes import true_matches
@@ -304,7 +304,7 @@ class ProtocolReport:
                 "solvers": {name: [figures(s) for s in v.held_out] for name, v in self.solvers.items()}}
 
 
-def protocol(cases, method="III", *, train: int = 0, seeds: int = 5, ga: GAConfig | None = None,
+def protocol(cases, method=DEFAULT_METHOD, *, train: int = 0, seeds: int = 5, ga: GAConfig | None = None,
              rng=0, peers: bool = False, progress=None, solver=DEFAULT_SOLVER, solvers=(),
              fit_solver=DEFAULT_SOLVER, fit_seeds: int = 1, fit_all: bool = True, jobs: int = 1,
              one_to_one: bool = False, **settings) -> ProtocolReport:

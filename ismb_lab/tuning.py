@@ -21,7 +21,7 @@ import numpy as np
 from ._validation import ParameterError, ParameterTypeError, check_number, message
 from .evaluation import Score, Scorer, _tally
 from .genetic import Bounds, GAConfig, Generation, evolve
-from .methods import get_method
+from .methods import DEFAULT_METHOD, get_method
 from .params import Params
 from .solvers import DEFAULT_SOLVER, get_solver, matched_neurons, one_match_per_corner
 
@@ -154,7 +154,7 @@ class Fitness:
         return total
 
 
-def tune(cases: Sequence, method="III", *, rng=0, ga: GAConfig | None = None, seed: int = 0,
+def tune(cases: Sequence, method=DEFAULT_METHOD, *, rng=0, ga: GAConfig | None = None, seed: int = 0,
          base: Params | None = None, solver=DEFAULT_SOLVER, seeds: int = 1,
          **settings) -> Iterator[Generation]:
     """Run the GA on `cases`, yielding one :class:`~ismb_lab.genetic.Generation` per generation.

@@ -18,7 +18,7 @@ from ..genetic import GAConfig
 from ..hopfield import RULES
 from ..dynamics import STOP_RULES
 from ..matching import MatchConfig, match
-from ..methods import all_genes, get_method, load_params, method_names
+from ..methods import DEFAULT_METHOD, all_genes, get_method, load_params, method_names
 from ..solvers import SOLVERS
 from ._guard import UsageError, interrupted, json_text
 
@@ -26,8 +26,6 @@ __all__ = ["ParameterError", "ParameterTypeError", "Parser", "UsageError", "add_
            "add_matching_options", "add_feature_options", "window_record", "add_solver_option", "ga_config",
            "gene_options", "match_config", "progress_bar", "resolve_params"]
 
-#: The method the commands use when neither --method nor a params file names one.
-DEFAULT_METHOD = "III"
 FEATURE_OPTIONS = ("roi", "shift", "n_min", "n_max")
 
 

@@ -7,7 +7,7 @@ from pathlib import Path
 
 from .._files import atomic_write_text
 from ..depth import GROUPINGS, DepthConfig
-from ..depth_demo import DEPTH_MATCH_CONFIG, DEPTH_PARAMS, DEPTH_SOLVER
+from ..depth_demo import DEPTH_MATCH_CONFIG, DEPTH_METHOD, DEPTH_PARAMS, DEPTH_SOLVER
 from ._common import (UsageError, add_matching_options, add_solver_option, match_config, network_settings,
                       resolve_params, window_record)
 from ._guard import json_text, save_figure
@@ -74,7 +74,7 @@ def run(args) -> int:
             if not value > 0 or math.isinf(value):
                 raise UsageError(f"--{name.replace('_', '-')} must be a finite number > 0, got {value:g}")
             calibration[name] = value
-    method, params = resolve_params(args, defaults={"III": DEPTH_PARAMS})
+    method, params = resolve_params(args, defaults={DEPTH_METHOD: DEPTH_PARAMS})
     config = match_config(args, DEPTH_MATCH_CONFIG)
     if config.shift == "auto":
         from ..io import load_pair

@@ -20,7 +20,7 @@ from .._validation import ParameterTypeError, check_number, message
 from ..depth import DepthConfig, DepthObject, DepthResult
 from ..depth_demo import DEPTH_MATCH_CONFIG, depth_pairs, pair_silhouettes, relative_depth
 from ..io import StereoPair, load_pair
-from ..methods import get_method, method_names
+from ..methods import DEFAULT_METHOD, get_method, method_names
 from ..params import Params
 from ..plotting import outlines
 from ._common import Base, Pane, button, grey_rgb, pair_files, path_labels, with_class
@@ -84,7 +84,7 @@ class DepthModel:
     (3, 4.0)
     """
 
-    def __init__(self, background, scene, method="III", params: Params | None = None, seed: int = 0,
+    def __init__(self, background, scene, method=DEFAULT_METHOD, params: Params | None = None, seed: int = 0,
                  config: DepthConfig | None = None, match_config=None,
                  background_name: str = "the nearest background object"):
         owner = "DepthModel"
@@ -349,7 +349,7 @@ class DepthDemo(Base):
     ``ismb-status``; ``ismb-log``.
     """
 
-    def __init__(self, background, scene, *, method="III", params: Params | None = None, seed: int = 0,
+    def __init__(self, background, scene, *, method=DEFAULT_METHOD, params: Params | None = None, seed: int = 0,
                  config: DepthConfig | None = None, match_config=None,
                  background_name: str = "the nearest background object"):
         import ipywidgets

@@ -29,7 +29,7 @@ import numpy as np
 from .._validation import ParameterError, ParameterTypeError, check_number, message
 from ..genetic import GAConfig, Generation
 from ..matching import MatchConfig
-from ..methods import get_method, save_params
+from ..methods import DEFAULT_METHOD, get_method, save_params
 from ..params import Params
 from ..protocol import Case
 from ..solvers import DEFAULT_SOLVER, SOLVERS, get_solver
@@ -100,7 +100,7 @@ class GAModel:
     (True, 'finished', True)
     """
 
-    def __init__(self, cases, method="III", *, population: int | None = None, generations: int | None = None,
+    def __init__(self, cases, method=DEFAULT_METHOD, *, population: int | None = None, generations: int | None = None,
                  seed: int = 0, save_to=None, solver: str = DEFAULT_SOLVER):
         owner = "GAModel"
         self.save_to = None if save_to is None else Path(save_to)
@@ -272,7 +272,7 @@ class GARunner(Base):
     ``ismb-chromosome``; ``ismb-status``; ``ismb-log``.
     """
 
-    def __init__(self, cases_or_folder, *, method="III", population: int | None = None,
+    def __init__(self, cases_or_folder, *, method=DEFAULT_METHOD, population: int | None = None,
                  generations: int | None = None, seed: int = 0, config: MatchConfig | None = None,
                  redraw_every: float = 0.2, save_to=None, solver: str = DEFAULT_SOLVER):
         import ipywidgets
