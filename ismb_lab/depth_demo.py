@@ -347,7 +347,7 @@ def _load(value, name: str, owner: str) -> StereoPair:
 
 
 def depth_match(pair, *, background=None, method=DEFAULT_METHOD, params=None, match_config=None,
-                seed: int = 0, solver: str = DEPTH_SOLVER, **network) -> MatchResult:
+                seed: int = 0, solver=DEPTH_SOLVER, one_to_one: bool = False, **network) -> MatchResult:
     """Match one stereo pair as the depth demo does.
 
     Parameters
@@ -363,6 +363,8 @@ def depth_match(pair, *, background=None, method=DEFAULT_METHOD, params=None, ma
         Method-III).
     solver : str or Solver
         A name in :data:`ismb_lab.solvers.SOLVERS` or a configured solver (default :data:`DEPTH_SOLVER`).
+    one_to_one : bool
+        Keep at most one match per corner (:func:`ismb_lab.matching.match`).
     **network
         Options of the solver (e.g. ``stop_rule``, ``rule`` or ``kernel`` of the discrete network)
         (:func:`ismb_lab.matching.match`).
@@ -384,7 +386,7 @@ def depth_match(pair, *, background=None, method=DEFAULT_METHOD, params=None, ma
     """
     own = "depth_match"
     solver = get_solver(solver, own, **network)
-    return _match(_prepared(pair, background, match_config, own), method, params, seed, solver)
+    return _match(_prepared(pair, background, match_config, own), method, params, seed, solver, one_to_one)
 
 
 def _prepared(pair, background, match_config, own: str) -> Prepared:
@@ -400,10 +402,10 @@ def _prepared(pair, background, match_config, own: str) -> Prepared:
     return prepare(pair, None, match_config)
 
 
-def _match(prepared: Prepared, method, params, seed, solver) -> MatchResult:
+def _match(prepared: Prepared, method, params, seed, solver, one_to_one=False) -> MatchResult:
     if params is None and get_method(method).name == DEPTH_METHOD:
         params = DEPTH_PARAMS
-    return match(method=method, params=params, seed=seed, solver=solver, prepared=prepared)
+    return match(method=method, params=params, seed=seed, solver=solver, prepared=prepared, one_to_one=one_to_one)
 
 
 def depth_pairs(background, scene, match_config=None) -> tuple[Prepared, Prepared]:
@@ -436,8 +438,8 @@ def _depth_pairs(background, scene, match_config, own: str) -> tuple[Prepared, P
 
 def relative_depth(background, scene, *, method=DEFAULT_METHOD, params=None, match_config=None,
                    config: DepthConfig | None = None, seed: int = 0,
-                   solver: str = DEPTH_SOLVER, prepared=None, silhouettes: Silhouettes | None = None,
-                   **network) -> DepthResult:
+                   solver=DEPTH_SOLVER, prepared=None, silhouettes: Silhouettes | None = None,
+                   one_to_one: bool = False, **network) -> DepthResult:
     """Match a background pair and a scene pair, and rank the scene's new objects by depth.
 
     Parameters
@@ -458,7 +460,7 @@ def relative_depth(background, scene, *, method=DEFAULT_METHOD, params=None, mat
         Tolerances and calibration.
     seed : int
         Update-order seed of both runs.
-    solver : str
+    solver : str or Solver
         How the energy is solved (see :func:`depth_match`).
     prepared : (Prepared, Prepared), optional
         Both pairs already prepared by :func:`depth_pairs` with these images and
@@ -467,8 +469,10 @@ def relative_depth(background, scene, *, method=DEFAULT_METHOD, params=None, mat
     silhouettes : Silhouettes, optional
         :func:`pair_silhouettes` of these `prepared` pairs, found once as well; used
         when ``config.grouping`` is ``"silhouettes"``.
+    one_to_one : bool
+        Keep at most one match per corner in both pairs (:func:`ismb_lab.matching.match`).
     **network
-        The discrete network's settings, as in :func:`depth_match`.
+        The solver's options, as in :func:`depth_match`.
 
     Returns
     -------
@@ -496,7 +500,7 @@ def relative_depth(background, scene, *, method=DEFAULT_METHOD, params=None, mat
     if silhouettes is not None and not isinstance(silhouettes, Silhouettes):
         raise ParameterTypeError(message("silhouettes", own, "None or the Silhouettes that pair_silhouettes "
                                          "returns", silhouettes))
-    results = [_match(p, method, params, seed, solver) for p in prepared]
+    results = [_match(p, method, params, seed, solver, one_to_one) for p in prepared]
     scene_roi = resolve_roi(prepared[1].config.roi, prepared[1].pair.shape)
     blobs = None
     if config.grouping == "silhouettes":
