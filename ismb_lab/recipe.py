@@ -36,7 +36,7 @@ from .methods import DEFAULT_METHOD, Method, get_method, params_of, read_params_
 from .params import Params
 from .solvers import DEFAULT_SOLVER, Solver, get_solver
 
-__all__ = ["RECIPE_VERSION", "Loaded", "Recipe", "load_recipe", "save_recipe"]
+__all__ = ["RECIPE_VERSION", "Loaded", "Recipe", "load_recipe", "recipe_of", "save_recipe"]
 
 #: The version :func:`save_recipe` writes; files without a version key are version 1.
 RECIPE_VERSION = 2
@@ -188,3 +188,20 @@ def load_recipe(path, *, method=None, solver=DEFAULT_SOLVER, before: str | None 
         note = (f"{path} was written before recipes were saved whole: its solver '{saved}' is used, "
                 f"where this command used '{get_solver(before).name}' with it before")
     return Loaded(recipe, note)
+
+
+def recipe_of(recipe, owner: str = "recipe_of", solver=DEFAULT_SOLVER) -> Recipe:
+    """A :class:`Recipe` as it is, or the recipe of a params file (`solver`: when it names none).
+
+    >>> recipe_of(Recipe("NM3")).method.name
+    'NM3'
+    >>> recipe_of(3)
+    Traceback (most recent call last):
+    ...
+    ismb_lab.ParameterTypeError: The 'recipe' parameter of recipe_of must be a Recipe or the path of a params file. Got 3 instead.
+    """
+    if isinstance(recipe, Recipe):
+        return recipe
+    if not isinstance(recipe, (str, Path)):
+        raise ParameterTypeError(message("recipe", owner, "a Recipe or the path of a params file", recipe))
+    return load_recipe(recipe, solver=solver).recipe
