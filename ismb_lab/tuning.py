@@ -23,7 +23,7 @@ from .evaluation import Score, Scorer, _tally
 from .genetic import Bounds, GAConfig, Generation, evolve
 from .methods import DEFAULT_METHOD, get_method
 from .params import Params
-from .solvers import DEFAULT_SOLVER, get_solver, matched_neurons, one_match_per_corner
+from .solvers import DEFAULT_SOLVER, get_solver, matched_neurons, one_match_per_corner, solve
 
 __all__ = ["Fitness", "evaluate", "gene_bounds", "to_chromosome", "to_params", "tune"]
 
@@ -97,7 +97,7 @@ def _counts(case, m, params: Params, seed: int, solver, one_to_one: bool = False
     :func:`~ismb_lab.solvers.to_matches`' pairs, counted over neurons coded once per case
     (:meth:`~ismb_lab.evaluation.Scorer.neuron_codes`)."""
     problem = case.prepared.problem
-    state = solver.solve(m.network(problem, params), seed).state
+    state = solve(m.network(problem, params), solver, seed=seed, owner="evaluate").state
     codes = getattr(case, "neuron_codes", None)
     if codes is None:
         codes = Scorer(case.targets, case.unknown).neuron_codes(problem.rows, problem.cols)
