@@ -167,3 +167,15 @@ def test_evaluate_takes_the_recipes_solver_fit_seeds_and_one_to_one(tuned, tmp_p
     assert seen["fit_seeds"] == 1 and seen["one_to_one"] is False
     notes = [line for line in capsys.readouterr().err.splitlines() if "override" in line]
     assert len(notes) == 1 and "fit_seeds 2 -> 1" in notes[0] and "one_to_one True -> False" in notes[0]
+
+
+def test_depth_uses_the_params_file_as_it_is(tuned, tmp_path, capsys):
+    from pathlib import Path
+
+    images = Path(__file__).resolve().parents[1] / "images"
+    scenes = [images / folder / side for folder in ("lab", "toy_cars") for side in ("left.png", "right.png")]
+    out = tmp_path / "depth.json"
+    assert main(["depth", *map(str, scenes), "--params-file", str(tuned), "--json", str(out)]) == 0
+    said = capsys.readouterr()
+    assert "Method-NM3 (anneal, one match per corner)" in said.out and "override" not in said.err
+    assert json.loads(out.read_text())["objects"]

@@ -94,7 +94,8 @@ def run(args) -> int:
                 raise UsageError(why)
             # A plain wall has no corners: nothing to remove, the blobs of change still find the objects.
             print(f"note: {why}; no scene feature is removed as background")
-    print(f"Method-{method} ({result.scene.solver}): {len(result.background.pairs)} background matches, "
+    after = ", one match per corner" if recipe.one_to_one else ""
+    print(f"Method-{method} ({result.scene.solver}{after}): {len(result.background.pairs)} background matches, "
           f"{len(result.scene.pairs)} scene matches; {result.background_removed} scene features "
           "removed as background")
     if not result.objects:
