@@ -179,3 +179,22 @@ def test_depth_uses_the_params_file_as_it_is(tuned, tmp_path, capsys):
     said = capsys.readouterr()
     assert "Method-NM3 (anneal, one match per corner)" in said.out and "override" not in said.err
     assert json.loads(out.read_text())["objects"]
+
+
+def test_evaluate_interrupted_writes_the_recipe_with_the_best_so_far(tuned, tmp_path, monkeypatch, capsys):
+    from types import SimpleNamespace
+
+    import ismb_lab.cli.evaluate as command
+
+    def interrupted_protocol(cases, method, progress=None, **kwargs):
+        progress("a", SimpleNamespace(best_chromosome=[9.0, 5.0, 4.0], best=3.0, index=2, mean=1.0))
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(command, "protocol", interrupted_protocol)
+    monkeypatch.setattr(command, "load_manifest", lambda path: [])
+    out = tmp_path / "report.json"
+    assert main(["evaluate", str(tmp_path / "m.json"), "--recipe", str(tuned), "--jobs", "1",
+                 "--json", str(out)]) == 130
+    saved = load_recipe(out).recipe
+    assert saved == Recipe("NM3", Params(theta_c=9.0, lambda_c=5.0, lambda_s=4.0), "anneal", 2, True)
+    assert json.loads(out.read_text())["interrupted"] is True and "interrupted" in capsys.readouterr().err

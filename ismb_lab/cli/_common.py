@@ -20,7 +20,7 @@ from ..dynamics import STOP_RULES
 from ..matching import MatchConfig, match
 from ..methods import DEFAULT_METHOD, all_genes, get_method, method_names
 from ..solvers import SOLVERS, NetworkSolver
-from ._guard import UsageError, interrupted, json_text
+from ._guard import UsageError, interrupted
 
 __all__ = ["ParameterError", "ParameterTypeError", "Parser", "UsageError", "add_ga_options",
            "add_matching_options", "add_feature_options", "window_record", "add_solver_option", "ga_config",
@@ -251,26 +251,31 @@ def progress_bar(total: int, desc: str, unit: str = "gen"):
 
 
 class BestSoFar:
-    """A GA progress callback's companion: keeps the latest record, to save it when interrupted."""
+    """A GA progress callback's companion: keeps the latest record, to save it when interrupted.
 
-    def __init__(self, method: str):
-        self.method, self.name, self.record = method, None, None
+    `recipe` (:class:`ismb_lab.recipe.Recipe`) is what the fit runs for; the file written holds it
+    with the best parameters so far.
+    """
+
+    def __init__(self, recipe):
+        self.recipe, self.method, self.name, self.record = recipe, recipe.method.name, None, None
 
     def __call__(self, name, record) -> None:
         self.name, self.record = name, record
 
     def save(self, path) -> int:
-        """Write the best parameters so far to `path` (if given and a generation finished); 130."""
-        from .._files import atomic_write_text
+        """Write the recipe with the best parameters so far to `path` (if given and a generation
+        finished); 130."""
+        from ..recipe import save_recipe
         from ..tuning import to_params
 
         if self.record is None:
             raise KeyboardInterrupt
-        params = to_params(self.method, self.record.best_chromosome)
+        recipe = replace(self.recipe, params=to_params(self.recipe.method, self.record.best_chromosome))
+        params = recipe.params
         if path is not None:
-            atomic_write_text(path, json_text({
-                "method": self.method, "params": params.to_dict(), "fitness": self.record.best,
-                "generations": self.record.index, "fitted_on": self.name, "interrupted": True}))
+            save_recipe(path, recipe, fitness=self.record.best, generations=self.record.index,
+                        fitted_on=self.name, interrupted=True)
         print(f"ismb-lab: interrupted while fitting {self.name}; best parameters so far "
               f"{params.to_dict()}" + (f", written to {path}" if path is not None else ""),
               file=sys.stderr)

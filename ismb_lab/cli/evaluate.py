@@ -73,7 +73,7 @@ def run(args) -> int:
     if jobs < 1:
         raise UsageError(f"--jobs must be an integer >= 1, got {jobs}")
     recipe = given_recipe(args)
-    best, reported = BestSoFar(recipe.method.name), []
+    best, reported = BestSoFar(recipe), []
     try:
         return _run(args, jobs, best, reported, recipe)
     except BaseException as exc:
