@@ -44,7 +44,7 @@ from .depth import DepthConfig, DepthResult, depth_from_matches
 from .features import Corners, detect_corners, resolve_roi
 from .io import StereoPair, load_pair
 from .matching import MatchConfig, MatchResult, Prepared, auto_window, match, prepare, shift_roi
-from .methods import build_problem
+from .methods import DEFAULT_METHOD, build_problem, get_method
 from .params import Params
 from .similarity import mean_abs_difference
 from .silhouettes import Silhouettes, changed_in_roi, silhouettes
@@ -67,6 +67,9 @@ DEPTH_MATCH_CONFIG = MatchConfig(n_min=40, n_max=60)
 #: give many extra matches on rendered scenes.
 DEPTH_PARAMS = Params(theta_c=1.945540697133651, theta_s=13.577571706866182,
                       lambda_c=7.143116184828514, lambda_s=6.966076587109354)
+
+#: The method :data:`DEPTH_PARAMS` were fitted for.
+DEPTH_METHOD = "III"
 
 #: Corners per blob of change in the scene pair (:func:`scene_prepared`): at least, at most.
 REGION_CORNERS = (20, 40)
@@ -343,8 +346,8 @@ def _load(value, name: str, owner: str) -> StereoPair:
                                      "paths, or an object with .left and .right", value))
 
 
-def depth_match(pair, *, background=None, method: str = "III", params=None, match_config=None,
-                seed: int = 0, solver: str = DEPTH_SOLVER, **network) -> MatchResult:
+def depth_match(pair, *, background=None, method=DEFAULT_METHOD, params=None, match_config=None,
+                seed: int = 0, solver=DEPTH_SOLVER, one_to_one: bool = False, **network) -> MatchResult:
     """Match one stereo pair as the depth demo does.
 
     Parameters
@@ -358,10 +361,12 @@ def depth_match(pair, *, background=None, method: str = "III", params=None, matc
     method, params, match_config, seed
         As in :func:`relative_depth` (``params`` default: :data:`DEPTH_PARAMS` for
         Method-III).
-    solver : str
-        A name in :data:`ismb_lab.solvers.SOLVERS` (default :data:`DEPTH_SOLVER`).
+    solver : str or Solver
+        A name in :data:`ismb_lab.solvers.SOLVERS` or a configured solver (default :data:`DEPTH_SOLVER`).
+    one_to_one : bool
+        Keep at most one match per corner (:func:`ismb_lab.matching.match`).
     **network
-        ``stop_rule``, ``rule`` or ``kernel`` of the discrete network
+        Options of the solver (e.g. ``stop_rule``, ``rule`` or ``kernel`` of the discrete network)
         (:func:`ismb_lab.matching.match`).
 
     Returns
@@ -373,15 +378,15 @@ def depth_match(pair, *, background=None, method: str = "III", params=None, matc
     >>> from ismb_lab.scenes import lab_scene
     >>> m = depth_match(lab_scene(0, supersample=1))
     >>> m.solver, m.stop_rule, len(m.pairs) > 10
-    ('anneal', 'anneal', True)
+    ('anneal', 'sweep', True)
     >>> depth_match(lab_scene(0, supersample=1), solver="annealing")
     Traceback (most recent call last):
     ...
     ismb_lab.ParameterError: The 'solver' parameter of depth_match must be one of 'network', 'anneal', 'exact', 'assign'. Got 'annealing' instead.
     """
     own = "depth_match"
-    get_solver(solver, own)
-    return _match(_prepared(pair, background, match_config, own), method, params, seed, solver, network)
+    solver = get_solver(solver, own, **network)
+    return _match(_prepared(pair, background, match_config, own), method, params, seed, solver, one_to_one)
 
 
 def _prepared(pair, background, match_config, own: str) -> Prepared:
@@ -397,10 +402,10 @@ def _prepared(pair, background, match_config, own: str) -> Prepared:
     return prepare(pair, None, match_config)
 
 
-def _match(prepared: Prepared, method, params, seed, solver, network: dict) -> MatchResult:
-    if params is None and method == "III":
+def _match(prepared: Prepared, method, params, seed, solver, one_to_one=False) -> MatchResult:
+    if params is None and get_method(method).name == DEPTH_METHOD:
         params = DEPTH_PARAMS
-    return match(method=method, params=params, seed=seed, solver=solver, prepared=prepared, **network)
+    return match(method=method, params=params, seed=seed, solver=solver, prepared=prepared, one_to_one=one_to_one)
 
 
 def depth_pairs(background, scene, match_config=None) -> tuple[Prepared, Prepared]:
@@ -431,10 +436,10 @@ def _depth_pairs(background, scene, match_config, own: str) -> tuple[Prepared, P
     return _prepared(bg, None, match_config, own), _prepared(sc, bg, match_config, own)
 
 
-def relative_depth(background, scene, *, method: str = "III", params=None, match_config=None,
+def relative_depth(background, scene, *, method=DEFAULT_METHOD, params=None, match_config=None,
                    config: DepthConfig | None = None, seed: int = 0,
-                   solver: str = DEPTH_SOLVER, prepared=None, silhouettes: Silhouettes | None = None,
-                   **network) -> DepthResult:
+                   solver=DEPTH_SOLVER, prepared=None, silhouettes: Silhouettes | None = None,
+                   one_to_one: bool = False, **network) -> DepthResult:
     """Match a background pair and a scene pair, and rank the scene's new objects by depth.
 
     Parameters
@@ -455,7 +460,7 @@ def relative_depth(background, scene, *, method: str = "III", params=None, match
         Tolerances and calibration.
     seed : int
         Update-order seed of both runs.
-    solver : str
+    solver : str or Solver
         How the energy is solved (see :func:`depth_match`).
     prepared : (Prepared, Prepared), optional
         Both pairs already prepared by :func:`depth_pairs` with these images and
@@ -464,8 +469,10 @@ def relative_depth(background, scene, *, method: str = "III", params=None, match
     silhouettes : Silhouettes, optional
         :func:`pair_silhouettes` of these `prepared` pairs, found once as well; used
         when ``config.grouping`` is ``"silhouettes"``.
+    one_to_one : bool
+        Keep at most one match per corner in both pairs (:func:`ismb_lab.matching.match`).
     **network
-        The discrete network's settings, as in :func:`depth_match`.
+        The solver's options, as in :func:`depth_match`.
 
     Returns
     -------
@@ -481,7 +488,7 @@ def relative_depth(background, scene, *, method: str = "III", params=None, match
     ismb_lab.ParameterError: The 'scene' parameter of relative_depth must be images of the background's size 80x60 (width x height). Got 'images of size 80x50' instead.
     """
     own = "relative_depth"
-    get_solver(solver, own)
+    solver = get_solver(solver, own, **network)
     if prepared is None:
         prepared = _depth_pairs(background, scene, match_config, own)
     elif not (isinstance(prepared, tuple) and len(prepared) == 2 and all(isinstance(p, Prepared) for p in prepared)):
@@ -493,7 +500,7 @@ def relative_depth(background, scene, *, method: str = "III", params=None, match
     if silhouettes is not None and not isinstance(silhouettes, Silhouettes):
         raise ParameterTypeError(message("silhouettes", own, "None or the Silhouettes that pair_silhouettes "
                                          "returns", silhouettes))
-    results = [_match(p, method, params, seed, solver, network) for p in prepared]
+    results = [_match(p, method, params, seed, solver, one_to_one) for p in prepared]
     scene_roi = resolve_roi(prepared[1].config.roi, prepared[1].pair.shape)
     blobs = None
     if config.grouping == "silhouettes":

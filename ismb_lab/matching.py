@@ -17,10 +17,8 @@ import numpy as np
 from ._validation import MAX_SEED, ParameterError, ParameterTypeError, check_choice, check_number, message
 from .coords import euclidean_disparity, horizontal_disparity
 from .features import Corners, detect_corners, resolve_roi
-from .hopfield import RULES
-from .dynamics import STOP_RULES
 from .io import StereoPair, load_pair
-from .methods import Problem, build_problem, get_method
+from .methods import DEFAULT_METHOD, Problem, build_problem, get_method
 from .params import Params
 from .similarity import mean_abs_difference
 from .solvers import DEFAULT_SOLVER, get_solver, one_match_per_corner, solve, to_matches
@@ -216,7 +214,7 @@ class MatchResult:
     seed : int
     stop_rule : str
         What stopped the network (``"sweep"``, ``"stall"``, ``"max_attempts"``), or
-        the solver's name when another solver found the state.
+        ``"minimum"`` (:attr:`ismb_lab.solvers.Solution.stop_rule`).
     energy : float
         Final energy (3-15).
     attempts : int
@@ -313,9 +311,9 @@ def _xy_list(xy):
     return xy.tolist()
 
 
-def match(left=None, right=None, method="III", params: Params | None = None, *,
-          config: MatchConfig | None = None, seed: int = 0, solver: str = DEFAULT_SOLVER,
-          stop_rule: str = "sweep", rule: str = "exact", kernel: str = "numba",
+def match(left=None, right=None, method=DEFAULT_METHOD, params: Params | None = None, *,
+          config: MatchConfig | None = None, seed: int = 0, solver=DEFAULT_SOLVER,
+          stop_rule: str | None = None, rule: str | None = None, kernel: str | None = None,
           prepared: Prepared | None = None, one_to_one: bool = False) -> MatchResult:
     """Match the Harris corners of a stereo pair with the Hopfield network.
 
@@ -331,10 +329,12 @@ def match(left=None, right=None, method="III", params: Params | None = None, *,
         Corners, candidate window and neighbourhood settings.
     seed : int
         Seed of the random update order (and of annealing), from 0 to 2**63 - 1.
-    solver : str
-        How the energy is minimised, a name in :data:`ismb_lab.solvers.SOLVERS`.
+    solver : str or Solver
+        How the energy is minimised: a name in :data:`ismb_lab.solvers.SOLVERS` or a
+        configured :class:`~ismb_lab.solvers.Solver`.
     stop_rule, rule, kernel
-        The discrete network's settings, see :func:`ismb_lab.dynamics.run`.
+        Options of the ``"network"`` and ``"assign"`` solvers that replace the solver's
+        own (:class:`~ismb_lab.solvers.NetworkSolver`); None keeps them.
     prepared : Prepared, optional
         Reuse corners and geometry from :func:`prepare`.
     one_to_one : bool
@@ -349,10 +349,9 @@ def match(left=None, right=None, method="III", params: Params | None = None, *,
     params = m.defaults if params is None else params
     if not isinstance(params, Params):
         raise ParameterTypeError(message("params", "match", "a Params instance", params))
-    get_solver(solver, "match")   # the settings are checked before the images are read
+    # the settings are checked before the images are read
+    solver = get_solver(solver, "match", stop_rule=stop_rule, rule=rule, kernel=kernel)
     check_number(seed, "seed", "match", low=0, high=MAX_SEED, integer=True)
-    check_choice(stop_rule, "stop_rule", "match", STOP_RULES)
-    check_choice(rule, "rule", "match", RULES)
     if not isinstance(one_to_one, bool):
         raise ParameterTypeError(message("one_to_one", "match", "True or False", one_to_one))
     if prepared is None:
@@ -360,8 +359,7 @@ def match(left=None, right=None, method="III", params: Params | None = None, *,
     elif not isinstance(prepared, Prepared):
         raise ParameterTypeError(message("prepared", "match", "a Prepared from prepare()", prepared))
     problem = prepared.problem
-    result = solve(m.network(problem, params), solver, seed=seed, stop_rule=stop_rule, rule=rule,
-                   kernel=kernel, owner="match")
+    result = solve(m.network(problem, params), solver, seed=seed, owner="match")
     found = to_matches(problem, result.state, m)
     if one_to_one:
         kept = np.zeros_like(found.state)
@@ -369,7 +367,7 @@ def match(left=None, right=None, method="III", params: Params | None = None, *,
         found = to_matches(problem, kept)
     return MatchResult(m.name, params, int(seed), result.stop_rule, result.energy, result.attempts,
                        problem.left_xy, problem.right_xy, found.pairs, _explain(prepared, result),
-                       problem.n_neurons, found.state, solver, one_to_one)
+                       problem.n_neurons, found.state, solver.name, one_to_one)
 
 
 def _explain(prepared: Prepared, result) -> str:

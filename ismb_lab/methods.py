@@ -54,7 +54,7 @@ from .params import LAMBDA_C, LAMBDA_S, MATCH_BIAS, THETA_C, THETA_S, Gene, Para
 from .similarity import candidate_mask, no_match_cut, transfer
 
 __all__ = ["all_genes", "Method", "MethodI", "MethodII", "MethodIII", "MethodNM", "MethodNM3", "MethodNM4",
-           "Problem", "THESIS_PARAMS", "build_problem", "get_method", "load_params", "method_names",
+           "DEFAULT_METHOD", "Problem", "THESIS_PARAMS", "build_problem", "get_method", "load_params", "method_names",
            "register_method", "save_params", "unregister_method"]
 
 
@@ -464,6 +464,10 @@ THESIS_PARAMS = _Defaults()
 
 for _method in (MethodI(), MethodII(), MethodIII(), MethodNM(), MethodNM4(), MethodNM3()):
     register_method(_method)
+
+#: The method used wherever none is named: the thesis' own, Method-III.  The one place
+#: the default is declared; every function and command refers to this name.
+DEFAULT_METHOD = MethodIII.name
 def get_method(name) -> Method:
     """Look a method up by name: ``"I"``, ``"II"``, ``"III"``, ``"NM"``, ``"NM4"`` or ``"NM3"`` (a ``Method`` passes through).
 
@@ -505,28 +509,39 @@ def load_params(path, method: str | None = None) -> tuple[str | None, Params]:
     """Read a params file: its method (None if it names none) and its parameters.
 
     Values the file leaves out take the defaults of its method, else of `method`,
-    else of Method-III.  Extra top-level keys are allowed; unknown parameter names
-    and values out of range are errors that name the file.
+    else of :data:`DEFAULT_METHOD`.  Extra top-level keys are allowed; unknown parameter
+    names and values out of range are errors that name the file.  The whole recipe of a
+    params file (solver, fit seeds, one-to-one) is read by :func:`ismb_lab.recipe.load_recipe`.
     """
-    own = "load_params"
+    return params_of(read_params_file(path), path, method)
+
+
+def read_params_file(path, owner: str = "load_params") -> dict:
+    """The JSON object of a params file, checked to hold a ``"params"`` object."""
     try:
         data = json.loads(Path(path).read_text(encoding="utf-8"))
     except FileNotFoundError:
-        raise ParameterError(message("path", own, "an existing params file", str(path))) from None
+        raise ParameterError(message("path", owner, "an existing params file", str(path))) from None
     except RecursionError:
-        raise ParameterError(message("path", own, "a JSON file that is not nested too deeply",
+        raise ParameterError(message("path", owner, "a JSON file that is not nested too deeply",
                                      str(path))) from None
     except (OSError, UnicodeDecodeError, ValueError) as exc:
-        raise ParameterError(message("path", own, f"a readable JSON file ({type(exc).__name__})",
+        raise ParameterError(message("path", owner, f"a readable JSON file ({type(exc).__name__})",
                                      str(path))) from None
     if not isinstance(data, dict) or not isinstance(data.get("params"), dict):
-        raise ParameterError(message("path", own, "a JSON object with a 'params' object", str(path)))
+        raise ParameterError(message("path", owner, "a JSON object with a 'params' object", str(path)))
+    return data
+
+
+def params_of(data: dict, path, method: str | None = None,
+              owner: str = "load_params") -> tuple[str | None, Params]:
+    """:func:`load_params`' answer for the object `data` read from `path`."""
     named = data.get("method")
     if named is not None:
         named = get_method(named).name if isinstance(named, str) and named in _METHODS else None
         if named is None:
-            raise ParameterError(message("method", f"{own}('{path}')", "one of "
+            raise ParameterError(message("method", f"{owner}('{path}')", "one of "
                                          + ", ".join(repr(n) for n in method_names()), data["method"]))
-    base = get_method(named or method or "III").defaults
+    base = get_method(named or method or DEFAULT_METHOD).defaults
     merged = {**base.to_dict(), **data["params"]}
-    return named, Params.from_dict(merged, owner=f"{own}('{path}')")
+    return named, Params.from_dict(merged, owner=f"{owner}('{path}')")

@@ -29,11 +29,11 @@ from .datasets import aloe, ground_truth_pairs, motorcycle
 from .evaluation import Score, Scorer, score
 from .genetic import GAConfig
 from .matching import MatchConfig, Prepared, prepare
-from .methods import get_method
+from .methods import DEFAULT_METHOD, get_method
 from .params import Params
 from .peers import PEERS
 from .scenes import true_matches
-from .solvers import DEFAULT_SOLVER, get_solver
+from .solvers import DEFAULT_SOLVER, Solver, get_solver
 from .targets import check_one_to_one, load_targets, snap
 from .tuning import evaluate, to_params, tune
 
@@ -245,6 +245,7 @@ class SolverReport:
 
     rows: tuple
     held_out: tuple
+    seeded: bool = True
 
 
 @dataclass(frozen=True)
@@ -305,9 +306,9 @@ class ProtocolReport:
                 "solvers": {name: [figures(s) for s in v.held_out] for name, v in self.solvers.items()}}
 
 
-def protocol(cases, method="III", *, train: int = 0, seeds: int = 5, ga: GAConfig | None = None,
-             rng=0, peers: bool = False, progress=None, solver: str = DEFAULT_SOLVER, solvers=(),
-             fit_solver: str = DEFAULT_SOLVER, fit_seeds: int = 1, fit_all: bool = True, jobs: int = 1,
+def protocol(cases, method=DEFAULT_METHOD, *, train: int = 0, seeds: int = 5, ga: GAConfig | None = None,
+             rng=0, peers: bool = False, progress=None, solver=DEFAULT_SOLVER, solvers=(),
+             fit_solver=DEFAULT_SOLVER, fit_seeds: int = 1, fit_all: bool = True, jobs: int = 1,
              one_to_one: bool = False, **settings) -> ProtocolReport:
     """Fig. 5.10's protocol: GA-fit on each pair ("training") and on one pair applied to all
     the others ("testing"), every network figure over `seeds` update-order seeds.
@@ -330,10 +331,11 @@ def protocol(cases, method="III", *, train: int = 0, seeds: int = 5, ga: GAConfi
         tested parameters where they use S and C.
     progress : callable, optional
         ``progress(case_name, generation)`` after every GA generation.
-    solver : str
-        How the tested energies are solved (:data:`ismb_lab.solvers.SOLVERS`); a solver
-        that ignores the seed is run once.
-    solvers : sequence of str
+    solver : str or Solver
+        How the tested energies are solved (a name in :data:`ismb_lab.solvers.SOLVERS`
+        or a configured :class:`~ismb_lab.solvers.Solver`); a solver that ignores the
+        seed is run once.
+    solvers : sequence of str or Solver
         Other solvers of the same energies with the same tested parameters, reported
         beside `solver`'s rows.
     fit_solver, fit_seeds
@@ -360,15 +362,15 @@ def protocol(cases, method="III", *, train: int = 0, seeds: int = 5, ga: GAConfi
         raise ParameterError(message("cases", own, "at least one pair", cases))
     if not all(isinstance(c, Case) for c in cases):
         raise ParameterTypeError(message("cases", own, "a sequence of Case", cases))
-    method = get_method(method).name
+    method = get_method(method)
     train = check_number(train, "train", own, low=0, high=len(cases) - 1, integer=True)
     seeds = check_number(seeds, "seeds", own, low=1, integer=True)
     main = get_solver(solver, own)
-    fit_solver = get_solver(fit_solver, own, "fit_solver").name
+    fit_solver = get_solver(fit_solver, own, "fit_solver")
     fit_seeds = check_number(fit_seeds, "fit_seeds", own, low=1, integer=True)
     if not isinstance(one_to_one, bool):
         raise ParameterTypeError(message("one_to_one", own, "True or False", one_to_one))
-    solvers = (solvers,) if isinstance(solvers, str) else tuple(solvers)
+    solvers = (solvers,) if isinstance(solvers, (str, Solver)) else tuple(solvers)
     chosen = [get_solver(name, own, "solvers") for name in solvers]
     if any(s.name == main.name for s in chosen):
         raise ParameterError(message("solvers", own, f"solvers other than solver={main.name!r}, "
@@ -391,7 +393,7 @@ def protocol(cases, method="III", *, train: int = 0, seeds: int = 5, ga: GAConfi
                 if progress:
                     progress(cases[n].name, fits[n][1])
         tested = fits[train][0]
-        task = (method, tested, runs, main.name, [(o.name, o.seeded) for o in chosen], seeds, peers, one_to_one)
+        task = (method, tested, runs, main, chosen, seeds, peers, one_to_one)
         owns = [fits[n][0] if n in fits else None for n in range(len(cases))]
         if pool is None:
             scored = [_score_pair(c, p, *task) for c, p in zip(cases, owns)]
@@ -407,12 +409,13 @@ def protocol(cases, method="III", *, train: int = 0, seeds: int = 5, ga: GAConfi
     solver_reports = {}
     for other in chosen:
         per_pair = tuple(s["solvers"][other.name] for s in scored)
-        solver_reports[other.name] = SolverReport(per_pair, pooled(per_pair, range(len(per_pair[0]))))
+        solver_reports[other.name] = SolverReport(per_pair, pooled(per_pair, range(len(per_pair[0]))),
+                                                   other.seeded)
     peer_reports = {}
     for name in PEERS if peers else ():
         per_pair = tuple(s["peers"][name] for s in scored)
         peer_reports[name] = PeerReport(per_pair, sum((p for n, p in enumerate(per_pair) if n != train), _NONE))
-    return ProtocolReport(method, tested, train, rows, held_out, main.name, peer_reports, solver_reports,
+    return ProtocolReport(method.name, tested, train, rows, held_out, main.name, peer_reports, solver_reports,
                           one_to_one)
 
 
@@ -430,9 +433,9 @@ def _score_pair(case, own_params, method, tested, runs, solver, others, seeds, p
     out = {"testing": tuple(evaluate([case], method, tested, s, solver, one_to_one) for s in runs),
            "training": None if own_params is None else tuple(
                evaluate([case], method, own_params, s, solver, one_to_one) for s in runs),
-           "solvers": {name: tuple(evaluate([case], method, tested, s, name, one_to_one)
-                                   for s in (range(seeds) if seeded else range(1)))
-                       for name, seeded in others},
+           "solvers": {other.name: tuple(evaluate([case], method, tested, s, other, one_to_one)
+                                         for s in (range(seeds) if other.seeded else range(1)))
+                       for other in others},
            "peers": {}}
     if peers:
         out["peers"] = {name: score(peer(case.prepared.problem, method, tested), case.targets, case.unknown)
@@ -538,7 +541,7 @@ def format_protocol(report: ProtocolReport) -> str:
         lines.append(f"Held-out total, seed 0: {_figures(report.held_out[0])}")
         lines += _over_seeds(report.held_out, "held-out total")
     for name, variant in report.solvers.items():
-        seed = " (seed 0)" if get_solver(name).seeded else ""
+        seed = " (seed 0)" if variant.seeded else ""
         lines.append(f"solver {name:>9}: held-out{seed} {_figures(variant.held_out[0])}   per pair: "
                      + "  ".join(str(p[0]) for p in variant.rows))
         lines += _over_seeds(variant.held_out, f"solver {name}")

@@ -21,7 +21,7 @@ import numpy as np
 from ._validation import ParameterError, ParameterTypeError, check_number, message
 from .evaluation import Score, Scorer, _tally
 from .genetic import Bounds, GAConfig, Generation, evolve
-from .methods import get_method
+from .methods import DEFAULT_METHOD, get_method
 from .params import Params
 from .solvers import DEFAULT_SOLVER, get_solver, matched_neurons, one_match_per_corner, solve
 
@@ -74,11 +74,14 @@ def to_chromosome(method, params: Params) -> np.ndarray:
 
 
 def evaluate(cases: Sequence, method, params: Params, seed: int = 0,
-             solver: str = DEFAULT_SOLVER, one_to_one: bool = False) -> Score:
-    """The summed C/E/T of `params` over `cases`, each solved by `solver` with `seed`; with
-    `one_to_one`, the matches pass :func:`~ismb_lab.solvers.one_match_per_corner` first."""
+             solver=DEFAULT_SOLVER, one_to_one: bool = False) -> Score:
+    """The summed C/E/T of `params` over `cases`, each solved by `solver` (a name or a
+    :class:`~ismb_lab.solvers.Solver`) with `seed`; with `one_to_one`, the matches pass
+    :func:`~ismb_lab.solvers.one_match_per_corner` first.  `method` is a name or a
+    :class:`~ismb_lab.methods.Method`: pass the object to resolve it once for many calls."""
     m = get_method(method)
-    get_solver(solver, "evaluate")
+    solver = get_solver(solver, "evaluate")
+    check_number(seed, "seed", "evaluate", low=0, integer=True)
     if not isinstance(one_to_one, bool):
         raise ParameterTypeError(message("one_to_one", "evaluate", "True or False", one_to_one))
     correct = wrong = extra = targets = 0
@@ -89,7 +92,7 @@ def evaluate(cases: Sequence, method, params: Params, seed: int = 0,
     return Score(correct, wrong, extra, targets)
 
 
-def _counts(case, m, params: Params, seed: int, solver: str, one_to_one: bool = False) -> tuple[int, int, int]:
+def _counts(case, m, params: Params, seed: int, solver, one_to_one: bool = False) -> tuple[int, int, int]:
     """C, wrong partner and extra of one case: the score of
     :func:`~ismb_lab.solvers.to_matches`' pairs, counted over neurons coded once per case
     (:meth:`~ismb_lab.evaluation.Scorer.neuron_codes`)."""
@@ -118,7 +121,7 @@ class Fitness:
     """
 
     def __init__(self, cases: Sequence, method, *, seed: int = 0, base: Params | None = None,
-                 solver: str = DEFAULT_SOLVER, seeds: int = 1):
+                 solver=DEFAULT_SOLVER, seeds: int = 1):
         cases = list(cases)
         if not cases:
             raise ParameterError(message("cases", "Fitness", "at least one training pair", cases))
@@ -131,7 +134,7 @@ class Fitness:
         self.cases, self.method, self.base = cases, get_method(method), base
         self.seed = check_number(seed, "seed", "Fitness", low=0, integer=True)
         self.seeds = check_number(seeds, "seeds", "Fitness", low=1, integer=True)
-        self.solver = get_solver(solver, "Fitness").name
+        self.solver = get_solver(solver, "Fitness")
         self.target = sum(len(c.targets) for c in cases)
 
     def params(self, chromosome) -> Params:
@@ -151,8 +154,8 @@ class Fitness:
         return total
 
 
-def tune(cases: Sequence, method="III", *, rng=0, ga: GAConfig | None = None, seed: int = 0,
-         base: Params | None = None, solver: str = DEFAULT_SOLVER, seeds: int = 1,
+def tune(cases: Sequence, method=DEFAULT_METHOD, *, rng=0, ga: GAConfig | None = None, seed: int = 0,
+         base: Params | None = None, solver=DEFAULT_SOLVER, seeds: int = 1,
          **settings) -> Iterator[Generation]:
     """Run the GA on `cases`, yielding one :class:`~ismb_lab.genetic.Generation` per generation.
 
@@ -174,8 +177,9 @@ def tune(cases: Sequence, method="III", *, rng=0, ga: GAConfig | None = None, se
         Update-order seed of every network run.
     base : Params, optional
         Values of the genes the method does not use (default: the method's defaults).
-    solver : str
-        How each network is solved, a name in :data:`ismb_lab.solvers.SOLVERS`.
+    solver : str or Solver
+        How each network is solved, a name in :data:`ismb_lab.solvers.SOLVERS` or a
+        configured :class:`~ismb_lab.solvers.Solver`.
     seeds : int
         Update-order seeds each chromosome is scored over (mean fitness).
     **settings
@@ -185,4 +189,4 @@ def tune(cases: Sequence, method="III", *, rng=0, ga: GAConfig | None = None, se
     if ga is not None and not isinstance(ga, GAConfig):
         raise ParameterTypeError(message("ga", "tune", "a GAConfig", ga))
     ga = (ga or GAConfig()).updated("tune", **settings)
-    return evolve(fitness, gene_bounds(method), rng=rng, config=ga, target=fitness.target)
+    return evolve(fitness, gene_bounds(fitness.method), rng=rng, config=ga, target=fitness.target)

@@ -233,3 +233,24 @@ def test_the_code_notebooks_and_scripts_pass_the_linter():
     done = subprocess.run([sys.executable, "-m", "ruff", "check", "--no-cache", "--quiet", str(root)],
                           capture_output=True, text=True, cwd=root, timeout=120)
     assert done.returncode == 0, done.stdout + done.stderr
+
+
+#: Modules whose "III" defaults are changed on other branches (the peers' signatures, the explorer).
+_DEFAULT_METHOD_ELSEWHERE = {"ismb_lab.peers", "ismb_lab.widgets.explorer"}
+
+
+def test_the_default_method_is_declared_once():
+    """No function spells the default method out: each refers to ``methods.DEFAULT_METHOD``."""
+    from ismb_lab.methods import DEFAULT_METHOD
+
+    spelled = []
+    for path in MODULES:
+        if module_name(path) in _DEFAULT_METHOD_ELSEWHERE:
+            continue
+        for node in ast.walk(ast.parse(path.read_text(encoding="utf-8"))):
+            if isinstance(node, (ast.FunctionDef, ast.AsyncFunctionDef)):
+                args = node.args
+                for default in (*args.defaults, *args.kw_defaults):
+                    if isinstance(default, ast.Constant) and default.value == DEFAULT_METHOD:
+                        spelled.append(f"{module_name(path)}.{node.name}")
+    assert spelled == []

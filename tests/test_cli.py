@@ -260,7 +260,7 @@ def test_a_real_ctrl_c_stops_tune_cleanly(pair, targets, tmp_path):
     (lambda p, t, g: ["tune", p[0], p[1], t / "empty.json"], "no target"),
     (lambda p, t, g: ["tune", p[0], p[1], g, "--population", "1"], "'population'"),
     (lambda p, t, g: ["tune", p[0], p[1], g, "--generations", "0"], "'generations'"),
-    (lambda p, t, g: ["tune", p[0], p[1], g, "--fit-seeds", "0"], "'seeds'"),
+    (lambda p, t, g: ["tune", p[0], p[1], g, "--fit-seeds", "0"], "'fit_seeds'"),
     (lambda p, t, g: ["tune", p[0], p[1], g, "--fit-seeds", "101"], "--fit-seeds 101 is above the limit"),
     (lambda p, t, g: ["evaluate", t / "missing_manifest.json"], "existing file"),
     (lambda p, t, g: ["evaluate", t / "missing_manifest.json", "--ga-seed", "-1"], "argument --ga-seed: a seed"),

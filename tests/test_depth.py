@@ -140,7 +140,7 @@ def test_network_solver_is_the_plain_match_and_annealing_ends_at_a_fixed_point()
     network = depth_match(scene, solver="network", seed=1)
     annealed = depth_match(scene, seed=1)
     assert np.array_equal(network.pairs, plain.pairs) and network.stop_rule == plain.stop_rule
-    assert annealed.stop_rule == "anneal" and len(annealed.pairs)
+    assert annealed.solver == "anneal" and annealed.stop_rule == "sweep" and len(annealed.pairs)
     assert np.array_equal(annealed.left_xy, plain.left_xy)
     problem = prepare(scene.left, scene.right, DEPTH_MATCH_CONFIG).problem
     candidates = set(zip(problem.rows.tolist(), problem.cols.tolist()))

@@ -1,4 +1,5 @@
-"""The solver registry's fourth member: the network started from the similarity assignment."""
+"""The solvers: the registry's fourth member (the network started from the similarity assignment),
+each solver's own options, and a solver added by one definition."""
 
 import itertools
 
@@ -165,3 +166,92 @@ def test_match_one_to_one_on_the_command_line(tmp_path):
     lefts = [m["left"] for m in data["matches"]]
     rights = [m["right"] for m in data["matches"]]
     assert data["one_to_one"] is True and len(lefts) == len(set(lefts)) == len(set(rights)) > 0
+
+
+# --- solvers are configured objects, registered by one definition ---------------------------
+
+from dataclasses import dataclass  # noqa: E402
+
+from ismb_lab import ParameterError  # noqa: E402
+from ismb_lab.annealing import anneal  # noqa: E402
+from ismb_lab.solvers import (AnnealSolver, ExactSolver, NetworkSolver, Solution, Solver,  # noqa: E402
+                              get_solver, register_solver, unregister_solver)
+
+
+def test_each_solver_takes_its_own_options_and_only_those():
+    assert get_solver("anneal", cooling=0.8) == AnnealSolver(cooling=0.8)
+    assert get_solver("exact", time_limit=5) == ExactSolver(time_limit=5)
+    assert get_solver("network", stop_rule="stall", rule=None) == NetworkSolver(stop_rule="stall")
+    for name in ("anneal", "exact"):
+        with pytest.raises(ParameterError, match=rf"'stop_rule' parameter of match must be an option of the '{name}'"):
+            get_solver(name, "match", stop_rule="stall")
+    with pytest.raises(ParameterError, match="'cooling' parameter of AnnealSolver"):
+        AnnealSolver(cooling=1.0)
+    with pytest.raises(ParameterError, match="'time_limit' parameter of ExactSolver"):
+        ExactSolver(time_limit=0)
+    with pytest.raises(ParameterError, match="'kernel' parameter of NetworkSolver"):
+        NetworkSolver(kernel="fortran")
+
+
+@pytest.mark.parametrize("seed", range(4))
+def test_the_anneal_schedule_reaches_the_annealer_and_the_name_stays_apart_from_the_stop_rule(seed):
+    net = grid_network(500 + seed, 5, 6)
+    quick = AnnealSolver(t_start=1.0, cooling=0.5, sweeps=1)
+    got = solve(net, quick, seed=seed)
+    assert np.array_equal(got.state, anneal(net, rng=seed, t_start=1.0, cooling=0.5, sweeps=1).state)
+    assert np.array_equal(solve(net, "anneal", seed=seed).state, anneal(net, rng=seed).state)
+    assert (got.solver, got.stop_rule) == ("anneal", "sweep")
+    exact = solve(net, "exact")
+    assert (exact.solver, exact.stop_rule) == ("exact", "minimum")
+    assert solve(net, "network", seed=seed).solver == "network"
+
+
+@dataclass(frozen=True)
+class AllOff(Solver):
+    """Every candidate off: a solver defined in one place, with one option of its own."""
+
+    name, description, seeded = "all-off", "every candidate off (a test solver)", False
+    level: int = 0
+
+    def solve(self, net, seed):
+        return Solution(np.full(net.n_neurons, self.level, np.uint8), "minimum", 0, net, solver=self.name)
+
+
+@pytest.fixture
+def all_off():
+    solver = register_solver(AllOff())
+    yield solver
+    unregister_solver(solver.name)
+
+
+def test_a_solver_defined_once_shows_up_in_the_cli_and_in_the_protocol(all_off, capsys):
+    from ismb_lab.protocol import format_protocol, protocol
+
+    for command in ("match", "tune", "evaluate", "depth"):
+        with pytest.raises(SystemExit):
+            main([command, "--help"])
+        assert "all-off: every candidate off" in capsys.readouterr().out, command
+    cases = _hand_cases()
+    report = protocol(cases, "III", seeds=2, generations=2, solvers=("all-off",))
+    assert [str(s) for s in report.solvers["all-off"].held_out] == ["0/0+0/4"]
+    assert "solver   all-off: held-out 0/0+0/4" in format_protocol(report)
+    on = protocol(cases, "III", seeds=2, generations=2, solver=AllOff(level=1), fit_all=False)
+    assert on.solver == "all-off" and len(on.held_out) == 1 and on.held_out[0].extra > 0
+    with pytest.raises(ParameterError, match="'solver' parameter of register_solver"):
+        register_solver(AllOff())      # the name is taken
+
+
+def _hand_cases():
+    from ismb_lab.matching import Prepared
+    from ismb_lab.methods import build_problem
+    from ismb_lab.protocol import Case
+
+    cases = []
+    for offset in (0, 30, 60):
+        lxy = np.array([[100.0, 50.0], [112.0, 56.0], [140.0, 90.0]]) + [offset, 0]
+        rxy = np.array([[80.0, 50.0], [92.0, 56.0], [126.0, 92.0]]) + [offset, 0]
+        M = np.array([[2.0, 60.0, 60.0], [60.0, 3.0, 60.0], [60.0, 60.0, 45.0]])
+        prepared = Prepared.__new__(Prepared)
+        object.__setattr__(prepared, "problem", build_problem(lxy, rxy, M))
+        cases.append(Case(prepared, np.array([[0, 0], [1, 1]]), name=str(offset)))
+    return cases

@@ -18,16 +18,14 @@ from ..genetic import GAConfig
 from ..hopfield import RULES
 from ..dynamics import STOP_RULES
 from ..matching import MatchConfig, match
-from ..methods import all_genes, get_method, load_params, method_names
-from ..solvers import SOLVERS
-from ._guard import UsageError, interrupted, json_text
+from ..methods import DEFAULT_METHOD, all_genes, get_method, method_names
+from ..solvers import SOLVERS, NetworkSolver
+from ._guard import UsageError, interrupted
 
 __all__ = ["ParameterError", "ParameterTypeError", "Parser", "UsageError", "add_ga_options",
            "add_matching_options", "add_feature_options", "window_record", "add_solver_option", "ga_config",
-           "gene_options", "match_config", "progress_bar", "resolve_params"]
+           "gene_options", "match_config", "progress_bar", "resolve_recipe"]
 
-#: The method the commands use when neither --method nor a params file names one.
-DEFAULT_METHOD = "III"
 FEATURE_OPTIONS = ("roi", "shift", "n_min", "n_max")
 
 
@@ -57,16 +55,23 @@ def add_matching_options(p: argparse.ArgumentParser, base: MatchConfig) -> None:
         p.add_argument("--" + gene.name.replace("_", "-"), type=float, default=None, metavar="X",
                        help=f"{gene.meaning} (default: the method's)")
     p.add_argument("--params-file", type=Path, default=None, metavar="P.json",
-                   help='parameters as {"method": ..., "params": {...}}, e.g. from ismb-lab tune')
+                   help="the recipe that 'ismb-lab tune' writes: method, parameters, solver with its options "
+                   "and one-to-one, used as it is; the options given here replace single fields")
     add_feature_options(p, base)
     p.add_argument("--seed", type=seed, default=None,
                    help=f"seed of the update order, 0 to 2**63 - 1 (default: {default_of(match, 'seed')})")
     p.add_argument("--stop-rule", choices=STOP_RULES, default=None,
                    help="sweep: a full sweep without change; stall: 200 idle attempts "
-                   f"(default: {default_of(match, 'stop_rule')})")
+                   f"(default: {NetworkSolver().stop_rule})")
     p.add_argument("--rule", choices=RULES, default=None,
                    help="exact Hopfield weights, or the thesis' literal (3-17)/(3-20) "
-                   f"(default: {default_of(match, 'rule')})")
+                   f"(default: {NetworkSolver().rule})")
+    add_one_to_one_option(p, "keep at most one match per corner after solving, the most similar (smallest M)")
+
+
+def add_one_to_one_option(p: argparse.ArgumentParser, text: str) -> None:
+    p.add_argument("--one-to-one", action=argparse.BooleanOptionalAction, default=None,
+                   help=f"{text} (default: the params file's, else off)")
 
 
 def add_solver_option(p: argparse.ArgumentParser, default: str) -> None:
@@ -137,32 +142,73 @@ def match_config(args, base: MatchConfig | None = None) -> MatchConfig:
     return replace(base, **{k: getattr(args, k) for k in FEATURE_OPTIONS if getattr(args, k) is not None})
 
 
-def resolve_params(args, defaults=None):
-    """The method and parameters from --method, --params-file and the single gene options.
+def resolve_recipe(args, solver: str, defaults=None):
+    """The recipe from --params-file, replaced field by field by the options given.
 
+    `solver` is the command's solver when the file names none (or there is no file);
     `defaults`, a mapping of method name to Params, replaces a method's own defaults
-    when no params file is given (the depth demo's fitted values).
+    when no params file is given (the depth demo's fitted values).  What an option
+    changes in the file's recipe, and a version-1 file whose solver this command did not
+    use before, are said once each on stderr.
     """
-    file_method, params = None, None
+    from ..recipe import Recipe, load_recipe
+
+    loaded = None
     if args.params_file is not None:
-        file_method, params = load_params(check_input(args.params_file, what="--params-file"), args.method)
-    if args.method and file_method and args.method != file_method:
-        raise UsageError(f"--method {args.method} conflicts with --params-file, "
-                         f"which holds parameters for Method-{file_method}")
-    method = args.method or file_method or DEFAULT_METHOD
-    if params is None:
-        params = (defaults or {}).get(method, get_method(method).defaults)
+        loaded = load_recipe(check_input(args.params_file, what="--params-file"), method=args.method,
+                             solver=solver, before=solver)
+        if args.method and loaded.recipe.method.name != args.method:
+            raise UsageError(f"--method {args.method} conflicts with --params-file, "
+                             f"which holds parameters for Method-{loaded.recipe.method.name}")
+        if loaded.note:
+            note(loaded.note)
+        base = loaded.recipe
+    else:
+        method = args.method or DEFAULT_METHOD
+        base = Recipe(method, (defaults or {}).get(method), solver)
+    method = base.method
     given = {k: getattr(args, k) for k in gene_options() if getattr(args, k) is not None}
-    for name in get_method(method).derived:
+    for name in method.derived:
         if name in given:
-            raise UsageError(f"--{name.replace('_', '-')} is not used by Method-{method}, which sets {name} "
+            raise UsageError(f"--{name.replace('_', '-')} is not used by Method-{method.name}, which sets {name} "
                              f"from each image pair (half the median of M); drop it")
     try:
-        params = replace(params, **given)
+        params = replace(base.params, **given)
     except (ParameterError, ParameterTypeError) as exc:
         raise UsageError(str(exc).replace("of Params", "of ismb-lab")) from None
-    check_unused_genes(method, params)
-    return method, params
+    check_unused_genes(method.name, params)
+    one_to_one = base.one_to_one if args.one_to_one is None else args.one_to_one
+    recipe = replace(base, params=params, solver=configured_solver(args, base.solver), one_to_one=one_to_one)
+    if loaded is not None:
+        said_changes(args.params_file, loaded.recipe, recipe)
+    return recipe
+
+
+def configured_solver(args, base):
+    """`base`, or the solver --solver names (with `base`'s options if it is the same one), with
+    --stop-rule and --rule."""
+    from ..solvers import get_solver
+
+    chosen = base if args.solver is None or args.solver == base.name else args.solver
+    settings = {"stop_rule": getattr(args, "stop_rule", None), "rule": getattr(args, "rule", None)}
+    try:
+        return get_solver(chosen, "ismb-lab", **settings)
+    except ParameterError:
+        name = get_solver(chosen).name
+        used = [f"--{k.replace('_', '-')}" for k, v in settings.items() if v is not None]
+        raise UsageError(f"{' and '.join(used)} set the discrete network, which the {name} solver does "
+                         f"not run (drop {'them' if len(used) > 1 else 'it'}, or use --solver network)") from None
+
+
+def said_changes(path, before, after) -> None:
+    """One note on stderr naming what the options changed in the recipe read from `path`."""
+    changes = before.changes(after)
+    if changes:
+        note(f"options override {path}: " + "; ".join(changes))
+
+
+def note(text: str) -> None:
+    print(f"ismb-lab: note: {text}", file=sys.stderr)
 
 
 def check_unused_genes(method: str, params) -> None:
@@ -181,10 +227,9 @@ def check_unused_genes(method: str, params) -> None:
                      f"--method {users[0]})")
 
 
-def network_settings(args) -> dict:
-    """--seed, --stop-rule and --rule that were given, as keyword arguments."""
-    names = {"seed": "seed", "stop_rule": "stop_rule", "rule": "rule"}
-    return {key: getattr(args, name) for name, key in names.items() if getattr(args, name) is not None}
+def seed_setting(args) -> dict:
+    """--seed, if given, as a keyword argument."""
+    return {} if args.seed is None else {"seed": args.seed}
 
 
 def progress_bar(total: int, desc: str, unit: str = "gen"):
@@ -206,26 +251,31 @@ def progress_bar(total: int, desc: str, unit: str = "gen"):
 
 
 class BestSoFar:
-    """A GA progress callback's companion: keeps the latest record, to save it when interrupted."""
+    """A GA progress callback's companion: keeps the latest record, to save it when interrupted.
 
-    def __init__(self, method: str):
-        self.method, self.name, self.record = method, None, None
+    `recipe` (:class:`ismb_lab.recipe.Recipe`) is what the fit runs for; the file written holds it
+    with the best parameters so far.
+    """
+
+    def __init__(self, recipe):
+        self.recipe, self.method, self.name, self.record = recipe, recipe.method.name, None, None
 
     def __call__(self, name, record) -> None:
         self.name, self.record = name, record
 
     def save(self, path) -> int:
-        """Write the best parameters so far to `path` (if given and a generation finished); 130."""
-        from .._files import atomic_write_text
+        """Write the recipe with the best parameters so far to `path` (if given and a generation
+        finished); 130."""
+        from ..recipe import save_recipe
         from ..tuning import to_params
 
         if self.record is None:
             raise KeyboardInterrupt
-        params = to_params(self.method, self.record.best_chromosome)
+        recipe = replace(self.recipe, params=to_params(self.recipe.method, self.record.best_chromosome))
+        params = recipe.params
         if path is not None:
-            atomic_write_text(path, json_text({
-                "method": self.method, "params": params.to_dict(), "fitness": self.record.best,
-                "generations": self.record.index, "fitted_on": self.name, "interrupted": True}))
+            save_recipe(path, recipe, fitness=self.record.best, generations=self.record.index,
+                        fitted_on=self.name, interrupted=True)
         print(f"ismb-lab: interrupted while fitting {self.name}; best parameters so far "
               f"{params.to_dict()}" + (f", written to {path}" if path is not None else ""),
               file=sys.stderr)

@@ -7,9 +7,9 @@ from pathlib import Path
 
 from .._files import atomic_write_text
 from ..depth import GROUPINGS, DepthConfig
-from ..depth_demo import DEPTH_MATCH_CONFIG, DEPTH_PARAMS, DEPTH_SOLVER
-from ._common import (UsageError, add_matching_options, add_solver_option, match_config, network_settings,
-                      resolve_params, window_record)
+from ..depth_demo import DEPTH_MATCH_CONFIG, DEPTH_METHOD, DEPTH_PARAMS, DEPTH_SOLVER
+from ._common import (UsageError, add_matching_options, add_solver_option, match_config, resolve_recipe,
+                      seed_setting, window_record)
 from ._guard import json_text, save_figure
 
 __all__ = ["add_parser", "run"]
@@ -30,7 +30,7 @@ def add_parser(sub) -> None:
     for name in ("bg_left", "bg_right", "scene_left", "scene_right"):
         dp.add_argument(name, type=Path, help=name.replace("_", " ") + " image file")
     add_matching_options(dp, DEPTH_MATCH_CONFIG)
-    add_solver_option(dp, DEPTH_SOLVER)
+    add_solver_option(dp, f"the params file's, else {DEPTH_SOLVER}")
     calibration = DepthConfig()
     dp.add_argument("--focal-px", type=float, default=None, metavar="F",
                     help=f"focal length in pixels (default: {calibration.focal_px:g}, the rendered rig's)")
@@ -74,7 +74,8 @@ def run(args) -> int:
             if not value > 0 or math.isinf(value):
                 raise UsageError(f"--{name.replace('_', '-')} must be a finite number > 0, got {value:g}")
             calibration[name] = value
-    method, params = resolve_params(args, defaults={"III": DEPTH_PARAMS})
+    recipe = resolve_recipe(args, DEPTH_SOLVER, defaults={DEPTH_METHOD: DEPTH_PARAMS})
+    method = recipe.method.name
     config = match_config(args, DEPTH_MATCH_CONFIG)
     if config.shift == "auto":
         from ..io import load_pair
@@ -84,10 +85,8 @@ def run(args) -> int:
         print(f"candidate window measured on the background pair: shift {config.shift:g} px, "
               f"{config.window_width:g} x {config.window_height:g} px")
     result = relative_depth((args.bg_left, args.bg_right), (args.scene_left, args.scene_right),
-                            method=method, params=params, match_config=config,
-                            config=DepthConfig(grouping=args.grouping, **calibration),
-                            solver=args.solver or DEPTH_SOLVER,
-                            **network_settings(args))
+                            match_config=config, config=DepthConfig(grouping=args.grouping, **calibration),
+                            **recipe.match_settings(), **seed_setting(args))
     for what, res in (("background", result.background), ("scene", result.scene)):
         if not len(res.pairs):
             why = f"no matches in the {what} pair" + (f": {res.message}" if res.message else "")
@@ -95,7 +94,8 @@ def run(args) -> int:
                 raise UsageError(why)
             # A plain wall has no corners: nothing to remove, the blobs of change still find the objects.
             print(f"note: {why}; no scene feature is removed as background")
-    print(f"Method-{method} ({result.scene.solver}): {len(result.background.pairs)} background matches, "
+    after = ", one match per corner" if recipe.one_to_one else ""
+    print(f"Method-{method} ({result.scene.solver}{after}): {len(result.background.pairs)} background matches, "
           f"{len(result.scene.pairs)} scene matches; {result.background_removed} scene features "
           "removed as background")
     if not result.objects:

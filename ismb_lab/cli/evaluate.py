@@ -10,7 +10,7 @@ from .._files import atomic_write_text
 from ..protocol import format_protocol, load_manifest, protocol
 from ..solvers import DEFAULT_SOLVER, SOLVERS
 from ._common import (DEFAULT_METHOD, BestSoFar, UsageError, add_ga_options, add_method_option, seed,
-                      add_solver_option, default_of, ga_config, progress_bar)
+                      add_one_to_one_option, add_solver_option, default_of, ga_config, progress_bar, said_changes)
 from ._guard import deferred_signals, interrupted, interrupted_line, is_interruption, json_text
 
 __all__ = ["add_parser", "run"]
@@ -33,13 +33,17 @@ def add_parser(sub) -> None:
                    help=f"update-order seeds per figure (default: {DEFAULTS['seeds']})")
     add_ga_options(e)
     e.add_argument("--peers", action="store_true", help="also score the peer matchers")
-    e.add_argument("--one-to-one", action="store_true",
-                   help="score the network's matches after keeping at most one per corner (the most similar)")
-    add_solver_option(e, DEFAULT_SOLVER)
+    e.add_argument("--recipe", type=Path, default=None, metavar="P.json",
+                   help="take the method, the solver with its options, the fit seeds and one-to-one from a "
+                   "params file of 'ismb-lab tune' (its parameters are fitted again under the protocol); "
+                   "the options given here replace single fields")
+    add_one_to_one_option(e, "score the network's matches after keeping at most one per corner (the most similar)")
+    add_solver_option(e, f"the recipe's, else {DEFAULT_SOLVER}")
     e.add_argument("--solvers", nargs="*", choices=tuple(SOLVERS), default=(),
                    help="also solve the tested energies these other ways")
     e.add_argument("--fit-solver", choices=tuple(SOLVERS), default=None,
-                   help=f"how the GA solves each network while fitting (default: {DEFAULT_SOLVER})")
+                   help=f"how the GA solves each network while fitting (default: the recipe's solver, else "
+                   f"{DEFAULT_SOLVER})")
     e.add_argument("--fit-seeds", type=int, default=None, metavar="N",
                    help=f"update-order seeds averaged in each GA fitness (default: {DEFAULTS['fit_seeds']})")
     e.add_argument("--ga-seed", type=seed, default=None, metavar="N",
@@ -68,9 +72,10 @@ def run(args) -> int:
     jobs = available_cores() if args.jobs is None else args.jobs
     if jobs < 1:
         raise UsageError(f"--jobs must be an integer >= 1, got {jobs}")
-    best, reported = BestSoFar(args.method or DEFAULT_METHOD), []
+    recipe = given_recipe(args)
+    best, reported = BestSoFar(recipe), []
     try:
-        return _run(args, jobs, best, reported)
+        return _run(args, jobs, best, reported, recipe)
     except BaseException as exc:
         if not is_interruption(exc):
             raise
@@ -92,10 +97,32 @@ def _stopped(best, path, unit: str, reported) -> int:
     return 130
 
 
-def _run(args, jobs: int, best, reported: list) -> int:
+def given_recipe(args):
+    """The method, solver, fit seeds and one-to-one of --recipe (if any), replaced by the options given."""
+    from dataclasses import replace
+
+    from .._files import check_input
+    from ..recipe import Recipe, load_recipe
+    from ..solvers import get_solver
+
+    if args.recipe is None:
+        base = Recipe(args.method or DEFAULT_METHOD, fit_seeds=DEFAULTS["fit_seeds"])
+    else:
+        base = load_recipe(check_input(args.recipe, what="--recipe"), method=args.method).recipe
+        if args.method and base.method.name != args.method:
+            raise UsageError(f"--method {args.method} conflicts with --recipe, which holds Method-{base.method.name}")
+    solver = base.solver if args.solver is None or args.solver == base.solver.name else get_solver(args.solver)
+    recipe = replace(base, solver=solver, fit_seeds=base.fit_seeds if args.fit_seeds is None else args.fit_seeds,
+                     one_to_one=base.one_to_one if args.one_to_one is None else args.one_to_one)
+    if args.recipe is not None:
+        said_changes(args.recipe, base, recipe)
+    return recipe
+
+
+def _run(args, jobs: int, best, reported: list, recipe) -> int:
     ga = ga_config(args)
     cases = load_manifest(args.manifest)
-    bars, method = {}, best.method
+    bars = {}
 
     def progress(name, record):
         best(name, record)
@@ -113,13 +140,14 @@ def _run(args, jobs: int, best, reported: list) -> int:
         bars[name].update(1)
         bars[name].set_postfix(best=f"{record.best:g}", mean=f"{record.mean:.2f}")
 
-    given = {k: v for k, v in (("train", args.train), ("seeds", args.seeds), ("fit_seeds", args.fit_seeds),
-                               ("rng", args.ga_seed), ("solver", args.solver),
-                               ("fit_solver", args.fit_solver)) if v is not None}
+    given = {k: v for k, v in (("train", args.train), ("seeds", args.seeds), ("rng", args.ga_seed))
+             if v is not None}
+    fit_solver = recipe.solver if args.fit_solver is None else args.fit_solver
     try:
-        report = protocol(cases, method, ga=ga, peers=args.peers, progress=progress,
+        report = protocol(cases, recipe.method, ga=ga, peers=args.peers, progress=progress,
                           solvers=tuple(args.solvers), fit_all=not args.held_out_only, jobs=jobs,
-                          one_to_one=args.one_to_one, **given)
+                          solver=recipe.solver, fit_solver=fit_solver, fit_seeds=recipe.fit_seeds,
+                          one_to_one=recipe.one_to_one, **given)
     finally:
         for bar in bars.values():
             bar.close()

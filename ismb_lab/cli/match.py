@@ -7,8 +7,7 @@ from pathlib import Path
 from .._files import atomic_write_text
 from ..matching import MatchConfig
 from ..solvers import DEFAULT_SOLVER
-from ._common import (add_matching_options, add_solver_option, match_config, network_settings, resolve_params,
-                      window_record)
+from ._common import add_matching_options, add_solver_option, match_config, resolve_recipe, seed_setting, window_record
 from ._guard import json_text, save_figure
 
 __all__ = ["add_parser", "run"]
@@ -21,9 +20,7 @@ def add_parser(sub) -> None:
     m.add_argument("left", type=Path, help="left image file")
     m.add_argument("right", type=Path, help="right image file")
     add_matching_options(m, MatchConfig())
-    add_solver_option(m, DEFAULT_SOLVER)
-    m.add_argument("--one-to-one", action="store_true",
-                   help="keep at most one match per corner after solving, the most similar (smallest M)")
+    add_solver_option(m, f"the params file's, else {DEFAULT_SOLVER}")
     m.add_argument("--json", type=Path, default=None, metavar="OUT", help="write the result as JSON")
     m.add_argument("--plot", type=Path, default=None, metavar="OUT.png",
                    help="draw the pair with features and match lines")
@@ -33,10 +30,10 @@ def add_parser(sub) -> None:
 def run(args) -> int:
     from ..matching import match, prepare
 
-    method, params = resolve_params(args)
+    recipe = resolve_recipe(args, DEFAULT_SOLVER)
+    params = recipe.params
     prepared = prepare(args.left, args.right, match_config(args))
-    result = match(method=method, params=params, prepared=prepared, solver=args.solver or DEFAULT_SOLVER,
-                   one_to_one=args.one_to_one, **network_settings(args))
+    result = match(prepared=prepared, **recipe.match_settings(), **seed_setting(args))
     after = ", one match per corner" if result.one_to_one else ""
     print(f"Method-{result.method} ({result.solver}{after})  params {params.to_dict()}  seed {result.seed}")
     print(f"{len(result.left_xy)} left / {len(result.right_xy)} right corners, "

@@ -3,11 +3,12 @@
 from __future__ import annotations
 
 import sys
+from dataclasses import replace
 from pathlib import Path
 
 from ..matching import MatchConfig
-from ..methods import save_params
 from ..protocol import Case
+from ..recipe import Recipe, save_recipe
 from ..solvers import DEFAULT_SOLVER
 from .. import tuning
 from ._common import (DEFAULT_METHOD, UsageError, add_feature_options, seed, add_ga_options, add_method_option,
@@ -36,6 +37,9 @@ def add_parser(sub) -> None:
     t.add_argument("--fit-seeds", type=int, default=None, metavar="N",
                    help=f"update-order seeds averaged in each GA fitness (default: {FIT_SEEDS}); more "
                    "seeds favour parameters that do not work for one visiting order only")
+    t.add_argument("--one-to-one", action="store_true",
+                   help="record in the params file that matching keeps at most one match per corner, the "
+                   "most similar (the GA's fitness does not apply it)")
     add_feature_options(t, MatchConfig())
     t.add_argument("--out", type=Path, default=Path("params.json"), metavar="PARAMS.json",
                    help="where to write the parameters (default: %(default)s)")
@@ -46,21 +50,21 @@ class _Fit:
     """What a run of the GA has to keep: its last generation, and whether the file is written."""
 
     def __init__(self, args):
-        self.out, self.method = args.out, args.method or DEFAULT_METHOD
-        self.solver = args.solver or DEFAULT_SOLVER
-        self.seed = GA_SEED if args.seed is None else args.seed
-        self.fit_seeds = FIT_SEEDS if args.fit_seeds is None else args.fit_seeds
+        self.out, self.seed = args.out, GA_SEED if args.seed is None else args.seed
+        self.recipe = Recipe(args.method or DEFAULT_METHOD, solver=args.solver or DEFAULT_SOLVER,
+                             fit_seeds=FIT_SEEDS if args.fit_seeds is None else args.fit_seeds,
+                             one_to_one=args.one_to_one)
         self.targets, self.last, self.written = 0, None, False
 
-    def write(self, interrupted: bool):
-        """Write the last generation's best parameters (a signal meanwhile waits); return them."""
-        params = tuning.to_params(self.method, self.last.best_chromosome)
+    def write(self, interrupted: bool) -> Recipe:
+        """Write the recipe with the last generation's best parameters (a signal meanwhile waits);
+        return it."""
+        recipe = replace(self.recipe, params=tuning.to_params(self.recipe.method, self.last.best_chromosome))
         with deferred_signals():
-            save_params(self.out, self.method, params, solver=self.solver, fitness=self.last.best,
-                        generations=self.last.index, seed=self.seed, fit_seeds=self.fit_seeds,
+            save_recipe(self.out, recipe, fitness=self.last.best, generations=self.last.index, seed=self.seed,
                         targets=self.targets, interrupted=interrupted)
             self.written = True
-        return params
+        return recipe
 
 
 def run(args) -> int:
@@ -90,7 +94,8 @@ def _keep(fit: _Fit) -> str:
 
 
 def _run(args, fit: _Fit) -> int:
-    method, solver, ga = fit.method, fit.solver, ga_config(args)
+    ga, recipe = ga_config(args), fit.recipe
+    method, solver = recipe.method.name, recipe.solver.name
     case = Case.from_files(args.left, args.right, args.targets, match_config(args),
                            check_hash=not args.no_hash_check)
     if len(case.left_out):
@@ -100,16 +105,18 @@ def _run(args, fit: _Fit) -> int:
         raise UsageError(f"{args.targets}: no target pair lies on the corners found "
                          f"({len(case.left_out)} targets, {len(case.prepared.problem.left_xy)} left corners)")
     fit.targets = len(case.targets)
-    records = tuning.tune([case], method, rng=fit.seed, ga=ga, solver=solver, seeds=fit.fit_seeds)
+    records = tuning.tune([case], recipe.method, rng=fit.seed, ga=ga, solver=recipe.solver, seeds=recipe.fit_seeds)
     with progress_bar(ga.generations + 1, f"Method-{method} GA") as bar:
         for fit.last in records:
             bar.update(1)
             bar.set_postfix(best=f"{fit.last.best:g}", mean=f"{fit.last.mean:.2f}", target=fit.targets)
-    params, best = fit.write(interrupted=False), fit.last
+    recipe, best = fit.write(interrupted=False), fit.last
+    params = recipe.params
     if interrupted():   # a signal came during the write, which finished first
         raise KeyboardInterrupt
-    result = tuning.evaluate([case], method, params, solver=solver)
-    print(f"Method-{method} ({solver}): best fitness {best.best:g} of {fit.targets} after "
+    result = tuning.evaluate([case], recipe.method, params, solver=recipe.solver, one_to_one=recipe.one_to_one)
+    after = ", one match per corner" if recipe.one_to_one else ""
+    print(f"Method-{method} ({solver}{after}): best fitness {best.best:g} of {fit.targets} after "
           f"{best.index} generations; C/E/T {result}; parameters {params.to_dict()}")
     print(f"written to {args.out}")
     return 0

@@ -18,11 +18,12 @@ import numpy as np
 
 from .._validation import ParameterTypeError, check_number, message
 from ..depth import DepthConfig, DepthObject, DepthResult
-from ..depth_demo import DEPTH_MATCH_CONFIG, depth_pairs, pair_silhouettes, relative_depth
+from ..depth_demo import DEPTH_MATCH_CONFIG, DEPTH_SOLVER, depth_pairs, pair_silhouettes, relative_depth
 from ..io import StereoPair, load_pair
-from ..methods import get_method, method_names
+from ..methods import DEFAULT_METHOD, get_method, method_names
 from ..params import Params
 from ..plotting import outlines
+from ..recipe import recipe_of
 from ._common import Base, Pane, button, grey_rgb, pair_files, path_labels, with_class
 
 __all__ = ["CMAP", "GROUPING_LABELS", "TOLERANCES", "depth_text", "support_text", "DepthDemo",
@@ -73,6 +74,10 @@ class DepthModel:
     match_config : MatchConfig, optional
     background_name : str
         What the scene's objects are compared with: the background's nearest object.
+    recipe : Recipe or path, optional
+        A recipe (:class:`ismb_lab.recipe.Recipe`, or the params file ``ismb-lab tune``
+        writes), used as it is: its method, parameters, solver and one-to-one replace
+        `method` and `params` and the demo's solver (:data:`~ismb_lab.depth_demo.DEPTH_SOLVER`).
 
     Examples
     --------
@@ -84,10 +89,15 @@ class DepthModel:
     (3, 4.0)
     """
 
-    def __init__(self, background, scene, method="III", params: Params | None = None, seed: int = 0,
+    def __init__(self, background, scene, method=DEFAULT_METHOD, params: Params | None = None, seed: int = 0,
                  config: DepthConfig | None = None, match_config=None,
-                 background_name: str = "the nearest background object"):
+                 background_name: str = "the nearest background object", recipe=None):
         owner = "DepthModel"
+        self.solver, self.one_to_one = DEPTH_SOLVER, False
+        if recipe is not None:
+            recipe = recipe_of(recipe, owner, DEPTH_SOLVER)
+            method, params, self.solver, self.one_to_one = (recipe.method, recipe.params, recipe.solver,
+                                                            recipe.one_to_one)
         self.background = load_stereo(background, "background", owner)
         self.scene = load_stereo(scene, "scene", owner)
         self.match_config = match_config
@@ -118,7 +128,8 @@ class DepthModel:
     def _compute(self, method, params, seed, config) -> DepthResult:
         return relative_depth(self.background, self.scene, method=method, params=params,
                               match_config=self.match_config, config=config, seed=seed,
-                              prepared=self.prepared, silhouettes=self.silhouettes)
+                              prepared=self.prepared, silhouettes=self.silhouettes, solver=self.solver,
+                              one_to_one=self.one_to_one)
 
     def set(self, *, method=None, params: Params | None = None, seed=None, config=None,
             **tolerances) -> "DepthModel":
@@ -340,6 +351,8 @@ class DepthDemo(Base):
     match_config : MatchConfig, optional
     background_name : str
         How the ranking sentence calls the background's nearest object (e.g. "the box").
+    recipe : Recipe or path, optional
+        Used as it is (see :class:`DepthModel`).
 
     Notes
     -----
@@ -349,14 +362,14 @@ class DepthDemo(Base):
     ``ismb-status``; ``ismb-log``.
     """
 
-    def __init__(self, background, scene, *, method="III", params: Params | None = None, seed: int = 0,
+    def __init__(self, background, scene, *, method=DEFAULT_METHOD, params: Params | None = None, seed: int = 0,
                  config: DepthConfig | None = None, match_config=None,
-                 background_name: str = "the nearest background object"):
+                 background_name: str = "the nearest background object", recipe=None):
         import ipywidgets
 
         super().__init__()
         self.model = DepthModel(background, scene, method, params, seed, config, match_config,
-                                background_name)
+                                background_name, recipe)
         self.background_pane = Pane((3.6, 2.7), "ismb-background")
         self.scene_pane = Pane((4.2, 2.7), "ismb-scene")
         self.panes = (self.background_pane, self.scene_pane)

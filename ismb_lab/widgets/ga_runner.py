@@ -29,9 +29,10 @@ import numpy as np
 from .._validation import ParameterError, ParameterTypeError, check_number, message
 from ..genetic import GAConfig, Generation
 from ..matching import MatchConfig
-from ..methods import get_method, save_params
+from ..methods import DEFAULT_METHOD, get_method
 from ..params import Params
 from ..protocol import Case
+from ..recipe import Recipe, save_recipe
 from ..solvers import DEFAULT_SOLVER, SOLVERS, get_solver
 from ..tuning import to_params, tune
 from ._common import Base, Pane, button, pair_files, row, with_class
@@ -100,7 +101,7 @@ class GAModel:
     (True, 'finished', True)
     """
 
-    def __init__(self, cases, method="III", *, population: int | None = None, generations: int | None = None,
+    def __init__(self, cases, method=DEFAULT_METHOD, *, population: int | None = None, generations: int | None = None,
                  seed: int = 0, save_to=None, solver: str = DEFAULT_SOLVER):
         owner = "GAModel"
         self.save_to = None if save_to is None else Path(save_to)
@@ -155,8 +156,8 @@ class GAModel:
                 improved = not self.history or record.best > self.history[-1].best
                 self.history.append(record)
                 if improved and self.save_to is not None:
-                    save_params(self.save_to, self.method.name, to_params(self.method, record.best_chromosome),
-                                solver=self.solver, fitness=record.best, generations=record.index, seed=self.seed,
+                    recipe = Recipe(self.method, to_params(self.method, record.best_chromosome), self.solver)
+                    save_recipe(self.save_to, recipe, fitness=record.best, generations=record.index, seed=self.seed,
                                 targets=self.target)
                 for listener in list(self.listeners):
                     listener(record)
@@ -272,7 +273,7 @@ class GARunner(Base):
     ``ismb-chromosome``; ``ismb-status``; ``ismb-log``.
     """
 
-    def __init__(self, cases_or_folder, *, method="III", population: int | None = None,
+    def __init__(self, cases_or_folder, *, method=DEFAULT_METHOD, population: int | None = None,
                  generations: int | None = None, seed: int = 0, config: MatchConfig | None = None,
                  redraw_every: float = 0.2, save_to=None, solver: str = DEFAULT_SOLVER):
         import ipywidgets

@@ -14,7 +14,7 @@ from .._validation import ParameterTypeError, check_choice, check_number, messag
 from ..hopfield import RULES, energy
 from ..dynamics import STOP_RULES, Update, iter_updates
 from ..matching import MatchConfig, Prepared, prepare
-from ..methods import get_method
+from ..methods import DEFAULT_METHOD, get_method
 from ..params import Params
 from ..solvers import to_matches
 from ._common import Base, Pane, button, draw_pair, pair_files, path_labels, row, update_pair, with_class
@@ -49,7 +49,7 @@ class StepperModel:
     (True, 'sweep')
     """
 
-    def __init__(self, prepared: Prepared, method="III", params: Params | None = None, seed: int = 0,
+    def __init__(self, prepared: Prepared, method=DEFAULT_METHOD, params: Params | None = None, seed: int = 0,
                  rule: str = "exact", stop_rule: str = "sweep"):
         owner = "StepperModel"
         if not isinstance(prepared, Prepared):
@@ -236,7 +236,7 @@ class HopfieldStepper(Base):
     ``ismb-status``, ``ismb-log``.
     """
 
-    def __init__(self, left, right=None, *, method="III", params: Params | None = None, seed: int = 0,
+    def __init__(self, left, right=None, *, method=DEFAULT_METHOD, params: Params | None = None, seed: int = 0,
                  config: MatchConfig | None = None, run_limit: int = 50_000):
         import ipywidgets
 

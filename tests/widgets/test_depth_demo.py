@@ -176,3 +176,18 @@ def test_static_figure_and_css(demo):
                    (demo.sliders["disparity_tol_px"], "ismb-disparity-tol-px"),
                    (demo.status, "ismb-status"), (demo.log, "ismb-log")):
         assert css in w._dom_classes
+
+
+def test_the_model_uses_a_recipe_as_it_is(tmp_path):
+    from ismb_lab.recipe import Recipe, save_recipe
+
+    recipe = Recipe("NM3", Params(theta_c=9.0, lambda_c=5.0, lambda_s=4.0), "network", one_to_one=True)
+    path = save_recipe(tmp_path / "recipe.json", recipe)
+    model = DepthModel(IMAGES / "lab", IMAGES / "toy_cars", recipe=path)
+    assert (model.method, model.params, model.solver, model.one_to_one) == ("NM3", recipe.params,
+                                                                           recipe.solver, True)
+    assert model.result.scene.solver == "network" and model.result.scene.one_to_one
+    assert model.result.to_dict() == expected(method="NM3", params=recipe.params, solver="network",
+                                              one_to_one=True)
+    with pytest.raises(TypeError, match="'recipe' parameter of DepthModel"):
+        DepthModel(LAB, CARS, recipe=3)

@@ -193,6 +193,10 @@ def test_solver_menu_tunes_with_that_solver_and_records_it(case, tmp_path):
     expected = list(tune([case], "III", rng=2, population=6, generations=3, seed=2, solver="anneal"))
     assert [g.best for g in runner.model.history] == [g.best for g in expected]
     assert json.loads((tmp_path / "p.json").read_text())["solver"] == "anneal"
+    from ismb_lab.recipe import load_recipe
+
+    saved = load_recipe(tmp_path / "p.json").recipe       # the recipe match --params-file uses as it is
+    assert saved.solver.name == "anneal" and saved.params == runner.model.best_params
 
 
 def test_solver_cannot_change_mid_run(endless):
