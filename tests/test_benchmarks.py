@@ -22,6 +22,7 @@ def test_every_benchmark_has_a_smoke_check():
     assert sorted(p.name for p in BENCHMARKS.glob("bench_*.py")) == sorted(EXPECTED)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("script", sorted(EXPECTED))
 def test_benchmark_smoke_mode_runs(script, tmp_path):
     env = {**os.environ, "MPLBACKEND": "Agg"}
