@@ -20,8 +20,8 @@ in the right image, are the objects' outlines: :func:`ismb_lab.silhouettes.silho
 gives each left blob of change the shift that lays it on the right image's blobs, and
 :func:`ismb_lab.depth.depth_from_matches` makes each well-fitting blob one object at the
 disparity its agreeing features give (``DepthConfig.grouping``; ``"features"`` is the
-thesis' grouping).  On random object layouts (``scripts/depth_layouts.py``) this ranks 119
-of 120 held-out layouts right, against 68 with the features alone.
+thesis' grouping).  ``scripts/depth_layouts.py`` scores it on random object layouts; its
+figures, against the features alone, are in ``docs/experiments/2026-11-24-depth-layouts.md``.
 
 The demo's defaults, :data:`DEPTH_PARAMS`, :data:`DEPTH_MATCH_CONFIG` and
 :data:`DEPTH_SOLVER`, are declared here once; the command line and the widget read them.
@@ -75,9 +75,9 @@ DEPTH_METHOD = "III"
 REGION_CORNERS = (20, 40)
 
 #: When > 0, scene corners count only within this many pixels of a changed pixel
-#: (:func:`scene_prepared`).  Off: on the 40 first development layouts of
-#: ``scripts/depth_layouts.py`` it changed 65% to 60-67.5% (1, 3 or 6 px: noise), and it
-#: leaves the background removal of §5.2.3 nothing to remove.
+#: (:func:`scene_prepared`).  Off: on the development layouts of ``scripts/depth_layouts.py``
+#: its effect was noise (``docs/experiments/2026-11-24-depth-layouts.md``), and it leaves the
+#: background removal of §5.2.3 nothing to remove.
 MASK_GROW = 0
 
 #: How the demo solves the energy, a name in :data:`ismb_lab.solvers.SOLVERS`: mean-field

@@ -17,25 +17,8 @@ Protocol.  Every choice of :mod:`ismb_lab.depth` and :mod:`ismb_lab.depth_demo` 
 the development split (seeds ``DEV_START`` onwards).  ``--held-out`` runs the held-out
 split (seeds ``HELD_OUT_START`` onwards), drawn after those choices and run once.
 
-Measured with the defaults (objects by their outlines, ``DepthConfig.grouping =
-"silhouettes"``; about 0.3 s per layout on one core, 1.5 s through ``--cli``):
-
-    split (seeds)            all      contrast repetitive border  cameras  2 obj    3 obj
-    development (1000-1359)  355/360  89/90    88/90      89/90   89/90    179/180  176/180
-    held-out (880000-)       119/120  30/30    30/30      29/30   30/30    60/60    59/60
-    the same, --cli          119/120  (through ismb-lab depth on PNG files: the same layouts)
-
-With the thesis' grouping by features alone (``--set grouping=features``), as chosen before:
-
-    development (1000-1119)  79/120   23/30    6/30       25/30   25/30    43/60    36/60
-    held-out (810000-)       78/120   23/30    7/30       20/30   28/30    40/60    38/60
-    held-out (880000-)       68/120   21/30    4/30       17/30   26/30    35/60    33/60
-
-The one held-out failure (880022): the box across the left border fits a shift of 16 px
-(true 13.9), its neighbour 8 px away 17 px (true 17.8), and blobs that close with shifts
-within 1 px are merged as one object cut in two.  Notebook 07 shows it, and
-three layouts that the features alone rank wrong.  The variants tried on the development
-split, with its figures, are listed in ``VARIANTS`` below.
+The figures of the defaults on both splits, and of every variant tried on the development
+split, are in ``docs/experiments/2026-11-24-depth-layouts.md``.
 
     python scripts/depth_layouts.py --count 360     # development split, 360 layouts (2 min)
     python scripts/depth_layouts.py --held-out      # the held-out split, 880000- (40 s)
@@ -65,57 +48,6 @@ from ismb_lab.depth import DepthConfig
 from ismb_lab.depth_demo import DEPTH_SOLVER, layout_match_config, relative_depth
 from ismb_lab.scenes import families, object_layout
 
-VARIANTS = """
-development split figures of every variant tried (first 40 layouts = seeds 1000-1039;
-"120" = the whole split):
-  demo as it was (changed box, 40-60 corners, single linkage)     40: 10/40 (25%)
-  + corners per blob of change, 20-40 each                         40: 23/40 (57.5%)
-  + peeling consensus bands, merging like halves (45 px, 1.5 px)   40: 24/40 (60%)
-    variants of that: min_features=3 25/40, consensus_px=1.5 24/40, link_px=45 24/40,
-    20-40 -> 30-60 corners per blob 25/40, 12-30 22/40
-  + corners only near changed pixels (grow 3 px)                   40: 26/40; 1 px 27/40;
-    6 px 24/40; 120: 77/120 (64.2%) -- dropped: noise-level, and nothing left for the
-    background removal to remove
-  without it, border boxes across the image edge                   120: 74/120 (61.7%);
-    a first held-out run (seeds 730000-730119) of this variant: 76/120 (63.3%)
-  + the changed box's own 40-60 corners kept beside the blobs'     120: 79/120 (65.8%)
-    (chosen: the committed toy-car pair keeps its background removal); held-out 78/120
-  after that choice, on 2026-11-25, not chosen:
-    --set min_features=3                                           120: 83/120 (69.2%)
-    --set min_features=4                                           120: 83/120 (69.2%)
-    both trade splits and spurious fragments for missing objects (missing 6 -> 16 and
-    23); issue #15 asks that an object with few features be kept when its disparity is
-    consistent, and four more layouts (69%, against 95% asked) are not worth breaking that for
-    --solver assign                                                120: 80/120 (66.7%), in
-    half the time (0.24 s per layout); one layout more is within noise, not chosen
-    --method NM4 (its own default parameters, not fitted)          120: 3/120 (2.5%)
-    --method NM4 --solver assign                                   120: 5/120 (4.2%)
-    NM4 with Method-III's thesis parameters breaks every layout into spurious fragments; a fair
-    trial needs parameters fitted for it (scripts/fit_depth_params.py), not done
-
-objects by their outlines (blobs of change in both images), on 2026-11-25; every step on the
-development split, the first ones on 1000-1119 only:
-  each left blob of change (ROI only, grown 3 px) one object, its largest band   120: 99/120
-  + every band of a blob kept                                                    120: 81/120
-  + the band nearest the blob's shift (Dice over its box; 3 px), else largest    120: 99/120
-  + only features within 3 px of the shift; none: the outline alone              120: 110/120
-  + blobs over the whole image, merged when alike, outline centroid, trusted
-    at Dice >= 0.9 (else the features decide)  ("V1")                           120: 119/120
-    V1 was then run once on a held-out split, 860000-: 114/120 (95.0%); features alone 69/120.
-    Its failure list showed objects across the left border and slivers at impossible shifts;
-    the same kinds were found on more development layouts (1120-1359: V1 234/240), and the
-    variants below were compared on 1000-1359:
-  V1                                                                             360: 353/360
-  V2: + 8 px padding of the compared box; outlines behind the local background
-      not trusted                                                                360: 352/360
-  V3: whole right blobs over the columns both images see; outlines behind the
-      farthest background match not trusted                                      360: 350/360
-  V4: V1 + outlines behind the farthest background match not trusted             360: 355/360
-  V5: V4 + 8 px padding (chosen: as good as V4 on development, and a blob at the
-      image's left edge no longer fits every larger shift equally)               360: 355/360
-  then all of them once on a new held-out split, 880000- (119/120 is V5's figure):
-      V1 119/120, V2 119/120, V3 117/120, V4 119/120, V5 119/120; features alone 68/120
-"""
 
 DEV_START = 1000
 HELD_OUT_START = 880_000

@@ -1,5 +1,7 @@
-"""The trials behind scripts/matching_families.py's third and fourth records: cleanups of a fitted
-variant's matches, the kinds of its errors, and NM3 with its cleanup inside the GA's fitness.
+"""Trials on the scene families: cleanups of a fitted variant's matches, the kinds of its errors,
+and NM3 with its cleanup inside the GA's fitness.
+
+Their figures are the third and fourth records of ``docs/experiments/2026-11-24-matching-families.md``.
 
 Each family's GA is fitted as ``matching_families.py`` fits the chosen variant (annealing for
 fitting and testing, each chromosome over 3 update orders, 200 generations, GA seeds 0-2, the

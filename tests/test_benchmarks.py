@@ -34,6 +34,7 @@ def _needs_proxy(script):
     pytest.skip(text)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("script", sorted(EXPECTED))
 def test_benchmark_smoke_mode_runs(script, tmp_path):
     _needs_proxy(script)

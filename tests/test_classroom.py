@@ -36,6 +36,7 @@ for n in range(cycles):
 """
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("mode", ["load", "keep"])
 def test_two_processes_saving_one_file_lose_no_pair(tmp_path, mode):
     path = tmp_path / "class.json"

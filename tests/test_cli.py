@@ -29,6 +29,7 @@ def run_cli(*args):
                           capture_output=True, text=True, timeout=300)
 
 
+@pytest.mark.slow
 def test_match_prints_the_table_and_writes_the_json_contract(pair, tmp_path):
     out, plot = tmp_path / "m.json", tmp_path / "m.png"
     proc = run_cli("match", *pair, "--json", out, "--plot", plot, "--seed", 4)
@@ -205,6 +206,7 @@ def test_tune_interrupted_still_writes_the_best_so_far(pair, targets, tmp_path, 
     assert main(["match", *map(str, pair), "--params-file", str(out)]) == 0
 
 
+@pytest.mark.slow
 def test_a_real_ctrl_c_stops_tune_cleanly(pair, targets, tmp_path):
     import signal
     import time
@@ -301,6 +303,7 @@ def manifest(pair, targets, tmp_path):
     return path
 
 
+@pytest.mark.slow
 def test_evaluate_runs_the_train_test_protocol_with_peers(manifest, tmp_path, capsys):
     out = tmp_path / "report.json"
     assert main(["evaluate", str(manifest), "--generations", "6", "--seeds", "2", "--peers",
@@ -315,6 +318,7 @@ def test_evaluate_runs_the_train_test_protocol_with_peers(manifest, tmp_path, ca
         assert 0.0 <= held["recall"] <= 1.0 and 0.0 <= held["precision"] <= 1.0
 
 
+@pytest.mark.slow
 def test_evaluate_ga_seed_and_held_out_only(manifest, tmp_path, capsys):
     """The GA seed reaches the GA (another seed, other parameters; the same seed, the same
     report), and --held-out-only fits only the training pair without changing held-out figures."""
@@ -333,6 +337,7 @@ def test_evaluate_ga_seed_and_held_out_only(manifest, tmp_path, capsys):
     assert held["held_out"] == reports["s0"]["held_out"] and held["params"] == reports["s0"]["params"]
 
 
+@pytest.mark.slow
 def test_evaluate_on_two_processes_writes_the_same_report_as_on_one(manifest, tmp_path, capsys):
     reports = []
     for jobs in ("1", "2"):
@@ -345,6 +350,7 @@ def test_evaluate_on_two_processes_writes_the_same_report_as_on_one(manifest, tm
     assert "--jobs must be an integer >= 1" in capsys.readouterr().err
 
 
+@pytest.mark.slow
 def test_help_of_tune_and_evaluate():
     for command, options in (("tune", ("--method", "--generations", "--population", "--seed", "--roi",
                                        "--shift", "--n-min", "--n-max", "--out", "--solver", "--fit-seeds")),
@@ -366,6 +372,7 @@ def test_method_nm_round_trips_its_fifth_gene_through_tune_and_match(pair, targe
     assert json.loads(matched.read_text())["params"] == params
 
 
+@pytest.mark.slow
 def test_evaluate_reports_the_annealed_and_exact_solvers(manifest, tmp_path, capsys):
     out = tmp_path / "report.json"
     assert main(["evaluate", str(manifest), "--generations", "3", "--seeds", "1",

@@ -16,6 +16,7 @@ BG = [IMAGES / "lab" / "left.png", IMAGES / "lab" / "right.png"]
 CARS = [IMAGES / "toy_cars" / "left.png", IMAGES / "toy_cars" / "right.png"]
 
 
+@pytest.mark.slow
 def test_depth_ranks_the_left_car_first_and_writes_json_and_plot(tmp_path):
     out, plot = tmp_path / "d.json", tmp_path / "d.png"
     proc = subprocess.run([sys.executable, "-m", "ismb_lab.cli", "depth", *map(str, BG + CARS),
@@ -47,6 +48,7 @@ def test_depth_ranks_the_left_car_first_and_writes_json_and_plot(tmp_path):
         assert row.endswith(f"outline {o['silhouette_disparity']:.0f} px")
 
 
+@pytest.mark.slow
 def test_grouping_by_features_alone_is_the_thesis_variant(tmp_path):
     out = tmp_path / "d.json"
     proc = subprocess.run([sys.executable, "-m", "ismb_lab.cli", "depth", *map(str, BG + CARS),

@@ -29,6 +29,7 @@ def test_rectify_writes_the_pair_and_its_figures(data, tmp_path):
     assert (out / "left.png").stat().st_size > 1000 and (out / "right.png").stat().st_size > 1000
 
 
+@pytest.mark.slow
 def test_refused_pairs_exit_2_in_one_line_and_write_nothing(data, tmp_path):
     cases = [[data / "left.jpg", data / "left.jpg"],               # the same photo twice
              [data / "left.jpg", data / "left01.jpg"],             # different sizes
@@ -42,6 +43,7 @@ def test_refused_pairs_exit_2_in_one_line_and_write_nothing(data, tmp_path):
         assert not (tmp_path / f"out{n}").exists()
 
 
+@pytest.mark.slow
 def test_calibrate_then_rectify_and_depth_with_the_rig(data, tmp_path):
     files = [data / f"{side}{n}.jpg" for n in CHESSBOARD_PAIRS if n != "14" for side in ("left", "right")]
     rig = tmp_path / "rig.json"
@@ -57,6 +59,7 @@ def test_calibrate_then_rectify_and_depth_with_the_rig(data, tmp_path):
     assert proc.returncode == 2 and "640x480" in proc.stderr and not (tmp_path / "x").exists()
 
 
+@pytest.mark.slow
 def test_calibrate_refusals(data, tmp_path):
     one = [data / "left01.jpg", data / "right01.jpg"]
     for args, said in (([*one, "--out", tmp_path / "r.json"], "at least 3 pairs"),
@@ -69,6 +72,7 @@ def test_calibrate_refusals(data, tmp_path):
     assert not (tmp_path / "r.json").exists()
 
 
+@pytest.mark.slow
 def test_shift_auto_measures_the_window_and_records_it(data, tmp_path):
     import numpy as np
 
@@ -108,6 +112,7 @@ def test_shift_auto_needs_matches():
         MatchConfig(shift="sideways")
 
 
+@pytest.mark.slow
 def test_depth_takes_f_and_b_from_a_rig_of_its_size(data, tmp_path):
     from pathlib import Path
 

@@ -107,6 +107,7 @@ def test_force_writes_into_a_device_and_never_replaces_it(lab, tmp_path):
     assert stat.S_ISCHR(os.lstat(device).st_mode) and os.lstat(device).st_rdev == os.makedev(1, 3)
 
 
+@pytest.mark.slow
 def test_json_to_stdout_through_its_link_with_force(lab):
     proc = subprocess.run([sys.executable, "-m", "ismb_lab.cli", "match", *map(str, lab[:2]),
                            "--json", "/dev/stdout", "--force"], capture_output=True, text=True,
@@ -171,6 +172,7 @@ def test_check_output_names_the_rule(tmp_path):
 
 # --- signals -----------------------------------------------------------------------------
 
+@pytest.mark.slow
 @needs_proc
 @pytest.mark.parametrize("sig, code", [(signal.SIGTERM, 143), (signal.SIGHUP, 129)])
 def test_sigterm_and_sighup_stop_tune_and_write_the_best_so_far(cli, lab, hard_targets, tmp_path, sig,
@@ -260,6 +262,7 @@ def test_evaluate_interrupted_writes_the_best_so_far(lab, tmp_path, monkeypatch,
 
 # --- crashes and wrong results -----------------------------------------------------------
 
+@pytest.mark.slow
 def test_a_file_name_that_is_not_utf8_is_read(lab, tmp_path):
     name = os.path.join(os.fsencode(tmp_path), b"\xff.png")
     shutil.copy(lab[0], name)

@@ -91,6 +91,7 @@ VARIANTS = (np.random.default_rng(5213).integers(1000, 10 ** 6, size=20).tolist(
             + np.random.default_rng(20261123).integers(1000, 10 ** 6, size=20).tolist())
 
 
+@pytest.mark.slow
 def test_ranking_on_rendered_variants():
     """Measured, not tuned: the demo's defaults on 40 random car layouts, left car nearer."""
     background = lab_scene(0, supersample=1)
@@ -119,6 +120,7 @@ def test_changed_roi_boxes_what_changed_inside_the_roi():
     assert changed_roi(bg, outside) is None and changed_roi(bg, outside, "full") is not None
 
 
+@pytest.mark.slow
 def test_scene_corners_are_sought_where_the_cars_are(committed):
     background, scene = (load_pair(s.left, s.right) for s in (lab_scene(0), toy_car_scene(0)))
     assert scene_match_config(background, background) is DEPTH_MATCH_CONFIG

@@ -1,9 +1,9 @@
-"""The depth demo on random object layouts (scripts/depth_layouts.py): a fixed set of 12, fast.
+"""The depth demo on random object layouts (scripts/depth_layouts.py): a fixed set of 12.
 
 The first 12 layouts of the development split (seeds 1000-1011: three of each family, six
 with two objects and six with three) rank 12 of 12 fully right with the objects found by
 their outlines (the thesis' grouping by features alone ranked 9 of them right; the whole
-split's figures and the held-out split's are in the script's docstring).  The layouts and
+split's figures and the held-out split's are in docs/experiments/2026-11-24-depth-layouts.md).  The layouts and
 the update order are seeded, so the figure repeats exactly on one machine; the margin of
 one layout allows for another BLAS or numpy build turning one borderline match.
 """
@@ -11,6 +11,9 @@ one layout allows for another BLAS or numpy build turning one borderline match.
 import time
 
 import numpy as np
+import pytest
+
+pytestmark = pytest.mark.slow     # both tests run the demo on whole layouts (about 7 s each)
 
 MEASURED, MARGIN, COUNT = 12, 1, 12
 

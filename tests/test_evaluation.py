@@ -146,6 +146,7 @@ def test_the_figure_check_catches_a_mean_beside_a_count():
         check_printed_figures("Held-out total: 146/5+17/159   C/T 89.3%   precision 86.9%")
 
 
+@pytest.mark.slow
 def test_protocol_on_two_processes_reports_exactly_what_one_process_does():
     cases = [hand_case(0, "a"), hand_case(30, "b"), hand_case(60, "c")]
     kwargs = dict(train=1, seeds=2, generations=4, solvers=("anneal",), peers=True, rng=3)

@@ -51,6 +51,7 @@ def test_the_background_is_the_scene_without_its_objects(layouts):
         assert not np.array_equal(lay.scene.left[wall], lay.background.left[wall])
 
 
+@pytest.mark.slow
 def test_family_functions_give_the_layout_pairs_bit_for_bit():
     for family, make in SCENES.items():
         lay = object_layout(11, 3, family=family)
@@ -109,6 +110,7 @@ def test_repetitive_family_uses_stripes_and_tiles_with_a_short_period():
         assert 6 <= lag <= 14 and ac[lag] > 0.2 * ac[0], (o, lag)
 
 
+@pytest.mark.slow
 def test_contrast_family_has_low_and_high_contrast_objects():
     seen = {o.contrast for seed in range(8) for o in object_layout(seed, 3, family="contrast").objects}
     assert seen == {"low", "high"}

@@ -17,6 +17,7 @@ from ismb_lab.targets import load_targets, snap
 IMAGES = Path(__file__).resolve().parent.parent / "images"
 
 
+@pytest.mark.slow
 def test_render_reproduces_the_committed_images_byte_for_byte(tmp_path):
     assert main(["render", "--out", str(tmp_path)]) == 0
     rendered = sorted(p.relative_to(tmp_path) for p in tmp_path.rglob("*") if p.is_file())

@@ -292,6 +292,7 @@ def test_topology_refuses_more_neurons_than_an_entry_can_index():
         Topology(1, n, np.zeros(n, dtype=np.int64), np.arange(n), [], [])
 
 
+@pytest.mark.slow
 def test_packed_entries_hold_the_extreme_weights_and_indices():
     """C = +-1 gives the largest weights, +-2**41 under the exact rule; the entries give them
     back with every neighbour's index, and both kernels then agree."""

@@ -57,6 +57,7 @@ def test_thesis_parameters_find_partners_but_add_extra_matches(scenes):
     assert precision < 0.85
 
 
+@pytest.mark.slow
 def test_vertical_disparity_term_helps_an_unrectified_rig():
     results = {}
     for method in ("II", "III"):

@@ -5,6 +5,7 @@ import re
 import pytest
 
 
+@pytest.mark.slow
 def test_pooled_figures_lie_within_their_spread_over_ga_and_update_seeds(capsys, load_script):
     load_script("matching_families").main(["--count", "4", "--generations", "2", "--ga-seeds", "2",
                                            "--variants", "NM4:network", "III:assign:assign"])
@@ -23,6 +24,7 @@ def test_pooled_figures_lie_within_their_spread_over_ga_and_update_seeds(capsys,
     assert re.search(r"hungarian: C/T +[\d.]+% +precision", pooled)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("method, one_to_one", [("NM3", True), ("NM4", False)])
 def test_the_command_line_alone_gives_the_library_protocol_figures(tmp_path, method, one_to_one, load_script):
     from ismb_lab.protocol import family_cases, protocol

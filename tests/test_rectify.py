@@ -48,6 +48,7 @@ def test_books_pair_gets_rectified_and_an_independent_matcher_agrees(data):
     assert np.median(after) <= 1.0 and np.percentile(after, 90) <= 2.5
 
 
+@pytest.mark.slow
 def test_aloe_is_already_rectified_and_left_as_it_is(data):
     result = rectify_pair(data / "aloeL.jpg", data / "aloeR.jpg")
     assert result.method == "already rectified" and result.median_abs_dy_px <= 0.5
@@ -102,6 +103,7 @@ def _with_orientation(jpeg: bytes, orientation: int) -> bytes:
     return jpeg[:2] + b"\xff\xe1" + struct.pack(">H", len(body) + 2) + body + jpeg[2:]
 
 
+@pytest.mark.slow
 def test_a_12_megapixel_photo_is_scaled_to_the_working_size(data, tmp_path):
     for side in ("left", "right"):
         photo = cv2.imread(str(data / f"{side}.jpg"))

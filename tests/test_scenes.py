@@ -240,6 +240,7 @@ def test_images_are_float_grey_levels_and_the_right_camera_differs(scene):
     assert np.allclose(bright.right, np.clip(1.2 * plain.right - 5, 0, 255))
 
 
+@pytest.mark.slow
 def test_supersampling_antialiases_edges_only():
     wall = Plane((0, 0, 1.8), (1, 0, 0), (0, 1, 0), 20, 20, Texture(base=0.5))
     # The box's left edge is at column 129.75: pixel 130 is 3/4 box, 1/4 wall.
@@ -255,6 +256,7 @@ def test_supersampling_antialiases_edges_only():
 # --------------------------------------------------------------- determinism
 
 
+@pytest.mark.slow
 def test_same_seed_same_images_different_seed_different():
     a, b, c = synthetic_scene(7), synthetic_scene(7), synthetic_scene(8)
     for name in ("left", "right", "depth", "disparity", "occluded"):
@@ -459,6 +461,7 @@ def test_group_normals_and_albedo_follow_the_part_hit():
     assert car.hi[2] == pytest.approx(1.0 + CAR_DEPTH + 0.006)
 
 
+@pytest.mark.slow
 def test_realistic_scenes_vary_and_some_are_not_rectified():
     rigs = [realistic_scene(n, supersample=1).rig for n in range(1, REALISTIC_COUNT + 1)]
     offsets = [r.vertical_offset_px for r in rigs]

@@ -150,6 +150,7 @@ def test_silhouettes_must_cover_the_scene():
         depth_from_matches(background, scene, None, np.zeros((H, W), dtype=int))
 
 
+@pytest.mark.slow
 def test_silhouettes_found_once_give_what_finding_them_each_time_gives():
     from ismb_lab.depth_demo import depth_pairs, pair_silhouettes, relative_depth
     from ismb_lab.scenes import object_layout
@@ -171,6 +172,7 @@ def test_silhouettes_found_once_give_what_finding_them_each_time_gives():
         relative_depth(layout.background, layout.scene, prepared=prepared, silhouettes=blobs.labels)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("gain, offset", [(1.15, 0.0), (0.85, -10.0)])
 def test_a_change_of_light_over_the_whole_view_is_no_outline(gain, offset):
     """The toy-car scene photographed in another light: every pixel changed, so the one blob is

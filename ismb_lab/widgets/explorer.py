@@ -22,7 +22,7 @@ from ..solvers import DEFAULT_SOLVER, SOLVERS, get_solver
 from ..targets import TargetSet, load_targets, snap
 from ._common import Base, Pane, draw_pair, pair_files, update_pair, with_class
 
-__all__ = ["draw_transfer", "ExplorerModel", "ParameterExplorer", "update_transfer"]
+__all__ = ["draw_transfer", "ExplorerModel", "ParameterExplorer", "similarity_theta", "update_transfer"]
 
 
 
@@ -145,10 +145,48 @@ def draw_transfer(axes, model: ExplorerModel) -> dict:
     return art
 
 
+#: The λs of the probe that reads back a derived θs: |λs (M - θs) / 2| stays far below tanh's
+#: saturation for any M of grey levels, so the inverse loses no digits.
+_PROBE_LAMBDA = 1e-3
+
+
+def similarity_theta(model: ExplorerModel) -> float | None:
+    """The θs the model's method really uses on its pair, or None when it forms no ``S(M)``.
+
+    A method that sets θs from each pair (``"theta_s"`` in its ``derived``, as Method-NM3)
+    ignores the θs of ``model.params``: the value is read back from the method's own
+    similarity of the pair's neurons, ``S = -tanh(λs (M - θs) / 2)``, formed with a λs so
+    small that no ``S`` saturates, at the neuron whose ``S`` is nearest 0.
+
+    Examples
+    --------
+    >>> from ismb_lab.scenes import synthetic_scene
+    >>> pair = synthetic_scene(0)
+    >>> model = ExplorerModel(prepare(pair.left, pair.right), "NM3")
+    >>> bool(np.isclose(similarity_theta(model), model.prepared.problem.no_match_cut))
+    True
+    >>> similarity_theta(model.set(method="III")) == model.params.theta_s
+    True
+    >>> similarity_theta(model.set(method="I")) is None
+    True
+    """
+    method, params = get_method(model.method), model.params
+    if "theta_s" in method.derived:
+        problem = model.prepared.problem
+        if problem.n_neurons == 0:
+            return None
+        s = method.similarity(problem, replace(params, lambda_s=_PROBE_LAMBDA))
+        n = int(np.argmin(np.abs(s)))
+        return float(problem.neuron_dissimilarity[n] + 2 * np.arctanh(s[n]) / _PROBE_LAMBDA)
+    return params.theta_s if "theta_s" in method.gene_names else None
+
+
 def update_transfer(art: dict, model: ExplorerModel) -> None:
     p = model.params
-    uses_s = model.method != "I"
-    for key, theta, lam in (("s", p.theta_s, p.lambda_s), ("c", p.theta_c, p.lambda_c)):
+    theta_s = similarity_theta(model)
+    uses_s = theta_s is not None
+    for key, theta, lam in (("s", p.theta_s if theta_s is None else theta_s, p.lambda_s),
+                            ("c", p.theta_c, p.lambda_c)):
         art[key].set_ydata(transfer(art["x"], theta, lam))
         art[key + "_theta"].set_xdata([theta, theta])
         art[key + "_dot"].set_data([theta], [0.0])

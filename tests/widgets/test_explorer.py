@@ -113,3 +113,40 @@ def test_from_folder_reads_the_answer_key(pair_folder, truth):
     assert "ismb-theta-c" in explorer.sliders["theta_c"]._dom_classes
     fig = explorer.static_figure()
     assert len(fig.axes) == 3
+
+
+
+@pytest.mark.parametrize("lambda_s", [0.3, 1.16, 4.0])
+def test_nm3_draws_s_at_the_theta_s_it_sets_from_the_pair(prepared, lambda_s):
+    from matplotlib.figure import Figure
+
+    from ismb_lab.methods import get_method
+    from ismb_lab.widgets.explorer import draw_transfer, update_transfer
+
+    params = Params(theta_c=17.97, theta_s=24.02, lambda_c=6.37, lambda_s=lambda_s)
+    model = ExplorerModel(prepared, "NM3", params)
+    cut = prepared.problem.no_match_cut
+    assert abs(cut - params.theta_s) > 1      # the pair's theta_s is not the one in params
+    art = draw_transfer(Figure().subplots(1, 2), model)
+    update_transfer(art, model)
+    theta = art["s_theta"].get_xdata()[0]
+    assert theta == pytest.approx(cut, abs=1e-9) and art["s_dot"].get_xdata()[0] == theta
+    # the curve drawn is the S the method's network is built with, neuron by neuron
+    network = get_method("NM3").network(prepared.problem, model.params)
+    np.testing.assert_allclose(transfer(prepared.problem.neuron_dissimilarity, theta, lambda_s),
+                               network.similarity, atol=1e-9)
+    assert art["s"].get_alpha() == 1.0
+
+
+def test_s_is_faded_only_for_a_method_without_it(prepared):
+    from matplotlib.figure import Figure
+
+    from ismb_lab.widgets.explorer import draw_transfer, update_transfer
+
+    for method, alpha in (("I", 0.25), ("III", 1.0), ("NM4", 1.0), ("NM3", 1.0)):
+        model = ExplorerModel(prepared, method)
+        art = draw_transfer(Figure().subplots(1, 2), model)
+        update_transfer(art, model)
+        assert art["s"].get_alpha() == alpha, method
+        if method in ("III", "NM4"):
+            assert art["s_theta"].get_xdata()[0] == model.params.theta_s

@@ -167,6 +167,7 @@ model.wait()
 """
 
 
+@pytest.mark.slow
 def test_a_kernel_killed_mid_run_leaves_the_best_so_far(tmp_path):
     import signal
     import subprocess

@@ -241,6 +241,7 @@ def test_from_folder_finds_the_answer_key(pair_folder):
     assert TargetLabeler.from_folder(pair_folder).key_toggle.disabled
 
 
+@pytest.mark.slow
 def test_rapid_clicks_leave_a_consistent_state(labeler, canvas_click):
     rng = np.random.default_rng(1)
     model = labeler.model

@@ -32,6 +32,7 @@ def drag(loader, start, stop):
         MouseEvent(name, canvas, x, y, button=1)._process()
 
 
+@pytest.mark.slow
 def test_upload_check_rectify_roi_use_and_label(data, tmp_path, monkeypatch):
     monkeypatch.chdir(tmp_path)         # the labeller's own targets file goes to the working folder
     loader = TargetLabeler.from_photos(folder=tmp_path)
@@ -64,6 +65,7 @@ def test_upload_check_rectify_roi_use_and_label(data, tmp_path, monkeypatch):
     assert len(saved["pairs"]) == 1 and saved["left_image_sha256"] == image_sha256(folder / "left.png")
 
 
+@pytest.mark.slow
 def test_an_already_rectified_pair_needs_no_rectify_and_explorer_opens(data, tmp_path, monkeypatch):
     monkeypatch.chdir(tmp_path)
     loader = ParameterExplorer.from_photos(folder=tmp_path)
@@ -125,6 +127,7 @@ def test_the_scene_pair_takes_the_background_rectification(data, tmp_path):
     np.testing.assert_array_equal(scene.rectified.right, r.right)
 
 
+@pytest.mark.slow
 def test_another_pair_under_a_used_name_gets_its_own_folder_and_the_first_is_kept(tmp_path):
     from ismb_lab.scenes import synthetic_scene
     from ismb_lab.widgets.photos import PhotoModel
