@@ -38,6 +38,23 @@ def browser(chromium):
         b.close()
 
 
+@pytest.fixture(scope="module")
+def pair(tmp_path_factory):
+    """The rendered synthetic scene (seed 3) as two PNG files: [left, right]."""
+    import cv2
+    import numpy as np
+
+    from ismb_lab.scenes import synthetic_scene
+
+    folder = tmp_path_factory.mktemp("pair")
+    scene = synthetic_scene(seed=3)
+    paths = []
+    for name, image in (("left.png", scene.left), ("right.png", scene.right)):
+        cv2.imwrite(str(folder / name), np.clip(np.rint(image), 0, 255).astype(np.uint8))
+        paths.append(folder / name)
+    return paths
+
+
 @pytest.fixture(scope="session")
 def opencv_data():
     """The folder of OpenCV's sample photos (Debian's opencv-doc). Without it the test is

@@ -12,18 +12,6 @@ from ismb_lab.cli import main
 from ismb_lab.scenes import synthetic_scene
 
 
-@pytest.fixture(scope="module")
-def pair(tmp_path_factory):
-    folder = tmp_path_factory.mktemp("pair")
-    scene = synthetic_scene(seed=3)
-    paths = []
-    for name, image in (("left.png", scene.left), ("right.png", scene.right)):
-        path = folder / name
-        cv2.imwrite(str(path), np.clip(np.rint(image), 0, 255).astype(np.uint8))
-        paths.append(path)
-    return paths
-
-
 def run_cli(*args):
     return subprocess.run([sys.executable, "-m", "ismb_lab.cli", *map(str, args)],
                           capture_output=True, text=True, timeout=300)

@@ -2,8 +2,6 @@
 
 import json
 
-import cv2
-import numpy as np
 import pytest
 
 from ismb_lab import ParameterError, ParameterTypeError
@@ -12,17 +10,6 @@ from ismb_lab.params import Params
 from ismb_lab.recipe import RECIPE_VERSION, Recipe, load_recipe, save_recipe
 from ismb_lab.scenes import synthetic_scene
 from ismb_lab.solvers import AnnealSolver, NetworkSolver
-
-
-@pytest.fixture(scope="module")
-def pair(tmp_path_factory):
-    folder = tmp_path_factory.mktemp("pair")
-    scene = synthetic_scene(seed=3)
-    paths = []
-    for name, image in (("left.png", scene.left), ("right.png", scene.right)):
-        cv2.imwrite(str(folder / name), np.clip(np.rint(image), 0, 255).astype(np.uint8))
-        paths.append(folder / name)
-    return paths
 
 
 @pytest.fixture(scope="module")
