@@ -94,6 +94,7 @@ def test_a_v1_rig_still_loads_but_cannot_be_recalibrated(rig, tmp_path):
     assert not (tmp_path / "new.json").exists()
 
 
+@pytest.mark.slow
 def test_drop_gives_the_rig_of_the_other_photos(runs):
     out, _, direct, dropped = runs
     a, b = (json.loads((out / name).read_text()) for name in ("direct.json", "dropped.json"))
@@ -106,6 +107,7 @@ def test_drop_gives_the_rig_of_the_other_photos(runs):
     assert b["rms_px"] < 0.35                                     # 0.302 px measured, from 0.448 with pair 02
 
 
+@pytest.mark.slow
 def test_the_table_marks_the_outlier_pair(runs):
     _, all13, _, dropped = runs
     rows = [line for line in all13.stdout.splitlines() if line.startswith("left") and ".jpg" in line]
@@ -122,6 +124,7 @@ def test_outlier_rule():
     assert outliers(make([0.5, 0.6, 0.55, 1.2])) == ()           # over 0.5 px, but not 3x the median
 
 
+@pytest.mark.slow
 def test_three_pairs_zoom_and_crop_warn_naming_the_fix(pairs, rig, opencv_data, tmp_path):
     few = calibrate_rig([p for p in pairs if p[0] in ("03", "05", "14")])
     assert few.zoom > MAX_ZOOM and few.to_dict()["zoom"] == few.zoom
@@ -132,6 +135,7 @@ def test_three_pairs_zoom_and_crop_warn_naming_the_fix(pairs, rig, opencv_data, 
     assert "more pairs" in proc.stderr and "different poses" in proc.stderr
 
 
+@pytest.mark.slow
 def test_calibrate_from_refusals(runs, opencv_data):
     out = runs[0]
     before = (out / "all.json").read_bytes()
