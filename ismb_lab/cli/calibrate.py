@@ -1,56 +1,113 @@
-"""``ismb-lab calibrate``: calibrate a fixed two-camera rig from chessboard pairs."""
+"""``ismb-lab calibrate``: calibrate a fixed two-camera rig from chessboard pairs, or again
+from a rig's own corners without some of its pairs (``--from RIG.json --drop left02.jpg``)."""
 
 from __future__ import annotations
 
+import sys
 from pathlib import Path
 
-__all__ = ["add_parser", "run"]
+__all__ = ["add_parser", "report", "run"]
 
 
 def add_parser(sub) -> None:
-    from ..rig import BOARD, SQUARE_M
+    from ..rig import BOARD, MAX_ZOOM, OUTLIER_PX, OUTLIER_RATIO, SQUARE_M
 
     c = sub.add_parser("calibrate", help="calibrate a fixed rig from chessboard pairs",
                        description="Find the chessboard in each pair, calibrate both cameras and the "
                        "pair (cv2.stereoCalibrate) and write the rig as JSON: the RMS reprojection "
-                       "error, the rectified focal length in px and the baseline in m. Pairs where the "
-                       "board is not found in both views are skipped and named.")
-    c.add_argument("pairs", type=Path, nargs="+", metavar="LEFT RIGHT",
+                       "error, each pair's own error, the rectified focal length in px, the baseline in m "
+                       "and each pair's corners. Pairs where the board is not found in both views are "
+                       "skipped and named. The table of pairs marks with '<-- outlier' a pair whose error "
+                       f"is above both {OUTLIER_RATIO:g}x the median and {OUTLIER_PX:g} px; drop it with "
+                       "--from RIG.json --drop LEFT.jpg. A rectified zoom above "
+                       f"{MAX_ZOOM:g}x, or a board leaving the rectified view, is warned about.")
+    c.add_argument("pairs", type=Path, nargs="*", metavar="LEFT RIGHT",
                    help="photos in pairs: left1 right1 left2 right2 ... (at least 3 pairs)")
-    c.add_argument("--board", default=f"{BOARD[0]}x{BOARD[1]}", metavar="COLSxROWS",
+    c.add_argument("--from", dest="source", type=Path, default=None, metavar="RIG.json",
+                   help="calibrate again from this rig's corners instead of photos (no photos then)")
+    c.add_argument("--drop", action="append", default=[], metavar="PHOTO",
+                   help="with --from: leave out the pair of this left or right photo (repeatable)")
+    c.add_argument("--board", default=None, metavar="COLSxROWS",
                    help=f"inner corners per row and per column (default: {BOARD[0]}x{BOARD[1]})")
-    c.add_argument("--square-m", type=float, default=SQUARE_M, metavar="S",
+    c.add_argument("--square-m", type=float, default=None, metavar="S",
                    help=f"side of one square in metres (default: {SQUARE_M}); B and Z scale with it")
     c.add_argument("--out", type=Path, required=True, metavar="RIG.json", help="where the rig is written")
     c.set_defaults(run=run)
+
+
+def report(rig) -> str:
+    """The table of the rig's pairs, their errors and the outliers' marks."""
+    from ..rig import OUTLIER_PX, OUTLIER_RATIO, outliers
+
+    marked = set(outliers(rig.pairs))
+    width = max([len("left")] + [len(p.left) for p in rig.pairs])
+    lines = [f"{'left':<{width}}  {'right':<{width}}  rms_px"]
+    lines += [f"{p.left:<{width}}  {p.right:<{width}}  {p.rms_px:6.3f}" + ("  <-- outlier" if n in marked else "")
+              for n, p in enumerate(rig.pairs)]
+    if marked:
+        lines.append(f"outlier: above both {OUTLIER_RATIO:g}x the median and {OUTLIER_PX:g} px; to leave one "
+                     "out: ismb-lab calibrate --from RIG.json --drop LEFT --out NEW.json")
+    return "\n".join(lines)
+
+
+def _board(text: str):
+    from ._common import UsageError
+    try:
+        board = tuple(int(v) for v in text.lower().split("x"))
+        assert len(board) == 2 and min(board) >= 2
+    except (ValueError, AssertionError):
+        raise UsageError(f"--board must be COLSxROWS of inner corners, e.g. 9x6; got {text!r}") from None
+    return board
+
+
+def _from_rig(args):
+    from .._files import check_input
+    from ..rig import load_rig, recalibrate
+    from ._common import UsageError
+
+    if args.pairs:
+        raise UsageError("calibrate takes either photos or --from RIG.json, not both")
+    if args.board is not None or args.square_m is not None:
+        raise UsageError("--board and --square-m are the rig's own with --from; leave them out")
+    check_input(args.source, what="--from")
+    return recalibrate(load_rig(args.source), args.drop)
 
 
 def run(args) -> int:
     import math
 
     from .._files import atomic_write_text, check_input, check_output
-    from ..rig import calibrate_rig
+    from ..rig import BOARD, SQUARE_M, calibrate_rig
     from ._common import UsageError, progress_bar
 
-    if len(args.pairs) % 2:
-        raise UsageError(f"calibrate takes photos in pairs (left right ...): got {len(args.pairs)} files")
-    try:
-        board = tuple(int(v) for v in args.board.lower().split("x"))
-        assert len(board) == 2 and min(board) >= 2
-    except (ValueError, AssertionError):
-        raise UsageError(f"--board must be COLSxROWS of inner corners, e.g. 9x6; got {args.board!r}") from None
-    if not args.square_m > 0 or math.isinf(args.square_m):
-        raise UsageError(f"--square-m must be a finite number > 0, got {args.square_m:g}")
-    for path in args.pairs:
-        check_input(path, what="a photo")
-    check_output(args.out, inputs=args.pairs, force=getattr(args, "force", False), what="--out")
-    pairs = [(f"{args.pairs[n].name}+{args.pairs[n + 1].name}", args.pairs[n], args.pairs[n + 1])
-             for n in range(0, len(args.pairs), 2)]
-    with progress_bar(len(pairs), "chessboards", unit="pair") as bar:
-        rig = calibrate_rig(pairs, board, args.square_m, progress=lambda _: bar.update(1))
+    if args.drop and args.source is None:
+        raise UsageError("--drop leaves a pair out of a rig: give the rig with --from RIG.json")
+    inputs = list(args.pairs) + ([args.source] if args.source is not None else [])
+    if args.source is not None:
+        check_output(args.out, inputs=inputs, force=getattr(args, "force", False), what="--out")
+        rig = _from_rig(args)
+    else:
+        if len(args.pairs) % 2 or not args.pairs:
+            raise UsageError(f"calibrate takes photos in pairs (left right ...) or --from RIG.json: got "
+                             f"{len(args.pairs)} files")
+        board = _board(args.board) if args.board is not None else BOARD
+        square_m = SQUARE_M if args.square_m is None else args.square_m
+        if not square_m > 0 or math.isinf(square_m):
+            raise UsageError(f"--square-m must be a finite number > 0, got {square_m:g}")
+        for path in args.pairs:
+            check_input(path, what="a photo")
+        check_output(args.out, inputs=inputs, force=getattr(args, "force", False), what="--out")
+        pairs = [(f"{args.pairs[n].name}+{args.pairs[n + 1].name}", args.pairs[n], args.pairs[n + 1])
+                 for n in range(0, len(args.pairs), 2)]
+        with progress_bar(len(pairs), "chessboards", unit="pair") as bar:
+            rig = calibrate_rig(pairs, board, square_m, progress=lambda _: bar.update(1))
     atomic_write_text(args.out, rig.to_json())
     if rig.skipped:
         print(f"board not found in both views, skipped: {', '.join(rig.skipped)}")
+    print(report(rig))
     print(f"{len(rig.used)} pairs: RMS reprojection error {rig.rms:.3f} px, focal length {rig.focal_px:.1f} px, "
-          f"baseline {rig.baseline_m:.4f} m (squares of {rig.square_m:g} m) -> {args.out}")
+          f"baseline {rig.baseline_m:.4f} m (squares of {rig.square_m:g} m), rectified zoom {rig.zoom:.2f}x "
+          f"-> {args.out}")
+    for text in rig.warnings():
+        print(f"ismb-lab: warning: {text}", file=sys.stderr)
     return 0
