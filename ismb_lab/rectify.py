@@ -279,7 +279,8 @@ def rectify_pair(left, right, *, max_side: int = WORKING_SIDE) -> Rectified:
     left, right : path, bytes or ndarray
         The photos, the left camera's first.  They must be of one size.
     max_side : int
-        Scale both down so that the longer side is at most this (default :data:`WORKING_SIDE`).
+        Scale both down so that the longer side is at most this (default :data:`WORKING_SIDE`);
+        the rectified images, which the warp can make larger, are kept within it too.
 
     Returns
     -------
@@ -310,6 +311,11 @@ def rectify_pair(left, right, *, max_side: int = WORKING_SIDE) -> Rectified:
         raise ParameterError(message("right", owner, "a view OpenCV's uncalibrated rectification accepts",
                                      f"a pair it refused ({len(lxy)} inliers)"))
     h_left, h_right, size = _place(h_left, h_right, lxy, rxy, (h, w))
+    shrink = working_size(size[::-1], max_side)
+    if shrink < 1.0:       # the warp can enlarge the image: the output, too, stays within max_side
+        scale = np.diag([shrink, shrink, 1.0])
+        h_left, h_right, size = _place(scale @ h_left, scale @ h_right, lxy, rxy, (h, w))
+        size = (min(size[0], max_side), min(size[1], max_side))
     warp = lambda image, hom: cv2.warpPerspective(image.astype(np.float32), hom, size, flags=cv2.INTER_LINEAR,
                                                   borderMode=cv2.BORDER_CONSTANT, borderValue=0).astype(float)
     lxy_r, rxy_r = _transform(h_left, lxy), _transform(h_right, rxy)
