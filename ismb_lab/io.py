@@ -285,7 +285,7 @@ def load_pair(left, right, *, min_shape=(1, 1)) -> StereoPair:
     Traceback (most recent call last):
     ...
     ismb_lab.ParameterError: The 'right' parameter of load_pair must be an image of the same size as 'left',
-    4x6 pixels (height x width). Got 'an image of 4x5 pixels' instead.
+    6x4 pixels (width x height). Got 'an image of 5x4 pixels' instead.
     """
     owner = "load_pair"
     rule = "a (height, width) pair of integers >= 1"
@@ -299,12 +299,12 @@ def load_pair(left, right, *, min_shape=(1, 1)) -> StereoPair:
     (h, w), (rh, rw) = images["left"].shape, images["right"].shape
     if h < min_h or w < min_w:
         raise ParameterError(message(
-            "left", owner, f"an image of at least {min_h}x{min_w} pixels (height x width) "
-            "to hold the matching windows", f"an image of {h}x{w} pixels"))
+            "left", owner, f"an image of at least {min_w}x{min_h} pixels (width x height) "
+            "to hold the matching windows", f"an image of {w}x{h} pixels"))
     if (rh, rw) != (h, w):
         raise ParameterError(message(
-            "right", owner, f"an image of the same size as 'left', {h}x{w} pixels "
-            "(height x width)", f"an image of {rh}x{rw} pixels"))
+            "right", owner, f"an image of the same size as 'left', {w}x{h} pixels "
+            "(width x height)", f"an image of {rw}x{rh} pixels"))
     path = {side: os.fspath(src) if _is_path(src) else None
             for side, src in (("left", left), ("right", right))}
     return StereoPair(images["left"], images["right"], image_sha256(left), image_sha256(right),

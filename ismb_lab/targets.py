@@ -315,7 +315,7 @@ def load_targets(path, *, pair: StereoPair | None = None, shape=None,
     for (h, w), key in ((hw, key) for hw in bounds for key in _POINTS):
         xy = getattr(targets, key)
         if (bad := np.flatnonzero((xy[:, 0] > w - 1) | (xy[:, 1] > h - 1))).size:
-            raise ParameterError(message(f"pairs[{bad[0]}].{key}", source, f"inside the {h}x{w} image "
+            raise ParameterError(message(f"pairs[{bad[0]}].{key}", source, f"inside the {w}x{h} (width x height) image "
                                          f"(0 <= x <= {w - 1}, 0 <= y <= {h - 1})", _plain(xy[bad[0]])))
     return targets
 

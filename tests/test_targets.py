@@ -193,7 +193,7 @@ def test_points_outside_the_image(tmp_path, left, right, bad):
         return
     with pytest.raises(ParameterError) as info:
         load_targets(path, shape=(20, 30))
-    says(info, *bad, "inside the 20x30 image", "0 <= x <= 29, 0 <= y <= 19")
+    says(info, *bad, "inside the 30x20 (width x height) image", "0 <= x <= 29, 0 <= y <= 19")
 
 
 def test_pair_shape_bounds_the_points(tmp_path):
