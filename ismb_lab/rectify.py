@@ -36,7 +36,7 @@ from ._validation import ParameterError, ParameterTypeError, check_number, messa
 from .io import _is_path, _read, _to_grey, decode
 
 __all__ = ["WORKING_SIDE", "Correspondences", "Rectified", "apply_rectification", "check_rectified", "load_photo",
-           "measured", "rectify_pair", "robust_matches", "working_size"]
+           "measured", "sideways_step", "rectify_pair", "robust_matches", "working_size"]
 
 #: Longest side, in pixels, that photos are scaled down to before anything else: Middlebury-
 #: sized pairs (Aloe, 1282 x 1110) stay whole, a 12-megapixel phone photo becomes 1600 x 1200.
@@ -252,6 +252,48 @@ def _fundamental(matches: Correspondences, owner: str):
     return F, inliers
 
 
+def sideways_step(left_xy, right_xy, F, shape) -> float | None:
+    """Which way the camera moved between the left and the right photo: the x component of the
+    unit translation, negative for a right photo taken to the right; None when the pair does not
+    say.
+
+    The rule for a swapped pair.  Disparities ``x_left - x_right`` are positive when the right
+    photo is taken to the right of the left one, but a hand-held pair adds the camera's turn and
+    often a step forward, which shift every disparity alike (the books pair's raw disparities
+    are all negative in the right order).  So the motion is found from `F` instead, with an
+    assumed focal length of one image width (``cv2.recoverPose``), and its sideways part is
+    returned: > 0 means most disparities of the robust matches, the turn and the step forward
+    taken out, are negative.  A motion that fewer than 80% of the matches put in front of both
+    cameras (an assumed focal length far off), or that is mostly forward (``|x| < 0.2``),
+    decides nothing: None.
+
+    Examples
+    --------
+    >>> xy = np.random.default_rng(0).uniform(0, 400, (40, 2))
+    >>> depth = np.random.default_rng(1).uniform(1, 2, 40)
+    >>> shifted = xy - np.c_[40 / depth, np.zeros(40)]     # a right view: near points move more
+    >>> F = np.array([[0, 0, 0], [0, 0, -1], [0, 1, 0]], float)
+    >>> round(sideways_step(xy, shifted, F, (400, 400)), 3), round(sideways_step(shifted, xy, F, (400, 400)), 3)
+    (-1.0, 1.0)
+    """
+    h, w = shape
+    K = np.array([[w, 0, w / 2], [0, w, h / 2], [0, 0, 1]], float)
+    left_xy, right_xy = np.asarray(left_xy, float), np.asarray(right_xy, float)
+    if len(left_xy) < 5:
+        return None
+    good, _, t, _ = cv2.recoverPose(K.T @ F @ K, left_xy, right_xy, K)
+    step = float(t.ravel()[0])
+    return step if good >= 0.8 * len(left_xy) and abs(step) >= 0.2 else None
+
+
+def _refuse_swapped(left_xy, right_xy, F, shape, owner: str) -> None:
+    step = sideways_step(left_xy, right_xy, F, shape)
+    if step is not None and step > 0:
+        raise ParameterError(message("left", owner, "the left camera's photo, given first: swap the two files",
+                                     f"the right camera's (its {len(left_xy)} robust matches put it to the "
+                                     "right)"))
+
+
 def _transform(h, xy) -> np.ndarray:
     return cv2.perspectiveTransform(np.asarray(xy, float).reshape(-1, 1, 2), h).reshape(-1, 2)
 
@@ -290,7 +332,8 @@ def rectify_pair(left, right, *, max_side: int = WORKING_SIDE) -> Rectified:
     ------
     ParameterError
         With one sentence: photos of different sizes, too few matches, the same photo twice,
-        no common epipolar geometry, or no parallax (the camera only turned).
+        no common epipolar geometry, no parallax (the camera only turned), or the two photos
+        swapped (most disparities negative, see :func:`sideways_step`).
     """
     owner = "rectify_pair"
     max_side = check_number(max_side, "max_side", owner, low=64, integer=True)
@@ -299,6 +342,7 @@ def rectify_pair(left, right, *, max_side: int = WORKING_SIDE) -> Rectified:
     _refuse_same(matches, owner)
     F, inliers = _fundamental(matches, owner)
     lxy, rxy = matches.left_xy[inliers], matches.right_xy[inliers]
+    _refuse_swapped(lxy, rxy, F, left.shape, owner)
     figures = _dy_figures(lxy, rxy)
     if figures["median_abs_dy_px"] <= 0.5 and figures["p90_abs_dy_px"] <= 1.5:
         eye = np.eye(3)
@@ -363,10 +407,11 @@ def check_rectified(left, right, *, max_side: int = WORKING_SIDE) -> dict:
            "left_xy": np.zeros((0, 2)), "right_xy": np.zeros((0, 2))}
     try:
         _refuse_same(matches, owner)
-        _, inliers = _fundamental(matches, owner)
+        F, inliers = _fundamental(matches, owner)
+        lxy, rxy = matches.left_xy[inliers], matches.right_xy[inliers]
+        _refuse_swapped(lxy, rxy, F, left.shape, owner)
     except ParameterError as exc:
         return {**out, "problem": str(exc)}
-    lxy, rxy = matches.left_xy[inliers], matches.right_xy[inliers]
     figures = _dy_figures(lxy, rxy)
     rectified = figures["median_abs_dy_px"] <= 0.5 and figures["p90_abs_dy_px"] <= 1.5
     return {**out, **figures, "inliers": int(inliers.sum()), "rectified": bool(rectified),
