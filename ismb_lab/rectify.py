@@ -35,7 +35,8 @@ import numpy as np
 from ._validation import ParameterError, ParameterTypeError, check_number, message
 from .io import _is_path, _read, _to_grey, decode
 
-__all__ = ["WORKING_SIDE", "Correspondences", "Rectified", "apply_rectification", "check_rectified", "load_photo",
+__all__ = ["ROW_SPREAD_PX", "WORKING_SIDE", "Correspondences", "Rectified", "apply_rectification", "check_for_matching",
+           "check_rectified", "load_photo",
            "measured", "sideways_step", "rectify_pair", "robust_matches", "working_size"]
 
 #: Longest side, in pixels, that photos are scaled down to before anything else: Middlebury-
@@ -43,6 +44,9 @@ __all__ = ["WORKING_SIDE", "Correspondences", "Rectified", "apply_rectification"
 WORKING_SIDE = 1600
 #: Longest side of the copy that SIFT looks at (see :func:`robust_matches`).
 DETECT_SIDE = 1024
+#: Median row difference, in pixels, of a pair's robust matches above which
+#: :func:`check_for_matching` calls it unrectified (pairs from :func:`rectify_pair`: 0.35-0.56).
+ROW_SPREAD_PX = 1.0
 #: Fewest RANSAC inliers that make a pair worth rectifying.
 MIN_INLIERS = 20
 _RATIO = 0.75
@@ -292,6 +296,34 @@ def _refuse_swapped(left_xy, right_xy, F, shape, owner: str) -> None:
         raise ParameterError(message("left", owner, "the left camera's photo, given first: swap the two files",
                                      f"the right camera's (its {len(left_xy)} robust matches put it to the "
                                      "right)"))
+
+
+def check_for_matching(left, right, owner: str = "check_for_matching") -> str:
+    """Refuse a swapped pair and warn about an unrectified one, before it is matched.
+
+    Measured on the robust matches of the pair as given (:func:`robust_matches`, no warp):
+    a pair whose rows differ by more than :data:`ROW_SPREAD_PX` at the median is not rectified,
+    and the returned one-line warning names ``ismb-lab rectify``; a rectified pair on whose
+    rows (``|dy| <= 2`` px, at least 8 matches) most disparities ``x_left - x_right`` are
+    negative was given right first, and is refused.  Returns "" when there is nothing to say
+    (also for a pair with fewer than 8 robust matches: it says nothing either way).
+
+    `left` and `right` are grey images (arrays) of one size.
+    """
+    matches = robust_matches(left, right)
+    if len(matches) < 8:
+        return ""
+    dy = np.abs(matches.left_xy[:, 1] - matches.right_xy[:, 1])
+    spread = float(np.median(dy))
+    if spread > ROW_SPREAD_PX:
+        return (f"warning: the pair is not rectified (the rows of its {len(matches)} robust matches differ by "
+                f"{spread:.1f} px at the median): make it so with 'ismb-lab rectify LEFT RIGHT --out DIR'")
+    d = (matches.left_xy[:, 0] - matches.right_xy[:, 0])[dy <= 2.0]
+    if len(d) >= 8 and np.mean(d < 0) > 0.5:
+        raise ParameterError(message("left", owner, "the left camera's photo, given first: swap the two files",
+                                     f"the right camera's ({np.mean(d < 0):.0%} of {len(d)} robust matches "
+                                     "have a negative disparity)"))
+    return ""
 
 
 def _transform(h, xy) -> np.ndarray:

@@ -35,3 +35,32 @@ def test_rectify_cli_refuses_swapped_photos_in_one_line(opencv_data, tmp_path, c
     assert main(["rectify", str(opencv_data / "right.jpg"), str(opencv_data / "left.jpg"), "--out", str(out)]) == 2
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and "swap the two files" in err and not out.exists()
+
+
+def _match(capsys, *args):
+    from ismb_lab.cli import main
+
+    code = main(["match", *map(str, args)])
+    out = capsys.readouterr()
+    return code, out.out, out.err
+
+
+def test_match_warns_about_an_unrectified_pair_and_names_rectify(opencv_data, pair, capsys):
+    code, _, err = _match(capsys, opencv_data / "left.jpg", opencv_data / "right.jpg", "--shift", "10")
+    assert code == 0 and err.count("\n") == 1
+    assert err.startswith("warning: the pair is not rectified") and "ismb-lab rectify" in err
+    code, _, err = _match(capsys, *pair)                          # a rectified pair: nothing to say
+    assert code == 0 and err == ""
+
+
+def test_match_shift_auto_on_an_unrectified_pair_says_rectify_first(opencv_data, capsys):
+    code, _, err = _match(capsys, opencv_data / "left.jpg", opencv_data / "right.jpg", "--shift", "auto")
+    lines = err.splitlines()
+    assert code == 2 and len(lines) == 2 and lines[0].startswith("warning:")
+    assert lines[1].startswith("ismb-lab: error:") and "rectify first" in lines[1]
+
+
+def test_match_refuses_a_swapped_rectified_pair(pair, capsys, tmp_path):
+    out = tmp_path / "m.json"
+    code, _, err = _match(capsys, pair[1], pair[0], "--json", out)
+    assert code == 2 and err.count("\n") == 1 and "swap the two files" in err and not out.exists()
