@@ -201,7 +201,7 @@ def test_pair_shape_bounds_the_points(tmp_path):
     path = pairs_file(tmp_path, {"left_xy": [30, 1], "right_xy": [0, 0]})
     with pytest.raises(ParameterError) as info:
         load_targets(path, pair=pair)
-    says(info, "'pairs[0].left_xy'", "20x30")
+    says(info, "'pairs[0].left_xy'", "30x20 (width x height)")
     assert len(load_targets(path, shape=(40, 40))) == 1
 
 
