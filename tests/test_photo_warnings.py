@@ -64,3 +64,35 @@ def test_match_refuses_a_swapped_rectified_pair(pair, capsys, tmp_path):
     out = tmp_path / "m.json"
     code, _, err = _match(capsys, pair[1], pair[0], "--json", out)
     assert code == 2 and err.count("\n") == 1 and "swap the two files" in err and not out.exists()
+
+
+def _photo(path, orientation):
+    """A 40x24 colour JPEG with an EXIF Orientation tag (Pillow)."""
+    from PIL import Image
+
+    pixels = np.kron(np.random.default_rng(0).integers(0, 256, (6, 10, 3)), np.ones((4, 4, 1))).astype(np.uint8)
+    exif = Image.Exif()
+    exif[0x0112] = orientation
+    Image.fromarray(pixels).save(path, quality=95, exif=exif.tobytes())
+    return path
+
+
+@pytest.mark.parametrize("orientation", [1, 6])
+def test_targets_record_the_orientation_and_old_files_on_turned_photos_are_refused(tmp_path, orientation):
+    import json
+
+    from ismb_lab.targets import TargetSet, load_targets, save_targets
+
+    left, right = _photo(tmp_path / "l.jpg", orientation), _photo(tmp_path / "r.jpg", orientation)
+    pair = load_pair(left, right)
+    new = save_targets(tmp_path / "new.json", TargetSet([[3, 4]], [[1, 4]]))
+    assert json.loads(new.read_text())["orientation"] == "upright"
+    assert load_targets(new, pair=pair).orientation == "upright"
+    old = tmp_path / "old.json"                                   # as written before: no orientation key
+    old.write_text(json.dumps({"version": 1, "pairs": [{"left_xy": [3, 4], "right_xy": [1, 4]}]}))
+    if orientation == 1:
+        assert load_targets(old, pair=pair).orientation == "as stored"
+        return
+    with pytest.raises(ParameterError) as info:
+        load_targets(old, pair=pair)
+    assert "\n" not in str(info.value) and "orientation 6" in str(info.value) and "label the pair again" in str(info.value)

@@ -73,7 +73,7 @@ def test_hand_written_file_survives_load_and_save(tmp_path):
 
 def test_saved_set_holds_no_hash_keys_when_none(tmp_path):
     path = save_targets(tmp_path / "t.json", TargetSet([[1, 1]], [[0, 1]]))
-    assert set(json.loads(path.read_text())) == {"version", "pairs"}
+    assert set(json.loads(path.read_text())) == {"version", "orientation", "pairs"}
 
 
 # --- atomic save ------------------------------------------------------------------------
