@@ -36,7 +36,7 @@ from ._validation import ParameterError, ParameterTypeError, check_number, messa
 from .io import _is_path, _read, _to_grey, decode
 
 __all__ = ["ROW_SPREAD_PX", "WORKING_SIDE", "Correspondences", "Rectified", "apply_rectification", "check_for_matching",
-           "check_rectified", "load_photo",
+           "check_rectified", "epipole_warning", "load_photo",
            "measured", "sideways_step", "rectify_pair", "robust_matches", "working_size"]
 
 #: Longest side, in pixels, that photos are scaled down to before anything else: Middlebury-
@@ -175,8 +175,10 @@ class Rectified:
     method : str
         ``"already rectified"``, ``"uncalibrated"`` or ``"rig"``.
     inliers : int
-        Correspondences consistent with the epipolar geometry (all matches when the pair
-        was already rectified).
+        How many correspondences the figures were measured on, which `measured_on` names:
+        ``"RANSAC inliers"`` (consistent with the fundamental matrix) for :func:`rectify_pair`,
+        ``"robust matches (no RANSAC)"`` for a pair rectified another way (:func:`measured`:
+        a rig, a background's homographies), where wrong matches count too.
     median_abs_dy_px, p90_abs_dy_px : float
         Row differences of those correspondences after rectification.
     disparity_range_px : [float, float]
@@ -185,6 +187,10 @@ class Rectified:
         The factor the inputs were scaled by first (1: not scaled).
     left_xy, right_xy : (n, 2) ndarray
         The inliers, after rectification (for epipolar-line plots).
+    measured_on : str
+        What `inliers` counts (see there).
+    warnings : tuple of str
+        One line each, e.g. an unstable framing (:func:`epipole_warning`).
     """
 
     left: np.ndarray
@@ -199,6 +205,8 @@ class Rectified:
     scale: float
     left_xy: np.ndarray = field(repr=False, default=None)
     right_xy: np.ndarray = field(repr=False, default=None)
+    measured_on: str = "RANSAC inliers"
+    warnings: tuple = ()
 
     @property
     def size(self) -> list:
@@ -206,7 +214,8 @@ class Rectified:
 
     def to_dict(self) -> dict:
         """What ``ismb-lab rectify`` writes to ``rectify.json``."""
-        return {"method": self.method, "inliers": self.inliers, "median_abs_dy_px": self.median_abs_dy_px,
+        return {"method": self.method, "inliers": self.inliers, "measured_on": self.measured_on,
+                "warnings": list(self.warnings), "median_abs_dy_px": self.median_abs_dy_px,
                 "p90_abs_dy_px": self.p90_abs_dy_px, "disparity_range_px": list(self.disparity_range_px),
                 "size": self.size, "scale": self.scale, "working_side": WORKING_SIDE,
                 "left_homography": self.left_h.tolist(), "right_homography": self.right_h.tolist()}
@@ -326,6 +335,32 @@ def check_for_matching(left, right, owner: str = "check_for_matching") -> str:
     return ""
 
 
+def epipole_warning(F, shape) -> str:
+    """A one-line warning when an epipole lies within one image diagonal of its image, else "".
+
+    Uncalibrated rectification sends both epipoles to infinity; the nearer an epipole is to
+    the image (the camera stepped forward rather than sideways), the more the homographies
+    stretch it, and the more the framing changes with every small error in `F`.
+
+    >>> F = np.array([[0, 0, 0], [0, 0, -1], [0, 1, 0]], float)   # sideways: epipoles at infinity
+    >>> epipole_warning(F, (480, 640))
+    ''
+    """
+    h, w = shape
+    diagonal = float(np.hypot(w, h))
+    for side, matrix in (("left", F), ("right", F.T)):
+        e = np.linalg.svd(matrix)[2][-1]                      # matrix @ e = 0
+        if abs(e[2]) < 1e-12 * np.abs(e[:2]).max():
+            continue
+        x, y = e[:2] / e[2]
+        away = float(np.hypot(max(0.0, -x, x - w), max(0.0, -y, y - h)))
+        if away < diagonal:
+            return (f"warning: the {side} epipole lies {away:.0f} px from the image (within its {diagonal:.0f} px "
+                    "diagonal): the camera moved forward more than sideways, so the rectified framing is "
+                    "unstable; take the right photo after a sideways step")
+    return ""
+
+
 def _transform(h, xy) -> np.ndarray:
     return cv2.perspectiveTransform(np.asarray(xy, float).reshape(-1, 1, 2), h).reshape(-1, 2)
 
@@ -396,9 +431,11 @@ def rectify_pair(left, right, *, max_side: int = WORKING_SIDE) -> Rectified:
                                                   borderMode=cv2.BORDER_CONSTANT, borderValue=0).astype(float)
     lxy_r, rxy_r = _transform(h_left, lxy), _transform(h_right, rxy)
     figures = _dy_figures(lxy_r, rxy_r)
+    warning = epipole_warning(F, (h, w))
     return Rectified(np.clip(warp(left, h_left), 0, 255), np.clip(warp(right, h_right), 0, 255), h_left,
                      h_right, "uncalibrated", int(inliers.sum()), figures["median_abs_dy_px"],
-                     figures["p90_abs_dy_px"], figures["disparity_range_px"], factor, lxy_r, rxy_r)
+                     figures["p90_abs_dy_px"], figures["disparity_range_px"], factor, lxy_r, rxy_r,
+                     warnings=(warning,) if warning else ())
 
 
 def apply_rectification(left, right, left_h, right_h, size) -> Rectified:
@@ -420,7 +457,7 @@ def measured(left, right, left_h, right_h, method: str) -> Rectified:
                {"median_abs_dy_px": float("nan"), "p90_abs_dy_px": float("nan"), "disparity_range_px": [0.0, 0.0]})
     return Rectified(left, right, np.asarray(left_h, float), np.asarray(right_h, float), method, len(matches),
                      figures["median_abs_dy_px"], figures["p90_abs_dy_px"], figures["disparity_range_px"], 1.0,
-                     matches.left_xy, matches.right_xy)
+                     matches.left_xy, matches.right_xy, "robust matches (no RANSAC)")
 
 
 def check_rectified(left, right, *, max_side: int = WORKING_SIDE) -> dict:

@@ -96,3 +96,29 @@ def test_targets_record_the_orientation_and_old_files_on_turned_photos_are_refus
     with pytest.raises(ParameterError) as info:
         load_targets(old, pair=pair)
     assert "\n" not in str(info.value) and "orientation 6" in str(info.value) and "label the pair again" in str(info.value)
+
+
+def test_rectify_names_what_its_figures_were_measured_on(opencv_data):
+    from ismb_lab.rectify import load_photo, measured, rectify_pair
+
+    assert rectify_pair(opencv_data / "left01.jpg", opencv_data / "right01.jpg").measured_on == "RANSAC inliers"
+    left, right = load_photo(opencv_data / "aloeL.jpg"), load_photo(opencv_data / "aloeR.jpg")
+    eye = np.eye(3)
+    result = measured(left, right, eye, eye, "rig")
+    assert result.measured_on == "robust matches (no RANSAC)" == result.to_dict()["measured_on"]
+
+
+def test_an_epipole_near_the_image_gets_a_framing_warning(opencv_data, tmp_path, capsys):
+    from ismb_lab.cli import main
+    from ismb_lab.rectify import epipole_warning, rectify_pair
+
+    # the books pair: the camera stepped mostly forward (an epipole inside the image)
+    assert main(["rectify", str(opencv_data / "left.jpg"), str(opencv_data / "right.jpg"),
+                 "--out", str(tmp_path / "books")]) == 0
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and err.startswith("warning: the") and "framing is unstable" in err
+    import json
+    assert json.loads((tmp_path / "books" / "rectify.json").read_text())["warnings"] == [err.strip()]
+    assert rectify_pair(opencv_data / "left01.jpg", opencv_data / "right01.jpg").warnings == ()   # a sideways step
+    forward = np.array([[0, -1, 240], [1, 0, -320], [-240, 320, 0]], float)   # [e]x, e at the centre
+    assert "0 px from the image" in epipole_warning(forward, (480, 640))
