@@ -15,8 +15,8 @@ import numpy as np
 
 from ._validation import ParameterError, ParameterTypeError, check_number, message
 
-__all__ = ["MAX_PIXELS", "MOST_PIXELS", "PIXELS_VARIABLE", "decode", "image_sha256", "load_image", "load_pair", "max_pixels",
-           "png_bytes", "save_image", "save_pair", "StereoPair"]
+__all__ = ["MAX_PIXELS", "MOST_PIXELS", "PIXELS_VARIABLE", "decode", "exif_orientation", "image_sha256", "load_image", "load_pair", "max_pixels",
+           "orient", "png_bytes", "save_image", "save_pair", "StereoPair"]
 
 _ARRAY_TAG = b"ismb_lab-array-v1\n"
 
@@ -66,9 +66,54 @@ def _too_large(error, what: str, limit: int) -> ParameterError:
                  f"{PIXELS_VARIABLE} to allow more")
 
 
+def exif_orientation(data: bytes) -> int:
+    """The EXIF Orientation tag (1-8) of a JPEG file's bytes; 1 (upright) when there is none.
+
+    Examples
+    --------
+    >>> exif_orientation(b"not a JPEG")
+    1
+    """
+    at = 2
+    while data[:2] == b"\xff\xd8" and at + 4 <= len(data) and data[at] == 0xFF and data[at + 1] not in (0xD9, 0xDA):
+        end = at + 2 + int.from_bytes(data[at + 2:at + 4], "big")
+        if data[at + 1] == 0xE1 and data[at + 4:at + 10] == b"Exif\x00\x00":
+            return _tiff_orientation(data[at + 10:end])
+        at = end
+    return 1
+
+
+def _tiff_orientation(tiff: bytes) -> int:
+    order = {b"II": "little", b"MM": "big"}.get(tiff[:2])
+    if order is None or len(tiff) < 8:
+        return 1
+    number = lambda at, size: int.from_bytes(tiff[at:at + size], order)   # noqa: E731
+    ifd = number(4, 4)
+    for entry in range(number(ifd, 2) if ifd + 2 <= len(tiff) else 0):
+        at = ifd + 2 + 12 * entry
+        if at + 12 <= len(tiff) and number(at, 2) == 0x0112:
+            value = number(at + 8, 2)
+            return value if 1 <= value <= 8 else 1
+    return 1
+
+
+def orient(image: np.ndarray, orientation: int) -> np.ndarray:
+    """`image` (``image[y, x]``) turned upright by its EXIF `orientation`, as viewers show it.
+
+    >>> orient(np.array([[1, 2], [3, 4]]), 6).tolist()   # 6: turn 90 degrees clockwise
+    [[3, 1], [4, 2]]
+    """
+    turned = {1: image, 2: image[:, ::-1], 3: image[::-1, ::-1], 4: image[::-1],
+              5: np.swapaxes(image, 0, 1), 6: np.rot90(image, -1), 7: np.swapaxes(image, 0, 1)[::-1, ::-1],
+              8: np.rot90(image, 1)}[orientation]
+    return np.ascontiguousarray(turned)
+
+
 def decode(data: bytes, flags: int, error) -> np.ndarray:
     """Decode an image file's bytes with ``cv2.imdecode``, only once its header shows a size
-    within :func:`max_pixels` (see :mod:`ismb_lab._header` for the formats read).
+    within :func:`max_pixels` (see :mod:`ismb_lab._header` for the formats read).  A JPEG is
+    turned upright by its EXIF orientation with every flag, ``IMREAD_UNCHANGED`` included (which
+    OpenCV leaves as stored): every command sees a photo as ``rectify`` and viewers do.
 
     `error(why)` makes the exception raised, e.g. one that names the file.
     """
@@ -84,6 +129,8 @@ def decode(data: bytes, flags: int, error) -> np.ndarray:
     image = cv2.imdecode(np.frombuffer(data, dtype=np.uint8), flags)
     if image is None:
         raise error(f"OpenCV cannot decode it as a {kind} image")
+    if flags == cv2.IMREAD_UNCHANGED and kind == "JPEG":   # OpenCV turns the other reads itself
+        image = orient(image, exif_orientation(data))
     if image.shape[0] * image.shape[1] > limit:
         raise _too_large(error, f"it is {image.shape[1]}x{image.shape[0]}", limit)
     return image
@@ -285,7 +332,7 @@ def load_pair(left, right, *, min_shape=(1, 1)) -> StereoPair:
     Traceback (most recent call last):
     ...
     ismb_lab.ParameterError: The 'right' parameter of load_pair must be an image of the same size as 'left',
-    4x6 pixels (height x width). Got 'an image of 4x5 pixels' instead.
+    6x4 pixels (width x height). Got 'an image of 5x4 pixels' instead.
     """
     owner = "load_pair"
     rule = "a (height, width) pair of integers >= 1"
@@ -299,12 +346,12 @@ def load_pair(left, right, *, min_shape=(1, 1)) -> StereoPair:
     (h, w), (rh, rw) = images["left"].shape, images["right"].shape
     if h < min_h or w < min_w:
         raise ParameterError(message(
-            "left", owner, f"an image of at least {min_h}x{min_w} pixels (height x width) "
-            "to hold the matching windows", f"an image of {h}x{w} pixels"))
+            "left", owner, f"an image of at least {min_w}x{min_h} pixels (width x height) "
+            "to hold the matching windows", f"an image of {w}x{h} pixels"))
     if (rh, rw) != (h, w):
         raise ParameterError(message(
-            "right", owner, f"an image of the same size as 'left', {h}x{w} pixels "
-            "(height x width)", f"an image of {rh}x{rw} pixels"))
+            "right", owner, f"an image of the same size as 'left', {w}x{h} pixels "
+            "(width x height)", f"an image of {rw}x{rh} pixels"))
     path = {side: os.fspath(src) if _is_path(src) else None
             for side, src in (("left", left), ("right", right))}
     return StereoPair(images["left"], images["right"], image_sha256(left), image_sha256(right),

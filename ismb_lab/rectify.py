@@ -35,14 +35,18 @@ import numpy as np
 from ._validation import ParameterError, ParameterTypeError, check_number, message
 from .io import _is_path, _read, _to_grey, decode
 
-__all__ = ["WORKING_SIDE", "Correspondences", "Rectified", "apply_rectification", "check_rectified", "load_photo",
-           "measured", "rectify_pair", "robust_matches", "working_size"]
+__all__ = ["ROW_SPREAD_PX", "WORKING_SIDE", "Correspondences", "Rectified", "apply_rectification", "check_for_matching",
+           "check_rectified", "epipole_warning", "load_photo",
+           "measured", "sideways_step", "rectify_pair", "robust_matches", "working_size"]
 
 #: Longest side, in pixels, that photos are scaled down to before anything else: Middlebury-
 #: sized pairs (Aloe, 1282 x 1110) stay whole, a 12-megapixel phone photo becomes 1600 x 1200.
 WORKING_SIDE = 1600
 #: Longest side of the copy that SIFT looks at (see :func:`robust_matches`).
 DETECT_SIDE = 1024
+#: Median row difference, in pixels, of a pair's robust matches above which
+#: :func:`check_for_matching` calls it unrectified (pairs from :func:`rectify_pair`: 0.35-0.56).
+ROW_SPREAD_PX = 1.0
 #: Fewest RANSAC inliers that make a pair worth rectifying.
 MIN_INLIERS = 20
 _RATIO = 0.75
@@ -171,8 +175,10 @@ class Rectified:
     method : str
         ``"already rectified"``, ``"uncalibrated"`` or ``"rig"``.
     inliers : int
-        Correspondences consistent with the epipolar geometry (all matches when the pair
-        was already rectified).
+        How many correspondences the figures were measured on, which `measured_on` names:
+        ``"RANSAC inliers"`` (consistent with the fundamental matrix) for :func:`rectify_pair`,
+        ``"robust matches (no RANSAC)"`` for a pair rectified another way (:func:`measured`:
+        a rig, a background's homographies), where wrong matches count too.
     median_abs_dy_px, p90_abs_dy_px : float
         Row differences of those correspondences after rectification.
     disparity_range_px : [float, float]
@@ -181,6 +187,10 @@ class Rectified:
         The factor the inputs were scaled by first (1: not scaled).
     left_xy, right_xy : (n, 2) ndarray
         The inliers, after rectification (for epipolar-line plots).
+    measured_on : str
+        What `inliers` counts (see there).
+    warnings : tuple of str
+        One line each, e.g. an unstable framing (:func:`epipole_warning`).
     """
 
     left: np.ndarray
@@ -195,6 +205,8 @@ class Rectified:
     scale: float
     left_xy: np.ndarray = field(repr=False, default=None)
     right_xy: np.ndarray = field(repr=False, default=None)
+    measured_on: str = "RANSAC inliers"
+    warnings: tuple = ()
 
     @property
     def size(self) -> list:
@@ -202,7 +214,8 @@ class Rectified:
 
     def to_dict(self) -> dict:
         """What ``ismb-lab rectify`` writes to ``rectify.json``."""
-        return {"method": self.method, "inliers": self.inliers, "median_abs_dy_px": self.median_abs_dy_px,
+        return {"method": self.method, "inliers": self.inliers, "measured_on": self.measured_on,
+                "warnings": list(self.warnings), "median_abs_dy_px": self.median_abs_dy_px,
                 "p90_abs_dy_px": self.p90_abs_dy_px, "disparity_range_px": list(self.disparity_range_px),
                 "size": self.size, "scale": self.scale, "working_side": WORKING_SIDE,
                 "left_homography": self.left_h.tolist(), "right_homography": self.right_h.tolist()}
@@ -252,6 +265,102 @@ def _fundamental(matches: Correspondences, owner: str):
     return F, inliers
 
 
+def sideways_step(left_xy, right_xy, F, shape) -> float | None:
+    """Which way the camera moved between the left and the right photo: the x component of the
+    unit translation, negative for a right photo taken to the right; None when the pair does not
+    say.
+
+    The rule for a swapped pair.  Disparities ``x_left - x_right`` are positive when the right
+    photo is taken to the right of the left one, but a hand-held pair adds the camera's turn and
+    often a step forward, which shift every disparity alike (the books pair's raw disparities
+    are all negative in the right order).  So the motion is found from `F` instead, with an
+    assumed focal length of one image width (``cv2.recoverPose``), and its sideways part is
+    returned: > 0 means most disparities of the robust matches, the turn and the step forward
+    taken out, are negative.  A motion that fewer than 80% of the matches put in front of both
+    cameras (an assumed focal length far off), or that is mostly forward (``|x| < 0.2``),
+    decides nothing: None.
+
+    Examples
+    --------
+    >>> xy = np.random.default_rng(0).uniform(0, 400, (40, 2))
+    >>> depth = np.random.default_rng(1).uniform(1, 2, 40)
+    >>> shifted = xy - np.c_[40 / depth, np.zeros(40)]     # a right view: near points move more
+    >>> F = np.array([[0, 0, 0], [0, 0, -1], [0, 1, 0]], float)
+    >>> round(sideways_step(xy, shifted, F, (400, 400)), 3), round(sideways_step(shifted, xy, F, (400, 400)), 3)
+    (-1.0, 1.0)
+    """
+    h, w = shape
+    K = np.array([[w, 0, w / 2], [0, w, h / 2], [0, 0, 1]], float)
+    left_xy, right_xy = np.asarray(left_xy, float), np.asarray(right_xy, float)
+    if len(left_xy) < 5:
+        return None
+    good, _, t, _ = cv2.recoverPose(K.T @ F @ K, left_xy, right_xy, K)
+    step = float(t.ravel()[0])
+    return step if good >= 0.8 * len(left_xy) and abs(step) >= 0.2 else None
+
+
+def _refuse_swapped(left_xy, right_xy, F, shape, owner: str) -> None:
+    step = sideways_step(left_xy, right_xy, F, shape)
+    if step is not None and step > 0:
+        raise ParameterError(message("left", owner, "the left camera's photo, given first: swap the two files",
+                                     f"the right camera's (its {len(left_xy)} robust matches put it to the "
+                                     "right)"))
+
+
+def check_for_matching(left, right, owner: str = "check_for_matching") -> str:
+    """Refuse a swapped pair and warn about an unrectified one, before it is matched.
+
+    Measured on the robust matches of the pair as given (:func:`robust_matches`, no warp):
+    a pair whose rows differ by more than :data:`ROW_SPREAD_PX` at the median is not rectified,
+    and the returned one-line warning names ``ismb-lab rectify``; a rectified pair on whose
+    rows (``|dy| <= 2`` px, at least 8 matches) most disparities ``x_left - x_right`` are
+    negative was given right first, and is refused.  Returns "" when there is nothing to say
+    (also for a pair with fewer than 8 robust matches: it says nothing either way).
+
+    `left` and `right` are grey images (arrays) of one size.
+    """
+    matches = robust_matches(left, right)
+    if len(matches) < 8:
+        return ""
+    dy = np.abs(matches.left_xy[:, 1] - matches.right_xy[:, 1])
+    spread = float(np.median(dy))
+    if spread > ROW_SPREAD_PX:
+        return (f"warning: the pair is not rectified (the rows of its {len(matches)} robust matches differ by "
+                f"{spread:.1f} px at the median): make it so with 'ismb-lab rectify LEFT RIGHT --out DIR'")
+    d = (matches.left_xy[:, 0] - matches.right_xy[:, 0])[dy <= 2.0]
+    if len(d) >= 8 and np.mean(d < 0) > 0.5:
+        raise ParameterError(message("left", owner, "the left camera's photo, given first: swap the two files",
+                                     f"the right camera's ({np.mean(d < 0):.0%} of {len(d)} robust matches "
+                                     "have a negative disparity)"))
+    return ""
+
+
+def epipole_warning(F, shape) -> str:
+    """A one-line warning when an epipole lies within one image diagonal of its image, else "".
+
+    Uncalibrated rectification sends both epipoles to infinity; the nearer an epipole is to
+    the image (the camera stepped forward rather than sideways), the more the homographies
+    stretch it, and the more the framing changes with every small error in `F`.
+
+    >>> F = np.array([[0, 0, 0], [0, 0, -1], [0, 1, 0]], float)   # sideways: epipoles at infinity
+    >>> epipole_warning(F, (480, 640))
+    ''
+    """
+    h, w = shape
+    diagonal = float(np.hypot(w, h))
+    for side, matrix in (("left", F), ("right", F.T)):
+        e = np.linalg.svd(matrix)[2][-1]                      # matrix @ e = 0
+        if abs(e[2]) < 1e-12 * np.abs(e[:2]).max():
+            continue
+        x, y = e[:2] / e[2]
+        away = float(np.hypot(max(0.0, -x, x - w), max(0.0, -y, y - h)))
+        if away < diagonal:
+            return (f"warning: the {side} epipole lies {away:.0f} px from the image (within its {diagonal:.0f} px "
+                    "diagonal): the camera moved forward more than sideways, so the rectified framing is "
+                    "unstable; take the right photo after a sideways step")
+    return ""
+
+
 def _transform(h, xy) -> np.ndarray:
     return cv2.perspectiveTransform(np.asarray(xy, float).reshape(-1, 1, 2), h).reshape(-1, 2)
 
@@ -279,7 +388,8 @@ def rectify_pair(left, right, *, max_side: int = WORKING_SIDE) -> Rectified:
     left, right : path, bytes or ndarray
         The photos, the left camera's first.  They must be of one size.
     max_side : int
-        Scale both down so that the longer side is at most this (default :data:`WORKING_SIDE`).
+        Scale both down so that the longer side is at most this (default :data:`WORKING_SIDE`);
+        the rectified images, which the warp can make larger, are kept within it too.
 
     Returns
     -------
@@ -289,7 +399,8 @@ def rectify_pair(left, right, *, max_side: int = WORKING_SIDE) -> Rectified:
     ------
     ParameterError
         With one sentence: photos of different sizes, too few matches, the same photo twice,
-        no common epipolar geometry, or no parallax (the camera only turned).
+        no common epipolar geometry, no parallax (the camera only turned), or the two photos
+        swapped (most disparities negative, see :func:`sideways_step`).
     """
     owner = "rectify_pair"
     max_side = check_number(max_side, "max_side", owner, low=64, integer=True)
@@ -298,6 +409,7 @@ def rectify_pair(left, right, *, max_side: int = WORKING_SIDE) -> Rectified:
     _refuse_same(matches, owner)
     F, inliers = _fundamental(matches, owner)
     lxy, rxy = matches.left_xy[inliers], matches.right_xy[inliers]
+    _refuse_swapped(lxy, rxy, F, left.shape, owner)
     figures = _dy_figures(lxy, rxy)
     if figures["median_abs_dy_px"] <= 0.5 and figures["p90_abs_dy_px"] <= 1.5:
         eye = np.eye(3)
@@ -310,13 +422,20 @@ def rectify_pair(left, right, *, max_side: int = WORKING_SIDE) -> Rectified:
         raise ParameterError(message("right", owner, "a view OpenCV's uncalibrated rectification accepts",
                                      f"a pair it refused ({len(lxy)} inliers)"))
     h_left, h_right, size = _place(h_left, h_right, lxy, rxy, (h, w))
+    shrink = working_size(size[::-1], max_side)
+    if shrink < 1.0:       # the warp can enlarge the image: the output, too, stays within max_side
+        scale = np.diag([shrink, shrink, 1.0])
+        h_left, h_right, size = _place(scale @ h_left, scale @ h_right, lxy, rxy, (h, w))
+        size = (min(size[0], max_side), min(size[1], max_side))
     warp = lambda image, hom: cv2.warpPerspective(image.astype(np.float32), hom, size, flags=cv2.INTER_LINEAR,
                                                   borderMode=cv2.BORDER_CONSTANT, borderValue=0).astype(float)
     lxy_r, rxy_r = _transform(h_left, lxy), _transform(h_right, rxy)
     figures = _dy_figures(lxy_r, rxy_r)
+    warning = epipole_warning(F, (h, w))
     return Rectified(np.clip(warp(left, h_left), 0, 255), np.clip(warp(right, h_right), 0, 255), h_left,
                      h_right, "uncalibrated", int(inliers.sum()), figures["median_abs_dy_px"],
-                     figures["p90_abs_dy_px"], figures["disparity_range_px"], factor, lxy_r, rxy_r)
+                     figures["p90_abs_dy_px"], figures["disparity_range_px"], factor, lxy_r, rxy_r,
+                     warnings=(warning,) if warning else ())
 
 
 def apply_rectification(left, right, left_h, right_h, size) -> Rectified:
@@ -338,7 +457,7 @@ def measured(left, right, left_h, right_h, method: str) -> Rectified:
                {"median_abs_dy_px": float("nan"), "p90_abs_dy_px": float("nan"), "disparity_range_px": [0.0, 0.0]})
     return Rectified(left, right, np.asarray(left_h, float), np.asarray(right_h, float), method, len(matches),
                      figures["median_abs_dy_px"], figures["p90_abs_dy_px"], figures["disparity_range_px"], 1.0,
-                     matches.left_xy, matches.right_xy)
+                     matches.left_xy, matches.right_xy, "robust matches (no RANSAC)")
 
 
 def check_rectified(left, right, *, max_side: int = WORKING_SIDE) -> dict:
@@ -357,10 +476,11 @@ def check_rectified(left, right, *, max_side: int = WORKING_SIDE) -> dict:
            "left_xy": np.zeros((0, 2)), "right_xy": np.zeros((0, 2))}
     try:
         _refuse_same(matches, owner)
-        _, inliers = _fundamental(matches, owner)
+        F, inliers = _fundamental(matches, owner)
+        lxy, rxy = matches.left_xy[inliers], matches.right_xy[inliers]
+        _refuse_swapped(lxy, rxy, F, left.shape, owner)
     except ParameterError as exc:
         return {**out, "problem": str(exc)}
-    lxy, rxy = matches.left_xy[inliers], matches.right_xy[inliers]
     figures = _dy_figures(lxy, rxy)
     rectified = figures["median_abs_dy_px"] <= 0.5 and figures["p90_abs_dy_px"] <= 1.5
     return {**out, **figures, "inliers": int(inliers.sum()), "rectified": bool(rectified),

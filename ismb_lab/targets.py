@@ -4,7 +4,13 @@ Targets are coordinates (``(x, y)``, full image, see :mod:`ismb_lab.coords`), ne
 feature indices; :func:`snap` turns them into feature pairs ``(i, k)``.  The file::
 
     {"version": 1, "left_image_sha256": "...", "right_image_sha256": "...",  (optional)
+     "orientation": "upright",
      "pairs": [{"left_xy": [x, y], "right_xy": [x, y]}, ...]}
+
+``"orientation": "upright"`` says the points were clicked on the photos turned by their EXIF
+orientation, as every loader reads them (:func:`ismb_lab.io.decode`).  A file without it was
+written before the loaders did so: its points are in the photos as stored, which
+:func:`load_targets` refuses for a photo whose EXIF orientation turns it.
 
 Other top-level keys go to :attr:`TargetSet.meta`, other keys of a pair to
 :attr:`TargetSet.extras`; both survive a load and a save.
@@ -44,7 +50,8 @@ MAX_PAIRS = 10_000
 MAX_BYTES = 4 << 20
 _HASHES = ("left_image_sha256", "right_image_sha256")
 _POINTS = ("left_xy", "right_xy")
-_RESERVED = ("version", "pairs") + _HASHES
+_ORIENTATIONS = ("upright", "as stored")
+_RESERVED = ("version", "pairs", "orientation") + _HASHES
 _HEX = re.compile(r"[0-9a-fA-F]{64}")
 _SHORT_LIST = re.compile(r"\[\s+([^\s,\[\]{}\"]+),\s+([^\s,\[\]{}\"]+)\s+\]")
 
@@ -111,7 +118,8 @@ class TargetSet:
     `left_xy`, `right_xy` are read-only ``(m, 2)`` float arrays of points >= 0, each
     pair at most once;
     `left_sha256`, `right_sha256` the :func:`ismb_lab.io.image_sha256` of the images
-    (or None); `meta` the file's extra top-level keys; `extras` one dict of extra
+    (or None); `orientation` how the photos were shown when the points were clicked,
+    ``"upright"`` (EXIF orientation applied) or ``"as stored"`` (files from before); `meta` the file's extra top-level keys; `extras` one dict of extra
     keys per pair (None: all empty).
 
     Examples
@@ -127,9 +135,12 @@ class TargetSet:
     right_sha256: str | None = None
     meta: dict = field(default_factory=dict)
     extras: tuple | None = None
+    orientation: str = "upright"
 
     def __post_init__(self):
         owner = "TargetSet"
+        if self.orientation not in _ORIENTATIONS:
+            raise ParameterError(message("orientation", owner, "'upright' or 'as stored'", self.orientation))
         for name in _POINTS:
             xy = check_points(getattr(self, name), name, owner).copy()
             if (xy < 0).any():
@@ -179,10 +190,12 @@ class TargetSet:
         """The file's JSON object (integral coordinates as integers, no hash key for None).
 
         >>> TargetSet([[1, 2.5]], [[0, 2.5]]).to_dict()
-        {'version': 1, 'pairs': [{'left_xy': [1, 2.5], 'right_xy': [0, 2.5]}]}
+        {'version': 1, 'orientation': 'upright', 'pairs': [{'left_xy': [1, 2.5], 'right_xy': [0, 2.5]}]}
         """
         d = {"version": VERSION}
         d.update({k: h for k, h in zip(_HASHES, (self.left_sha256, self.right_sha256)) if h})
+        if self.orientation == "upright":      # a file without the key is "as stored"
+            d["orientation"] = self.orientation
         d.update(copy.deepcopy(self.meta))
         d["pairs"] = [{"left_xy": _plain(p), "right_xy": _plain(q), **copy.deepcopy(e)}
                       for p, q, e in zip(self.left_xy, self.right_xy, self.extras)]
@@ -216,10 +229,14 @@ class TargetSet:
             for key in _POINTS:
                 xy[key].append(_xy(item[key], f"pairs[{j}].{key}", source))
         _check_unique(xy["left_xy"], xy["right_xy"], source)
+        orientation = d.get("orientation", "as stored")
+        if orientation not in _ORIENTATIONS:
+            raise ParameterError(message("orientation", source, "'upright' or 'as stored'", orientation))
         return cls(np.reshape(xy["left_xy"], (-1, 2)), np.reshape(xy["right_xy"], (-1, 2)),
                    *(_hash(d.get(k), k, source) for k in _HASHES),
                    meta={k: v for k, v in d.items() if k not in _RESERVED},
-                   extras=[{k: v for k, v in p.items() if k not in _POINTS} for p in pairs])
+                   extras=[{k: v for k, v in p.items() if k not in _POINTS} for p in pairs],
+                   orientation=orientation)
 
 
 def _path(path, owner) -> Path:
@@ -238,7 +255,7 @@ def save_targets(path, targets: TargetSet) -> Path:
 
     >>> import tempfile, pathlib
     >>> path = save_targets(pathlib.Path(tempfile.mkdtemp()) / "t.json", TargetSet([[1, 2]], [[0, 2]]))
-    >>> path.read_text().splitlines()[4]
+    >>> path.read_text().splitlines()[5]
     '      "left_xy": [1, 2],'
     """
     path = _path(path, "save_targets")
@@ -274,7 +291,7 @@ def load_targets(path, *, pair: StereoPair | None = None, shape=None,
     >>> load_targets(path, shape=(5, 5))
     Traceback (most recent call last):
     ismb_lab.ParameterError: The 'pairs[0].left_xy' parameter of the targets file '...' must be inside
-    the 5x5 image (0 <= x <= 4, 0 <= y <= 4). Got [9, 2] instead.
+    the 5x5 (width x height) image (0 <= x <= 4, 0 <= y <= 4). Got [9, 2] instead.
     """
     owner = "load_targets"
     path = _path(path, owner)
@@ -311,13 +328,31 @@ def load_targets(path, *, pair: StereoPair | None = None, shape=None,
         raise ParameterError(f"The 'path' parameter of {owner} must be targets for the given images "
                              f"({short[0]}), or pass check_hash=False. Got {str(path)!r}, "
                              f"targets made for other images ({short[1]}) instead.")
+    if pair is not None and targets.orientation == "as stored":
+        _refuse_turned(pair, path, owner)
     bounds = [s for s in (shape, pair and tuple(pair.shape)) if s]
     for (h, w), key in ((hw, key) for hw in bounds for key in _POINTS):
         xy = getattr(targets, key)
         if (bad := np.flatnonzero((xy[:, 0] > w - 1) | (xy[:, 1] > h - 1))).size:
-            raise ParameterError(message(f"pairs[{bad[0]}].{key}", source, f"inside the {h}x{w} image "
+            raise ParameterError(message(f"pairs[{bad[0]}].{key}", source, f"inside the {w}x{h} (width x height) image "
                                          f"(0 <= x <= {w - 1}, 0 <= y <= {h - 1})", _plain(xy[bad[0]])))
     return targets
+
+
+def _refuse_turned(pair: StereoPair, path, owner: str) -> None:
+    """A file from before the loaders applied EXIF orientation, on a photo it turns: its
+    points are in the photo as stored, not as it is now shown."""
+    from .io import exif_orientation
+
+    for side, photo in (("left", pair.left_path), ("right", pair.right_path)):
+        if photo is None:
+            continue
+        with open(photo, "rb") as handle:
+            turn = exif_orientation(handle.read(1 << 17))   # the Exif segment is at most 64 KB, near the start
+        if turn != 1:
+            raise ParameterError(f"The 'path' parameter of {owner} must be targets clicked on the photos shown "
+                                 f"upright. Got {str(path)!r}, made before EXIF orientation was applied, on a "
+                                 f"{side} photo with orientation {turn} instead: label the pair again.")
 
 
 def many_to_one(targets: TargetSet) -> np.ndarray:

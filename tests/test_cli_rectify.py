@@ -52,9 +52,12 @@ def test_calibrate_then_rectify_and_depth_with_the_rig(data, tmp_path):
     record = json.loads(rig.read_text())
     assert record["rms_px"] < 1.0 and record["baseline_m"] > 0 and record["focal_px"] > 0
     assert "RMS reprojection error" in proc.stdout
-    assert main(["rectify", str(data / "left14.jpg"), str(data / "right14.jpg"), "--rig", str(rig),
-                 "--out", str(tmp_path / "held")]) == 0
-    assert json.loads((tmp_path / "held" / "rectify.json").read_text())["method"] == "rig"
+    held = cli("rectify", data / "left14.jpg", data / "right14.jpg", "--rig", rig, "--out", tmp_path / "held")
+    assert held.returncode == 0, held.stderr
+    record = json.loads((tmp_path / "held" / "rectify.json").read_text())
+    # the rig's figures come from robust matches that never went through RANSAC: said so
+    assert record["method"] == "rig" and record["measured_on"] == "robust matches (no RANSAC)"
+    assert "robust matches (no RANSAC)" in held.stdout and "inliers" not in held.stdout
     proc = cli("rectify", data / "left.jpg", data / "right.jpg", "--rig", rig, "--out", tmp_path / "x")
     assert proc.returncode == 2 and "640x480" in proc.stderr and not (tmp_path / "x").exists()
 

@@ -126,10 +126,10 @@ def test_text_file_named_png_is_not_an_image(tmp_path):
 def test_sizes_must_match_and_reach_the_minimum():
     with pytest.raises(ValueError) as info:
         load_pair(np.zeros((40, 50)), np.zeros((40, 51)))
-    says(info, "'right'", "40x50", "40x51")
+    says(info, "'right'", "50x40", "51x40", "(width x height)")
     with pytest.raises(ValueError) as info:
         load_pair(np.zeros((30, 50)), np.zeros((30, 50)), min_shape=(31, 41))
-    says(info, "'left'", "at least 31x41", "30x50", "matching windows")
+    says(info, "'left'", "at least 41x31", "50x30", "matching windows")
     with pytest.raises(ValueError) as info:
         load_pair(np.zeros((3, 3)), np.zeros((3, 3)), min_shape=(0, 3))
     says(info, "'min_shape'", "0")
@@ -264,3 +264,33 @@ def test_a_header_pillow_will_not_size_is_refused_in_words(tmp_path, monkeypatch
     with pytest.raises(ValueError) as info:
         load_image(path)
     says(info, "header says 9000x9000")
+
+
+def _jpeg_with_orientation(path, orientation: int):
+    """A small colour JPEG, 40 wide and 24 high, with an EXIF Orientation tag (Pillow)."""
+    from PIL import Image
+
+    rng = np.random.default_rng(orientation)
+    pixels = np.kron(rng.integers(0, 256, (6, 10, 3)), np.ones((4, 4, 1))).astype(np.uint8)
+    exif = Image.Exif()
+    exif[0x0112] = orientation
+    Image.fromarray(pixels).save(path, quality=95, exif=exif.tobytes())
+    return path
+
+
+@pytest.mark.parametrize("orientation", range(1, 9))
+def test_every_loader_turns_a_jpeg_upright_as_opencv_and_rectify_do(tmp_path, orientation):
+    import cv2
+
+    from ismb_lab.io import exif_orientation, load_pair
+    from ismb_lab.rectify import load_photo
+
+    path = _jpeg_with_orientation(tmp_path / "photo.jpg", orientation)
+    assert exif_orientation(path.read_bytes()) == orientation
+    upright = cv2.imread(str(path), cv2.IMREAD_COLOR)                # OpenCV applies the tag here
+    want = cv2.cvtColor(upright.astype(np.float32), cv2.COLOR_BGR2GRAY).astype(float)
+    image = load_image(path)
+    assert image.shape == want.shape == ((40, 24) if orientation >= 5 else (24, 40))
+    np.testing.assert_allclose(image, want, atol=1e-3)
+    assert load_pair(path, path).shape == image.shape              # what match, tune and depth read
+    assert load_photo(path).shape == image.shape                   # what rectify reads

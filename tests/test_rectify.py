@@ -188,3 +188,13 @@ def test_aloe_manifest_gives_ground_truth_cases(data, tmp_path):
     (tmp_path / "m.json").write_text(json.dumps({"pairs": [{"source": "middlebury-teddy", "roi": [0, 0, 9, 9]}]}))
     with pytest.raises(ParameterError, match="source' parameter of the manifest .* must be one of"):
         load_manifest(tmp_path / "m.json")
+
+
+def test_rectified_images_stay_within_max_side(data):
+    # the books pair is 640 x 480; rectification alone makes it 710 x 530
+    free = rectify_pair(data / "left.jpg", data / "right.jpg")
+    assert max(free.size) > 640
+    result = rectify_pair(data / "left.jpg", data / "right.jpg", max_side=640)
+    assert result.method == "uncalibrated" and max(result.size) <= 640
+    assert result.left.shape == result.right.shape == (result.size[1], result.size[0])
+    assert result.median_abs_dy_px <= 1.0 and 0 < result.disparity_range_px[0] < result.disparity_range_px[1]

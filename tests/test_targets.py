@@ -73,7 +73,7 @@ def test_hand_written_file_survives_load_and_save(tmp_path):
 
 def test_saved_set_holds_no_hash_keys_when_none(tmp_path):
     path = save_targets(tmp_path / "t.json", TargetSet([[1, 1]], [[0, 1]]))
-    assert set(json.loads(path.read_text())) == {"version", "pairs"}
+    assert set(json.loads(path.read_text())) == {"version", "orientation", "pairs"}
 
 
 # --- atomic save ------------------------------------------------------------------------
@@ -193,7 +193,7 @@ def test_points_outside_the_image(tmp_path, left, right, bad):
         return
     with pytest.raises(ParameterError) as info:
         load_targets(path, shape=(20, 30))
-    says(info, *bad, "inside the 20x30 image", "0 <= x <= 29, 0 <= y <= 19")
+    says(info, *bad, "inside the 30x20 (width x height) image", "0 <= x <= 29, 0 <= y <= 19")
 
 
 def test_pair_shape_bounds_the_points(tmp_path):
@@ -201,7 +201,7 @@ def test_pair_shape_bounds_the_points(tmp_path):
     path = pairs_file(tmp_path, {"left_xy": [30, 1], "right_xy": [0, 0]})
     with pytest.raises(ParameterError) as info:
         load_targets(path, pair=pair)
-    says(info, "'pairs[0].left_xy'", "20x30")
+    says(info, "'pairs[0].left_xy'", "30x20 (width x height)")
     assert len(load_targets(path, shape=(40, 40))) == 1
 
 

@@ -2,9 +2,11 @@
 
 from __future__ import annotations
 
+import sys
 from pathlib import Path
 
 from .._files import atomic_write_text
+from .._validation import ParameterError
 from ..matching import MatchConfig
 from ..solvers import DEFAULT_SOLVER
 from ._common import add_matching_options, add_solver_option, match_config, resolve_recipe, seed_setting, window_record
@@ -27,12 +29,32 @@ def add_parser(sub) -> None:
     m.set_defaults(run=run)
 
 
+def _prepared(args):
+    """The prepared pair, after refusing a swapped one and warning about an unrectified one."""
+    from ..io import load_pair
+    from ..matching import prepare
+    from ..rectify import check_for_matching
+    from ._common import UsageError
+
+    config = match_config(args)
+    pair = load_pair(args.left, args.right, min_shape=config.min_shape)
+    warning = check_for_matching(pair.left, pair.right, "ismb-lab match")
+    if warning:
+        print(warning, file=sys.stderr)
+    try:
+        return prepare(pair, None, config)
+    except ParameterError as exc:
+        if warning and args.shift == "auto":
+            raise UsageError(f"{exc} The pair is not rectified: rectify first ('ismb-lab rectify').") from None
+        raise
+
+
 def run(args) -> int:
-    from ..matching import match, prepare
+    from ..matching import match
 
     recipe = resolve_recipe(args, DEFAULT_SOLVER)
     params = recipe.params
-    prepared = prepare(args.left, args.right, match_config(args))
+    prepared = _prepared(args)
     result = match(prepared=prepared, **recipe.match_settings(), **seed_setting(args))
     after = ", one match per corner" if result.one_to_one else ""
     print(f"Method-{result.method} ({result.solver}{after})  params {params.to_dict()}  seed {result.seed}")

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import os
+import sys
 from pathlib import Path
 
 from .._files import atomic_write_bytes, atomic_write_text, check_input, check_output
@@ -63,7 +64,9 @@ def run(args) -> int:
     atomic_write_bytes(targets[1], png_bytes(result.right))
     atomic_write_text(targets[2], json_text(result.to_dict()))
     lo, hi = result.disparity_range_px
-    print(f"{result.method}: {result.inliers} inliers, |dy| median {result.median_abs_dy_px:.2f} px, "
+    for warning in result.warnings:
+        print(warning, file=sys.stderr)
+    print(f"{result.method}: {result.inliers} {result.measured_on}, |dy| median {result.median_abs_dy_px:.2f} px, "
           f"90th percentile {result.p90_abs_dy_px:.2f} px; disparities {lo:.1f} to {hi:.1f} px; "
           f"{result.size[0]}x{result.size[1]} -> {folder}")
     return 0
