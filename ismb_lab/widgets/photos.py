@@ -108,7 +108,7 @@ class PhotoModel:
             self.rectified = rectify_pair(self.left, self.right)
         self.roi, self.saved = None, None
         r = self.rectified
-        self.message = (f"rectified ({r.method}): {r.inliers} inliers, |dy| median {r.median_abs_dy_px:.2f} px, "
+        self.message = (f"rectified ({r.method}): {r.inliers} {r.measured_on}, |dy| median {r.median_abs_dy_px:.2f} px, "
                         f"90% below {r.p90_abs_dy_px:.2f} px; disparities {r.disparity_range_px[0]:.0f} to "
                         f"{r.disparity_range_px[1]:.0f} px: choose a ROI and press 'Use this pair'")
         return self.message

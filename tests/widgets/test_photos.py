@@ -123,6 +123,8 @@ def test_the_scene_pair_takes_the_background_rectification(data, tmp_path):
     scene = PhotoModel(tmp_path, role="scene", homographies=(r.left_h, r.right_h, r.left.shape[::-1]))
     scene.set_photos(data / "left.jpg", data / "right.jpg", "books")
     assert scene.ready and scene.rectified.method == "the background's"
+    # the figures of a pair placed by another pair's homographies went through no RANSAC
+    assert "robust matches (no RANSAC)" in scene.rectify() and "inliers" not in scene.message
     np.testing.assert_array_equal(scene.rectified.left, r.left)
     np.testing.assert_array_equal(scene.rectified.right, r.right)
 
