@@ -171,7 +171,7 @@ class Rectified:
         The rectified grey images, at the working size.
     left_h, right_h : (3, 3) ndarray
         Homographies from the (scaled) input images to these; the identity for a rig, whose
-        undistorting maps are not homographies (:meth:`ismb_lab.rig.Rig.maps`).
+        undistorting maps are not homographies (:meth:`ismb_lab.camera.StereoCamera.maps`).
     method : str
         ``"already rectified"``, ``"uncalibrated"`` or ``"rig"``.
     inliers : int

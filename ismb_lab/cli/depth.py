@@ -55,11 +55,11 @@ def run(args) -> int:
     calibration = {}
     if args.rig is not None:
         from .._files import check_input
-        from ..rig import load_rig
+        from ..camera import load_camera
 
         if args.focal_px is not None or args.baseline_m is not None:
             raise UsageError("--rig gives the focal length and the baseline: leave out --focal-px and --baseline-m")
-        rig = load_rig(check_input(args.rig, what="--rig"))
+        rig = load_camera(check_input(args.rig, what="--rig"))
         from ..io import load_image
 
         shape = load_image(args.bg_left).shape
