@@ -76,7 +76,7 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from ._validation import ParameterError, ParameterTypeError, check_choice, check_number, message, readonly
-from .camera import BASELINE_M, FOCAL_PX
+from .camera import BASELINE_M, FOCAL_PX, StereoCamera
 from .matching import MatchResult
 from .silhouettes import Silhouettes
 
@@ -355,6 +355,14 @@ class DepthResult:
     message: str = ""
     scene_roi: tuple | None = None
     silhouettes: Silhouettes | None = None
+
+    def points(self, camera=None) -> np.ndarray:
+        """The kept scene matches as ``(N, 3)`` points in metres, in the rectified left camera's
+        frame (:meth:`ismb_lab.camera.StereoCamera.points_from_disparity`) of `camera`; by
+        default the rendered scenes' camera with this result's focal length and baseline."""
+        if camera is None:
+            camera = StereoCamera.pinhole(focal_px=self.config.focal_px, baseline_m=self.config.baseline_m)
+        return camera.points_from_disparity(self.kept_xy, self.kept_disparity)
 
     def to_dict(self) -> dict:
         """The JSON of ``ismb-lab depth --json``: objects near -> far and the counts."""
