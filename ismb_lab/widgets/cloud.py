@@ -241,7 +241,8 @@ class PointCloudView:
         vertices, segments = frustum_edges(cloud.centres, cloud.frustum)
         self.cameras = k3d.lines(vertices, segments, indices_type="segment", shader="simple", color=0x303030,
                                  name="cameras")
-        self.notes = [k3d.text("", (0.0, 0.0, 0.0), color=0x202020, size=0.7, label_box=False, visible=False)
+        self.notes = [k3d.text("", (0.0, 0.0, 0.0), color=0x202020, size=0.7, label_box=False, is_html=True,
+                               visible=False)
                       for _ in range(MAX_NOTES)]
         for obj in (self.points, self.cameras, *self.notes):
             self.plot += obj
@@ -270,7 +271,8 @@ class PointCloudView:
         self.cameras.vertices = _shown(vertices)
         for k, text in enumerate(self.notes):
             if k < len(cloud.notes):
-                text.text, text.position, text.visible = cloud.notes[k][0], _shown(cloud.notes[k][1])[0], True
+                words, xyz = cloud.notes[k]
+                text.text, text.position, text.visible = html.escape(words, quote=False), _shown(xyz)[0], True
             else:
                 text.visible = False
         self.caption.value = f"<small>{html.escape(cloud.caption, quote=False)}</small>"
