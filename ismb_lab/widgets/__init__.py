@@ -1,8 +1,9 @@
-"""Classroom widgets: each a model (plain Python), a matplotlib view and ipywidgets controls.
+"""Classroom widgets: each a model (plain Python), a matplotlib or k3d view and ipywidgets controls.
 
 Display one by ending a notebook cell with it; ``.widget`` is its root container.
 """
 
+from .cloud import PointCloudView
 from .depth_demo import DepthDemo, DepthModel
 from .explorer import ExplorerModel, ParameterExplorer
 from .ga_runner import GAModel, GARunner
@@ -11,4 +12,5 @@ from .photos import PhotoLoader, PhotoModel
 from .stepper import HopfieldStepper, StepperModel
 
 __all__ = ["DepthDemo", "DepthModel", "ExplorerModel", "GAModel", "GARunner", "HopfieldStepper",
-           "LabelModel", "ParameterExplorer", "PhotoLoader", "PhotoModel", "StepperModel", "TargetLabeler"]
+           "LabelModel", "ParameterExplorer", "PhotoLoader", "PhotoModel", "PointCloudView", "StepperModel",
+           "TargetLabeler"]

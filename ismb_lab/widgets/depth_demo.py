@@ -25,6 +25,7 @@ from ..params import Params
 from ..plotting import outlines
 from ..recipe import recipe_of
 from ._common import Base, Pane, button, grey_rgb, pair_files, path_labels, with_class
+from .cloud import PointCloudView, depth_cloud
 
 __all__ = ["CMAP", "GROUPING_LABELS", "TOLERANCES", "depth_text", "support_text", "DepthDemo",
            "DepthModel", "disparity_limits", "draw_background", "draw_scene", "label_positions",
@@ -359,6 +360,7 @@ class DepthDemo(Base):
     CSS classes: root ``ismb-depth``; ranking ``ismb-ranking``; ``ismb-seed``; ``ismb-method``;
     sliders ``ismb-position-tol-px``, ``ismb-disparity-tol-px``, ``ismb-local-px``; button
     ``ismb-recompute``; figures ``ismb-background`` (Fig. 5.12) and ``ismb-scene`` (Fig. 5.14);
+    the matches in 3-D ``ismb-cloud`` (:class:`~ismb_lab.widgets.cloud.PointCloudView`);
     ``ismb-status``; ``ismb-log``.
     """
 
@@ -377,6 +379,7 @@ class DepthDemo(Base):
         fig = self.scene_pane.fig
         self.scene_artists = draw_scene(fig.add_axes((0, 0, 0.857, 1)), fig.add_axes((0.87, 0.08, 0.03, 0.84)),
                                         self.model)
+        self.cloud = PointCloudView(depth_cloud(self.model))
 
         self.method_menu = with_class(ipywidgets.Dropdown(options=list(method_names()), value=self.model.method,
                                                           description="method", layout={"width": "160px"}),
@@ -408,7 +411,8 @@ class DepthDemo(Base):
                                                      self.recompute_button]),
                                     ipywidgets.VBox(list(self.sliders.values()))])
         views = ipywidgets.HBox([self.background_pane.widget, self.scene_pane.widget])
-        self.widget = with_class(ipywidgets.VBox([controls, self.status, self.ranking, views, self.log]),
+        self.widget = with_class(ipywidgets.VBox([controls, self.status, self.ranking, views, self.cloud.widget,
+                                                  self.log]),
                                  "ismb-depth")
         self.refresh()
 
@@ -474,9 +478,10 @@ class DepthDemo(Base):
                 s.value = getattr(self.model.config, name)
 
     def refresh(self) -> None:
-        """Update both views, the ranking and the status from the model, and draw."""
+        """Update the three views, the ranking and the status from the model, and draw."""
         update_background(self.background_artists, self.model)
         update_scene(self.scene_artists, self.model)
+        self.cloud.update(depth_cloud(self.model))
         self.ranking.value = self.model.ranking_html()
         self.say(self.model.describe())
         self.background_pane.draw()
