@@ -488,6 +488,18 @@ class StereoCamera:
         return (make(self.k_left, self.d_left, rect["r1"], rect["p1"]),
                 make(self.k_right, self.d_right, rect["r2"], rect["p2"]))
 
+    def photos(self, left, right, owner: str = "StereoCamera.photos") -> tuple:
+        """A pair of this camera loaded grey (:func:`ismb_lab.rectify.load_photo`); a photo of
+        another size than the camera's is refused."""
+        from .rectify import load_photo
+
+        left, right = load_photo(left, "left", owner), load_photo(right, "right", owner)
+        for name, image in (("left", left), ("right", right)):
+            if (image.shape[1], image.shape[0]) != tuple(self.size):
+                raise ParameterError(message(name, owner, f"a {self.size[0]}x{self.size[1]} photo, the size the "
+                                             "rig was calibrated at", f"{image.shape[1]}x{image.shape[0]}"))
+        return left, right
+
     def rectify(self, left, right):
         """Rectify a pair of this camera exactly (no matching needed; the figures are
         measured on robust matches afterwards).  A pair of another size is refused.
@@ -496,14 +508,9 @@ class StereoCamera:
         -------
         ismb_lab.rectify.Rectified
         """
-        from .rectify import load_photo, measured
+        from .rectify import measured
 
-        owner = "StereoCamera.rectify"
-        left, right = load_photo(left, "left", owner), load_photo(right, "right", owner)
-        for name, image in (("left", left), ("right", right)):
-            if (image.shape[1], image.shape[0]) != tuple(self.size):
-                raise ParameterError(message(name, owner, f"a {self.size[0]}x{self.size[1]} photo, the size the "
-                                             "rig was calibrated at", f"{image.shape[1]}x{image.shape[0]}"))
+        left, right = self.photos(left, right, "StereoCamera.rectify")
         (lx, ly), (rx, ry) = self.maps()
         warp = lambda image, mx, my: cv2.remap(image.astype(np.float32), mx, my, cv2.INTER_LINEAR).astype(float)
         return measured(warp(left, lx, ly), warp(right, rx, ry), np.eye(3), np.eye(3), "rig")

@@ -129,14 +129,9 @@ def for_camera(left, right, camera: StereoCamera) -> tuple:
     kept as it is.  ``how`` says which, with both figures.  Photos of another size than the
     camera's are refused.
     """
-    from .rectify import _dy_figures, load_photo, robust_matches
+    from .rectify import _dy_figures, robust_matches
 
-    owner = "for_camera"
-    left, right = load_photo(left, "left", owner), load_photo(right, "right", owner)
-    for name, image in (("left", left), ("right", right)):
-        if (image.shape[1], image.shape[0]) != tuple(camera.size):
-            raise ParameterError(message(name, owner, f"a {camera.size[0]}x{camera.size[1]} photo, the size the "
-                                         "rig was calibrated at", f"{image.shape[1]}x{image.shape[0]}"))
+    left, right = camera.photos(left, right, "for_camera")
     rectified = camera.rectify(left, right)
     given = robust_matches(left, right)
     before = _dy_figures(given.left_xy, given.right_xy)["median_abs_dy_px"] if len(given) else math.inf
