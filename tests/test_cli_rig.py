@@ -53,10 +53,11 @@ def test_match_rig_keeps_a_rectified_pair_and_says_so(opencv_data, without_14, t
     rect = tmp_path / "rect"
     proc = cli("rectify", opencv_data / "left14.jpg", opencv_data / "right14.jpg", "--rig", without_14, "--out", rect)
     assert proc.returncode == 0, proc.stderr
-    proc = cli("match", rect / "left.png", rect / "right.png", "--rig", without_14, "--shift", "auto", "--roi", "full",
+    proc = cli("match", rect / "left.png", rect / "right.png", "--rig", without_14, "--roi", "full",
                "--json", tmp_path / "m.json")
     assert proc.returncode == 0, proc.stderr
     assert "already rectified" in proc.stderr and "rectified with the rig" not in proc.stderr
+    assert json.loads((tmp_path / "m.json").read_text())["candidate_window"]["auto"]    # --shift auto by default
 
 
 def test_match_rig_refuses_photos_of_another_size(opencv_data, without_14):

@@ -27,7 +27,7 @@ def add_parser(sub) -> None:
                    help="a rig from 'ismb-lab calibrate': rectify raw photos with it (a rectified pair is "
                    "matched as it is; stderr says which), keep the candidates on their rows, and give each "
                    "match its point in metres (xyz_m, the rectified left camera's frame: X right, Y down, "
-                   "Z forward)")
+                   "Z forward); --shift is then auto unless given")
     m.add_argument("--json", type=Path, default=None, metavar="OUT", help="write the result as JSON")
     m.add_argument("--plot", type=Path, default=None, metavar="OUT.png",
                    help="draw the pair with features and match lines")
@@ -64,6 +64,8 @@ def _prepared_with_rig(args):
     from ..rectify import check_for_matching
 
     camera = load_camera(check_input(args.rig, what="--rig"))
+    if args.shift is None:      # a photo's disparities are the pair's own, not the thesis' 20 px
+        args.shift = "auto"
     config = match_config(args)
     left, right, how = for_camera(args.left, args.right, camera)
     print(f"--rig: {how}", file=sys.stderr)
