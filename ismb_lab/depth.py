@@ -76,6 +76,7 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from ._validation import ParameterError, ParameterTypeError, check_choice, check_number, message, readonly
+from .camera import BASELINE_M, FOCAL_PX, StereoCamera
 from .matching import MatchResult
 from .silhouettes import Silhouettes
 
@@ -126,7 +127,7 @@ class DepthConfig:
         A feature within this many pixels of a blob lies on it (corners sit on outlines).
     focal_px, baseline_m : float
         Focal length in pixels and baseline in metres (> 0); the defaults are
-        :class:`ismb_lab.scenes.Rig`'s (the thesis' 10 cm rig).
+        :data:`ismb_lab.camera.FOCAL_PX` and :data:`~ismb_lab.camera.BASELINE_M` (the thesis' 10 cm rig).
     quantisation_px : float
         Disparity error bar for the depth range (integer corners: 0.5 px).
 
@@ -154,8 +155,8 @@ class DepthConfig:
     silhouette_tol_px: float = 3.0
     silhouette_score: float = 0.9
     silhouette_grow_px: int = 3
-    focal_px: float = 300.0
-    baseline_m: float = 0.10
+    focal_px: float = FOCAL_PX
+    baseline_m: float = BASELINE_M
     quantisation_px: float = 0.5
 
     def __post_init__(self):
@@ -187,7 +188,7 @@ class Depth:
     status: str
 
 
-def metric_depth(disparity, focal_px: float = 300.0, baseline_m: float = 0.10,
+def metric_depth(disparity, focal_px: float = FOCAL_PX, baseline_m: float = BASELINE_M,
                  error_px: float = 0.5) -> Depth:
     """``Z = f B / d`` and the depth range of ``d +- error_px``.
 
@@ -354,6 +355,14 @@ class DepthResult:
     message: str = ""
     scene_roi: tuple | None = None
     silhouettes: Silhouettes | None = None
+
+    def points(self, camera=None) -> np.ndarray:
+        """The kept scene matches as ``(N, 3)`` points in metres, in the rectified left camera's
+        frame (:meth:`ismb_lab.camera.StereoCamera.points_from_disparity`) of `camera`; by
+        default the rendered scenes' camera with this result's focal length and baseline."""
+        if camera is None:
+            camera = StereoCamera.pinhole(focal_px=self.config.focal_px, baseline_m=self.config.baseline_m)
+        return camera.points_from_disparity(self.kept_xy, self.kept_disparity)
 
     def to_dict(self) -> dict:
         """The JSON of ``ismb-lab depth --json``: objects near -> far and the counts."""

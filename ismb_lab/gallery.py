@@ -18,6 +18,7 @@ import cv2
 import numpy as np
 
 from ._files import atomic_write_bytes, atomic_write_text
+from .camera import BASELINE_M, FOCAL_PX
 from .io import image_sha256
 from .scenes import (REALISTIC_COUNT, Scene, lab_scene, realistic_scene, synthetic_scene,
                      toy_car_scene, true_matches)
@@ -143,7 +144,7 @@ def write_manifest(folder, pairs, about: str) -> Path:
 
 
 _READMES = {
-    "lab": """# lab/: the background of the depth demo (thesis Fig. 5.11)
+    "lab": f"""# lab/: the background of the depth demo (thesis Fig. 5.11)
 
 `ismb_lab.scenes.lab_scene(seed=0)`, written by `ismb-lab render`: a wall with posters
 at 1.8 m (the deepest background), a table 15 cm below the cameras and one cardboard box
@@ -151,7 +152,7 @@ just right of the middle of the view, its front 1.3 to 1.45 m away. The right ca
 and offset +6; both images have camera noise (sigma 1 grey level).
 
 * `left.png`, `right.png`: 240x320 8-bit grey; `disparity.png`: exact disparity x256
-  (16-bit, 0 = unknown); `scene.json`: the rig (f = 300 px, B = 0.10 m).
+  (16-bit, 0 = unknown); `scene.json`: the rig (f = {FOCAL_PX:g} px, B = {BASELINE_M:.2f} m).
 * `answer_key.json`: ground-truth target pairs on the default matcher's corners.
 * `manifest.json`: this pair for `ismb-lab evaluate`.
 """,

@@ -109,13 +109,16 @@ class MatchConfig:
 AUTO_MARGIN = 5.0
 
 
-def auto_window(pair, config: MatchConfig) -> MatchConfig:
+def auto_window(pair, config: MatchConfig, *, rows_px: float | None = None) -> MatchConfig:
     """`config` with ``shift="auto"`` replaced by numbers measured on `pair`.
 
     Robust matches (:func:`ismb_lab.rectify.robust_matches`) whose left point lies in the
     ROI and whose rows differ by at most 2 px give the disparity range (2nd to 98th
-    percentile); when fewer than 8 lie in the ROI, those of the whole image do.  The window is centred on it, and widened to the range plus
-    :data:`AUTO_MARGIN` on each side when the range is wider than the window.
+    percentile); when fewer than 8 lie in the ROI, those of the whole image do.  The window is
+    centred on it, and widened to the range plus :data:`AUTO_MARGIN` on each side when the
+    range is wider than the window.  For a pair rectified with a calibrated camera, `rows_px`
+    (the rows' tolerance the camera gives) makes the robust matches search only their own
+    rows at positive disparities, and replaces the 2 px.
 
     Raises
     ------
@@ -126,13 +129,14 @@ def auto_window(pair, config: MatchConfig) -> MatchConfig:
 
     if config.shift != "auto":
         return config
-    matches = robust_matches(pair.left, pair.right)
+    matches = robust_matches(pair.left, pair.right, rows_px=rows_px)
+    rows_px = 2.0 if rows_px is None else rows_px
     x, y, w, h = resolve_roi(config.roi, pair.shape)
     lxy, rxy = matches.left_xy, matches.right_xy
     inside = ((lxy[:, 0] >= x) & (lxy[:, 0] < x + w) & (lxy[:, 1] >= y) & (lxy[:, 1] < y + h)
-              & (np.abs(lxy[:, 1] - rxy[:, 1]) <= 2.0)) if len(lxy) else np.zeros(0, bool)
+              & (np.abs(lxy[:, 1] - rxy[:, 1]) <= rows_px)) if len(lxy) else np.zeros(0, bool)
     if inside.sum() < 8:      # a small ROI: the whole pair's range is the best guess there is
-        inside = np.abs(lxy[:, 1] - rxy[:, 1]) <= 2.0 if len(lxy) else inside
+        inside = np.abs(lxy[:, 1] - rxy[:, 1]) <= rows_px if len(lxy) else inside
     d = lxy[inside, 0] - rxy[inside, 0]
     if len(d) < 8:
         raise ParameterError(message("shift", "MatchConfig", "a number of pixels when the pair has fewer than "

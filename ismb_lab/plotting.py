@@ -8,7 +8,7 @@ from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["GAP", "outlines", "plot_depth", "plot_matches", "side_by_side"]
+__all__ = ["GAP", "frustum_lines", "outlines", "plot_depth", "plot_matches", "plot_top_down", "side_by_side"]
 
 GAP = 8  # pixels between the left and right image in side-by-side views
 
@@ -139,3 +139,61 @@ def plot_depth(ax, left, result, *, cmap: str = "plasma") -> dict:
     ax.set_axis_off()
     return {"image": image, "features": features, "removed": removed, "labels": labels, "box": box,
             "outlines": drawn}
+
+
+def frustum_lines(camera, depth_m: float) -> np.ndarray:
+    """The outlines of both rectified cameras' views out to `depth_m` metres, as ``(16, 2, 3)``
+    segments in the rectified left camera's frame: for each camera, its centre to the four
+    corners of its view at that depth, and the four sides of that rectangle.
+
+    Examples
+    --------
+    >>> from ismb_lab.camera import StereoCamera
+    >>> lines = frustum_lines(StereoCamera(), 3.0)
+    >>> lines.shape, lines[0].round(3).tolist()
+    ((16, 2, 3), [[0.0, 0.0, 0.0], [-1.6, -1.2, 3.0]])
+    """
+    (w, h), f, (cx, cy) = camera.size, camera.focal_px, camera.rectified_centre
+    corners = np.array([[-0.5, -0.5], [w - 0.5, -0.5], [w - 0.5, h - 0.5], [-0.5, h - 0.5]])
+    far = np.column_stack([(corners[:, 0] - cx) * depth_m / f, (corners[:, 1] - cy) * depth_m / f,
+                           np.full(4, float(depth_m))])
+    segments = []
+    for offset in (0.0, camera.baseline_m):
+        centre, rim = np.array([offset, 0.0, 0.0]), far + [offset, 0.0, 0.0]
+        segments += [(centre, p) for p in rim] + [(rim[n], rim[(n + 1) % 4]) for n in range(4)]
+    return np.array(segments)
+
+
+def plot_top_down(ax, points, camera=None, *, depth_m: float | None = None, cmap: str = "viridis") -> dict:
+    """Draw points seen from above (X right, Z up the page), coloured by depth, with the
+    cameras' views when `camera` is given.
+
+    Parameters
+    ----------
+    ax : matplotlib.axes.Axes
+    points : (N, 3) ndarray
+        Metres, in the rectified left camera's frame (NaN rows are left out).
+    camera : ismb_lab.camera.StereoCamera, optional
+    depth_m : float, optional
+        How far the cameras' views are drawn (default: the farthest point).
+
+    Returns
+    -------
+    artists : dict
+        ``points`` (the scatter) and ``cameras`` (None without `camera`).
+    """
+    from matplotlib.collections import LineCollection
+
+    xyz = np.asarray(points, dtype=float).reshape(-1, 3)
+    xyz = xyz[np.all(np.isfinite(xyz), axis=1)]
+    scatter = ax.scatter(xyz[:, 0], xyz[:, 2], c=xyz[:, 2], cmap=cmap, s=14)
+    drawn = None
+    if camera is not None:
+        reach = depth_m if depth_m is not None else (float(xyz[:, 2].max()) if len(xyz) else 1.0)
+        lines = frustum_lines(camera, reach)[:, :, [0, 2]]
+        drawn = ax.add_collection(LineCollection(lines, colors="0.4", linewidths=0.8))
+    ax.set_xlabel("X (m)")
+    ax.set_ylabel("Z, depth (m)")
+    ax.set_aspect("equal", adjustable="datalim")
+    ax.autoscale_view()
+    return {"points": scatter, "cameras": drawn}

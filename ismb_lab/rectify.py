@@ -111,8 +111,14 @@ class Correspondences:
         return len(self.left_xy)
 
 
-def robust_matches(left, right, *, max_features: int = 4000) -> Correspondences:
+def robust_matches(left, right, *, max_features: int = 4000, rows_px: float | None = None) -> Correspondences:
     """SIFT keypoints matched both ways, kept when they pass the ratio test and are mutual.
+
+    With `rows_px`, the pair is taken as rectified by a calibrated camera: a keypoint's
+    candidates are only the other image's keypoints within `rows_px` of its row and at a
+    positive disparity (in front of the cameras), and the ratio test and the mutual check are
+    made among those.  On a repetitive texture, the ratio test then compares a keypoint's
+    partner with the other keypoints of its own row, not with the whole pattern.
 
     Examples
     --------
@@ -123,6 +129,8 @@ def robust_matches(left, right, *, max_features: int = 4000) -> Correspondences:
     (True, True)
     """
     max_features = check_number(max_features, "max_features", "robust_matches", low=8, integer=True)
+    if rows_px is not None:
+        rows_px = check_number(rows_px, "rows_px", "robust_matches", low=0, low_open=True)
     sift = cv2.SIFT_create(nfeatures=max_features)
     # SIFT doubles its input first: above DETECT_SIDE px it would hold several hundred MB of
     # pyramid, so it looks at a copy of that size and the points are scaled back.
@@ -139,7 +147,10 @@ def robust_matches(left, right, *, max_features: int = 4000) -> Correspondences:
         return {m[0].queryIdx: m[0].trainIdx for m in matcher.knnMatch(query, train, k=2)
                 if len(m) == 2 and m[0].distance < _RATIO * m[1].distance}
 
-    forward, backward = passing(dl, dr), passing(dr, dl)
+    if rows_px is None:
+        forward, backward = passing(dl, dr), passing(dr, dl)
+    else:
+        forward, backward = _row_passing(kl, dl, kr, dr, rows_px * factor)
     kept = sorted((q, t) for q, t in forward.items() if backward.get(t) == q)
     if not kept:
         return empty
@@ -149,6 +160,25 @@ def robust_matches(left, right, *, max_features: int = 4000) -> Correspondences:
     _, first = np.unique(np.round(np.hstack([lxy, rxy]), 3), axis=0, return_index=True)
     first = np.sort(first)
     return Correspondences(lxy[first], rxy[first])
+
+
+def _row_passing(kl, dl, kr, dr, rows_px: float) -> tuple:
+    """The ratio test both ways among the keypoints of one row band at positive disparities."""
+    pl, pr = np.array([k.pt for k in kl]), np.array([k.pt for k in kr])
+    dl, dr = np.asarray(dl, np.float32), np.asarray(dr, np.float32)
+    dist = np.sqrt(np.maximum((dl ** 2).sum(1)[:, None] + (dr ** 2).sum(1)[None, :] - 2 * dl @ dr.T, 0))
+    band = (np.abs(pl[:, None, 1] - pr[None, :, 1]) <= rows_px) & (pl[:, None, 0] > pr[None, :, 0])
+    dist = np.where(band, dist, np.inf)
+
+    def passing(table):
+        if table.shape[1] < 2:
+            return {}
+        two = np.partition(table, 1, axis=1)[:, :2]
+        best = np.argmin(table, axis=1)
+        ok = np.isfinite(two[:, 0]) & (two[:, 0] < _RATIO * two[:, 1])
+        return {int(q): int(best[q]) for q in np.flatnonzero(ok)}
+
+    return passing(dist), passing(dist.T)
 
 
 def _dy_figures(left_xy, right_xy) -> dict:
@@ -171,7 +201,7 @@ class Rectified:
         The rectified grey images, at the working size.
     left_h, right_h : (3, 3) ndarray
         Homographies from the (scaled) input images to these; the identity for a rig, whose
-        undistorting maps are not homographies (:meth:`ismb_lab.rig.Rig.maps`).
+        undistorting maps are not homographies (:meth:`ismb_lab.camera.StereoCamera.maps`).
     method : str
         ``"already rectified"``, ``"uncalibrated"`` or ``"rig"``.
     inliers : int

@@ -23,36 +23,24 @@ floor keeps a rig whose pairs are all good from marking any.
 
 from __future__ import annotations
 
-import json
-from dataclasses import dataclass, field
 from pathlib import Path
 
 import cv2
 import numpy as np
 
 from ._validation import ParameterError, ParameterTypeError, check_number, message
-from .rectify import Rectified, load_photo, measured
+from .camera import BOARD, FORMAT, MAX_ZOOM, SQUARE_M, BoardPair, StereoCamera
+from .rectify import load_photo
 
-__all__ = ["BOARD", "SQUARE_M", "BoardPair", "Rig", "board_depth", "calibrate_rig", "find_board", "load_rig",
+__all__ = ["BOARD", "MAX_ZOOM", "SQUARE_M", "board_depth", "board_points", "calibrate_rig", "find_board",
            "outliers", "recalibrate"]
 
-#: Inner corners of OpenCV's sample board (columns, rows).
-BOARD = (9, 6)
-#: Square size assumed for OpenCV's sample board, in metres.  The sample does not state it
-#: (its calibration program takes the size as an argument and defaults to 1 unit); 25 mm is
-#: a common printed board and gives a baseline of a few centimetres, as the rig's two small
-#: cameras suggest.  Every metric result scales with it.
-SQUARE_M = 0.025
 #: Fewest pairs in which the board is found in both views for a calibration.
 MIN_PAIRS = 3
 _CRITERIA = (cv2.TERM_CRITERIA_EPS + cv2.TERM_CRITERIA_MAX_ITER, 100, 1e-6)
-FORMAT = "ismb_lab-rig-v2"
-_FORMATS = ("ismb_lab-rig-v1", FORMAT)
 #: A pair is an outlier above both this many times the pairs' median error and `OUTLIER_PX`.
 OUTLIER_RATIO = 3.0
 OUTLIER_PX = 0.5
-#: Above this rectified zoom (rectified focal length over the cameras' own), the rig warns.
-MAX_ZOOM = 1.3
 
 
 def _u8(image) -> np.ndarray:
@@ -70,48 +58,16 @@ def find_board(image, board=BOARD) -> np.ndarray | None:
     return corners.reshape(-1, 2).astype(float)
 
 
-def _board_points(board, square_m: float) -> np.ndarray:
+def board_points(board, square_m: float) -> np.ndarray:
+    """The board's inner corners in its own frame, metres, in ``cv2.findChessboardCorners``' order.
+
+    >>> board_points((3, 2), 0.5)[[0, 1, 3]].tolist()
+    [[0.0, 0.0, 0.0], [0.5, 0.0, 0.0], [0.0, 0.5, 0.0]]
+    """
     cols, rows = board
     grid = np.zeros((rows * cols, 3), np.float32)
     grid[:, :2] = np.mgrid[0:cols, 0:rows].T.reshape(-1, 2) * square_m
     return grid
-
-
-@dataclass(frozen=True, eq=False)
-class BoardPair:
-    """One calibration pair: its photos' names, the board's corners found in each, the
-    board's pose in the left camera (``rvec``, ``tvec`` as ``cv2.Rodrigues`` vectors, metres)
-    and the pair's RMS reprojection error over both views, in pixels."""
-
-    left: str
-    right: str
-    left_corners: np.ndarray
-    right_corners: np.ndarray
-    rms_px: float = float("nan")
-    rvec: np.ndarray = field(default_factory=lambda: np.full(3, np.nan))
-    tvec: np.ndarray = field(default_factory=lambda: np.full(3, np.nan))
-
-    def __post_init__(self):
-        for name in ("left_corners", "right_corners"):
-            value = np.asarray(getattr(self, name), dtype=float)
-            if value.ndim != 2 or value.shape[1] != 2 or not len(value) or not np.isfinite(value).all():
-                raise ParameterError(message(name, "BoardPair", "finite (x, y) corners, one row each",
-                                             f"shape {value.shape}"))
-            object.__setattr__(self, name, value)
-        if self.left_corners.shape != self.right_corners.shape:
-            raise ParameterError(message("right_corners", "BoardPair", "as many corners as left_corners",
-                                         f"{len(self.right_corners)} against {len(self.left_corners)}"))
-        for name in ("rvec", "tvec"):
-            object.__setattr__(self, name, np.asarray(getattr(self, name), dtype=float).reshape(3))
-
-    @property
-    def names(self) -> tuple:
-        return (self.left, self.right)
-
-    def to_dict(self) -> dict:
-        return {"left": self.left, "right": self.right, "rms_px": self.rms_px, "rvec": self.rvec.tolist(),
-                "tvec": self.tvec.tolist(), "left_corners": self.left_corners.tolist(),
-                "right_corners": self.right_corners.tolist()}
 
 
 def outliers(pairs) -> tuple:
@@ -127,193 +83,7 @@ def outliers(pairs) -> tuple:
     return tuple(int(i) for i in np.flatnonzero(errors > limit))
 
 
-@dataclass(frozen=True, eq=False)
-class Rig:
-    """A calibrated rig (see the module's description).
-
-    Attributes
-    ----------
-    size : (int, int)
-        Image width and height the rig was calibrated at.
-    k_left, d_left, k_right, d_right : ndarray
-        Camera matrices and distortion coefficients.
-    rotation, translation : ndarray
-        The right camera's pose relative to the left one (metres).
-    rms : float
-        Reprojection error of the stereo calibration, in pixels.
-    board, square_m
-        The board used.
-    used, skipped : tuple of str
-        Names of the pairs used, and of those where the board was not found in both views.
-    pairs : tuple of BoardPair
-        The used pairs' corners, poses and errors (empty for a rig read from a v1 file).
-    """
-
-    size: tuple
-    k_left: np.ndarray
-    d_left: np.ndarray
-    k_right: np.ndarray
-    d_right: np.ndarray
-    rotation: np.ndarray
-    translation: np.ndarray
-    rms: float
-    board: tuple = BOARD
-    square_m: float = SQUARE_M
-    used: tuple = ()
-    skipped: tuple = ()
-    pairs: tuple = ()
-    _rect: dict = field(default_factory=dict, repr=False)
-
-    def __post_init__(self):
-        _check_rig(self, "Rig")
-
-    def _rectification(self) -> dict:
-        if not self._rect:
-            r1, r2, p1, p2, q, _, _ = cv2.stereoRectify(self.k_left, self.d_left, self.k_right, self.d_right,
-                                                          tuple(self.size), self.rotation, self.translation,
-                                                          flags=cv2.CALIB_ZERO_DISPARITY, alpha=0)
-            self._rect.update(r1=r1, r2=r2, p1=p1, p2=p2, q=q)
-        return self._rect
-
-    @property
-    def focal_px(self) -> float:
-        """Focal length of the rectified views, in pixels."""
-        return float(self._rectification()["p1"][0, 0])
-
-    @property
-    def baseline_m(self) -> float:
-        """Distance between the two rectified camera centres, in metres."""
-        p2 = self._rectification()["p2"]
-        return float(abs(p2[0, 3] / p2[0, 0]))
-
-    @property
-    def zoom(self) -> float:
-        """How much the rectified views are enlarged: their focal length over the smaller of the
-        cameras' own.  Near 1 for a good rig (0.97 on OpenCV's sample); a poorly constrained
-        distortion makes the crop to valid pixels zoom in (1.9 with its pairs 03, 05, 14 alone)."""
-        return self.focal_px / min(float(self.k_left[0, 0]), float(self.k_right[0, 0]))
-
-    def cropped(self) -> tuple:
-        """Names of the pairs whose board has a corner outside a rectified view."""
-        rect, (w, h) = self._rectification(), self.size
-        out = []
-        for pair in self.pairs:
-            for corners, k, d, r, p in ((pair.left_corners, self.k_left, self.d_left, rect["r1"], rect["p1"]),
-                                        (pair.right_corners, self.k_right, self.d_right, rect["r2"], rect["p2"])):
-                xy = cv2.undistortPoints(corners.reshape(-1, 1, 2), k, d, R=r, P=p).reshape(-1, 2)
-                if not ((xy >= 0).all() and (xy[:, 0] <= w - 1).all() and (xy[:, 1] <= h - 1).all()):
-                    out.append(pair.left)
-                    break
-        return tuple(out)
-
-    def warnings(self) -> tuple:
-        """What makes this rig's rectified views doubtful, each naming the fix."""
-        found = []
-        if self.zoom > MAX_ZOOM:
-            found.append(f"the rectified views are zoomed {self.zoom:.2f}x (above {MAX_ZOOM}x): the lens "
-                         "distortion is poorly constrained; calibrate with more pairs, or with poses that put "
-                         "the board near the corners and tilted")
-        cropped = self.cropped()
-        if cropped:
-            found.append(f"the board leaves the rectified view in {len(cropped)} pair(s) ({', '.join(cropped)}); "
-                         "calibrate with more pairs, or with different poses")
-        return tuple(found)
-
-    def maps(self):
-        """The ``cv2.remap`` maps of the left and the right view."""
-        rect = self._rectification()
-        make = lambda k, d, r, p: cv2.initUndistortRectifyMap(k, d, r, p, tuple(self.size), cv2.CV_32FC1)
-        return (make(self.k_left, self.d_left, rect["r1"], rect["p1"]),
-                make(self.k_right, self.d_right, rect["r2"], rect["p2"]))
-
-    def rectify(self, left, right) -> Rectified:
-        """Rectify a pair of this rig exactly (no matching needed; the figures are measured
-        on robust matches afterwards).  A pair of another size is refused."""
-        owner = "Rig.rectify"
-        left, right = load_photo(left, "left", owner), load_photo(right, "right", owner)
-        for name, image in (("left", left), ("right", right)):
-            if (image.shape[1], image.shape[0]) != tuple(self.size):
-                raise ParameterError(message(name, owner, f"a {self.size[0]}x{self.size[1]} photo, the size the "
-                                             "rig was calibrated at", f"{image.shape[1]}x{image.shape[0]}"))
-        (lx, ly), (rx, ry) = self.maps()
-        warp = lambda image, mx, my: cv2.remap(image.astype(np.float32), mx, my, cv2.INTER_LINEAR).astype(float)
-        return measured(warp(left, lx, ly), warp(right, rx, ry), np.eye(3), np.eye(3), "rig")
-
-    def to_dict(self) -> dict:
-        return {"format": FORMAT, "size": list(self.size), "rms_px": self.rms,
-                "focal_px": self.focal_px, "baseline_m": self.baseline_m, "zoom": self.zoom,
-                "cropped": list(self.cropped()), "board": list(self.board),
-                "square_m": self.square_m, "used": list(self.used), "skipped": list(self.skipped),
-                "k_left": self.k_left.tolist(), "d_left": self.d_left.ravel().tolist(),
-                "k_right": self.k_right.tolist(), "d_right": self.d_right.ravel().tolist(),
-                "rotation": self.rotation.tolist(), "translation": self.translation.ravel().tolist(),
-                "pairs": [pair.to_dict() for pair in self.pairs]}
-
-    def to_json(self) -> str:
-        return json.dumps(self.to_dict(), indent=2)
-
-
-def _check_camera(k, d, name: str, owner: str) -> None:
-    rule = "a camera matrix [[fx, 0, cx], [0, fy, cy], [0, 0, 1]] with finite fx, fy > 0 and cx, cy"
-    k = np.asarray(k, dtype=float)
-    if (k.shape != (3, 3) or not np.isfinite(k).all() or not (k[0, 0] > 0 and k[1, 1] > 0)
-            or not np.allclose(k[2], (0, 0, 1)) or k[1, 0] != 0):
-        raise ParameterError(message(f"k_{name}", owner, rule, k.tolist()))
-    d = np.asarray(d, dtype=float)
-    if d.size not in (4, 5, 8, 12, 14) or not np.isfinite(d).all():
-        raise ParameterError(message(f"d_{name}", owner, "4, 5, 8, 12 or 14 finite distortion "
-                                     "coefficients", d.ravel().tolist()))
-
-
-def _check_rig(rig: Rig, owner: str) -> None:
-    """Refuse a rig that cannot rectify: it would give black images or a crash, not an error."""
-    size = rig.size
-    if (len(size) != 2 or not all(isinstance(v, (int, np.integer)) and 1 <= v <= 1 << 16 for v in size)):
-        raise ParameterError(message("size", owner, f"(width, height), whole numbers from 1 to {1 << 16}",
-                                     tuple(size)))
-    for name, k, d in (("left", rig.k_left, rig.d_left), ("right", rig.k_right, rig.d_right)):
-        _check_camera(k, d, name, owner)
-    r = np.asarray(rig.rotation, dtype=float)
-    if r.shape != (3, 3) or not np.isfinite(r).all() or not np.allclose(r @ r.T, np.eye(3), atol=1e-6) \
-            or not np.linalg.det(r) > 0:
-        raise ParameterError(message("rotation", owner, "a 3x3 rotation matrix", r.tolist()))
-    t = np.asarray(rig.translation, dtype=float)
-    if t.size != 3 or not np.isfinite(t).all() or not np.linalg.norm(t) > 0:
-        raise ParameterError(message("translation", owner, "a finite (x, y, z) offset of the right camera, "
-                                     "not zero (a baseline > 0)", t.ravel().tolist()))
-    if not (np.isfinite(rig.focal_px) and rig.focal_px > 0 and np.isfinite(rig.baseline_m)
-            and rig.baseline_m > 0):
-        raise ParameterError(message("k_left", owner, "cameras that rectify to a finite focal length > 0",
-                                     f"focal length {rig.focal_px} px, baseline {rig.baseline_m} m"))
-
-
-def load_rig(source) -> Rig:
-    """A rig from ``ismb-lab calibrate``'s JSON (a path or the text), validated."""
-    owner = "load_rig"
-    try:
-        text = Path(source).read_text() if not str(source).lstrip().startswith("{") else str(source)
-        data = json.loads(text)
-    except (OSError, ValueError) as exc:
-        raise ParameterError(message("source", owner, "a readable rig JSON file", f"{source} ({exc})")) from None
-    if not isinstance(data, dict) or data.get("format") not in _FORMATS:
-        raise ParameterError(message("source", owner, "a rig file written by 'ismb-lab calibrate' "
-                                     f"(format {' or '.join(_FORMATS)})", str(source)))
-    try:
-        arr = lambda key, shape: np.asarray(data[key], dtype=float).reshape(shape)
-        rig = Rig(tuple(int(v) for v in data["size"]), arr("k_left", (3, 3)), arr("d_left", (1, -1)),
-                  arr("k_right", (3, 3)), arr("d_right", (1, -1)), arr("rotation", (3, 3)),
-                  arr("translation", (3, 1)), float(data["rms_px"]), tuple(data["board"]),
-                  float(data["square_m"]), tuple(data.get("used", ())), tuple(data.get("skipped", ())),
-                  tuple(BoardPair(str(p["left"]), str(p["right"]), p["left_corners"], p["right_corners"],
-                                  float(p["rms_px"]), p["rvec"], p["tvec"]) for p in data.get("pairs", ())))
-    except ParameterError as exc:   # a degenerate rig: name the file
-        raise ParameterError(str(exc).replace("of Rig", f"of the rig file {str(source)!r}")) from None
-    except (KeyError, TypeError, ValueError, OverflowError) as exc:
-        raise ParameterError(message("source", owner, "a complete rig file", f"{source} ({exc})")) from None
-    return rig
-
-
-def calibrate_rig(pairs, board=BOARD, square_m: float = SQUARE_M, progress=None) -> Rig:
+def calibrate_rig(pairs, board=BOARD, square_m: float = SQUARE_M, progress=None) -> StereoCamera:
     """Calibrate a rig from chessboard pairs.
 
     Parameters
@@ -329,9 +99,9 @@ def calibrate_rig(pairs, board=BOARD, square_m: float = SQUARE_M, progress=None)
 
     Returns
     -------
-    Rig
+    StereoCamera
         Pairs where the board is not found in both views are skipped and named in
-        ``Rig.skipped``.
+        ``StereoCamera.skipped``.
 
     Raises
     ------
@@ -369,12 +139,12 @@ def _photo_name(photo, default: str) -> str:
     return Path(photo).name if isinstance(photo, (str, Path)) else default
 
 
-def _calibrate(pairs, used, skipped, size, board, square_m, owner) -> Rig:
+def _calibrate(pairs, used, skipped, size, board, square_m, owner) -> StereoCamera:
     """The rig from the corners already found: each camera, then the pair with them fixed."""
     if len(pairs) < MIN_PAIRS:
         raise ParameterError(message("pairs", owner, f"at least {MIN_PAIRS} pairs with the {board[0]}x{board[1]} "
                                      "board found in both views", f"{len(pairs)} (skipped: {', '.join(skipped)})"))
-    objects = [_board_points(board, square_m)] * len(pairs)
+    objects = [board_points(board, square_m)] * len(pairs)
     left_points = [p.left_corners.astype(np.float32) for p in pairs]
     right_points = [p.right_corners.astype(np.float32) for p in pairs]
     _, k_l, d_l, _, _ = cv2.calibrateCamera(objects, left_points, size, None, None)
@@ -386,11 +156,11 @@ def _calibrate(pairs, used, skipped, size, board, square_m, owner) -> Rig:
     errors = np.sqrt(np.mean(np.square(per_view), axis=1))
     pairs = tuple(BoardPair(p.left, p.right, p.left_corners, p.right_corners, float(e), r, t)
                   for p, e, r, t in zip(pairs, errors, rvecs, tvecs))
-    return Rig(tuple(size), k_l, d_l, k_r, d_r, rotation, translation, float(rms), tuple(board), square_m,
+    return StereoCamera(tuple(size), k_l, d_l, k_r, d_r, rotation, translation, float(rms), tuple(board), square_m,
                tuple(used), tuple(skipped), pairs)
 
 
-def recalibrate(rig: Rig, drop=()) -> Rig:
+def recalibrate(rig: StereoCamera, drop=()) -> StereoCamera:
     """`rig` calibrated again from its own corners without the pairs named in `drop` (a
     pair is named by its left or its right photo, or by its name in ``rig.used``).
 
@@ -415,7 +185,7 @@ def recalibrate(rig: Rig, drop=()) -> Rig:
                       tuple(rig.board), rig.square_m, owner)
 
 
-def board_depth(rig: Rig, left, right) -> dict:
+def board_depth(rig: StereoCamera, left, right) -> dict:
     """The board's depth in a pair of `rig`, two ways, in the left rectified camera's frame.
 
     ``"stereo"``: the board's corners found in both rectified views, ``Z = f B / d`` of each,
@@ -435,10 +205,10 @@ def board_depth(rig: Rig, left, right) -> dict:
     raw = find_board(load_photo(left, "left", owner), rig.board)
     if raw is None:
         raise ParameterError(message("left", owner, "a photo showing the whole board", "one where it was not found"))
-    grid = _board_points(rig.board, rig.square_m)
+    grid = board_points(rig.board, rig.square_m)
     ok, rvec, tvec = cv2.solvePnP(grid, raw.astype(np.float32), rig.k_left, rig.d_left)
     pose, _ = cv2.Rodrigues(rvec)
     in_camera = grid @ pose.T + tvec.reshape(1, 3)
-    in_rectified = in_camera @ rig._rectification()["r1"].T
+    in_rectified = in_camera @ rig.left_to_rectified.T
     return {"stereo": float(np.median(stereo)), "pnp": float(np.median(in_rectified[:, 2])),
             "disparity_px": [float(disparity.min()), float(disparity.max())]}

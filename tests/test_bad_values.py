@@ -10,7 +10,7 @@ import pytest
 from ismb_lab import ParameterError
 from ismb_lab._validation import MAX_SEED, check_number, check_rng, message
 from ismb_lab.params import Params
-from ismb_lab.rig import Rig, load_rig
+from ismb_lab.camera import StereoCamera, load_camera
 from ismb_lab.targets import MAX_BYTES, MAX_PAIRS, TargetSet, load_targets
 
 LAB = Path(__file__).resolve().parent.parent / "images" / "lab"
@@ -95,7 +95,7 @@ def rig_record(**change) -> dict:
 
 
 def test_a_sound_rig_loads():
-    rig = load_rig(json.dumps(rig_record()))
+    rig = load_camera(json.dumps(rig_record()))
     assert rig.focal_px == pytest.approx(300) and rig.baseline_m == pytest.approx(0.1)
 
 
@@ -114,15 +114,15 @@ def test_a_degenerate_rig_is_refused_naming_the_field(tmp_path, change, field):
     path = tmp_path / "rig.json"
     path.write_text(json.dumps(rig_record(**change)))
     with pytest.raises(ParameterError, match=f"'{field}' parameter of the rig file '{path}'"):
-        load_rig(path)
-    good = load_rig(json.dumps(rig_record()))
+        load_camera(path)
+    good = load_camera(json.dumps(rig_record()))
     arrays = {k: np.asarray(v, dtype=float) for k, v in change.items() if k != "size"}
     if arrays:
         fields = {"size": good.size, "k_left": good.k_left, "d_left": good.d_left, "k_right": good.k_right,
                   "d_right": good.d_right, "rotation": good.rotation, "translation": good.translation,
                   **arrays}
-        with pytest.raises(ParameterError, match=f"'{field}' parameter of Rig"):
-            Rig(rms=0.3, **fields)
+        with pytest.raises(ParameterError, match=f"'{field}' parameter of StereoCamera"):
+            StereoCamera(rms=0.3, **fields)
 
 
 def test_a_bound_of_400_digits_is_shown_by_its_size():

@@ -11,7 +11,8 @@ import pytest
 
 from ismb_lab._validation import ParameterError
 from ismb_lab.datasets import CHESSBOARD_PAIRS, chessboard_pairs
-from ismb_lab.rig import BoardPair, MAX_ZOOM, calibrate_rig, load_rig, outliers, recalibrate
+from ismb_lab.camera import MAX_ZOOM, BoardPair, load_camera
+from ismb_lab.rig import calibrate_rig, outliers, recalibrate
 
 
 def cli(*args):
@@ -73,7 +74,7 @@ def test_each_pair_has_its_own_reprojection_error_in_the_json(rig):
 
 
 def test_the_rig_keeps_its_corners_through_json(rig):
-    again = load_rig(rig.to_json())
+    again = load_camera(rig.to_json())
     assert len(again.pairs) == len(rig.pairs)
     for a, b in zip(again.pairs, rig.pairs):
         assert a.names == b.names and a.rms_px == b.rms_px
@@ -85,7 +86,7 @@ def test_a_v1_rig_still_loads_but_cannot_be_recalibrated(rig, tmp_path):
     v1 = {k: v for k, v in record.items() if k not in ("pairs", "zoom", "cropped")} | {"format": "ismb_lab-rig-v1"}
     path = tmp_path / "v1.json"
     path.write_text(json.dumps(v1))
-    old = load_rig(path)
+    old = load_camera(path)
     assert old.pairs == () and old.focal_px == pytest.approx(rig.focal_px) and old.used == rig.used
     with pytest.raises(ParameterError, match="corners"):
         recalibrate(old, ["01 left"])

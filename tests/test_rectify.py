@@ -11,7 +11,8 @@ import pytest
 from ismb_lab import ParameterError
 from ismb_lab.datasets import OPENCV_DATA, chessboard_pairs
 from ismb_lab.rectify import check_rectified, load_photo, rectify_pair
-from ismb_lab.rig import board_depth, calibrate_rig, load_rig
+from ismb_lab.camera import load_camera
+from ismb_lab.rig import board_depth, calibrate_rig
 
 
 @pytest.fixture(scope="session")
@@ -152,16 +153,16 @@ def test_metric_results_scale_with_the_square_size(data, rig):
 
 
 def test_rig_file_round_trip_and_refusals(rig, data, tmp_path):
-    again = load_rig(rig.to_json())
+    again = load_camera(rig.to_json())
     assert again.baseline_m == pytest.approx(rig.baseline_m) and again.size == rig.size
-    with pytest.raises(ParameterError, match="'left' parameter of Rig.rectify must be a 640x480 photo"):
+    with pytest.raises(ParameterError, match="'left' parameter of StereoCamera.rectify must be a 640x480 photo"):
         rig.rectify(data / "left.jpg", data / "right.jpg")
     (tmp_path / "rig.json").write_text(json.dumps({"format": "ismb_lab-rig-v1", "size": [640, 480]}))
     with pytest.raises(ParameterError, match="a complete rig file"):
-        load_rig(tmp_path / "rig.json")
+        load_camera(tmp_path / "rig.json")
     (tmp_path / "other.json").write_text("{}")
     with pytest.raises(ParameterError, match="ismb_lab-rig-v1"):
-        load_rig(tmp_path / "other.json")
+        load_camera(tmp_path / "other.json")
 
 
 def test_pairs_without_the_board_are_skipped_and_too_few_refused(data):

@@ -9,7 +9,8 @@ import pytest
 from scipy.ndimage import binary_dilation, map_coordinates
 
 from ismb_lab import ParameterError, ParameterTypeError
-from ismb_lab.scenes import (ROI, Box, Plane, Rig, Scene, Texture, cast, random_texture, render,
+from ismb_lab.camera import StereoCamera
+from ismb_lab.scenes import (ROI, Box, Plane, Scene, Texture, cast, random_texture, render,
                              synthetic_scene, true_matches)
 
 F, B = 300.0, 0.10
@@ -20,7 +21,7 @@ def scene():
     return synthetic_scene(0)
 
 
-def wall_and_box(rig=Rig(), **kw):
+def wall_and_box(rig=StereoCamera.pinhole(), **kw):
     """A plain wall at 1.8 m and a 20 cm cube face at 1 m straight ahead."""
     wall = Plane((0, 0, 1.8), (1, 0, 0), (0, 1, 0), 20, 20, Texture(base=0.5))
     box = Box((-0.1, -0.1, 1.0), (0.1, 0.1, 1.2), Texture(base=0.9))
@@ -41,7 +42,7 @@ def on_ray(origins, dirs, points):
 
 
 def test_parallel_rig_disparity_is_f_b_over_z_and_rays_invert_projection():
-    rig = Rig()
+    rig = StereoCamera.pinhole()
     pts = random_points(np.random.default_rng(0), 200)
     left, right = rig.project_left(pts), rig.project_right(pts)
     assert np.allclose(left[:, 0] - right[:, 0], F * B / pts[:, 2], rtol=0, atol=1e-9)
@@ -58,25 +59,25 @@ def test_parallel_rig_disparity_is_f_b_over_z_and_rays_invert_projection():
 
 def test_vertical_offset_shifts_the_right_image_down():
     pts = random_points(np.random.default_rng(1), 50)
-    plain, shifted = Rig().project_right(pts), Rig(vertical_offset_px=3.5).project_right(pts)
+    plain, shifted = StereoCamera.pinhole().project_right(pts), StereoCamera.pinhole(vertical_offset_px=3.5).project_right(pts)
     assert np.allclose(shifted - plain, [0, 3.5], rtol=0, atol=1e-9)
-    o, d = Rig(vertical_offset_px=3.5).rays_right(shifted)
+    o, d = StereoCamera.pinhole(vertical_offset_px=3.5).rays_right(shifted)
     assert on_ray(o, d, pts).max() < 1e-12
 
 
 def test_roll_rotates_the_right_image_about_its_centre():
-    rig = Rig(roll_deg=90)
+    rig = StereoCamera.pinhole(roll_deg=90)
     # On the right optical axis: the centre.  To its right in the world: above the centre.
     xy = rig.project_right([[B, 0, 1.0], [B + 0.1, 0, 1.0]])
     assert np.allclose(xy, [[159.5, 119.5], [159.5, 89.5]])
-    rig = Rig(roll_deg=-7, vertical_offset_px=2)
+    rig = StereoCamera.pinhole(roll_deg=-7, vertical_offset_px=2)
     pts = random_points(np.random.default_rng(2), 50)
     o, d = rig.rays_right(rig.project_right(pts))
     assert on_ray(o, d, pts).max() < 1e-12
     # Roll keeps distances from the centre (for points at equal depth).
     flat = random_points(np.random.default_rng(3), 20, depth=(1.5, 1.5))
-    r0 = Rig().project_right(flat) - [159.5, 119.5]
-    r1 = Rig(roll_deg=30).project_right(flat) - [159.5, 119.5]
+    r0 = StereoCamera.pinhole().project_right(flat) - [159.5, 119.5]
+    r1 = StereoCamera.pinhole(roll_deg=30).project_right(flat) - [159.5, 119.5]
     assert np.allclose(np.hypot(*r0.T), np.hypot(*r1.T))
     assert not np.allclose(r0, r1)
 
@@ -294,7 +295,7 @@ def test_box_faces_are_textured_and_shaded_differently():
     assert np.allclose(box.normals(info), -d)
     # Lambertian shading under the default light (0.3, -0.8, -1) with ambient 0.35:
     # a uniform box's front (-z) and side (+x) faces differ in brightness.
-    rig = Rig(width=64, height=48, focal_px=60)
+    rig = StereoCamera.pinhole(width=64, height=48, focal_px=60)
     cube = Box((-0.5, -0.2, 0.8), (-0.1, 0.2, 1.4), Texture(base=0.8))
     sc = render([cube], rig, seed=0, noise_std=0, supersample=1, quantise=False)
     gy, gx = np.mgrid[0:48, 0:64]
@@ -359,16 +360,16 @@ def test_rendering_is_vectorised_fast():
 
 
 @pytest.mark.parametrize("make, name, error", [
-    (lambda: Rig(focal_px=-300), "focal_px", ValueError),
-    (lambda: Rig(focal_px=0), "focal_px", ValueError),
-    (lambda: Rig(baseline_m=-0.1), "baseline_m", ValueError),
-    (lambda: Rig(width=0), "width", ValueError),
-    (lambda: Rig(height=1), "height", ValueError),
-    (lambda: Rig(width=320.5), "width", TypeError),
-    (lambda: Rig(roll_deg=float("nan")), "roll_deg", ValueError),
-    (lambda: Rig(vertical_offset_px="2"), "vertical_offset_px", TypeError),
-    (lambda: Rig().project_left([[1.0, 2.0]]), "points3d", ValueError),
-    (lambda: Rig().rays_right([[1.0, np.nan]]), "xy", ValueError),
+    (lambda: StereoCamera.pinhole(focal_px=-300), "focal_px", ValueError),
+    (lambda: StereoCamera.pinhole(focal_px=0), "focal_px", ValueError),
+    (lambda: StereoCamera.pinhole(baseline_m=-0.1), "baseline_m", ValueError),
+    (lambda: StereoCamera.pinhole(width=0), "width", ValueError),
+    (lambda: StereoCamera.pinhole(height=1), "height", ValueError),
+    (lambda: StereoCamera.pinhole(width=320.5), "width", TypeError),
+    (lambda: StereoCamera.pinhole(roll_deg=float("nan")), "roll_deg", ValueError),
+    (lambda: StereoCamera.pinhole(vertical_offset_px="2"), "vertical_offset_px", TypeError),
+    (lambda: StereoCamera.pinhole().project_left([[1.0, 2.0]]), "points3d", ValueError),
+    (lambda: StereoCamera.pinhole().rays_right([[1.0, np.nan]]), "xy", ValueError),
     (lambda: Plane((0, 0, 1), (1, 0, 0), (1, 1, 0), 1, 1, Texture()), "v_axis", ValueError),
     (lambda: Plane((0, 0, 1), (1, 0, 0), (0, 1, 0), -1, 1, Texture()), "half_u", ValueError),
     (lambda: Plane((0, 0), (1, 0, 0), (0, 1, 0), 1, 1, Texture()), "centre", ValueError),
@@ -385,7 +386,7 @@ def test_rendering_is_vectorised_fast():
     (lambda: wall_and_box(noise_std=-1), "noise_std", ValueError),
     (lambda: wall_and_box(gain=0), "gain", ValueError),
     (lambda: wall_and_box(light=(0, 0, 0)), "light", ValueError),
-    (lambda: render([Box((0, 0, 1), (1, 1, 2), Texture())], Rig(), seed=-1), "seed", ValueError),
+    (lambda: render([Box((0, 0, 1), (1, 1, 2), Texture())], StereoCamera.pinhole(), seed=-1), "seed", ValueError),
     (lambda: render([Box((0, 0, 1), (1, 1, 2), Texture())], "rig", seed=0), "rig", TypeError),
     (lambda: synthetic_scene(0, roll_deg=400), "roll_deg", ValueError),
     (lambda: synthetic_scene(0, noise_std=-2), "noise_std", ValueError),

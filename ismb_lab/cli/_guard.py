@@ -62,7 +62,7 @@ LIMITS = {
 }
 
 INPUTS = ("left", "right", "targets", "manifest", "params_file",
-          "bg_left", "bg_right", "scene_left", "scene_right")
+          "bg_left", "bg_right", "scene_left", "scene_right", "rig")
 OUTPUTS = {"json": "--json", "plot": "--plot", "out": "--out"}
 
 _ACTIVE: list = []
@@ -311,8 +311,8 @@ def preflight(args, usage_error) -> None:
     inputs = [getattr(args, a) for a in INPUTS if getattr(args, a, None) is not None]
     for attr in INPUTS:
         if getattr(args, attr, None) is not None:
-            check_input(getattr(args, attr), what=attr.replace("_", "-") if attr != "params_file"
-                        else "--params-file")
+            check_input(getattr(args, attr), what=attr.replace("_", "-") if attr not in ("params_file", "rig")
+                        else "--" + attr.replace("_", "-"))
     if getattr(args, "manifest", None) is not None:
         inputs += _manifest_files(args.manifest)
     if getattr(args, "command", None) == "render":

@@ -62,7 +62,8 @@ def _board(text: str):
 
 def _from_rig(args):
     from .._files import check_input
-    from ..rig import load_rig, recalibrate
+    from ..camera import load_camera
+    from ..rig import recalibrate
     from ._common import UsageError
 
     if args.pairs:
@@ -70,7 +71,7 @@ def _from_rig(args):
     if args.board is not None or args.square_m is not None:
         raise UsageError("--board and --square-m are the rig's own with --from; leave them out")
     check_input(args.source, what="--from")
-    return recalibrate(load_rig(args.source), args.drop)
+    return recalibrate(load_camera(args.source), args.drop)
 
 
 def run(args) -> int:

@@ -6,6 +6,7 @@ import math
 from pathlib import Path
 
 from .._files import atomic_write_text
+from .._validation import ParameterError
 from ..depth import GROUPINGS, DepthConfig
 from ..depth_demo import DEPTH_MATCH_CONFIG, DEPTH_METHOD, DEPTH_PARAMS, DEPTH_SOLVER
 from ._common import (UsageError, add_matching_options, add_solver_option, match_config, resolve_recipe,
@@ -38,7 +39,8 @@ def add_parser(sub) -> None:
                     help=f"baseline in metres (default: {calibration.baseline_m:g}, the thesis' rig)")
     dp.add_argument("--rig", type=Path, default=None, metavar="RIG.json",
                     help="take F and B from a rig calibrated with 'ismb-lab calibrate' (the pairs must "
-                    "be rectified with it: 'ismb-lab rectify --rig')")
+                    "be rectified with it: 'ismb-lab rectify --rig'); the candidate window is then measured on "
+                    "the background pair along its rows, or the command refuses")
     dp.add_argument("--grouping", choices=GROUPINGS, default=calibration.grouping,
                     help="find the objects by their blobs of change in both images, each at the shift "
                     "that lays the left blob on the right one, refined by the features on it "
@@ -55,11 +57,11 @@ def run(args) -> int:
     calibration = {}
     if args.rig is not None:
         from .._files import check_input
-        from ..rig import load_rig
+        from ..camera import load_camera
 
         if args.focal_px is not None or args.baseline_m is not None:
             raise UsageError("--rig gives the focal length and the baseline: leave out --focal-px and --baseline-m")
-        rig = load_rig(check_input(args.rig, what="--rig"))
+        rig = load_camera(check_input(args.rig, what="--rig"))
         from ..io import load_image
 
         shape = load_image(args.bg_left).shape
@@ -68,6 +70,10 @@ def run(args) -> int:
                              f"{shape[1]}x{shape[0]}: its focal length in pixels does not apply (rectify the "
                              "pairs with 'ismb-lab rectify --rig' first)")
         calibration = {"focal_px": rig.focal_px, "baseline_m": rig.baseline_m}
+        if args.shift is not None and args.shift != "auto":
+            raise UsageError("--rig measures the disparity window from the background pair: leave out --shift "
+                             "(or give --shift auto)")
+        args.shift = "auto"
     for name in ("focal_px", "baseline_m"):
         value = getattr(args, name)
         if value is not None:
@@ -81,7 +87,17 @@ def run(args) -> int:
         from ..io import load_pair
         from ..matching import auto_window
 
-        config = auto_window(load_pair(args.bg_left, args.bg_right), config)
+        background = load_pair(args.bg_left, args.bg_right)
+        if args.rig is not None:
+            from ..metric import rig_config
+
+            try:
+                config = rig_config(rig, config, background)
+            except ParameterError as exc:
+                raise UsageError(f"--rig: the background pair gives no disparity range to set the window by "
+                                 f"({exc}); is it a rectified pair of this rig ('ismb-lab rectify --rig')?") from None
+        else:
+            config = auto_window(background, config)
         print(f"candidate window measured on the background pair: shift {config.shift:g} px, "
               f"{config.window_width:g} x {config.window_height:g} px")
     result = relative_depth((args.bg_left, args.bg_right), (args.scene_left, args.scene_right),

@@ -23,6 +23,11 @@ def add_parser(sub) -> None:
     m.add_argument("right", type=Path, help="right image file")
     add_matching_options(m, MatchConfig())
     add_solver_option(m, f"the params file's, else {DEFAULT_SOLVER}")
+    m.add_argument("--rig", type=Path, default=None, metavar="RIG.json",
+                   help="a rig from 'ismb-lab calibrate': rectify raw photos with it (a rectified pair is "
+                   "matched as it is; stderr says which), keep the candidates on their rows, and give each "
+                   "match its point in metres (xyz_m, the rectified left camera's frame: X right, Y down, "
+                   "Z forward); --shift is then auto unless given")
     m.add_argument("--json", type=Path, default=None, metavar="OUT", help="write the result as JSON")
     m.add_argument("--plot", type=Path, default=None, metavar="OUT.png",
                    help="draw the pair with features and match lines")
@@ -49,26 +54,73 @@ def _prepared(args):
         raise
 
 
+def _prepared_with_rig(args):
+    """The pair rectified with the rig (unless it already is), prepared in the rig's window."""
+    from .._files import check_input
+    from ..camera import load_camera
+    from ..io import load_pair
+    from ..matching import prepare
+    from ..metric import for_camera, rig_config
+    from ..rectify import check_for_matching
+
+    camera = load_camera(check_input(args.rig, what="--rig"))
+    if args.shift is None:      # a photo's disparities are the pair's own, not the thesis' 20 px
+        args.shift = "auto"
+    config = match_config(args)
+    left, right, how = for_camera(args.left, args.right, camera)
+    print(f"--rig: {how}", file=sys.stderr)
+    warning = check_for_matching(left, right, "ismb-lab match --rig")
+    if warning:
+        print(warning, file=sys.stderr)
+    pair = load_pair(left, right, min_shape=config.min_shape)
+    return camera, prepare(pair, None, rig_config(camera, config, pair))
+
+
 def run(args) -> int:
     from ..matching import match
 
     recipe = resolve_recipe(args, DEFAULT_SOLVER)
     params = recipe.params
-    prepared = _prepared(args)
+    camera = None
+    if args.rig is not None:
+        camera, prepared = _prepared_with_rig(args)
+    else:
+        prepared = _prepared(args)
     result = match(prepared=prepared, **recipe.match_settings(), **seed_setting(args))
+    found = len(result.pairs)
+    if camera is not None:
+        from ..metric import mutual_best
+
+        result = mutual_best(prepared, result)
     after = ", one match per corner" if result.one_to_one else ""
     print(f"Method-{result.method} ({result.solver}{after})  params {params.to_dict()}  seed {result.seed}")
     print(f"{len(result.left_xy)} left / {len(result.right_xy)} right corners, "
           f"{result.n_candidates} candidate neurons, {len(result.pairs)} matches, "
           f"energy {result.energy:.4f}, stopped by '{result.stop_rule}' "
           f"after {result.attempts} attempts")
+    if camera is not None:
+        print(f"--rig: {len(result.pairs)} of {found} matches kept, those whose corners are each other's "
+              "most similar candidate")
     print(result.table())
     window = window_record(prepared.config, args.shift == "auto")
     if window["auto"]:
         print(f"candidate window measured on the pair: shift {window['shift']:g} px, "
               f"{window['width']:g} x {window['height']:g} px")
+    record = {**result.to_dict(), "candidate_window": window}
+    if camera is not None:
+        import numpy as np
+
+        from ..metric import match_points
+
+        xyz = match_points(result, camera)
+        for item, point in zip(record["matches"], xyz):
+            item["xyz_m"] = [float(v) for v in point] if np.all(np.isfinite(point)) else None
+        z = xyz[np.isfinite(xyz[:, 2]), 2]
+        print(f"--rig: focal length {camera.focal_px:.1f} px, baseline {camera.baseline_m:.4f} m; "
+              + (f"{len(z)} matches in metres, depth {z.min():.3f} to {z.max():.3f} m" if len(z) else
+                 "no match in front of the cameras"))
     if args.json is not None:
-        atomic_write_text(args.json, json_text({**result.to_dict(), "candidate_window": window}))
+        atomic_write_text(args.json, json_text(record))
     if args.plot is not None:
         from matplotlib.figure import Figure
 

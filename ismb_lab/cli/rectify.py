@@ -53,9 +53,9 @@ def run(args) -> int:
         if not parent.is_dir() or not os.access(parent, os.W_OK | os.X_OK):
             raise UsageError(f"--out {str(folder)!r}: cannot make a folder in {str(parent)!r}")
     if args.rig is not None:
-        from ..rig import load_rig
+        from ..camera import load_camera
 
-        result = load_rig(args.rig).rectify(args.left, args.right)
+        result = load_camera(args.rig).rectify(args.left, args.right)
     else:
         result = rectify_pair(args.left, args.right)
     folder.mkdir(parents=True, exist_ok=True)

@@ -1,6 +1,6 @@
 """Synthetic stereo scenes with exact ground truth, by ray casting.
 
-A tiny deterministic renderer for testing the matcher: a stereo :class:`Rig`, a
+A tiny deterministic renderer for testing the matcher: a stereo :class:`~ismb_lab.camera.StereoCamera`, a
 list of textured primitives (:class:`Plane`, :class:`Box`), and :func:`render`,
 which ray-casts both views and returns a :class:`Scene` holding the grey
 images, the depth and disparity maps of the left view, the occlusion mask and
@@ -28,7 +28,7 @@ Anything with these three methods can be rendered (see :class:`Primitive`)::
 
 Shading is Lambertian with one distant light plus ambient light, identical in
 both views, so a surface point has the same radiance in both cameras.
-The package follows the data: :mod:`~ismb_lab.scenes.geometry` (the rig and its rays),
+The package follows the data: :mod:`~ismb_lab.scenes.geometry` (rays; the rig is :class:`~ismb_lab.camera.StereoCamera`),
 :mod:`~ismb_lab.scenes.textures`, :mod:`~ismb_lab.scenes.primitives`,
 :mod:`~ismb_lab.scenes.render` (the two views and their ground truth) and
 :mod:`~ismb_lab.scenes.library` (the named scenes) and
@@ -55,7 +55,7 @@ from .layouts import (
                        repetitive_scene,
                        unregister_family,
 )
-from .geometry import ROI, Rig
+from .geometry import ROI
 from .library import (
                       CAR_DEPTH,
                       REALISTIC_COUNT,
@@ -71,7 +71,7 @@ from .render import Scene, render, true_matches
 from .textures import Texture, random_texture
 
 __all__ = [
-    "Rig", "Texture", "random_texture", "Primitive", "Plane", "Box", "Group", "cast",
+    "Texture", "random_texture", "Primitive", "Plane", "Box", "Group", "cast",
     "Scene", "render", "synthetic_scene", "true_matches", "ROI",
     "toy_car", "toy_car_layout", "lab_scene", "toy_car_scene", "realistic_scene",
     "REALISTIC_COUNT", "CAR_DEPTH", "Cylinder",

@@ -11,8 +11,8 @@ The draws come in a fixed order (wall, object disparities, wall texture, sizes, 
 then object by object, then the cameras and the noise seeds), so a family's layouts depend
 only on its seed and on its own hooks.
 
->>> from .geometry import Rig
->>> design = draw_objects(np.random.default_rng(0), 2, Rig(), Look())
+>>> from ..camera import StereoCamera
+>>> design = draw_objects(np.random.default_rng(0), 2, StereoCamera.pinhole(), Look())
 >>> [t.rank for t in design.truth], design.camera["noise_std"]
 ([1, 2], 1.0)
 """
@@ -25,7 +25,7 @@ from dataclasses import dataclass, fields
 import numpy as np
 
 from .._validation import ParameterTypeError, message
-from .geometry import Rig
+from ..camera import StereoCamera
 from .primitives import Box, Cylinder, Group, Plane
 from .textures import Texture, random_texture
 
@@ -235,7 +235,7 @@ def _texture(rng, kind: str, extent, pixel_m: float, base: float, contrast) -> T
                    levels=np.full((1, cols), base + step))
 
 
-def _wall(rng, look: Look, mode: str, wall_z: float, rig: Rig) -> tuple:
+def _wall(rng, look: Look, mode: str, wall_z: float, rig: StereoCamera) -> tuple:
     """The wall plane at `wall_z` (three times the field of view) and its tone."""
     f, (cx, cy) = rig.focal_px, rig.centre
     base = float(rng.uniform(0.4, 0.6))
@@ -246,7 +246,7 @@ def _wall(rng, look: Look, mode: str, wall_z: float, rig: Rig) -> tuple:
 
 
 def _object(rng, look: Look, mode: str, k: int, left: float, width: float, height: float, d: float,
-            order: int, wall_base: float, box_only: bool, rig: Rig) -> tuple:
+            order: int, wall_base: float, box_only: bool, rig: StereoCamera) -> tuple:
     """Object ``k`` (from 0, left to right) at disparity `d`: its primitive and its truth."""
     f, fb, (cx, cy) = rig.focal_px, rig.focal_px * rig.baseline_m, rig.centre
     _, ry, _, rh = LAYOUT_ROI
@@ -280,7 +280,7 @@ def _object(rng, look: Look, mode: str, k: int, left: float, width: float, heigh
     return prim, truth
 
 
-def draw_objects(rng: np.random.Generator, n: int, rig: Rig, look: Look) -> Design:
+def draw_objects(rng: np.random.Generator, n: int, rig: StereoCamera, look: Look) -> Design:
     """Draw `n` objects at distinct depths before a wall, as `look` says, from `rng`.
 
     Parameters
@@ -288,7 +288,7 @@ def draw_objects(rng: np.random.Generator, n: int, rig: Rig, look: Look) -> Desi
     rng : numpy.random.Generator
     n : int
         Number of objects (2 or 3 fit the layout ROI).
-    rig : Rig
+    rig : StereoCamera
     look : Look
 
     Returns
@@ -297,7 +297,7 @@ def draw_objects(rng: np.random.Generator, n: int, rig: Rig, look: Look) -> Desi
 
     Examples
     --------
-    >>> d = draw_objects(np.random.default_rng(1), 3, Rig(), Look())
+    >>> d = draw_objects(np.random.default_rng(1), 3, StereoCamera.pinhole(), Look())
     >>> bool(np.all(np.diff([t.disparity for t in d.truth]) <= -MIN_GAP_PX)), len(d.objects)
     (True, 3)
     """

@@ -40,7 +40,7 @@ above (:data:`FAMILIES`) keep the stream they had before families were registere
 for bit (``tests/test_family_digests.py``).  A Generator passed instead of a seed is used as
 it is, for every family.
 
-Geometry of every layout (the default :class:`~ismb_lab.scenes.Rig`: 320 x 240
+Geometry of every layout (the default :meth:`~ismb_lab.camera.StereoCamera.pinhole`: 320 x 240
 images, ``f B = 30`` px m, so ``d = 30 / Z``):
 
 * the wall has disparity 5 to 9 px (3.3 to 6 m);
@@ -75,7 +75,7 @@ import numpy as np
 
 from .._validation import ParameterError, ParameterTypeError, check_choice, check_number, check_rng, message
 from .design import HIGH, LAYOUT_ROI, LOW, MIN_GAP_PX, Design, Look, ObjectTruth, Placement, draw_objects
-from .geometry import Rig
+from ..camera import StereoCamera
 from .primitives import cast
 from .render import Scene, render
 
@@ -112,7 +112,7 @@ class Family:
     >>> from ismb_lab.scenes.design import Look
     >>> dim = Family("dim", "A darker right camera", Look(camera=lambda rng: {
     ...     "gain": float(rng.uniform(0.5, 0.6)), "offset": 0.0, "noise_std": 1.0}))
-    >>> dim.name, dim.draw(dim.stream(0), 2, Rig()).camera["gain"] < 0.6
+    >>> dim.name, dim.draw(dim.stream(0), 2, StereoCamera.pinhole()).camera["gain"] < 0.6
     ('dim', True)
     """
 
@@ -145,7 +145,7 @@ class Family:
             return rng
         return np.random.default_rng(np.random.SeedSequence(int(seed), spawn_key=(_name_key(self.name),)))
 
-    def draw(self, rng: np.random.Generator, n_objects: int, rig: Rig) -> Design:
+    def draw(self, rng: np.random.Generator, n_objects: int, rig: StereoCamera) -> Design:
         """One layout's design, drawn from `rng` (see :func:`~ismb_lab.scenes.design.draw_objects`)."""
         return draw_objects(rng, n_objects, rig, self.look)
 
@@ -303,7 +303,7 @@ def _check(seed, family, n_objects, supersample, owner):
     return fam.stream(seed, owner), fam, n, s
 
 
-def _render(design: Design, rig: Rig, empty: bool, supersample: int) -> Scene:
+def _render(design: Design, rig: StereoCamera, empty: bool, supersample: int) -> Scene:
     prims = [design.wall] + ([] if empty else list(design.objects))
     return render(prims, rig, seed=design.noise[0 if empty else 1], supersample=supersample,
                   **design.camera)
@@ -313,7 +313,7 @@ def _family_scene(family: str, owner: str, seed, n_objects, empty, supersample) 
     rng, fam, n, s = _check(seed, family, n_objects, supersample, owner)
     if not isinstance(empty, bool):
         raise ParameterTypeError(message("empty", owner, "True or False", empty))
-    rig = Rig()
+    rig = StereoCamera.pinhole()
     return _render(fam.draw(rng, n, rig), rig, empty, s)
 
 
@@ -411,7 +411,7 @@ def object_layout(seed, n_objects: int = 2, *, family: str = "contrast", supersa
     """
     own = "object_layout"
     rng, fam, n, s = _check(seed, family, n_objects, supersample, own)
-    rig = Rig()
+    rig = StereoCamera.pinhole()
     design = fam.draw(rng, n, rig)
     top = max(o.disparity for o in design.truth)
     shift = float(round((design.wall_disparity + top) / 2))

@@ -14,7 +14,8 @@ from dataclasses import replace
 import numpy as np
 
 from .._validation import ParameterTypeError, check_number, check_rng, message
-from .geometry import ROI, Rig
+from ..camera import StereoCamera
+from .geometry import ROI
 from .primitives import _FACE_UV, Box, Group, Plane
 from .render import Scene, render
 from .textures import Texture, random_texture
@@ -28,7 +29,7 @@ WALL_Z = 1.8
 TABLE_Y = 0.15
 
 
-def _wall_shadow(box: Box, rig: Rig, margin: float) -> np.ndarray:
+def _wall_shadow(box: Box, rig: StereoCamera, margin: float) -> np.ndarray:
     """``(x0, y0, x1, y1)`` on the wall hidden by `box` from either camera, plus `margin`."""
     corners = np.array(np.meshgrid(*zip(box.lo, box.hi))).reshape(3, -1).T
     hits = []
@@ -53,7 +54,7 @@ def _clear(texture: Texture, zones) -> Texture:
     return replace(texture, rects=rects)
 
 
-def _scene_primitives(rng: np.random.Generator, rig: Rig) -> list:
+def _scene_primitives(rng: np.random.Generator, rig: StereoCamera) -> list:
     """Wall, table and boxes of :func:`synthetic_scene`; the layout ignores roll and offset."""
     x0, _, w, _ = ROI
     cx, f = rig.centre[0], rig.focal_px
@@ -86,7 +87,7 @@ def _cardboard(rng: np.random.Generator, lo, hi, wall_base: float) -> Box:
     return Box(lo, hi, faces)
 
 
-def _room(rng: np.random.Generator, rig: Rig, wall_base: float, boxes, poster_bottom: float) -> list:
+def _room(rng: np.random.Generator, rig: StereoCamera, wall_base: float, boxes, poster_bottom: float) -> list:
     """The wall at 1.8 m with posters down to ``y = poster_bottom`` and the table: ``[wall, table]``."""
     # Posters: none that a box's silhouette would cut in either view, so that no
     # corner of the scene is an occlusion junction that moves between the views.
@@ -128,7 +129,7 @@ def synthetic_scene(seed=0, *, vertical_offset_px: float = 0.0, roll_deg: float 
         depend on the other arguments, so the same seed with another roll,
         offset or noise level shows the same scene.
     vertical_offset_px, roll_deg : float
-        Passed to :class:`Rig` (an unrectified pair).
+        Passed to :meth:`~ismb_lab.camera.StereoCamera.pinhole` (an unrectified pair).
     noise_std : float
         Camera noise in grey levels, see :func:`render`.
 
@@ -152,7 +153,7 @@ def synthetic_scene(seed=0, *, vertical_offset_px: float = 0.0, roll_deg: float 
     vertical_offset_px = check_number(vertical_offset_px, "vertical_offset_px", own)
     roll_deg = check_number(roll_deg, "roll_deg", own, low=-180, high=180)
     noise_std = check_number(noise_std, "noise_std", own, low=0)
-    rig = Rig(vertical_offset_px=vertical_offset_px, roll_deg=roll_deg)
+    rig = StereoCamera.pinhole(vertical_offset_px=vertical_offset_px, roll_deg=roll_deg)
     prims = _scene_primitives(rng, rig)
     return render(prims, rig, seed=rng, noise_std=noise_std, gain=0.9, offset=8.0)
 
@@ -228,7 +229,7 @@ def toy_car(rng, x_centre: float, z_front: float, *, length: float = 0.13, name:
     return Group((body, cabin, *wheels), name)
 
 
-def _lab_primitives(rng: np.random.Generator, rig: Rig) -> list:
+def _lab_primitives(rng: np.random.Generator, rig: StereoCamera) -> list:
     """Wall, table and one cardboard box in the middle of the view (Fig. 5.11)."""
     cx, f = rig.centre[0], rig.focal_px
     z = rng.uniform(1.3, 1.45)
@@ -245,9 +246,9 @@ def _lab_primitives(rng: np.random.Generator, rig: Rig) -> list:
     return _room(rng, rig, wall_base, [box], poster_bottom=0.06) + [box]
 
 
-def _demo_rig(owner: str, vertical_offset_px, roll_deg) -> Rig:
-    return Rig(vertical_offset_px=check_number(vertical_offset_px, "vertical_offset_px", owner),
-               roll_deg=check_number(roll_deg, "roll_deg", owner, low=-180, high=180))
+def _demo_rig(owner: str, vertical_offset_px, roll_deg) -> StereoCamera:
+    return StereoCamera.pinhole(vertical_offset_px=check_number(vertical_offset_px, "vertical_offset_px", owner),
+                                roll_deg=check_number(roll_deg, "roll_deg", owner, low=-180, high=180))
 
 
 def lab_scene(seed=0, *, noise_std: float = 1.0, vertical_offset_px: float = 0.0,
@@ -268,7 +269,7 @@ def lab_scene(seed=0, *, noise_std: float = 1.0, vertical_offset_px: float = 0.0
     noise_std : float
         Camera noise in grey levels.
     vertical_offset_px, roll_deg : float
-        Passed to :class:`Rig`; the layout does not depend on them.
+        Passed to :meth:`~ismb_lab.camera.StereoCamera.pinhole`; the layout does not depend on them.
     supersample : int
         Rays per pixel side, see :func:`render` (1 renders 4 times faster).
 
@@ -294,7 +295,7 @@ def lab_scene(seed=0, *, noise_std: float = 1.0, vertical_offset_px: float = 0.0
                   gain=0.92, offset=6.0, supersample=supersample)
 
 
-def toy_car_layout(cars=0, rig: Rig = Rig()) -> tuple[tuple[float, float, float], ...]:
+def toy_car_layout(cars=0, rig: StereoCamera = StereoCamera.pinhole()) -> tuple[tuple[float, float, float], ...]:
     """Positions of the two toy cars of :func:`toy_car_scene`: ``((x, z, length), ...)``, left first.
 
     ``x`` is the car's middle and ``z`` the depth of its side, metres; cars are
@@ -312,8 +313,8 @@ def toy_car_layout(cars=0, rig: Rig = Rig()) -> tuple[tuple[float, float, float]
     """
     own = "toy_car_layout"
     rng = check_rng(cars, "cars", own)
-    if not isinstance(rig, Rig):
-        raise ParameterTypeError(message("rig", own, "a Rig", rig))
+    if not isinstance(rig, StereoCamera):
+        raise ParameterTypeError(message("rig", own, "a StereoCamera", rig))
     cx, f = rig.centre[0], rig.focal_px
     z_left = rng.uniform(0.88, 1.0)
     z_right = rng.uniform(z_left + 0.1, 1.2)
@@ -411,7 +412,7 @@ def realistic_scene(index: int, *, noise_std: float = 1.5, supersample: int = 2)
     rng = np.random.default_rng([index, 20090701])
     offset_px = round(float(rng.uniform(2.5, 5.0)) * 2) / 2 if index % 3 else 0.0
     roll = round(float(rng.uniform(-1.0, 1.0)), 2) if index % 4 == 0 else 0.0
-    rig = Rig(vertical_offset_px=offset_px, roll_deg=roll)
+    rig = StereoCamera.pinhole(vertical_offset_px=offset_px, roll_deg=roll)
     prims = _scene_primitives(rng, rig)
     cx, f = rig.centre[0], rig.focal_px
     n_cars = int(rng.integers(0, 3))

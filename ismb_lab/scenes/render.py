@@ -7,7 +7,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from .._validation import ParameterError, ParameterTypeError, check_number, check_points, check_rng, message
-from .geometry import Rig, _vector
+from ..camera import StereoCamera
+from .geometry import _vector
 from .primitives import _check_primitives, cast
 
 __all__ = ["render", "Scene", "true_matches"]
@@ -15,7 +16,7 @@ __all__ = ["render", "Scene", "true_matches"]
 # -------------------------------------------------------------------------- scene
 
 
-def _correspond(primitives, rig: Rig, left_xy: np.ndarray):
+def _correspond(primitives, rig: StereoCamera, left_xy: np.ndarray):
     """3-D points, depths and right-image positions of left points (NaN when not visible)."""
     o, d = rig.rays_left(left_xy)
     t, _, _ = cast(primitives, o, d)
@@ -53,7 +54,7 @@ class Scene:
     occluded : (H, W) ndarray of bool
         Left pixels whose surface point is hidden from the right camera or falls
         outside the right image (False where there is no surface at all).
-    rig : Rig
+    rig : StereoCamera
     primitives : tuple of Primitive
     gain, offset, noise_std : float
         The right image is ``gain * radiance + offset + noise``; the left image
@@ -72,7 +73,7 @@ class Scene:
     depth: np.ndarray
     disparity: np.ndarray
     occluded: np.ndarray
-    rig: Rig
+    rig: StereoCamera
     primitives: tuple
     gain: float = 1.0
     offset: float = 0.0
@@ -80,8 +81,8 @@ class Scene:
 
     def __post_init__(self):
         own = "Scene"
-        if not isinstance(self.rig, Rig):
-            raise ParameterTypeError(message("rig", own, "a Rig", self.rig))
+        if not isinstance(self.rig, StereoCamera):
+            raise ParameterTypeError(message("rig", own, "a StereoCamera", self.rig))
         object.__setattr__(self, "primitives", _check_primitives(self.primitives, own))
         shape = (self.rig.height, self.rig.width)
         for name in ("left", "right", "depth", "disparity", "occluded"):
@@ -139,7 +140,7 @@ class Scene:
         return _correspond(self.primitives, self.rig, xy)[2]
 
 
-def _sample_grid(rig: Rig, s: int) -> np.ndarray:
+def _sample_grid(rig: StereoCamera, s: int) -> np.ndarray:
     """``(H*s*W*s, 2)`` sub-pixel sample points, row-major, ``s x s`` per pixel."""
     off = (np.arange(s) + 0.5) / s - 0.5
     xs = (np.arange(rig.width)[:, None] + off).ravel()
@@ -162,7 +163,7 @@ def _radiance(primitives, origins, dirs, light, ambient, background) -> np.ndarr
     return out
 
 
-def render(primitives, rig: Rig = Rig(), *, seed, noise_std: float = 1.0, gain: float = 1.0,
+def render(primitives, rig: StereoCamera = StereoCamera.pinhole(), *, seed, noise_std: float = 1.0, gain: float = 1.0,
            offset: float = 0.0, supersample: int = 2, light=(0.3, -0.8, -1.0),
            ambient: float = 0.35, background: float = 0.0, quantise: bool = True) -> Scene:
     """Ray-cast both views of a scene and compute its ground truth.
@@ -171,7 +172,7 @@ def render(primitives, rig: Rig = Rig(), *, seed, noise_std: float = 1.0, gain: 
     ----------
     primitives : sequence of Primitive
         The surfaces, e.g. :class:`Plane` and :class:`Box`.
-    rig : Rig
+    rig : StereoCamera
         The cameras.
     seed : int or numpy.random.Generator
         Source of the camera noise (keyword-only, required).
@@ -204,7 +205,7 @@ def render(primitives, rig: Rig = Rig(), *, seed, noise_std: float = 1.0, gain: 
 
     Examples
     --------
-    >>> rig = Rig(width=32, height=24, focal_px=30)
+    >>> rig = StereoCamera.pinhole(width=32, height=24, focal_px=30)
     >>> from ismb_lab.scenes import Plane, Texture
     >>> wall = Plane((0, 0, 1.8), (1, 0, 0), (0, 1, 0), 10, 10, Texture(base=0.6))
     >>> scene = render([wall], rig, seed=0, noise_std=0)
@@ -213,8 +214,8 @@ def render(primitives, rig: Rig = Rig(), *, seed, noise_std: float = 1.0, gain: 
     """
     own = "render"
     primitives = _check_primitives(primitives, own)
-    if not isinstance(rig, Rig):
-        raise ParameterTypeError(message("rig", own, "a Rig", rig))
+    if not isinstance(rig, StereoCamera):
+        raise ParameterTypeError(message("rig", own, "a StereoCamera", rig))
     rng = check_rng(seed, "seed", own)
     noise_std = check_number(noise_std, "noise_std", own, low=0)
     gain = check_number(gain, "gain", own, low=0, low_open=True)

@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from ismb_lab import ParameterError, ParameterTypeError
-from ismb_lab.scenes.geometry import Rig
+from ismb_lab.camera import StereoCamera
 from ismb_lab.widgets import DepthDemo, DepthModel
 from ismb_lab.widgets.cloud import (MAX_NOTES, Cloud, PointCloudView, _points_via_metric_depth, board_cloud,
                                     depth_cloud, frustum_edges)
@@ -15,7 +15,7 @@ IMAGES = Path(__file__).resolve().parents[2] / "images"
 
 
 def test_points_come_back_where_a_pinhole_rig_saw_them():
-    rig = Rig(focal_px=300.0, baseline_m=0.1)
+    rig = StereoCamera.pinhole(focal_px=300.0, baseline_m=0.1)
     rng = np.random.default_rng(20261125)
     truth = np.column_stack([rng.uniform(-0.4, 0.4, 40), rng.uniform(-0.3, 0.3, 40), rng.uniform(0.5, 3.0, 40)])
     left, right = rig.project_left(truth), rig.project_right(truth)

@@ -1,0 +1,589 @@
+"""One stereo camera model: two cameras, their rectification, and metres from disparities.
+
+A :class:`StereoCamera` holds what a pair of cameras is: each camera's matrix ``K`` and
+distortion coefficients, the right camera's pose relative to the left one (OpenCV's
+convention: a point ``X`` of the left camera's frame is ``R X + T`` in the right one's), and
+the image size.  Two kinds are made with it:
+
+* the rendered scenes' ideal rig (:meth:`StereoCamera.pinhole`, the defaults below): two
+  distortion-free cameras side by side, the right one optionally rolled about its optical
+  axis and with its image shifted down;
+* a calibrated rig (:func:`ismb_lab.rig.calibrate_rig`, or :func:`load_camera` from
+  ``ismb-lab calibrate``'s JSON), which also keeps the calibration's record: its RMS error,
+  the board and each pair's corners (:class:`BoardPair`).
+
+The rectification (``cv2.stereoRectify``) turns both cameras to a common orientation so that
+a point's two images are on one row.  Cameras with distortion are rectified with
+``alpha=0`` (the views cropped to valid pixels, OpenCV's choice); distortion-free cameras keep
+the left camera's matrix, so the rendered scenes' rectified focal length is their cameras'.
+The rectified pair gives ``focal_px``, ``baseline_m`` and, for a match at left ``(x, y)``
+with disparity ``d``, the point ``Z = f B / d``, ``X = (x - cx) Z / f``, ``Y = (y - cy) Z / f``
+in metres in the rectified left camera's frame (X right, Y down, Z forward):
+:meth:`StereoCamera.points_from_disparity`.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import cv2
+import numpy as np
+
+from ._validation import ParameterError, ParameterTypeError, check_number, check_points, message
+
+__all__ = ["BASELINE_M", "BOARD", "FOCAL_PX", "MAX_ZOOM", "SQUARE_M", "FORMAT", "HEIGHT", "WIDTH", "BoardPair", "StereoCamera", "load_camera"]
+
+#: The rendered scenes' camera, mimicking the thesis' webcams: 320 x 240 images, 10 cm apart.
+#: A focal length of 300 px gives a horizontal field of view of about 56 degrees
+#: (``2 atan(160 / 300)``), like a webcam; a point at 1.8 m (the deepest background) then has
+#: a disparity of 16.7 px and one at 1 m of 30 px, bracketing the thesis' expected shift of 20 px.
+WIDTH, HEIGHT = 320, 240
+FOCAL_PX = 300.0
+BASELINE_M = 0.10
+#: Inner corners of OpenCV's sample board (columns, rows).
+BOARD = (9, 6)
+#: Square size assumed for OpenCV's sample board, in metres.  The sample does not state it
+#: (its calibration program takes the size as an argument and defaults to 1 unit); 25 mm is
+#: a common printed board and gives a baseline of a few centimetres, as the rig's two small
+#: cameras suggest.  Every metric result scales with it.
+SQUARE_M = 0.025
+#: Format of the rig files (v1 files, without the pairs, still load).
+FORMAT = "ismb_lab-rig-v2"
+_FORMATS = ("ismb_lab-rig-v1", FORMAT)
+#: Above this rectified zoom (rectified focal length over the cameras' own), the rig warns.
+MAX_ZOOM = 1.3
+
+
+def _points3d(points, name: str, owner: str) -> np.ndarray:
+    rule = "an (N, 3) array of finite (X, Y, Z) points"
+    try:
+        arr = np.asarray(points, dtype=float)
+    except (TypeError, ValueError):
+        raise ParameterTypeError(message(name, owner, rule, points)) from None
+    if arr.size == 0:
+        return arr.reshape(0, 3)
+    if arr.ndim != 2 or arr.shape[1] != 3:
+        raise ParameterError(message(name, owner, rule, f"an array of shape {arr.shape}"))
+    if not np.all(np.isfinite(arr)):
+        raise ParameterError(message(name, owner, rule, "an array with NaN or infinite values"))
+    return arr
+
+
+def _rotate(vectors: np.ndarray, matrix: np.ndarray) -> np.ndarray:
+    """``vectors @ matrix.T`` for ``(N, 3)`` vectors (much faster than matmul for this shape)."""
+    return np.stack([vectors @ row for row in matrix], axis=1)
+
+
+def _unit(vectors: np.ndarray) -> np.ndarray:
+    return vectors / np.sqrt(np.einsum("ij,ij->i", vectors, vectors))[:, None]
+
+
+@dataclass(frozen=True, eq=False)
+class BoardPair:
+    """One calibration pair: its photos' names, the board's corners found in each, the
+    board's pose in the left camera (``rvec``, ``tvec`` as ``cv2.Rodrigues`` vectors, metres)
+    and the pair's RMS reprojection error over both views, in pixels."""
+
+    left: str
+    right: str
+    left_corners: np.ndarray
+    right_corners: np.ndarray
+    rms_px: float = float("nan")
+    rvec: np.ndarray = field(default_factory=lambda: np.full(3, np.nan))
+    tvec: np.ndarray = field(default_factory=lambda: np.full(3, np.nan))
+
+    def __post_init__(self):
+        for name in ("left_corners", "right_corners"):
+            value = np.asarray(getattr(self, name), dtype=float)
+            if value.ndim != 2 or value.shape[1] != 2 or not len(value) or not np.isfinite(value).all():
+                raise ParameterError(message(name, "BoardPair", "finite (x, y) corners, one row each",
+                                             f"shape {value.shape}"))
+            object.__setattr__(self, name, value)
+        if self.left_corners.shape != self.right_corners.shape:
+            raise ParameterError(message("right_corners", "BoardPair", "as many corners as left_corners",
+                                         f"{len(self.right_corners)} against {len(self.left_corners)}"))
+        for name in ("rvec", "tvec"):
+            object.__setattr__(self, name, np.asarray(getattr(self, name), dtype=float).reshape(3))
+
+    @property
+    def names(self) -> tuple:
+        return (self.left, self.right)
+
+    def to_dict(self) -> dict:
+        return {"left": self.left, "right": self.right, "rms_px": self.rms_px, "rvec": self.rvec.tolist(),
+                "tvec": self.tvec.tolist(), "left_corners": self.left_corners.tolist(),
+                "right_corners": self.right_corners.tolist()}
+
+
+def _intrinsics(focal_px: float, cx: float, cy: float) -> np.ndarray:
+    return np.array([[focal_px, 0.0, cx], [0.0, focal_px, cy], [0.0, 0.0, 1.0]])
+
+
+@dataclass(frozen=True, eq=False)
+class StereoCamera:
+    """Two cameras, their rectification and the calibration they came from (see the module).
+
+    Attributes
+    ----------
+    size : (int, int)
+        Image width and height.
+    k_left, d_left, k_right, d_right : ndarray
+        Camera matrices and distortion coefficients (None: the default pinhole camera,
+        :data:`FOCAL_PX` at the image centre, no distortion).
+    rotation, translation : ndarray
+        The right camera's pose relative to the left one, metres (None: side by side,
+        :data:`BASELINE_M` apart).
+    rms : float
+        Reprojection error of the stereo calibration, in pixels (NaN if not calibrated).
+    board, square_m
+        The calibration board: inner corners (columns, rows) and square size in metres.
+    used, skipped : tuple of str
+        Names of the calibration pairs used, and of those where the board was not found.
+    pairs : tuple of BoardPair
+        The used pairs' corners, poses and errors (empty for a v1 file or a pinhole rig).
+
+    Examples
+    --------
+    >>> camera = StereoCamera()
+    >>> camera.focal_px, camera.baseline_m, camera.size
+    (300.0, 0.1, (320, 240))
+    >>> camera.points_from_disparity([[159.5, 119.5], [189.5, 89.5]], [30.0, 15.0])
+    array([[ 0. ,  0. ,  1. ],
+           [ 0.2, -0.2,  2. ]])
+    """
+
+    size: tuple = (WIDTH, HEIGHT)
+    k_left: np.ndarray = None
+    d_left: np.ndarray = None
+    k_right: np.ndarray = None
+    d_right: np.ndarray = None
+    rotation: np.ndarray = None
+    translation: np.ndarray = None
+    rms: float = float("nan")
+    board: tuple = BOARD
+    square_m: float = SQUARE_M
+    used: tuple = ()
+    skipped: tuple = ()
+    pairs: tuple = ()
+    # The right camera's centre in the left camera's frame, kept as given by `pinhole` so
+    # that the rendered scenes' rays are computed exactly as they always were.
+    _origin: np.ndarray = field(default=None, repr=False)
+    _rect: dict = field(default_factory=dict, repr=False)
+
+    def __post_init__(self):
+        size = tuple(self.size) if isinstance(self.size, (tuple, list)) else self.size
+        if (not isinstance(size, tuple) or len(size) != 2
+                or not all(isinstance(v, (int, np.integer)) and 1 <= v <= 1 << 16 for v in size)):
+            raise ParameterError(message("size", "StereoCamera",
+                                         f"(width, height), whole numbers from 1 to {1 << 16}", self.size))
+        object.__setattr__(self, "size", tuple(int(v) for v in size))
+        defaults = {"k_left": lambda: _intrinsics(FOCAL_PX, (size[0] - 1) / 2, (size[1] - 1) / 2),
+                    "d_left": lambda: np.zeros((1, 5)), "rotation": lambda: np.eye(3),
+                    "translation": lambda: np.array([[-BASELINE_M], [0.0], [0.0]])}
+        for name in ("k_left", "d_left", "rotation", "translation"):
+            if getattr(self, name) is None:
+                object.__setattr__(self, name, defaults[name]())
+        for name, default in (("k_right", self.k_left), ("d_right", self.d_left)):
+            if getattr(self, name) is None:
+                object.__setattr__(self, name, default)
+        _check(self, "StereoCamera")
+
+    @classmethod
+    def pinhole(cls, width: int = WIDTH, height: int = HEIGHT, focal_px: float = FOCAL_PX,
+                baseline_m: float = BASELINE_M, vertical_offset_px: float = 0.0,
+                roll_deg: float = 0.0) -> StereoCamera:
+        """Two distortion-free cameras side by side, as the rendered scenes use.
+
+        Parameters
+        ----------
+        width, height : int
+            Image size in pixels.  The principal point is the image centre
+            ``((width - 1) / 2, (height - 1) / 2)``.
+        focal_px : float
+            Focal length in pixels (> 0), the same for both cameras.
+        baseline_m : float
+            Distance between the optical centres in metres (> 0).
+        vertical_offset_px : float
+            The right image is shifted *down* by this many pixels.
+        roll_deg : float
+            Rotation of the right camera about its optical axis, in degrees.  A positive
+            roll turns the camera's ``x`` axis towards its ``y`` axis, so the scene appears
+            rotated counter-clockwise on screen in the right image.
+
+        Examples
+        --------
+        >>> cam = StereoCamera.pinhole()
+        >>> float(cam.disparity_at(1.8)), float(cam.disparity_at(1.0))
+        (16.666666666666668, 30.0)
+        >>> cam.project_left([[0.0, 0.0, 2.0]]), cam.project_right([[0.0, 0.0, 2.0]])
+        (array([[159.5, 119.5]]), array([[144.5, 119.5]]))
+        >>> StereoCamera.pinhole(baseline_m=-0.1)
+        Traceback (most recent call last):
+        ...
+        ismb_lab.ParameterError: The 'baseline_m' parameter of StereoCamera.pinhole must be a finite number > 0. Got -0.1 instead.
+        """
+        own = "StereoCamera.pinhole"
+        width, height = (check_number(v, name, own, low=2, high=100_000, integer=True)
+                         for v, name in ((width, "width"), (height, "height")))
+        focal_px, baseline_m = (check_number(v, name, own, low=0, low_open=True)
+                                for v, name in ((focal_px, "focal_px"), (baseline_m, "baseline_m")))
+        offset = check_number(vertical_offset_px, "vertical_offset_px", own)
+        roll = check_number(roll_deg, "roll_deg", own, low=-180, high=180)
+        cx, cy = (width - 1) / 2, (height - 1) / 2
+        a = math.radians(roll)
+        c, s = math.cos(a), math.sin(a)
+        to_left = np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]])   # right camera -> left frame
+        origin = np.array([baseline_m, 0.0, 0.0])
+        rotation = to_left.T
+        return cls((width, height), _intrinsics(focal_px, cx, cy), np.zeros((1, 5)),
+                   _intrinsics(focal_px, cx, cy + offset), np.zeros((1, 5)), rotation,
+                   (-(rotation @ origin)).reshape(3, 1), _origin=origin)
+
+    # ------------------------------------------------------------------ the two cameras
+
+    @property
+    def width(self) -> int:
+        return self.size[0]
+
+    @property
+    def height(self) -> int:
+        return self.size[1]
+
+    @property
+    def centre(self) -> np.ndarray:
+        """Principal point ``(cx, cy)`` of the left camera."""
+        return self.k_left[:2, 2].copy()
+
+    @property
+    def vertical_offset_px(self) -> float:
+        """How far the right camera's principal point is below the left one's, in pixels."""
+        return float(self.k_right[1, 2] - self.k_left[1, 2])
+
+    @property
+    def roll_deg(self) -> float:
+        """The right camera's roll about its optical axis, in degrees (to 1e-9 degree)."""
+        return round(math.degrees(math.atan2(self.rotation[0, 1], self.rotation[0, 0])), 9) + 0.0
+
+    @property
+    def right_origin(self) -> np.ndarray:
+        """Optical centre of the right camera in the left camera's frame."""
+        if self._origin is not None:
+            return self._origin
+        return -(self.rotation.T @ self.translation.reshape(3)) + 0.0   # + 0.0: no -0.0
+
+    @property
+    def right_rotation(self) -> np.ndarray:
+        """Rotation matrix from right-camera to left-camera coordinates."""
+        return self.rotation.T
+
+    @property
+    def distorted(self) -> bool:
+        """Whether either camera has lens distortion."""
+        return bool(np.any(self.d_left) or np.any(self.d_right))
+
+    def _pixels(self, cam: np.ndarray, k: np.ndarray) -> np.ndarray:
+        # The left camera's principal point plus the right one's offset from it: the order
+        # of the additions the rendered scenes (pinned bit for bit) were made with.
+        with np.errstate(divide="ignore", invalid="ignore"):
+            xy = self.centre + k[0, 0] * cam[:, :2] / cam[:, 2:3]
+        xy += k[:2, 2] - self.k_left[:2, 2]
+        xy[cam[:, 2] <= 0] = np.nan
+        return xy
+
+    def project_left(self, points3d) -> np.ndarray:
+        """Left-image ``(x, y)`` of 3-D points (pinhole, no distortion); NaN rows for points
+        not in front of the camera.
+
+        Examples
+        --------
+        >>> StereoCamera().project_left([[0.1, -0.05, 1.0]])
+        array([[189.5, 104.5]])
+        """
+        return self._pixels(_points3d(points3d, "points3d", "StereoCamera.project_left"), self.k_left)
+
+    def project_right(self, points3d) -> np.ndarray:
+        """Right-image ``(x, y)`` of 3-D points of the left camera's frame (pinhole, no
+        distortion); NaN rows for points not in front of the camera.
+
+        Examples
+        --------
+        >>> StereoCamera.pinhole(vertical_offset_px=2).project_right([[0.1, -0.05, 1.0]])
+        array([[159.5, 106.5]])
+        """
+        points = _points3d(points3d, "points3d", "StereoCamera.project_right")
+        return self._pixels(_rotate(points - self.right_origin, self.rotation), self.k_right)
+
+    def _dirs(self, xy: np.ndarray, k: np.ndarray) -> np.ndarray:
+        d = np.empty((len(xy), 3))
+        d[:, :2] = (xy - self.centre) / k[0, 0]
+        d[:, 2] = 1.0
+        return d
+
+    def rays_left(self, xy) -> tuple[np.ndarray, np.ndarray]:
+        """Rays through left-image points: ``(origins, unit directions)``, both ``(N, 3)``.
+
+        Examples
+        --------
+        >>> StereoCamera().rays_left([[159.5, 119.5]])
+        (array([[0., 0., 0.]]), array([[0., 0., 1.]]))
+        """
+        xy = check_points(xy, "xy", "StereoCamera.rays_left")
+        d = self._dirs(xy, self.k_left)
+        return np.zeros_like(d), _unit(d)
+
+    def rays_right(self, xy) -> tuple[np.ndarray, np.ndarray]:
+        """Rays through right-image points, in the left camera's frame.
+
+        Examples
+        --------
+        >>> StereoCamera().rays_right([[159.5, 119.5]])
+        (array([[0.1, 0. , 0. ]]), array([[0., 0., 1.]]))
+        """
+        xy = check_points(xy, "xy", "StereoCamera.rays_right") - (self.k_right[:2, 2] - self.k_left[:2, 2])
+        d = self._dirs(xy, self.k_right)
+        if not np.array_equal(self.rotation, np.eye(3)):
+            d = _rotate(d, self.right_rotation)
+        return np.broadcast_to(self.right_origin, d.shape).copy(), _unit(d)
+
+    # ------------------------------------------------------------------ the rectified pair
+
+    def _rectification(self) -> dict:
+        if not self._rect:
+            r1, r2, p1, p2, q, _, _ = cv2.stereoRectify(self.k_left, self.d_left, self.k_right, self.d_right,
+                                                          tuple(self.size), self.rotation, self.translation,
+                                                          flags=cv2.CALIB_ZERO_DISPARITY, alpha=0)
+            focal, baseline = float(p1[0, 0]), float(abs(p2[0, 3] / p2[0, 0]))
+            if not self.distorted:   # nothing to crop: keep the left camera's matrix
+                origin = self.right_origin
+                focal, baseline = float(self.k_left[0, 0]), float(np.sqrt(origin @ origin))
+                p1 = np.hstack([self.k_left, np.zeros((3, 1))])
+                p2 = p1.copy()
+                p2[0, 3] = -focal * baseline
+            self._rect.update(r1=r1, r2=r2, p1=p1, p2=p2, q=q, focal=focal, baseline=baseline)
+        return self._rect
+
+    @property
+    def focal_px(self) -> float:
+        """Focal length of the rectified views, in pixels."""
+        return self._rectification()["focal"]
+
+    @property
+    def baseline_m(self) -> float:
+        """Distance between the two rectified camera centres, in metres."""
+        return self._rectification()["baseline"]
+
+    @property
+    def rectified_centre(self) -> np.ndarray:
+        """Principal point ``(cx, cy)`` of the rectified left view."""
+        return self._rectification()["p1"][:2, 2].copy()
+
+    @property
+    def left_to_rectified(self) -> np.ndarray:
+        """Rotation from the left camera's frame to the rectified left camera's."""
+        return self._rectification()["r1"].copy()
+
+    def disparity_at(self, depth) -> np.ndarray:
+        """Disparity ``focal_px * baseline_m / depth`` of the rectified pair, in pixels.
+
+        Examples
+        --------
+        >>> StereoCamera().disparity_at([1.0, 1.5])
+        array([30., 20.])
+        """
+        return self.focal_px * self.baseline_m / np.asarray(depth, dtype=float)
+
+    def points_from_disparity(self, xy_left, disparity) -> np.ndarray:
+        """3-D points of rectified-left pixels and their disparities.
+
+        Parameters
+        ----------
+        xy_left : (N, 2) array_like
+            Points ``(x, y)`` of the rectified left view.
+        disparity : (N,) array_like
+            Their disparities ``x_left - x_right``, in pixels (> 0 for a point in front).
+
+        Returns
+        -------
+        (N, 3) ndarray
+            ``(X, Y, Z)`` in metres, in the rectified left camera's frame (X right, Y down,
+            Z forward); NaN rows where the disparity is not > 0.
+
+        Examples
+        --------
+        >>> StereoCamera().points_from_disparity([[10.0, 20.0]], [0.0])
+        array([[nan, nan, nan]])
+        """
+        own = "StereoCamera.points_from_disparity"
+        xy = check_points(xy_left, "xy_left", own)
+        d = np.asarray(disparity, dtype=float).reshape(-1)
+        if len(d) != len(xy) or not np.all(np.isfinite(d)):
+            raise ParameterError(message("disparity", own, f"{len(xy)} finite numbers, one per point of xy_left",
+                                         f"{len(d)} values" if len(d) != len(xy) else "NaN or infinite values"))
+        f, (cx, cy) = self.focal_px, self.rectified_centre
+        with np.errstate(divide="ignore", invalid="ignore"):
+            z = np.where(d > 0, f * self.baseline_m / d, np.nan)
+        return np.stack([(xy[:, 0] - cx) * z / f, (xy[:, 1] - cy) * z / f, z], axis=1)
+
+    def disparity_range(self, near_m: float, far_m: float) -> tuple:
+        """The disparities, in pixels, of points from `near_m` to `far_m` in front of the
+        rectified pair: ``(f B / far_m, f B / near_m)``.
+
+        Examples
+        --------
+        >>> StereoCamera().disparity_range(1.0, 2.0)
+        (15.0, 30.0)
+        """
+        own = "StereoCamera.disparity_range"
+        near = check_number(near_m, "near_m", own, low=0, low_open=True)
+        far = check_number(far_m, "far_m", own, low=near, low_open=True)
+        fb = self.focal_px * self.baseline_m
+        return (fb / far, fb / near)
+
+    @property
+    def zoom(self) -> float:
+        """How much the rectified views are enlarged: their focal length over the smaller of the
+        cameras' own.  Near 1 for a good rig (0.97 on OpenCV's sample); a poorly constrained
+        distortion makes the crop to valid pixels zoom in (1.9 with its pairs 03, 05, 14 alone)."""
+        return self.focal_px / min(float(self.k_left[0, 0]), float(self.k_right[0, 0]))
+
+    def rectify_points(self, xy, side: str = "left") -> np.ndarray:
+        """Raw-image points ``(x, y)`` of one camera in its rectified view."""
+        rect = self._rectification()
+        k, d, r, p = ((self.k_left, self.d_left, rect["r1"], rect["p1"]) if side == "left"
+                      else (self.k_right, self.d_right, rect["r2"], rect["p2"]))
+        xy = np.asarray(xy, dtype=float).reshape(-1, 1, 2)
+        return cv2.undistortPoints(xy, k, d, R=r, P=p).reshape(-1, 2)
+
+    def cropped(self) -> tuple:
+        """Names of the pairs whose board has a corner outside a rectified view."""
+        (w, h), out = self.size, []
+        for pair in self.pairs:
+            for corners, side in ((pair.left_corners, "left"), (pair.right_corners, "right")):
+                xy = self.rectify_points(corners, side)
+                if not ((xy >= 0).all() and (xy[:, 0] <= w - 1).all() and (xy[:, 1] <= h - 1).all()):
+                    out.append(pair.left)
+                    break
+        return tuple(out)
+
+    def warnings(self) -> tuple:
+        """What makes this rig's rectified views doubtful, each naming the fix."""
+        found = []
+        if self.zoom > MAX_ZOOM:
+            found.append(f"the rectified views are zoomed {self.zoom:.2f}x (above {MAX_ZOOM}x): the lens "
+                         "distortion is poorly constrained; calibrate with more pairs, or with poses that put "
+                         "the board near the corners and tilted")
+        cropped = self.cropped()
+        if cropped:
+            found.append(f"the board leaves the rectified view in {len(cropped)} pair(s) ({', '.join(cropped)}); "
+                         "calibrate with more pairs, or with different poses")
+        return tuple(found)
+
+    def maps(self):
+        """The ``cv2.remap`` maps of the left and the right view."""
+        rect = self._rectification()
+        make = lambda k, d, r, p: cv2.initUndistortRectifyMap(k, d, r, p, tuple(self.size), cv2.CV_32FC1)
+        return (make(self.k_left, self.d_left, rect["r1"], rect["p1"]),
+                make(self.k_right, self.d_right, rect["r2"], rect["p2"]))
+
+    def photos(self, left, right, owner: str = "StereoCamera.photos") -> tuple:
+        """A pair of this camera loaded grey (:func:`ismb_lab.rectify.load_photo`); a photo of
+        another size than the camera's is refused."""
+        from .rectify import load_photo
+
+        left, right = load_photo(left, "left", owner), load_photo(right, "right", owner)
+        for name, image in (("left", left), ("right", right)):
+            if (image.shape[1], image.shape[0]) != tuple(self.size):
+                raise ParameterError(message(name, owner, f"a {self.size[0]}x{self.size[1]} photo, the size the "
+                                             "rig was calibrated at", f"{image.shape[1]}x{image.shape[0]}"))
+        return left, right
+
+    def rectify(self, left, right):
+        """Rectify a pair of this camera exactly (no matching needed; the figures are
+        measured on robust matches afterwards).  A pair of another size is refused.
+
+        Returns
+        -------
+        ismb_lab.rectify.Rectified
+        """
+        from .rectify import measured
+
+        left, right = self.photos(left, right, "StereoCamera.rectify")
+        (lx, ly), (rx, ry) = self.maps()
+        warp = lambda image, mx, my: cv2.remap(image.astype(np.float32), mx, my, cv2.INTER_LINEAR).astype(float)
+        return measured(warp(left, lx, ly), warp(right, rx, ry), np.eye(3), np.eye(3), "rig")
+
+    def to_dict(self) -> dict:
+        return {"format": FORMAT, "size": list(self.size), "rms_px": self.rms,
+                "focal_px": self.focal_px, "baseline_m": self.baseline_m, "zoom": self.zoom,
+                "cropped": list(self.cropped()), "board": list(self.board),
+                "square_m": self.square_m, "used": list(self.used), "skipped": list(self.skipped),
+                "k_left": self.k_left.tolist(), "d_left": self.d_left.ravel().tolist(),
+                "k_right": self.k_right.tolist(), "d_right": self.d_right.ravel().tolist(),
+                "rotation": self.rotation.tolist(), "translation": self.translation.ravel().tolist(),
+                "pairs": [pair.to_dict() for pair in self.pairs]}
+
+    def to_json(self) -> str:
+        return json.dumps(self.to_dict(), indent=2)
+
+
+def _check_intrinsics(k, d, name: str, owner: str) -> None:
+    rule = "a camera matrix [[fx, 0, cx], [0, fy, cy], [0, 0, 1]] with finite fx, fy > 0 and cx, cy"
+    k = np.asarray(k, dtype=float)
+    if (k.shape != (3, 3) or not np.isfinite(k).all() or not (k[0, 0] > 0 and k[1, 1] > 0)
+            or not np.allclose(k[2], (0, 0, 1)) or k[1, 0] != 0):
+        raise ParameterError(message(f"k_{name}", owner, rule, k.tolist()))
+    d = np.asarray(d, dtype=float)
+    if d.size not in (4, 5, 8, 12, 14) or not np.isfinite(d).all():
+        raise ParameterError(message(f"d_{name}", owner, "4, 5, 8, 12 or 14 finite distortion "
+                                     "coefficients", d.ravel().tolist()))
+
+
+def _check(camera: StereoCamera, owner: str) -> None:
+    """Refuse a camera that cannot rectify: it would give black images or a crash, not an error."""
+    for name in ("k_left", "d_left", "k_right", "d_right", "rotation", "translation"):
+        object.__setattr__(camera, name, np.asarray(getattr(camera, name), dtype=float))
+    for name in ("left", "right"):
+        _check_intrinsics(getattr(camera, f"k_{name}"), getattr(camera, f"d_{name}"), name, owner)
+    r = camera.rotation
+    if r.shape != (3, 3) or not np.isfinite(r).all() or not np.allclose(r @ r.T, np.eye(3), atol=1e-6) \
+            or not np.linalg.det(r) > 0:
+        raise ParameterError(message("rotation", owner, "a 3x3 rotation matrix", r.tolist()))
+    t = camera.translation
+    if t.size != 3 or not np.isfinite(t).all() or not np.linalg.norm(t) > 0:
+        raise ParameterError(message("translation", owner, "a finite (x, y, z) offset of the right camera, "
+                                     "not zero (a baseline > 0)", t.ravel().tolist()))
+    object.__setattr__(camera, "translation", t.reshape(3, 1))
+    if not (np.isfinite(camera.focal_px) and camera.focal_px > 0 and np.isfinite(camera.baseline_m)
+            and camera.baseline_m > 0):
+        raise ParameterError(message("k_left", owner, "cameras that rectify to a finite focal length > 0",
+                                     f"focal length {camera.focal_px} px, baseline {camera.baseline_m} m"))
+
+
+def load_camera(source) -> StereoCamera:
+    """A calibrated camera from ``ismb-lab calibrate``'s JSON (a path or the text), validated."""
+    owner = "load_camera"
+    try:
+        text = Path(source).read_text() if not str(source).lstrip().startswith("{") else str(source)
+        data = json.loads(text)
+    except (OSError, ValueError) as exc:
+        raise ParameterError(message("source", owner, "a readable rig JSON file", f"{source} ({exc})")) from None
+    if not isinstance(data, dict) or data.get("format") not in _FORMATS:
+        raise ParameterError(message("source", owner, "a rig file written by 'ismb-lab calibrate' "
+                                     f"(format {' or '.join(_FORMATS)})", str(source)))
+    try:
+        arr = lambda key, shape: np.asarray(data[key], dtype=float).reshape(shape)
+        camera = StereoCamera(tuple(int(v) for v in data["size"]), arr("k_left", (3, 3)), arr("d_left", (1, -1)),
+                              arr("k_right", (3, 3)), arr("d_right", (1, -1)), arr("rotation", (3, 3)),
+                              arr("translation", (3, 1)), float(data["rms_px"]), tuple(data["board"]),
+                              float(data["square_m"]), tuple(data.get("used", ())), tuple(data.get("skipped", ())),
+                              tuple(BoardPair(str(p["left"]), str(p["right"]), p["left_corners"],
+                                              p["right_corners"], float(p["rms_px"]), p["rvec"], p["tvec"])
+                                    for p in data.get("pairs", ())))
+    except ParameterError as exc:   # a degenerate rig: name the file
+        raise ParameterError(str(exc).replace("of StereoCamera", f"of the rig file {str(source)!r}")) from None
+    except (KeyError, TypeError, ValueError, OverflowError) as exc:
+        raise ParameterError(message("source", owner, "a complete rig file", f"{source} ({exc})")) from None
+    return camera

@@ -1,0 +1,143 @@
+"""Matches in metres: match a calibrated camera's pair using what the camera knows.
+
+A pair rectified with a calibrated :class:`~ismb_lab.camera.StereoCamera` has its
+epipolar lines on the image rows, to within the calibration's error.  Matching it
+(``ismb-lab match --rig``) uses that three ways, none of them special to any scene:
+
+1. **rows**: a match's two corners are on one row to within :func:`row_tolerance` pixels,
+   ``1 + 2 rms``: Harris corners are whole pixels (each is up to half a pixel from its
+   point, so a row difference of up to 1 px), and each of the two points is rectified with
+   about the calibration's RMS reprojection error.  The candidate window is that tall;
+2. **the disparity range**: the window's range is measured on robust SIFT matches that
+   search only their own rows and positive disparities (a point in front of both cameras)
+   (:func:`ismb_lab.matching.auto_window` with ``rows_px``), so a repetitive texture's
+   ratio test compares a keypoint with the others of its row only;
+3. **mutual best**: of the network's matches, only those whose two corners are each
+   other's most similar candidate in that window are kept (:func:`mutual_best`).
+
+Then each match is a point ``(X, Y, Z)`` in metres in the rectified left camera's frame
+(:func:`match_points`, :meth:`~ismb_lab.camera.StereoCamera.points_from_disparity`).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import replace
+
+import numpy as np
+
+from ._validation import ParameterError, ParameterTypeError, message
+from .camera import StereoCamera
+from .matching import MatchConfig, MatchResult, Prepared, auto_window
+
+__all__ = ["for_camera", "match_points", "mutual_best", "rig_config", "row_tolerance"]
+
+
+def row_tolerance(camera: StereoCamera) -> float:
+    """Largest row difference, in pixels, of a true corner match in `camera`'s rectified pair:
+    ``1 + 2 rms`` (``1`` for an uncalibrated, ideal camera).
+
+    >>> row_tolerance(StereoCamera())
+    1.0
+    """
+    rms = float(camera.rms)
+    return 1.0 + (2.0 * rms if math.isfinite(rms) else 0.0)
+
+
+def rig_config(camera: StereoCamera, config: MatchConfig, pair=None) -> MatchConfig:
+    """`config` with the candidate window `camera` gives: :func:`row_tolerance` rows up and
+    down, and, with ``shift="auto"``, the disparity range measured on `pair` along its rows.
+
+    >>> rig_config(StereoCamera(), MatchConfig()).window_height
+    2.0
+    """
+    if not isinstance(config, MatchConfig):
+        raise ParameterTypeError(message("config", "rig_config", "a MatchConfig", config))
+    rows = row_tolerance(camera)
+    config = replace(config, window_height=2 * rows)
+    if config.shift == "auto":
+        if pair is None:
+            raise ParameterError(message("pair", "rig_config", "the pair whose disparities set shift='auto'",
+                                         None))
+        config = auto_window(pair, config, rows_px=rows)
+    return config
+
+
+def mutual_best(prepared: Prepared, result: MatchResult) -> MatchResult:
+    """`result` with only the matches whose two corners are each other's most similar
+    candidate (smallest ``M``) among the candidate pairs of `prepared`.
+
+    >>> import numpy as np
+    >>> from ismb_lab.matching import match, prepare
+    >>> from ismb_lab.scenes import synthetic_scene
+    >>> s = synthetic_scene(0)
+    >>> p = prepare(s.left, s.right)
+    >>> r = match(prepared=p)
+    >>> kept = mutual_best(p, r)
+    >>> 0 < len(kept.pairs) <= len(r.pairs)
+    True
+    """
+    if not isinstance(prepared, Prepared) or not isinstance(result, MatchResult):
+        raise ParameterTypeError(message("prepared", "mutual_best", "a Prepared and its MatchResult",
+                                         type(prepared).__name__))
+    problem = prepared.problem
+    rows, cols = problem.rows, problem.cols
+    if not len(result.pairs):
+        return result
+    m = problem.dissimilarity[rows, cols]
+    best_right = np.full(len(problem.left_xy), -1)
+    best_left = np.full(len(problem.right_xy), -1)
+    for r, c, value in zip(rows, cols, m):
+        if best_right[r] < 0 or value < problem.dissimilarity[r, best_right[r]]:
+            best_right[r] = c
+        if best_left[c] < 0 or value < problem.dissimilarity[best_left[c], c]:
+            best_left[c] = r
+    i, k = result.pairs[:, 0], result.pairs[:, 1]
+    keep = (best_right[i] == k) & (best_left[k] == i)
+    state = result.state
+    if state is not None:
+        neuron = {(int(r), int(c)): n for n, (r, c) in enumerate(zip(rows, cols))}
+        state = state.copy()
+        for a, b in result.pairs[~keep]:
+            state[neuron[(int(a), int(b))]] = 0
+    return replace(result, pairs=result.pairs[keep], state=state)
+
+
+def match_points(result: MatchResult, camera: StereoCamera) -> np.ndarray:
+    """The ``(m, 3)`` points, metres, of `result`'s matches in `camera`'s rectified left
+    frame (NaN rows for a disparity that is not > 0); the pair must be rectified by `camera`.
+
+    >>> import numpy as np
+    >>> from ismb_lab.matching import match
+    >>> from ismb_lab.scenes import synthetic_scene
+    >>> s = synthetic_scene(0)
+    >>> xyz = match_points(match(s.left, s.right), StereoCamera())
+    >>> xyz.shape[1], bool(np.all(xyz[:, 2] > 0))
+    (3, True)
+    """
+    if not isinstance(camera, StereoCamera):
+        raise ParameterTypeError(message("camera", "match_points", "a StereoCamera", camera))
+    left, right = result.left_match_xy, result.right_match_xy
+    return camera.points_from_disparity(left, left[:, 0] - right[:, 0])
+
+
+def for_camera(left, right, camera: StereoCamera) -> tuple:
+    """The pair to match with `camera`: ``(left, right, how)``.
+
+    Raw photos of `camera` are rectified with it; a pair that is already rectified (its
+    robust matches' median row difference is not larger than after rectifying it again) is
+    kept as it is.  ``how`` says which, with both figures.  Photos of another size than the
+    camera's are refused.
+    """
+    from .rectify import _dy_figures, robust_matches
+
+    left, right = camera.photos(left, right, "for_camera")
+    rectified = camera.rectify(left, right)
+    given = robust_matches(left, right)
+    before = _dy_figures(given.left_xy, given.right_xy)["median_abs_dy_px"] if len(given) else math.inf
+    after = rectified.median_abs_dy_px if rectified.inliers else math.inf
+    if before < after:
+        return left, right, (f"already rectified (median row difference of robust matches {before:.2f} px; "
+                             f"{after:.2f} px if rectified again): matched as they are")
+    return rectified.left, rectified.right, (f"raw photos, rectified with the rig (median row difference of "
+                                             f"robust matches {before:.2f} px before, {after:.2f} px after)")
