@@ -137,15 +137,6 @@ def _inputs_of(y, u, nb_ptr, entries, self_w, bias, neurons, on_in_row, on_in_co
 
 
 @numba.njit(cache=True)
-def _unstable(y, u):
-    """Whether any neuron would flip, given its current net input."""
-    found = False
-    for a in range(y.shape[0]):
-        found |= (u[a] != 0) & ((u[a] > 0) ^ (y[a] == 1))
-    return found
-
-
-@numba.njit(cache=True)
 def _solve(seed, sweep_rule, patience, max_attempts, y0, all_on, packed, values):
     """The whole run in one call: the visiting order drawn from `seed` as
     :func:`visiting_order` draws it, and every net input computed exactly.
@@ -203,12 +194,6 @@ def _solve(seed, sweep_rule, patience, max_attempts, y0, all_on, packed, values)
     code = 0
     pull = True
     while code == 0:
-        if sweep_rule and not pull and not _unstable(y, u):
-            # every u is current and no neuron would flip: this sweep would change nothing,
-            # whatever its order, so it is not drawn (the stream is not read after the run)
-            attempts += n
-            code = 1
-            break
         if sweep_rule:
             state = _shuffle(order, state)
         else:
@@ -224,18 +209,17 @@ def _solve(seed, sweep_rule, patience, max_attempts, y0, all_on, packed, values)
                     _prefetch(entries, nb_ptr[order[t + _AHEAD]])
                 i, k = neurons[a + a], neurons[a + a + _U64(1)]
                 ua = bias[a] + self_w[a] * ya + row_w * (on_in_row[i] - ya) + col_w * (on_in_col[k] - ya)
-                mid, end = pos_end[a], nb_ptr[a + _U64(1)]
-                for p in range(nb_ptr[a], mid):
-                    x = entries[p]
-                    ua += (x >> NB_SHIFT) * y[x & _INDEX]
-                # the other weights can only lower ua: once it is negative, its sign is known
-                p = mid
-                while ua >= 0 and p + _U64(8) <= end:
+                # the weights after pos_end[a] can only lower ua: once they are being read and
+                # ua is negative, its sign is known.  Blocks of eight from the segment's start,
+                # whatever their signs: a loop of its own for the positive weights had cost a
+                # mispredicted exit per attempt.
+                p, mid, end = nb_ptr[a], pos_end[a], nb_ptr[a + _U64(1)]
+                while p + _U64(8) <= end and (p < mid or ua >= 0):
                     for q in range(p, p + _U64(8)):
                         x = entries[q]
                         ua += (x >> NB_SHIFT) * y[x & _INDEX]
                     p += _U64(8)
-                if ua >= 0:
+                if p < mid or ua >= 0:
                     for q in range(p, end):
                         x = entries[q]
                         ua += (x >> NB_SHIFT) * y[x & _INDEX]
