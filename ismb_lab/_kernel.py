@@ -152,7 +152,10 @@ def _solve(seed, sweep_rule, patience, max_attempts, y0, all_on, packed, values)
     The first sweep pulls: each attempt sums its neuron's neighbours afresh and reads the
     two counts, and a flip changes only ``y`` and the counts.  From every neuron on, nine
     in ten neurons flip in that sweep, and pushing each flip to its neighbours had cost
-    more than the sums.  Later sweeps flip a few neurons each, so they keep every ``u``
+    more than the sums.  A sum stops early: a neuron's positive weights come first in its
+    entries (:class:`ismb_lab.hopfield._Weights`), and once they are summed and the input
+    is negative, the others can only lower it, so the decision is known (at 200 x 200
+    corners, two in five entries are read).  The input itself is not kept in that sweep.  Later sweeps flip a few neurons each, so they keep every ``u``
     current instead (:func:`_inputs_of` fills it once): a flip adds its weights to its
     neighbours and the uniqueness weight to its row and column, and an attempt reads one
     number.  Reading ``u_a`` from its parts had cost three times as much per attempt.
