@@ -85,6 +85,7 @@ RULES = ("exact", "thesis")
 NB_SHIFT = 21
 #: The most candidate neurons a network holds: one more needs a 22-bit index.
 MAX_NEURONS = 1 << NB_SHIFT
+_ONE_WEIGHT = 1 << NB_SHIFT   # a packed entry is at least this when its weight is positive
 
 
 def _csr(n: int, src: np.ndarray, dst: np.ndarray):
@@ -430,15 +431,21 @@ def _quantised(pair_c, nb_ptr, nb_pair, nb_idx, similarity, self_c, exact, scale
     values = np.zeros(m + 3 * n + 2, dtype=np.int64)
     values[-2] = values[-1] = unique
     entries, self_w, bias, pos_end = values[:m], values[m:m + n], values[m + n:m + 2 * n], values[m + 2 * n:m + 3 * n]
+    ptr = nb_ptr.view(np.uint64)   # unsigned: no test for a negative (from-the-end) index
+    one = np.uint64(1)
     for a in range(n):
-        front, back = nb_ptr[a], nb_ptr[a + 1]
-        for p in range(nb_ptr[a], nb_ptr[a + 1]):
+        # positive weights from the front, the others from the back: each entry is stored at
+        # both ends of the part not yet filled, and the end that keeps it moves on, so no
+        # branch depends on a weight's sign (the other copy is overwritten later)
+        front, back = ptr[a], ptr[a + 1]
+        for p in range(ptr[a], ptr[a + 1]):
             c = pair_c[nb_pair[p]]
-            w = np.int64(np.rint((2.0 * c if exact else c) * scale))
-            positive = w > 0
-            back -= 1 - positive
-            entries[front if positive else back] = (w << NB_SHIFT) | nb_idx[p]
+            e = (np.int64(np.rint((2.0 * c if exact else c) * scale)) << NB_SHIFT) | nb_idx[p]
+            entries[front] = e
+            entries[back - one] = e
+            positive = np.uint64(e >= _ONE_WEIGHT)
             front += positive
+            back -= one - positive
         pos_end[a] = front
         bias[a] = np.int64(np.rint((match_bias + similarity[a]) * scale))
         if not exact:
