@@ -30,18 +30,17 @@ from dataclasses import dataclass, field
 from functools import cached_property
 from typing import Iterator, NamedTuple
 
-import numba
 import numpy as np
 
+from ._kernel import _GOLDEN, _MIX1, _MIX2, _below, _next, _shuffle, _solve  # noqa: F401 (tested here)
 from ._validation import MAX_SEED, ParameterTypeError, check_choice, check_number, check_rng, message
-from .hopfield import NB_SHIFT, PACKED, RULES, SCALE, Network, _check_state, _Weights, _weights, _energy_of, energy
+from .hopfield import RULES, SCALE, Network, _check_state, _Weights, _weights, _energy_of, energy
 
 __all__ = ["KERNELS", "STOP_RULES", "iter_updates", "run", "RunResult", "Update", "visiting_order"]
 
 STOP_RULES = ("sweep", "stall")
 KERNELS = ("numba", "textbook")
 
-_GOLDEN, _MIX1, _MIX2 = 0x9E3779B97F4A7C15, 0xBF58476D1CE4E5B9, 0x94D049BB133111EB
 _MASK64 = (1 << 64) - 1
 
 
@@ -95,70 +94,6 @@ def visiting_order(seed: int, n: int, stop_rule: str) -> Iterator[np.ndarray]:
             yield np.array(order, dtype=np.int64)
         else:
             yield np.array([stream.below(n) for _ in range(n)], dtype=np.int64)
-
-
-_U64 = numba.types.uint64
-# numba freezes module globals as constants; as plain ints these would not fit an int64
-_GOLDEN_U, _MIX1_U, _MIX2_U = np.uint64(_GOLDEN), np.uint64(_MIX1), np.uint64(_MIX2)
-
-
-@numba.njit(cache=True)
-def _next(state):
-    """One SplitMix64 step: ``(new state, number)``, all arithmetic modulo 2**64."""
-    state = _U64(state + _GOLDEN_U)
-    z = state
-    z = _U64((z ^ (z >> _U64(30))) * _MIX1_U)
-    z = _U64((z ^ (z >> _U64(27))) * _MIX2_U)
-    return state, _U64(z ^ (z >> _U64(31)))
-
-
-@numba.njit(cache=True)
-def _ones_below(x):
-    """`x` with every bit under its highest set bit set: the mask of a draw below ``x + 1``."""
-    mask = _U64(x)
-    mask |= mask >> _U64(1)
-    mask |= mask >> _U64(2)
-    mask |= mask >> _U64(4)
-    mask |= mask >> _U64(8)
-    mask |= mask >> _U64(16)
-    mask |= mask >> _U64(32)
-    return mask
-
-
-@numba.njit(cache=True)
-def _below(state, bound):
-    """:meth:`_Stream.below`: ``(new state, a number in range(bound))``."""
-    mask = _ones_below(bound - 1)
-    while True:
-        state, x = _next(state)
-        x = _U64(x & mask)
-        if x < _U64(bound):
-            return state, np.int64(x)
-
-
-@numba.njit(cache=True)
-def _shuffle(order, state):
-    """Shuffle `order` in place as :func:`visiting_order`'s sweep does, and return the new state.
-
-    The same draws as ``_below(state, t + 1)`` for ``t = n - 1, ..., 1``, without a branch
-    on the draw: a rejected number leaves ``t`` where it is (its swap is with itself).  The
-    mask changes only when ``t`` falls to the next power of two, so the inner loop keeps it
-    fixed and carries only ``t`` from one draw to the next.  A rejection had been a
-    mispredicted branch, and then the mask's update the longest chain of the loop.
-    """
-    state = _U64(state)
-    t = order.shape[0] - 1
-    while t > 0:
-        mask = _ones_below(t)
-        low = np.int64(mask >> _U64(1))   # the mask holds while t is above its lower half
-        while t > low:
-            state, x = _next(state)
-            x &= mask
-            accept = x <= _U64(t)
-            j = np.int64(x) if accept else t
-            order[t], order[j] = order[j], order[t]
-            t -= np.int64(accept)
-    return state
 
 
 def _seed_of(rng, owner: str) -> int:
@@ -397,176 +332,6 @@ class RunResult:
 
 
 _STOP_NAMES = {1: "sweep", 2: "stall", 3: "max_attempts"}
-
-
-# The compiled run takes the topology's integers in one buffer (Topology.packed) and the
-# network's in another (_Weights.values): a call into compiled code unboxes each array
-# argument separately, about 0.1 us apiece, which on a 20 x 20 ROI cost as much as the run.
-_NB_PTR, _ROW_PTR, _COL_PTR, _NEURONS, _COL_IDX = range(len(PACKED))
-_INDEX = (1 << NB_SHIFT) - 1   # an entry's low bits: the neighbour's index
-
-
-@numba.njit(cache=True)
-def _segment(packed, j):
-    return packed[packed[j]:packed[j + 1]]
-
-
-@numba.njit(cache=True)
-def _split(packed, values):
-    """``(entries, self_w, bias)``: the views of a :class:`_Weights` ``values`` buffer."""
-    m, n = packed[packed[_NB_PTR + 1] - 1], packed[_NEURONS + 1] - packed[_NEURONS]
-    return values[:m], values[m:m + n], values[m + n:m + 2 * n]
-
-
-@numba.njit(cache=True)
-def _inputs_of(y, u, nb_ptr, entries, self_w, bias, neurons, on_in_row, on_in_col, row_w, col_w):
-    """Fill ``u`` with every net input: ``bias_a + self_w_a y_a + sum_b W_ab y_b`` and the
-    uniqueness terms, pushing the weights of the neurons on (after a first sweep from
-    every neuron on, a few percent are left)."""
-    for a in range(y.shape[0]):
-        ya = np.int64(y[a])
-        u[a] = (bias[a] + self_w[a] * ya + row_w * (on_in_row[neurons[2 * a]] - ya)
-                + col_w * (on_in_col[neurons[2 * a + 1]] - ya))
-    for a in range(y.shape[0]):
-        if y[a]:
-            for p in range(nb_ptr[a], nb_ptr[a + 1]):
-                x = entries[p]
-                u[x & _INDEX] += x >> NB_SHIFT
-
-
-@numba.njit(cache=True)
-def _solve(seed, sweep_rule, patience, max_attempts, y0, all_on, packed, values):
-    """The whole run in one call: the visiting order drawn from `seed` as
-    :func:`visiting_order` draws it, and every net input computed exactly.
-    `packed` is :attr:`Topology.packed`, `values` the :class:`_Weights` buffer; with
-    `all_on` the run starts from every neuron on (and `y0` is not read).
-    Returns ``(state, stop code of _STOP_NAMES, attempts, flips)``.
-
-    A net input is ``u_a = c_a + row_w (R_i - y_a) + col_w (K_k - y_a)``: ``c_a`` sums the
-    bias, the neighbours and the thesis rule's self term ``self_w_a y_a``; ``R_i`` and
-    ``K_k`` count the neurons on in the row and column of ``a``.  The same integers as
-    (3-20) summed term by term, so the same decisions.
-
-    The first sweep pulls: each attempt sums its neuron's neighbours afresh and reads the
-    two counts, and a flip changes only ``y`` and the counts.  From every neuron on, nine
-    in ten neurons flip in that sweep, and pushing each flip to its neighbours had cost
-    more than the sums.  Later sweeps flip a few neurons each, so they keep every ``u``
-    current instead (:func:`_inputs_of` fills it once): a flip adds its weights to its
-    neighbours and the uniqueness weight to its row and column, and an attempt reads one
-    number.  Reading ``u_a`` from its parts had cost three times as much per attempt.
-
-    The stop tests are those of :func:`_updates`, in its order: with the sweep rule the
-    attempt limit is a whole number of sweeps, so both are tested at the end of a sweep,
-    the sweep rule first."""
-    # indices read as unsigned: numba then skips the test for a negative (from-the-end)
-    # index, which in the loops over neighbours had cost a quarter of a run
-    nb_ptr = _segment(packed, _NB_PTR).view(np.uint64)
-    row_ptr, col_ptr = _segment(packed, _ROW_PTR).view(np.uint64), _segment(packed, _COL_PTR).view(np.uint64)
-    col_idx = _segment(packed, _COL_IDX).view(np.uint64)
-    neurons = _segment(packed, _NEURONS).view(np.uint32)   # i, k of each neuron, side by side
-    entries, self_w, bias = _split(packed, values)
-    row_w, col_w = values[-2], values[-1]
-    n, n_left, n_right = self_w.shape[0], row_ptr.shape[0] - 1, col_ptr.shape[0] - 1
-    # one allocation for the visiting order, the net inputs and the counts
-    work = np.empty(2 * n + n_left + n_right, dtype=np.int64)
-    order, u = work[:n].view(np.uint64), work[n:2 * n]
-    on_in_row, on_in_col = work[2 * n:2 * n + n_left], work[2 * n + n_left:]
-    if all_on:
-        y = np.ones(n, dtype=np.uint8)
-        for i in range(n_left):
-            on_in_row[i] = row_ptr[i + 1] - row_ptr[i]
-        for k in range(n_right):
-            on_in_col[k] = col_ptr[k + 1] - col_ptr[k]
-    else:
-        y = y0.copy()
-        on_in_row[:] = 0
-        on_in_col[:] = 0
-        for a in range(n):
-            on_in_row[neurons[2 * a]] += y[a]
-            on_in_col[neurons[2 * a + 1]] += y[a]
-    for t in range(n):
-        order[t] = t
-    state = _U64(seed)
-    attempts = flips = unchanged = 0
-    code = 0
-    pull = True
-    while code == 0:
-        if sweep_rule:
-            state = _shuffle(order, state)
-        else:
-            for t in range(n):
-                state, order[t] = _below(state, n)
-        changed = 0
-        for t in range(n):
-            a = order[t]
-            attempts += 1
-            ya = np.int64(y[a])
-            if pull:
-                i, k = neurons[a + a], neurons[a + a + _U64(1)]
-                ua = bias[a] + self_w[a] * ya + row_w * (on_in_row[i] - ya) + col_w * (on_in_col[k] - ya)
-                for p in range(nb_ptr[a], nb_ptr[a + _U64(1)]):
-                    x = entries[p]
-                    ua += (x >> NB_SHIFT) * y[x & _INDEX]
-            else:
-                ua = u[a]
-            # flip when on with u < 0 or off with u > 0, without a branch on y: on a random
-            # visiting order that branch is mispredicted about half the time
-            flip = (ua != 0) & ((ua > 0) ^ (ya == 1))
-            if not flip:
-                unchanged += 1
-                if not sweep_rule:
-                    if unchanged >= patience:
-                        code = 2
-                    elif attempts >= max_attempts:
-                        code = 3
-                    if code:
-                        break
-                continue
-            if pull:
-                y[a] = 1 - ya
-                on_in_row[i] += 1 - 2 * ya
-                on_in_col[k] += 1 - 2 * ya
-            # a flip of y_a by d adds W_ab d to every u_b of a neighbour, and row_w d or
-            # col_w d to every other neuron of its row and column (the row's neurons are
-            # consecutive); its own u_a changes only by its self term.  Each sign has its
-            # own loops of plain additions or subtractions.  Integers: no rounding.
-            elif ya == 1:
-                y[a] = 0
-                i, k = neurons[a + a], neurons[a + a + _U64(1)]
-                for p in range(nb_ptr[a], nb_ptr[a + _U64(1)]):
-                    x = entries[p]
-                    u[x & _INDEX] -= x >> NB_SHIFT
-                for b in range(row_ptr[i], row_ptr[i + _U64(1)]):
-                    u[b] -= row_w
-                for q in range(col_ptr[k], col_ptr[k + _U64(1)]):
-                    u[col_idx[q]] -= col_w
-                u[a] += row_w + col_w - self_w[a]
-            else:
-                y[a] = 1
-                i, k = neurons[a + a], neurons[a + a + _U64(1)]
-                for p in range(nb_ptr[a], nb_ptr[a + _U64(1)]):
-                    x = entries[p]
-                    u[x & _INDEX] += x >> NB_SHIFT
-                for b in range(row_ptr[i], row_ptr[i + _U64(1)]):
-                    u[b] += row_w
-                for q in range(col_ptr[k], col_ptr[k + _U64(1)]):
-                    u[col_idx[q]] += col_w
-                u[a] += self_w[a] - row_w - col_w
-            changed += 1
-            unchanged = 0
-            if not sweep_rule and attempts >= max_attempts:
-                code = 3
-                break
-        flips += changed
-        if sweep_rule:
-            if changed == 0:
-                code = 1
-            elif attempts >= max_attempts:
-                code = 3
-        if pull and code == 0:
-            _inputs_of(y, u, nb_ptr, entries, self_w, bias, neurons, on_in_row, on_in_col, row_w, col_w)
-            pull = False
-    return y, code, attempts, flips
 
 
 _NO_STATE = np.zeros(0, dtype=np.uint8)

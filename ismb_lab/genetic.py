@@ -172,6 +172,18 @@ class Generation:
             if getattr(self, name) is not None:
                 object.__setattr__(self, name, readonly(getattr(self, name)))
 
+    @classmethod
+    def _of(cls, *values) -> "Generation":
+        """The same record without the frozen ``__init__``'s ``object.__setattr__`` calls."""
+        g = object.__new__(cls)
+        d = g.__dict__
+        for f, value in zip(fields(cls), values):
+            d[f.name] = readonly(value) if f.name in _ARRAYS and value is not None else value
+        return g
+
+
+_ARRAYS = ("best_chromosome", "population", "fitness")
+
 
 def _check_bounds(bounds, owner: str) -> Bounds:
     if isinstance(bounds, Bounds):
@@ -289,17 +301,30 @@ def elite(fitness, n: int = 2) -> np.ndarray:
 
 
 def _breed(rng, population, fitness, bounds, p_c, p_m, n_elite):
-    """The next population and, per row, its unchanged source row (-1 if new)."""
+    """The next population and, per row, its unchanged source row (-1 if new).
+
+    The steps of :func:`elite`, :func:`tournament`, :func:`arithmetic_crossover` and
+    :func:`random_mutation` on arguments already checked: the same draws from `rng` in the
+    same order, and the same arithmetic (tested against them), without their checks, which
+    had cost more than a generation's selection itself."""
     size = len(population)
-    origin = np.concatenate([elite(fitness, n_elite), tournament(rng, fitness, size - n_elite)])
+    k = size - n_elite
+    first = rng.integers(size, size=k)
+    second = rng.integers(size - 1, size=k)
+    second += second >= first
+    origin = np.concatenate([np.argsort(-fitness, kind="stable")[:n_elite],
+                             np.where(fitness[second] > fitness[first], second, first)])
     children = population[origin]
     lam = rng.random()
-    first = n_elite + 2 * np.flatnonzero(rng.random((size - n_elite) // 2) < p_c)
-    children[first], children[first + 1] = arithmetic_crossover(children[first], children[first + 1], lam)
-    crossed = np.sort(np.concatenate([first, first + 1]))
+    first = n_elite + 2 * np.flatnonzero(rng.random(k // 2) < p_c)
+    a, b = children[first], children[first + 1]
+    children[first], children[first + 1] = lam * a + (1 - lam) * b, lam * b + (1 - lam) * a
+    crossed = np.empty(2 * len(first), dtype=np.int64)
+    crossed[0::2], crossed[1::2] = first, first + 1   # ascending, as np.sort would give
     origin[crossed] = -1
-    for i in crossed[rng.random(crossed.size) < p_m]:
-        children[i] = random_mutation(rng, children[i], bounds)
+    for i in crossed[rng.random(crossed.size) < p_m].tolist():
+        gene = rng.integers(bounds.n_genes)
+        children[i, gene] = rng.uniform(bounds.low[gene], bounds.high[gene])
     return children, origin
 
 
@@ -389,11 +414,12 @@ def _run(fitness, bounds, rng, size, generations, target, rates, keep) -> Iterat
         if index:
             pop, origin = _breed(rng, pop, scores, bounds, *rates)
             scores, new = scores[origin], origin < 0  # rows with origin -1 are overwritten below
-        if new.any():
-            scores[new] = _scores(fitness(pop[new]), "evolve", rule, lambda n: n == new.sum())
-            count += int(new.sum())
-        best = int(np.argmax(scores))
-        yield Generation(index, float(scores[best]), float(scores.mean()), float(scores.min()), pop[best],
-                         pop if keep else None, scores if keep else None, count)
-        if target is not None and scores.mean() >= target:
+        changed = np.flatnonzero(new)
+        if changed.size:
+            scores[changed] = _scores(fitness(pop[changed]), "evolve", rule, lambda n: n == changed.size)
+            count += changed.size
+        best, mean = int(np.argmax(scores)), float(scores.mean())
+        yield Generation._of(index, float(scores[best]), mean, float(scores.min()), pop[best],
+                             pop if keep else None, scores if keep else None, count)
+        if target is not None and mean >= target:
             return

@@ -85,6 +85,7 @@ RULES = ("exact", "thesis")
 NB_SHIFT = 21
 #: The most candidate neurons a network holds: one more needs a 22-bit index.
 MAX_NEURONS = 1 << NB_SHIFT
+_ONE_WEIGHT = 1 << NB_SHIFT   # a packed entry is at least this when its weight is positive
 
 
 def _csr(n: int, src: np.ndarray, dst: np.ndarray):
@@ -332,16 +333,18 @@ class _Weights(NamedTuple):
     """Fixed-point weights of one rule, in the layout the kernels read.
 
     ``self_w`` and ``bias`` are views of ``values``, one buffer laid out as
-    ``entries | self_w | bias | row_w | col_w``.  Entry ``p`` holds the weight ``nb_w[p]``
-    shifted left by :data:`NB_SHIFT` bits and the neighbour's index ``nb_idx[p]`` in those
-    low bits: a flip's updates read one word per neighbour instead of two (the 173,826
-    updates of a 200 x 200 run, replayed alone: 84 instead of 104 us).  A weight is at most
+    ``entries | self_w | bias | pos_end | row_w | col_w``.  Entry ``p`` holds a neighbour
+    weight shifted left by :data:`NB_SHIFT` bits and the neighbour's index in those low
+    bits: a flip's updates read one word per neighbour instead of two (the 173,826 updates
+    of a 200 x 200 run, replayed alone: 84 instead of 104 us).  A weight is at most
     ``2 * SCALE = 2**41`` in size (C lies in [-1, 1]), so it fits the 43 bits left with its
-    sign.
+    sign.  Neuron ``a``'s entries are ``entries[nb_ptr[a]:nb_ptr[a + 1]]``, its positive
+    weights first, up to ``pos_end[a]``, then the others: the compiled run's first sweep
+    sums the positive ones, and stops summing the others once the input is negative
+    (:func:`ismb_lab._kernel._solve`).  ``nb_idx`` and ``nb_w`` list them in that order.
     """
 
     nb_ptr: np.ndarray
-    nb_idx: np.ndarray
     row_ptr: np.ndarray
     row_idx: np.ndarray
     col_ptr: np.ndarray
@@ -356,9 +359,20 @@ class _Weights(NamedTuple):
     run_args: tuple  # the compiled run's last arguments: (Topology.packed, values)
 
     @property
+    def nb_idx(self) -> np.ndarray:
+        """Each entry's neighbour, unpacked from ``values``."""
+        return self.values[:self.nb_ptr[-1]] & (MAX_NEURONS - 1)
+
+    @property
     def nb_w(self) -> np.ndarray:
-        """The neighbour weights, unpacked from ``values``."""
-        return self.values[:len(self.nb_idx)] >> NB_SHIFT
+        """Each entry's weight, unpacked from ``values``."""
+        return self.values[:self.nb_ptr[-1]] >> NB_SHIFT
+
+    @property
+    def pos_end(self) -> np.ndarray:
+        """Where each neuron's positive weights end in ``entries``."""
+        m, n = int(self.nb_ptr[-1]), len(self.bias)
+        return self.values[m + 2 * n:m + 3 * n]
 
 
 #: Largest net input the 64-bit fixed point holds with room to spare: 2**62 / SCALE, about 4.2e6.
@@ -398,10 +412,10 @@ def _weights(net: Network, rule: str) -> _Weights:
     _check_fits(net, lay)
     # round() of a float rounds half to even, as np.rint does, to the same integer
     unique = np.int64(round((-2.0 * kappa if exact else -kappa) * SCALE))
-    values = _quantised(net.pair_c, lay.nb_pair, lay.nb_idx, net.similarity, net.self_c, exact, SCALE,
-                        net.match_bias, 2.0 * kappa, unique)
+    values = _quantised(net.pair_c, lay.nb_ptr, lay.nb_pair, lay.nb_idx, net.similarity, net.self_c, exact,
+                        SCALE, net.match_bias, 2.0 * kappa, unique)
     m, n = len(lay.nb_pair), net.n_neurons
-    w = _Weights(lay.nb_ptr, lay.nb_idx, lay.row_ptr, lay.row_idx, lay.col_ptr, lay.col_idx,
+    w = _Weights(lay.nb_ptr, lay.row_ptr, lay.row_idx, lay.col_ptr, lay.col_idx,
                  net.rows, net.cols, unique, unique, values[m:m + n], values[m + n:m + 2 * n], values,
                  (net.topology.packed, values))
     net._weights[rule] = w
@@ -409,16 +423,30 @@ def _weights(net: Network, rule: str) -> _Weights:
 
 
 @numba.njit(cache=True)
-def _quantised(pair_c, nb_pair, nb_idx, similarity, self_c, exact, scale, match_bias, self_penalty, unique):
-    """The ``values`` buffer of :class:`_Weights`."""
+def _quantised(pair_c, nb_ptr, nb_pair, nb_idx, similarity, self_c, exact, scale, match_bias, self_penalty,
+               unique):
+    """The ``values`` buffer of :class:`_Weights`: each neuron's positive weights from the
+    front of its segment, the others from the back."""
     m, n = nb_pair.shape[0], similarity.shape[0]
-    values = np.zeros(m + 2 * n + 2, dtype=np.int64)
+    values = np.zeros(m + 3 * n + 2, dtype=np.int64)
     values[-2] = values[-1] = unique
-    entries, self_w, bias = values[:m], values[m:m + n], values[m + n:m + 2 * n]
-    for p in range(m):
-        c = pair_c[nb_pair[p]]
-        entries[p] = (np.int64(np.rint((2.0 * c if exact else c) * scale)) << NB_SHIFT) | nb_idx[p]
+    entries, self_w, bias, pos_end = values[:m], values[m:m + n], values[m + n:m + 2 * n], values[m + 2 * n:m + 3 * n]
+    ptr = nb_ptr.view(np.uint64)   # unsigned: no test for a negative (from-the-end) index
+    one = np.uint64(1)
     for a in range(n):
+        # positive weights from the front, the others from the back: each entry is stored at
+        # both ends of the part not yet filled, and the end that keeps it moves on, so no
+        # branch depends on a weight's sign (the other copy is overwritten later)
+        front, back = ptr[a], ptr[a + 1]
+        for p in range(ptr[a], ptr[a + 1]):
+            c = pair_c[nb_pair[p]]
+            e = (np.int64(np.rint((2.0 * c if exact else c) * scale)) << NB_SHIFT) | nb_idx[p]
+            entries[front] = e
+            entries[back - one] = e
+            positive = np.uint64(e >= _ONE_WEIGHT)
+            front += positive
+            back -= one - positive
+        pos_end[a] = front
         bias[a] = np.int64(np.rint((match_bias + similarity[a]) * scale))
         if not exact:
             self_w[a] = np.int64(np.rint((self_c[a] - self_penalty) * scale))

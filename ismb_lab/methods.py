@@ -53,7 +53,7 @@ from .hopfield import Network, Topology
 from .params import LAMBDA_C, LAMBDA_S, MATCH_BIAS, THETA_C, THETA_S, Gene, Params
 from .similarity import candidate_mask, no_match_cut, transfer
 
-__all__ = ["all_genes", "Method", "MethodI", "MethodII", "MethodIII", "MethodNM", "MethodNM3", "MethodNM4",
+__all__ = ["BATCHED", "all_genes", "Method", "MethodI", "MethodII", "MethodIII", "MethodNM", "MethodNM3", "MethodNM4",
            "DEFAULT_METHOD", "Problem", "THESIS_PARAMS", "build_problem", "get_method", "load_params", "method_names",
            "register_method", "save_params", "unregister_method"]
 
@@ -206,6 +206,26 @@ class Method:
             problem._measures[self] = kept
         return kept
 
+    def _columns(self, problem: Problem, table: dict, thesis: bool):
+        """For a GA's batch of parameter sets: ``(S, C, self_C, match_bias)`` of the networks
+        :meth:`network` builds from each row of `table` (an ``(m,)`` float array per
+        :class:`Params` field), as ``(m, n)``, ``(m, P)``, ``(m, n)`` and ``(m,)`` arrays;
+        ``self_C`` only for the thesis rule, else None.  The transfer functions take the
+        parameters as columns: the same operations on the same numbers, element by element.
+        Only the built-in methods have it (:data:`BATCHED`); a subclass that changes how
+        the network is built is scored one parameter set at a time."""
+        pair_x, self_x = self._measures(problem)
+        theta_c, lambda_c = table["theta_c"][:, None], table["lambda_c"][:, None]
+        c = transfer(pair_x, theta_c, lambda_c)
+        self_c = transfer(self_x, theta_c, lambda_c) if thesis else None
+        return self._similarities(problem, table), c, self_c, self._match_biases(table)
+
+    def _similarities(self, problem: Problem, table: dict) -> np.ndarray:
+        return transfer(problem.neuron_dissimilarity, table["theta_s"][:, None], table["lambda_s"][:, None])
+
+    def _match_biases(self, table: dict) -> np.ndarray:
+        return np.full(len(table["theta_c"]), 2.0)   # Network's default, which network() keeps
+
     def postprocess(self, problem: Problem, on: np.ndarray) -> np.ndarray:
         """Which of the neurons that are on (indices `on`) stay matches; all (`on` itself), by default.
 
@@ -242,6 +262,9 @@ class MethodI(Method):
 
     def self_measure(self, problem):
         return problem.neuron_dissimilarity
+
+    def _similarities(self, problem, table):
+        return np.zeros((len(table["theta_c"]), problem.n_neurons))
 
     def postprocess(self, problem, on):
         on = np.asarray(on, dtype=np.int64)
@@ -313,6 +336,9 @@ class MethodNM(MethodIII):
         return Network._trusted(problem.topology, base.similarity, base.pair_c, base.self_c,
                                 1.0, params.match_bias)
 
+    def _match_biases(self, table):
+        return table["match_bias"]
+
 
 class MethodNM4(MethodNM):
     """Method-NM with ``beta = 0`` fixed: "at most one match" and four genes.
@@ -339,6 +365,9 @@ class MethodNM4(MethodNM):
         if not isinstance(params, Params):
             raise ParameterTypeError(message("params", "Method-NM4", "a Params instance", params))
         return super().network(problem, replace(params, **self.fixed))
+
+    def _match_biases(self, table):
+        return np.full(len(table["theta_c"]), float(self.fixed["match_bias"]))
 
 
 class MethodNM3(MethodNM4):
@@ -369,6 +398,9 @@ class MethodNM3(MethodNM4):
 
     def similarity(self, problem: Problem, params: Params) -> np.ndarray:
         return transfer(problem.neuron_dissimilarity, problem.no_match_cut, params.lambda_s)
+
+    def _similarities(self, problem, table):
+        return transfer(problem.neuron_dissimilarity, problem.no_match_cut, table["lambda_s"][:, None])
 
 
 _METHODS: dict[str, Method] = {}
@@ -464,6 +496,9 @@ THESIS_PARAMS = _Defaults()
 
 for _method in (MethodI(), MethodII(), MethodIII(), MethodNM(), MethodNM4(), MethodNM3()):
     register_method(_method)
+
+#: The methods whose networks :meth:`Method._columns` builds for a batch of parameter sets.
+BATCHED = (MethodI, MethodII, MethodIII, MethodNM, MethodNM4, MethodNM3)
 
 #: The method used wherever none is named: the thesis' own, Method-III.  The one place
 #: the default is declared; every function and command refers to this name.

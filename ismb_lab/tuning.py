@@ -14,6 +14,7 @@ A training pair is a :class:`ismb_lab.protocol.Case`, or anything else with a
 from __future__ import annotations
 
 from dataclasses import fields
+from inspect import signature
 from typing import Iterator, Sequence
 
 import numpy as np
@@ -21,9 +22,12 @@ import numpy as np
 from ._validation import ParameterError, ParameterTypeError, check_number, message
 from .evaluation import Score, Scorer, _tally
 from .genetic import Bounds, GAConfig, Generation, evolve
-from .methods import DEFAULT_METHOD, get_method
+from ._kernel import _fitness_runs
+from .dynamics import KERNELS, STOP_RULES, run
+from .hopfield import MAX_INPUT, RULES, SCALE
+from .methods import BATCHED, DEFAULT_METHOD, MethodI, get_method
 from .params import Params
-from .solvers import DEFAULT_SOLVER, get_solver, matched_neurons, one_match_per_corner, solve
+from .solvers import DEFAULT_SOLVER, NetworkSolver, get_solver, matched_neurons, one_match_per_corner, solve
 
 __all__ = ["Fitness", "evaluate", "gene_bounds", "to_chromosome", "to_params", "tune"]
 
@@ -141,9 +145,50 @@ class Fitness:
         return to_params(self.method, chromosome, self.base)
 
     def __call__(self, population: np.ndarray) -> np.ndarray:
+        population = np.atleast_2d(population)
+        totals = self._batch(population)
         # fitnesses are integers: their sum is exact, so this is np.mean's value
+        if totals is not None:
+            return totals / self.seeds
         return np.array([sum(self._fitness(self.params(c), self.seed + s) for s in range(self.seeds))
-                         / self.seeds for c in np.atleast_2d(population)], dtype=float)
+                         / self.seeds for c in population], dtype=float)
+
+    def _batch(self, population: np.ndarray) -> np.ndarray | None:
+        """The summed fitness of every chromosome, in one compiled call per case
+        (:func:`ismb_lab._kernel._fitness_runs`): the same networks, runs and tallies as
+        :meth:`_fitness`, without a Python object per chromosome.  None where that path does
+        not apply (another solver, kernel or method class, parameters that :class:`Params`
+        or the network would refuse): then each chromosome goes the general way, which
+        raises the error."""
+        solver, method = self.solver, self.method
+        if not (type(solver) is NetworkSolver and solver.kernel == KERNELS[0] and type(method) in BATCHED):
+            return None
+        table = _table(method, population, self.base)
+        if table is None:
+            return None
+        exact = solver.rule == RULES[0]
+        seeds = np.arange(self.seed, self.seed + self.seeds, dtype=np.int64)
+        totals = np.zeros(len(population), dtype=np.int64)
+        for case in self.cases:
+            problem = case.prepared.problem
+            if problem.n_neurons == 0:
+                continue
+            s, c, self_c, beta = method._columns(problem, table, not exact)
+            crowd, neighbours = problem.topology.crowding
+            if beta is None or not np.all(np.abs(beta) + 1 + 2 * (crowd + 1) + 2 * neighbours < MAX_INPUT):
+                return None   # Network refuses it (_check_fits, uniqueness 1)
+            codes = getattr(case, "neuron_codes", None)
+            if codes is None:
+                codes = Scorer(case.targets, case.unknown).neuron_codes(problem.rows, problem.cols)
+            lay, least_dy = problem.topology.layout, type(method).postprocess is MethodI.postprocess
+            dy = np.abs(problem.right_xy[problem.cols, 1] - problem.left_xy[problem.rows, 1]) if least_dy else _NONE
+            totals += _fitness_runs(
+                problem.topology.packed, lay.nb_ptr, lay.nb_pair, lay.nb_idx, c, s, s if self_c is None else self_c,
+                beta, exact, SCALE, 2.0, np.int64(round((-2.0 if exact else -1.0) * SCALE)), seeds,
+                solver.stop_rule == STOP_RULES[0], _RUN["patience"], _RUN["max_sweeps"] * problem.n_neurons,
+                np.asarray(codes, dtype=np.uint8), least_dy, problem.rows, problem.cols, problem.topology.n_left,
+                problem.topology.n_right, dy)
+        return totals
 
     def _fitness(self, params: Params, seed: int) -> int:
         """``evaluate(...).fitness``, without building the Score."""
@@ -152,6 +197,33 @@ class Fitness:
             correct, wrong, extra = _counts(case, self.method, params, seed, self.solver)
             total += correct - wrong - extra
         return total
+
+
+def _table(method, population: np.ndarray, base: Params | None) -> dict | None:
+    """Each :class:`Params` field as an ``(m,)`` float array over the chromosomes, as
+    :func:`to_params` fills it; None unless every value passes :class:`Params`' check."""
+    genes = method.gene_names
+    if population.ndim != 2 or population.shape[1] != len(genes) or len(population) == 0:
+        return None
+    population = np.asarray(population, dtype=float)
+    m, base = len(population), base or method.defaults
+    table = {name: getattr(base, name) for name in _FIELDS}
+    table.update(zip(genes, population.T))
+    for name in _FIELDS:
+        value = table[name]
+        if value is None:
+            continue
+        column = np.full(m, float(value)) if np.ndim(value) == 0 else value
+        low_open = name.startswith("lambda")
+        ok = np.isfinite(column) & ((column > 0) if low_open else (column >= 0) if name != "match_bias" else True)
+        if not np.all(ok):
+            return None
+        table[name] = column
+    return table
+
+
+_NONE = np.zeros(0)
+_RUN = {k: v.default for k, v in signature(run).parameters.items()}   # what NetworkSolver.solve leaves at run's defaults
 
 
 def tune(cases: Sequence, method=DEFAULT_METHOD, *, rng=0, ga: GAConfig | None = None, seed: int = 0,

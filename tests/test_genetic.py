@@ -318,3 +318,34 @@ def test_evolve_rejects_bad_arguments_at_call_time(kw, pattern):
 def test_bad_fitness_values_are_reported_naming_fitness(fitness, pattern):
     with pytest.raises(ParameterError, match=r"The 'fitness' parameter of evolve .*" + pattern):
         next(evolve(fitness, UNIT4, rng=0))
+
+
+def _breed_by_the_operators(rng, population, fitness, bounds, p_c, p_m, n_elite):
+    """One generation composed of the public operators, as _breed's docstring describes it."""
+    size = len(population)
+    origin = np.concatenate([elite(fitness, n_elite), tournament(rng, fitness, size - n_elite)])
+    children = population[origin]
+    lam = rng.random()
+    first = n_elite + 2 * np.flatnonzero(rng.random((size - n_elite) // 2) < p_c)
+    children[first], children[first + 1] = arithmetic_crossover(children[first], children[first + 1], lam)
+    crossed = np.sort(np.concatenate([first, first + 1]))
+    origin[crossed] = -1
+    for i in crossed[rng.random(crossed.size) < p_m]:
+        children[i] = random_mutation(rng, children[i], bounds)
+    return children, origin
+
+
+@pytest.mark.parametrize("size, n_elite, p_m", [(30, 2, 0.05), (31, 0, 0.5), (2, 1, 1.0), (9, 9, 0.3)])
+def test_a_generation_draws_and_computes_as_its_operators(size, n_elite, p_m):
+    from ismb_lab.genetic import _breed
+
+    bounds = Bounds([0, 0, 0.05], [60, 60, 10])
+    for seed in range(20):
+        rng = np.random.default_rng(seed)
+        population = initial_population(rng, bounds, size)
+        fitness = np.round(rng.normal(size=size), 1)   # ties too
+        fast_rng, slow_rng = np.random.default_rng(100 + seed), np.random.default_rng(100 + seed)
+        fast = _breed(fast_rng, population.copy(), fitness, bounds, 0.8, p_m, n_elite)
+        slow = _breed_by_the_operators(slow_rng, population.copy(), fitness, bounds, 0.8, p_m, n_elite)
+        assert np.array_equal(fast[0], slow[0]) and np.array_equal(fast[1], slow[1])
+        assert fast_rng.random() == slow_rng.random()   # the same number of draws

@@ -303,6 +303,7 @@ def test_packed_entries_hold_the_extreme_weights_and_indices():
         w = _weights(net, rule)
         assert np.array_equal(np.abs(w.nb_w), np.full(2 * net.n_pairs, size, dtype=np.int64))
         assert np.array_equal(w.values[:2 * net.n_pairs] & (MAX_NEURONS - 1), w.nb_idx)
+        assert sorted(w.nb_idx.tolist()) == sorted(net.topology.layout.nb_idx.tolist())
         fast, slow = run(net, rng=3, rule=rule), run(net, rng=3, rule=rule, kernel="textbook")
         assert np.array_equal(fast.state, slow.state) and fast.attempts == slow.attempts
 
@@ -430,3 +431,26 @@ def test_a_match_bias_too_large_for_the_fixed_point_is_refused():
     ok = Network.from_arrays(2, 2, rows=[0, 0, 1, 1], cols=[0, 1, 0, 1], similarity=[0.5, -0.2, -0.3, 0.4],
                              pair_a=[0, 1], pair_b=[3, 2], pair_c=[0.9, -0.5], match_bias=-1e3)
     assert run(ok).state.tolist() == [0, 0, 0, 0] and MAX_INPUT > 1e6
+
+
+@pytest.mark.parametrize("rule", ["exact", "thesis"])
+def test_each_neurons_entries_hold_its_neighbours_positive_weights_first(rule):
+    """The first sweep reads a neuron's positive weights, then the others until the input is
+    negative: each segment must hold exactly the neighbours' weights, the positive ones
+    before pos_end.  A C of exactly zero gives a zero weight, among the others."""
+    net = NETS[5]
+    pair_c = net.pair_c.copy()
+    pair_c[::7] = 0.0
+    net = Network(net.topology, net.similarity, pair_c, net.self_c)
+    w, lay = _weights(net, rule), net.topology.layout
+    W, _ = hopfield_form(net, rule)
+    for a in range(net.n_neurons):
+        lo, mid, hi = lay.nb_ptr[a], w.pos_end[a], lay.nb_ptr[a + 1]
+        assert lo <= mid <= hi
+        assert np.all(w.nb_w[lo:mid] > 0) and np.all(w.nb_w[mid:hi] <= 0)
+        got = sorted(zip(w.nb_idx[lo:hi].tolist(), w.nb_w[lo:hi].tolist()))
+        assert [b for b, _ in got] == sorted(lay.nb_idx[lo:hi].tolist())
+        # neighbours share no row or column: the fixed-point weight is W's entry, rounded
+        assert [v for _, v in got] == [int(np.rint(W[a, b] * SCALE)) for b, _ in got]
+    fast, slow = run(net, rng=4, rule=rule), run(net, rng=4, rule=rule, kernel="textbook")
+    assert np.array_equal(fast.state, slow.state) and (fast.attempts, fast.flips) == (slow.attempts, slow.flips)

@@ -101,3 +101,54 @@ def test_fitness_over_seeds_is_the_mean_of_single_seed_fitnesses(cases):
         Fitness(cases[:1], "NM", solver="greedy")
     with pytest.raises(ParameterError, match="'solver' parameter of evaluate"):
         evaluate(cases[:1], "NM", Params(match_bias=0.0), solver="greedy")
+
+
+def _one_at_a_time(fitness, population):
+    """Fitness.__call__'s general path: one Params, one network and one run per chromosome."""
+    return np.array([sum(fitness._fitness(fitness.params(c), fitness.seed + s) for s in range(fitness.seeds))
+                     / fitness.seeds for c in population])
+
+
+@pytest.mark.parametrize("method", ["I", "II", "III", "NM", "NM4", "NM3"])
+def test_a_batch_of_chromosomes_scores_as_each_one_alone(cases, method):
+    """The compiled batch (every built-in method, both rules, both stop rules, several seeds,
+    Method-I's post-processing) gives each chromosome the fitness of its own network run."""
+    from ismb_lab.genetic import initial_population
+    from ismb_lab.solvers import get_solver
+
+    population = initial_population(len(method), gene_bounds(method), 25)
+    population[0] = gene_bounds(method).low   # the edges of the box too
+    population[1] = gene_bounds(method).high
+    for solver in (get_solver("network"), get_solver("network", rule="thesis"),
+                   get_solver("network", stop_rule="stall")):
+        for seeds in (1, 3):
+            fitness = Fitness(cases[:2], method, solver=solver, seeds=seeds, seed=5)
+            assert fitness._batch(population) is not None
+            batched, alone = fitness(population), _one_at_a_time(fitness, population)
+            assert batched.dtype == alone.dtype and np.array_equal(batched, alone)
+            assert len(set(batched.tolist())) > 1   # the chromosomes differ in what they score
+
+
+def test_the_batch_leaves_other_methods_solvers_and_bad_genes_to_the_general_path(cases):
+    from ismb_lab.methods import MethodIII
+
+    class Flat(MethodIII):
+        name = "FLAT-TEST"
+
+        def similarity(self, problem, params):
+            return np.zeros(problem.n_neurons)
+
+    population = np.array([[10.0, 20.0, 3.0, 2.0], [30.0, 10.0, 1.0, 5.0]])
+    flat = Fitness(cases[:1], Flat())
+    assert flat._batch(population) is None
+    assert np.array_equal(flat(population), _one_at_a_time(flat, population))
+    from ismb_lab.solvers import get_solver
+    textbook = Fitness(cases[:1], "III", solver=get_solver("network", kernel="textbook"))
+    assert textbook._batch(population) is None
+    assigned = Fitness(cases[:1], "III", solver="assign")
+    assert assigned._batch(population) is None
+    bad = np.array([[10.0, 20.0, -3.0, 2.0]])   # lambda_c must be > 0
+    plain = Fitness(cases[:1], "III")
+    assert plain._batch(bad) is None
+    with pytest.raises(ParameterError, match="'lambda_c'"):
+        plain(bad)
