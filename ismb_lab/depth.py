@@ -33,9 +33,9 @@ How it works
    exceeds the smallest background disparity by more than ``disparity_tol_px`` (a
    sliver of an object that looks like the wall can fit a shift behind it); otherwise
    -- a narrow object whose outline is blurred, or the piece of one -- its features are
-   grouped as below, and when no ``min_features`` of them agree, the blob (in front of
-   the background) is still one object at its silhouette disparity (``outline_alone``):
-   nothing else tells where it is.  So
+   grouped as below; with ``outline_alone``, when no ``min_features`` of them agree, the
+   blob (in front of the background) is still one object at its silhouette disparity,
+   since nothing else tells where it is.  So
    a striped object matched one period off, or cut into bands, stays one object at its
    true disparity, and a feature off every blob is not an object.
 
@@ -158,9 +158,9 @@ class DepthConfig:
     local_px: float = 40.0
     grouping: str = "silhouettes"
     silhouette_tol_px: float = 3.0
-    silhouette_score: float = 0.8
+    silhouette_score: float = 0.9
     silhouette_grow_px: int = 3
-    outline_alone: bool = True
+    outline_alone: bool = False
     focal_px: float = 300.0
     baseline_m: float = 0.10
     quantisation_px: float = 0.5
@@ -495,7 +495,8 @@ def _objects(feature, xy, d, config: DepthConfig, silhouettes: Silhouettes | Non
              trusted=None, infront=None) -> tuple[list, int]:
     """Group matches into objects; returns (objects near -> far, features dropped).
 
-    With `silhouettes`, blob ``k`` is one object when ``trusted[k - 1]``."""
+    With `silhouettes`, blob ``k`` is one object when ``trusted[k - 1]``, or (``outline_alone``)
+    when ``infront[k - 1]`` and no band of its features agrees."""
     features = np.unique(feature)
     if not len(features) and silhouettes is None:
         return [], 0

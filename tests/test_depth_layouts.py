@@ -76,10 +76,11 @@ def test_the_command_line_ranks_as_the_library_does(tmp_path, load_script):
     (119, "split", "no join"),         # a striped cylinder in pieces that fit no shift well
     (79, "missing", "join+split"),     # a narrow striped cylinder, a poor outline and no agreeing features
 ])
-def test_unseen_development_layouts_the_code_of_2026_11_24_got_wrong_are_ranked_right(load_script, n, wrong, fix):
-    """Development layouts of the unseen family (docs/experiments/2026-11-25-depth-unseen.md): the code
-    as it was loses or splits an object, the chosen rules rank them right, and without the rule that
-    fixes each (`fix`: the variant that leaves it out) it is wrong again."""
+def test_unseen_development_layouts_the_defaults_get_wrong_are_ranked_right_by_the_rules(load_script, n, wrong, fix):
+    """Development layouts of the unseen family (docs/experiments/2026-11-25-depth-unseen.md): the
+    defaults lose or split an object, the rules (join, split, trust at 0.8, the outline alone) rank
+    them right, and without the rule that fixes each (`fix`: the variant that leaves it out) it is
+    wrong again."""
     from ismb_lab.scenes import UNSEEN, register_family, unregister_family
 
     script = load_script("depth_layouts")
@@ -89,5 +90,5 @@ def test_unseen_development_layouts_the_code_of_2026_11_24_got_wrong_are_ranked_
     finally:
         unregister_family(UNSEEN.name)
     assert len(layout.objects) == 3
-    assert out["before"][1] == wrong and out["chosen"][1] == "ok" and out[fix][1] != "ok"
-    assert len(out["chosen"][0].objects) == 3
+    assert out["before"][1] == wrong and out["rules"][1] == "ok" and out[fix][1] != "ok"
+    assert len(out["rules"][0].objects) == 3

@@ -47,8 +47,7 @@ def test_objects_across_the_image_border_are_compared_where_both_images_see_them
     backwards = silhouettes(bg, sc, roi=(0, 0, W, H), shifts=range(40, -1, -1))
     assert backwards.disparity.tolist() == [20.0]
     if x0 < 0:    # the blob touches the left edge: without padding every larger shift fits as well
-        assert silhouettes(bg, sc, roi=(0, 0, W, H), shifts=range(40, -1, -1), pad_px=0, sigma=0,
-                           split=False).disparity[0] > 20
+        assert silhouettes(bg, sc, roi=(0, 0, W, H), shifts=range(40, -1, -1), pad_px=0, sigma=0).disparity[0] > 20
         assert silhouettes(bg, sc, roi=(0, 0, W, H), shifts=range(40, -1, -1), sigma=0).disparity[0] == 20
 
 
@@ -70,19 +69,19 @@ def test_two_objects_that_touch_in_one_blob_are_cut_apart_at_the_column_between_
     left, right = sc.left.copy(), sc.right.copy()
     left[120:124, 140:150] = right[120:124, 130:140] = 255.0      # a bridge: one blob in each image
     touching = load_pair(left, right)
-    whole = silhouettes(bg, touching, split=False)
+    whole = silhouettes(bg, touching)
     assert len(whole) == 1                                       # one shift for both: one is lost
-    cut = silhouettes(bg, touching)
+    cut = silhouettes(bg, touching, split=True)
     assert cut.disparity.tolist() == [10.0, 20.0] and cut.score.min() >= 0.9
     assert cut.labels[100, 100] == 1 and cut.labels[150, 180] == 2
     # Each part must fit as well as a trusted blob does, and their shifts must differ.
-    assert len(silhouettes(bg, touching, split_score=0.99)) == 1
-    assert len(silhouettes(bg, touching, split_step_px=11)) == 1
+    assert len(silhouettes(bg, touching, split=True, split_score=0.99)) == 1
+    assert len(silhouettes(bg, touching, split=True, split_step_px=11)) == 1
 
 
 def test_one_object_is_not_cut():
     bg, sc = pairs_with([(90, 195, 80, 160, 14)])
-    one = silhouettes(bg, sc)
+    one = silhouettes(bg, sc, join=True, split=True)
     assert one.disparity.tolist() == [14.0] and one.score[0] > 0.95
 
 
@@ -177,11 +176,11 @@ def test_an_outline_no_features_agree_on_is_an_object_however_poor_its_fit():
     labels = blob_labels((100, 140, 100, 140), (200, 230, 100, 140), (250, 280, 100, 140))
     sil = Silhouettes(labels, [22.0, 16.0, 3.0], [0.98, 0.6, 0.7],
                       [[120.0, 120.0], [215.0, 120.0], [265.0, 120.0]])
-    r = depth_from_matches(background, scene, DepthConfig(), sil)
+    r = depth_from_matches(background, scene, DepthConfig(outline_alone=True), sil)
     assert [(o.silhouette_disparity, o.n_features) for o in r.objects] == [(22.0, 3), (16.0, 0)]
     assert r.objects[1].centroid_xy == (215.0, 120.0) and r.objects[1].silhouette_score == 0.6
-    # The third lies behind the wall: no object.  Without the rule the second is lost as well.
-    lost = depth_from_matches(background, scene, DepthConfig(outline_alone=False), sil)
+    # The third lies behind the wall: no object.  Without the rule (the default) the second is lost too.
+    lost = depth_from_matches(background, scene, DepthConfig(), sil)
     assert [o.silhouette_disparity for o in lost.objects] == [22.0]
 
 
