@@ -32,7 +32,10 @@ How it works
    overlap well (Dice ``>= silhouette_score``) and, with ``in_front``, when its shift
    exceeds the smallest background disparity by more than ``disparity_tol_px`` (a
    sliver of an object that looks like the wall can fit a shift behind it); otherwise
-   -- two objects touching in one blob, say -- its features are grouped as below.  So
+   -- a narrow object whose outline is blurred, or the piece of one -- its features are
+   grouped as below; with ``outline_alone``, when no ``min_features`` of them agree, the
+   blob (in front of the background) is still one object at its silhouette disparity,
+   since nothing else tells where it is.  So
    a striped object matched one period off, or cut into bands, stays one object at its
    true disparity, and a feature off every blob is not an object.
 
@@ -125,6 +128,9 @@ class DepthConfig:
         silhouette to decide the object alone.
     silhouette_grow_px : int
         A feature within this many pixels of a blob lies on it (corners sit on outlines).
+    outline_alone : bool
+        A blob in front of the background that is not trusted and on which no band of
+        ``min_features`` features agrees is still one object, at its silhouette disparity.
     focal_px, baseline_m : float
         Focal length in pixels and baseline in metres (> 0); the defaults are
         :data:`ismb_lab.camera.FOCAL_PX` and :data:`~ismb_lab.camera.BASELINE_M` (the thesis' 10 cm rig).
@@ -155,6 +161,7 @@ class DepthConfig:
     silhouette_tol_px: float = 3.0
     silhouette_score: float = 0.9
     silhouette_grow_px: int = 3
+    outline_alone: bool = False
     focal_px: float = FOCAL_PX
     baseline_m: float = BASELINE_M
     quantisation_px: float = 0.5
@@ -174,8 +181,9 @@ class DepthConfig:
         object.__setattr__(self, "silhouette_score",
                            check_number(self.silhouette_score, "silhouette_score", own, low=0, high=1))
         check_choice(self.grouping, "grouping", own, GROUPINGS)
-        if not isinstance(self.in_front, bool):
-            raise ParameterTypeError(message("in_front", own, "True or False", self.in_front))
+        for name in ("in_front", "outline_alone"):
+            if not isinstance(getattr(self, name), bool):
+                raise ParameterTypeError(message(name, own, "True or False", getattr(self, name)))
 
 
 @dataclass(frozen=True)
@@ -493,10 +501,11 @@ def _on_blobs(xy, silhouettes: Silhouettes, grow: int) -> np.ndarray:
 
 
 def _objects(feature, xy, d, config: DepthConfig, silhouettes: Silhouettes | None = None,
-             trusted=None) -> tuple[list, int]:
+             trusted=None, infront=None) -> tuple[list, int]:
     """Group matches into objects; returns (objects near -> far, features dropped).
 
-    With `silhouettes`, blob ``k`` is one object when ``trusted[k - 1]``."""
+    With `silhouettes`, blob ``k`` is one object when ``trusted[k - 1]``, or (``outline_alone``)
+    when ``infront[k - 1]`` and no band of its features agrees."""
     features = np.unique(feature)
     if not len(features) and silhouettes is None:
         return [], 0
@@ -513,15 +522,20 @@ def _objects(feature, xy, d, config: DepthConfig, silhouettes: Silhouettes | Non
         blob = _on_blobs(xy, silhouettes, config.silhouette_grow_px)
         for k in range(1, len(silhouettes) + 1):
             idx = np.flatnonzero(blob == k)
+            dk, score = float(silhouettes.disparity[k - 1]), float(silhouettes.score[k - 1])
             if not trusted[k - 1]:
-                groups.append(idx)    # two objects in one blob, or a poor outline: the features decide
+                if (config.outline_alone and infront[k - 1] and score > 0
+                        and not _peel(feature[idx], d[idx], config)):
+                    # Nothing else tells where it is: the outline alone, however poor its fit.
+                    found.append(_object(idx[:0], feature, first, d, config, silhouettes.centroid_xy[k - 1],
+                                         (dk, score)))
+                    continue
+                groups.append(idx)    # a poor outline: the features decide
                 continue
-            dk = float(silhouettes.disparity[k - 1])
             near = idx[np.abs(d[idx] - dk) <= config.silhouette_tol_px]
             rows = near[_consensus(d[near], config.consensus_px)] if len(near) else near
             used.update(np.unique(feature[rows]).tolist())
-            found.append(_object(rows, feature, first, d, config, silhouettes.centroid_xy[k - 1],
-                                 (dk, float(silhouettes.score[k - 1]))))
+            found.append(_object(rows, feature, first, d, config, silhouettes.centroid_xy[k - 1], (dk, score)))
     for idx in groups:
         for band in _peel(feature[idx], d[idx], config):
             rows = idx[band]
@@ -592,14 +606,15 @@ def depth_from_matches(background, scene, config: DepthConfig | None = None,
         behind = keep & (sd <= _local_background(sxy, bxy, bd, config.local_px)
                          + config.disparity_tol_px)
     keep &= ~behind
-    trusted = None
+    trusted = infront = None
     if silhouettes is not None:
         # An object stands in front of what was there: an outline at the background's
         # disparity or behind it is a poor outline (a sliver that looks like the wall).
-        trusted = silhouettes.score >= config.silhouette_score
+        infront = np.ones(len(silhouettes), dtype=bool)
         if config.in_front and len(bd):
-            trusted &= silhouettes.disparity > bd.min() + config.disparity_tol_px
-    objects, dropped = _objects(sf[keep], sxy[keep], sd[keep], config, silhouettes, trusted)
+            infront = silhouettes.disparity > bd.min() + config.disparity_tol_px
+        trusted = (silhouettes.score >= config.silhouette_score) & infront
+    objects, dropped = _objects(sf[keep], sxy[keep], sd[keep], config, silhouettes, trusted, infront)
 
     note = ""
     if not len(sf):

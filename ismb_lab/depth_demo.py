@@ -508,11 +508,12 @@ def relative_depth(background, scene, *, method=DEFAULT_METHOD, params=None, mat
     return replace(depth_from_matches(*results, config, blobs), scene_roi=scene_roi)
 
 
-def pair_silhouettes(prepared) -> Silhouettes:
+def pair_silhouettes(prepared, **options) -> Silhouettes:
     """:func:`~ismb_lab.silhouettes.silhouettes` of two pairs prepared by :func:`depth_pairs`.
 
     The blobs are sought in the background's ROI, at the whole-pixel shifts of the scene's
-    candidate window (the disparities the matcher may find).
+    candidate window (the disparities the matcher may find); `options` are passed on
+    (``join=False``, say).
 
     Examples
     --------
@@ -524,4 +525,4 @@ def pair_silhouettes(prepared) -> Silhouettes:
     (background, scene), config = (p.pair for p in prepared), prepared[1].config
     half = float(config.window_width) / 2
     shifts = range(int(np.floor(config.shift - half)), int(np.ceil(config.shift + half)) + 1)
-    return silhouettes(background, scene, prepared[0].config.roi, shifts=shifts)
+    return silhouettes(background, scene, prepared[0].config.roi, shifts=shifts, **options)

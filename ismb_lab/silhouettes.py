@@ -130,9 +130,104 @@ def _best_shift(mask: np.ndarray, rows: slice, cols: slice, right: np.ndarray, s
     return best
 
 
+def _cut(mask: np.ndarray, right: np.ndarray, shifts, min_pixels: int, step: float, least: float,
+         pad: int):
+    """Two objects side by side in one blob: the column that cuts `mask` into a left and a right
+    part that two shifts lay on `right` better (Dice) than one shift lays the whole, or None.
+
+    The cut is taken only when the two shifts differ by `step` or more and each part, measured
+    as every blob is (:func:`_best_shift`, padded by `pad`), fits with a Dice of `least` or more.
+    Dice of a part at shift ``d`` is counted over its own columns (those with a counterpart in
+    `right`): per column, the blob's pixels, the right image's changed pixels ``d`` to the left
+    and their overlap add up, so cumulative sums give every cut at once."""
+    from scipy.ndimage import find_objects
+
+    rows, cols = find_objects(mask.astype(int))[0]
+    width = right.shape[1]
+    c = np.arange(cols.start, cols.stop)
+    m = mask[rows, cols]
+    shifts = np.asarray(shifts)
+    a = np.zeros((len(shifts), len(c)))
+    b = np.zeros_like(a)
+    inter = np.zeros_like(a)
+    for k, d in enumerate(shifts):
+        valid = (c - d >= 0) & (c - d < width)
+        patch = right[rows, np.clip(c - d, 0, width - 1)]
+        a[k] = np.where(valid, m.sum(axis=0), 0)
+        b[k] = np.where(valid, patch.sum(axis=0), 0)
+        inter[k] = np.where(valid, (m & patch).sum(axis=0), 0)
+    count = np.concatenate([[0], np.cumsum(m.sum(axis=0))])
+    cum = [np.concatenate([np.zeros((len(shifts), 1)), np.cumsum(v, axis=1)], axis=1) for v in (a, b, inter)]
+
+    def best(lo, hi):
+        """Best shift index, overlap and (blob + right) counts of columns lo..hi-1."""
+        ai, bi, ii = (v[:, hi] - v[:, lo] for v in cum)
+        ok = 2 * ai >= count[hi] - count[lo]        # most of the part on the right image
+        dice = np.where(ok & (ai + bi > 0), 2 * ii / np.maximum(ai + bi, 1), 0.0)
+        k = int(np.argmax(dice))
+        return k, ii[k], ai[k] + bi[k], dice[k]
+
+    n = len(c)
+    whole = best(0, n)[3]
+    top = None
+    for x in range(1, n):
+        if min(count[x], count[n] - count[x]) < min_pixels or min(x, n - x) < 2 * pad:
+            continue            # a sliver narrower than both paddings can fit almost any shift
+        kl, il, tl, dl = best(0, x)
+        kr, ir, tr, dr = best(x, n)
+        score = 2 * (il + ir) / max(tl + tr, 1)
+        if (abs(shifts[kl] - shifts[kr]) >= step and min(dl, dr) >= least
+                and (top is None or score > top[0])):
+            top = (score, x)
+    if top is None or top[0] < whole:
+        return None
+    left = mask.copy()
+    left[:, cols.start + top[1]:] = False
+    parts = left, mask & ~left
+    # Then the test every blob passes (padded), since a thin sliver, or a piece of stripes, can
+    # fit its own columns at almost any shift.
+    fits = [_best_shift(part, *find_objects(part.astype(int))[0], right, shifts, pad) for part in parts]
+    if min(f[0] for f in fits) < least or abs(fits[0][1] - fits[1][1]) < step:
+        return None
+    return parts
+
+
+def _join(masks: list, measure, gap_px: int) -> list:
+    """Join neighbouring blobs (boxes `gap_px` or less apart) while one shift lays their union
+    on the right image at least as well as their own shifts lay them (Dice, weighted by size):
+    the pieces of one object that looks like the wall in places, e.g. stripes; the best pair first."""
+    fits = [measure(m) for m in masks]
+    sizes = [int(np.count_nonzero(m)) for m in masks]
+    keys = [frozenset([k]) for k in range(len(masks))]
+    unions = {}
+    while len(masks) > 1:
+        best = None
+        for a in range(len(masks)):
+            for b in range(a + 1, len(masks)):
+                (ra, ca), (rb, cb) = fits[a][2], fits[b][2]
+                gap = max(ra.start - rb.stop, rb.start - ra.stop, ca.start - cb.stop, cb.start - ca.stop, 0)
+                if gap > gap_px:
+                    continue
+                key = keys[a] | keys[b]
+                if key not in unions:
+                    unions[key] = measure(masks[a] | masks[b])
+                union = unions[key]
+                margin = union[0] - (sizes[a] * fits[a][0] + sizes[b] * fits[b][0]) / (sizes[a] + sizes[b])
+                if margin >= 0 and (best is None or margin > best[0]):
+                    best = (margin, a, b, union)
+        if best is None:
+            return masks
+        _, a, b, union = best
+        masks[a] = masks[a] | masks[b]
+        fits[a], sizes[a], keys[a] = union, sizes[a] + sizes[b], keys[a] | keys[b]
+        del masks[b], fits[b], sizes[b], keys[b]
+    return masks
+
+
 def silhouettes(background, scene, roi="center", *, shifts=range(0, 41), threshold: float = 8.0,
                 sigma: float = 1.0, min_pixels: int = 20, pad_px: int = 8, merge_gap_px: int = 10,
-                merge_disparity_px: float = 1.0, max_fraction: float = 0.5) -> Silhouettes:
+                merge_disparity_px: float = 1.0, max_fraction: float = 0.5, join: bool = False,
+                split: bool = False, split_score: float = 0.9, split_step_px: float = 2.0) -> Silhouettes:
     """Blobs of change of the scene's left image, each with the shift that lays it on the right's.
 
     Where the scene pair differs from the background pair is where the objects are, in
@@ -146,7 +241,13 @@ def silhouettes(background, scene, roi="center", *, shifts=range(0, 41), thresho
     of a pixel (:func:`ismb_lab.depth.depth_from_matches`).
 
     Blobs with shifts within `merge_disparity_px` and boxes within `merge_gap_px` of
-    each other are one object cut in two where it looks like the wall behind it.
+    each other are one object cut in two where it looks like the wall behind it.  With
+    `join`, so are neighbours (boxes within `merge_gap_px`) whose union one shift lays on
+    the right image's change at least as well as their own shifts lay them (Dice weighted by
+    size): the pieces of a striped object, each of which fits some shift poorly.  With
+    `split`, a blob that two shifts `split_step_px` or more apart lay better than one, cut at a
+    column into a left and a right part that each fit with a Dice of `split_score` or more,
+    is two objects side by side that touch in the image (cut again while that holds).
 
     Parameters
     ----------
@@ -167,6 +268,13 @@ def silhouettes(background, scene, roi="center", *, shifts=range(0, 41), thresho
     max_fraction : float
         A blob that covers more of the ROI than this is no object's outline but a change
         of the light or of the view: its score is 0, so its features are grouped alone.
+    join, split : bool
+        Join the pieces of one object, cut two touching objects apart (see above).
+    split_score : float
+        Least Dice (0-1) of each part of a cut blob (measured as every blob is, padded by
+        `pad_px`); each part is at least ``2 * pad_px`` columns wide.
+    split_step_px : float
+        Least difference of the two parts' shifts, pixels.
 
     Returns
     -------
@@ -200,6 +308,11 @@ def silhouettes(background, scene, roi="center", *, shifts=range(0, 41), thresho
     pad_px = check_number(pad_px, "pad_px", own, low=0, integer=True)
     merge_disparity_px = check_number(merge_disparity_px, "merge_disparity_px", own, low=0)
     max_fraction = check_number(max_fraction, "max_fraction", own, low=0, high=1, low_open=True)
+    split_score = check_number(split_score, "split_score", own, low=0, high=1)
+    split_step_px = check_number(split_step_px, "split_step_px", own, low=0)
+    for name, value in (("join", join), ("split", split)):
+        if not isinstance(value, bool):
+            raise ParameterTypeError(message(name, own, "True or False", value))
     try:
         shifts = [int(d) for d in shifts]
     except (TypeError, ValueError):
@@ -231,6 +344,19 @@ def silhouettes(background, scene, roi="center", *, shifts=range(0, 41), thresho
             link[a, b] |= abs(da - db) <= merge_disparity_px and gap <= merge_gap_px
     group = connected_components(link, directed=False)[1] if len(ks) else np.zeros(0, dtype=int)
     masks = [np.isin(blobs, ks[group == g]) for g in np.unique(group)]
+    if join:
+        masks = _join(masks, measure, merge_gap_px)
+    if split:
+        todo, masks = masks, []
+        while todo:
+            part = todo.pop()
+            whole_view = np.count_nonzero(part[y:y + h, x:x + w]) > max_fraction * w * h
+            two = None if whole_view else _cut(part, changed[1], shifts, min_pixels, split_step_px,
+                                               split_score, pad_px)
+            if two is None:
+                masks.append(part)
+            else:
+                todo += list(two)
     centroids = [np.argwhere(m).mean(axis=0)[::-1] for m in masks]
     labels = np.zeros(shape, dtype=np.int32)
     disparity, score = [], []

@@ -10,21 +10,28 @@ demo's defaults, the layout's ROI ``(40, 40, 240, 160)`` and the layout's window
 A layout is *ranked correctly* when the demo reports exactly one object per object put
 into the scene (an object is "on" a true object when its centroid lies in that object's
 left-image box, 4 px margin), nothing else, and the objects nearest first in the true
-order.  Layout ``n`` of a split has the family ``FAMILIES[n % 4]`` and ``2 + (n // 4) % 2``
-objects, so the families and object counts are balanced.
+order.  Layout ``n`` of a split has the family ``names[n % k]`` of the ``k`` families it
+cycles through (``--families``; default every registered one, :func:`ismb_lab.scenes.families`)
+and ``2 + (n // k) % 2`` objects, so the families and object counts are balanced.
+``--families unseen`` draws from :data:`ismb_lab.scenes.UNSEEN`, a family with wider sizes,
+kinds, gaps, textures and cameras than the four, which the library does not register.
 
-Protocol.  Every choice of :mod:`ismb_lab.depth` and :mod:`ismb_lab.depth_demo` was made on
-the development split (seeds ``DEV_START`` onwards).  ``--held-out`` runs the held-out
-split (seeds ``HELD_OUT_START`` onwards), drawn after those choices and run once.
+Protocol.  Every choice of :mod:`ismb_lab.depth`, :mod:`ismb_lab.silhouettes` and
+:mod:`ismb_lab.depth_demo` was made on the development split (seeds ``DEV_START`` onwards,
+of the four families and of ``unseen``).  ``--held-out`` runs the held-out split (seeds
+``HELD_OUT_START`` onwards), drawn after those choices and run once.
 
 The figures of the defaults on both splits, and of every variant tried on the development
-split, are in ``docs/experiments/2026-11-24-depth-layouts.md``.
+split, are in ``docs/experiments/2026-11-24-depth-layouts.md`` and
+``docs/experiments/2026-11-25-depth-unseen.md``.
 
     python scripts/depth_layouts.py --count 360     # development split, 360 layouts (2 min)
-    python scripts/depth_layouts.py --held-out      # the held-out split, 880000- (40 s)
-    python scripts/depth_layouts.py --held-out --cli                  # the same through the CLI (3 min)
+    python scripts/depth_layouts.py --count 120 --families unseen     # the unseen family's
+    python scripts/depth_layouts.py --held-out      # the first held-out split, 880000- (40 s)
+    python scripts/depth_layouts.py --held-out --seeds-from 1200000 --variants   # the second, every variant
+    python scripts/depth_layouts.py --held-out --cli                  # through the CLI (3 min)
     python scripts/depth_layouts.py --count 12      # the first 12 (the test's set)
-    python scripts/depth_layouts.py --solver assign # a variant: --method, --solver, --set
+    python scripts/depth_layouts.py --solver assign # a variant: --method, --solver, --set, --blobs
     python scripts/depth_layouts.py --set grouping=features          # the thesis' grouping
 """
 
@@ -44,9 +51,9 @@ from types import SimpleNamespace
 import cv2
 import numpy as np
 
-from ismb_lab.depth import DepthConfig
-from ismb_lab.depth_demo import DEPTH_SOLVER, layout_match_config, relative_depth
-from ismb_lab.scenes import families, object_layout
+from ismb_lab.depth import DepthConfig, depth_from_matches
+from ismb_lab.depth_demo import DEPTH_SOLVER, depth_pairs, layout_match_config, pair_silhouettes, relative_depth
+from ismb_lab.scenes import UNSEEN, families, object_layout, register_family
 
 
 DEV_START = 1000
@@ -54,9 +61,10 @@ HELD_OUT_START = 880_000
 MARGIN_PX = 4.0
 
 
-def layout_of(seed: int, n: int):
-    """Layout number `n` of a split: its family and object count follow `n`, the rest `seed`."""
-    names = families()
+def layout_of(seed: int, n: int, names=None):
+    """Layout number `n` of a split: its family (of `names`, default every registered one) and
+    object count follow `n`, the rest `seed`."""
+    names = families() if names is None else names
     return object_layout(seed, 2 + (n // len(names)) % 2, family=names[n % len(names)])
 
 
@@ -85,18 +93,21 @@ def verdict(layout, result) -> str:
     return "ok" if names == truth else "order"
 
 
-def run_layout(seed: int, n: int, **kw):
-    layout = layout_of(seed, n)
-    result = relative_depth(layout.background, layout.scene, match_config=layout_match_config(layout),
-                            **kw)
+def run_layout(seed: int, n: int, names=None, blobs=None, **kw):
+    """Layout `n` of the split from `seed`, the demo's result and its verdict; `blobs` are
+    options of :func:`ismb_lab.silhouettes.silhouettes` for a variant (``{"split": False}``)."""
+    layout = layout_of(seed, n, names)
+    prepared = depth_pairs(layout.background, layout.scene, layout_match_config(layout))
+    grouped = pair_silhouettes(prepared, **blobs) if blobs else None
+    result = relative_depth(layout.background, layout.scene, prepared=prepared, silhouettes=grouped, **kw)
     return layout, result, verdict(layout, result)
 
 
-def run_layout_cli(seed: int, n: int, folder: Path, *, method: str, solver: str, grouping: str):
+def run_layout_cli(seed: int, n: int, folder: Path, *, method: str, solver: str, grouping: str, names=None):
     """:func:`run_layout` through ``ismb-lab depth`` itself: the four images as PNG files
     (the renderer's grey levels are whole numbers, so nothing is lost), the layout's ROI
     and shift as options, the objects read back from ``--json``."""
-    layout = layout_of(seed, n)
+    layout = layout_of(seed, n, names)
     paths = []
     for pair, name in ((layout.background, "bg"), (layout.scene, "scene")):
         for side in ("left", "right"):
@@ -124,6 +135,36 @@ def describe(layout, result) -> str:
     return f"truth [{truth}] wall {layout.wall_disparity:.1f} shift {layout.shift:g}; found [{found}]"
 
 
+RULES = {"silhouette_score": 0.8, "outline_alone": True}
+VARIANTS = {
+    "before": ({}, {}),
+    "join+split": ({"silhouette_score": 0.8}, {"join": True, "split": True}),
+    "no join": (RULES, {"split": True}),
+    "no split": (RULES, {"join": True}),
+    "rules": (RULES, {"join": True, "split": True}),
+}
+"""``--variants``: the rules of docs/experiments/2026-11-25-depth-unseen.md on and off, as DepthConfig
+fields and silhouettes options; "before" is the defaults, "rules" all of them on."""
+
+
+def run_variants(seed: int, n: int, names, variants: dict, **kw):
+    """:func:`run_layout` for every variant, matching both pairs once (the matches do not depend on
+    the tolerances or the blobs): ``{name: (result, verdict)}`` and the layout."""
+    layout = layout_of(seed, n, names)
+    prepared = depth_pairs(layout.background, layout.scene, layout_match_config(layout))
+    out, first = {}, None
+    for name, (fields, blobs) in variants.items():
+        config = DepthConfig(**fields)
+        grouped = pair_silhouettes(prepared, **blobs)
+        if first is None:
+            first = result = relative_depth(layout.background, layout.scene, prepared=prepared, config=config,
+                                            silhouettes=grouped, **kw)
+        else:
+            result = depth_from_matches(first.background, first.scene, config, grouped)
+        out[name] = (result, verdict(layout, result))
+    return layout, out
+
+
 def main(argv=None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--held-out", action="store_true", help="run the held-out split (once)")
@@ -135,6 +176,13 @@ def main(argv=None) -> int:
                         help=f"first layout seed (default {DEV_START}, or {HELD_OUT_START} with --held-out)")
     parser.add_argument("--cli", action="store_true",
                         help="run every layout through 'ismb-lab depth' on PNG files (about 2 s more each)")
+    parser.add_argument("--families", default=None, metavar="NAME,...",
+                        help="the families to cycle through (default every registered one; "
+                        f"{UNSEEN.name!r} is registered when named)")
+    parser.add_argument("--variants", action="store_true",
+                        help=f"score every variant of VARIANTS ({', '.join(VARIANTS)}) on the same matches")
+    parser.add_argument("--blobs", action="append", default=[], metavar="OPTION=VALUE",
+                        help="an option of ismb_lab.silhouettes.silhouettes for a variant, e.g. --blobs split=False")
     parser.add_argument("--set", action="append", default=[], metavar="FIELD=VALUE",
                         help="a DepthConfig field for a variant, e.g. --set min_features=3")
     args = parser.parse_args(argv)
@@ -146,43 +194,65 @@ def main(argv=None) -> int:
             parser.error(f"--set {item}: no DepthConfig field {name!r}")
         overrides[name] = {"int": int, "str": str, "bool": lambda v: v == "True"}.get(fields[name], float)(value)
     config = DepthConfig(**overrides)
+    blobs = {}
+    for item in args.blobs:
+        name, _, value = item.partition("=")
+        if name not in ("join", "split", "split_score", "split_step_px"):
+            parser.error(f"--blobs {item}: not join, split, split_score or split_step_px")
+        blobs[name] = value == "True" if name in ("join", "split") else float(value)
+    names = families() if args.families is None else tuple(args.families.split(","))
+    if UNSEEN.name in names and UNSEEN.name not in families():
+        register_family(UNSEEN)
+    for name in names:
+        if name not in families():
+            parser.error(f"--families {args.families}: no family {name!r} (registered: {', '.join(families())})")
+    if args.cli and (set(overrides) - {"grouping"} or blobs or args.variants):
+        parser.error("--cli takes no --variants, no --blobs and no --set but grouping=...")
+    if args.variants and (overrides or blobs):
+        parser.error("--variants takes no --set and no --blobs")
+    label = ", ".join(args.set + args.blobs) or "defaults"
+    variants = VARIANTS if args.variants else {label: (overrides, blobs)}
     start = args.seeds_from if args.seeds_from is not None else HELD_OUT_START if args.held_out else DEV_START
     t0 = time.perf_counter()
     by = defaultdict(lambda: [0, 0])
+    kinds_by = defaultdict(lambda: defaultdict(int))
     failures = []
-    if args.cli and set(overrides) - {"grouping"}:
-        parser.error("--cli takes no --set but grouping=...")
     folder = tempfile.TemporaryDirectory(prefix="depth_layouts-")
     for n in range(args.count):
         if args.cli:
             layout, result, what = run_layout_cli(start + n, n, Path(folder.name), method=args.method,
-                                                  solver=args.solver, grouping=config.grouping)
+                                                  solver=args.solver, grouping=config.grouping, names=names)
+            outcome = {label: (result, what)}
+        elif args.variants:
+            layout, outcome = run_variants(start + n, n, names, variants, method=args.method, solver=args.solver)
         else:
-            layout, result, what = run_layout(start + n, n, config=config, method=args.method, solver=args.solver)
-        for key in ("all", layout.family, f"{len(layout.objects)} objects"):
-            by[key][0] += what == "ok"
-            by[key][1] += 1
-        if what != "ok":
-            failures.append((start + n, layout, result, what))
+            layout, result, what = run_layout(start + n, n, names, blobs, config=config, method=args.method,
+                                              solver=args.solver)
+            outcome = {label: (result, what)}
+        for variant, (result, what) in outcome.items():
+            for key in ("all", layout.family, f"{len(layout.objects)} objects"):
+                by[variant, key][0] += what == "ok"
+                by[variant, key][1] += 1
+                kinds_by[variant, key][what] += 1
+            if what != "ok":
+                failures.append((variant, start + n, layout, result, what))
     elapsed = time.perf_counter() - t0
     split = "held-out" if args.held_out else "development"
     folder.cleanup()
     print(f"{split} split, seeds {start}..{start + args.count - 1}, Method-{args.method}, {args.solver}"
-          + (", through ismb-lab depth" if args.cli else "")
-          + (f", {', '.join(args.set)}" if args.set else "") + f": {elapsed:.0f} s "
+          + (", through ismb-lab depth" if args.cli else "") + f": {elapsed:.0f} s "
           f"({elapsed / max(args.count, 1):.2f} s per layout)")
-    for key in ("all", *families(), "2 objects", "3 objects"):
-        if key in by:
-            ok, total = by[key]
-            print(f"  {key:<12} {ok:>4} / {total:<4} ranked correctly ({100 * ok / total:.1f}%)")
-    kinds = defaultdict(int)
-    for *_, what in failures:
-        kinds[what] += 1
-    if kinds:
-        print("  failures: " + ", ".join(f"{k} {v}" for k, v in sorted(kinds.items())))
+    for variant in variants:
+        print(f" {variant}:")
+        for key in ("all", *names, "2 objects", "3 objects"):
+            if (variant, key) in by:
+                ok, total = by[variant, key]
+                wrong = ", ".join(f"{k} {v}" for k, v in sorted(kinds_by[variant, key].items()) if k != "ok")
+                print(f"  {key:<12} {ok:>4} / {total:<4} ranked correctly ({100 * ok / total:.1f}%)"
+                      + (f"; {wrong}" if wrong else ""))
     if not args.quiet:
-        for seed, layout, result, what in failures:
-            print(f"seed {seed} {layout.family} {what}: {describe(layout, result)}")
+        for variant, seed, layout, result, what in failures:
+            print(f"{variant}: seed {seed} {layout.family} {what}: {describe(layout, result)}")
     return 0
 
 

@@ -69,3 +69,26 @@ def test_the_command_line_ranks_as_the_library_does(tmp_path, load_script):
         assert cli_what == what
         assert [o.mean_disparity for o in cli.objects] == [o.mean_disparity for o in result.objects]
         assert [o.centroid_xy for o in cli.objects] == [o.centroid_xy for o in result.objects]
+
+
+@pytest.mark.parametrize("n, wrong, fix", [
+    (71, "missing", "no split"),       # a box and a cylinder 3 px apart: one blob, one object lost
+    (119, "split", "no join"),         # a striped cylinder in pieces that fit no shift well
+    (79, "missing", "join+split"),     # a narrow striped cylinder, a poor outline and no agreeing features
+])
+def test_unseen_development_layouts_the_defaults_get_wrong_are_ranked_right_by_the_rules(load_script, n, wrong, fix):
+    """Development layouts of the unseen family (docs/experiments/2026-11-25-depth-unseen.md): the
+    defaults lose or split an object, the rules (join, split, trust at 0.8, the outline alone) rank
+    them right, and without the rule that fixes each (`fix`: the variant that leaves it out) it is
+    wrong again."""
+    from ismb_lab.scenes import UNSEEN, register_family, unregister_family
+
+    script = load_script("depth_layouts")
+    register_family(UNSEEN)
+    try:
+        layout, out = script.run_variants(script.DEV_START + n, n, (UNSEEN.name,), script.VARIANTS)
+    finally:
+        unregister_family(UNSEEN.name)
+    assert len(layout.objects) == 3
+    assert out["before"][1] == wrong and out["rules"][1] == "ok" and out[fix][1] != "ok"
+    assert len(out["rules"][0].objects) == 3

@@ -88,6 +88,30 @@ def test_a_new_family_leaves_the_recorded_layouts_as_they_were(recorded):
         unregister_family(extra.name)
 
 
+def test_the_unseen_family_draws_wider_layouts_and_leaves_the_recorded_ones_as_they_were(recorded):
+    from ismb_lab.scenes import UNSEEN, MIN_GAP_PX, families
+
+    assert UNSEEN.name not in families()           # the scripts' recorded splits cycle through families()
+    register_family(UNSEEN)
+    try:
+        layouts = [object_layout(seed, 2 + seed % 2, family=UNSEEN.name) for seed in range(12)]
+        for family in RECORDED:
+            again = {f"{seed} {2 + seed % 2}": layout_digests(object_layout(seed, 2 + seed % 2, family=family))
+                     for seed in SEEDS[:2]}
+            assert again == {key: recorded[family][key] for key in again}
+    finally:
+        unregister_family(UNSEEN.name)
+    objects = [o for lay in layouts for o in lay.objects]
+    widths = [o.box_xy[2] - o.box_xy[0] for o in objects]
+    heights = [o.box_xy[3] - o.box_xy[1] for o in objects]
+    assert min(widths) < 32 and max(heights) > 68          # beyond the four families' 32-64 and 36-68 px
+    assert all(w >= 18 * 0.5 for w in widths) and max(heights) <= 120
+    assert {o.kind for o in objects} == {"box", "cylinder"} and len({o.texture for o in objects}) == 3
+    for lay in layouts:
+        d = sorted((o.disparity for o in lay.objects), reverse=True)
+        assert np.all(-np.diff(d) >= MIN_GAP_PX) and d[-1] - lay.wall_disparity >= MIN_GAP_PX
+
+
 def test_the_fixture_records_every_layout_it_claims():
     data = json.loads(FIXTURE.read_text())
     assert tuple(data) == RECORDED

@@ -64,6 +64,27 @@ def test_an_object_cut_in_two_where_it_looks_like_the_wall_is_one():
     assert len(whole) == 1 and whole.disparity.tolist() == [22.0] and whole.score[0] > 0.95
 
 
+def test_two_objects_that_touch_in_one_blob_are_cut_apart_at_the_column_between_them():
+    bg, sc = pairs_with([(90, 140, 80, 160, 10), (150, 195, 100, 170, 20)])
+    left, right = sc.left.copy(), sc.right.copy()
+    left[120:124, 140:150] = right[120:124, 130:140] = 255.0      # a bridge: one blob in each image
+    touching = load_pair(left, right)
+    whole = silhouettes(bg, touching)
+    assert len(whole) == 1                                       # one shift for both: one is lost
+    cut = silhouettes(bg, touching, split=True)
+    assert cut.disparity.tolist() == [10.0, 20.0] and cut.score.min() >= 0.9
+    assert cut.labels[100, 100] == 1 and cut.labels[150, 180] == 2
+    # Each part must fit as well as a trusted blob does, and their shifts must differ.
+    assert len(silhouettes(bg, touching, split=True, split_score=0.99)) == 1
+    assert len(silhouettes(bg, touching, split=True, split_step_px=11)) == 1
+
+
+def test_one_object_is_not_cut():
+    bg, sc = pairs_with([(90, 195, 80, 160, 14)])
+    one = silhouettes(bg, sc, join=True, split=True)
+    assert one.disparity.tolist() == [14.0] and one.score[0] > 0.95
+
+
 def test_blobs_outside_the_roi_and_specks_are_not_objects():
     bg, sc = pairs_with([(150, 190, 100, 140, 22), (30, 33, 30, 33, 5)])
     assert len(silhouettes(bg, sc, roi=(0, 0, 100, 100), min_pixels=50)) == 0
@@ -81,6 +102,14 @@ def test_silhouettes_bad_input_names_the_parameter():
         silhouettes(bg, load_pair(sc.left[:200], sc.right[:200]))
     with pytest.raises(ParameterError, match="'min_pixels' parameter of silhouettes"):
         silhouettes(bg, sc, min_pixels=0)
+    with pytest.raises(ParameterError, match="'split_score' parameter of silhouettes"):
+        silhouettes(bg, sc, split_score=1.5)
+    with pytest.raises(ParameterError, match="'split_step_px' parameter of silhouettes"):
+        silhouettes(bg, sc, split_step_px=-1)
+    with pytest.raises(ParameterTypeError, match="'join' parameter of silhouettes"):
+        silhouettes(bg, sc, join="yes")
+    with pytest.raises(ParameterTypeError, match="'outline_alone' parameter of DepthConfig"):
+        DepthConfig(outline_alone=1)
     with pytest.raises(ParameterError, match="'grouping' parameter of DepthConfig"):
         DepthConfig(grouping="blobs")
     with pytest.raises(ParameterError, match="'silhouette_score' parameter of DepthConfig"):
@@ -138,6 +167,21 @@ def test_a_trusted_blob_is_one_object_at_the_disparity_its_features_agree_on_wit
     alone = depth_from_matches(background, scene, DepthConfig())
     assert len(alone.objects) > 3 and alone.to_dict()["grouping"] == "features"
     assert all(o.silhouette_disparity is None for o in alone.objects)
+
+
+def test_an_outline_no_features_agree_on_is_an_object_however_poor_its_fit():
+    background = matches([(x, y, 6.0) for x in range(20, 300, 40) for y in (20, 220)])
+    scene = matches([(105, 105, 22.0), (115, 110, 22.0), (125, 125, 22.0),     # on the trusted blob
+                     (210, 110, 25.0), (220, 125, 12.0)])                      # two that disagree
+    labels = blob_labels((100, 140, 100, 140), (200, 230, 100, 140), (250, 280, 100, 140))
+    sil = Silhouettes(labels, [22.0, 16.0, 3.0], [0.98, 0.6, 0.7],
+                      [[120.0, 120.0], [215.0, 120.0], [265.0, 120.0]])
+    r = depth_from_matches(background, scene, DepthConfig(outline_alone=True), sil)
+    assert [(o.silhouette_disparity, o.n_features) for o in r.objects] == [(22.0, 3), (16.0, 0)]
+    assert r.objects[1].centroid_xy == (215.0, 120.0) and r.objects[1].silhouette_score == 0.6
+    # The third lies behind the wall: no object.  Without the rule (the default) the second is lost too.
+    lost = depth_from_matches(background, scene, DepthConfig(), sil)
+    assert [o.silhouette_disparity for o in lost.objects] == [22.0]
 
 
 def test_silhouettes_must_cover_the_scene():

@@ -41,6 +41,7 @@ from .layouts import (
                        FAMILIES,
                        LAYOUT_ROI,
                        MIN_GAP_PX,
+                       UNSEEN,
                        Family,
                        Layout,
                        ObjectTruth,
@@ -75,7 +76,7 @@ __all__ = [
     "Scene", "render", "synthetic_scene", "true_matches", "ROI",
     "toy_car", "toy_car_layout", "lab_scene", "toy_car_scene", "realistic_scene",
     "REALISTIC_COUNT", "CAR_DEPTH", "Cylinder",
-    "FAMILIES", "LAYOUT_ROI", "MIN_GAP_PX", "Layout", "ObjectTruth", "object_layout", "object_ids",
+    "FAMILIES", "LAYOUT_ROI", "MIN_GAP_PX", "UNSEEN", "Layout", "ObjectTruth", "object_layout", "object_ids",
     "contrast_scene", "repetitive_scene", "border_scene", "camera_scene",
     "Family", "Look", "Placement", "families", "get_family", "register_family", "unregister_family",
 ]

@@ -2,10 +2,11 @@
 
 :func:`draw_objects` draws one design from a Generator: the wall, the objects (boxes and
 upright cylinders) at distinct depths, side by side, and the cameras.  What a scene family
-changes in it is a :class:`Look`: a few small hooks (the wall's texture, where the objects
-stand, their contrast and texture, the cameras), each drawing from the same Generator.  The
-defaults draw nothing and give posters of high contrast, objects 8 to 20 px apart inside
-:data:`LAYOUT_ROI`, and quiet cameras.
+changes in it is a :class:`Look`: a few small hooks (the wall's texture, the objects' sizes,
+where they stand, their kind, contrast and texture, the cameras), each drawing from the same
+Generator.  The defaults give posters of high contrast, objects 32 to 64 px wide and 36 to
+68 px tall, 8 to 20 px apart inside :data:`LAYOUT_ROI`, a third of them cylinders, and quiet
+cameras; only the sizes and the kinds are drawn.
 
 The draws come in a fixed order (wall, object disparities, wall texture, sizes, places,
 then object by object, then the cameras and the noise seeds), so a family's layouts depend
@@ -152,6 +153,16 @@ def posters(rng) -> str:
     return "posters"
 
 
+def common_sizes(rng, n: int) -> tuple:
+    """Widths 32 to 64 px and heights 36 to 68 px."""
+    return rng.uniform(32, 64, n), rng.uniform(36, 68, n)
+
+
+def box_or_cylinder(rng, box_only: bool) -> str:
+    """A cylinder one time in three (0.35), a box otherwise or when `box_only` (one draw either way)."""
+    return "cylinder" if rng.random() < 0.35 and not box_only else "box"
+
+
 def quiet_cameras(rng) -> dict:
     """Noise of 1 grey level, the right camera with gain 0.92 and offset 6 (no draw)."""
     return {"gain": 0.92, "offset": 6.0, "noise_std": 1.0}
@@ -175,6 +186,10 @@ class Look:
         One object's texture kind (once per object, after its tone).
     camera : callable ``(rng) -> dict``
         The cameras: ``gain`` and ``offset`` of the right one, ``noise_std`` of both.
+    sizes : callable ``(rng, n) -> (widths, heights)``
+        The `n` objects' widths and heights, pixels (drawn before `placement`).
+    shape : callable ``(rng, box_only) -> {"box", "cylinder"}``
+        One object's kind (once per object, first); a box when `box_only`.
 
     Examples
     --------
@@ -187,6 +202,8 @@ class Look:
     contrast: Callable = high_contrast
     texture: Callable = posters
     camera: Callable = quiet_cameras
+    sizes: Callable = common_sizes
+    shape: Callable = box_or_cylinder
 
     def __post_init__(self):
         for f in fields(self):
@@ -252,7 +269,7 @@ def _object(rng, look: Look, mode: str, k: int, left: float, width: float, heigh
     _, ry, _, rh = LAYOUT_ROI
     z = fb / d
     pm = z / f                                   # metres per pixel at the object
-    kind = "cylinder" if rng.random() < 0.35 and not box_only else "box"
+    kind = look.shape(rng, box_only)
     contrast = look.contrast(rng, mode)
     tone = float(np.clip(wall_base + rng.choice([-1.0, 1.0]) * rng.uniform(0.1, 0.3), 0.1, 0.9))
     tex_kind = look.texture(rng)
@@ -308,8 +325,7 @@ def draw_objects(rng: np.random.Generator, n: int, rig: StereoCamera, look: Look
     objects_d = disp[::-1][order]               # left to right; [::-1] makes order[k] == 0 the nearest
     mode = str(rng.choice(["low-on-high", "high-on-low", "mixed"]))
     wall, wall_base = _wall(rng, look, mode, fb / wall_d, rig)
-    widths = rng.uniform(32, 64, n)
-    heights = rng.uniform(36, 68, n)
+    widths, heights = look.sizes(rng, n)
     place = look.placement(rng, widths)
     x0, widths = _columns(rng, place.widths, place.lo, place.hi, place.gap)
     if place.pin_left:

@@ -64,6 +64,13 @@ truth (:class:`Layout`).  Randomness comes only from the seed or Generator passe
 ([1, 2, 3], 'contrast', (40, 40, 240, 160))
 >>> bool(np.all(np.diff([o.disparity for o in lay.objects]) <= -MIN_GAP_PX))
 True
+
+:data:`UNSEEN` is a fifth family, for held-out tests of the depth demo, which the library
+defines but does not register:
+
+>>> register_family(UNSEEN).name, object_layout(0, 3, family="unseen").family
+('unseen', 'unseen')
+>>> unregister_family("unseen")
 """
 
 from __future__ import annotations
@@ -79,7 +86,7 @@ from ..camera import StereoCamera
 from .primitives import cast
 from .render import Scene, render
 
-__all__ = ["FAMILIES", "LAYOUT_ROI", "MIN_GAP_PX", "Family", "Layout", "ObjectTruth", "border_scene",
+__all__ = ["FAMILIES", "LAYOUT_ROI", "MIN_GAP_PX", "UNSEEN", "Family", "Layout", "ObjectTruth", "border_scene",
            "camera_scene", "contrast_scene", "families", "get_family", "object_ids", "object_layout",
            "register_family", "repetitive_scene", "unregister_family"]
 
@@ -255,6 +262,53 @@ for _family in (
         Family("cameras", "Camera noise of 2 to 4 grey levels, the right camera's gain and offset off",
                Look(camera=_unsteady_cameras))):
     register_family(_family)
+
+
+# ------------------------------------------------------------------ a family the depth code never saw
+
+def _any_wall(rng, mode: str) -> tuple:
+    return rng.choice(["posters", "stripes", "tiles"]), (HIGH, LOW)[int(rng.integers(2))]
+
+
+def _any_sizes(rng, n: int) -> tuple:
+    return rng.uniform(18, 96, n), rng.uniform(24, 120, n)
+
+
+def _anywhere(rng, widths) -> Placement:
+    rx, _, rw, _ = LAYOUT_ROI
+    return Placement(rx + 2, rx + rw - 2, (3.0, 30.0), widths)
+
+
+def _any_shape(rng, box_only: bool) -> str:
+    return "cylinder" if rng.random() < 0.5 and not box_only else "box"
+
+
+def _any_contrast(rng, mode: str) -> str:
+    return str(rng.choice(["low", "high"]))
+
+
+def _any_texture(rng) -> str:
+    return str(rng.choice(["posters", "stripes", "tiles"]))
+
+
+def _any_cameras(rng) -> dict:
+    return {"gain": float(rng.uniform(0.8, 1.25)), "offset": float(rng.uniform(-15, 15)),
+            "noise_std": float(rng.uniform(0.5, 3.0))}
+
+
+UNSEEN = Family("unseen", "Objects 18 to 96 px wide and 24 to 120 px tall, half of them cylinders, 3 to 30 px "
+                "apart, any texture and contrast on objects and wall, cameras a little off",
+                Look(wall=_any_wall, placement=_anywhere, contrast=_any_contrast, texture=_any_texture,
+                     camera=_any_cameras, sizes=_any_sizes, shape=_any_shape))
+"""A family for held-out tests of the depth demo, not registered by the library.
+
+Every hook of :class:`~ismb_lab.scenes.design.Look` draws from wider ranges than the four
+families': sizes, kinds, gaps, textures and contrasts of objects and wall, and the cameras.
+Its stream is its own (:meth:`Family.stream`), so registering it (``register_family(UNSEEN)``,
+as ``scripts/depth_layouts.py --families unseen`` does) moves no other family's layouts;
+it is left out of :func:`families` so that the scripts' recorded splits, which cycle
+through the registered families, stay as they were.
+"""
 
 
 # ------------------------------------------------------------------ layouts
