@@ -2,8 +2,10 @@
 
 :class:`Cloud` is the model (plain numbers: points in the rectified left camera's frame,
 the two camera centres, the depth each point is coloured by, short notes);
-:func:`depth_cloud` and :func:`board_cloud` make one from a depth demo or a calibrated
-rig.  :class:`PointCloudView` is the view: k3d objects (WebGL in the browser, the
+:func:`depth_cloud` makes one from a depth demo, :func:`match_cloud` from the network's
+matches of a pair rectified with a calibrated :class:`~ismb_lab.camera.StereoCamera`, and
+:func:`board_cloud` from a chessboard's corners in such a pair.  Every point comes from
+:meth:`~ismb_lab.camera.StereoCamera.points_from_disparity`.  :class:`PointCloudView` is the view: k3d objects (WebGL in the browser, the
 JavaScript shipped inside the k3d wheel and sent by the kernel, nothing fetched from a
 CDN) created once and updated in place by :meth:`PointCloudView.update`.
 
@@ -19,35 +21,12 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from .._validation import ParameterError, ParameterTypeError, message, readonly
-from ..depth import metric_depth
+from ..camera import StereoCamera
 
-__all__ = ["Cloud", "MAX_NOTES", "PointCloudView", "board_cloud", "depth_cloud", "frustum_edges"]
+__all__ = ["Cloud", "MAX_NOTES", "PointCloudView", "board_cloud", "depth_cloud", "frustum_edges", "match_cloud"]
 
 #: How many notes (e.g. ``#1 0.89 m`` beside an object) a view can show at once.
 MAX_NOTES = 6
-
-
-def _points_via_metric_depth(xy, disparity, focal_px: float, baseline_m: float, principal_xy) -> np.ndarray:
-    """Stand-in for ``StereoCamera.points_from_disparity`` until the camera model is merged:
-    swap this one function for it then.
-
-    ``Z = f B / d`` (:func:`ismb_lab.depth.metric_depth`), ``X = (x - cx) Z / f``,
-    ``Y = (y - cy) Z / f``; a row of NaN where ``d <= 0`` (no point in front of the rig).
-
-    >>> _points_via_metric_depth([[160.0, 120.0]], [30.0], 300.0, 0.1, (130.0, 120.0))
-    array([[0.1, 0. , 1. ]])
-    """
-    xy = np.asarray(xy, dtype=float).reshape(-1, 2)
-    z = np.array([np.nan if (got := metric_depth(float(d), focal_px, baseline_m)).z is None else got.z
-                  for d in np.asarray(disparity, dtype=float).ravel()])
-    return np.column_stack([(xy - np.asarray(principal_xy, dtype=float)) * z[:, None] / focal_px, z])
-
-
-def _rig_principal_xy(rig) -> tuple[float, float]:
-    """The rectified left view's principal point of an :class:`ismb_lab.rig.Rig` (goes with
-    :func:`_points_via_metric_depth` when the camera model is merged)."""
-    p1 = rig._rectification()["p1"]
-    return float(p1[0, 2]), float(p1[1, 2])
 
 
 def frustum_edges(centres, corners_xyz) -> tuple[np.ndarray, np.ndarray]:
@@ -142,33 +121,34 @@ class Cloud:
         object.__setattr__(self, "depth_range", (lo, hi))
 
 
-def _cloud(xy, disparity, focal_px, baseline_m, principal_xy, size_wh, notes, caption) -> Cloud:
-    """The points with a depth (d > 0), the cameras drawn 0.6 baselines deep, notes placed."""
-    points = _points_via_metric_depth(xy, disparity, focal_px, baseline_m, principal_xy)
+def _cloud(camera: StereoCamera, points, notes, caption: str) -> Cloud:
+    """`points` of `camera`'s rectified left frame that have a place (a NaN row: a disparity
+    <= 0), the cameras drawn 0.6 baselines deep, each note ``(text, xy, disparity)`` placed."""
+    points = np.asarray(points, dtype=float).reshape(-1, 3)
     ok = np.isfinite(points).all(axis=1)
-    w, h = size_wh
+    w, h = camera.size
     corners = np.array([[0, 0], [w - 1, 0], [w - 1, h - 1], [0, h - 1]], dtype=float)
-    depth = 0.6 * baseline_m
-    frustum = _points_via_metric_depth(corners, np.full(4, focal_px * baseline_m / depth), focal_px, baseline_m,
-                                       principal_xy)
-    placed = tuple((text, tuple(float(v) for v in _points_via_metric_depth([at_xy], [d], focal_px, baseline_m,
-                                                                           principal_xy)[0]))
+    frustum = camera.points_from_disparity(corners, np.full(4, camera.focal_px / 0.6))   # Z = 0.6 B
+    placed = tuple((text, tuple(float(v) for v in camera.points_from_disparity([at_xy], [d])[0]))
                    for text, at_xy, d in notes if d > 0)
     if not ok.all():
         caption += f"; {int((~ok).sum())} match(es) with disparity <= 0 left out"
-    return Cloud(points[ok], [[0, 0, 0], [baseline_m, 0, 0]], frustum, notes=placed[:MAX_NOTES], caption=caption)
+    return Cloud(points[ok], [[0, 0, 0], [camera.baseline_m, 0, 0]], frustum, notes=placed[:MAX_NOTES],
+                 caption=caption)
 
 
 def depth_cloud(model) -> Cloud:
     """The depth demo's matched points in 3-D: the background pair's matches (the box, the wall)
     and the scene's matches kept after background removal, with each object's rank and depth.
 
-    Metres come from the demo's calibration (``model.config.focal_px``, ``baseline_m``; the
-    principal point is the image centre, as the rendered rig's), so for photos of one's own
-    they are only as right as those defaults.
+    Metres come from the demo's calibration: a :meth:`~ismb_lab.camera.StereoCamera.pinhole`
+    camera of the scene's size with ``model.config.focal_px`` and ``baseline_m`` (its principal
+    point is the image centre, as the rendered rig's), so for photos of one's own they are only
+    as right as those defaults.
     """
     r, cfg = model.result, model.config
     h, w = model.scene.left.shape
+    camera = StereoCamera.pinhole(width=w, height=h, focal_px=cfg.focal_px, baseline_m=cfg.baseline_m)
     xy = np.vstack([np.asarray(r.background.left_match_xy, dtype=float).reshape(-1, 2),
                     np.asarray(r.kept_xy, dtype=float).reshape(-1, 2)])
     d = np.concatenate([np.asarray(r.background.horizontal_disparity, dtype=float).ravel(),
@@ -178,25 +158,68 @@ def depth_cloud(model) -> Cloud:
     caption = (f"{len(r.background.pairs)} background matches and {len(r.kept_xy)} scene matches kept, in "
                f"metres for f = {cfg.focal_px:g} px and B = {cfg.baseline_m:g} m (the demo's calibration); "
                "left camera at 0, Z forward, colour = Z")
-    return _cloud(xy, d, cfg.focal_px, cfg.baseline_m, ((w - 1) / 2, (h - 1) / 2), (w, h), notes, caption)
+    return _cloud(camera, camera.points_from_disparity(xy, d), notes, caption)
 
 
-def board_cloud(rig, rectified) -> Cloud:
-    """A chessboard's corners, found in both views of a pair rectified with `rig`, in metres
-    (``Z = f B / d`` with the rig's rectified focal length, baseline and principal point)."""
+def _board(camera: StereoCamera, rectified, owner: str) -> tuple:
+    """The board's corners in both rectified views (cv2), their disparities and a note at their
+    centre with their median depth."""
     from ..rig import find_board
 
-    left, right = find_board(rectified.left, rig.board), find_board(rectified.right, rig.board)
+    left, right = find_board(rectified.left, camera.board), find_board(rectified.right, camera.board)
     if left is None or right is None:
-        raise ParameterError(message("rectified", "board_cloud", "a pair showing the whole board in both views",
+        raise ParameterError(message("rectified", owner, "a pair showing the whole board in both views",
                                      "a pair where it was not found"))
     d = left[:, 0] - right[:, 0]
-    centre = left.mean(axis=0)
-    notes = [(f"board, median Z {rig.focal_px * rig.baseline_m / np.median(d):.3f} m", centre, float(np.median(d)))]
+    median = float(np.median(d))
+    z = float(camera.disparity_at(median))
+    return left, d, (f"board's corners (cv2), median Z {z:.3f} m", left.mean(axis=0), median)
+
+
+def board_cloud(camera: StereoCamera, rectified) -> Cloud:
+    """A chessboard's corners, found in both views of a pair rectified with `camera`, in metres
+    (:meth:`~ismb_lab.camera.StereoCamera.points_from_disparity`)."""
+    if not isinstance(camera, StereoCamera):
+        raise ParameterTypeError(message("camera", "board_cloud", "a StereoCamera", camera))
+    left, d, note = _board(camera, rectified, "board_cloud")
     caption = (f"the board's {len(left)} corners matched between the rectified views, in metres "
-               f"(f = {rig.focal_px:.1f} px, B = {rig.baseline_m * 100:.2f} cm); left camera at 0, "
+               f"(f = {camera.focal_px:.1f} px, B = {camera.baseline_m * 100:.2f} cm); left camera at 0, "
                "Z forward, colour = Z")
-    return _cloud(left, d, rig.focal_px, rig.baseline_m, _rig_principal_xy(rig), tuple(rig.size), notes, caption)
+    return _cloud(camera, camera.points_from_disparity(left, d), [note], caption)
+
+
+def match_cloud(result, camera: StereoCamera, board=None) -> Cloud:
+    """The network's matches of a pair rectified with `camera`, in metres
+    (:func:`ismb_lab.metric.match_points`), as ``ismb-lab match --rig`` gives them.
+
+    Parameters
+    ----------
+    result : ismb_lab.matching.MatchResult
+        The matches (e.g. after :func:`ismb_lab.metric.mutual_best`).
+    camera : StereoCamera
+        The camera that rectified the pair.
+    board : ismb_lab.rectify.Rectified, optional
+        The rectified pair, when it shows the calibration board: a note at the board's centre
+        gives its corners' median depth (found by cv2, not by the network), for comparison.
+
+    Examples
+    --------
+    >>> from ismb_lab.matching import match
+    >>> from ismb_lab.scenes import synthetic_scene
+    >>> s = synthetic_scene(0)
+    >>> cloud = match_cloud(match(s.left, s.right), StereoCamera())
+    >>> len(cloud.points) > 0, bool((cloud.points[:, 2] > 0).all()), cloud.centres[1].tolist()
+    (True, True, [0.1, 0.0, 0.0])
+    """
+    from ..metric import match_points
+
+    if not isinstance(camera, StereoCamera):
+        raise ParameterTypeError(message("camera", "match_cloud", "a StereoCamera", camera))
+    notes = [] if board is None else [_board(camera, board, "match_cloud")[2]]
+    caption = (f"the network's {len(result.pairs)} matches (Method-{result.method}) in metres "
+               f"(f = {camera.focal_px:.1f} px, B = {camera.baseline_m * 100:.2f} cm); left camera at 0, "
+               "Z forward, colour = Z")
+    return _cloud(camera, match_points(result, camera), notes, caption)
 
 
 def _shown(xyz) -> np.ndarray:

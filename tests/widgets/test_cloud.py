@@ -8,24 +8,48 @@ import pytest
 from ismb_lab import ParameterError, ParameterTypeError
 from ismb_lab.camera import StereoCamera
 from ismb_lab.widgets import DepthDemo, DepthModel
-from ismb_lab.widgets.cloud import (MAX_NOTES, Cloud, PointCloudView, _points_via_metric_depth, board_cloud,
-                                    depth_cloud, frustum_edges)
+from ismb_lab.widgets.cloud import (MAX_NOTES, Cloud, PointCloudView, _cloud, board_cloud, depth_cloud,
+                                    frustum_edges, match_cloud)
 
 IMAGES = Path(__file__).resolve().parents[2] / "images"
 
 
-def test_points_come_back_where_a_pinhole_rig_saw_them():
-    rig = StereoCamera.pinhole(focal_px=300.0, baseline_m=0.1)
-    rng = np.random.default_rng(20261125)
-    truth = np.column_stack([rng.uniform(-0.4, 0.4, 40), rng.uniform(-0.3, 0.3, 40), rng.uniform(0.5, 3.0, 40)])
-    left, right = rig.project_left(truth), rig.project_right(truth)
-    back = _points_via_metric_depth(left, left[:, 0] - right[:, 0], rig.focal_px, rig.baseline_m, rig.centre)
-    np.testing.assert_allclose(back, truth, rtol=1e-12, atol=1e-12)
+def test_matches_in_3d_project_back_onto_their_pixels():
+    """The cloud's points, seen again by the camera that placed them, fall on the matched pixels:
+    on the left one exactly, and on the right one's column (the pinhole pair shares rows)."""
+    from ismb_lab.matching import match
+    from ismb_lab.scenes import synthetic_scene
+
+    scene = synthetic_scene(0)
+    result = match(scene.left, scene.right)
+    h, w = scene.left.shape
+    camera = StereoCamera.pinhole(width=w, height=h, focal_px=250.0, baseline_m=0.12)
+    cloud = match_cloud(result, camera)
+    d = result.left_match_xy[:, 0] - result.right_match_xy[:, 0]
+    assert (d > 0).all() and len(cloud.points) == len(result.pairs) > 10
+    np.testing.assert_allclose(cloud.points[:, 2], 250.0 * 0.12 / d, rtol=1e-12)
+    np.testing.assert_allclose(camera.project_left(cloud.points), result.left_match_xy, atol=1e-9)
+    np.testing.assert_allclose(camera.project_right(cloud.points)[:, 0], result.right_match_xy[:, 0], atol=1e-9)
+    np.testing.assert_allclose(cloud.centres, [[0, 0, 0], [0.12, 0, 0]])
+    assert "the network's" in cloud.caption and "f = 250.0 px, B = 12.00 cm" in cloud.caption
+
+
+def test_the_drawn_cameras_see_the_image_corners_at_0_6_baselines():
+    camera = StereoCamera.pinhole(width=320, height=240, focal_px=300.0, baseline_m=0.1)
+    cloud = _cloud(camera, np.zeros((0, 3)), [], "")
+    np.testing.assert_allclose(cloud.frustum[:, 2], 0.06, rtol=1e-12)
+    np.testing.assert_allclose(camera.project_left(cloud.frustum), [[0, 0], [319, 0], [319, 239], [0, 239]],
+                               atol=1e-9)
 
 
 def test_a_point_without_a_positive_disparity_has_no_place():
-    back = _points_via_metric_depth([[10, 10], [20, 20], [30, 30]], [0.0, -2.0, 6.0], 300.0, 0.1, (0, 0))
-    assert np.isnan(back[:2]).all() and np.allclose(back[2], [0.5, 0.5, 5.0])   # Z = 300 * 0.1 / 6, X = 30 Z / 300
+    camera = StereoCamera.pinhole(width=61, height=61, focal_px=300.0, baseline_m=0.1)   # centre (30, 30)
+    points = camera.points_from_disparity([[10, 10], [20, 20], [60, 60]], [0.0, -2.0, 6.0])
+    cloud = _cloud(camera, points, [("behind", (5, 5), -1.0), ("front", (60, 60), 6.0)], "c")
+    # Z = 300 * 0.1 / 6 = 5, X = Y = (60 - 30) Z / 300
+    np.testing.assert_allclose(cloud.points, [[0.5, 0.5, 5.0]], rtol=1e-12)
+    assert cloud.caption == "c; 2 match(es) with disparity <= 0 left out"
+    assert [text for text, _ in cloud.notes] == ["front"] and cloud.notes[0][1] == pytest.approx((0.5, 0.5, 5.0))
 
 
 def test_frustums_have_their_apex_at_each_centre():
@@ -67,6 +91,11 @@ def test_the_demo_cloud_holds_its_matches_at_f_b_over_d(model):
     d = np.concatenate([r.background.horizontal_disparity, r.kept_disparity])
     assert len(cloud.points) == int((d > 0).sum()) > 20
     np.testing.assert_allclose(cloud.points[:, 2], cfg.focal_px * cfg.baseline_m / d[d > 0], rtol=1e-12)
+    # the principal point is the image centre, as the rendered rig's
+    h, w = model.scene.left.shape
+    xy = np.vstack([r.background.left_match_xy, r.kept_xy])[d > 0]
+    np.testing.assert_allclose(cloud.points[:, :2], (xy - [(w - 1) / 2, (h - 1) / 2]) * cloud.points[:, 2:] / cfg.focal_px,
+                               rtol=1e-12, atol=1e-15)
     np.testing.assert_array_equal(cloud.colour, cloud.points[:, 2])
     np.testing.assert_allclose(cloud.centres, [[0, 0, 0], [cfg.baseline_m, 0, 0]])
     assert [text for text, _ in cloud.notes] == [f"#{o.rank} {o.depth_m:.2f} m" for o in r.objects]
@@ -138,3 +167,36 @@ def test_the_board_cloud_lies_at_the_board_depth(opencv_data):
     # neighbouring corners one square apart (25 mm, rig.square_m), to within 5%
     step = np.linalg.norm(np.diff(cloud.points.reshape(rig.board[1], rig.board[0], 3), axis=1), axis=2)
     assert np.median(step) == pytest.approx(rig.square_m, rel=0.05)
+
+
+def test_the_networks_matches_of_a_held_out_pair_are_placed_by_the_rig(opencv_data):
+    """The path of ``ismb-lab match --rig`` (as notebook 09 takes it) on held-out pair 14: the
+    cloud holds the matches' points in metres, most of them at the board's depths (the board
+    fills part of the photo; the room behind it is farther), and the note gives the board's own
+    depth from its corners."""
+    from ismb_lab.datasets import chessboard_pairs
+    from ismb_lab.io import load_pair
+    from ismb_lab.matching import MatchConfig, match, prepare
+    from ismb_lab.metric import for_camera, match_points, mutual_best, rig_config
+    from ismb_lab.rig import board_depth, calibrate_rig
+
+    pairs = chessboard_pairs()
+    rig = calibrate_rig([p for p in pairs if p[0] != "14"])
+    _, raw_left, raw_right = [p for p in pairs if p[0] == "14"][0]
+    left, right, how = for_camera(raw_left, raw_right, rig)
+    assert "rectified with the rig" in how
+    config = MatchConfig(roi="full", shift="auto", n_min=150, n_max=200)
+    pair = load_pair(left, right, min_shape=config.min_shape)
+    prepared = prepare(pair, None, rig_config(rig, config, pair))
+    result = mutual_best(prepared, match(prepared=prepared))
+    rectified = rig.rectify(raw_left, raw_right)
+    cloud = match_cloud(result, rig, board=rectified)
+    xyz = match_points(result, rig)
+    np.testing.assert_array_equal(cloud.points, xyz[np.isfinite(xyz).all(axis=1)])
+    assert len(cloud.points) >= 20
+    corners = board_cloud(rig, rectified).points[:, 2]
+    z = cloud.points[:, 2]
+    assert np.mean((z >= 0.95 * corners.min()) & (z <= 1.05 * corners.max())) > 0.5
+    (text, at), = cloud.notes
+    assert text.startswith("board's corners (cv2)")
+    assert at[2] == pytest.approx(board_depth(rig, raw_left, raw_right)["stereo"], rel=1e-3)
