@@ -364,12 +364,15 @@ class DepthResult:
     scene_roi: tuple | None = None
     silhouettes: Silhouettes | None = None
 
-    def points(self, camera=None) -> np.ndarray:
-        """The kept scene matches as ``(N, 3)`` points in metres, in the rectified left camera's
-        frame (:meth:`ismb_lab.camera.StereoCamera.points_from_disparity`) of `camera`; by
-        default the rendered scenes' camera with this result's focal length and baseline."""
-        if camera is None:
-            camera = StereoCamera.pinhole(focal_px=self.config.focal_px, baseline_m=self.config.baseline_m)
+    def points(self, camera: StereoCamera) -> np.ndarray:
+        """The kept scene matches as ``(N, 3)`` points in metres, in `camera`'s rectified left
+        frame (:meth:`ismb_lab.camera.StereoCamera.points_from_disparity`).
+
+        The camera is not optional: the principal point depends on the image's size, which a
+        result does not hold (:meth:`StereoCamera.pinhole` of the pair's width and height
+        with ``config.focal_px`` and ``config.baseline_m`` for the rendered scenes)."""
+        if not isinstance(camera, StereoCamera):
+            raise ParameterTypeError(message("camera", "DepthResult.points", "a StereoCamera", camera))
         return camera.points_from_disparity(self.kept_xy, self.kept_disparity)
 
     def to_dict(self) -> dict:

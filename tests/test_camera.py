@@ -77,10 +77,13 @@ def test_a_depth_results_points_are_its_kept_matches_in_metres():
     config = MatchConfig(roi=(40, 40, 240, 160), shift=22.0)
     background, scene = (match(s.left, s.right, config=config) for s in (lab_scene(3), toy_car_scene(3)))
     result = depth_from_matches(background, scene, DepthConfig())
-    points = result.points()
+    h, w = lab_scene(3).left.shape
+    points = result.points(StereoCamera.pinhole(width=w, height=h, focal_px=FOCAL_PX, baseline_m=BASELINE_M))
     assert len(points) == len(result.kept_xy) > 0
     assert np.allclose(points[:, 2], FOCAL_PX * BASELINE_M / result.kept_disparity)
-    assert np.allclose(points[:, 0], (result.kept_xy[:, 0] - 159.5) * points[:, 2] / FOCAL_PX)
+    assert np.allclose(points[:, 0], (result.kept_xy[:, 0] - (w - 1) / 2) * points[:, 2] / FOCAL_PX)
+    with pytest.raises(TypeError, match="camera"):
+        result.points(None)
 
 
 def test_match_points_are_the_scene_points_on_a_rendered_pair():
