@@ -2,12 +2,15 @@
 
 A pair rectified with a calibrated :class:`~ismb_lab.camera.StereoCamera` has its
 epipolar lines on the image rows, to within the calibration's error.  Matching it
-(``ismb-lab match --rig``) uses that three ways, none of them special to any scene:
+(``ismb-lab match --rig``, :func:`prepare_for_camera`) uses that three ways, none of them
+special to any scene:
 
-1. **rows**: a match's two corners are on one row to within :func:`row_tolerance` pixels,
-   ``1 + 2 rms``: Harris corners are whole pixels (each is up to half a pixel from its
-   point, so a row difference of up to 1 px), and each of the two points is rectified with
-   about the calibration's RMS reprojection error.  The candidate window is that tall;
+1. **rows**: the corners' positions are refined to sub-pixel (:func:`subpixel`; the
+   similarity ``M`` still compares the whole-pixel patches), and a match's two corners are
+   on one row to within :func:`row_tolerance` pixels, ``2 rms``: each of the two points is
+   rectified with about the calibration's RMS reprojection error.  The candidate window is
+   that tall.  (Whole-pixel corners, as ``depth --rig`` uses, need ``1 + 2 rms``: each is up
+   to half a pixel from its point);
 2. **the disparity range**: the window's range is measured on robust SIFT matches that
    search only their own rows and positive disparities (a point in front of both cameras)
    (:func:`ismb_lab.matching.auto_window` with ``rows_px``), so a repetitive texture's
@@ -16,7 +19,8 @@ epipolar lines on the image rows, to within the calibration's error.  Matching i
    other's most similar candidate in that window are kept (:func:`mutual_best`).
 
 Then each match is a point ``(X, Y, Z)`` in metres in the rectified left camera's frame
-(:func:`match_points`, :meth:`~ismb_lab.camera.StereoCamera.points_from_disparity`).
+(:func:`match_points`, :meth:`~ismb_lab.camera.StereoCamera.points_from_disparity`), from
+the sub-pixel positions' disparity.
 """
 
 from __future__ import annotations
@@ -24,36 +28,48 @@ from __future__ import annotations
 import math
 from dataclasses import replace
 
+import cv2
 import numpy as np
 
 from ._validation import ParameterError, ParameterTypeError, message
 from .camera import StereoCamera
-from .matching import MatchConfig, MatchResult, Prepared, auto_window
+from .matching import MatchConfig, MatchResult, Prepared, auto_window, prepare
+from .methods import build_problem
 
-__all__ = ["for_camera", "match_points", "mutual_best", "rig_config", "row_tolerance"]
+__all__ = ["for_camera", "match_points", "mutual_best", "prepare_for_camera", "rig_config", "row_tolerance",
+           "subpixel"]
+
+#: cv2.cornerSubPix stops when a step is under 0.001 px or after 40 steps.
+_SUBPIXEL_STOP = (cv2.TERM_CRITERIA_EPS + cv2.TERM_CRITERIA_COUNT, 40, 0.001)
 
 
-def row_tolerance(camera: StereoCamera) -> float:
+def row_tolerance(camera: StereoCamera, subpixel: bool = False) -> float:
     """Largest row difference, in pixels, of a true corner match in `camera`'s rectified pair:
-    ``1 + 2 rms`` (``1`` for an uncalibrated, ideal camera).
+    ``2 rms`` for sub-pixel corners, ``1 + 2 rms`` for whole-pixel ones (``1`` for an
+    uncalibrated, ideal camera, which has no error to go by).
 
     >>> row_tolerance(StereoCamera())
     1.0
+    >>> row_tolerance(StereoCamera(rms=0.25)), row_tolerance(StereoCamera(rms=0.25), subpixel=True)
+    (1.5, 0.5)
     """
     rms = float(camera.rms)
-    return 1.0 + (2.0 * rms if math.isfinite(rms) else 0.0)
+    if not math.isfinite(rms):
+        return 1.0
+    return 2.0 * rms + (0.0 if subpixel else 1.0)
 
 
-def rig_config(camera: StereoCamera, config: MatchConfig, pair=None) -> MatchConfig:
+def rig_config(camera: StereoCamera, config: MatchConfig, pair=None, subpixel: bool = False) -> MatchConfig:
     """`config` with the candidate window `camera` gives: :func:`row_tolerance` rows up and
-    down, and, with ``shift="auto"``, the disparity range measured on `pair` along its rows.
+    down (for sub-pixel corners when `subpixel`), and, with ``shift="auto"``, the disparity
+    range measured on `pair` along those rows.
 
     >>> rig_config(StereoCamera(), MatchConfig()).window_height
     2.0
     """
     if not isinstance(config, MatchConfig):
         raise ParameterTypeError(message("config", "rig_config", "a MatchConfig", config))
-    rows = row_tolerance(camera)
+    rows = row_tolerance(camera, subpixel)
     config = replace(config, window_height=2 * rows)
     if config.shift == "auto":
         if pair is None:
@@ -61,6 +77,51 @@ def rig_config(camera: StereoCamera, config: MatchConfig, pair=None) -> MatchCon
                                          None))
         config = auto_window(pair, config, rows_px=rows)
     return config
+
+
+def subpixel(image, xy, half: int) -> np.ndarray:
+    """Corner points `xy` ``(x, y)`` of `image` refined to sub-pixel (``cv2.cornerSubPix``
+    in a ``(2 half + 1)`` square window), kept inside the image.
+
+    >>> import numpy as np
+    >>> img = np.zeros((40, 40)); img[:20, :20] = img[20:, 20:] = 255.0
+    >>> subpixel(img, np.array([[21.0, 18.0]]), 5).round(1).tolist()
+    [[19.5, 19.5]]
+    """
+    grey = np.asarray(image, dtype=np.float32)
+    points = np.asarray(xy, dtype=np.float32).reshape(-1, 1, 2).copy()
+    if not len(points):
+        return np.zeros((0, 2))
+    refined = cv2.cornerSubPix(grey, points, (int(half), int(half)), (-1, -1), _SUBPIXEL_STOP)
+    refined = refined.reshape(-1, 2).astype(float)
+    height, width = grey.shape
+    return np.clip(refined, 0, [width - 1, height - 1])
+
+
+def prepare_for_camera(pair, config: MatchConfig, camera: StereoCamera) -> Prepared:
+    """`pair` (rectified by `camera`) prepared in the window `camera` gives: the corners are
+    detected as :func:`~ismb_lab.matching.prepare` does and ``M`` compares their whole-pixel
+    patches, then the geometry (the candidate window, the neighbours, the disparities) uses
+    their sub-pixel positions (:func:`subpixel`, half the patch size) and rows within
+    ``row_tolerance(camera, subpixel=True)``.
+
+    >>> from ismb_lab.io import load_pair
+    >>> from ismb_lab.scenes import synthetic_scene
+    >>> s = synthetic_scene(0)
+    >>> p = prepare_for_camera(load_pair(s.left, s.right), MatchConfig(), StereoCamera())
+    >>> p.config.window_height, p.problem.n_neurons > 0
+    (2.0, True)
+    """
+    if not isinstance(camera, StereoCamera):
+        raise ParameterTypeError(message("camera", "prepare_for_camera", "a StereoCamera", camera))
+    prepared = prepare(pair, None, rig_config(camera, config, pair, subpixel=True))
+    c, half = prepared.config, prepared.config.patch_size // 2
+    lxy = subpixel(prepared.pair.left, prepared.left_corners.xy, half)
+    rxy = subpixel(prepared.pair.right, prepared.right_corners.xy, half)
+    problem = build_problem(lxy, rxy, prepared.problem.dissimilarity, shift=c.shift,
+                            window_height=c.window_height, window_width=c.window_width,
+                            radius=c.neighbour_radius, neighbourhood=c.neighbourhood)
+    return replace(prepared, problem=problem)
 
 
 def mutual_best(prepared: Prepared, result: MatchResult) -> MatchResult:

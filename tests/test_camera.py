@@ -11,8 +11,9 @@ import ismb_lab
 from ismb_lab import ParameterError
 from ismb_lab.camera import BASELINE_M, FOCAL_PX, StereoCamera
 from ismb_lab.depth import DepthConfig, depth_from_matches
+from ismb_lab.io import load_pair
 from ismb_lab.matching import MatchConfig, match, prepare
-from ismb_lab.metric import match_points, mutual_best, row_tolerance
+from ismb_lab.metric import match_points, mutual_best, prepare_for_camera, row_tolerance, subpixel
 from ismb_lab.plotting import frustum_lines
 from ismb_lab.scenes import lab_scene, synthetic_scene, toy_car_scene
 
@@ -109,6 +110,34 @@ def test_mutual_best_keeps_only_pairs_that_are_each_others_most_similar():
         assert m[i, k] == min(m[r, k] for r, c in zip(problem.rows, problem.cols) if c == k)
     assert int(kept.state.sum()) == len(kept.pairs)
     assert row_tolerance(StereoCamera(rms=0.25)) == 1.5
+    assert row_tolerance(StereoCamera(rms=0.25), subpixel=True) == 0.5
+
+
+def test_subpixel_finds_a_saddle_between_the_pixels():
+    x0, y0, s = 20.3, 17.7, 16          # the corner, and 16 x 16 samples per pixel (centres on integers)
+    yy, xx = np.mgrid[0:40 * s, 0:40 * s]
+    xs, ys = (xx + 0.5) / s - 0.5, (yy + 0.5) / s - 0.5
+    image = 20 + 200 * ((xs - x0) * (ys - y0) > 0).reshape(40, s, 40, s).mean(axis=(1, 3))
+    found = subpixel(image, np.array([[21.0, 18.0], [19.0, 17.0]]), 5)
+    assert np.abs(found - [x0, y0]).max() < 0.1
+    assert subpixel(image, np.zeros((0, 2)), 5).shape == (0, 2)
+
+
+def test_prepare_for_camera_refines_the_geometry_and_keeps_the_whole_pixel_similarity():
+    scene = synthetic_scene(2)
+    camera = StereoCamera(rms=0.3)
+    prepared = prepare_for_camera(load_pair(scene.left, scene.right), MatchConfig(), camera)
+    plain = prepare(prepared.pair, None, MatchConfig(window_height=prepared.config.window_height))
+    assert prepared.config.window_height == pytest.approx(4 * 0.3)
+    assert np.array_equal(prepared.problem.dissimilarity, plain.problem.dissimilarity)
+    half = MatchConfig().patch_size // 2
+    assert np.array_equal(prepared.problem.left_xy, subpixel(prepared.pair.left, plain.left_corners.xy, half))
+    assert np.array_equal(prepared.problem.right_xy, subpixel(prepared.pair.right, plain.right_corners.xy, half))
+    problem = prepared.problem
+    dy = np.abs(problem.left_xy[problem.rows, 1] - problem.right_xy[problem.cols, 1])
+    assert dy.max() <= 2 * 0.3
+    with pytest.raises(TypeError, match="camera"):
+        prepare_for_camera(prepared.pair, MatchConfig(), "rig.json")
 
 
 def test_the_frustum_reaches_the_image_corners_at_its_depth():

@@ -45,7 +45,8 @@ def test_match_rig_rectifies_raw_photos_and_gives_every_match_its_point(opencv_d
         assert Z == pytest.approx(camera.focal_px * camera.baseline_m / d)
         assert X == pytest.approx((x - camera.rectified_centre[0]) * Z / camera.focal_px)
         assert Y == pytest.approx((y - camera.rectified_centre[1]) * Z / camera.focal_px)
-        assert abs(m["left_xy"][1] - m["right_xy"][1]) <= 1 + 2 * camera.rms    # on their rows
+        assert abs(m["left_xy"][1] - m["right_xy"][1]) <= 2 * camera.rms    # sub-pixel, on their rows
+    assert any(x != round(x) for m in matches for x in m["left_xy"])
     assert "matches in metres" in proc.stdout
 
 
@@ -87,14 +88,14 @@ def test_depth_rig_measures_the_window_or_refuses(opencv_data, without_14, tmp_p
 
 @pytest.mark.slow
 def test_held_out_boards_get_their_plane_through_the_command_line(opencv_data, load_script):
-    """The first three pairs held out in turn (issue 27's rule; all 13 are in the experiment record)."""
+    """Pairs 01-03, 09 and 12 held out in turn (issue 27's rule; all 13 are in the experiment record)."""
     script = load_script("board_metres")
     full = calibrate_rig([(n, opencv_data / f"left{n}.jpg", opencv_data / f"right{n}.jpg") for n in CHESSBOARD_PAIRS])
     import tempfile
     from pathlib import Path
     with tempfile.TemporaryDirectory() as tmp:
         rows = [script.held_out(full, name, opencv_data, Path(tmp), script.N_MIN, script.N_MAX)
-                for name in ("01", "02", "03")]
+                for name in ("01", "02", "03", "09", "12")]
     for row in rows:
         assert row["rectified_by_rig"]
         assert row["board_matches"] >= 20 and row["share"] >= 0.90, row

@@ -25,9 +25,9 @@ def add_parser(sub) -> None:
     add_solver_option(m, f"the params file's, else {DEFAULT_SOLVER}")
     m.add_argument("--rig", type=Path, default=None, metavar="RIG.json",
                    help="a rig from 'ismb-lab calibrate': rectify raw photos with it (a rectified pair is "
-                   "matched as it is; stderr says which), keep the candidates on their rows, and give each "
-                   "match its point in metres (xyz_m, the rectified left camera's frame: X right, Y down, "
-                   "Z forward); --shift is then auto unless given")
+                   "matched as it is; stderr says which), refine the corners to sub-pixel, keep the "
+                   "candidates on their rows, and give each match its point in metres (xyz_m, the rectified "
+                   "left camera's frame: X right, Y down, Z forward); --shift is then auto unless given")
     m.add_argument("--json", type=Path, default=None, metavar="OUT", help="write the result as JSON")
     m.add_argument("--plot", type=Path, default=None, metavar="OUT.png",
                    help="draw the pair with features and match lines")
@@ -59,8 +59,7 @@ def _prepared_with_rig(args):
     from .._files import check_input
     from ..camera import load_camera
     from ..io import load_pair
-    from ..matching import prepare
-    from ..metric import for_camera, rig_config
+    from ..metric import for_camera, prepare_for_camera
     from ..rectify import check_for_matching
 
     camera = load_camera(check_input(args.rig, what="--rig"))
@@ -73,7 +72,7 @@ def _prepared_with_rig(args):
     if warning:
         print(warning, file=sys.stderr)
     pair = load_pair(left, right, min_shape=config.min_shape)
-    return camera, prepare(pair, None, rig_config(camera, config, pair))
+    return camera, prepare_for_camera(pair, config, camera)
 
 
 def run(args) -> int:
