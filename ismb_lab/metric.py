@@ -33,10 +33,10 @@ import numpy as np
 
 from ._validation import ParameterError, ParameterTypeError, message
 from .camera import StereoCamera
-from .matching import MatchConfig, MatchResult, Prepared, auto_window, prepare
+from .matching import MatchConfig, MatchResult, Prepared, auto_window, match, prepare
 from .methods import build_problem
 
-__all__ = ["for_camera", "match_points", "mutual_best", "prepare_for_camera", "rig_config", "row_tolerance",
+__all__ = ["for_camera", "match_points", "match_with_camera", "mutual_best", "prepare_for_camera", "rig_config", "row_tolerance",
            "subpixel"]
 
 #: cv2.cornerSubPix stops when a step is under 0.001 px or after 40 steps.
@@ -122,6 +122,24 @@ def prepare_for_camera(pair, config: MatchConfig, camera: StereoCamera) -> Prepa
                             window_height=c.window_height, window_width=c.window_width,
                             radius=c.neighbour_radius, neighbourhood=c.neighbourhood)
     return replace(prepared, problem=problem)
+
+
+def match_with_camera(pair, config: MatchConfig, camera: StereoCamera, **options) -> tuple:
+    """``ismb-lab match --rig`` on a pair rectified by `camera`: :func:`prepare_for_camera`,
+    :func:`~ismb_lab.matching.match` with `options` (method, params, solver, seed, ...), then
+    :func:`mutual_best`.  Returns ``(prepared, found, kept)``: the network's matches and those
+    kept; ``match_points(kept, camera)`` gives them in metres.
+
+    >>> from ismb_lab.io import load_pair
+    >>> from ismb_lab.scenes import synthetic_scene
+    >>> s = synthetic_scene(0)
+    >>> prepared, found, kept = match_with_camera(load_pair(s.left, s.right), MatchConfig(), s.rig)
+    >>> 0 < len(kept.pairs) <= len(found.pairs)
+    True
+    """
+    prepared = prepare_for_camera(pair, config, camera)
+    found = match(prepared=prepared, **options)
+    return prepared, found, mutual_best(prepared, found)
 
 
 def mutual_best(prepared: Prepared, result: MatchResult) -> MatchResult:

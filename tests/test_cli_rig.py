@@ -29,6 +29,7 @@ def without_14(full, tmp_path_factory):
     return path
 
 
+@pytest.mark.slow   # the module's rig fixture calibrates 13 pairs (about 10 s)
 def test_match_rig_rectifies_raw_photos_and_gives_every_match_its_point(opencv_data, without_14, tmp_path):
     out = tmp_path / "m.json"
     proc = cli("match", opencv_data / "left14.jpg", opencv_data / "right14.jpg", "--rig", without_14,
@@ -50,6 +51,7 @@ def test_match_rig_rectifies_raw_photos_and_gives_every_match_its_point(opencv_d
     assert "matches in metres" in proc.stdout
 
 
+@pytest.mark.slow   # the module's rig fixture calibrates 13 pairs (about 10 s)
 def test_match_rig_keeps_a_rectified_pair_and_says_so(opencv_data, without_14, tmp_path):
     rect = tmp_path / "rect"
     proc = cli("rectify", opencv_data / "left14.jpg", opencv_data / "right14.jpg", "--rig", without_14, "--out", rect)
@@ -61,11 +63,13 @@ def test_match_rig_keeps_a_rectified_pair_and_says_so(opencv_data, without_14, t
     assert json.loads((tmp_path / "m.json").read_text())["candidate_window"]["auto"]    # --shift auto by default
 
 
+@pytest.mark.slow   # the module's rig fixture calibrates 13 pairs (about 10 s)
 def test_match_rig_refuses_photos_of_another_size(opencv_data, without_14):
     proc = cli("match", opencv_data / "aloeL.jpg", opencv_data / "aloeR.jpg", "--rig", without_14)
     assert proc.returncode == 2 and "calibrated at" in proc.stderr and len(proc.stderr.strip().splitlines()) == 1
 
 
+@pytest.mark.slow   # the module's rig fixture calibrates 13 pairs (about 10 s)
 def test_depth_rig_measures_the_window_or_refuses(opencv_data, without_14, tmp_path):
     rect = tmp_path / "rect"
     assert cli("rectify", opencv_data / "left14.jpg", opencv_data / "right14.jpg", "--rig", without_14,
@@ -101,6 +105,7 @@ def test_held_out_boards_get_their_plane_through_the_command_line(opencv_data, l
         assert row["board_matches"] >= 20 and row["share"] >= 0.90, row
 
 
+@pytest.mark.slow   # the module's rig fixture calibrates 13 pairs (about 10 s)
 def test_the_plane_score_counts_only_board_matches_and_fails_wrong_depths(opencv_data, full, load_script):
     script = load_script("board_metres")
     camera = recalibrate(full, ["14"])

@@ -54,12 +54,12 @@ def _prepared(args):
         raise
 
 
-def _prepared_with_rig(args):
-    """The pair rectified with the rig (unless it already is), prepared in the rig's window."""
+def _rig_pair(args):
+    """The rig, the pair rectified with it (unless it already is) and the match settings."""
     from .._files import check_input
     from ..camera import load_camera
     from ..io import load_pair
-    from ..metric import for_camera, prepare_for_camera
+    from ..metric import for_camera
     from ..rectify import check_for_matching
 
     camera = load_camera(check_input(args.rig, what="--rig"))
@@ -71,8 +71,7 @@ def _prepared_with_rig(args):
     warning = check_for_matching(left, right, "ismb-lab match --rig")
     if warning:
         print(warning, file=sys.stderr)
-    pair = load_pair(left, right, min_shape=config.min_shape)
-    return camera, prepare_for_camera(pair, config, camera)
+    return camera, load_pair(left, right, min_shape=config.min_shape), config
 
 
 def run(args) -> int:
@@ -82,15 +81,15 @@ def run(args) -> int:
     params = recipe.params
     camera = None
     if args.rig is not None:
-        camera, prepared = _prepared_with_rig(args)
+        from ..metric import match_with_camera
+
+        camera, pair, config = _rig_pair(args)
+        prepared, found, result = match_with_camera(pair, config, camera, **recipe.match_settings(),
+                                                    **seed_setting(args))
+        found = len(found.pairs)
     else:
         prepared = _prepared(args)
-    result = match(prepared=prepared, **recipe.match_settings(), **seed_setting(args))
-    found = len(result.pairs)
-    if camera is not None:
-        from ..metric import mutual_best
-
-        result = mutual_best(prepared, result)
+        result = match(prepared=prepared, **recipe.match_settings(), **seed_setting(args))
     after = ", one match per corner" if result.one_to_one else ""
     print(f"Method-{result.method} ({result.solver}{after})  params {params.to_dict()}  seed {result.seed}")
     print(f"{len(result.left_xy)} left / {len(result.right_xy)} right corners, "

@@ -176,8 +176,8 @@ def test_the_networks_matches_of_a_held_out_pair_are_placed_by_the_rig(opencv_da
     depth from its corners."""
     from ismb_lab.datasets import chessboard_pairs
     from ismb_lab.io import load_pair
-    from ismb_lab.matching import MatchConfig, match, prepare
-    from ismb_lab.metric import for_camera, match_points, mutual_best, rig_config
+    from ismb_lab.matching import MatchConfig
+    from ismb_lab.metric import for_camera, match_points, match_with_camera
     from ismb_lab.rig import board_depth, calibrate_rig
 
     pairs = chessboard_pairs()
@@ -187,8 +187,7 @@ def test_the_networks_matches_of_a_held_out_pair_are_placed_by_the_rig(opencv_da
     assert "rectified with the rig" in how
     config = MatchConfig(roi="full", shift="auto", n_min=150, n_max=200)
     pair = load_pair(left, right, min_shape=config.min_shape)
-    prepared = prepare(pair, None, rig_config(rig, config, pair))
-    result = mutual_best(prepared, match(prepared=prepared))
+    _, _, result = match_with_camera(pair, config, rig)
     rectified = rig.rectify(raw_left, raw_right)
     cloud = match_cloud(result, rig, board=rectified)
     xyz = match_points(result, rig)
