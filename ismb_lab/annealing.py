@@ -148,12 +148,12 @@ def iter_annealing(net: Network, *, rng=0, t_start: float = 2.0, t_end: float = 
     >>> steps[0].temperature, round(steps[-1].temperature, 3), steps[-1].committed
     (2.0, 0.021, 1.0)
     """
-    t_start, t_end, cooling, sweeps = _checked(net, "iter_annealing", t_start, t_end, cooling, sweeps)
+    t_start, t_end, cooling, sweeps = check_schedule(net, "iter_annealing", t_start, t_end, cooling, sweeps)
     rng = check_rng(rng, "rng", "iter_annealing")
     return _anneal(net, rng, t_start, t_end, cooling, sweeps, state)
 
 
-def _checked(net, owner, t_start, t_end, cooling, sweeps):
+def check_schedule(net, owner, t_start, t_end, cooling, sweeps):
     """The schedule's arguments, checked as `owner`'s."""
     if not isinstance(net, Network):
         raise ParameterTypeError(message("net", owner, "a Network", type(net).__name__))
@@ -206,7 +206,7 @@ def anneal(net: Network, *, rng=0, t_start: float = 2.0, t_end: float = 0.02, co
     [1, 0]
     """
     rng = check_rng(rng, "rng", "anneal")
-    t_start, t_end, cooling, sweeps = _checked(net, "anneal", t_start, t_end, cooling, sweeps)
+    t_start, t_end, cooling, sweeps = check_schedule(net, "anneal", t_start, t_end, cooling, sweeps)
     temperatures = []
     T = t_start
     while T >= t_end * (1 - 1e-12):
