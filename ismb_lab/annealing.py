@@ -92,6 +92,15 @@ class AnnealResult:
 
 
 @numba.njit(cache=True)
+def _logistic(x):
+    """``1 / (1 + exp(-x))`` without overflow: ``exp`` of a negative number only."""
+    if x >= 0:
+        return 1.0 / (1.0 + np.exp(-x))
+    z = np.exp(x)
+    return z / (1.0 + z)
+
+
+@numba.njit(cache=True)
 def _sweeps(W, u, v, orders, T):
     """Asynchronous mean-field updates at temperature `T`, one sweep per row of `orders`;
     `v` and the net inputs `u` are updated in place.  Returns the largest ``|dv|``.
@@ -101,12 +110,7 @@ def _sweeps(W, u, v, orders, T):
     change = 0.0
     for s in range(orders.shape[0]):
         for a in orders[s]:
-            x = u[a] / T
-            if x >= 0:
-                new = 1.0 / (1.0 + np.exp(-x))
-            else:
-                z = np.exp(x)
-                new = z / (1.0 + z)
+            new = _logistic(u[a] / T)
             d = new - v[a]
             if d != 0.0:
                 v[a] = new
@@ -299,12 +303,7 @@ def _schedule(rng, ptr, idx, w, u, v, temperatures, sweeps):
     for T in temperatures:
         for _ in range(sweeps):
             for a in rng.permutation(n):
-                x = u[a] / T
-                if x >= 0:
-                    new = 1.0 / (1.0 + np.exp(-x))
-                else:
-                    z = np.exp(x)
-                    new = z / (1.0 + z)
+                new = _logistic(u[a] / T)
                 d = new - v[a]
                 if d != 0.0:
                     v[a] = new
