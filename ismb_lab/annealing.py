@@ -249,6 +249,7 @@ def _neighbours(top: Topology) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
 
 @numba.njit(cache=True)
 def _neighbour_lists(rows, cols, nb_ptr, nb_idx, nb_pair, row_ptr, row_idx, col_ptr, col_idx):
+    """The lists of :func:`_neighbours`, from a topology's layout."""
     n = rows.shape[0]
     ptr = np.zeros(n + 1, dtype=np.int64)
     for a in range(n):
