@@ -29,6 +29,7 @@ point like the discrete network's.
 
 from __future__ import annotations
 
+import weakref
 from dataclasses import dataclass
 from typing import Iterator
 
@@ -36,7 +37,7 @@ import numba
 import numpy as np
 
 from ._validation import ParameterError, ParameterTypeError, check_number, check_rng, message
-from .hopfield import Network, energy, hopfield_form
+from .hopfield import Network, Topology, energy, hopfield_form
 from .dynamics import run
 
 __all__ = ["anneal", "AnnealResult", "AnnealStep", "iter_annealing"]
@@ -91,6 +92,15 @@ class AnnealResult:
 
 
 @numba.njit(cache=True)
+def _logistic(x):
+    """``1 / (1 + exp(-x))`` without overflow: ``exp`` of a negative number only."""
+    if x >= 0:
+        return 1.0 / (1.0 + np.exp(-x))
+    z = np.exp(x)
+    return z / (1.0 + z)
+
+
+@numba.njit(cache=True)
 def _sweeps(W, u, v, orders, T):
     """Asynchronous mean-field updates at temperature `T`, one sweep per row of `orders`;
     `v` and the net inputs `u` are updated in place.  Returns the largest ``|dv|``.
@@ -100,12 +110,7 @@ def _sweeps(W, u, v, orders, T):
     change = 0.0
     for s in range(orders.shape[0]):
         for a in orders[s]:
-            x = u[a] / T
-            if x >= 0:
-                new = 1.0 / (1.0 + np.exp(-x))
-            else:
-                z = np.exp(x)
-                new = z / (1.0 + z)
+            new = _logistic(u[a] / T)
             d = new - v[a]
             if d != 0.0:
                 v[a] = new
@@ -147,7 +152,13 @@ def iter_annealing(net: Network, *, rng=0, t_start: float = 2.0, t_end: float = 
     >>> steps[0].temperature, round(steps[-1].temperature, 3), steps[-1].committed
     (2.0, 0.021, 1.0)
     """
-    owner = "iter_annealing"
+    t_start, t_end, cooling, sweeps = check_schedule(net, "iter_annealing", t_start, t_end, cooling, sweeps)
+    rng = check_rng(rng, "rng", "iter_annealing")
+    return _anneal(net, rng, t_start, t_end, cooling, sweeps, state)
+
+
+def check_schedule(net, owner, t_start, t_end, cooling, sweeps):
+    """The schedule's arguments, checked as `owner`'s."""
     if not isinstance(net, Network):
         raise ParameterTypeError(message("net", owner, "a Network", type(net).__name__))
     t_end = check_number(t_end, "t_end", owner, low=0, low_open=True)
@@ -156,8 +167,7 @@ def iter_annealing(net: Network, *, rng=0, t_start: float = 2.0, t_end: float = 
     if cooling >= 1:
         raise ParameterError(message("cooling", owner, "a number in (0, 1)", cooling))
     sweeps = check_number(sweeps, "sweeps", owner, low=1, integer=True)
-    rng = check_rng(rng, "rng", owner)
-    return _anneal(net, rng, t_start, t_end, cooling, sweeps, state)
+    return t_start, t_end, cooling, sweeps
 
 
 def _anneal(net, rng, t_start, t_end, cooling, sweeps, holder):
@@ -180,9 +190,13 @@ def _anneal(net, rng, t_start, t_end, cooling, sweeps, holder):
 
 def anneal(net: Network, *, rng=0, t_start: float = 2.0, t_end: float = 0.02, cooling: float = 0.9,
            sweeps: int = 2) -> AnnealResult:
-    """Run :func:`iter_annealing` to the end, round ``v`` at 1/2 and settle with the discrete network.
+    """Run the schedule of :func:`iter_annealing` to the end, round ``v`` at 1/2 and settle with
+    the discrete network.
 
-    Parameters are those of :func:`iter_annealing`.
+    Parameters are those of :func:`iter_annealing`.  The schedule runs in one compiled call
+    on each neuron's list of neighbours (:func:`_neighbours`) instead of the dense rows of
+    ``W``: the same updates in the same order, drawn from the same generator, so the same
+    ``v`` bit for bit, without the per-temperature records.
 
     Returns
     -------
@@ -196,12 +210,103 @@ def anneal(net: Network, *, rng=0, t_start: float = 2.0, t_end: float = 0.02, co
     [1, 0]
     """
     rng = check_rng(rng, "rng", "anneal")
-    holder: list = []
-    steps = 0
-    for steps, _ in enumerate(iter_annealing(net, rng=rng, t_start=t_start, t_end=t_end,
-                                             cooling=cooling, sweeps=sweeps, state=holder), 1):
-        pass
-    v = holder[0] if holder else np.zeros(0)
+    t_start, t_end, cooling, sweeps = check_schedule(net, "anneal", t_start, t_end, cooling, sweeps)
+    temperatures = []
+    T = t_start
+    while T >= t_end * (1 - 1e-12):
+        temperatures.append(T)
+        T *= cooling
+    v = 0.5 + 0.01 * rng.uniform(-1, 1, net.n_neurons)
+    ptr, idx, pair = _neighbours(net.topology)
+    W, w = _dense_and_listed(ptr, idx, pair, net.pair_c, 2.0 * net.uniqueness)
+    u = W @ v + (net.match_bias + net.similarity)   # hopfield_form's W and I: the same sum
+    _schedule(rng, ptr, idx, w, u, v, np.array(temperatures, dtype=float), sweeps)
     rounded = (v > 0.5).astype(np.uint8)
     polish = run(net, rng=rng, state=rounded)
-    return AnnealResult(polish.state, energy(net, polish.state), rounded, v.copy(), steps)
+    return AnnealResult(polish.state, energy(net, polish.state), rounded, v, len(temperatures))
+
+
+#: Each topology's neighbour lists, kept while the topology lives (a GA anneals many
+#: networks of one topology).
+_NEIGHBOURS: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
+
+
+def _neighbours(top: Topology) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Where :func:`ismb_lab.hopfield.hopfield_form`'s ``W`` may be non-zero off its diagonal, by row.
+
+    Neuron ``a``'s neighbours are ``idx[ptr[a]:ptr[a + 1]]``; ``pair`` gives, for each, the
+    interacting pair whose ``C`` the entry holds, or -1 for a neuron on the same row or
+    column.  A pair listed twice holds its last ``C``, as in the dense matrix.
+    """
+    found = _NEIGHBOURS.get(top)
+    if found is None:
+        lay = top.layout
+        found = _neighbour_lists(top.rows, top.cols, lay.nb_ptr, lay.nb_idx, lay.nb_pair, lay.row_ptr,
+                                 lay.row_idx, lay.col_ptr, lay.col_idx)
+        _NEIGHBOURS[top] = found
+    return found
+
+
+@numba.njit(cache=True)
+def _neighbour_lists(rows, cols, nb_ptr, nb_idx, nb_pair, row_ptr, row_idx, col_ptr, col_idx):
+    """The lists of :func:`_neighbours`, from a topology's layout."""
+    n = rows.shape[0]
+    ptr = np.zeros(n + 1, dtype=np.int64)
+    for a in range(n):
+        count = row_ptr[rows[a] + 1] - row_ptr[rows[a]] + col_ptr[cols[a] + 1] - col_ptr[cols[a]] - 2
+        for e in range(nb_ptr[a], nb_ptr[a + 1]):
+            count += e + 1 == nb_ptr[a + 1] or nb_idx[e + 1] != nb_idx[e]   # a repeated pair once
+        ptr[a + 1] = ptr[a] + count
+    idx = np.empty(ptr[n], dtype=np.int64)
+    pair = np.empty(ptr[n], dtype=np.int64)
+    for a in range(n):
+        j = ptr[a]
+        for e in range(row_ptr[rows[a]], row_ptr[rows[a] + 1]):
+            if row_idx[e] != a:
+                idx[j], pair[j] = row_idx[e], -1
+                j += 1
+        for e in range(col_ptr[cols[a]], col_ptr[cols[a] + 1]):
+            if col_idx[e] != a:
+                idx[j], pair[j] = col_idx[e], -1
+                j += 1
+        for e in range(nb_ptr[a], nb_ptr[a + 1]):
+            if e + 1 == nb_ptr[a + 1] or nb_idx[e + 1] != nb_idx[e]:   # the last of a repeated pair
+                idx[j], pair[j] = nb_idx[e], nb_pair[e]
+                j += 1
+    return ptr, idx, pair
+
+
+@numba.njit(cache=True)
+def _dense_and_listed(ptr, idx, pair, pair_c, two_kappa):
+    """``W`` of :func:`ismb_lab.hopfield.hopfield_form` (rule "exact"), value for value, and
+    its entries in the order of `idx`."""
+    n = ptr.shape[0] - 1
+    W = np.zeros((n, n))
+    w = np.empty(idx.shape[0])
+    for a in range(n):
+        for e in range(ptr[a], ptr[a + 1]):
+            # hopfield_form's arithmetic: (C + C') doubled, less 2 kappa on a shared row or column
+            x = 2.0 * (pair_c[pair[e]] + 0.0) - 0.0 if pair[e] >= 0 else 2.0 * 0.0 - two_kappa
+            W[a, idx[e]] = x
+            w[e] = x
+    return W, w
+
+
+@numba.njit(cache=True)
+def _schedule(rng, ptr, idx, w, u, v, temperatures, sweeps):
+    """:func:`_sweeps` at every temperature, on neighbour lists, each visiting order drawn
+    from `rng` as :func:`_anneal` draws it (``rng.permutation(n)`` per sweep); `v` and `u`
+    are updated in place.
+
+    A weight of zero that the dense row would add is skipped: it could only change the
+    sign of a zero ``u``, which gives the same ``v``."""
+    n = v.shape[0]
+    for T in temperatures:
+        for _ in range(sweeps):
+            for a in rng.permutation(n):
+                new = _logistic(u[a] / T)
+                d = new - v[a]
+                if d != 0.0:
+                    v[a] = new
+                    for e in range(ptr[a], ptr[a + 1]):
+                        u[idx[e]] += w[e] * d

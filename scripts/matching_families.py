@@ -12,7 +12,8 @@ mutual nearest neighbour and Hungarian assignment with a no-match cost see the s
 
 The variants are Method-III (the thesis, network), Method-NM4 (annealed) and Method-NM
 (network); ``--variants III:network NM4:anneal`` picks others, and ``METHOD:SOLVER:FIT_SOLVER``
-also has the GA fit with that solver (by default the GA fits with the network).
+also has the GA fit with that solver (by default the GA fits with the network).  A solver
+may carry options: ``anneal(cooling=0.8,sweeps=1)``.
 ``--fit-seeds N`` has the GA score each chromosome over N update-order seeds, ``--ga-seeds N``
 sets the number of GA seeds and ``--seeds-from`` the first layout seed. It prints the
 figures per family, pooled, and their spread over GA seeds and over update-order seeds, and
@@ -38,11 +39,26 @@ from ismb_lab.evaluation import score
 from ismb_lab.io import save_image
 from ismb_lab.protocol import family_cases, protocol
 from ismb_lab.scenes import families
-from ismb_lab.solvers import DEFAULT_SOLVER
+from ismb_lab.solvers import DEFAULT_SOLVER, get_solver
 from ismb_lab.targets import save_targets, targets_from_matches
 
 DEV_START, HELD_OUT_START = 2000, 930_000
 VARIANTS = ("III:network", "NM4:anneal", "NM:network")
+
+
+def solver_of(text: str):
+    """A solver name, or a configured solver from ``NAME(OPTION=VALUE,...)``.
+
+    >>> solver_of("anneal(cooling=0.8,sweeps=1)")
+    AnnealSolver(t_start=2.0, t_end=0.02, cooling=0.8, sweeps=1)
+    >>> solver_of("network")
+    'network'
+    """
+    if not text.endswith(")"):
+        return text
+    name, _, options = text[:-1].partition("(")
+    values = dict(item.split("=", 1) for item in options.split(",") if item)
+    return get_solver(name, "--variants", **{k: json.loads(v) for k, v in values.items()})
 
 
 def family_sets(start: int, count: int) -> dict:
@@ -151,7 +167,8 @@ def main(argv=None) -> None:
             for ga_seed in range(args.ga_seeds):
                 # only the training pair's fit is tested on the others: fit_all=False fits it alone
                 report = protocol(cases, method, peers=ga_seed == 0, generations=args.generations, seeds=3,
-                                  solver=solver, fit_solver=fit[0] if fit else DEFAULT_SOLVER, rng=ga_seed,
+                                  solver=solver_of(solver), fit_solver=solver_of(fit[0]) if fit else DEFAULT_SOLVER,
+                                  rng=ga_seed,
                                   fit_seeds=args.fit_seeds, fit_all=False, jobs=args.jobs,
                                   one_to_one=args.one_to_one)
                 add(rows, variant, figures(report.held_out))

@@ -16,6 +16,7 @@ EXPECTED = {
     "bench_evaluate.py": "identical reports for every jobs value: True",
     "bench_class.py": "no label lost",
     "bench_scale.py": "peak MB",
+    "bench_tune.py": "ratio best recipe / Method-III",
 }
 
 

@@ -185,3 +185,46 @@ def test_evaluate_interrupted_writes_the_recipe_with_the_best_so_far(tuned, tmp_
     saved = load_recipe(out).recipe
     assert saved == Recipe("NM3", Params(theta_c=9.0, lambda_c=5.0, lambda_s=4.0), "anneal", 2, True)
     assert json.loads(out.read_text())["interrupted"] is True and "interrupted" in capsys.readouterr().err
+
+
+@pytest.fixture(scope="module")
+def scheduled(pair, targets, tmp_path_factory):
+    """A tune whose annealing schedule is set with --solver-option."""
+    out = tmp_path_factory.mktemp("scheduled") / "recipe.json"
+    assert main(["tune", *map(str, pair), str(targets), "--method", "NM3", "--solver", "anneal", "--solver-option",
+                 "cooling=0.8", "--solver-option", "sweeps=1", "--one-to-one", "--generations", "2",
+                 "--population", "6", "--out", str(out)]) == 0
+    return out
+
+
+def test_tune_records_the_solver_options_given_and_match_uses_them_alone(pair, scheduled, tmp_path, capsys):
+    data = json.loads(scheduled.read_text())
+    assert data["solver_options"] == AnnealSolver(cooling=0.8, sweeps=1).options()
+    assert load_recipe(scheduled).recipe.solver == AnnealSolver(cooling=0.8, sweeps=1)
+    alone, said = match_json(pair, tmp_path, capsys, "--params-file", scheduled, name="alone.json")
+    retyped, _ = match_json(pair, tmp_path, capsys, "--params-file", scheduled, "--solver", "anneal",
+                            "--solver-option", "cooling=0.8", "--solver-option", "sweeps=1", "--one-to-one",
+                            name="retyped.json")
+    assert alone == retyped and said == ""
+    default, said = match_json(pair, tmp_path, capsys, "--params-file", scheduled, "--solver-option", "cooling=0.9",
+                               "--solver-option", "sweeps=2", name="default.json")
+    assert "solver options" in said and said.count("\n") == 1
+    assert default["params"] == alone["params"]
+
+
+@pytest.mark.parametrize("options, words", [
+    (["--solver-option", "cool=0.8"], "'cool' option of ismb-lab's --solver-option"),
+    (["--solver-option", "cooling=2"], "'cooling' parameter of AnnealSolver"),
+    (["--solver-option", "cooling"], "NAME=VALUE"),
+    (["--solver", "network", "--solver-option", "cooling=0.8"], "the 'network' solver"),
+])
+def test_a_bad_solver_option_is_one_line(pair, targets, tmp_path, capsys, options, words):
+    out = tmp_path / "p.json"
+    code = main(["tune", *map(str, pair), str(targets), "--solver", "anneal", *options, "--generations", "2",
+                 "--out", str(out)])
+    err = capsys.readouterr().err
+    assert code == 2 and len(err.strip().splitlines()) == 1 and words in err
+    assert not out.exists()
+    code = main(["match", *map(str, pair), "--solver", "anneal", *options, "--json", str(out)])
+    err = capsys.readouterr().err
+    assert code == 2 and len(err.strip().splitlines()) == 1 and words in err

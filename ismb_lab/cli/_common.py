@@ -23,7 +23,8 @@ from ..solvers import SOLVERS, NetworkSolver
 from ._guard import UsageError, interrupted
 
 __all__ = ["ParameterError", "ParameterTypeError", "Parser", "UsageError", "add_ga_options",
-           "add_matching_options", "add_feature_options", "window_record", "add_solver_option", "ga_config",
+           "add_matching_options", "add_feature_options", "window_record", "add_solver_option",
+           "add_solver_settings", "ga_config", "solver_settings", "with_settings",
            "gene_options", "match_config", "progress_bar", "resolve_recipe"]
 
 FEATURE_OPTIONS = ("roi", "shift", "n_min", "n_max")
@@ -78,6 +79,36 @@ def add_solver_option(p: argparse.ArgumentParser, default: str) -> None:
     text = "; ".join(f"{s.name}: {s.description}" for s in SOLVERS.values())
     p.add_argument("--solver", choices=tuple(SOLVERS), default=None,
                    help=f"how the energy is minimised ({text}) (default: {default})")
+
+
+def add_solver_settings(p: argparse.ArgumentParser) -> None:
+    """``--solver-option NAME=VALUE``: one of the solver's own options (repeatable)."""
+    own = "; ".join(f"{s.name}: {', '.join(s.options()) or 'none'}" for s in SOLVERS.values())
+    p.add_argument("--solver-option", action="append", default=None, metavar="NAME=VALUE",
+                   help=f"an option of the solver, e.g. cooling=0.8 for anneal; repeat it for more ({own}) "
+                   "(default: the params file's, else the solver's own)")
+
+
+def solver_settings(args) -> dict:
+    """The ``--solver-option`` values by name, numbers read as numbers.
+
+    >>> solver_settings(argparse.Namespace(solver_option=["cooling=0.8", "sweeps=1", "rule=thesis"]))
+    {'cooling': 0.8, 'sweeps': 1, 'rule': 'thesis'}
+    """
+    settings = {}
+    for text in getattr(args, "solver_option", None) or ():
+        name, equals, value = text.partition("=")
+        if not equals or not name.strip():
+            raise UsageError(f"--solver-option takes NAME=VALUE (e.g. cooling=0.8), not {text!r}")
+        value = value.strip()
+        for kind in (int, float):
+            try:
+                value = kind(value)
+                break
+            except ValueError:
+                pass
+        settings[name.strip()] = value
+    return settings
 
 
 def window_record(config: MatchConfig, auto: bool) -> dict:
@@ -192,12 +223,23 @@ def configured_solver(args, base):
     chosen = base if args.solver is None or args.solver == base.name else args.solver
     settings = {"stop_rule": getattr(args, "stop_rule", None), "rule": getattr(args, "rule", None)}
     try:
-        return get_solver(chosen, "ismb-lab", **settings)
+        chosen = get_solver(chosen, "ismb-lab", **settings)
     except ParameterError:
         name = get_solver(chosen).name
         used = [f"--{k.replace('_', '-')}" for k, v in settings.items() if v is not None]
         raise UsageError(f"{' and '.join(used)} set the discrete network, which the {name} solver does "
                          f"not run (drop {'them' if len(used) > 1 else 'it'}, or use --solver network)") from None
+    return with_settings(chosen, args)
+
+
+def with_settings(solver, args):
+    """`solver` (a name or a Solver) with the ``--solver-option`` values given; a bad one is a usage error."""
+    from ..solvers import get_solver
+
+    try:
+        return get_solver(solver, "ismb-lab", "--solver-option", **solver_settings(args))
+    except (ParameterError, ParameterTypeError) as exc:
+        raise UsageError(str(exc).replace("parameter of ismb-lab", "option of ismb-lab's --solver-option")) from None
 
 
 def said_changes(path, before, after) -> None:

@@ -9,7 +9,8 @@ from .._files import atomic_write_text
 from .._validation import ParameterError
 from ..matching import MatchConfig
 from ..solvers import DEFAULT_SOLVER
-from ._common import add_matching_options, add_solver_option, match_config, resolve_recipe, seed_setting, window_record
+from ._common import (add_matching_options, add_solver_option, add_solver_settings, match_config, resolve_recipe,
+                      seed_setting, window_record)
 from ._guard import json_text, save_figure
 
 __all__ = ["add_parser", "run"]
@@ -23,6 +24,7 @@ def add_parser(sub) -> None:
     m.add_argument("right", type=Path, help="right image file")
     add_matching_options(m, MatchConfig())
     add_solver_option(m, f"the params file's, else {DEFAULT_SOLVER}")
+    add_solver_settings(m)
     m.add_argument("--rig", type=Path, default=None, metavar="RIG.json",
                    help="a rig from 'ismb-lab calibrate': rectify raw photos with it (a rectified pair is "
                    "matched as it is; stderr says which), refine the corners to sub-pixel, keep the "

@@ -12,7 +12,8 @@ from ..recipe import Recipe, save_recipe
 from ..solvers import DEFAULT_SOLVER
 from .. import tuning
 from ._common import (DEFAULT_METHOD, UsageError, add_feature_options, seed, add_ga_options, add_method_option,
-                      add_solver_option, default_of, ga_config, match_config, progress_bar)
+                      add_solver_option, add_solver_settings, default_of, ga_config, match_config, progress_bar,
+                      with_settings)
 from ._guard import deferred_signals, interrupted, interrupted_line, is_interruption
 
 __all__ = ["add_parser", "run"]
@@ -34,6 +35,7 @@ def add_parser(sub) -> None:
     add_ga_options(t)
     t.add_argument("--seed", type=seed, default=None, help=f"seed of the GA (default: {GA_SEED})")
     add_solver_option(t, DEFAULT_SOLVER)
+    add_solver_settings(t)
     t.add_argument("--fit-seeds", type=int, default=None, metavar="N",
                    help=f"update-order seeds averaged in each GA fitness (default: {FIT_SEEDS}); more "
                    "seeds favour parameters that do not work for one visiting order only")
@@ -51,7 +53,7 @@ class _Fit:
 
     def __init__(self, args):
         self.out, self.seed = args.out, GA_SEED if args.seed is None else args.seed
-        self.recipe = Recipe(args.method or DEFAULT_METHOD, solver=args.solver or DEFAULT_SOLVER,
+        self.recipe = Recipe(args.method or DEFAULT_METHOD, solver=with_settings(args.solver or DEFAULT_SOLVER, args),
                              fit_seeds=FIT_SEEDS if args.fit_seeds is None else args.fit_seeds,
                              one_to_one=args.one_to_one)
         self.targets, self.last, self.written = 0, None, False
