@@ -69,11 +69,13 @@ def recorded():
     return json.loads(FIXTURE.read_text())
 
 
+@pytest.mark.slow   # each draws 10 layouts (about 2 s)
 @pytest.mark.parametrize("k, family", list(enumerate(RECORDED)))
 def test_the_recorded_families_draw_their_layouts_bit_for_bit(recorded, k, family):
     assert family_digests(family, k) == recorded[family]
 
 
+@pytest.mark.slow
 def test_a_new_family_leaves_the_recorded_layouts_as_they_were(recorded):
     extra = register_family(Family("striped cameras", "Striped objects, unsteady cameras", Look(
         texture=lambda rng: "stripes",
@@ -88,6 +90,7 @@ def test_a_new_family_leaves_the_recorded_layouts_as_they_were(recorded):
         unregister_family(extra.name)
 
 
+@pytest.mark.slow
 def test_the_unseen_family_draws_wider_layouts_and_leaves_the_recorded_ones_as_they_were(recorded):
     from ismb_lab.scenes import UNSEEN, MIN_GAP_PX, families
 
