@@ -40,6 +40,14 @@ def column_figsize(width: float, height: float, column: float = COLUMN_PX) -> tu
     return round(column / DPI, 3), round(height * scale / DPI, 3)
 
 
+def pair_figsize(pair) -> tuple[float, float]:
+    """:func:`column_figsize` of a pair's side-by-side view (:data:`ismb_lab.plotting.GAP` between)."""
+    from ..plotting import GAP
+
+    height, width = pair.shape[:2]
+    return column_figsize(2 * width + GAP, height)
+
+
 def ipympl_active() -> bool:
     """Whether pyplot draws into ipympl canvases (``%matplotlib widget``)."""
     return "ipympl" in matplotlib.get_backend().lower() or matplotlib.get_backend() == "widget"

@@ -4,6 +4,7 @@ the notebook column is what a student gets (about 592 px).  The canvas fits the 
 click on a feature's screen position reaches the kernel as that feature's image coordinate."""
 
 import json
+from pathlib import Path
 import time
 
 import matplotlib
@@ -16,7 +17,7 @@ from playwright.sync_api import expect  # noqa: E402
 
 pytestmark = pytest.mark.browser
 
-DEADLINE_S = 400
+DEADLINE_S = 500
 
 _LAYOUT = """() => { const shell = window.jupyterapp.shell;
   const panel = shell.currentWidget.content.node.getBoundingClientRect();
@@ -128,3 +129,61 @@ def _press(record, count: int) -> str:
             return lines[count - 1]
         time.sleep(0.1)
     raise AssertionError(f"the kernel recorded {len(lines)} presses, not {count}")
+
+
+# every element of an output past x, unless an ancestor inside the output clips it before x
+# (k3d's hidden KaTeX MathML, for one, sits in a 1 px box with overflow hidden)
+_OUTPUTS_PAST = """(x) => {
+  const clipped = (e) => {
+    for (let a = e.parentElement; a && !a.classList.contains('jp-OutputArea-output'); a = a.parentElement) {
+      const style = getComputedStyle(a);
+      if ((style.overflowX !== 'visible' || style.clip !== 'auto')
+          && a.getBoundingClientRect().right <= x + 0.5) return true;
+    }
+    return false;
+  };
+  return [...document.querySelectorAll('.jp-OutputArea-output, .jp-OutputArea-output *')]
+    .filter(e => e.offsetParent !== null && e.getBoundingClientRect().width > 0
+                 && e.getBoundingClientRect().right > x + 0.5 && !clipped(e))
+    .map(e => [e.closest('[class*="ismb-"]') !== null,
+               `${e.tagName.toLowerCase()}.${[...e.classList].slice(0, 3).join('.')} `
+               + `to ${e.getBoundingClientRect().right.toFixed(0)}`]);
+}"""
+
+NOTEBOOKS = sorted(p.name for p in (Path(__file__).resolve().parents[2] / "notebooks").glob("0*.ipynb"))
+
+
+def _wide_figsizes(name: str) -> list[str]:
+    """The ``figsize=(w, h)`` of the notebook's own code cells wider than the column."""
+    import re
+
+    from ismb_lab.widgets._common import COLUMN_PX, DPI
+
+    cells = json.loads((Path(__file__).resolve().parents[2] / "notebooks" / name).read_text())["cells"]
+    found = re.findall(r"figsize=\(([0-9.]+),\s*([0-9.]+)\)",
+                       "".join("".join(c["source"]) for c in cells if c["cell_type"] == "code"))
+    return [f"figsize=({w}, {h})" for w, h in found if float(w) * DPI > COLUMN_PX + 12]
+
+
+@pytest.mark.parametrize("name", NOTEBOOKS)
+def test_every_output_fits_default_layout(name, lab, default_page, ui, artifacts):
+    base, token = lab
+    path = f"notebooks/{name}"
+    url = f"{base}/lab/workspaces/column-{name[:2]}/tree/{path}?token={token}&reset"
+    page = ui.run_all(default_page, url, path, timeout=240_000)
+    layout = page.evaluate(_LAYOUT)
+    assert not layout["leftCollapsed"] and layout["rightCollapsed"] and layout["sidebar"] > 200, layout
+    past = []
+    for _ in range(3):                      # widgets render, and ipympl canvases size, after their cell ran
+        page.wait_for_timeout(1500)
+        past = page.evaluate(_OUTPUTS_PAST, layout["panelRight"])
+    edge = layout["panelRight"]
+    widgets = [text for inside, text in past if inside]
+    figures = [text for inside, text in past if not inside]
+    (artifacts / f"column_{name[:2]}.json").write_text(json.dumps(
+        {"panel_right": edge, "widgets": widgets, "others": figures}))
+    assert not widgets, f"{name}: widget parts past the panel's edge at {edge:.0f}: {widgets[:8]}"
+    wide = _wide_figsizes(name)
+    if figures and wide:
+        pytest.xfail(f"{name}: its own code cells draw {wide}, wider than the column: {figures[:3]}")
+    assert not figures, f"{name}: outputs past the panel's edge at {edge:.0f}: {figures[:8]}"
