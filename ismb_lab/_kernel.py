@@ -106,6 +106,7 @@ def _prefetch(typingctx, array, index):
 _NB_PTR, _ROW_PTR, _COL_PTR, _NEURONS, _COL_IDX = range(len(PACKED))
 _INDEX = (1 << NB_SHIFT) - 1   # an entry's low bits: the neighbour's index
 _AHEAD = 4
+_FEW = 2   # a sweep with at most this many flips is often the last to flip: test for the end
 
 
 @numba.njit(cache=True)
@@ -137,6 +138,16 @@ def _inputs_of(y, u, nb_ptr, entries, self_w, bias, neurons, on_in_row, on_in_co
 
 
 @numba.njit(cache=True)
+def _settled(y, u):
+    """Whether no neuron would flip: every ``u_a`` is zero or has the sign of ``y_a``."""
+    for a in range(y.shape[0]):
+        ua = u[a]
+        if (ua != 0) & ((ua > 0) ^ (y[a] == 1)):
+            return False
+    return True
+
+
+@numba.njit(cache=True)
 def _solve(seed, sweep_rule, patience, max_attempts, y0, all_on, packed, values):
     """The whole run in one call: the visiting order drawn from `seed` as
     :func:`visiting_order` draws it, and every net input computed exactly.
@@ -162,7 +173,9 @@ def _solve(seed, sweep_rule, patience, max_attempts, y0, all_on, packed, values)
 
     The stop tests are those of :func:`_updates`, in its order: with the sweep rule the
     attempt limit is a whole number of sweeps, so both are tested at the end of a sweep,
-    the sweep rule first."""
+    the sweep rule first.  A sweep with no neuron to flip at its start flips none, in any
+    order, and stops the run under the sweep rule: after a sweep of few flips the run looks
+    for one (:func:`_settled`) and, if so, counts its attempts without drawing its order."""
     # indices read as unsigned: numba then skips the test for a negative (from-the-end)
     # index, which in the loops over neighbours had cost a quarter of a run
     nb_ptr = _segment(packed, _NB_PTR).view(np.uint64)
@@ -285,6 +298,11 @@ def _solve(seed, sweep_rule, patience, max_attempts, y0, all_on, packed, values)
         if pull and code == 0:
             _inputs_of(y, u, nb_ptr, entries, self_w, bias, neurons, on_in_row, on_in_col, row_w, col_w)
             pull = False
+        elif code == 0 and sweep_rule and changed <= _FEW and _settled(y, u):
+            # no neuron would flip in the next sweep, whatever its order: it ends the run
+            # with n attempts and no flip, so its order need not be drawn
+            attempts += n
+            code = 1
     return y, code, attempts, flips
 
 

@@ -144,15 +144,19 @@ def check_choice(value, name: str, owner: str, choices, rule: str | None = None)
     raise kind(message(name, owner, rule, value))
 
 
-def check_points(points, name: str, owner: str) -> np.ndarray:
-    """Check an ``(N, 2)`` array of finite ``(x, y)`` points and return it as float.
+def check_points(points, name: str, owner: str, dims: int = 2) -> np.ndarray:
+    """Check an ``(N, 2)`` array of finite ``(x, y)`` points (``dims=3``: ``(N, 3)``
+    ``(X, Y, Z)`` points) and return it as float.
 
     Examples
     --------
     >>> check_points([[1, 2], [3, 4]], "left_xy", "match").shape
     (2, 2)
+    >>> check_points([], "points3d", "project", dims=3).shape
+    (0, 3)
     """
-    rule = "an (N, 2) array of finite (x, y) coordinates"
+    rule = ("an (N, 2) array of finite (x, y) coordinates" if dims == 2
+            else "an (N, 3) array of finite (X, Y, Z) points")
     try:
         arr = np.asarray(points, dtype=float)
     except OverflowError:   # an int of hundreds of digits
@@ -160,8 +164,8 @@ def check_points(points, name: str, owner: str) -> np.ndarray:
     except (TypeError, ValueError):
         raise ParameterTypeError(message(name, owner, rule, points)) from None
     if arr.size == 0:
-        return arr.reshape(0, 2)
-    if arr.ndim != 2 or arr.shape[1] != 2:
+        return arr.reshape(0, dims)
+    if arr.ndim != 2 or arr.shape[1] != dims:
         raise ParameterError(message(name, owner, rule, f"an array of shape {arr.shape}"))
     if not np.all(np.isfinite(arr)):
         raise ParameterError(message(name, owner, rule, "an array with NaN or infinite values"))

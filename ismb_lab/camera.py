@@ -32,7 +32,7 @@ from pathlib import Path
 import cv2
 import numpy as np
 
-from ._validation import ParameterError, ParameterTypeError, check_number, check_points, message
+from ._validation import ParameterError, check_number, check_points, message
 
 __all__ = ["BASELINE_M", "BOARD", "FOCAL_PX", "MAX_ZOOM", "SQUARE_M", "FORMAT", "HEIGHT", "WIDTH", "BoardPair", "StereoCamera", "load_camera"]
 
@@ -55,21 +55,6 @@ FORMAT = "ismb_lab-rig-v2"
 _FORMATS = ("ismb_lab-rig-v1", FORMAT)
 #: Above this rectified zoom (rectified focal length over the cameras' own), the rig warns.
 MAX_ZOOM = 1.3
-
-
-def _points3d(points, name: str, owner: str) -> np.ndarray:
-    rule = "an (N, 3) array of finite (X, Y, Z) points"
-    try:
-        arr = np.asarray(points, dtype=float)
-    except (TypeError, ValueError):
-        raise ParameterTypeError(message(name, owner, rule, points)) from None
-    if arr.size == 0:
-        return arr.reshape(0, 3)
-    if arr.ndim != 2 or arr.shape[1] != 3:
-        raise ParameterError(message(name, owner, rule, f"an array of shape {arr.shape}"))
-    if not np.all(np.isfinite(arr)):
-        raise ParameterError(message(name, owner, rule, "an array with NaN or infinite values"))
-    return arr
 
 
 def _rotate(vectors: np.ndarray, matrix: np.ndarray) -> np.ndarray:
@@ -302,7 +287,7 @@ class StereoCamera:
         >>> StereoCamera().project_left([[0.1, -0.05, 1.0]])
         array([[189.5, 104.5]])
         """
-        return self._pixels(_points3d(points3d, "points3d", "StereoCamera.project_left"), self.k_left)
+        return self._pixels(check_points(points3d, "points3d", "StereoCamera.project_left", dims=3), self.k_left)
 
     def project_right(self, points3d) -> np.ndarray:
         """Right-image ``(x, y)`` of 3-D points of the left camera's frame (pinhole, no
@@ -313,7 +298,7 @@ class StereoCamera:
         >>> StereoCamera.pinhole(vertical_offset_px=2).project_right([[0.1, -0.05, 1.0]])
         array([[159.5, 106.5]])
         """
-        points = _points3d(points3d, "points3d", "StereoCamera.project_right")
+        points = check_points(points3d, "points3d", "StereoCamera.project_right", dims=3)
         return self._pixels(_rotate(points - self.right_origin, self.rotation), self.k_right)
 
     def _dirs(self, xy: np.ndarray, k: np.ndarray) -> np.ndarray:

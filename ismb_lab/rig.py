@@ -23,6 +23,7 @@ floor keeps a rig whose pairs are all good from marking any.
 
 from __future__ import annotations
 
+from contextlib import contextmanager
 from pathlib import Path
 
 import cv2
@@ -139,6 +140,19 @@ def _photo_name(photo, default: str) -> str:
     return Path(photo).name if isinstance(photo, (str, Path)) else default
 
 
+@contextmanager
+def _one_thread():
+    """OpenCV on one thread for the duration: its calibration sums the views' terms in an
+    order that depends on thread scheduling (15 calls of ``calibrateCamera`` on the same 13
+    views, 4 threads, 3 busy cores: 8 different results; 1 thread: 1)."""
+    before = cv2.getNumThreads()
+    cv2.setNumThreads(1)
+    try:
+        yield
+    finally:
+        cv2.setNumThreads(before)
+
+
 def _calibrate(pairs, used, skipped, size, board, square_m, owner) -> StereoCamera:
     """The rig from the corners already found: each camera, then the pair with them fixed."""
     if len(pairs) < MIN_PAIRS:
@@ -147,11 +161,12 @@ def _calibrate(pairs, used, skipped, size, board, square_m, owner) -> StereoCame
     objects = [board_points(board, square_m)] * len(pairs)
     left_points = [p.left_corners.astype(np.float32) for p in pairs]
     right_points = [p.right_corners.astype(np.float32) for p in pairs]
-    _, k_l, d_l, _, _ = cv2.calibrateCamera(objects, left_points, size, None, None)
-    _, k_r, d_r, _, _ = cv2.calibrateCamera(objects, right_points, size, None, None)
-    rms, k_l, d_l, k_r, d_r, rotation, translation, _, _, rvecs, tvecs, per_view = cv2.stereoCalibrateExtended(
-        objects, left_points, right_points, k_l, d_l, k_r, d_r, size, None, None, criteria=_CRITERIA,
-        flags=cv2.CALIB_FIX_INTRINSIC)
+    with _one_thread():          # the same corners give the same rig, bit for bit
+        _, k_l, d_l, _, _ = cv2.calibrateCamera(objects, left_points, size, None, None)
+        _, k_r, d_r, _, _ = cv2.calibrateCamera(objects, right_points, size, None, None)
+        rms, k_l, d_l, k_r, d_r, rotation, translation, _, _, rvecs, tvecs, per_view = cv2.stereoCalibrateExtended(
+            objects, left_points, right_points, k_l, d_l, k_r, d_r, size, None, None, criteria=_CRITERIA,
+            flags=cv2.CALIB_FIX_INTRINSIC)
     # per_view holds each view's RMS; both views have as many corners, so the pair's is their quadratic mean.
     errors = np.sqrt(np.mean(np.square(per_view), axis=1))
     pairs = tuple(BoardPair(p.left, p.right, p.left_corners, p.right_corners, float(e), r, t)

@@ -154,3 +154,27 @@ def test_calibrate_from_refusals(runs, opencv_data):
     proc = cli("calibrate", "--from", out / "all.json", "--out", out / "all.json")
     assert proc.returncode == 2 and (out / "all.json").read_bytes() == before
     assert not (out / "refused.json").exists()
+
+
+def test_calibration_runs_opencv_on_one_thread_and_restores_its_setting(monkeypatch):
+    """OpenCV's calibration on several threads gives results that differ in the 6th digit from
+    run to run under load; on one thread the same corners give the same rig."""
+    import ismb_lab.rig
+
+    seen, real = [], cv2.calibrateCamera
+
+    def calibrate_camera(*args, **kwargs):
+        seen.append(cv2.getNumThreads())
+        return real(*args, **kwargs)
+
+    monkeypatch.setattr(ismb_lab.rig.cv2, "calibrateCamera", calibrate_camera)
+    before = cv2.getNumThreads()
+    cv2.setNumThreads(3)
+    try:
+        rig = calibrate_rig(chessboard_pairs()[:4])
+        assert seen == [1, 1] and cv2.getNumThreads() == 3
+        again = recalibrate(rig)
+        assert seen == [1, 1, 1, 1]
+        assert again.d_left.tobytes() == rig.d_left.tobytes() and again.rms == rig.rms
+    finally:
+        cv2.setNumThreads(before)

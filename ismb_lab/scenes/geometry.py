@@ -7,8 +7,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .._validation import ParameterError, ParameterTypeError, message
-from ..camera import _points3d
+from .._validation import ParameterError, ParameterTypeError, check_points, message
 
 __all__ = ["EPS", "ROI"]
 
@@ -31,8 +30,8 @@ def _vector(value, name: str, owner: str, n: int = 3) -> np.ndarray:
 
 
 def _rays(origins, dirs, owner: str) -> tuple[np.ndarray, np.ndarray]:
-    origins = _points3d(origins, "origins", owner)
-    dirs = _points3d(dirs, "dirs", owner)
+    origins = check_points(origins, "origins", owner, dims=3)
+    dirs = check_points(dirs, "dirs", owner, dims=3)
     if origins.shape != dirs.shape:
         raise ParameterError(message("dirs", owner, f"an array of the shape of origins {origins.shape}",
                                      f"an array of shape {dirs.shape}"))
