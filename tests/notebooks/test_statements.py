@@ -10,8 +10,12 @@ NOTEBOOKS = Path(__file__).resolve().parents[2] / "notebooks"
 
 
 def output_text(nb) -> str:
-    return "\n".join(o.get("text", "") or o.get("data", {}).get("text/plain", "")
-                     for c in nb.cells if c.cell_type == "code" for o in c.get("outputs", []))
+    """Everything the notebook printed to stdout, and its cells' values.  Streams are joined as
+    they are: a printed line can arrive in two stream messages (with a warning on stderr between
+    them), which a newline between them would cut."""
+    return "".join(o["text"] if o.get("output_type") == "stream" else o.get("data", {}).get("text/plain", "") + "\n"
+                   for c in nb.cells if c.cell_type == "code" for o in c.get("outputs", [])
+                   if o.get("name") != "stderr")
 
 
 def test_02_shows_the_literal_rule_failing(run_notebook):
