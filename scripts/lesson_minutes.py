@@ -65,9 +65,9 @@ QUIZ_MIN = 5
 #: An exercise starts a line of the Exercises section with its bold number: ``**2.**``, ``**4. Predict first.**``.
 _EXERCISE = re.compile(r"^\*\*(\d+)\.(.*?)\*\*", re.M)
 _FENCE = re.compile(r"```.*?```", re.S)
-#: A code cell that makes a widget a student works with: the package's widgets, or ipywidgets' sliders.
-_WIDGET = re.compile(r"\b(TargetLabeler|HopfieldStepper|GARunner|ParameterExplorer|DepthDemo|"
-                     r"PointCloudView|\w+Slider)\s*[.(]")
+#: A code cell that makes a widget a student works with: the package's widgets, or ipywidgets' controls.
+_WIDGET = re.compile(r"\b(TargetLabeler|HopfieldStepper|GARunner|ParameterExplorer|DepthDemo|PointCloudView|"
+                     r"\w*Slider|SelectMultiple|Dropdown|Button|Checkbox|ToggleButtons|FileUpload)\s*[.(]")
 
 
 @dataclass(frozen=True)
