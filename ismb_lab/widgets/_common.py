@@ -22,6 +22,31 @@ from matplotlib.figure import Figure
 
 from .._validation import ParameterError, ParameterTypeError, message
 
+COLUMN_PX = 580
+"""Widest figure, in CSS pixels: JupyterLab's notebook column at 1024 x 768, with the file browser
+open at its default width and the right panel collapsed, is about 592 px."""
+
+DPI = 100
+"""Dots per inch of every widget figure, so that inches times DPI are CSS pixels."""
+
+
+def column_figsize(width: float, height: float, column: float = COLUMN_PX) -> tuple[float, float]:
+    """Figure size in inches that shows `width` x `height` data units at equal aspect, `column` px wide.
+
+    >>> column_figsize(648, 240)
+    (5.8, 2.148)
+    """
+    scale = column / width
+    return round(column / DPI, 3), round(height * scale / DPI, 3)
+
+
+def pair_figsize(pair) -> tuple[float, float]:
+    """:func:`column_figsize` of a pair's side-by-side view (:data:`ismb_lab.plotting.GAP` between)."""
+    from ..plotting import GAP
+
+    height, width = pair.shape[:2]
+    return column_figsize(2 * width + GAP, height)
+
 
 def ipympl_active() -> bool:
     """Whether pyplot draws into ipympl canvases (``%matplotlib widget``)."""
@@ -61,6 +86,9 @@ class Pane:
     the inline backend) the figure has a plain Agg canvas and is shown as a PNG
     in an ``ipywidgets.Image`` refreshed after each draw once the widget has
     been displayed.  Either way the widget carries the CSS class `css`.
+    `figsize` is in inches at :data:`DPI`; :func:`column_figsize` fits one to the
+    notebook column; ipympl's zoom, pan and home buttons show over its left
+    edge while the pointer is on the figure.
     """
 
     def __init__(self, figsize, css: str):
@@ -68,7 +96,7 @@ class Pane:
             import matplotlib.pyplot as plt
 
             with plt.ioff():
-                self.fig = plt.figure(figsize=figsize)
+                self.fig = plt.figure(figsize=figsize, dpi=DPI)
             canvas = self.fig.canvas
             canvas.header_visible = False
             canvas.footer_visible = False
@@ -78,7 +106,7 @@ class Pane:
         else:
             from matplotlib.backends.backend_agg import FigureCanvasAgg
 
-            self.fig = Figure(figsize=figsize)
+            self.fig = Figure(figsize=figsize, dpi=DPI)
             FigureCanvasAgg(self.fig)
             self.widget = ipywidgets.Image(format="png")
         self.widget.add_class(css)

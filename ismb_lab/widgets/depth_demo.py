@@ -24,7 +24,7 @@ from ..methods import DEFAULT_METHOD, get_method, method_names
 from ..params import Params
 from ..plotting import outlines
 from ..recipe import recipe_of
-from ._common import Base, Pane, button, grey_rgb, pair_files, path_labels, with_class
+from ._common import Base, Pane, button, grey_rgb, pair_files, path_labels, row, with_class
 from .cloud import PointCloudView, depth_cloud
 
 __all__ = ["CMAP", "GROUPING_LABELS", "TOLERANCES", "depth_text", "support_text", "DepthDemo",
@@ -407,10 +407,10 @@ class DepthDemo(Base):
         self.seed_field.observe(self.guard(self._on_control), names="value")
         self.grouping_menu.observe(self.guard(self._on_control), names="value")
         self.recompute_button.on_click(self.guard(lambda _: self.recompute()))
-        controls = ipywidgets.HBox([ipywidgets.VBox([self.method_menu, self.seed_field, self.grouping_menu,
-                                                     self.recompute_button]),
-                                    ipywidgets.VBox(list(self.sliders.values()))])
-        views = ipywidgets.HBox([self.background_pane.widget, self.scene_pane.widget])
+        controls = row([ipywidgets.VBox([self.method_menu, self.seed_field, self.grouping_menu,
+                                          self.recompute_button]),
+                        ipywidgets.VBox(list(self.sliders.values()))])
+        views = row([self.background_pane.widget, self.scene_pane.widget])
         self.widget = with_class(ipywidgets.VBox([controls, self.status, self.ranking, views, self.cloud.widget,
                                                   self.log]),
                                  "ismb-depth")

@@ -20,7 +20,7 @@ from ..params import THETA_C, Params
 from ..similarity import transfer
 from ..solvers import DEFAULT_SOLVER, SOLVERS, get_solver
 from ..targets import TargetSet, load_targets, snap
-from ._common import Base, Pane, draw_pair, pair_files, update_pair, with_class
+from ._common import Base, Pane, draw_pair, pair_figsize, pair_files, update_pair, with_class
 
 __all__ = ["draw_transfer", "ExplorerModel", "ParameterExplorer", "similarity_theta", "update_transfer"]
 
@@ -227,8 +227,8 @@ class ParameterExplorer(Base):
                 targets = load_targets(targets, pair=prepared.pair)
             targets = snap(targets, prepared.problem.left_xy, prepared.problem.right_xy).pairs
         self.model = ExplorerModel(prepared, method, params, seed, targets, solver)
-        self.pair_pane = Pane((6.6, 2.6), "ismb-matches")
-        self.transfer_pane = Pane((6.6, 2.2), "ismb-transfer")
+        self.pair_pane = Pane(pair_figsize(prepared.pair), "ismb-matches")
+        self.transfer_pane = Pane((5.8, 2.2), "ismb-transfer")
         self.panes = (self.pair_pane, self.transfer_pane)
         self.pair_artists = draw_pair(self.pair_pane.fig.add_axes((0, 0, 1, 1)), self.model)
         axes = self.transfer_pane.fig.subplots(1, 2)

@@ -286,7 +286,7 @@ class GARunner(Base):
         self._lock = threading.Lock()
         self._drawn_at = 0.0
         self._watcher: threading.Thread | None = None
-        self.pane = Pane((6.0, 3.0), "ismb-fitness")
+        self.pane = Pane((5.8, 3.0), "ismb-fitness")
         self.panes = (self.pane,)
         self.pane.fig.subplots_adjust(left=0.13, bottom=0.17, right=0.97, top=0.95)
         self.artists = draw_fitness(self.pane.fig.add_subplot(), self.model)

@@ -25,7 +25,7 @@ from ..matching import MatchConfig, Prepared, prepare
 from ..plotting import GAP, plot_matches
 from ..classroom import save_merging, targets_path, voila_without_hub
 from ..targets import TargetSet, load_targets, snap, targets_from_matches
-from ._common import Base, Pane, button, grey_rgb, number_labels, pair_files, with_class
+from ._common import Base, Pane, button, column_figsize, grey_rgb, number_labels, pair_files, with_class
 
 __all__ = ["COLUMNS", "Comparison", "draw_labels", "LabelModel", "pairs_html", "TargetLabeler",
            "update_labels"]
@@ -450,7 +450,10 @@ class TargetLabeler(Base):
         if path is None and not ask:
             path = targets_path(self.pair_name, Path.cwd())
         self.model = LabelModel(prepared, path=path, answer_key=answer_key, exclusive=ask)
-        self.pane = Pane((8.2, 3.3), "ismb-stereo")
+        # each image gets half the column (286 px of 320 px images); on larger photos the
+        # toolbar's zoom tells corners apart, and clicks still land in image coordinates
+        self.pane = Pane(column_figsize(self.model.offset + self.model.width, self.model.height),
+                         "ismb-stereo")
         self.panes = (self.pane,)
         self.ax = self.pane.fig.add_axes((0, 0, 1, 1))
         self.artists = draw_labels(self.ax, self.model)

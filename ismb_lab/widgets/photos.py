@@ -229,7 +229,7 @@ class PhotoLoader(Base):
         self.title = title
         self.open_with = open_with
         self.opened = None
-        self.pane = Pane((8.2, 3.0), "ismb-photo-pair")
+        self.pane = Pane((5.8, 2.12), "ismb-photo-pair")
         self.panes = (self.pane,)
         self.ax = self.pane.fig.add_axes((0, 0, 1, 1))
         self.artists = draw_photos(self.ax, self.model)

@@ -17,7 +17,7 @@ from ..matching import MatchConfig, Prepared, prepare
 from ..methods import DEFAULT_METHOD, get_method
 from ..params import Params
 from ..solvers import to_matches
-from ._common import Base, Pane, button, draw_pair, pair_files, path_labels, row, update_pair, with_class
+from ._common import Base, Pane, button, draw_pair, pair_figsize, pair_files, path_labels, row, update_pair, with_class
 
 __all__ = ["draw_energy", "draw_grid", "HopfieldStepper", "StepperModel", "update_energy", "update_grid"]
 
@@ -247,8 +247,8 @@ class HopfieldStepper(Base):
         # Three figures, so that an attempt that flips nothing redraws neither the images
         # nor their matches: only the grid's cursor and the energy curve move.
         self.grid_pane = Pane((3.6, 3.2), "ismb-grid")
-        self.pair_pane = Pane((6.6, 2.6), "ismb-matches")
-        self.energy_pane = Pane((6.0, 2.6), "ismb-energy")
+        self.pair_pane = Pane(pair_figsize(prepared.pair), "ismb-matches")
+        self.energy_pane = Pane((5.8, 2.6), "ismb-energy")
         self.panes = (self.grid_pane, self.pair_pane, self.energy_pane)
         self.grid_ax = self.grid_pane.fig.add_subplot()
         self.grid_pane.fig.subplots_adjust(left=0.18, bottom=0.16, right=0.97, top=0.97)

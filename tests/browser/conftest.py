@@ -75,7 +75,8 @@ def free_port():
 
 @pytest.fixture
 def page(browser):
-    context = browser.new_context(viewport={"width": 1400, "height": 1000})
+    """A 1024 x 768 page: a classroom projector."""
+    context = browser.new_context(viewport={"width": 1024, "height": 768})
     context.set_default_timeout(60_000)
     page = context.new_page()
     yield page
@@ -228,14 +229,25 @@ def run_all(page, url: str, path: str, timeout: float = 120_000):
     return page
 
 
+_DEFAULT_LAYOUT = """() => { const shell = window.jupyterapp.shell;
+  const left = document.querySelector('#jp-left-stack');
+  return !shell.leftCollapsed && shell.rightCollapsed && left !== null
+         && left.getBoundingClientRect().width > 200; }"""
+
+
 @pytest.fixture
 def open_notebook(lab, page):
-    """Open notebooks/<name> in JupyterLab and run all cells; returns the page."""
+    """Open notebooks/<name> in JupyterLab as it opens for a student (a workspace of its own, reset:
+    the file browser open at its default width, the right panel collapsed) and run all cells;
+    returns the page."""
     base, token = lab
 
     def open_(name: str, timeout: float = 120_000):
         path = f"notebooks/{name}"
-        return run_all(page, f"{base}/lab/tree/{path}?token={token}", path, timeout)
+        workspace = "t-" + Path(name).stem.replace("_", "-")
+        opened = run_all(page, f"{base}/lab/workspaces/{workspace}/tree/{path}?token={token}&reset", path, timeout)
+        assert opened.evaluate(_DEFAULT_LAYOUT), "JupyterLab did not open in its default layout"
+        return opened
 
     return open_
 

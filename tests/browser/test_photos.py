@@ -1,4 +1,5 @@
-"""A student's own photos in JupyterLab: upload two JPEGs, rectify, label a pair, save."""
+"""A student's own photos in notebook 09, in JupyterLab's default layout at 1024 x 768 (nothing
+collapsed): upload two JPEGs, rectify, label a pair, save."""
 
 import json
 
@@ -14,12 +15,6 @@ from ismb_lab.classroom import user_name  # noqa: E402
 
 pytestmark = pytest.mark.browser
 DEADLINE_S = 300
-
-NOTEBOOK = {"cells": [{"cell_type": "code", "execution_count": None, "id": "photos", "metadata": {}, "outputs": [],
-                       "source": ["%matplotlib widget\n", "from ismb_lab.widgets import TargetLabeler\n",
-                                  "loader = TargetLabeler.from_photos()\n", "loader"]}],
-            "metadata": {"kernelspec": {"display_name": "Python 3", "language": "python", "name": "python3"}},
-            "nbformat": 4, "nbformat_minor": 5}
 
 
 @pytest.fixture
@@ -44,8 +39,8 @@ def geometry(folder):
 
 
 def test_upload_rectify_label_and_save(open_notebook, ui, workspace, artifacts, data):
-    (workspace / "notebooks" / "own_photos.ipynb").write_text(json.dumps(NOTEBOOK))
-    page = open_notebook("own_photos.ipynb")
+    # notebook 09 as a student meets it: Run All, the file browser open, at 1024 x 768
+    page = open_notebook("09_your_own_photos.ipynb", timeout=240_000)
     root = page.locator(".ismb-photos")
     with page.expect_file_chooser() as chooser:       # the upload button opens the file dialog
         root.locator("button.ismb-upload").click()
@@ -69,4 +64,4 @@ def test_upload_rectify_label_and_save(open_notebook, ui, workspace, artifacts, 
     expect(labeler.locator(".ismb-dirty")).to_have_text("saved", timeout=20_000)
     saved = json.loads((workspace / "notebooks" / f"targets-{user_name()}-{folder.name}.json").read_text())
     assert [(p["left_xy"], p["right_xy"]) for p in saved["pairs"]] == [(list(left_xy), list(right_xy))]
-    root.screenshot(path=artifacts / "own_photos.png")
+    root.screenshot(path=artifacts / "09_own_photos.png")

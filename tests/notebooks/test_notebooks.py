@@ -33,6 +33,22 @@ def test_committed_without_outputs(name):
 
 
 @pytest.mark.parametrize("name", NAMES)
+def test_interactive_figures_fit_the_column(name):
+    """An ipympl figure is drawn at its size in inches times its dpi, whatever the column's width:
+    every ``figsize`` of a notebook that draws with ``%matplotlib widget`` fits the column of
+    JupyterLab's default layout at 1024 x 768.  (Inline images are scaled to the column.)"""
+    from ismb_lab.widgets._common import COLUMN_PX, DPI
+
+    nb = nbformat.read(NOTEBOOKS / name, as_version=4)
+    code = "\n".join(c.source for c in nb.cells if c.cell_type == "code")
+    if "%matplotlib widget" not in code:
+        pytest.skip(f"{name} draws inline")
+    sizes = re.findall(r"figsize=\(([0-9.]+),\s*([0-9.]+)\)", code)
+    wide = [f"figsize=({w}, {h})" for w, h in sizes if float(w) * DPI > COLUMN_PX]
+    assert not wide, f"{name}: {wide} wider than the {COLUMN_PX} px column at {DPI} dpi"
+
+
+@pytest.mark.parametrize("name", NAMES)
 def test_sections_in_order_and_thesis_cited(name):
     nb = nbformat.read(NOTEBOOKS / name, as_version=4)
     markdown = [c.source for c in nb.cells if c.cell_type == "markdown"]

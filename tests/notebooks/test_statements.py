@@ -10,8 +10,12 @@ NOTEBOOKS = Path(__file__).resolve().parents[2] / "notebooks"
 
 
 def output_text(nb) -> str:
-    return "\n".join(o.get("text", "") or o.get("data", {}).get("text/plain", "")
-                     for c in nb.cells if c.cell_type == "code" for o in c.get("outputs", []))
+    """Everything the notebook printed to stdout, and its cells' values.  Streams are joined as
+    they are: a printed line can arrive in two stream messages (with a warning on stderr between
+    them), which a newline between them would cut."""
+    return "".join(o["text"] if o.get("output_type") == "stream" else o.get("data", {}).get("text/plain", "") + "\n"
+                   for c in nb.cells if c.cell_type == "code" for o in c.get("outputs", [])
+                   if o.get("name") != "stderr")
 
 
 def test_02_shows_the_literal_rule_failing(run_notebook):
@@ -63,6 +67,53 @@ def test_07_background_sliders_change_nothing_on_the_toy_car_pair():
             assert r.background_removed == base.background_removed
 
 
+def test_07_counts_its_seed_table_and_warns_nothing(run_notebook):
+    """07 says: no row of the seed table is wrong, the network's car #2 moves with the seed and
+    annealing's does not; and its cells print no warning."""
+    nb = run_notebook("07_toy_car_depth.ipynb")
+    warned = [o["text"] for c in nb.cells if c.cell_type == "code" for o in c.get("outputs", [])
+              if o.get("name") == "stderr" and "Warning" in o.get("text", "")]
+    assert not warned, warned
+    text = output_text(nb)
+    counts = {solver: (int(n), values.split(", ")) for solver, n, values in
+              re.findall(r"(network|anneal): (\d+) wrong rows of 10; car #2's disparity over the seeds: "
+                         r"\[([\d., ]+)\] px", text)}
+    assert set(counts) == {"network", "anneal"}, text
+    assert counts["network"][0] == 0 and counts["anneal"][0] == 0, counts
+    assert len(counts["network"][1]) > 1 and len(counts["anneal"][1]) == 1, counts
+
+
+def test_08_exercises_work_after_run_all_and_its_energy_claim_holds(live_notebook):
+    nb, run_cell = live_notebook("08_real_data_and_peers.ipynb")
+    text = output_text(nb)
+    # cell 13: the truth scores every target yet lies above the exact minimum; annealing reaches
+    # the minimum's score, no further
+    table = text[text.index("Method-III, "):text.index("Method-NM, ")]
+    truth = re.search(r"truth +E = +[-\d.]+ +(\d+)/(\d+)\+(\d+)/(\d+) +[\d.]+ above the minimum", table)
+    assert truth and truth.group(1) == truth.group(4) and truth.group(2) == truth.group(3) == "0", table
+    minimum = re.search(r"exact minimum +E = +[-\d.]+ +(\S+)", table).group(1)
+    assert set(re.findall(r"anneal seed \d +E = +[-\d.]+ +(\S+)", table)) == {minimum}, table
+    # exercise 1, with the sign fixed, on the Motorcycle cut-out it names
+    starter = next(c.source for c in nb.cells if c.cell_type == "code" and "expected = np.stack([x + d, y]" in c.source)
+    answer = printed(run_cell(starter.replace("x + d", "x - d")))
+    assert answer.strip() == "correct", answer
+    # exercise 3: the table rebuilt with NM's genes and beta = 2
+    rebuilt = printed(run_cell("""from dataclasses import replace
+method = get_method("NM")
+net = method.network(problem, replace(report_nm.params, match_bias=2.0))
+best = milp_minimum(net)
+print(line("anneal seed 0", method, net, anneal(net, rng=0).state, best))
+print(line("truth", method, net, truth, best))"""))
+    assert re.search(r"anneal seed 0 +E = .*\n +truth +E = ", rebuilt), rebuilt
+
+
+def printed(outputs) -> str:
+    """What one extra cell printed to stdout; it must not have failed."""
+    errors = [f"{o['ename']}: {o['evalue']}" for o in outputs if o.get("output_type") == "error"]
+    assert not errors, errors
+    return "".join(o["text"] for o in outputs if o.get("output_type") == "stream" and o.get("name") == "stdout")
+
+
 def test_05_and_06_use_the_labels_a_student_saved_in_04(run_notebook):
     """One thread through the class: 04's saved labels feed 05's GA and 06's explorer."""
     from pathlib import Path
@@ -97,6 +148,9 @@ def test_03_explains_method_one_by_its_post_processing(run_notebook):
         line = re.search(rf"Method-{m:>3} on the eleven realistic pairs.*", text).group(0)
         recall[m] = [int(c) / int(t) for c, t in re.findall(r"(\d+)/\d+\+\d+/(\d+) \(C/T", line)]
     assert min(recall["III"]) > max(recall["I"]), recall      # the thesis' ranking by C/T holds there
+    # 03 says the leader by C/T changes with the seed, and names each seed's leader from the output
+    leaders = re.findall(r"seed (\d): most targets found by Method-(\S+(?: and \S+)*)", text)
+    assert len(leaders) == 3 and len({who for _, who in leaders}) > 1, leaders
 
 
 def test_05_shows_the_plateau_it_describes(run_notebook):

@@ -291,3 +291,16 @@ def test_model_refuses_bad_arguments(prepared):
         model.click(1, 1, side="top")
     with pytest.raises(ParameterError, match="'path' parameter"):
         model.save()
+
+
+def test_the_figure_fits_the_notebook_column_with_half_for_each_image(labeler):
+    from ismb_lab.widgets._common import COLUMN_PX
+
+    fig, model = labeler.pane.fig, labeler.model
+    width, height = fig.bbox.width, fig.bbox.height
+    assert width <= COLUMN_PX < 592            # JupyterLab's column at 1024 x 768, file browser open
+    # the pair fills the figure at equal aspect: no pixel of the width is wasted on margins
+    corners = labeler.ax.transData.transform([(-0.5, model.height - 0.5), (model.offset + model.width - 0.5, -0.5)])
+    np.testing.assert_allclose(corners, [(0, 0), (width, height)], atol=1.0)
+    image = width * model.width / (model.offset + model.width)
+    assert image >= 0.45 * COLUMN_PX, f"each image gets {image:.0f} px"
