@@ -128,6 +128,11 @@ class DepthConfig:
         silhouette to decide the object alone.
     silhouette_grow_px : int
         A feature within this many pixels of a blob lies on it (corners sit on outlines).
+    silhouette_behind_px : float
+        Largest amount by which a match's disparity may lie below its blob's silhouette
+        disparity for the match to count (at most ``silhouette_tol_px``).  An object's
+        surface is not behind its outline: the outline of an upright cylinder is its
+        farthest visible part, its front is nearer.
     outline_alone : bool
         A blob in front of the background that is not trusted and on which no band of
         ``min_features`` features agrees is still one object, at its silhouette disparity.
@@ -162,6 +167,7 @@ class DepthConfig:
     silhouette_score: float = 0.9
     silhouette_grow_px: int = 3
     outline_alone: bool = False
+    silhouette_behind_px: float = 3.0
     focal_px: float = FOCAL_PX
     baseline_m: float = BASELINE_M
     quantisation_px: float = 0.5
@@ -169,7 +175,8 @@ class DepthConfig:
     def __post_init__(self):
         own = "DepthConfig"
         for name in ("position_tol_px", "disparity_tol_px", "consensus_px", "quantisation_px",
-                     "link_disparity_px", "merge_px", "merge_disparity_px", "silhouette_tol_px"):
+                     "link_disparity_px", "merge_px", "merge_disparity_px", "silhouette_tol_px",
+                     "silhouette_behind_px"):
             object.__setattr__(self, name, check_number(getattr(self, name), name, own, low=0))
         for name in ("link_px", "local_px", "focal_px", "baseline_m"):
             object.__setattr__(self, name, check_number(getattr(self, name), name, own,
@@ -535,7 +542,9 @@ def _objects(feature, xy, d, config: DepthConfig, silhouettes: Silhouettes | Non
                     continue
                 groups.append(idx)    # a poor outline: the features decide
                 continue
-            near = idx[np.abs(d[idx] - dk) <= config.silhouette_tol_px]
+            gap = d[idx] - dk
+            behind = min(config.silhouette_behind_px, config.silhouette_tol_px)
+            near = idx[(gap >= -behind) & (gap <= config.silhouette_tol_px)]
             rows = near[_consensus(d[near], config.consensus_px)] if len(near) else near
             used.update(np.unique(feature[rows]).tolist())
             found.append(_object(rows, feature, first, d, config, silhouettes.centroid_xy[k - 1], (dk, score)))

@@ -22,8 +22,8 @@ of the four families and of ``unseen``).  ``--held-out`` runs the held-out split
 ``HELD_OUT_START`` onwards), drawn after those choices and run once.
 
 The figures of the defaults on both splits, and of every variant tried on the development
-split, are in ``docs/experiments/2026-11-24-depth-layouts.md`` and
-``docs/experiments/2026-11-25-depth-unseen.md``.
+split, are in ``docs/experiments/2026-11-24-depth-layouts.md``,
+``docs/experiments/2026-11-25-depth-unseen.md`` and ``docs/experiments/2026-11-26-depth-unseen-2.md``.
 
     python scripts/depth_layouts.py --count 360     # development split, 360 layouts (2 min)
     python scripts/depth_layouts.py --count 120 --families unseen     # the unseen family's
@@ -136,15 +136,19 @@ def describe(layout, result) -> str:
 
 
 RULES = {"silhouette_score": 0.8, "outline_alone": True}
+BLOBS = {"join": True, "split": True}
 VARIANTS = {
     "before": ({}, {}),
-    "join+split": ({"silhouette_score": 0.8}, {"join": True, "split": True}),
-    "no join": (RULES, {"split": True}),
-    "no split": (RULES, {"join": True}),
-    "rules": (RULES, {"join": True, "split": True}),
+    "rules": (RULES, BLOBS),
+    "apart": (RULES, {**BLOBS, "keep_apart": True}),
+    "behind": ({**RULES, "silhouette_behind_px": 1.0}, BLOBS),
+    "apart+behind": ({**RULES, "silhouette_behind_px": 1.0}, {**BLOBS, "keep_apart": True}),
+    "apart+behind0": ({**RULES, "silhouette_behind_px": 0.0}, {**BLOBS, "keep_apart": True}),
 }
-"""``--variants``: the rules of docs/experiments/2026-11-25-depth-unseen.md on and off, as DepthConfig
-fields and silhouettes options; "before" is the defaults, "rules" all of them on."""
+"""``--variants``: as DepthConfig fields and silhouettes options, "before" is the defaults, "rules" the
+rules of docs/experiments/2026-11-25-depth-unseen.md, "apart" and "behind" the rules with the join's
+test of both parts at once and with no match counted more than 1 px (0 px) behind its outline
+(docs/experiments/2026-11-26-depth-unseen-2.md)."""
 
 
 def run_variants(seed: int, n: int, names, variants: dict, **kw):
@@ -197,9 +201,9 @@ def main(argv=None) -> int:
     blobs = {}
     for item in args.blobs:
         name, _, value = item.partition("=")
-        if name not in ("join", "split", "split_score", "split_step_px"):
-            parser.error(f"--blobs {item}: not join, split, split_score or split_step_px")
-        blobs[name] = value == "True" if name in ("join", "split") else float(value)
+        if name not in ("join", "split", "keep_apart", "split_score", "split_step_px"):
+            parser.error(f"--blobs {item}: not join, split, keep_apart, split_score or split_step_px")
+        blobs[name] = value == "True" if name in ("join", "split", "keep_apart") else float(value)
     names = families() if args.families is None else tuple(args.families.split(","))
     if UNSEEN.name in names and UNSEEN.name not in families():
         register_family(UNSEEN)

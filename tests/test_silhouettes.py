@@ -79,6 +79,22 @@ def test_two_objects_that_touch_in_one_blob_are_cut_apart_at_the_column_between_
     assert len(silhouettes(bg, touching, split=True, split_step_px=11)) == 1
 
 
+def test_two_objects_side_by_side_stay_apart_when_both_are_moved_at_once():
+    """Two objects 5 px apart in the image, at 12 and 17 px.  Each one's own fit counts the change
+    of its neighbour, in its padding, against it; so one shift lays their union better than either
+    alone, the join takes it and the object at 17 px is lost (the cut does not undo it).  Moved at
+    once, each by its own shift, the two lay on the right image's change better than the union."""
+    bg, sc = pairs_with([(100, 140, 80, 150, 12), (145, 195, 90, 160, 17)])
+    assert silhouettes(bg, sc).disparity.tolist() == [12.0, 17.0]
+    assert silhouettes(bg, sc, join=True, split=True).disparity.tolist() == [12.0]
+    kept = silhouettes(bg, sc, join=True, split=True, keep_apart=True)
+    assert kept.disparity.tolist() == [12.0, 17.0] and kept.score.min() > 0.9
+    # The pieces of one object, at one shift, are still one.
+    one = silhouettes(bg, pairs_with([(100, 140, 80, 150, 12), (145, 195, 80, 150, 12)])[1], join=True,
+                      keep_apart=True)
+    assert one.disparity.tolist() == [12.0]
+
+
 def test_one_object_is_not_cut():
     bg, sc = pairs_with([(90, 195, 80, 160, 14)])
     one = silhouettes(bg, sc, join=True, split=True)
@@ -108,6 +124,10 @@ def test_silhouettes_bad_input_names_the_parameter():
         silhouettes(bg, sc, split_step_px=-1)
     with pytest.raises(ParameterTypeError, match="'join' parameter of silhouettes"):
         silhouettes(bg, sc, join="yes")
+    with pytest.raises(ParameterTypeError, match="'keep_apart' parameter of silhouettes"):
+        silhouettes(bg, sc, keep_apart=1)
+    with pytest.raises(ParameterError, match="'silhouette_behind_px' parameter of DepthConfig"):
+        DepthConfig(silhouette_behind_px=-1)
     with pytest.raises(ParameterTypeError, match="'outline_alone' parameter of DepthConfig"):
         DepthConfig(outline_alone=1)
     with pytest.raises(ParameterError, match="'grouping' parameter of DepthConfig"):
@@ -182,6 +202,24 @@ def test_an_outline_no_features_agree_on_is_an_object_however_poor_its_fit():
     # The third lies behind the wall: no object.  Without the rule (the default) the second is lost too.
     lost = depth_from_matches(background, scene, DepthConfig(), sil)
     assert [o.silhouette_disparity for o in lost.objects] == [22.0]
+
+
+def test_matches_behind_an_outline_do_not_count():
+    """An upright cylinder's outline is its farthest visible part: its silhouette disparity (20) is
+    below its front (22).  Three wrong matches 2 px behind the outline outvote the two on the front
+    while they count (3 px either side); 1 px behind, the front decides.  With no match left, the
+    outline places the object."""
+    background = matches([(x, y, 6.0) for x in range(20, 300, 40) for y in (20, 220)])
+    scene = matches([(105, 105, 18.0), (115, 110, 18.0), (125, 125, 18.0),     # a period off
+                     (120, 120, 22.0), (122, 130, 22.0)])                      # the front
+    sil = Silhouettes(blob_labels((100, 140, 100, 140)), [20.0], [0.98], [[120.0, 120.0]])
+    both = depth_from_matches(background, scene, DepthConfig(), sil).objects[0]
+    front = depth_from_matches(background, scene, DepthConfig(silhouette_behind_px=1.0), sil).objects[0]
+    assert (both.mean_disparity, both.n_features) == (18.0, 3)
+    assert (front.mean_disparity, front.n_features) == (22.0, 2)
+    behind = matches([(105, 105, 18.0), (115, 110, 18.0), (125, 125, 18.5)])
+    alone = depth_from_matches(background, behind, DepthConfig(silhouette_behind_px=1.0), sil).objects[0]
+    assert (alone.mean_disparity, alone.n_features) == (20.0, 0)
 
 
 def test_silhouettes_must_cover_the_scene():
