@@ -25,8 +25,9 @@ How it works
    object is a blob of the left image where the
    scene differs from the background, and its disparity is the shift that lays that
    blob on the right image's blob of change (its silhouette disparity, whole pixels).
-   The features on the blob (``silhouette_grow_px`` around it) with matches within
-   ``silhouette_tol_px`` of that shift give the object's disparity (their consensus
+   The features on the blob (``silhouette_grow_px`` around it) with matches at most
+   ``silhouette_tol_px`` above that shift and at most ``silhouette_behind_px`` below it (an
+   outline is its object's farthest visible part) give the object's disparity (their consensus
    band); a blob none of whose matches agree is still an object, found by its outline
    alone (``n_features == 0``).  A silhouette is trusted only when the two blobs
    overlap well (Dice ``>= silhouette_score``) and, with ``in_front``, when its shift
@@ -164,10 +165,10 @@ class DepthConfig:
     local_px: float = 40.0
     grouping: str = "silhouettes"
     silhouette_tol_px: float = 3.0
-    silhouette_score: float = 0.9
+    silhouette_score: float = 0.8
     silhouette_grow_px: int = 3
-    outline_alone: bool = False
-    silhouette_behind_px: float = 3.0
+    outline_alone: bool = True
+    silhouette_behind_px: float = 0.0
     focal_px: float = FOCAL_PX
     baseline_m: float = BASELINE_M
     quantisation_px: float = 0.5

@@ -265,9 +265,9 @@ def _join(masks: list, measure, gap_px: int, right: np.ndarray, pad: int, apart:
 
 def silhouettes(background, scene, roi="center", *, shifts=range(0, 41), threshold: float = 8.0,
                 sigma: float = 1.0, min_pixels: int = 20, pad_px: int = 8, merge_gap_px: int = 10,
-                merge_disparity_px: float = 1.0, max_fraction: float = 0.5, join: bool = False,
-                split: bool = False, split_score: float = 0.9, split_step_px: float = 2.0,
-                keep_apart: bool = False) -> Silhouettes:
+                merge_disparity_px: float = 1.0, max_fraction: float = 0.5, join: bool = True,
+                split: bool = True, split_score: float = 0.9, split_step_px: float = 2.0,
+                keep_apart: bool = True) -> Silhouettes:
     """Blobs of change of the scene's left image, each with the shift that lays it on the right's.
 
     Where the scene pair differs from the background pair is where the objects are, in

@@ -135,20 +135,23 @@ def describe(layout, result) -> str:
     return f"truth [{truth}] wall {layout.wall_disparity:.1f} shift {layout.shift:g}; found [{found}]"
 
 
-RULES = {"silhouette_score": 0.8, "outline_alone": True}
-BLOBS = {"join": True, "split": True}
+BEFORE = ({"silhouette_score": 0.9, "outline_alone": False, "silhouette_behind_px": 3.0},
+          {"join": False, "split": False, "keep_apart": False})
+RULES = {"silhouette_score": 0.8, "outline_alone": True, "silhouette_behind_px": 3.0}
+BLOBS = {"join": True, "split": True, "keep_apart": False}
 VARIANTS = {
-    "before": ({}, {}),
+    "before": BEFORE,
     "rules": (RULES, BLOBS),
     "apart": (RULES, {**BLOBS, "keep_apart": True}),
     "behind": ({**RULES, "silhouette_behind_px": 1.0}, BLOBS),
     "apart+behind": ({**RULES, "silhouette_behind_px": 1.0}, {**BLOBS, "keep_apart": True}),
     "apart+behind0": ({**RULES, "silhouette_behind_px": 0.0}, {**BLOBS, "keep_apart": True}),
 }
-"""``--variants``: as DepthConfig fields and silhouettes options, "before" is the defaults, "rules" the
-rules of docs/experiments/2026-11-25-depth-unseen.md, "apart" and "behind" the rules with the join's
-test of both parts at once and with no match counted more than 1 px (0 px) behind its outline
-(docs/experiments/2026-11-26-depth-unseen-2.md)."""
+"""``--variants``: as DepthConfig fields and silhouettes options.  "before" is the defaults up to
+docs/experiments/2026-11-26-depth-unseen-2.md, "rules" the rules of
+docs/experiments/2026-11-25-depth-unseen.md, "apart" and "behind" the rules with the join's test of
+both parts at once and with no match counted more than 1 px (0 px) behind its outline;
+"apart+behind0" is the defaults since."""
 
 
 def run_variants(seed: int, n: int, names, variants: dict, **kw):

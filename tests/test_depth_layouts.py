@@ -86,8 +86,8 @@ def test_unseen_development_layouts_the_defaults_get_wrong_are_ranked_right_by_t
     script = load_script("depth_layouts")
     rules, blobs = script.VARIANTS["rules"]
     variants = {"before": script.VARIANTS["before"], "rules": (rules, blobs),
-                "no split": (rules, {"join": True}), "no join": (rules, {"split": True}),
-                "join+split": ({"silhouette_score": 0.8}, blobs)}
+                "no split": (rules, {**blobs, "split": False}), "no join": (rules, {**blobs, "join": False}),
+                "join+split": ({**script.BEFORE[0], "silhouette_score": 0.8}, blobs)}
     register_family(UNSEEN)
     try:
         layout, out = script.run_variants(script.DEV_START + n, n, (UNSEEN.name,), variants)
@@ -132,7 +132,7 @@ def test_the_join_that_keeps_apart_still_joins_the_pieces_of_one_object(load_scr
 
     script = load_script("depth_layouts")
     variants = {name: script.VARIANTS[name] for name in ("rules", "apart")}
-    variants["no join"] = (variants["rules"][0], {"split": True})
+    variants["no join"] = (variants["rules"][0], {**variants["rules"][1], "join": False})
     if family:
         register_family(UNSEEN)
     try:
@@ -141,3 +141,17 @@ def test_the_join_that_keeps_apart_still_joins_the_pieces_of_one_object(load_scr
         if family:
             unregister_family(UNSEEN.name)
     assert out["no join"][1] == "split" and out["rules"][1] == "ok" and out["apart"][1] == "ok"
+
+
+def test_the_chosen_variant_is_the_defaults(load_script):
+    """docs/experiments/2026-11-26-depth-unseen-2.md chose "apart+behind0" as the defaults: the demo's
+    own code path (no options) is the variant that was measured."""
+    import inspect
+
+    from ismb_lab.depth import DepthConfig
+    from ismb_lab.silhouettes import silhouettes
+
+    fields, blobs = load_script("depth_layouts").VARIANTS["apart+behind0"]
+    assert DepthConfig(**fields) == DepthConfig()
+    defaults = inspect.signature(silhouettes).parameters
+    assert all(defaults[name].default == value for name, value in blobs.items())
