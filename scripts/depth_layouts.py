@@ -29,6 +29,7 @@ split, are in ``docs/experiments/2026-11-24-depth-layouts.md``,
     python scripts/depth_layouts.py --count 120 --families unseen     # the unseen family's
     python scripts/depth_layouts.py --held-out      # the first held-out split, 880000- (40 s)
     python scripts/depth_layouts.py --held-out --seeds-from 1200000 --variants   # the second, every variant
+    python scripts/depth_layouts.py --held-out --seeds-from 1600000 --variants   # the third (spent too)
     python scripts/depth_layouts.py --held-out --cli                  # through the CLI (3 min)
     python scripts/depth_layouts.py --count 12      # the first 12 (the test's set)
     python scripts/depth_layouts.py --solver assign # a variant: --method, --solver, --set, --blobs
