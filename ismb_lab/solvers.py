@@ -43,7 +43,7 @@ from typing import ClassVar, NamedTuple
 import numpy as np
 
 from ._validation import ParameterError, ParameterTypeError, check_choice, check_number, message
-from .annealing import anneal
+from .annealing import anneal, check_settle
 from .exact import milp_minimum
 from .hopfield import RULES, Network, _energy_of
 from .dynamics import KERNELS, STOP_RULES, run
@@ -180,6 +180,7 @@ class AnnealSolver(Solver):
     t_end: float = 0.02
     cooling: float = 0.9
     sweeps: int = 2
+    settle: float = 0.0
 
     def __post_init__(self):
         own = "AnnealSolver"
@@ -188,9 +189,11 @@ class AnnealSolver(Solver):
         if not 0 < check_number(self.cooling, "cooling", own, low=0, low_open=True) < 1:
             raise ParameterError(message("cooling", own, "a number in (0, 1)", self.cooling))
         check_number(self.sweeps, "sweeps", own, low=1, integer=True)
+        check_settle(self.settle, own)
 
     def solve(self, net, seed) -> Solution:
-        r = anneal(net, rng=seed, t_start=self.t_start, t_end=self.t_end, cooling=self.cooling, sweeps=self.sweeps)
+        r = anneal(net, rng=seed, t_start=self.t_start, t_end=self.t_end, cooling=self.cooling, sweeps=self.sweeps,
+                   settle=self.settle)
         return Solution(r.state, "sweep", 0, net, solver=self.name)
 
 
