@@ -7,8 +7,9 @@ options:
   (:func:`ismb_lab.dynamics.run`), asynchronous flips from "all candidates on" to a
   fixed point, with its stop rule, update rule and kernel.
 * :class:`AnnealSolver` (``"anneal"``): mean-field annealing
-  (:func:`ismb_lab.annealing.anneal`) with its cooling schedule, the analog network of
-  the thesis' future work, polished by the discrete network.
+  (:func:`ismb_lab.annealing.anneal`) with its cooling schedule (``settle`` > 0 stops it
+  once the state has settled), the analog network of the thesis' future work, polished by
+  the discrete network.
 * :class:`ExactSolver` (``"exact"``): the global minimum as a mixed-integer programme
   (:func:`ismb_lab.exact.milp_minimum`).  It ignores the seed, and refuses a problem it
   cannot solve within its time limit.
@@ -172,7 +173,8 @@ class NetworkSolver(Solver):
 
 @dataclass(frozen=True)
 class AnnealSolver(Solver):
-    """Mean-field annealing with its schedule (:func:`ismb_lab.annealing.anneal`)."""
+    """Mean-field annealing with its schedule (:func:`ismb_lab.annealing.anneal`, whose
+    arguments the fields are; ``settle=0`` runs every temperature)."""
 
     name: ClassVar[str] = ANNEAL
     description: ClassVar[str] = "mean-field annealing, then the discrete network from the rounded state"
