@@ -32,7 +32,7 @@ to matched ``(i, k)`` feature pairs, including a method's post-processing.
 >>> [solve(net, name).state.tolist() for name in SOLVERS]
 [[1, 0], [1, 0], [1, 0], [1, 0]]
 >>> get_solver("anneal", cooling=0.95)
-AnnealSolver(t_start=2.0, t_end=0.02, cooling=0.95, sweeps=2)
+AnnealSolver(t_start=2.0, t_end=0.02, cooling=0.95, sweeps=2, settle=0.0)
 """
 
 from __future__ import annotations
@@ -140,7 +140,7 @@ class Solver:
         >>> SOLVERS["anneal"].configured(stop_rule="stall")
         Traceback (most recent call last):
         ...
-        ismb_lab.ParameterError: The 'stop_rule' parameter of Solver.configured must be an option of the 'anneal' solver (t_start, t_end, cooling, sweeps). Got 'stall' instead.
+        ismb_lab.ParameterError: The 'stop_rule' parameter of Solver.configured must be an option of the 'anneal' solver (t_start, t_end, cooling, sweeps, settle). Got 'stall' instead.
         """
         own = [f.name for f in fields(self)]
         for key, value in options.items():
