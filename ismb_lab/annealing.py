@@ -18,6 +18,12 @@ At the end ``v`` is rounded at 1/2 and handed to the discrete network
 (:func:`ismb_lab.dynamics.run` from that state), so the answer is an exact fixed
 point like the discrete network's.
 
+With ``settle > 0`` the schedule stops early, after the first temperature whose sweeps
+moved no ``v`` across 1/2 and left every ``v`` within `settle` of 0 or 1: the state has
+settled, and the colder temperatures left would only push each ``v`` further the same way
+(they can still flip a neuron, which the discrete polish then sees from its old side).
+``settle=0`` (the default) runs every temperature.
+
 >>> from ismb_lab.hopfield import Network
 >>> net = Network.from_arrays(2, 2, rows=[0, 0, 1, 1], cols=[0, 1, 0, 1],
 ...                           similarity=[0.5, -0.5, -0.5, 0.5],
@@ -121,7 +127,8 @@ def _sweeps(W, u, v, orders, T):
 
 
 def iter_annealing(net: Network, *, rng=0, t_start: float = 2.0, t_end: float = 0.02,
-                   cooling: float = 0.9, sweeps: int = 2, state: list | None = None) -> Iterator[AnnealStep]:
+                   cooling: float = 0.9, sweeps: int = 2, settle: float = 0.0,
+                   state: list | None = None) -> Iterator[AnnealStep]:
     """Cool the analog network, yielding an :class:`AnnealStep` per temperature.
 
     Parameters
@@ -136,6 +143,9 @@ def iter_annealing(net: Network, *, rng=0, t_start: float = 2.0, t_end: float = 
         Factor in (0, 1) between consecutive temperatures.
     sweeps : int
         Asynchronous sweeps per temperature.
+    settle : float
+        In [0, 1/2): stop after the first temperature that moved no ``v`` across 1/2 and
+        left every ``v`` within `settle` of 0 or 1; 0 runs the whole schedule.
     state : list, optional
         If given, a one-element list that receives the analog state array
         (updated in place as the schedule runs), for callers that want ``v``.
@@ -153,8 +163,17 @@ def iter_annealing(net: Network, *, rng=0, t_start: float = 2.0, t_end: float = 
     (2.0, 0.021, 1.0)
     """
     t_start, t_end, cooling, sweeps = check_schedule(net, "iter_annealing", t_start, t_end, cooling, sweeps)
+    settle = check_settle(settle, "iter_annealing")
     rng = check_rng(rng, "rng", "iter_annealing")
-    return _anneal(net, rng, t_start, t_end, cooling, sweeps, state)
+    return _anneal(net, rng, t_start, t_end, cooling, sweeps, settle, state)
+
+
+def check_settle(settle, owner) -> float:
+    """`settle`, a number in [0, 1/2), checked as `owner`'s."""
+    settle = check_number(settle, "settle", owner, low=0)
+    if settle >= 0.5:
+        raise ParameterError(message("settle", owner, "a number in [0, 0.5)", settle))
+    return settle
 
 
 def check_schedule(net, owner, t_start, t_end, cooling, sweeps):
@@ -170,7 +189,7 @@ def check_schedule(net, owner, t_start, t_end, cooling, sweeps):
     return t_start, t_end, cooling, sweeps
 
 
-def _anneal(net, rng, t_start, t_end, cooling, sweeps, holder):
+def _anneal(net, rng, t_start, t_end, cooling, sweeps, settle, holder):
     W, I = hopfield_form(net)
     n = net.n_neurons
     v = 0.5 + 0.01 * rng.uniform(-1, 1, n)
@@ -180,16 +199,19 @@ def _anneal(net, rng, t_start, t_end, cooling, sweeps, holder):
     T, index = t_start, 0
     while T >= t_end * (1 - 1e-12):
         orders = np.array([rng.permutation(n) for _ in range(sweeps)], dtype=np.int64).reshape(sweeps, n)
+        before = v > 0.5
         change = _sweeps(W, u, v, orders, T)
         e = net.constant - 0.5 * v @ W @ v - I @ v
         committed = float(np.mean((v < 0.05) | (v > 0.95))) if n else 1.0
         yield AnnealStep(index, float(T), float(change), float(e), committed)
+        if settle > 0 and np.array_equal(before, v > 0.5) and np.all((v < settle) | (v > 1 - settle)):
+            return
         index += 1
         T *= cooling
 
 
 def anneal(net: Network, *, rng=0, t_start: float = 2.0, t_end: float = 0.02, cooling: float = 0.9,
-           sweeps: int = 2) -> AnnealResult:
+           sweeps: int = 2, settle: float = 0.0) -> AnnealResult:
     """Run the schedule of :func:`iter_annealing` to the end, round ``v`` at 1/2 and settle with
     the discrete network.
 
@@ -211,6 +233,7 @@ def anneal(net: Network, *, rng=0, t_start: float = 2.0, t_end: float = 0.02, co
     """
     rng = check_rng(rng, "rng", "anneal")
     t_start, t_end, cooling, sweeps = check_schedule(net, "anneal", t_start, t_end, cooling, sweeps)
+    settle = check_settle(settle, "anneal")
     temperatures = []
     T = t_start
     while T >= t_end * (1 - 1e-12):
@@ -220,10 +243,10 @@ def anneal(net: Network, *, rng=0, t_start: float = 2.0, t_end: float = 0.02, co
     ptr, idx, pair = _neighbours(net.topology)
     W, w = _dense_and_listed(ptr, idx, pair, net.pair_c, 2.0 * net.uniqueness)
     u = W @ v + (net.match_bias + net.similarity)   # hopfield_form's W and I: the same sum
-    _schedule(rng, ptr, idx, w, u, v, np.array(temperatures, dtype=float), sweeps)
+    steps = _schedule(rng, ptr, idx, w, u, v, np.array(temperatures, dtype=float), sweeps, settle)
     rounded = (v > 0.5).astype(np.uint8)
     polish = run(net, rng=rng, state=rounded)
-    return AnnealResult(polish.state, energy(net, polish.state), rounded, v, len(temperatures))
+    return AnnealResult(polish.state, energy(net, polish.state), rounded, v, steps)
 
 
 #: Each topology's neighbour lists, kept while the topology lives (a GA anneals many
@@ -293,15 +316,20 @@ def _dense_and_listed(ptr, idx, pair, pair_c, two_kappa):
 
 
 @numba.njit(cache=True)
-def _schedule(rng, ptr, idx, w, u, v, temperatures, sweeps):
+def _schedule(rng, ptr, idx, w, u, v, temperatures, sweeps, settle):
     """:func:`_sweeps` at every temperature, on neighbour lists, each visiting order drawn
     from `rng` as :func:`_anneal` draws it (``rng.permutation(n)`` per sweep); `v` and `u`
-    are updated in place.
+    are updated in place.  With ``settle > 0`` it stops where :func:`_anneal` stops.
+    Returns the temperatures run.
 
     A weight of zero that the dense row would add is skipped: it could only change the
     sign of a zero ``u``, which gives the same ``v``."""
     n = v.shape[0]
-    for T in temperatures:
+    before = np.empty(n, dtype=np.bool_)
+    for t in range(temperatures.shape[0]):
+        T = temperatures[t]
+        if settle > 0:
+            before[:] = v > 0.5
         for _ in range(sweeps):
             for a in rng.permutation(n):
                 new = _logistic(u[a] / T)
@@ -310,3 +338,15 @@ def _schedule(rng, ptr, idx, w, u, v, temperatures, sweeps):
                     v[a] = new
                     for e in range(ptr[a], ptr[a + 1]):
                         u[idx[e]] += w[e] * d
+        if settle > 0 and _settled(before, v, settle):
+            return t + 1
+    return temperatures.shape[0]
+
+
+@numba.njit(cache=True)
+def _settled(before, v, settle):
+    """No ``v`` crossed 1/2 since `before` and every ``v`` lies within `settle` of 0 or 1."""
+    for a in range(v.shape[0]):
+        if before[a] != (v[a] > 0.5) or settle <= v[a] <= 1 - settle:
+            return False
+    return True

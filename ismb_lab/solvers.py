@@ -7,8 +7,9 @@ options:
   (:func:`ismb_lab.dynamics.run`), asynchronous flips from "all candidates on" to a
   fixed point, with its stop rule, update rule and kernel.
 * :class:`AnnealSolver` (``"anneal"``): mean-field annealing
-  (:func:`ismb_lab.annealing.anneal`) with its cooling schedule, the analog network of
-  the thesis' future work, polished by the discrete network.
+  (:func:`ismb_lab.annealing.anneal`) with its cooling schedule (``settle`` > 0 stops it
+  once the state has settled), the analog network of the thesis' future work, polished by
+  the discrete network.
 * :class:`ExactSolver` (``"exact"``): the global minimum as a mixed-integer programme
   (:func:`ismb_lab.exact.milp_minimum`).  It ignores the seed, and refuses a problem it
   cannot solve within its time limit.
@@ -31,7 +32,7 @@ to matched ``(i, k)`` feature pairs, including a method's post-processing.
 >>> [solve(net, name).state.tolist() for name in SOLVERS]
 [[1, 0], [1, 0], [1, 0], [1, 0]]
 >>> get_solver("anneal", cooling=0.95)
-AnnealSolver(t_start=2.0, t_end=0.02, cooling=0.95, sweeps=2)
+AnnealSolver(t_start=2.0, t_end=0.02, cooling=0.95, sweeps=2, settle=0.0)
 """
 
 from __future__ import annotations
@@ -43,7 +44,7 @@ from typing import ClassVar, NamedTuple
 import numpy as np
 
 from ._validation import ParameterError, ParameterTypeError, check_choice, check_number, message
-from .annealing import anneal
+from .annealing import anneal, check_settle
 from .exact import milp_minimum
 from .hopfield import RULES, Network, _energy_of
 from .dynamics import KERNELS, STOP_RULES, run
@@ -139,7 +140,7 @@ class Solver:
         >>> SOLVERS["anneal"].configured(stop_rule="stall")
         Traceback (most recent call last):
         ...
-        ismb_lab.ParameterError: The 'stop_rule' parameter of Solver.configured must be an option of the 'anneal' solver (t_start, t_end, cooling, sweeps). Got 'stall' instead.
+        ismb_lab.ParameterError: The 'stop_rule' parameter of Solver.configured must be an option of the 'anneal' solver (t_start, t_end, cooling, sweeps, settle). Got 'stall' instead.
         """
         own = [f.name for f in fields(self)]
         for key, value in options.items():
@@ -172,7 +173,8 @@ class NetworkSolver(Solver):
 
 @dataclass(frozen=True)
 class AnnealSolver(Solver):
-    """Mean-field annealing with its schedule (:func:`ismb_lab.annealing.anneal`)."""
+    """Mean-field annealing with its schedule (:func:`ismb_lab.annealing.anneal`, whose
+    arguments the fields are; ``settle=0`` runs every temperature)."""
 
     name: ClassVar[str] = ANNEAL
     description: ClassVar[str] = "mean-field annealing, then the discrete network from the rounded state"
@@ -180,6 +182,7 @@ class AnnealSolver(Solver):
     t_end: float = 0.02
     cooling: float = 0.9
     sweeps: int = 2
+    settle: float = 0.0
 
     def __post_init__(self):
         own = "AnnealSolver"
@@ -188,9 +191,11 @@ class AnnealSolver(Solver):
         if not 0 < check_number(self.cooling, "cooling", own, low=0, low_open=True) < 1:
             raise ParameterError(message("cooling", own, "a number in (0, 1)", self.cooling))
         check_number(self.sweeps, "sweeps", own, low=1, integer=True)
+        check_settle(self.settle, own)
 
     def solve(self, net, seed) -> Solution:
-        r = anneal(net, rng=seed, t_start=self.t_start, t_end=self.t_end, cooling=self.cooling, sweeps=self.sweeps)
+        r = anneal(net, rng=seed, t_start=self.t_start, t_end=self.t_end, cooling=self.cooling, sweeps=self.sweeps,
+                   settle=self.settle)
         return Solution(r.state, "sweep", 0, net, solver=self.name)
 
 

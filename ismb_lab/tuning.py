@@ -96,12 +96,13 @@ def evaluate(cases: Sequence, method, params: Params, seed: int = 0,
     return Score(correct, wrong, extra, targets)
 
 
-def _counts(case, m, params: Params, seed: int, solver, one_to_one: bool = False) -> tuple[int, int, int]:
+def _counts(case, m, params: Params, seed: int, solver, one_to_one: bool = False, net=None) -> tuple[int, int, int]:
     """C, wrong partner and extra of one case: the score of
     :func:`~ismb_lab.solvers.to_matches`' pairs, counted over neurons coded once per case
-    (:meth:`~ismb_lab.evaluation.Scorer.neuron_codes`)."""
+    (:meth:`~ismb_lab.evaluation.Scorer.neuron_codes`).  `net`, if given, is
+    ``m.network(problem, params)`` built already."""
     problem = case.prepared.problem
-    state = solve(m.network(problem, params), solver, seed=seed, owner="evaluate").state
+    state = solve(m.network(problem, params) if net is None else net, solver, seed=seed, owner="evaluate").state
     codes = getattr(case, "neuron_codes", None)
     if codes is None:
         codes = Scorer(case.targets, case.unknown).neuron_codes(problem.rows, problem.cols)
@@ -150,8 +151,7 @@ class Fitness:
         # fitnesses are integers: their sum is exact, so this is np.mean's value
         if totals is not None:
             return totals / self.seeds
-        return np.array([sum(self._fitness(self.params(c), self.seed + s) for s in range(self.seeds))
-                         / self.seeds for c in population], dtype=float)
+        return np.array([self._fitness(self.params(c)) / self.seeds for c in population], dtype=float)
 
     def _batch(self, population: np.ndarray) -> np.ndarray | None:
         """The summed fitness of every chromosome, in one compiled call per case
@@ -190,12 +190,15 @@ class Fitness:
                 problem.topology.n_right, dy)
         return totals
 
-    def _fitness(self, params: Params, seed: int) -> int:
-        """``evaluate(...).fitness``, without building the Score."""
+    def _fitness(self, params: Params) -> int:
+        """``evaluate(...).fitness`` summed over the seeds, without building the Score; each
+        case's network is built once for all the seeds."""
         total = 0
         for case in self.cases:
-            correct, wrong, extra = _counts(case, self.method, params, seed, self.solver)
-            total += correct - wrong - extra
+            net = self.method.network(case.prepared.problem, params)
+            for seed in range(self.seed, self.seed + self.seeds):
+                correct, wrong, extra = _counts(case, self.method, params, seed, self.solver, net=net)
+                total += correct - wrong - extra
         return total
 
 

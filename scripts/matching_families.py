@@ -50,7 +50,7 @@ def solver_of(text: str):
     """A solver name, or a configured solver from ``NAME(OPTION=VALUE,...)``.
 
     >>> solver_of("anneal(cooling=0.8,sweeps=1)")
-    AnnealSolver(t_start=2.0, t_end=0.02, cooling=0.8, sweeps=1)
+    AnnealSolver(t_start=2.0, t_end=0.02, cooling=0.8, sweeps=1, settle=0.0)
     >>> solver_of("network")
     'network'
     """

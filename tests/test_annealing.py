@@ -73,11 +73,17 @@ def test_analog_energy_at_a_committed_state_is_the_discrete_energy():
     (dict(t_start=0.01, t_end=0.1), ParameterError, "'t_start'"),
     (dict(cooling=1.0), ParameterError, "'cooling'"),
     (dict(sweeps=0), ParameterError, "'sweeps'"),
+    (dict(settle=-0.1), ParameterError, "'settle'"),
+    (dict(settle=0.5), ParameterError, "'settle' parameter of .* a number in \\[0, 0.5\\). Got 0.5"),
+    (dict(settle="0.1"), TypeError, "'settle'"),
     (dict(rng="x"), TypeError, "'rng'"),
 ])
 def test_bad_arguments(kwargs, error, words):
     with pytest.raises(error, match=words):
         list(iter_annealing(net_of(0), **kwargs))
+    if "rng" not in kwargs:
+        with pytest.raises(error, match=words):
+            anneal(net_of(0), **kwargs)
     with pytest.raises(TypeError, match="'net'"):
         iter_annealing("net")
 
@@ -116,3 +122,40 @@ def test_the_compiled_sweeps_are_the_textbook_schedule_bit_for_bit(seed):
     v, changes = textbook_annealing(net, np.random.default_rng(seed))
     assert np.array_equal(holder[0], v)
     assert [s.change for s in steps] == changes
+
+
+@pytest.mark.parametrize("seed", range(8))
+@pytest.mark.parametrize("settle", [0.05, 0.2])
+def test_a_settled_schedule_stops_at_the_first_temperature_that_moved_no_v_across_a_half(seed, settle):
+    """The full schedule's records show where the settled one must stop: the first temperature
+    after which every v lies within `settle` of 0 or 1 and no v changed side of 1/2; up to
+    there both runs are the same numbers (the same generator, the same updates)."""
+    net = net_of(seed)
+    full_v, sides, near = [], [], []
+    rng = np.random.default_rng(seed)
+    holder = []
+    before = None
+    for step in iter_annealing(net, rng=rng, state=holder):
+        v = holder[0]
+        sides.append(before is not None and np.array_equal(before, v > 0.5))
+        near.append(bool(np.all((v < settle) | (v > 1 - settle))))
+        full_v.append(v.copy())
+        before = v > 0.5
+    # the first temperature's "before" is the start: v = 1/2 + noise, rounded
+    start = 0.5 + 0.01 * np.random.default_rng(seed).uniform(-1, 1, net.n_neurons) > 0.5
+    v0 = full_v[0]
+    sides[0] = bool(np.array_equal(start, v0 > 0.5))
+    stop = next((t for t in range(len(full_v)) if sides[t] and near[t]), len(full_v) - 1)
+    holder = []
+    steps = list(iter_annealing(net, rng=seed, settle=settle, state=holder))
+    assert len(steps) == stop + 1
+    assert np.array_equal(holder[0], full_v[stop])
+    short = anneal(net, rng=seed, settle=settle)
+    assert short.steps == stop + 1 and np.array_equal(short.analog, full_v[stop])
+    assert np.array_equal(run(net, rng=0, state=short.state).state, short.state)   # a fixed point still
+
+
+def test_settle_zero_runs_every_temperature_and_a_settle_stops_earlier():
+    assert anneal(net_of(3), rng=2, settle=0).steps == anneal(net_of(3), rng=2).steps == 44
+    assert all(anneal(net_of(s), rng=2, settle=0.2).steps < 44 for s in range(8))
+    assert np.array_equal(anneal(net_of(3), rng=2, settle=0.0).analog, anneal(net_of(3), rng=2).analog)

@@ -112,5 +112,26 @@ def test_anneal_is_the_readable_schedule_then_the_discrete_network(case):
     assert np.array_equal(fast.state, polish.state) and fast.energy == energy(net, polish.state)
 
 
+#: Schedules that stop once the state has settled (not in the recorded digests: the earlier
+#: code had no such option).
+SETTLED = {"settled": dict(settle=0.2), "settled short": dict(t_start=1.0, t_end=0.05, cooling=0.8, sweeps=3,
+                                                              settle=0.05)}
+
+
+@pytest.mark.parametrize("schedule", SETTLED)
+@pytest.mark.parametrize("case", [c for c in reference_cases() if c[2] == 7 and c[3] == "default"],
+                         ids=lambda c: c[0])
+def test_a_settled_anneal_is_the_readable_settled_schedule_then_the_discrete_network(case, schedule):
+    name, net, seed, _ = case
+    rng, holder = np.random.default_rng(seed), []
+    steps = len(list(iter_annealing(net, rng=rng, state=holder, **SETTLED[schedule])))
+    v = holder[0] if holder else np.zeros(0)
+    polish = run(net, rng=rng, state=(v > 0.5).astype(np.uint8))
+    fast = anneal(net, rng=seed, **SETTLED[schedule])
+    assert fast.steps == steps
+    assert np.array_equal(fast.analog, v) and fast.analog.tobytes() == v.tobytes()
+    assert np.array_equal(fast.state, polish.state) and fast.energy == energy(net, polish.state)
+
+
 if __name__ == "__main__" and "--record" in sys.argv:
     record()

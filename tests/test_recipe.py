@@ -192,22 +192,23 @@ def scheduled(pair, targets, tmp_path_factory):
     """A tune whose annealing schedule is set with --solver-option."""
     out = tmp_path_factory.mktemp("scheduled") / "recipe.json"
     assert main(["tune", *map(str, pair), str(targets), "--method", "NM3", "--solver", "anneal", "--solver-option",
-                 "cooling=0.8", "--solver-option", "sweeps=1", "--one-to-one", "--generations", "2",
-                 "--population", "6", "--out", str(out)]) == 0
+                 "cooling=0.8", "--solver-option", "sweeps=1", "--solver-option", "settle=0.2", "--fit-seeds", "3",
+                 "--one-to-one", "--generations", "2", "--population", "6", "--out", str(out)]) == 0
     return out
 
 
 def test_tune_records_the_solver_options_given_and_match_uses_them_alone(pair, scheduled, tmp_path, capsys):
     data = json.loads(scheduled.read_text())
-    assert data["solver_options"] == AnnealSolver(cooling=0.8, sweeps=1).options()
-    assert load_recipe(scheduled).recipe.solver == AnnealSolver(cooling=0.8, sweeps=1)
+    assert data["solver_options"] == AnnealSolver(cooling=0.8, sweeps=1, settle=0.2).options()
+    assert load_recipe(scheduled).recipe.solver == AnnealSolver(cooling=0.8, sweeps=1, settle=0.2)
+    assert data["fit_seeds"] == 3
     alone, said = match_json(pair, tmp_path, capsys, "--params-file", scheduled, name="alone.json")
     retyped, _ = match_json(pair, tmp_path, capsys, "--params-file", scheduled, "--solver", "anneal",
-                            "--solver-option", "cooling=0.8", "--solver-option", "sweeps=1", "--one-to-one",
-                            name="retyped.json")
+                            "--solver-option", "cooling=0.8", "--solver-option", "sweeps=1", "--solver-option",
+                            "settle=0.2", "--one-to-one", name="retyped.json")
     assert alone == retyped and said == ""
     default, said = match_json(pair, tmp_path, capsys, "--params-file", scheduled, "--solver-option", "cooling=0.9",
-                               "--solver-option", "sweeps=2", name="default.json")
+                               "--solver-option", "sweeps=2", "--solver-option", "settle=0", name="default.json")
     assert "solver options" in said and said.count("\n") == 1
     assert default["params"] == alone["params"]
 

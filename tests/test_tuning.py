@@ -104,8 +104,10 @@ def test_fitness_over_seeds_is_the_mean_of_single_seed_fitnesses(cases):
 
 
 def _one_at_a_time(fitness, population):
-    """Fitness.__call__'s general path: one Params, one network and one run per chromosome."""
-    return np.array([sum(fitness._fitness(fitness.params(c), fitness.seed + s) for s in range(fitness.seeds))
+    """The mean over seeds of evaluate()'s fitness: one Params, one network and one run per
+    chromosome and seed."""
+    return np.array([sum(evaluate(fitness.cases, fitness.method, fitness.params(c), seed=fitness.seed + s,
+                                  solver=fitness.solver).fitness for s in range(fitness.seeds))
                      / fitness.seeds for c in population])
 
 
@@ -152,3 +154,16 @@ def test_the_batch_leaves_other_methods_solvers_and_bad_genes_to_the_general_pat
     assert plain._batch(bad) is None
     with pytest.raises(ParameterError, match="'lambda_c'"):
         plain(bad)
+
+
+def test_the_general_path_scores_each_chromosome_over_its_seeds_as_evaluate_does(cases):
+    """The annealing path (no compiled batch) builds each network once for all the fit seeds;
+    the fitness is still evaluate()'s mean over the seeds."""
+    from ismb_lab.genetic import initial_population
+    from ismb_lab.solvers import AnnealSolver
+
+    population = initial_population(3, gene_bounds("NM3"), 4)
+    for solver in ("anneal", AnnealSolver(settle=0.2)):
+        fitness = Fitness(cases[:2], "NM3", solver=solver, seeds=3, seed=2)
+        assert fitness._batch(population) is None
+        assert np.array_equal(fitness(population), _one_at_a_time(fitness, population))
