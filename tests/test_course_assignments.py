@@ -24,7 +24,7 @@ import pytest
 pytest.importorskip("nbgrader")
 
 from ismb_lab import exercises  # noqa: E402
-from ismb_lab.course import ASSIGNMENTS, CODE_STUB, make_source, student_notebook  # noqa: E402
+from ismb_lab.course import ASSIGNMENTS, CODE_STUB, student_notebook  # noqa: E402
 
 ROOT = Path(__file__).resolve().parents[1]
 EXERCISES = sorted(name for name in ASSIGNMENTS if name != "labels")
@@ -121,10 +121,13 @@ def test_autograde_gives_the_solutions_full_marks(course):
     with Gradebook(f"sqlite:///{course / 'gradebook.db'}") as gb:
         for name in EXERCISES:
             sub = gb.find_submission(name, STUDENT)
-            tests = [g for nb in sub.notebooks for g in nb.grades if g.auto_score is not None]
-            assert tests and all(g.score == g.max_score for g in tests), \
-                f"{name}: {[(g.name, g.score, g.max_score) for g in tests]}"
+            grades = [g for nb in sub.notebooks for g in nb.grades]
+            tests = [g for g in grades if g.cell.cell_type == "code"]
+            assert tests and all(g.auto_score == g.max_score for g in tests), \
+                f"{name}: {[(g.name, g.auto_score, g.max_score) for g in tests]}"
             assert sub.max_code_score == len(tests) and sub.code_score == sub.max_code_score
+            # the written predictions are graded by the teacher, not counted here
+            assert sub.max_written_score == sum(g.max_score for g in grades if g.cell.cell_type == "markdown")
     for name in EXERCISES:
         graded = notebook(course / "autograded", STUDENT, name)
         errors = [c.source for c in graded.cells for out in c.get("outputs", [])
