@@ -18,7 +18,7 @@ import stat
 import sys
 import tempfile
 
-__all__ = ["VARIABLE", "configure", "fallback_folder", "writable"]
+__all__ = ["VARIABLE", "cold", "configure", "fallback_folder", "writable"]
 
 VARIABLE = "NUMBA_CACHE_DIR"
 _IN_TREE = os.path.join(os.path.dirname(os.path.abspath(__file__)), "__pycache__")
@@ -88,3 +88,20 @@ def configure() -> str | None:
 
 
 configure()
+
+
+def cold(kernel) -> bool:
+    """Whether numba holds no cached machine code of `kernel` (a ``cache=True`` dispatcher) yet,
+    so that its first call will compile.  False when numba's cache cannot be inspected.
+
+    >>> import numba
+    >>> cold(numba.njit(lambda x: x))      # no cache at all: nothing to announce
+    False
+    """
+    try:
+        folder = kernel._cache._cache_path
+        stem = f"{kernel.py_func.__module__.rsplit('.', 1)[-1]}.{kernel.py_func.__qualname__}-"
+        names = os.listdir(folder) if os.path.isdir(folder) else []
+    except (AttributeError, OSError):
+        return False
+    return not any(name.startswith(stem) and name.endswith(".nbi") for name in names)

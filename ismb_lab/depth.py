@@ -25,8 +25,9 @@ How it works
    object is a blob of the left image where the
    scene differs from the background, and its disparity is the shift that lays that
    blob on the right image's blob of change (its silhouette disparity, whole pixels).
-   The features on the blob (``silhouette_grow_px`` around it) with matches within
-   ``silhouette_tol_px`` of that shift give the object's disparity (their consensus
+   The features on the blob (``silhouette_grow_px`` around it) with matches at most
+   ``silhouette_tol_px`` above that shift and at most ``silhouette_behind_px`` below it (an
+   outline is its object's farthest visible part) give the object's disparity (their consensus
    band); a blob none of whose matches agree is still an object, found by its outline
    alone (``n_features == 0``).  A silhouette is trusted only when the two blobs
    overlap well (Dice ``>= silhouette_score``) and, with ``in_front``, when its shift
@@ -128,6 +129,11 @@ class DepthConfig:
         silhouette to decide the object alone.
     silhouette_grow_px : int
         A feature within this many pixels of a blob lies on it (corners sit on outlines).
+    silhouette_behind_px : float
+        Largest amount by which a match's disparity may lie below its blob's silhouette
+        disparity for the match to count (at most ``silhouette_tol_px``).  An object's
+        surface is not behind its outline: the outline of an upright cylinder is its
+        farthest visible part, its front is nearer.
     outline_alone : bool
         A blob in front of the background that is not trusted and on which no band of
         ``min_features`` features agrees is still one object, at its silhouette disparity.
@@ -159,9 +165,10 @@ class DepthConfig:
     local_px: float = 40.0
     grouping: str = "silhouettes"
     silhouette_tol_px: float = 3.0
-    silhouette_score: float = 0.9
+    silhouette_score: float = 0.8
     silhouette_grow_px: int = 3
-    outline_alone: bool = False
+    outline_alone: bool = True
+    silhouette_behind_px: float = 0.0
     focal_px: float = FOCAL_PX
     baseline_m: float = BASELINE_M
     quantisation_px: float = 0.5
@@ -169,7 +176,8 @@ class DepthConfig:
     def __post_init__(self):
         own = "DepthConfig"
         for name in ("position_tol_px", "disparity_tol_px", "consensus_px", "quantisation_px",
-                     "link_disparity_px", "merge_px", "merge_disparity_px", "silhouette_tol_px"):
+                     "link_disparity_px", "merge_px", "merge_disparity_px", "silhouette_tol_px",
+                     "silhouette_behind_px"):
             object.__setattr__(self, name, check_number(getattr(self, name), name, own, low=0))
         for name in ("link_px", "local_px", "focal_px", "baseline_m"):
             object.__setattr__(self, name, check_number(getattr(self, name), name, own,
@@ -535,7 +543,9 @@ def _objects(feature, xy, d, config: DepthConfig, silhouettes: Silhouettes | Non
                     continue
                 groups.append(idx)    # a poor outline: the features decide
                 continue
-            near = idx[np.abs(d[idx] - dk) <= config.silhouette_tol_px]
+            gap = d[idx] - dk
+            behind = min(config.silhouette_behind_px, config.silhouette_tol_px)
+            near = idx[(gap >= -behind) & (gap <= config.silhouette_tol_px)]
             rows = near[_consensus(d[near], config.consensus_px)] if len(near) else near
             used.update(np.unique(feature[rows]).tolist())
             found.append(_object(rows, feature, first, d, config, silhouettes.centroid_xy[k - 1], (dk, score)))

@@ -23,7 +23,8 @@ from .params import Params
 from .similarity import mean_abs_difference
 from .solvers import DEFAULT_SOLVER, get_solver, one_match_per_corner, solve, to_matches
 
-__all__ = ["AUTO_MARGIN", "MatchConfig", "MatchResult", "Prepared", "auto_window", "match", "prepare", "shift_roi"]
+__all__ = ["AUTO_MARGIN", "MatchConfig", "MatchResult", "Prepared", "auto_window", "match", "prepare", "shift_roi",
+           "warm_up"]
 
 
 @dataclass(frozen=True)
@@ -388,3 +389,35 @@ def _explain(prepared: Prepared, result) -> str:
     if not result.converged:
         notes.append("the network did not settle within the attempt limit")
     return "; ".join(notes)
+
+
+def warm_up(solvers=(DEFAULT_SOLVER,)) -> float:
+    """Compile (or load from numba's cache) the kernels a first match runs; returns the seconds.
+
+    In a new kernel on a server whose cache is empty, the first call to :func:`match` spends
+    most of its time compiling.  A notebook calls this first, with a message, so that the
+    wait is announced and the cells after it run at their usual speed.  The pair matched
+    here is a small random texture and its shift, made in memory.
+
+    Parameters
+    ----------
+    solvers : tuple of str
+        The solvers to prepare (names of :func:`ismb_lab.solvers.solver_names`); each
+        compiles its own kernels.
+
+    Examples
+    --------
+    >>> warm_up() >= 0
+    True
+    """
+    import time
+
+    if isinstance(solvers, str) or not isinstance(solvers, (tuple, list)):
+        raise ParameterTypeError(message("solvers", "warm_up", "a tuple of solver names", solvers))
+    start = time.perf_counter()
+    texture = np.random.default_rng(0).integers(0, 256, (60, 100)).astype(float)
+    texture = np.kron(texture, np.ones((2, 2)))[:120, :160]      # blocks: corners at their edges
+    for solver in solvers:
+        match(texture, np.roll(texture, -8, axis=1), method=DEFAULT_METHOD, solver=solver,
+              config=MatchConfig(roi="full", shift=8))
+    return time.perf_counter() - start

@@ -8,9 +8,40 @@ from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["GAP", "frustum_lines", "outlines", "plot_depth", "plot_matches", "plot_top_down", "side_by_side"]
+__all__ = ["GAP", "LEFT_COLOUR", "OKABE_ITO", "RIGHT_COLOUR", "VERDICT_COLOURS", "frustum_lines", "outlines",
+           "plot_depth", "plot_matches", "plot_top_down", "side_by_side", "verdicts"]
 
 GAP = 8  # pixels between the left and right image in side-by-side views
+
+#: The eight colours of Okabe and Ito's palette, told apart with every common colour-vision
+#: deficiency (M. Okabe and K. Ito, *Color Universal Design*, 2008).
+OKABE_ITO = {"black": "#000000", "orange": "#E69F00", "sky blue": "#56B4E9", "bluish green": "#009E73",
+             "yellow": "#F0E442", "blue": "#0072B2", "vermillion": "#D55E00", "reddish purple": "#CC79A7"}
+
+#: A match's verdict against the targets (:func:`verdicts`): blue, vermillion and reddish
+#: purple, never red against green.
+VERDICT_COLOURS = {"correct": OKABE_ITO["blue"], "wrong partner": OKABE_ITO["vermillion"],
+                   "extra": OKABE_ITO["reddish purple"]}
+
+#: Left and right features in every side-by-side view.
+LEFT_COLOUR, RIGHT_COLOUR = OKABE_ITO["yellow"], OKABE_ITO["sky blue"]
+
+
+def verdicts(pairs, targets, unknown=()) -> list:
+    """Each matched pair's verdict, as :func:`ismb_lab.evaluation.score` counts it: ``"correct"``,
+    ``"wrong partner"`` (its left feature has another target), ``"extra"`` (its left feature has
+    no target) or ``None`` (its left feature's truth is unknown).
+
+    Examples
+    --------
+    >>> verdicts([[0, 0], [1, 2], [3, 3], [4, 4]], [[0, 0], [1, 1]], unknown=[4])
+    ['correct', 'wrong partner', 'extra', None]
+    """
+    targets = np.asarray(targets, int).reshape(-1, 2)
+    wanted, has_target = set(map(tuple, targets.tolist())), set(targets[:, 0].tolist())
+    skip = set(np.asarray(unknown, int).ravel().tolist())
+    return ["correct" if (i, k) in wanted else "wrong partner" if i in has_target else None if i in skip
+            else "extra" for i, k in np.asarray(pairs, int).reshape(-1, 2).tolist()]
 
 
 def side_by_side(left: np.ndarray, right: np.ndarray, gap: int = GAP) -> np.ndarray:
@@ -26,7 +57,7 @@ def side_by_side(left: np.ndarray, right: np.ndarray, gap: int = GAP) -> np.ndar
 
 
 def plot_matches(ax, left, right, left_xy, right_xy, pairs, *, numbers: bool = True,
-                 cmap: str = "viridis") -> dict:
+                 cmap: str = "viridis", targets=None, unknown=()) -> dict:
     """Draw a pair side by side with its features and match lines.
 
     Parameters
@@ -37,9 +68,14 @@ def plot_matches(ax, left, right, left_xy, right_xy, pairs, *, numbers: bool = T
     left_xy, right_xy : (N, 2) ndarray
         Feature points ``(x, y)``; right points are drawn offset by ``W + GAP``.
     pairs : (m, 2) int ndarray
-        Matched ``(i, k)`` indices; lines are coloured by Euclidean disparity.
+        Matched ``(i, k)`` indices; lines are coloured by Euclidean disparity, or by their
+        verdict if `targets` are given.
     numbers : bool
         Label features 1, 2, ... as in the thesis' figures.
+    targets : (t, 2) int array_like, optional
+        Target ``(i, k)`` pairs: each line takes its :func:`verdicts` colour
+        (:data:`VERDICT_COLOURS`; grey where the truth is `unknown`), the correct ones drawn
+        first, under the others.
 
     Returns
     -------
@@ -54,17 +90,24 @@ def plot_matches(ax, left, right, left_xy, right_xy, pairs, *, numbers: bool = T
     offset = np.array([left.shape[1] + GAP, 0.0])
     shifted = right_xy + offset
     image = ax.imshow(side_by_side(left, right), cmap="gray", vmin=0, vmax=255)
-    lp, = ax.plot(*left_xy.T, "+", color="yellow", ms=8, mew=1.5)
-    rp, = ax.plot(*shifted.T, "+", color="cyan", ms=8, mew=1.5)
+    lp, = ax.plot(*left_xy.T, "+", color=LEFT_COLOUR, ms=8, mew=1.5)
+    rp, = ax.plot(*shifted.T, "+", color=RIGHT_COLOUR, ms=8, mew=1.5)
     segments = np.stack([left_xy[pairs[:, 0]], shifted[pairs[:, 1]]], axis=1)
-    lines = LineCollection(segments, cmap=cmap, linewidths=1.2)
-    if len(pairs):
-        diff = left_xy[pairs[:, 0]] - right_xy[pairs[:, 1]]
-        lines.set_array(np.hypot(diff[:, 0], diff[:, 1]))
+    if targets is not None:
+        kinds = verdicts(pairs, targets, unknown)
+        # the correct lines first: an error (often a corner's second match) is drawn on top
+        order = sorted(range(len(kinds)), key=lambda n: kinds[n] != "correct")
+        lines = LineCollection(segments[order], linewidths=1.5,
+                               colors=[VERDICT_COLOURS.get(kinds[n], "0.6") for n in order])
+    else:
+        lines = LineCollection(segments, cmap=cmap, linewidths=1.2)
+        if len(pairs):
+            diff = left_xy[pairs[:, 0]] - right_xy[pairs[:, 1]]
+            lines.set_array(np.hypot(diff[:, 0], diff[:, 1]))
     ax.add_collection(lines)
     labels = []
     if numbers:
-        for xy, colour in ((left_xy, "yellow"), (shifted, "cyan")):
+        for xy, colour in ((left_xy, LEFT_COLOUR), (shifted, RIGHT_COLOUR)):
             labels += [ax.text(x + 2, y - 2, str(n), color=colour, fontsize=7)
                        for n, (x, y) in enumerate(xy, 1)]
     ax.set_axis_off()

@@ -192,10 +192,36 @@ def _cut(mask: np.ndarray, right: np.ndarray, shifts, min_pixels: int, step: flo
     return parts
 
 
-def _join(masks: list, measure, gap_px: int) -> list:
+def _placed_dice(parts, shifts, right: np.ndarray, pad: int) -> float:
+    """Dice overlap of `parts` (full-image masks), each moved left by its shift, with `right`'s
+    change, over the rows of the parts and the columns they cover in `right` (padded by `pad`)."""
+    width = right.shape[1]
+    placed = np.zeros_like(right)
+    for part, d in zip(parts, shifts):
+        rows, cols = np.nonzero(part)
+        keep = (cols - int(d) >= 0) & (cols - int(d) < width)
+        placed[rows[keep], cols[keep] - int(d)] = True
+    rows, cols = np.nonzero(placed)
+    if not len(rows):
+        return 0.0
+    r = slice(rows.min(), rows.max() + 1)
+    c = slice(max(cols.min() - pad, 0), min(cols.max() + 1 + pad, width))
+    mine, theirs = placed[r, c], right[r, c]
+    total = np.count_nonzero(mine) + np.count_nonzero(theirs)
+    return 2 * np.count_nonzero(mine & theirs) / total if total else 0.0
+
+
+def _join(masks: list, measure, gap_px: int, right: np.ndarray, pad: int, apart: bool = False) -> list:
     """Join neighbouring blobs (boxes `gap_px` or less apart) while one shift lays their union
     on the right image at least as well as their own shifts lay them (Dice, weighted by size):
-    the pieces of one object that looks like the wall in places, e.g. stripes; the best pair first."""
+    the pieces of one object that looks like the wall in places, e.g. stripes; the best pair first.
+
+    With `apart`, "their own shifts lay them" is one overlap (:func:`_placed_dice`): both parts
+    moved at once, each by its own shift, against the right image's change, compared with the union
+    moved by one shift, over the same rows and padded columns.  Two objects side by side then stay
+    apart however well or poorly each fits alone (the padding of each part's own fit counts its
+    neighbour's change against it).  A part narrower than ``2 * pad`` fits almost any shift, so it
+    is moved by its neighbour's (both: by the union's)."""
     fits = [measure(m) for m in masks]
     sizes = [int(np.count_nonzero(m)) for m in masks]
     keys = [frozenset([k]) for k in range(len(masks))]
@@ -212,7 +238,20 @@ def _join(masks: list, measure, gap_px: int) -> list:
                 if key not in unions:
                     unions[key] = measure(masks[a] | masks[b])
                 union = unions[key]
-                margin = union[0] - (sizes[a] * fits[a][0] + sizes[b] * fits[b][0]) / (sizes[a] + sizes[b])
+                if not apart:
+                    margin = union[0] - (sizes[a] * fits[a][0] + sizes[b] * fits[b][0]) / (sizes[a] + sizes[b])
+                elif np.isnan(union[1]):
+                    continue            # the union has no shift: nothing to compare
+                else:
+                    own = [fits[a][1], fits[b][1]]
+                    loose = [bool(ca.stop - ca.start < 2 * pad or np.isnan(own[0])),
+                             bool(cb.stop - cb.start < 2 * pad or np.isnan(own[1]))]
+                    if all(loose):
+                        own = [union[1], union[1]]
+                    elif any(loose):
+                        own = [own[loose[0]]] * 2       # the firm part's shift for both
+                    margin = (_placed_dice([masks[a] | masks[b]], [union[1]], right, pad)
+                              - _placed_dice([masks[a], masks[b]], own, right, pad))
                 if margin >= 0 and (best is None or margin > best[0]):
                     best = (margin, a, b, union)
         if best is None:
@@ -226,8 +265,9 @@ def _join(masks: list, measure, gap_px: int) -> list:
 
 def silhouettes(background, scene, roi="center", *, shifts=range(0, 41), threshold: float = 8.0,
                 sigma: float = 1.0, min_pixels: int = 20, pad_px: int = 8, merge_gap_px: int = 10,
-                merge_disparity_px: float = 1.0, max_fraction: float = 0.5, join: bool = False,
-                split: bool = False, split_score: float = 0.9, split_step_px: float = 2.0) -> Silhouettes:
+                merge_disparity_px: float = 1.0, max_fraction: float = 0.5, join: bool = True,
+                split: bool = True, split_score: float = 0.9, split_step_px: float = 2.0,
+                keep_apart: bool = True) -> Silhouettes:
     """Blobs of change of the scene's left image, each with the shift that lays it on the right's.
 
     Where the scene pair differs from the background pair is where the objects are, in
@@ -247,7 +287,10 @@ def silhouettes(background, scene, roi="center", *, shifts=range(0, 41), thresho
     size): the pieces of a striped object, each of which fits some shift poorly.  With
     `split`, a blob that two shifts `split_step_px` or more apart lay better than one, cut at a
     column into a left and a right part that each fit with a Dice of `split_score` or more,
-    is two objects side by side that touch in the image (cut again while that holds).
+    is two objects side by side that touch in the image (cut again while that holds).  With
+    `keep_apart` as well, two neighbours are joined only when one shift lays their union at least
+    as well as their own two shifts, applied at once, lay both together (one Dice over the same
+    padded columns): two objects side by side at different depths stay apart.
 
     Parameters
     ----------
@@ -270,6 +313,9 @@ def silhouettes(background, scene, roi="center", *, shifts=range(0, 41), thresho
         of the light or of the view: its score is 0, so its features are grouped alone.
     join, split : bool
         Join the pieces of one object, cut two touching objects apart (see above).
+    keep_apart : bool
+        With `join`, compare the union with both parts moved at once by their own shifts (a part
+        narrower than ``2 * pad_px`` by its neighbour's) rather than with the parts' own fits.
     split_score : float
         Least Dice (0-1) of each part of a cut blob (measured as every blob is, padded by
         `pad_px`); each part is at least ``2 * pad_px`` columns wide.
@@ -310,7 +356,7 @@ def silhouettes(background, scene, roi="center", *, shifts=range(0, 41), thresho
     max_fraction = check_number(max_fraction, "max_fraction", own, low=0, high=1, low_open=True)
     split_score = check_number(split_score, "split_score", own, low=0, high=1)
     split_step_px = check_number(split_step_px, "split_step_px", own, low=0)
-    for name, value in (("join", join), ("split", split)):
+    for name, value in (("join", join), ("split", split), ("keep_apart", keep_apart)):
         if not isinstance(value, bool):
             raise ParameterTypeError(message(name, own, "True or False", value))
     try:
@@ -345,7 +391,7 @@ def silhouettes(background, scene, roi="center", *, shifts=range(0, 41), thresho
     group = connected_components(link, directed=False)[1] if len(ks) else np.zeros(0, dtype=int)
     masks = [np.isin(blobs, ks[group == g]) for g in np.unique(group)]
     if join:
-        masks = _join(masks, measure, merge_gap_px)
+        masks = _join(masks, measure, merge_gap_px, changed[1], pad_px, keep_apart)
     if split:
         todo, masks = masks, []
         while todo:

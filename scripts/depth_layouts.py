@@ -22,13 +22,14 @@ of the four families and of ``unseen``).  ``--held-out`` runs the held-out split
 ``HELD_OUT_START`` onwards), drawn after those choices and run once.
 
 The figures of the defaults on both splits, and of every variant tried on the development
-split, are in ``docs/experiments/2026-11-24-depth-layouts.md`` and
-``docs/experiments/2026-11-25-depth-unseen.md``.
+split, are in ``docs/experiments/2026-11-24-depth-layouts.md``,
+``docs/experiments/2026-11-25-depth-unseen.md`` and ``docs/experiments/2026-11-26-depth-unseen-2.md``.
 
     python scripts/depth_layouts.py --count 360     # development split, 360 layouts (2 min)
     python scripts/depth_layouts.py --count 120 --families unseen     # the unseen family's
     python scripts/depth_layouts.py --held-out      # the first held-out split, 880000- (40 s)
     python scripts/depth_layouts.py --held-out --seeds-from 1200000 --variants   # the second, every variant
+    python scripts/depth_layouts.py --held-out --seeds-from 1600000 --variants   # the third (spent too)
     python scripts/depth_layouts.py --held-out --cli                  # through the CLI (3 min)
     python scripts/depth_layouts.py --count 12      # the first 12 (the test's set)
     python scripts/depth_layouts.py --solver assign # a variant: --method, --solver, --set, --blobs
@@ -135,16 +136,23 @@ def describe(layout, result) -> str:
     return f"truth [{truth}] wall {layout.wall_disparity:.1f} shift {layout.shift:g}; found [{found}]"
 
 
-RULES = {"silhouette_score": 0.8, "outline_alone": True}
+BEFORE = ({"silhouette_score": 0.9, "outline_alone": False, "silhouette_behind_px": 3.0},
+          {"join": False, "split": False, "keep_apart": False})
+RULES = {"silhouette_score": 0.8, "outline_alone": True, "silhouette_behind_px": 3.0}
+BLOBS = {"join": True, "split": True, "keep_apart": False}
 VARIANTS = {
-    "before": ({}, {}),
-    "join+split": ({"silhouette_score": 0.8}, {"join": True, "split": True}),
-    "no join": (RULES, {"split": True}),
-    "no split": (RULES, {"join": True}),
-    "rules": (RULES, {"join": True, "split": True}),
+    "before": BEFORE,
+    "rules": (RULES, BLOBS),
+    "apart": (RULES, {**BLOBS, "keep_apart": True}),
+    "behind": ({**RULES, "silhouette_behind_px": 1.0}, BLOBS),
+    "apart+behind": ({**RULES, "silhouette_behind_px": 1.0}, {**BLOBS, "keep_apart": True}),
+    "apart+behind0": ({**RULES, "silhouette_behind_px": 0.0}, {**BLOBS, "keep_apart": True}),
 }
-"""``--variants``: the rules of docs/experiments/2026-11-25-depth-unseen.md on and off, as DepthConfig
-fields and silhouettes options; "before" is the defaults, "rules" all of them on."""
+"""``--variants``: as DepthConfig fields and silhouettes options.  "before" is the defaults up to
+docs/experiments/2026-11-26-depth-unseen-2.md, "rules" the rules of
+docs/experiments/2026-11-25-depth-unseen.md, "apart" and "behind" the rules with the join's test of
+both parts at once and with no match counted more than 1 px (0 px) behind its outline;
+"apart+behind0" is the defaults since."""
 
 
 def run_variants(seed: int, n: int, names, variants: dict, **kw):
@@ -197,9 +205,9 @@ def main(argv=None) -> int:
     blobs = {}
     for item in args.blobs:
         name, _, value = item.partition("=")
-        if name not in ("join", "split", "split_score", "split_step_px"):
-            parser.error(f"--blobs {item}: not join, split, split_score or split_step_px")
-        blobs[name] = value == "True" if name in ("join", "split") else float(value)
+        if name not in ("join", "split", "keep_apart", "split_score", "split_step_px"):
+            parser.error(f"--blobs {item}: not join, split, keep_apart, split_score or split_step_px")
+        blobs[name] = value == "True" if name in ("join", "split", "keep_apart") else float(value)
     names = families() if args.families is None else tuple(args.families.split(","))
     if UNSEEN.name in names and UNSEEN.name not in families():
         register_family(UNSEEN)

@@ -84,11 +84,74 @@ def test_unseen_development_layouts_the_defaults_get_wrong_are_ranked_right_by_t
     from ismb_lab.scenes import UNSEEN, register_family, unregister_family
 
     script = load_script("depth_layouts")
+    rules, blobs = script.VARIANTS["rules"]
+    variants = {"before": script.VARIANTS["before"], "rules": (rules, blobs),
+                "no split": (rules, {**blobs, "split": False}), "no join": (rules, {**blobs, "join": False}),
+                "join+split": ({**script.BEFORE[0], "silhouette_score": 0.8}, blobs)}
     register_family(UNSEEN)
     try:
-        layout, out = script.run_variants(script.DEV_START + n, n, (UNSEEN.name,), script.VARIANTS)
+        layout, out = script.run_variants(script.DEV_START + n, n, (UNSEEN.name,), variants)
     finally:
         unregister_family(UNSEEN.name)
     assert len(layout.objects) == 3
     assert out["before"][1] == wrong and out["rules"][1] == "ok" and out[fix][1] != "ok"
     assert len(out["rules"][0].objects) == 3
+
+
+@pytest.mark.parametrize("family, n, wrong, fix", [
+    (None, 359, "missing", "apart"),      # cameras: a cylinder joined to the box beside it, the box lost
+    (None, 231, "spurious", "apart"),     # cameras: the same, one object between the two boxes
+    (None, 349, "order", "behind"),       # repetitive: a cylinder's matches a period off, behind its outline
+    ("unseen", 115, "order", "behind"),   # a cylinder's matches below its outline
+])
+def test_development_layouts_the_rules_get_wrong_need_the_join_that_keeps_apart_or_the_outline_behind(
+        load_script, family, n, wrong, fix):
+    """Development layouts (docs/experiments/2026-11-26-depth-unseen-2.md) that the rules of the first
+    study rank wrong: the rule named (`fix`) ranks them right, and so do both rules together."""
+    from ismb_lab.scenes import UNSEEN, register_family, unregister_family
+
+    script = load_script("depth_layouts")
+    if family:
+        register_family(UNSEEN)
+    try:
+        layout, out = script.run_variants(script.DEV_START + n, n, (UNSEEN.name,) if family else None,
+                                          script.VARIANTS)
+    finally:
+        if family:
+            unregister_family(UNSEEN.name)
+    assert out["rules"][1] == wrong and out[fix][1] == "ok" and out["apart+behind"][1] == "ok"
+    assert len(out["apart+behind"][0].objects) == len(layout.objects)
+
+
+@pytest.mark.parametrize("family, n", [(None, 104), (None, 101), ("unseen", 108), ("unseen", 119)])
+def test_the_join_that_keeps_apart_still_joins_the_pieces_of_one_object(load_script, family, n):
+    """Development layouts whose objects the rules rank right only by joining pieces (stripes that
+    look like the wall, a sliver narrower than the padding): the join that keeps two objects apart
+    joins them too."""
+    from ismb_lab.scenes import UNSEEN, register_family, unregister_family
+
+    script = load_script("depth_layouts")
+    variants = {name: script.VARIANTS[name] for name in ("rules", "apart")}
+    variants["no join"] = (variants["rules"][0], {**variants["rules"][1], "join": False})
+    if family:
+        register_family(UNSEEN)
+    try:
+        layout, out = script.run_variants(script.DEV_START + n, n, (UNSEEN.name,) if family else None, variants)
+    finally:
+        if family:
+            unregister_family(UNSEEN.name)
+    assert out["no join"][1] == "split" and out["rules"][1] == "ok" and out["apart"][1] == "ok"
+
+
+def test_the_chosen_variant_is_the_defaults(load_script):
+    """docs/experiments/2026-11-26-depth-unseen-2.md chose "apart+behind0" as the defaults: the demo's
+    own code path (no options) is the variant that was measured."""
+    import inspect
+
+    from ismb_lab.depth import DepthConfig
+    from ismb_lab.silhouettes import silhouettes
+
+    fields, blobs = load_script("depth_layouts").VARIANTS["apart+behind0"]
+    assert DepthConfig(**fields) == DepthConfig()
+    defaults = inspect.signature(silhouettes).parameters
+    assert all(defaults[name].default == value for name, value in blobs.items())

@@ -152,3 +152,11 @@ def test_bad_input_names_the_parameter(kwargs, error, words):
 def test_match_config_validates(field, value):
     with pytest.raises((ParameterError, ParameterTypeError), match=f"'{field}'"):
         MatchConfig(**{field: value})
+
+
+def test_warm_up_prepares_the_first_match_and_refuses_a_bare_name():
+    from ismb_lab.matching import warm_up
+
+    assert warm_up(("network", "anneal")) >= 0.0
+    with pytest.raises(TypeError, match=r"solvers.*warm_up.*tuple of solver names.*'network'"):
+        warm_up("network")

@@ -47,7 +47,8 @@ def test_objects_across_the_image_border_are_compared_where_both_images_see_them
     backwards = silhouettes(bg, sc, roi=(0, 0, W, H), shifts=range(40, -1, -1))
     assert backwards.disparity.tolist() == [20.0]
     if x0 < 0:    # the blob touches the left edge: without padding every larger shift fits as well
-        assert silhouettes(bg, sc, roi=(0, 0, W, H), shifts=range(40, -1, -1), pad_px=0, sigma=0).disparity[0] > 20
+        assert silhouettes(bg, sc, roi=(0, 0, W, H), shifts=range(40, -1, -1), pad_px=0, sigma=0,
+                           split=False).disparity[0] > 20
         assert silhouettes(bg, sc, roi=(0, 0, W, H), shifts=range(40, -1, -1), sigma=0).disparity[0] == 20
 
 
@@ -69,7 +70,7 @@ def test_two_objects_that_touch_in_one_blob_are_cut_apart_at_the_column_between_
     left, right = sc.left.copy(), sc.right.copy()
     left[120:124, 140:150] = right[120:124, 130:140] = 255.0      # a bridge: one blob in each image
     touching = load_pair(left, right)
-    whole = silhouettes(bg, touching)
+    whole = silhouettes(bg, touching, split=False)
     assert len(whole) == 1                                       # one shift for both: one is lost
     cut = silhouettes(bg, touching, split=True)
     assert cut.disparity.tolist() == [10.0, 20.0] and cut.score.min() >= 0.9
@@ -77,6 +78,22 @@ def test_two_objects_that_touch_in_one_blob_are_cut_apart_at_the_column_between_
     # Each part must fit as well as a trusted blob does, and their shifts must differ.
     assert len(silhouettes(bg, touching, split=True, split_score=0.99)) == 1
     assert len(silhouettes(bg, touching, split=True, split_step_px=11)) == 1
+
+
+def test_two_objects_side_by_side_stay_apart_when_both_are_moved_at_once():
+    """Two objects 5 px apart in the image, at 12 and 17 px.  Each one's own fit counts the change
+    of its neighbour, in its padding, against it; so one shift lays their union better than either
+    alone, the join takes it and the object at 17 px is lost (the cut does not undo it).  Moved at
+    once, each by its own shift, the two lay on the right image's change better than the union."""
+    bg, sc = pairs_with([(100, 140, 80, 150, 12), (145, 195, 90, 160, 17)])
+    assert silhouettes(bg, sc).disparity.tolist() == [12.0, 17.0]
+    assert silhouettes(bg, sc, join=True, split=True, keep_apart=False).disparity.tolist() == [12.0]
+    kept = silhouettes(bg, sc, join=True, split=True, keep_apart=True)
+    assert kept.disparity.tolist() == [12.0, 17.0] and kept.score.min() > 0.9
+    # The pieces of one object, at one shift, are still one.
+    one = silhouettes(bg, pairs_with([(100, 140, 80, 150, 12), (145, 195, 80, 150, 12)])[1], join=True,
+                      keep_apart=True)
+    assert one.disparity.tolist() == [12.0]
 
 
 def test_one_object_is_not_cut():
@@ -108,6 +125,10 @@ def test_silhouettes_bad_input_names_the_parameter():
         silhouettes(bg, sc, split_step_px=-1)
     with pytest.raises(ParameterTypeError, match="'join' parameter of silhouettes"):
         silhouettes(bg, sc, join="yes")
+    with pytest.raises(ParameterTypeError, match="'keep_apart' parameter of silhouettes"):
+        silhouettes(bg, sc, keep_apart=1)
+    with pytest.raises(ParameterError, match="'silhouette_behind_px' parameter of DepthConfig"):
+        DepthConfig(silhouette_behind_px=-1)
     with pytest.raises(ParameterTypeError, match="'outline_alone' parameter of DepthConfig"):
         DepthConfig(outline_alone=1)
     with pytest.raises(ParameterError, match="'grouping' parameter of DepthConfig"):
@@ -149,7 +170,7 @@ def test_a_trusted_blob_is_one_object_at_the_disparity_its_features_agree_on_wit
     labels = blob_labels((100, 140, 100, 140), (200, 230, 100, 140), (250, 280, 100, 140), (290, 300, 100, 140))
     sil = Silhouettes(labels, [22.0, 14.0, 11.0, -2.0], [0.98, 0.97, 0.5, 0.95],
                       [[120.0, 120.0], [215.0, 120.0], [265.0, 120.0], [295.0, 120.0]])
-    r = depth_from_matches(background, scene, DepthConfig(), sil)
+    r = depth_from_matches(background, scene, DepthConfig(silhouette_behind_px=3.0), sil)
     a, b, c = r.objects
     assert (a.rank, a.n_features, a.silhouette_disparity, a.centroid_xy) == (1, 4, 22.0, (120.0, 120.0))
     assert a.mean_disparity == pytest.approx(np.mean([22, 22, 21, 22])) and a.silhouette_score == 0.98
@@ -179,9 +200,30 @@ def test_an_outline_no_features_agree_on_is_an_object_however_poor_its_fit():
     r = depth_from_matches(background, scene, DepthConfig(outline_alone=True), sil)
     assert [(o.silhouette_disparity, o.n_features) for o in r.objects] == [(22.0, 3), (16.0, 0)]
     assert r.objects[1].centroid_xy == (215.0, 120.0) and r.objects[1].silhouette_score == 0.6
-    # The third lies behind the wall: no object.  Without the rule (the default) the second is lost too.
-    lost = depth_from_matches(background, scene, DepthConfig(), sil)
+    assert [(o.silhouette_disparity, o.n_features) for o in depth_from_matches(background, scene, None, sil).objects
+            ] == [(22.0, 3), (16.0, 0)]                                # the default
+    # The third lies behind the wall: no object.  Without the rule the second is lost too.
+    lost = depth_from_matches(background, scene, DepthConfig(outline_alone=False), sil)
     assert [o.silhouette_disparity for o in lost.objects] == [22.0]
+
+
+def test_matches_behind_an_outline_do_not_count():
+    """An upright cylinder's outline is its farthest visible part: its silhouette disparity (20) is
+    below its front (22).  Three wrong matches 2 px behind the outline outvote the two on the front
+    while they count (3 px either side); 1 px behind, the front decides.  With no match left, the
+    outline places the object."""
+    background = matches([(x, y, 6.0) for x in range(20, 300, 40) for y in (20, 220)])
+    scene = matches([(105, 105, 18.0), (115, 110, 18.0), (125, 125, 18.0),     # a period off
+                     (120, 120, 22.0), (122, 130, 22.0)])                      # the front
+    sil = Silhouettes(blob_labels((100, 140, 100, 140)), [20.0], [0.98], [[120.0, 120.0]])
+    both = depth_from_matches(background, scene, DepthConfig(silhouette_behind_px=3.0), sil).objects[0]
+    front = depth_from_matches(background, scene, DepthConfig(silhouette_behind_px=1.0), sil).objects[0]
+    assert depth_from_matches(background, scene, None, sil).objects[0].mean_disparity == 22.0   # the default
+    assert (both.mean_disparity, both.n_features) == (18.0, 3)
+    assert (front.mean_disparity, front.n_features) == (22.0, 2)
+    behind = matches([(105, 105, 18.0), (115, 110, 18.0), (125, 125, 18.5)])
+    alone = depth_from_matches(background, behind, DepthConfig(silhouette_behind_px=1.0), sil).objects[0]
+    assert (alone.mean_disparity, alone.n_features) == (20.0, 0)
 
 
 def test_silhouettes_must_cover_the_scene():

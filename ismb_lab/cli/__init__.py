@@ -162,6 +162,22 @@ def main(argv=None) -> int:
     return code
 
 
+#: The commands that run the network, and so compile its kernels on their first run.
+_COMPILING = frozenset({"match", "tune", "evaluate", "depth"})
+
+
+def _announce_compiling() -> None:
+    """One line on a terminal's stderr before numba compiles the network's kernels (the first run
+    for this user, or after an upgrade): that run is silent for up to a minute otherwise.
+    Not said when stderr is a file or a pipe, where a script reads what the command reports."""
+    from .._kernel import _solve
+    from .._numba import cold
+
+    if sys.stderr.isatty() and cold(_solve):
+        print("ismb-lab: compiling the network's kernels, once for this installation and user "
+              "(up to a minute); later runs start at once", file=sys.stderr, flush=True)
+
+
 def _main(argv, interrupts) -> int:
     usage_errors, args, running = (OutputError, OSError), None, False
     with interrupts:
@@ -172,6 +188,8 @@ def _main(argv, interrupts) -> int:
             args = build_parser().parse_args(argv)
             preflight(args, UsageError)
             running = True
+            if args.command in _COMPILING:
+                _announce_compiling()
             code = args.run(args)
             if code == 130 and interrupts.signum is not None:
                 return interrupts.exit_code   # the command said "interrupted": say by which signal

@@ -291,7 +291,7 @@ def draw_pair(ax, model) -> dict:
     `model` has ``prepared`` (:class:`~ismb_lab.matching.Prepared`) and ``pairs``
     (the matches as ``(i, k)``); :func:`update_pair` redraws the matches in place.
     """
-    from ..plotting import GAP, plot_matches
+    from ..plotting import GAP, LEFT_COLOUR, RIGHT_COLOUR, plot_matches
 
     pair = model.prepared.pair
     left_xy, right_xy = model.prepared.problem.left_xy, model.prepared.problem.right_xy
@@ -299,8 +299,8 @@ def draw_pair(ax, model) -> dict:
     art["image"].set_data(grey_rgb(art["image"].get_array()))
     art["image"].set_interpolation("nearest")
     offset = np.array([pair.shape[1] + GAP, 0.0])
-    number_labels(ax, left_xy, "yellow")
-    number_labels(ax, right_xy + offset, "cyan")
+    number_labels(ax, left_xy, LEFT_COLOUR)
+    number_labels(ax, right_xy + offset, RIGHT_COLOUR)
     art["lines"].set_clim(0, 40)
     art["offset"] = offset
     return art

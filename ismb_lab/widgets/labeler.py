@@ -22,7 +22,7 @@ import numpy as np
 
 from .._validation import ParameterError, ParameterTypeError, check_choice, check_number, message
 from ..matching import MatchConfig, Prepared, prepare
-from ..plotting import GAP, plot_matches
+from ..plotting import GAP, LEFT_COLOUR, OKABE_ITO, RIGHT_COLOUR, VERDICT_COLOURS, plot_matches
 from ..classroom import save_merging, targets_path, voila_without_hub
 from ..targets import TargetSet, load_targets, snap, targets_from_matches
 from ._common import Base, Pane, button, column_figsize, grey_rgb, number_labels, pair_files, with_class
@@ -338,7 +338,8 @@ class LabelModel:
 
 # --- view -------------------------------------------------------------------------------
 
-_KEY_COLOURS = {"correct": "#2ca02c", "wrong": "#d62728", "plain": "#ffb000", "selected": "#ff00ff"}
+_KEY_COLOURS = {"correct": VERDICT_COLOURS["correct"], "wrong": VERDICT_COLOURS["wrong partner"],
+                "plain": OKABE_ITO["orange"], "selected": OKABE_ITO["reddish purple"]}
 
 
 def draw_labels(ax, model: LabelModel) -> dict:
@@ -350,8 +351,8 @@ def draw_labels(ax, model: LabelModel) -> dict:
                        numbers=False)
     art["image"].set_data(grey_rgb(art["image"].get_array()))
     art["image"].set_interpolation("nearest")
-    art["labels"] = [number_labels(ax, model.left_xy, "yellow"),
-                     number_labels(ax, model.right_xy + [model.offset, 0], "cyan")]
+    art["labels"] = [number_labels(ax, model.left_xy, LEFT_COLOUR),
+                     number_labels(ax, model.right_xy + [model.offset, 0], RIGHT_COLOUR)]
     art["lines"].set_array(None)
     art["lines"].set_linewidths(1.6)
     art["missing"] = LineCollection([], colors=_KEY_COLOURS["plain"], linestyles="dashed", linewidths=1.2)

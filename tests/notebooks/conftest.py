@@ -46,9 +46,26 @@ def notebook_errors():
     return errors
 
 
+_EXECUTED: dict = {}
+
+
+@pytest.fixture(scope="session")
+def executed_notebook():
+    """A notebook executed once per test session, as Restart & Run All would, shared by every
+    test that only reads its outputs (a test must not change it).  A test whose run depends on
+    files it writes first, such as a student's saved labels, uses ``run_notebook`` instead."""
+    def get(name: str):
+        if name not in _EXECUTED:
+            c = client(name)
+            c.execute()
+            _EXECUTED[name] = c.nb
+        return _EXECUTED[name]
+    return get
+
+
 @pytest.fixture
 def run_notebook():
-    """Execute a notebook completely; returns the executed notebook."""
+    """Execute a notebook completely, in a fresh kernel; returns the executed notebook."""
     def run(name: str):
         c = client(name)
         c.execute()

@@ -60,8 +60,8 @@ def test_sections_in_order_and_thesis_cited(name):
 
 
 @pytest.mark.parametrize("name", NAMES)
-def test_runs_headless(name, run_notebook, notebook_errors):
-    nb = run_notebook(name)
+def test_runs_headless(name, executed_notebook, notebook_errors):
+    nb = executed_notebook(name)
     assert notebook_errors(nb) == []
     # every code cell ran
     assert all(c.execution_count for c in nb.cells if c.cell_type == "code" and c.source.strip())

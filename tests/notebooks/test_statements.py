@@ -18,8 +18,8 @@ def output_text(nb) -> str:
                    if o.get("name") != "stderr")
 
 
-def test_02_shows_the_literal_rule_failing(run_notebook):
-    nb = run_notebook("02_hopfield_network.ipynb")
+def test_02_shows_the_literal_rule_failing(executed_notebook):
+    nb = executed_notebook("02_hopfield_network.ipynb")
     text = output_text(nb)
     exact = re.search(r"exact: +\d+ attempts, energy rose (\d+) times.*stopped at a fixed point", text)
     thesis = re.search(r"thesis: +\d+ attempts, energy rose (\d+) times.*never reached a fixed point", text)
@@ -34,8 +34,8 @@ def test_02_shows_the_literal_rule_failing(run_notebook):
     assert re.search(r"Method-III: settled in 20/20 runs with the exact rule, 0/20 with the thesis rule", text)
 
 
-def test_00_scores_its_opening_result_and_counts_its_multiple_matches(run_notebook):
-    text = output_text(run_notebook("00_start_here.ipynb"))
+def test_00_scores_its_opening_result_and_counts_its_multiple_matches(executed_notebook):
+    text = output_text(executed_notebook("00_start_here.ipynb"))
     found = re.search(r"C/E/T = (\d+)/(\d+)\+(\d+)/(\d+): (\d+) of (\d+) true matches found \(C/T (\d+)%\), "
                       r"(\d+) of the (\d+) matches wrong \(precision (\d+)%\)", text)
     assert found, text
@@ -67,10 +67,10 @@ def test_07_background_sliders_change_nothing_on_the_toy_car_pair():
             assert r.background_removed == base.background_removed
 
 
-def test_07_counts_its_seed_table_and_warns_nothing(run_notebook):
+def test_07_counts_its_seed_table_and_warns_nothing(executed_notebook):
     """07 says: no row of the seed table is wrong, the network's car #2 moves with the seed and
     annealing's does not; and its cells print no warning."""
-    nb = run_notebook("07_toy_car_depth.ipynb")
+    nb = executed_notebook("07_toy_car_depth.ipynb")
     warned = [o["text"] for c in nb.cells if c.cell_type == "code" for o in c.get("outputs", [])
               if o.get("name") == "stderr" and "Warning" in o.get("text", "")]
     assert not warned, warned
@@ -137,8 +137,8 @@ def test_05_and_06_use_the_labels_a_student_saved_in_04(run_notebook):
     assert f"Scored against your labels ({mine.name})" in six and "C/E/T" in six and "/6" in six
 
 
-def test_03_explains_method_one_by_its_post_processing(run_notebook):
-    text = output_text(run_notebook("03_methods_compared.ipynb"))
+def test_03_explains_method_one_by_its_post_processing(executed_notebook):
+    text = output_text(executed_notebook("03_methods_compared.ipynb"))
     rows = re.findall(r"Method-I seed \d: before its post-processing (\d+)/(\d+)\+(\d+)/\d+, "
                       r"after (\d+)/(\d+)\+(\d+)/\d+", text)
     assert len(rows) == 3
@@ -153,16 +153,16 @@ def test_03_explains_method_one_by_its_post_processing(run_notebook):
     assert len(leaders) == 3 and len({who for _, who in leaders}) > 1, leaders
 
 
-def test_05_shows_the_plateau_it_describes(run_notebook):
-    text = output_text(run_notebook("05_genetic_algorithm.ipynb"))
+def test_05_shows_the_plateau_it_describes(executed_notebook):
+    text = output_text(executed_notebook("05_genetic_algorithm.ipynb"))
     best = [int(v) for v in re.search(r"best fitness per generation: \[([\d, ]+)\]", text).group(1).split(", ")]
     assert best[-1] == best[len(best) // 2]          # no gain over the second half of the run
     share = re.search(r"(\d+) of 30 chromosomes have the best fitness", text)
     assert share and int(share.group(1)) >= 20
 
 
-def test_05_adds_up_the_thesis_fig_5_10(run_notebook):
-    text = output_text(run_notebook("05_genetic_algorithm.ipynb"))
+def test_05_adds_up_the_thesis_fig_5_10(executed_notebook):
+    text = output_text(executed_notebook("05_genetic_algorithm.ipynb"))
     assert "the entries add up to C/E/T = 139/13/150 (C/T 92.67%); the thesis prints 125/14/137" in text
 
 
@@ -194,3 +194,182 @@ def test_symbols_are_defined_before_their_first_use():
             defined = re.search(rf"({pattern})\s*(=|\(3-1[023]\),| is | are |\$?,? the )", cells[first])
             assert defined or _POINTER in earlier.replace("\n", " ").lower(), \
                 f"{Path(path).name}: {symbol} first used in cell {first} without a definition or a pointer to 02"
+
+
+# --- every number in the markdown ------------------------------------------------------------
+def _load_rule():
+    """markdown_numbers.py, beside this file (pytest imports tests with --import-mode=importlib)."""
+    import importlib.util
+
+    spec = importlib.util.spec_from_file_location("markdown_numbers", Path(__file__).with_name("markdown_numbers.py"))
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
+
+
+numbers_rule = _load_rule()
+
+THESIS = NOTEBOOKS.parents[1] / "shared" / "thesis"
+NAMES = sorted(p.name for p in NOTEBOOKS.glob("0*.ipynb"))
+
+
+def unaccounted(nb_source, printed_text: str) -> list[str]:
+    """Each number of a markdown cell that is no reference, is not printed by the notebook and
+    is not listed, with its cell and context."""
+    key = nb_source.metadata.get("ismb_key") or ""
+    printed, values = numbers_rule.output_numbers(printed_text)
+    phrases = [phrase for phrase, _, _ in numbers_rule.LISTED.get(key, [])]
+    missing = []
+    for index, cell in enumerate(nb_source.cells):
+        if cell.cell_type != "markdown":
+            continue
+        text = numbers_rule.strip_code(cell.source)
+        for at, number in numbers_rule.numbers(text, phrases):
+            if not numbers_rule.in_output(number, printed, values, text, at, printed_text):
+                context = text[max(0, at - 40):at + len(number) + 20].replace("\n", " ")
+                missing.append(f"cell {index}: {number} in …{context}…")
+    return missing
+
+
+def _source(name: str):
+    import nbformat
+
+    nb = nbformat.read(NOTEBOOKS / name, as_version=4)
+    nb.metadata["ismb_key"] = name[:2]
+    return nb
+
+
+@pytest.mark.parametrize("name", NAMES)
+def test_every_number_in_the_markdown_is_printed_or_listed(name, executed_notebook):
+    """A number the text states is a reference, or the notebook's own output prints it, or
+    markdown_numbers.LISTED says what it must match."""
+    missing = unaccounted(_source(name), output_text(executed_notebook(name)))
+    assert not missing, f"{name}: numbers neither printed nor listed in markdown_numbers.py:\n" + "\n".join(missing)
+
+
+def test_the_listed_phrases_are_in_the_notebooks_and_their_evidence_holds(executed_notebook):
+    """Each listed phrase is still in its notebook's markdown (so a changed number drops out of
+    the list), and its evidence holds: the thesis quotation, the library value, the dated
+    record, the arithmetic, the notebook's own code or output."""
+    thesis = "\n".join(p.read_text(encoding="utf-8") for p in sorted(THESIS.glob("*.txt"))) \
+        if THESIS.is_dir() else None
+    scope = _library_scope()
+    problems = []
+    for key, entries in numbers_rule.LISTED.items():
+        name = next(n for n in NAMES if n.startswith(key))
+        source = _source(name)
+        markdown = "\n".join(numbers_rule.strip_code(c.source) for c in source.cells if c.cell_type == "markdown")
+        code = "\n".join(c.source for c in source.cells if c.cell_type == "code")
+        printed = None
+        for phrase, kind, evidence in entries:
+            where = f"{key}: {phrase!r} ({kind})"
+            if phrase not in markdown:
+                problems.append(f"{where}: the phrase is not in the markdown")
+            inside = [n for _, n in numbers_rule.numbers(phrase)]
+            if not inside:
+                problems.append(f"{where}: the phrase holds no number")
+            if kind not in _KINDS:
+                problems.append(f"{where}: unknown kind")
+                continue
+            if kind in ("count", "formula"):
+                if len(evidence.split()) < 3:
+                    problems.append(f"{where}: give the reason in words")
+                continue
+            text = evidence
+            if kind == "record":
+                text = (NOTEBOOKS.parent / evidence).read_text(encoding="utf-8")
+            held = numbers_rule.output_numbers(text)[0]
+            absent = [n for n in inside if n.replace(",", "") not in held
+                      and not (kind == "thesis" and re.search(rf"\b{_WORDS.get(n, '@')}\b", text.lower()))]
+            if absent:
+                problems.append(f"{where}: {absent} not in the evidence {evidence[:60]!r}")
+            if kind == "thesis" and thesis is not None:
+                for quote in evidence.split(" | "):
+                    if " ".join(quote.split()) not in " ".join(thesis.split()):
+                        problems.append(f"{where}: the quotation {quote!r} is not in the thesis")
+            if kind == "code" and evidence not in code:
+                problems.append(f"{where}: {evidence!r} is not in the notebook's code")
+            if kind == "printed":
+                if printed is None:
+                    printed = " ".join(output_text(executed_notebook(name)).split())
+                if " ".join(evidence.split()) not in printed:
+                    problems.append(f"{where}: {evidence!r} is not in the notebook's output")
+            if kind in ("library", "arithmetic"):
+                try:
+                    ok = eval(evidence, dict(scope))          # noqa: S307  (our own list)
+                except Exception as exc:                      # noqa: BLE001
+                    ok = f"{type(exc).__name__}: {exc}"
+                if ok is not True:
+                    problems.append(f"{where}: {evidence} gives {ok}")
+    assert not problems, "\n".join(problems)
+
+
+_KINDS = ("thesis", "library", "arithmetic", "record", "printed", "code", "count", "formula")
+_WORDS = dict(zip(map(str, range(1, 13)), ("one", "two", "three", "four", "five", "six", "seven", "eight",
+                                            "nine", "ten", "eleven", "twelve")))
+
+
+def _library_scope() -> dict:
+    import math
+
+    from ismb_lab import (camera, datasets, depth, depth_demo, exact, features, gallery, genetic, matching,
+                          methods, protocol, rig, silhouettes)
+    return {"math": math, "camera": camera, "datasets": datasets, "depth": depth, "depth_demo": depth_demo,
+            "exact": exact, "features": features, "gallery": gallery, "genetic": genetic,
+            "matching": matching, "methods": methods, "protocol": protocol, "rig": rig,
+            "silhouettes": silhouettes, "ROOT": NOTEBOOKS.parent,
+            "grouped": _grouped, "unmerged": _unmerged}
+
+
+def _layout(seed: int, n: int):
+    """07's ``layout_of``: the object layout its figures draw."""
+    from ismb_lab.scenes import FAMILIES, object_layout
+
+    return object_layout(seed, 2 + (n // 4) % 2, family=FAMILIES[n % len(FAMILIES)])
+
+
+def _grouped(seed: int, n: int, grouping: str) -> list[tuple[int, int]]:
+    """(whole-pixel disparity, feature count) of each object 07's demo reports, in rank order."""
+    from ismb_lab.depth import DepthConfig
+    from ismb_lab.depth_demo import layout_match_config, relative_depth
+
+    layout = _layout(seed, n)
+    found = relative_depth(layout.background, layout.scene, match_config=layout_match_config(layout),
+                           config=DepthConfig(grouping=grouping))
+    return [(round(o.mean_disparity), o.n_features) for o in found.objects]
+
+
+def _unmerged(seed: int, n: int):
+    """The blobs' shifts before merging, the gap in px between the first two blobs' boxes, and
+    the objects' true disparities (one decimal), for 07's layout that is still ranked wrong."""
+    import numpy as np
+
+    from ismb_lab.io import load_pair
+    from ismb_lab.silhouettes import silhouettes
+
+    layout = _layout(seed, n)
+    background, scene = (load_pair(s.left, s.right) for s in (layout.background, layout.scene))
+    blobs = silhouettes(background, scene, merge_disparity_px=0.0)
+    xs = [np.nonzero(blobs.labels == k)[1] for k in (1, 2)]
+    gap = int(xs[1].min() - xs[0].max() - 1)
+    return ([int(d) for d in blobs.disparity], gap, [round(t.disparity, 1) for t in layout.objects])
+
+
+def test_the_number_rule_fails_on_a_changed_number(executed_notebook):
+    """The rule can fail: 05's markdown with a listed number changed (the phrase "$p_c = 0.8$" is
+    gone, and 0.83 is neither printed nor listed), with a printed number changed (91.24 % is
+    printed, 91.42 % is not), and with a small integer changed (the notebook prints "40
+    generations", not "28 generations", though it prints 28 elsewhere)."""
+    name = "05_genetic_algorithm.ipynb"
+    printed = output_text(executed_notebook(name))
+    assert unaccounted(_source(name), printed) == []
+    for old, new, cell_has in (("$p_c = 0.8$", "$p_c = 0.83$", "Arithmetic crossover"),
+                               ("= 91.24 %", "= 91.42 %", "First, the thesis' own Fig. 5.10"),
+                               ("after 40 generations", "after 28 generations", "Why the GA stops")):
+        nb = _source(name)
+        cell = next(c for c in nb.cells if c.cell_type == "markdown" and cell_has in c.source)
+        assert old in cell.source
+        cell.source = cell.source.replace(old, new)
+        missing = unaccounted(nb, printed)
+        changed = re.search(r"\d+(?:\.\d+)?", new).group(0)
+        assert len(missing) == 1 and f": {changed} in" in missing[0], missing
