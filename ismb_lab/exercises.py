@@ -71,12 +71,11 @@ def _close(a, b, atol: float = 1e-9) -> bool:
 
 
 def check_energy_derivation(W, I, net: Network) -> Feedback:
-    """Check a Hopfield form ``E = const - 1/2 y'Wy - I'y`` of the energy (3-15).
+    """Check the weights and biases a student derived from the energy (3-15).
 
-    The reference is :func:`ismb_lab.hopfield.hopfield_form` with ``rule="exact"``:
-    ``W = 2C`` for neighbouring neurons, ``-2`` for two neurons that share a left
-    (``i = j``) or a right (``k = l``) feature, ``0`` on the diagonal and for
-    neurons that do not interact, and ``I = 2 + S``.
+    Compares them with :func:`ismb_lab.hopfield.hopfield_form` (``rule="exact"``) term by
+    term: the diagonal, neurons of the same left or right feature, neighbouring neurons,
+    neurons that do not interact, and the bias, and names the terms that are off.
 
     Parameters
     ----------
@@ -157,10 +156,10 @@ def check_energy_derivation(W, I, net: Network) -> Feedback:
 
 
 def check_harris_response(R, image, sigma: float = 1.0, k: float = 0.04) -> Feedback:
-    """Check a Harris response ``R = det(M) - k tr(M)^2`` (2-1 ... 2-8).
+    """Check a Harris response computed by a student (2-1 ... 2-8).
 
-    The reference is :func:`ismb_lab.features.harris_response` (Sobel gradients
-    divided by 8, a Gaussian window of standard deviation `sigma`).
+    Compares it with :func:`ismb_lab.features.harris_response` (Sobel gradients divided
+    by 8, a Gaussian window of standard deviation `sigma`) and recognises the usual slips.
 
     Parameters
     ----------
@@ -180,9 +179,8 @@ def check_harris_response(R, image, sigma: float = 1.0, k: float = 0.04) -> Feed
     >>> img = np.zeros((20, 20)); img[10:, 10:] = 100.0
     >>> print(check_harris_response(harris_response(img, 1.5, 0.05), img, 1.5, 0.05))
     correct
-    >>> Axx, Axy, Ayy = structure_tensor(img, 1.5)
-    >>> print(check_harris_response(Axx * Ayy - Axy ** 2, img, 1.5, 0.05))
-    The k tr(M)^2 term is missing: you have det(M) alone. Hint: read (2-6) again.
+    >>> print(check_harris_response(2 * harris_response(img, 1.5, 0.05), img, 1.5, 0.05))
+    R is off; the largest difference is at (x, y) = (10, 10), where yours is 593170. Hint: compute M there by hand.
     """
     owner = "check_harris_response"
     expected = harris_response(image, sigma, k)
@@ -216,7 +214,10 @@ def check_harris_response(R, image, sigma: float = 1.0, k: float = 0.04) -> Feed
 
 
 def check_transfer(values, x, theta: float, lam: float) -> Feedback:
-    """Check a transfer function ``2 / (1 + exp(lam (x - theta))) - 1`` (3-10, 3-13).
+    """Check a student's transfer function (3-10, 3-13) evaluated at `x`.
+
+    Compares it with :func:`ismb_lab.similarity.transfer` and recognises the usual slips
+    (sign, range, a parameter left out).
 
     Parameters
     ----------
@@ -234,9 +235,9 @@ def check_transfer(values, x, theta: float, lam: float) -> Feedback:
     Examples
     --------
     >>> x = np.linspace(0, 40, 9)
-    >>> print(check_transfer(2 / (1 + np.exp(2.0 * (x - 20))) - 1, x, 20, 2.0))
+    >>> print(check_transfer(transfer(x, 20, 2.0), x, 20, 2.0))
     correct
-    >>> print(check_transfer(1 / (1 + np.exp(2.0 * (x - 20))), x, 20, 2.0))
+    >>> print(check_transfer((transfer(x, 20, 2.0) + 1) / 2, x, 20, 2.0))
     The output must lie in [-1, 1], yours lies in [0, 1]. Hint: which two operations map [0, 1] onto [-1, 1]?
     """
     owner = "check_transfer"
@@ -269,7 +270,10 @@ def check_transfer(values, x, theta: float, lam: float) -> Feedback:
 
 
 def check_disparity(values, left_xy, right_xy) -> Feedback:
-    """Check the "disparity" column of the thesis' tables: ``||p - q||`` of matched points.
+    """Check a student's "disparity" column of the thesis' tables for matched points.
+
+    Compares it with :func:`ismb_lab.coords.euclidean_disparity` and recognises the
+    usual slips (one component, a missing root, the grid distance).
 
     Parameters
     ----------
@@ -320,11 +324,10 @@ def check_disparity(values, left_xy, right_xy) -> Feedback:
 
 
 def check_fitness(value, pairs, targets, unknown=()) -> Feedback:
-    """Check a GA fitness (4-1) ``f = n_c - n_e`` of matched pairs against target pairs.
+    """Check a student's GA fitness (4-1) of matched pairs against target pairs.
 
-    ``n_c`` counts matches that are targets, ``n_e`` every other match (wrong
-    partner or extra), except matches of left features in `unknown`; see
-    :func:`ismb_lab.evaluation.score`.
+    Compares it with the fitness of :func:`ismb_lab.evaluation.score` (matches of left
+    features in `unknown` do not count) and recognises the usual slips.
 
     Parameters
     ----------

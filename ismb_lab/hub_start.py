@@ -7,8 +7,9 @@ yet, then becomes ``jupyterhub-singleuser``. Root never writes in a home, so a s
 link the student swaps in mid-copy leads only where the student could write anyway.
 
 The teacher prepares the course folder once with ``python -m ismb_lab.hub_start stage
-REPOSITORY COURSE``: the notebooks, images and manifests, without solutions, labels or
-lock files, readable by everyone, and ``COURSE/config``, the folder the hub puts on the
+REPOSITORY COURSE``: the notebooks (their student versions: exercise solutions and hidden
+tests cleared as ``nbgrader generate_assignment`` clears them), images and manifests, without
+the solutions folder, labels or lock files, readable by everyone, and ``COURSE/config``, the folder the hub puts on the
 students' ``JUPYTER_CONFIG_PATH``: the course's ``nbgrader_config.py`` (its exchange, from
 ``deploy/course/``) and a page config that hides nbgrader's teacher tools from students.
 
@@ -91,6 +92,12 @@ def stage(repository, course) -> list[str]:
         raise ParameterError(message("repository", "stage", "a folder with notebooks/ in it", str(source)))
     course.mkdir(parents=True)
     copied = _copy_parts(source, course)
+    try:
+        _student_versions(course / "notebooks")
+    except ImportError:
+        shutil.rmtree(course)
+        raise ParameterError(message("repository", "stage", "notebooks whose solutions nbgrader can "
+                                     "clear (install the [course] extra)", str(source))) from None
     if (source / "deploy" / "course" / "nbgrader_config.py").is_file():
         _stage_config(source / "deploy" / "course", course / "config")
         copied.append("config")
@@ -99,6 +106,18 @@ def stage(repository, course) -> list[str]:
         for name in files:
             os.chmod(os.path.join(folder, name), 0o644)
     return copied
+
+
+def _student_versions(folder: Path) -> None:
+    """Replace each notebook of `folder` that holds exercise solutions or hidden tests by its
+    student version (:func:`ismb_lab.course.student_notebook`)."""
+    for path in sorted(folder.glob("*.ipynb")):
+        text = path.read_text(encoding="utf-8")
+        if "### BEGIN SOLUTION" in text or "### BEGIN HIDDEN TESTS" in text:
+            import nbformat
+
+            from .course import student_notebook
+            nbformat.write(student_notebook(nbformat.reads(text, as_version=4)), path)
 
 
 def _stage_config(course_config: Path, target: Path) -> None:

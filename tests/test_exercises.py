@@ -248,3 +248,24 @@ def test_fitness_missed_targets_are_not_errors():
 def test_fitness_bad_input():
     with pytest.raises(ParameterTypeError, match="'value' parameter of check_fitness"):
         check_fitness("3", [[0, 0]], [[0, 0]])
+
+
+#: The answers the exercises ask for, as the thesis writes them and as code would (#28: the
+#: checks' docstrings, which ``check_transfer?`` shows a student, once stated them).
+ANSWERS = {
+    "check_transfer": ("2/(1+exp(", "2/(1+np.exp("),
+    "check_harris_response": ("det(M)-ktr(M)^2", "det(M)-k*tr(M)**2", "Axx*Ayy-Axy**2-"),
+    "check_energy_derivation": ("W=2C", "I=2+S", "2*C-2*"),
+    "check_disparity": ("||p-q||", "hypot(", "sqrt(dx"),
+    "check_fitness": ("n_c-n_e", "f=n_c-", "n_c-(len("),
+}
+
+
+@pytest.mark.parametrize("name", sorted(ANSWERS))
+def test_a_checks_docstring_does_not_state_the_answer(name):
+    import inspect
+
+    from ismb_lab import exercises
+
+    doc = re.sub(r"\s+", "", inspect.getdoc(getattr(exercises, name)))
+    assert [a for a in ANSWERS[name] if a in doc] == [], f"{name}'s docstring states the answer"

@@ -22,3 +22,9 @@ c.CourseDirectory.ignore = [".ipynb_checkpoints", "*.pyc", "__pycache__", "feedb
 # that handed them in (ismb_lab/course_exchange.py).
 c.ExchangeFactory.submit = "ismb_lab.course_exchange.PrivateSubmit"
 c.ExchangeFactory.collect = "ismb_lab.course_exchange.OwnerCollect"
+# The exercise assignments keep a runnable first try beside each solution: the student
+# version gets a comment in the solution's place, not nbgrader's raise NotImplementedError(),
+# so it still runs on Restart & Run All (ismb_lab.course.CODE_STUB).
+c.ClearSolutions.code_stub = {"python": "# YOUR CODE HERE"}
+# The longest notebook (07) has cells of tens of seconds on a loaded 2-core server.
+c.Execute.timeout = 600

@@ -20,15 +20,17 @@ def add_parser(sub) -> None:
                            "replacing an older one; then run 'nbgrader generate_assignment' and "
                            "'nbgrader release_assignment' in COURSE.")
     s.add_argument("course", type=Path, metavar="COURSE", help="the teacher's course folder")
-    s.add_argument("--assignment", default="labels", choices=sorted(ASSIGNMENTS),
-                   help="the assignment (default: labels)")
+    s.add_argument("--assignment", default="labels", choices=sorted(ASSIGNMENTS) + ["all"],
+                   help="the assignment, or all of them (default: labels)")
     s.add_argument("--repo", type=Path, default=None,
                    help="the repository to take notebooks/ and images/ from (default: this package's)")
     s.set_defaults(run=run)
 
 
 def run(args) -> int:
-    from ..course import make_source
+    from ..course import ASSIGNMENTS, make_source
 
-    print(make_source(args.course, args.assignment, args.repo))
+    names = sorted(ASSIGNMENTS) if args.assignment == "all" else [args.assignment]
+    for name in names:
+        print(make_source(args.course, name, args.repo))
     return 0

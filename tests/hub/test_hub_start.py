@@ -38,6 +38,18 @@ def test_stage_keeps_solutions_labels_and_locks_out_and_is_readable_by_all(repos
     assert hub_start.main(["stage", str(repository), str(course)]) == 2     # never mixed into an old one
 
 
+def test_stage_copies_the_student_versions_of_the_exercises(repository, tmp_path):
+    pytest.importorskip("nbgrader")
+    notebook = ROOT / "notebooks" / "06_parameter_explorer.ipynb"
+    assert "### BEGIN SOLUTION" in notebook.read_text(encoding="utf-8")
+    (repository / "notebooks" / notebook.name).write_bytes(notebook.read_bytes())
+    course = tmp_path / "course"
+    assert hub_start.main(["stage", str(repository), str(course)]) == 0
+    staged = (course / "notebooks" / notebook.name).read_text(encoding="utf-8")
+    assert "BEGIN SOLUTION" not in staged and "HIDDEN TESTS" not in staged and "# YOUR CODE HERE" in staged
+    assert (course / "notebooks" / "04_label_targets.ipynb").read_text() == "{}"
+
+
 def test_the_students_copy_is_private_and_made_once(repository, tmp_path):
     home = tmp_path / "home"
     home.mkdir()

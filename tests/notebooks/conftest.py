@@ -1,4 +1,5 @@
-"""Run teaching notebooks headlessly, from the notebooks/ folder, as Restart & Run All would."""
+"""Run the student versions of the teaching notebooks headlessly, from the notebooks/ folder, as
+Restart & Run All would."""
 
 from pathlib import Path
 
@@ -22,8 +23,20 @@ def errors(nb) -> list[str]:
     return found
 
 
+def student_version(nb):
+    """The student version of `nb` (what the hub copies and nbgrader releases): the
+    repository's notebooks hold the exercises' solutions and hidden tests, which
+    tests/test_course_assignments.py runs through ``nbgrader autograde``.  Without nbgrader
+    (the ``[course]`` extra) the notebook is run as it is, solutions included."""
+    try:
+        from ismb_lab.course import student_notebook
+        return student_notebook(nb)
+    except ImportError:
+        return nb
+
+
 def client(name: str, timeout: int = 300) -> NotebookClient:
-    nb = nbformat.read(NOTEBOOKS / name, as_version=4)
+    nb = student_version(nbformat.read(NOTEBOOKS / name, as_version=4))
     return NotebookClient(nb, timeout=timeout, kernel_name="python3",
                           resources={"metadata": {"path": str(NOTEBOOKS)}})
 
