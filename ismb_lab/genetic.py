@@ -89,8 +89,14 @@ class GAConfig:
         return GAConfig(**_check_settings(values, owner))
 
 
+#: The largest population :class:`GAConfig` accepts.
+MAX_POPULATION = 100_000
+
+
 def _check_settings(values: dict, owner: str) -> dict:
-    size = check_number(values["population"], "population", owner, low=2, integer=True)
+    # each chromosome is a row of the population array: a bound keeps a typo from asking for
+    # an array no machine holds (the thesis uses 30)
+    size = check_number(values["population"], "population", owner, low=2, high=MAX_POPULATION, integer=True)
     return {"population": size,
             "generations": check_number(values["generations"], "generations", owner, low=1, integer=True),
             "p_crossover": check_number(values["p_crossover"], "p_crossover", owner, low=0, high=1),

@@ -10,7 +10,7 @@ candidate neurons as an ``(m, 2)`` int array of ``(i, k)`` sorted by ``i``.
 * :func:`graph_matching`: RRWM or spectral matching (pygmtools) of the method's
   own ``S`` and ``C``, i.e. a standard solver of the thesis' quadratic objective.
 
-:data:`PEERS` maps short names to callables ``f(problem, method="III", params=None)``.
+:data:`PEERS` maps short names to callables ``f(problem, method=DEFAULT_METHOD, params=None)`` (the default method is :data:`ismb_lab.methods.DEFAULT_METHOD`).
 
 >>> from ismb_lab.methods import build_problem
 >>> p = build_problem([[100, 50], [110, 50]], [[80, 51], [90, 51]], [[2.0, 40.0], [40.0, 3.0]])
@@ -24,7 +24,7 @@ import numpy as np
 from scipy.optimize import linear_sum_assignment
 
 from ._validation import ParameterError, ParameterTypeError, check_choice, check_number, message
-from .methods import Problem, get_method
+from .methods import DEFAULT_METHOD, Problem, get_method
 from .params import Params
 
 __all__ = ["MAX_ASSIGNMENTS", "PEERS", "affinity_matrix", "default_no_match_cost", "graph_matching",
@@ -132,7 +132,7 @@ def hungarian(problem, no_match_cost) -> np.ndarray:
     return _pairs(rows[real], cols[real])
 
 
-def affinity_matrix(problem, method="III", params=None) -> np.ndarray:
+def affinity_matrix(problem, method=DEFAULT_METHOD, params=None) -> np.ndarray:
     """The non-negative affinity ``K`` of the method's energy, in pygmtools' layout.
 
     ``K`` spans the full ``N_l x N_r`` assignment space in pygmtools' column-major
@@ -183,7 +183,7 @@ def affinity_matrix(problem, method="III", params=None) -> np.ndarray:
     return K
 
 
-def graph_matching(problem, method="III", params=None, *, solver="rrwm",
+def graph_matching(problem, method=DEFAULT_METHOD, params=None, *, solver="rrwm",
                    max_dissimilarity=None) -> np.ndarray:
     """Match by graph matching (pygmtools) on the method's own similarity and compatibility.
 
@@ -255,24 +255,24 @@ def default_no_match_cost(problem) -> float:
     return _check_problem(problem, "default_no_match_cost").no_match_cut
 
 
-def _mnn(problem, method="III", params=None):
+def _mnn(problem, method=DEFAULT_METHOD, params=None):
     return mutual_nearest(problem, default_no_match_cost(problem))
 
 
-def _hungarian(problem, method="III", params=None):
+def _hungarian(problem, method=DEFAULT_METHOD, params=None):
     return hungarian(problem, default_no_match_cost(problem))
 
 
-def _rrwm(problem, method="III", params=None):
+def _rrwm(problem, method=DEFAULT_METHOD, params=None):
     return graph_matching(problem, method, params, max_dissimilarity=default_no_match_cost(problem))
 
 
-def _spectral(problem, method="III", params=None):
+def _spectral(problem, method=DEFAULT_METHOD, params=None):
     return graph_matching(problem, method, params, solver="sm",
                           max_dissimilarity=default_no_match_cost(problem))
 
 
-#: Peer matchers by name, each ``f(problem, method="III", params=None) -> pairs``.
+#: Peer matchers by name, each ``f(problem, method=DEFAULT_METHOD, params=None) -> pairs``.
 #: All four refuse matches with ``M_ik`` above :func:`default_no_match_cost`;
 #: ``mutual-nn`` and ``hungarian`` use ``M`` only (they ignore `method` and
 #: `params`), ``rrwm`` and ``spectral`` the method's ``S`` and ``C`` (thesis GA

@@ -24,7 +24,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ._validation import ParameterError, ParameterTypeError, check_number, message
+from ._validation import MAX_SEED, ParameterError, ParameterTypeError, check_number, message
 from .datasets import aloe, ground_truth_pairs, motorcycle
 from .evaluation import Score, Scorer, score
 from .genetic import GAConfig
@@ -132,6 +132,8 @@ def family_cases(family: str, start: int, count: int) -> list:
     from .scenes import get_family, object_layout
 
     family = get_family(family, "family_cases").name
+    start = check_number(start, "start", "family_cases", low=0, high=MAX_SEED, integer=True)
+    count = check_number(count, "count", "family_cases", low=1, high=MAX_SEED - start + 1, integer=True)
     cases = []
     for seed in range(start, start + count):
         layout = object_layout(seed, 2 + seed % 2, family=family)
@@ -139,6 +141,9 @@ def family_cases(family: str, start: int, count: int) -> list:
                                name=f"{family} {seed}")
         if len(case.targets) >= 3:
             cases.append(case)
+    if not cases:
+        raise ParameterError(message("count", "family_cases", "a split with a layout of at least 3 targets",
+                                     f"{count} layout(s) from seed {start}, none with 3 targets"))
     first = next((i for i, c in enumerate(cases) if len(c.targets) >= 8), 0)
     return [cases[first]] + cases[:first] + cases[first + 1:]
 

@@ -131,3 +131,20 @@ def test_a_bound_of_400_digits_is_shown_by_its_size():
     with pytest.raises(ParameterError) as info:
         MatchConfig(n_min=HUGE)
     assert "an integer >= an integer of 400 digits" in str(info.value) and len(str(info.value)) < 200
+
+
+def test_family_cases_refuses_an_empty_split_and_bad_counts():
+    from ismb_lab.protocol import family_cases
+
+    with pytest.raises(ValueError, match=r"'count'.*family_cases.*>= 1.*Got 0"):
+        family_cases("cameras", 2300, 0)
+    with pytest.raises(TypeError, match=r"'start'.*family_cases"):
+        family_cases("cameras", "2300", 3)
+
+
+def test_ga_population_has_an_upper_bound():
+    from ismb_lab.genetic import MAX_POPULATION, GAConfig
+
+    assert GAConfig(population=MAX_POPULATION).population == MAX_POPULATION
+    with pytest.raises(ValueError, match=r"'population'.*GAConfig.*<= 100000.*401 digits"):
+        GAConfig(population=10**400)

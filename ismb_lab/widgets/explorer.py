@@ -15,7 +15,7 @@ import numpy as np
 from .._validation import ParameterTypeError, check_number, message
 from ..evaluation import Score, score
 from ..matching import MatchConfig, MatchResult, Prepared, match, prepare
-from ..methods import all_genes, get_method, method_names
+from ..methods import DEFAULT_METHOD, all_genes, get_method, method_names
 from ..params import THETA_C, Params
 from ..similarity import transfer
 from ..solvers import DEFAULT_SOLVER, SOLVERS, get_solver
@@ -50,7 +50,7 @@ class ExplorerModel:
     (5.0, 'Score')
     """
 
-    def __init__(self, prepared: Prepared, method="III", params: Params | None = None, seed: int = 0,
+    def __init__(self, prepared: Prepared, method=DEFAULT_METHOD, params: Params | None = None, seed: int = 0,
                  targets=None, solver: str = DEFAULT_SOLVER):
         owner = "ExplorerModel"
         self.solver = get_solver(solver, owner).name
@@ -216,7 +216,7 @@ class ParameterExplorer(Base):
     figures ``ismb-matches`` and ``ismb-transfer``; ``ismb-status``; ``ismb-log``.
     """
 
-    def __init__(self, left, right=None, *, method="III", params: Params | None = None, seed: int = 0,
+    def __init__(self, left, right=None, *, method=DEFAULT_METHOD, params: Params | None = None, seed: int = 0,
                  config: MatchConfig | None = None, targets=None, solver: str = DEFAULT_SOLVER):
         import ipywidgets
 
