@@ -101,10 +101,17 @@ def deadline(request):
 
 @pytest.fixture(scope="session")
 def workspace(tmp_path_factory):
-    """A copy of notebooks/, images/ and manifests/ with the repository's layout."""
+    """A copy of notebooks/, images/ and manifests/ with the repository's layout; the notebooks
+    are the students' versions (solutions and hidden tests cleared, as the hub stages them)."""
+    import nbformat
+
+    from ismb_lab.course import student_notebook
+
     root = tmp_path_factory.mktemp("lab")
     shutil.copytree(ROOT / "notebooks", root / "notebooks",
                     ignore=shutil.ignore_patterns(".ipynb_checkpoints", "my_targets*.json", "targets-*.json"))
+    for path in (root / "notebooks").glob("[0-9][0-9]_*.ipynb"):
+        nbformat.write(student_notebook(nbformat.read(path, as_version=4)), path)
     shutil.copytree(ROOT / "images", root / "images")
     shutil.copytree(ROOT / "manifests", root / "manifests")
     return root
