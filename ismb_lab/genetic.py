@@ -67,7 +67,7 @@ class GAConfig:
     >>> GAConfig(population=1)
     Traceback (most recent call last):
     ...
-    ismb_lab.ParameterError: The 'population' parameter of GAConfig must be an integer >= 2. Got 1 instead.
+    ismb_lab.ParameterError: The 'population' parameter of GAConfig must be an integer >= 2 and <= 100000. Got 1 instead.
     """
 
     population: int = 30

@@ -292,7 +292,7 @@ def test_batch_wraps_a_per_chromosome_score():
 
 
 @pytest.mark.parametrize("kw, pattern", [
-    ({"population": 1}, r"The 'population' parameter of evolve must be an integer >= 2. Got 1 instead."),
+    ({"population": 1}, r"The 'population' parameter of evolve must be an integer >= 2 and <= 100000. Got 1 instead."),
     ({"population": 2.5}, r"'population' parameter of evolve .*Got 2.5"),
     ({"generations": 0}, r"'generations' parameter of evolve .*>= 1. Got 0"),
     ({"p_crossover": 1.5}, r"'p_crossover' parameter of evolve .*>= 0 and <= 1. Got 1.5"),
