@@ -102,11 +102,17 @@ def test_anneal_is_the_readable_schedule_then_the_discrete_network(case):
     """anneal() equals iter_annealing() run to its end (dense weights, one temperature at a
     time), rounded at 1/2 and polished by the discrete network from the same generator."""
     name, net, seed, schedule = case
+    assert_readable_then_discrete(net, seed, SCHEDULES[schedule])
+
+
+def assert_readable_then_discrete(net, seed, schedule: dict):
+    """anneal() with `schedule` gives iter_annealing()'s values bit for bit, and the discrete
+    network's polish of them from the same generator."""
     rng, holder = np.random.default_rng(seed), []
-    steps = len(list(iter_annealing(net, rng=rng, state=holder, **SCHEDULES[schedule])))
+    steps = len(list(iter_annealing(net, rng=rng, state=holder, **schedule)))
     v = holder[0] if holder else np.zeros(0)
     polish = run(net, rng=rng, state=(v > 0.5).astype(np.uint8))
-    fast = anneal(net, rng=seed, **SCHEDULES[schedule])
+    fast = anneal(net, rng=seed, **schedule)
     assert fast.steps == steps
     assert np.array_equal(fast.analog, v) and fast.analog.tobytes() == v.tobytes()
     assert np.array_equal(fast.state, polish.state) and fast.energy == energy(net, polish.state)
@@ -123,14 +129,7 @@ SETTLED = {"settled": dict(settle=0.2), "settled short": dict(t_start=1.0, t_end
                          ids=lambda c: c[0])
 def test_a_settled_anneal_is_the_readable_settled_schedule_then_the_discrete_network(case, schedule):
     name, net, seed, _ = case
-    rng, holder = np.random.default_rng(seed), []
-    steps = len(list(iter_annealing(net, rng=rng, state=holder, **SETTLED[schedule])))
-    v = holder[0] if holder else np.zeros(0)
-    polish = run(net, rng=rng, state=(v > 0.5).astype(np.uint8))
-    fast = anneal(net, rng=seed, **SETTLED[schedule])
-    assert fast.steps == steps
-    assert np.array_equal(fast.analog, v) and fast.analog.tobytes() == v.tobytes()
-    assert np.array_equal(fast.state, polish.state) and fast.energy == energy(net, polish.state)
+    assert_readable_then_discrete(net, seed, SETTLED[schedule])
 
 
 if __name__ == "__main__" and "--record" in sys.argv:

@@ -41,22 +41,13 @@ labeler.pane.fig.canvas.mpl_connect("button_press_event", _record)
 """
 
 
-@pytest.fixture
-def default_page(browser):
-    context = browser.new_context(viewport={"width": 1024, "height": 768})
-    context.set_default_timeout(60_000)
-    page = context.new_page()
-    yield page
-    context.close()
-
-
-def test_labeller_fits_default_layout_and_clicks_map(lab, default_page, ui, kernel_exec, workspace,
+def test_labeller_fits_default_layout_and_clicks_map(lab, page, ui, kernel_exec, workspace,
                                                      artifacts, tmp_path):
     base, token = lab
     path = "notebooks/04_label_targets.ipynb"
     # a workspace of its own, reset: JupyterLab's layout as it opens, whatever earlier tests did
     url = f"{base}/lab/workspaces/column-04/tree/{path}?token={token}&reset"
-    page = ui.run_all(default_page, url, path, timeout=180_000)
+    page = ui.run_all(page, url, path, timeout=180_000)
     layout = page.evaluate(_LAYOUT)
     assert not layout["leftCollapsed"] and layout["rightCollapsed"], layout
     assert layout["sidebar"] > 200, f"the file browser is not open at its default width: {layout}"
@@ -166,11 +157,11 @@ NOTEBOOKS = sorted(p.name for p in (Path(__file__).resolve().parents[2] / "noteb
 
 
 @pytest.mark.parametrize("name", NOTEBOOKS)
-def test_every_output_fits_default_layout(name, lab, default_page, ui, artifacts):
+def test_every_output_fits_default_layout(name, lab, page, ui, artifacts):
     base, token = lab
     path = f"notebooks/{name}"
     url = f"{base}/lab/workspaces/column-{name[:2]}/tree/{path}?token={token}&reset"
-    page = ui.run_all(default_page, url, path, timeout=240_000)
+    page = ui.run_all(page, url, path, timeout=240_000)
     layout = page.evaluate(_LAYOUT)
     assert not layout["leftCollapsed"] and layout["rightCollapsed"] and layout["sidebar"] > 200, layout
     past = []
