@@ -163,7 +163,7 @@ def plot_depth(ax, left, result, *, cmap: str = "plasma") -> dict:
 
     drawn = None
     if getattr(result, "silhouettes", None) is not None:
-        drawn = ax.add_collection(LineCollection(outlines(result.silhouettes.labels), colors="cyan",
+        drawn = ax.add_collection(LineCollection(outlines(result.silhouettes.labels), colors=OKABE_ITO["sky blue"],
                                                  linewidths=0.8))
     removed, = ax.plot(*np.asarray(result.removed_xy).reshape(-1, 2).T, "x", color="0.6", ms=5)
     xy = np.asarray(result.kept_xy).reshape(-1, 2)
@@ -174,11 +174,11 @@ def plot_depth(ax, left, result, *, cmap: str = "plasma") -> dict:
         depth = f"{obj.depth_m:.2f} m" if obj.depth_m is not None else obj.depth.status
         x, y = obj.centroid_xy
         labels.append(ax.text(x, y - 8, f"#{obj.rank} {depth}\nd={obj.mean_disparity:.1f}",
-                              color="yellow", fontsize=7, ha="center", va="bottom"))
+                              color=OKABE_ITO["yellow"], fontsize=7, ha="center", va="bottom"))
     box = None
     if result.scene_roi is not None:
         x, y, w, h = result.scene_roi
-        box = ax.add_patch(Rectangle((x - 0.5, y - 0.5), w, h, fill=False, ec="yellow", lw=0.8, ls="--"))
+        box = ax.add_patch(Rectangle((x - 0.5, y - 0.5), w, h, fill=False, ec=OKABE_ITO["yellow"], lw=0.8, ls="--"))
     ax.set_axis_off()
     return {"image": image, "features": features, "removed": removed, "labels": labels, "box": box,
             "outlines": drawn}

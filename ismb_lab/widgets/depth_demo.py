@@ -22,7 +22,7 @@ from ..depth_demo import DEPTH_MATCH_CONFIG, DEPTH_SOLVER, depth_pairs, pair_sil
 from ..io import StereoPair, load_pair
 from ..methods import DEFAULT_METHOD, get_method, method_names
 from ..params import Params
-from ..plotting import outlines
+from ..plotting import OKABE_ITO, outlines
 from ..recipe import recipe_of
 from ._common import Base, Pane, button, grey_rgb, pair_files, path_labels, row, with_class
 from .cloud import PointCloudView, depth_cloud
@@ -281,7 +281,7 @@ def update_background(art: dict, model: DepthModel) -> None:
     art["features"].set_clim(*disparity_limits(model))
     if art["numbers"] is not None:
         art["numbers"].remove()
-    art["numbers"] = path_labels(art["ax"], xy, [f"{v:.0f}" for v in d], "cyan", size=6.5)
+    art["numbers"] = path_labels(art["ax"], xy, [f"{v:.0f}" for v in d], OKABE_ITO["sky blue"], size=6.5)
 
 
 def draw_scene(ax, cax, model: DepthModel) -> dict:
@@ -293,10 +293,10 @@ def draw_scene(ax, cax, model: DepthModel) -> dict:
     ax.imshow(grey_rgb(model.scene.left), interpolation="nearest")
     from matplotlib.collections import LineCollection
 
-    drawn = ax.add_collection(LineCollection([], colors="cyan", linewidths=0.8, visible=False))
+    drawn = ax.add_collection(LineCollection([], colors=OKABE_ITO["sky blue"], linewidths=0.8, visible=False))
     removed, = ax.plot([], [], "x", color="0.75", alpha=0.7, ms=4, mew=1)
     features = ax.scatter([], [], c=[], cmap=CMAP, s=30, edgecolors="white", linewidths=0.6)
-    box = ax.add_patch(Rectangle((0, 0), 0, 0, fill=False, ec="yellow", lw=0.8, ls="--", visible=False))
+    box = ax.add_patch(Rectangle((0, 0), 0, 0, fill=False, ec=OKABE_ITO["yellow"], lw=0.8, ls="--", visible=False))
     ax.set_axis_off()
     bar = ax.figure.colorbar(features, cax=cax) if cax is not None else ax.figure.colorbar(features, ax=ax)
     bar.set_label("disparity (px)", fontsize=8)
@@ -323,7 +323,7 @@ def update_scene(art: dict, model: DepthModel) -> None:
         art["labels"].remove()
     strings = [f"#{o.rank} " + (f"{o.depth_m:.2f} m" if o.depth_m is not None else o.depth.status)
                for o in r.objects]
-    art["labels"] = path_labels(art["ax"], label_positions(r.objects), strings, "yellow",
+    art["labels"] = path_labels(art["ax"], label_positions(r.objects), strings, OKABE_ITO["yellow"],
                                 size=8, shift=(0, 7), ha="center")
 
 

@@ -16,6 +16,7 @@ from .._validation import ParameterTypeError, check_number, message
 from ..evaluation import Score, score
 from ..matching import MatchConfig, MatchResult, Prepared, match, prepare
 from ..methods import DEFAULT_METHOD, all_genes, get_method, method_names
+from ..plotting import OKABE_ITO
 from ..params import THETA_C, Params
 from ..similarity import transfer
 from ..solvers import DEFAULT_SOLVER, SOLVERS, get_solver
@@ -131,9 +132,9 @@ def draw_transfer(axes, model: ExplorerModel) -> dict:
     art = {"x": x}
     for ax, key, title, xlabel in ((axes[0], "s", "similarity S(M)", "M (grey levels)"),
                                    (axes[1], "c", "compatibility C(X)", "X (pixels)")):
-        art[key], = ax.plot(x, np.zeros_like(x), "-", color="#1f77b4", lw=1.5)
-        art[key + "_theta"] = ax.axvline(0, color="#d62728", ls="--", lw=1)
-        art[key + "_dot"], = ax.plot([0], [0], "o", color="#d62728", ms=5)
+        art[key], = ax.plot(x, np.zeros_like(x), "-", color=OKABE_ITO["blue"], lw=1.5)
+        art[key + "_theta"] = ax.axvline(0, color=OKABE_ITO["vermillion"], ls="--", lw=1)
+        art[key + "_dot"], = ax.plot([0], [0], "o", color=OKABE_ITO["vermillion"], ms=5)
         ax.axhline(0, color="grey", lw=0.6)
         ax.set_ylim(-1.08, 1.08)
         ax.set_xlim(x[0], x[-1])

@@ -30,6 +30,7 @@ from .._validation import ParameterError, ParameterTypeError, check_number, mess
 from ..genetic import GAConfig, Generation
 from ..matching import MatchConfig
 from ..methods import DEFAULT_METHOD, get_method
+from ..plotting import OKABE_ITO
 from ..params import Params
 from ..protocol import Case
 from ..recipe import Recipe, save_recipe
@@ -212,8 +213,8 @@ def draw_fitness(ax, model: GAModel) -> dict:
     """Best and mean fitness per generation (thesis Figs. 5.4, 5.5)."""
     from matplotlib.ticker import MaxNLocator
 
-    best, = ax.plot([], [], "-", color="#d62728", lw=1.5, label="best")
-    mean, = ax.plot([], [], "-", color="#1f77b4", lw=1.2, label="mean")
+    best, = ax.plot([], [], "-", color=OKABE_ITO["vermillion"], lw=1.5, label="best")
+    mean, = ax.plot([], [], "-", color=OKABE_ITO["blue"], lw=1.2, label="mean")
     ax.axhline(model.target, color="grey", ls=":", lw=1, label="target n_c")
     ax.set_xlabel("generation")
     ax.set_ylabel("fitness n_c - n_e")

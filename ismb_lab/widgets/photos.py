@@ -25,6 +25,7 @@ import numpy as np
 from .._files import atomic_write_text
 from .._validation import ParameterError, ParameterTypeError, message
 from ..classroom import user_name
+from ..plotting import OKABE_ITO
 from ..io import save_pair
 from ..rectify import Rectified, _inputs, apply_rectification, check_rectified, rectify_pair
 from ._common import Base, Pane, button, grey_rgb, row, with_class
@@ -169,7 +170,7 @@ def draw_photos(ax, model: PhotoModel) -> dict:
     lines = LineCollection([], linewidths=0.8, cmap="coolwarm")
     lines.set_clim(0, 4)
     ax.add_collection(lines)
-    roi = Rectangle((0, 0), 0, 0, fill=False, ec="yellow", lw=1.5, visible=False)
+    roi = Rectangle((0, 0), 0, 0, fill=False, ec=OKABE_ITO["yellow"], lw=1.5, visible=False)
     ax.add_patch(roi)
     return {"image": image, "lines": lines, "roi": roi, "offset": 0.0}
 

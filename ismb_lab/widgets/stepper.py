@@ -14,6 +14,7 @@ from .._validation import ParameterTypeError, check_choice, check_number, messag
 from ..hopfield import RULES, energy
 from ..dynamics import STOP_RULES, Update, iter_updates
 from ..matching import MatchConfig, Prepared, prepare
+from ..plotting import OKABE_ITO
 from ..methods import DEFAULT_METHOD, get_method
 from ..params import Params
 from ..solvers import to_matches
@@ -170,7 +171,7 @@ def draw_grid(ax, model: StepperModel) -> dict:
                 offset_transform=below, ha="center")
     path_labels(ax, [(0, i) for i in rows], [i + 1 for i in rows], "black", size=7, shift=(-3, -2.5),
                 offset_transform=beside, ha="right")
-    cursor = Rectangle((-0.5, -0.5), 1, 1, fill=False, ec="#ff7f0e", lw=2.5, visible=False)
+    cursor = Rectangle((-0.5, -0.5), 1, 1, fill=False, ec=OKABE_ITO["orange"], lw=2.5, visible=False)
     ax.add_patch(cursor)
     return {"grid": grid, "cursor": cursor}
 
@@ -183,13 +184,13 @@ def update_grid(art: dict, model: StepperModel) -> None:
     else:
         cursor.set_visible(True)
         cursor.set_xy((model.last.k - 0.5, model.last.i - 0.5))
-        cursor.set_edgecolor("#d62728" if model.last.changed else "#ff7f0e")
+        cursor.set_edgecolor(OKABE_ITO["vermillion"] if model.last.changed else OKABE_ITO["orange"])
 
 
 def draw_energy(ax, model: StepperModel) -> dict:
     """The energy (3-15) after each attempt, as in the thesis' Fig. 5.6."""
-    line, = ax.plot([0], model.energies[:1], "-", color="#1f77b4", lw=1.2)
-    rises = ax.scatter([], [], s=14, color="#d62728", zorder=3, label="energy went up")
+    line, = ax.plot([0], model.energies[:1], "-", color=OKABE_ITO["blue"], lw=1.2)
+    rises = ax.scatter([], [], s=14, color=OKABE_ITO["vermillion"], zorder=3, label="energy went up")
     from matplotlib.ticker import MaxNLocator
 
     ax.set_xlabel("update attempt")
