@@ -37,11 +37,11 @@ def verdicts(pairs, targets, unknown=()) -> list:
     >>> verdicts([[0, 0], [1, 2], [3, 3], [4, 4]], [[0, 0], [1, 1]], unknown=[4])
     ['correct', 'wrong partner', 'extra', None]
     """
-    targets = np.asarray(targets, int).reshape(-1, 2)
-    wanted, has_target = set(map(tuple, targets.tolist())), set(targets[:, 0].tolist())
-    skip = set(np.asarray(unknown, int).ravel().tolist())
-    return ["correct" if (i, k) in wanted else "wrong partner" if i in has_target else None if i in skip
-            else "extra" for i, k in np.asarray(pairs, int).reshape(-1, 2).tolist()]
+    from .evaluation import Scorer
+
+    pairs = np.asarray(pairs, int).reshape(-1, 2)
+    names = (None, "correct", "wrong partner", "extra")     # Scorer.neuron_codes' codes 0-3
+    return [names[code] for code in Scorer(targets, unknown).neuron_codes(pairs[:, 0], pairs[:, 1])]
 
 
 def side_by_side(left: np.ndarray, right: np.ndarray, gap: int = GAP) -> np.ndarray:
