@@ -81,25 +81,25 @@ def _shuffle(order, state, drawn):
     ``len(drawn)`` at a time into the scratch array `drawn` (:func:`_draw`); the state
     returned is that after the last number used, as if drawn one by one.
     """
-    state = _U64(state)
-    t = order.shape[0] - 1
-    m = drawn.shape[0]
+    state, one = _U64(state), _U64(1)
+    t = _U64(max(order.shape[0] - 1, 0))   # unsigned: no test for a negative index
+    m = _U64(drawn.shape[0])
     k = m
-    while t > 0:
+    while t > _U64(0):
         mask = _ones_below(t)
-        low = np.int64(mask >> _U64(1))   # the mask holds while t is above its lower half
+        low = mask >> one   # the mask holds while t is above its lower half
         while t > low:
             if k == m:
                 _draw(drawn, state)
-                state = _U64(state + _U64(m) * _GOLDEN_U)
-                k = 0
+                state = _U64(state + m * _GOLDEN_U)
+                k = _U64(0)
             x = drawn[k] & mask
-            k += 1
-            accept = x <= _U64(t)
-            j = np.int64(x) if accept else t
+            k += one
+            # accepted when x <= t: swapped with x, and t moves down; else swapped with itself
+            j = min(x, t)
             order[t], order[j] = order[j], order[t]
-            t -= np.int64(accept)
-    return _U64(state - _U64(m - k) * _GOLDEN_U)
+            t = t - one + _U64(x > t)   # a compare and an add with carry: the loop's chain
+    return _U64(state - (m - k) * _GOLDEN_U)
 
 
 @numba.extending.intrinsic
