@@ -59,28 +59,47 @@ def _below(state, bound):
 
 
 @numba.njit(cache=True)
-def _shuffle(order, state):
+def _draw(drawn, state):
+    """Fill `drawn` with the stream's next ``len(drawn)`` numbers after `state` (after them
+    its state is ``state + len(drawn) * golden``).  Each number depends on its place only,
+    so the loop is vectorised."""
+    for k in range(drawn.shape[0]):
+        z = _U64(state + _U64(k + 1) * _GOLDEN_U)
+        z = _U64((z ^ (z >> _U64(30))) * _MIX1_U)
+        z = _U64((z ^ (z >> _U64(27))) * _MIX2_U)
+        drawn[k] = z ^ (z >> _U64(31))
+
+
+@numba.njit(cache=True)
+def _shuffle(order, state, drawn):
     """Shuffle `order` in place as :func:`visiting_order`'s sweep does, and return the new state.
 
     The same draws as ``_below(state, t + 1)`` for ``t = n - 1, ..., 1``, without a branch
     on the draw: a rejected number leaves ``t`` where it is (its swap is with itself).  The
     mask changes only when ``t`` falls to the next power of two, so the inner loop keeps it
-    fixed and carries only ``t`` from one draw to the next.  A rejection had been a
-    mispredicted branch, and then the mask's update the longest chain of the loop.
+    fixed and carries only ``t`` from one draw to the next.  The numbers are drawn
+    ``len(drawn)`` at a time into the scratch array `drawn` (:func:`_draw`); the state
+    returned is that after the last number used, as if drawn one by one.
     """
-    state = _U64(state)
-    t = order.shape[0] - 1
-    while t > 0:
+    state, one = _U64(state), _U64(1)
+    t = _U64(max(order.shape[0] - 1, 0))   # unsigned: no test for a negative index
+    m = _U64(drawn.shape[0])
+    k = m
+    while t > _U64(0):
         mask = _ones_below(t)
-        low = np.int64(mask >> _U64(1))   # the mask holds while t is above its lower half
+        low = mask >> one   # the mask holds while t is above its lower half
         while t > low:
-            state, x = _next(state)
-            x &= mask
-            accept = x <= _U64(t)
-            j = np.int64(x) if accept else t
+            if k == m:
+                _draw(drawn, state)
+                state = _U64(state + m * _GOLDEN_U)
+                k = _U64(0)
+            x = drawn[k] & mask
+            k += one
+            # accepted when x <= t: swapped with x, and t moves down; else swapped with itself
+            j = min(x, t)
             order[t], order[j] = order[j], order[t]
-            t -= np.int64(accept)
-    return state
+            t = t - one + _U64(x > t)   # a compare and an add with carry: the loop's chain
+    return _U64(state - (m - k) * _GOLDEN_U)
 
 
 @numba.extending.intrinsic
@@ -107,6 +126,7 @@ _NB_PTR, _ROW_PTR, _COL_PTR, _NEURONS, _COL_IDX = range(len(PACKED))
 _INDEX = (1 << NB_SHIFT) - 1   # an entry's low bits: the neighbour's index
 _AHEAD = 4
 _FEW = 2   # a sweep with at most this many flips is often the last to flip: test for the end
+_DRAWN = 128   # numbers drawn at a time for a shuffle
 
 
 @numba.njit(cache=True)
@@ -148,6 +168,135 @@ def _settled(y, u):
 
 
 @numba.njit(cache=True)
+def _unstable_from(order, t, lim, u, y):
+    """The first place in ``order[t:lim]`` of a neuron that would flip (``u_a`` nonzero and
+    of the other sign than ``y_a``), or `lim`."""
+    p, end = _U64(t), _U64(lim)
+    while p < end:
+        a = order[p]
+        ya = np.int64(y[a])
+        if (u[a] ^ -ya) + ya > 0:   # u_a, or -u_a when y_a is 1, is positive
+            return np.int64(p)
+        p += _U64(1)
+    return lim
+
+
+@numba.njit(cache=True)
+def _pull_sweep(order, y, on_in_row, on_in_col, nb_ptr, entries, pos_end, neurons, self_w, bias, row_w, col_w,
+                sweep_rule, patience, max_attempts, attempts, unchanged, from_on):
+    """One sweep of :func:`_solve` that sums each attempt's input afresh; changes `y` and
+    the counts.  With `from_on` every neuron is known to be on when attempted (the first
+    sweep from every neuron on, each neuron once).  Returns ``(flips, attempts, unchanged,
+    stop code or 0)``."""
+    n = order.shape[0]
+    changed = code = 0
+    for t in range(n):
+        a = order[t]
+        attempts += 1
+        ya = np.int64(1) if from_on else np.int64(y[a])
+        if t + _AHEAD < n:
+            _prefetch(entries, nb_ptr[order[t + _AHEAD]])
+        i, k = neurons[a + a], neurons[a + a + _U64(1)]
+        ua = bias[a] + self_w[a] * ya + row_w * (on_in_row[i] - ya) + col_w * (on_in_col[k] - ya)
+        # the weights after pos_end[a] can only lower ua: once they are being read and ua is
+        # negative, its sign is known.  Blocks of eight from the segment's start, whatever
+        # their signs: a loop of its own for the positive weights had cost a mispredicted
+        # exit per attempt.
+        p, mid, end = nb_ptr[a], pos_end[a], nb_ptr[a + _U64(1)]
+        while p + _U64(8) <= end and (p < mid or ua >= 0):
+            for q in range(p, p + _U64(8)):
+                x = entries[q]
+                ua += (x >> NB_SHIFT) * y[x & _INDEX]
+            p += _U64(8)
+        if p < mid or ua >= 0:
+            for q in range(p, end):
+                x = entries[q]
+                ua += (x >> NB_SHIFT) * y[x & _INDEX]
+        # flip when on with u < 0 or off with u > 0, without a branch on y: on a random
+        # visiting order that branch is mispredicted about half the time
+        if not ((ua != 0) & ((ua > 0) ^ (ya == 1))):
+            unchanged += 1
+            if not sweep_rule:
+                if unchanged >= patience:
+                    code = 2
+                elif attempts >= max_attempts:
+                    code = 3
+                if code:
+                    break
+            continue
+        y[a] = 1 - ya
+        on_in_row[i] += 1 - 2 * ya
+        on_in_col[k] += 1 - 2 * ya
+        changed += 1
+        unchanged = 0
+        if not sweep_rule and attempts >= max_attempts:
+            code = 3
+            break
+    return changed, attempts, unchanged, code
+
+
+@numba.njit(cache=True)
+def _push_sweep(order, y, u, nb_ptr, entries, neurons, row_ptr, col_ptr, col_idx, self_w, row_w, col_w,
+                sweep_rule, patience, max_attempts, attempts, unchanged):
+    """One sweep of :func:`_solve` that keeps every ``u`` current: each flip adds its
+    weights to its neighbours' inputs.  The attempts between two flips only look for the
+    next neuron to flip (:func:`_unstable_from`), and are counted together; under the stall
+    rule the search stops where the patience or the attempt limit would end the run.
+    Returns ``(flips, attempts, unchanged, stop code or 0)``."""
+    n = order.shape[0]
+    changed = code = 0
+    t = 0
+    while True:
+        lim = n
+        if not sweep_rule:
+            lim = min(n, t + min(patience - unchanged, max_attempts - attempts))
+        s = _unstable_from(order, t, lim, u, y)
+        attempts += s - t
+        unchanged += s - t
+        if s == lim:
+            if not sweep_rule:
+                if unchanged >= patience:
+                    code = 2
+                elif attempts >= max_attempts:
+                    code = 3
+            break
+        a = order[s]
+        attempts += 1
+        # a flip of y_a by d adds W_ab d to every u_b of a neighbour, and row_w d or col_w d
+        # to every other neuron of its row and column (the row's neurons are consecutive);
+        # its own u_a changes only by its self term.  Each sign has its own loops of plain
+        # additions or subtractions.  Integers: no rounding.
+        i, k = neurons[a + a], neurons[a + a + _U64(1)]
+        if y[a]:
+            y[a] = 0
+            for p in range(nb_ptr[a], nb_ptr[a + _U64(1)]):
+                x = entries[p]
+                u[x & _INDEX] -= x >> NB_SHIFT
+            for b in range(row_ptr[i], row_ptr[i + _U64(1)]):
+                u[b] -= row_w
+            for q in range(col_ptr[k], col_ptr[k + _U64(1)]):
+                u[col_idx[q]] -= col_w
+            u[a] += row_w + col_w - self_w[a]
+        else:
+            y[a] = 1
+            for p in range(nb_ptr[a], nb_ptr[a + _U64(1)]):
+                x = entries[p]
+                u[x & _INDEX] += x >> NB_SHIFT
+            for b in range(row_ptr[i], row_ptr[i + _U64(1)]):
+                u[b] += row_w
+            for q in range(col_ptr[k], col_ptr[k + _U64(1)]):
+                u[col_idx[q]] += col_w
+            u[a] += self_w[a] - row_w - col_w
+        changed += 1
+        unchanged = 0
+        if not sweep_rule and attempts >= max_attempts:
+            code = 3
+            break
+        t = s + 1
+    return changed, attempts, unchanged, code
+
+
+@numba.njit(cache=True)
 def _solve(seed, sweep_rule, patience, max_attempts, y0, all_on, packed, values):
     """The whole run in one call: the visiting order drawn from `seed` as
     :func:`visiting_order` draws it, and every net input computed exactly.
@@ -160,16 +309,18 @@ def _solve(seed, sweep_rule, patience, max_attempts, y0, all_on, packed, values)
     ``K_k`` count the neurons on in the row and column of ``a``.  The same integers as
     (3-20) summed term by term, so the same decisions.
 
-    The first sweep pulls: each attempt sums its neuron's neighbours afresh and reads the
-    two counts, and a flip changes only ``y`` and the counts.  From every neuron on, nine
-    in ten neurons flip in that sweep, and pushing each flip to its neighbours had cost
-    more than the sums.  A sum stops early: a neuron's positive weights come first in its
-    entries (:class:`ismb_lab.hopfield._Weights`), and once they are summed and the input
-    is negative, the others can only lower it, so the decision is known (at 200 x 200
-    corners, two in five entries are read).  The input itself is not kept in that sweep.  Later sweeps flip a few neurons each, so they keep every ``u``
-    current instead (:func:`_inputs_of` fills it once): a flip adds its weights to its
-    neighbours and the uniqueness weight to its row and column, and an attempt reads one
-    number.  Reading ``u_a`` from its parts had cost three times as much per attempt.
+    The first sweep pulls (:func:`_pull_sweep`): each attempt sums its neuron's neighbours
+    afresh and reads the two counts, and a flip changes only ``y`` and the counts.  From
+    every neuron on, nine in ten neurons flip in that sweep, and pushing each flip to its
+    neighbours had cost more than the sums.  A sum stops early: a neuron's positive weights
+    come first in its entries (:class:`ismb_lab.hopfield._Weights`), and once they are
+    summed and the input is negative, the others can only lower it, so the decision is
+    known.  The input itself is not kept in that sweep.  Later sweeps flip a few neurons
+    each, so they keep every ``u`` current instead (:func:`_push_sweep`; :func:`_inputs_of`
+    fills it once): a flip adds its weights to its neighbours and the uniqueness weight to
+    its row and column, and an attempt reads one number.  Each sweep is a function of its
+    own: in one loop with the run's other variables, the compiled sweeps had kept their
+    counters on the stack.
 
     The stop tests are those of :func:`_updates`, in its order: with the sweep rule the
     attempt limit is a whole number of sweeps, so both are tested at the end of a sweep,
@@ -186,10 +337,11 @@ def _solve(seed, sweep_rule, patience, max_attempts, y0, all_on, packed, values)
     pos_end = pos_end.view(np.uint64)
     row_w, col_w = values[-2], values[-1]
     n, n_left, n_right = self_w.shape[0], row_ptr.shape[0] - 1, col_ptr.shape[0] - 1
-    # one allocation for the visiting order, the net inputs and the counts
-    work = np.empty(2 * n + n_left + n_right, dtype=np.int64)
+    # one allocation for the visiting order, the net inputs, the counts and the draws
+    work = np.empty(2 * n + n_left + n_right + _DRAWN, dtype=np.int64)
     order, u = work[:n].view(np.uint64), work[n:2 * n]
-    on_in_row, on_in_col = work[2 * n:2 * n + n_left], work[2 * n + n_left:]
+    on_in_row, on_in_col = work[2 * n:2 * n + n_left], work[2 * n + n_left:2 * n + n_left + n_right]
+    drawn = work[2 * n + n_left + n_right:].view(np.uint64)
     if all_on:
         y = np.ones(n, dtype=np.uint8)
         for i in range(n_left):
@@ -211,84 +363,18 @@ def _solve(seed, sweep_rule, patience, max_attempts, y0, all_on, packed, values)
     pull = True
     while code == 0:
         if sweep_rule:
-            state = _shuffle(order, state)
+            state = _shuffle(order, state, drawn)
         else:
             for t in range(n):
                 state, order[t] = _below(state, n)
-        changed = 0
-        for t in range(n):
-            a = order[t]
-            attempts += 1
-            ya = np.int64(y[a])
-            if pull:
-                if t + _AHEAD < n:
-                    _prefetch(entries, nb_ptr[order[t + _AHEAD]])
-                i, k = neurons[a + a], neurons[a + a + _U64(1)]
-                ua = bias[a] + self_w[a] * ya + row_w * (on_in_row[i] - ya) + col_w * (on_in_col[k] - ya)
-                # the weights after pos_end[a] can only lower ua: once they are being read and
-                # ua is negative, its sign is known.  Blocks of eight from the segment's start,
-                # whatever their signs: a loop of its own for the positive weights had cost a
-                # mispredicted exit per attempt.
-                p, mid, end = nb_ptr[a], pos_end[a], nb_ptr[a + _U64(1)]
-                while p + _U64(8) <= end and (p < mid or ua >= 0):
-                    for q in range(p, p + _U64(8)):
-                        x = entries[q]
-                        ua += (x >> NB_SHIFT) * y[x & _INDEX]
-                    p += _U64(8)
-                if p < mid or ua >= 0:
-                    for q in range(p, end):
-                        x = entries[q]
-                        ua += (x >> NB_SHIFT) * y[x & _INDEX]
-            else:
-                ua = u[a]
-            # flip when on with u < 0 or off with u > 0, without a branch on y: on a random
-            # visiting order that branch is mispredicted about half the time
-            flip = (ua != 0) & ((ua > 0) ^ (ya == 1))
-            if not flip:
-                unchanged += 1
-                if not sweep_rule:
-                    if unchanged >= patience:
-                        code = 2
-                    elif attempts >= max_attempts:
-                        code = 3
-                    if code:
-                        break
-                continue
-            if pull:
-                y[a] = 1 - ya
-                on_in_row[i] += 1 - 2 * ya
-                on_in_col[k] += 1 - 2 * ya
-            # a flip of y_a by d adds W_ab d to every u_b of a neighbour, and row_w d or
-            # col_w d to every other neuron of its row and column (the row's neurons are
-            # consecutive); its own u_a changes only by its self term.  Each sign has its
-            # own loops of plain additions or subtractions.  Integers: no rounding.
-            elif ya == 1:
-                y[a] = 0
-                i, k = neurons[a + a], neurons[a + a + _U64(1)]
-                for p in range(nb_ptr[a], nb_ptr[a + _U64(1)]):
-                    x = entries[p]
-                    u[x & _INDEX] -= x >> NB_SHIFT
-                for b in range(row_ptr[i], row_ptr[i + _U64(1)]):
-                    u[b] -= row_w
-                for q in range(col_ptr[k], col_ptr[k + _U64(1)]):
-                    u[col_idx[q]] -= col_w
-                u[a] += row_w + col_w - self_w[a]
-            else:
-                y[a] = 1
-                i, k = neurons[a + a], neurons[a + a + _U64(1)]
-                for p in range(nb_ptr[a], nb_ptr[a + _U64(1)]):
-                    x = entries[p]
-                    u[x & _INDEX] += x >> NB_SHIFT
-                for b in range(row_ptr[i], row_ptr[i + _U64(1)]):
-                    u[b] += row_w
-                for q in range(col_ptr[k], col_ptr[k + _U64(1)]):
-                    u[col_idx[q]] += col_w
-                u[a] += self_w[a] - row_w - col_w
-            changed += 1
-            unchanged = 0
-            if not sweep_rule and attempts >= max_attempts:
-                code = 3
-                break
+        if pull:
+            changed, attempts, unchanged, code = _pull_sweep(
+                order, y, on_in_row, on_in_col, nb_ptr, entries, pos_end, neurons, self_w, bias, row_w, col_w,
+                sweep_rule, patience, max_attempts, attempts, unchanged, all_on and sweep_rule)
+        else:
+            changed, attempts, unchanged, code = _push_sweep(
+                order, y, u, nb_ptr, entries, neurons, row_ptr, col_ptr, col_idx, self_w, row_w, col_w,
+                sweep_rule, patience, max_attempts, attempts, unchanged)
         flips += changed
         if sweep_rule:
             if changed == 0:

@@ -188,20 +188,22 @@ def test_compiled_stream_draws_what_the_python_stream_draws():
 @pytest.mark.parametrize("n", [0, 1, 2, 3, 4, 5, 8, 9, 16, 17, 58, 1024, 1025])
 def test_compiled_shuffle_makes_the_sweeps_of_visiting_order(n):
     # the branch-free shuffle against the plain Fisher-Yates of the textbook stream, sizes
-    # at and just past powers of two (where the mask changes), several sweeps in a row
+    # at and just past powers of two (where the mask changes), several sweeps in a row;
+    # numbers drawn one, three and 128 at a time (refilled mid-sweep or not at all)
     from ismb_lab.dynamics import _Stream, _shuffle, visiting_order
 
     for seed in (0, 7, 2**63 - 1):
-        sweeps = visiting_order(seed, n, "sweep")
-        order, state = np.arange(n), np.uint64(seed)
-        for _ in range(4):
-            state = _shuffle(order, np.uint64(state))
-            np.testing.assert_array_equal(order, next(sweeps))
-        py = _Stream(seed)
-        for _ in range(4):
-            for t in range(n - 1, 0, -1):
-                py.below(t + 1)
-        assert int(state) == py.state
+        for m in (1, 3, 128):
+            sweeps = visiting_order(seed, n, "sweep")
+            order, state, drawn = np.arange(n), np.uint64(seed), np.empty(m, dtype=np.uint64)
+            for _ in range(4):
+                state = _shuffle(order, np.uint64(state), drawn)
+                np.testing.assert_array_equal(order, next(sweeps))
+            py = _Stream(seed)
+            for _ in range(4):
+                for t in range(n - 1, 0, -1):
+                    py.below(t + 1)
+            assert int(state) == py.state
 
 
 def test_visiting_orders_are_uniform_permutations():
