@@ -18,7 +18,8 @@ import pytest
 
 ROOT = Path(__file__).resolve().parent.parent
 
-pytestmark = pytest.mark.skipif(not sys.platform.startswith("linux"), reason="needs Linux /proc")
+# process pools and signals to whole process trees: slow (README's fast tier leaves them out)
+pytestmark = [pytest.mark.skipif(not sys.platform.startswith("linux"), reason="needs Linux /proc"), pytest.mark.slow]
 
 
 def _stat(pid: int):

@@ -41,6 +41,7 @@ def tally(scenes, method, params):
     return correct / partners, correct / max(correct + extra, 1), partners
 
 
+@pytest.mark.slow   # five rendered scenes, each matched: about 7 s
 def test_method_three_recovers_ground_truth_disparity_on_held_out_scenes(scenes):
     recall, precision, partners = tally(scenes, "III", SYNTHETIC_PARAMS)
     assert partners > 150

@@ -18,7 +18,8 @@ import pytest
 
 ROOT = Path(__file__).resolve().parent.parent
 
-pytestmark = pytest.mark.skipif(not hasattr(os, "getuid"), reason="POSIX users")
+# each test starts fresh Python processes that load or compile the kernels: slow
+pytestmark = [pytest.mark.skipif(not hasattr(os, "getuid"), reason="POSIX users"), pytest.mark.slow]
 
 PROBE = """
 import json, os
