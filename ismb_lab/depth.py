@@ -138,10 +138,7 @@ class DepthConfig:
         A blob in front of the background that is not trusted and on which no band of
         ``min_features`` features agrees is still one object, at its silhouette disparity.
     floor_agreed : bool
-        A blob's outline must lie in front of the smallest background disparity only when some
-        ``min_features`` background features agree on a disparity (a background object, step 4
-        on the background pair).  Otherwise every outline is in front: a lone wrong background
-        match, at a large disparity, cannot put the objects behind it.
+        Only a background object (agreeing features), not a lone wrong match, can hide outlines.
     focal_px, baseline_m : float
         Focal length in pixels and baseline in metres (> 0); the defaults are
         :data:`ismb_lab.camera.FOCAL_PX` and :data:`~ismb_lab.camera.BASELINE_M` (the thesis' 10 cm rig).
@@ -174,7 +171,7 @@ class DepthConfig:
     silhouette_grow_px: int = 3
     outline_alone: bool = True
     silhouette_behind_px: float = 0.0
-    floor_agreed: bool = False
+    floor_agreed: bool = True
     focal_px: float = FOCAL_PX
     baseline_m: float = BASELINE_M
     quantisation_px: float = 0.5

@@ -302,8 +302,8 @@ def silhouettes(background, scene, roi="center", *, shifts=range(0, 41), thresho
                 sigma: float = 1.0, min_pixels: int = 20, pad_px: int = 8, merge_gap_px: int = 10,
                 merge_disparity_px: float = 1.0, max_fraction: float = 0.5, join: bool = True,
                 split: bool = True, split_score: float = 0.9, split_step_px: float = 2.0,
-                keep_apart: bool = True, split_far_px: float | None = None,
-                split_far_score: float = 0.9) -> Silhouettes:
+                keep_apart: bool = True, split_far_px: float | None = 5.0,
+                split_far_score: float = 0.94) -> Silhouettes:
     """Blobs of change of the scene's left image, each with the shift that lays it on the right's.
 
     Where the scene pair differs from the background pair is where the objects are, in
@@ -358,7 +358,7 @@ def silhouettes(background, scene, roi="center", *, shifts=range(0, 41), thresho
     split_step_px : float
         Least difference of the two parts' shifts, pixels.
     split_far_px : float or None
-        With a number, a blob that the cut's test of each part (padded) does not cut is still cut
+        With a number (None: no such cut), a blob that the cut's test of each part (padded) does not cut is still cut
         when two shifts this far apart or more, one per part, lay both parts at once on the right
         image's change (one Dice over the same padded columns) better, by 0.01 or more, than the
         best single shift lays the blob, while that single shift lays it with a Dice of

@@ -136,10 +136,10 @@ def describe(layout, result) -> str:
     return f"truth [{truth}] wall {layout.wall_disparity:.1f} shift {layout.shift:g}; found [{found}]"
 
 
-BEFORE = ({"silhouette_score": 0.9, "outline_alone": False, "silhouette_behind_px": 3.0},
-          {"join": False, "split": False, "keep_apart": False})
-RULES = {"silhouette_score": 0.8, "outline_alone": True, "silhouette_behind_px": 3.0}
-BLOBS = {"join": True, "split": True, "keep_apart": False}
+BEFORE = ({"silhouette_score": 0.9, "outline_alone": False, "silhouette_behind_px": 3.0, "floor_agreed": False},
+          {"join": False, "split": False, "keep_apart": False, "split_far_px": None})
+RULES = {"silhouette_score": 0.8, "outline_alone": True, "silhouette_behind_px": 3.0, "floor_agreed": False}
+BLOBS = {"join": True, "split": True, "keep_apart": False, "split_far_px": None}
 VARIANTS = {
     "before": BEFORE,
     "rules": (RULES, BLOBS),
@@ -159,10 +159,12 @@ VARIANTS.update({
 docs/experiments/2026-11-26-depth-unseen-2.md, "rules" the rules of
 docs/experiments/2026-11-25-depth-unseen.md, "apart" and "behind" the rules with the join's test of
 both parts at once and with no match counted more than 1 px (0 px) behind its outline;
-"apart+behind0" is the defaults since.  "far", "floor" and "far+floor" add to "apart+behind0" the cut
+"apart+behind0" was the defaults from docs/experiments/2026-11-26-depth-unseen-2.md on.  "far", "floor"
+and "far+floor" add to "apart+behind0" the cut
 of a blob that two shifts 5 px or more apart lay better than one (``silhouettes(split_far_px=5,
 split_far_score=0.94)``) and the background floor of agreeing matches only
-(``DepthConfig.floor_agreed``): docs/experiments/2026-11-26-depth-unseen-3.md."""
+(``DepthConfig.floor_agreed``): docs/experiments/2026-11-26-depth-unseen-3.md; "far+floor" is the
+defaults since."""
 
 
 def run_variants(seed: int, n: int, names, variants: dict, **kw):

@@ -144,14 +144,15 @@ def test_the_join_that_keeps_apart_still_joins_the_pieces_of_one_object(load_scr
 
 
 def test_the_chosen_variant_is_the_defaults(load_script):
-    """docs/experiments/2026-11-26-depth-unseen-2.md chose "apart+behind0" as the defaults: the demo's
-    own code path (no options) is the variant that was measured."""
+    """docs/experiments/2026-11-26-depth-unseen-3.md chose "far+floor" as the defaults (after
+    2026-11-26-depth-unseen-2.md had chosen "apart+behind0"): the demo's own code path (no options) is
+    the variant that was measured."""
     import inspect
 
     from ismb_lab.depth import DepthConfig
     from ismb_lab.silhouettes import silhouettes
 
-    fields, blobs = load_script("depth_layouts").VARIANTS["apart+behind0"]
+    fields, blobs = load_script("depth_layouts").VARIANTS["far+floor"]
     assert DepthConfig(**fields) == DepthConfig()
     defaults = inspect.signature(silhouettes).parameters
     assert all(defaults[name].default == value for name, value in blobs.items())
