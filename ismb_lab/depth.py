@@ -137,6 +137,8 @@ class DepthConfig:
     outline_alone : bool
         A blob in front of the background that is not trusted and on which no band of
         ``min_features`` features agrees is still one object, at its silhouette disparity.
+    floor_agreed : bool
+        Only a background object (agreeing features), not a lone wrong match, can hide outlines.
     focal_px, baseline_m : float
         Focal length in pixels and baseline in metres (> 0); the defaults are
         :data:`ismb_lab.camera.FOCAL_PX` and :data:`~ismb_lab.camera.BASELINE_M` (the thesis' 10 cm rig).
@@ -169,6 +171,7 @@ class DepthConfig:
     silhouette_grow_px: int = 3
     outline_alone: bool = True
     silhouette_behind_px: float = 0.0
+    floor_agreed: bool = True
     focal_px: float = FOCAL_PX
     baseline_m: float = BASELINE_M
     quantisation_px: float = 0.5
@@ -189,7 +192,7 @@ class DepthConfig:
         object.__setattr__(self, "silhouette_score",
                            check_number(self.silhouette_score, "silhouette_score", own, low=0, high=1))
         check_choice(self.grouping, "grouping", own, GROUPINGS)
-        for name in ("in_front", "outline_alone"):
+        for name in ("in_front", "outline_alone", "floor_agreed"):
             if not isinstance(getattr(self, name), bool):
                 raise ParameterTypeError(message(name, own, "True or False", getattr(self, name)))
 
@@ -624,7 +627,7 @@ def depth_from_matches(background, scene, config: DepthConfig | None = None,
         # An object stands in front of what was there: an outline at the background's
         # disparity or behind it is a poor outline (a sliver that looks like the wall).
         infront = np.ones(len(silhouettes), dtype=bool)
-        if config.in_front and len(bd):
+        if config.in_front and len(bd) and (background_objects or not config.floor_agreed):
             infront = silhouettes.disparity > bd.min() + config.disparity_tol_px
         trusted = (silhouettes.score >= config.silhouette_score) & infront
     objects, dropped = _objects(sf[keep], sxy[keep], sd[keep], config, silhouettes, trusted, infront)

@@ -130,8 +130,39 @@ def _best_shift(mask: np.ndarray, rows: slice, cols: slice, right: np.ndarray, s
     return best
 
 
+def _two_shifts(parts, start, whole: np.ndarray, right: np.ndarray, shifts, pad: int, far: float,
+                least: float):
+    """Whether two shifts `far` or more apart, one per part, lay `parts` on `right` better than one shift
+    lays `whole` (their union), both counted as one overlap over the same padded columns
+    (:func:`_placed_dice`), by at least 0.01, while that one shift lays `whole` with a Dice of `least`
+    or more (a blob that fits no shift well is no pair of well-seen objects either).
+
+    The two shifts are found by coordinate ascent from `start` (each part's own padded fit).  Each
+    must lie strictly inside `shifts` (a fit at the end of the range is no fit), and each part must
+    lie wholly on the right image at its shift (a part across the image border fits any shift)."""
+    d = list(start)
+    best = _placed_dice(parts, d, right, pad)
+    for _ in range(3):
+        moved = False
+        for k in (0, 1):
+            for s in shifts:
+                trial = list(d)
+                trial[k] = s
+                score = _placed_dice(parts, trial, right, pad)
+                if score > best + 1e-12:
+                    best, d, moved = score, trial, True
+        if not moved:
+            break
+    if abs(d[0] - d[1]) < far or min(d) <= min(shifts) or max(d) >= max(shifts):
+        return False
+    if any(np.nonzero(part)[1].min() - s < 0 for part, s in zip(parts, d)):
+        return False
+    one = max(_placed_dice([whole], [s], right, pad) for s in shifts)
+    return one >= least and best >= one + 0.01
+
+
 def _cut(mask: np.ndarray, right: np.ndarray, shifts, min_pixels: int, step: float, least: float,
-         pad: int):
+         pad: int, far: float | None = None, far_score: float = 0.9):
     """Two objects side by side in one blob: the column that cuts `mask` into a left and a right
     part that two shifts lay on `right` better (Dice) than one shift lays the whole, or None.
 
@@ -187,9 +218,13 @@ def _cut(mask: np.ndarray, right: np.ndarray, shifts, min_pixels: int, step: flo
     # Then the test every blob passes (padded), since a thin sliver, or a piece of stripes, can
     # fit its own columns at almost any shift.
     fits = [_best_shift(part, *find_objects(part.astype(int))[0], right, shifts, pad) for part in parts]
-    if min(f[0] for f in fits) < least or abs(fits[0][1] - fits[1][1]) < step:
+    if min(f[0] for f in fits) >= least and abs(fits[0][1] - fits[1][1]) >= step:
+        return parts
+    # Each part's padding holds its neighbour's change, which counts against it when two objects
+    # touch: then ask whether two shifts far apart lay both parts at once better than one shift.
+    if far is None or any(np.isnan(f[1]) for f in fits):
         return None
-    return parts
+    return parts if _two_shifts(parts, [f[1] for f in fits], mask, right, shifts, pad, far, far_score) else None
 
 
 def _placed_dice(parts, shifts, right: np.ndarray, pad: int) -> float:
@@ -267,7 +302,8 @@ def silhouettes(background, scene, roi="center", *, shifts=range(0, 41), thresho
                 sigma: float = 1.0, min_pixels: int = 20, pad_px: int = 8, merge_gap_px: int = 10,
                 merge_disparity_px: float = 1.0, max_fraction: float = 0.5, join: bool = True,
                 split: bool = True, split_score: float = 0.9, split_step_px: float = 2.0,
-                keep_apart: bool = True) -> Silhouettes:
+                keep_apart: bool = True, split_far_px: float | None = 5.0,
+                split_far_score: float = 0.94) -> Silhouettes:
     """Blobs of change of the scene's left image, each with the shift that lays it on the right's.
 
     Where the scene pair differs from the background pair is where the objects are, in
@@ -321,6 +357,17 @@ def silhouettes(background, scene, roi="center", *, shifts=range(0, 41), thresho
         `pad_px`); each part is at least ``2 * pad_px`` columns wide.
     split_step_px : float
         Least difference of the two parts' shifts, pixels.
+    split_far_px : float or None
+        With a number (None: no such cut), a blob that the cut's test of each part (padded) does not cut is still cut
+        when two shifts this far apart or more, one per part, lay both parts at once on the right
+        image's change (one Dice over the same padded columns) better, by 0.01 or more, than the
+        best single shift lays the blob, while that single shift lays it with a Dice of
+        `split_far_score` or more.  Each part's padding holds its neighbour's change, which counts
+        against it when two objects at different depths touch in the image; both moved at once
+        do not.  Asked once per blob, not of its parts; a shift at either end of `shifts`, or a
+        part moved off the right image, does not count.
+    split_far_score : float
+        See `split_far_px`.
 
     Returns
     -------
@@ -356,6 +403,9 @@ def silhouettes(background, scene, roi="center", *, shifts=range(0, 41), thresho
     max_fraction = check_number(max_fraction, "max_fraction", own, low=0, high=1, low_open=True)
     split_score = check_number(split_score, "split_score", own, low=0, high=1)
     split_step_px = check_number(split_step_px, "split_step_px", own, low=0)
+    if split_far_px is not None:
+        split_far_px = check_number(split_far_px, "split_far_px", own, low=0)
+    split_far_score = check_number(split_far_score, "split_far_score", own, low=0, high=1)
     for name, value in (("join", join), ("split", split), ("keep_apart", keep_apart)):
         if not isinstance(value, bool):
             raise ParameterTypeError(message(name, own, "True or False", value))
@@ -393,16 +443,16 @@ def silhouettes(background, scene, roi="center", *, shifts=range(0, 41), thresho
     if join:
         masks = _join(masks, measure, merge_gap_px, changed[1], pad_px, keep_apart)
     if split:
-        todo, masks = masks, []
+        todo, masks = [(m, split_far_px) for m in masks], []
         while todo:
-            part = todo.pop()
+            part, far = todo.pop()
             whole_view = np.count_nonzero(part[y:y + h, x:x + w]) > max_fraction * w * h
             two = None if whole_view else _cut(part, changed[1], shifts, min_pixels, split_step_px,
-                                               split_score, pad_px)
+                                               split_score, pad_px, far, split_far_score)
             if two is None:
                 masks.append(part)
             else:
-                todo += list(two)
+                todo += [(p, None) for p in two]      # the test of two shifts far apart: once per blob
     centroids = [np.argwhere(m).mean(axis=0)[::-1] for m in masks]
     labels = np.zeros(shape, dtype=np.int32)
     disparity, score = [], []

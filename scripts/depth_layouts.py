@@ -23,13 +23,15 @@ of the four families and of ``unseen``).  ``--held-out`` runs the held-out split
 
 The figures of the defaults on both splits, and of every variant tried on the development
 split, are in ``docs/experiments/2026-11-24-depth-layouts.md``,
-``docs/experiments/2026-11-25-depth-unseen.md`` and ``docs/experiments/2026-11-26-depth-unseen-2.md``.
+``docs/experiments/2026-11-25-depth-unseen.md``, ``docs/experiments/2026-11-26-depth-unseen-2.md`` and
+``docs/experiments/2026-11-26-depth-unseen-3.md``.
 
     python scripts/depth_layouts.py --count 360     # development split, 360 layouts (2 min)
     python scripts/depth_layouts.py --count 120 --families unseen     # the unseen family's
     python scripts/depth_layouts.py --held-out      # the first held-out split, 880000- (40 s)
     python scripts/depth_layouts.py --held-out --seeds-from 1200000 --variants   # the second, every variant
     python scripts/depth_layouts.py --held-out --seeds-from 1600000 --variants   # the third (spent too)
+    python scripts/depth_layouts.py --held-out --seeds-from 1700000 --variants   # the fourth (spent too)
     python scripts/depth_layouts.py --held-out --cli                  # through the CLI (3 min)
     python scripts/depth_layouts.py --count 12      # the first 12 (the test's set)
     python scripts/depth_layouts.py --solver assign # a variant: --method, --solver, --set, --blobs
@@ -136,10 +138,10 @@ def describe(layout, result) -> str:
     return f"truth [{truth}] wall {layout.wall_disparity:.1f} shift {layout.shift:g}; found [{found}]"
 
 
-BEFORE = ({"silhouette_score": 0.9, "outline_alone": False, "silhouette_behind_px": 3.0},
-          {"join": False, "split": False, "keep_apart": False})
-RULES = {"silhouette_score": 0.8, "outline_alone": True, "silhouette_behind_px": 3.0}
-BLOBS = {"join": True, "split": True, "keep_apart": False}
+BEFORE = ({"silhouette_score": 0.9, "outline_alone": False, "silhouette_behind_px": 3.0, "floor_agreed": False},
+          {"join": False, "split": False, "keep_apart": False, "split_far_px": None})
+RULES = {"silhouette_score": 0.8, "outline_alone": True, "silhouette_behind_px": 3.0, "floor_agreed": False}
+BLOBS = {"join": True, "split": True, "keep_apart": False, "split_far_px": None}
 VARIANTS = {
     "before": BEFORE,
     "rules": (RULES, BLOBS),
@@ -148,11 +150,23 @@ VARIANTS = {
     "apart+behind": ({**RULES, "silhouette_behind_px": 1.0}, {**BLOBS, "keep_apart": True}),
     "apart+behind0": ({**RULES, "silhouette_behind_px": 0.0}, {**BLOBS, "keep_apart": True}),
 }
+_NOW = VARIANTS["apart+behind0"]
+FAR = {"split_far_px": 5.0, "split_far_score": 0.94}
+VARIANTS.update({
+    "far": (_NOW[0], {**_NOW[1], **FAR}),
+    "floor": ({**_NOW[0], "floor_agreed": True}, _NOW[1]),
+    "far+floor": ({**_NOW[0], "floor_agreed": True}, {**_NOW[1], **FAR}),
+})
 """``--variants``: as DepthConfig fields and silhouettes options.  "before" is the defaults up to
 docs/experiments/2026-11-26-depth-unseen-2.md, "rules" the rules of
 docs/experiments/2026-11-25-depth-unseen.md, "apart" and "behind" the rules with the join's test of
 both parts at once and with no match counted more than 1 px (0 px) behind its outline;
-"apart+behind0" is the defaults since."""
+"apart+behind0" was the defaults from docs/experiments/2026-11-26-depth-unseen-2.md on.  "far", "floor"
+and "far+floor" add to "apart+behind0" the cut
+of a blob that two shifts 5 px or more apart lay better than one (``silhouettes(split_far_px=5,
+split_far_score=0.94)``) and the background floor of agreeing matches only
+(``DepthConfig.floor_agreed``): docs/experiments/2026-11-26-depth-unseen-3.md; "far+floor" is the
+defaults since."""
 
 
 def run_variants(seed: int, n: int, names, variants: dict, **kw):
@@ -160,10 +174,13 @@ def run_variants(seed: int, n: int, names, variants: dict, **kw):
     the tolerances or the blobs): ``{name: (result, verdict)}`` and the layout."""
     layout = layout_of(seed, n, names)
     prepared = depth_pairs(layout.background, layout.scene, layout_match_config(layout))
-    out, first = {}, None
+    out, first, found = {}, None, {}
     for name, (fields, blobs) in variants.items():
         config = DepthConfig(**fields)
-        grouped = pair_silhouettes(prepared, **blobs)
+        key = tuple(sorted(blobs.items()))
+        if key not in found:        # variants with the same blob options share the blobs
+            found[key] = pair_silhouettes(prepared, **blobs)
+        grouped = found[key]
         if first is None:
             first = result = relative_depth(layout.background, layout.scene, prepared=prepared, config=config,
                                             silhouettes=grouped, **kw)
@@ -187,8 +204,9 @@ def main(argv=None) -> int:
     parser.add_argument("--families", default=None, metavar="NAME,...",
                         help="the families to cycle through (default every registered one; "
                         f"{UNSEEN.name!r} is registered when named)")
-    parser.add_argument("--variants", action="store_true",
-                        help=f"score every variant of VARIANTS ({', '.join(VARIANTS)}) on the same matches")
+    parser.add_argument("--variants", nargs="?", const=",".join(VARIANTS), default=None, metavar="NAME,...",
+                        help=f"score every variant of VARIANTS ({', '.join(VARIANTS)}), or those named, "
+                        "on the same matches")
     parser.add_argument("--blobs", action="append", default=[], metavar="OPTION=VALUE",
                         help="an option of ismb_lab.silhouettes.silhouettes for a variant, e.g. --blobs split=False")
     parser.add_argument("--set", action="append", default=[], metavar="FIELD=VALUE",
@@ -205,8 +223,10 @@ def main(argv=None) -> int:
     blobs = {}
     for item in args.blobs:
         name, _, value = item.partition("=")
-        if name not in ("join", "split", "keep_apart", "split_score", "split_step_px"):
-            parser.error(f"--blobs {item}: not join, split, keep_apart, split_score or split_step_px")
+        if name not in ("join", "split", "keep_apart", "split_score", "split_step_px", "split_far_px",
+                        "split_far_score"):
+            parser.error(f"--blobs {item}: not join, split, keep_apart, split_score, split_step_px, "
+                         "split_far_px or split_far_score")
         blobs[name] = value == "True" if name in ("join", "split", "keep_apart") else float(value)
     names = families() if args.families is None else tuple(args.families.split(","))
     if UNSEEN.name in names and UNSEEN.name not in families():
@@ -219,7 +239,12 @@ def main(argv=None) -> int:
     if args.variants and (overrides or blobs):
         parser.error("--variants takes no --set and no --blobs")
     label = ", ".join(args.set + args.blobs) or "defaults"
-    variants = VARIANTS if args.variants else {label: (overrides, blobs)}
+    if args.variants:
+        for name in args.variants.split(","):
+            if name not in VARIANTS:
+                parser.error(f"--variants {args.variants}: no variant {name!r} (known: {', '.join(VARIANTS)})")
+    variants = ({name: VARIANTS[name] for name in args.variants.split(",")} if args.variants
+                else {label: (overrides, blobs)})
     start = args.seeds_from if args.seeds_from is not None else HELD_OUT_START if args.held_out else DEV_START
     t0 = time.perf_counter()
     by = defaultdict(lambda: [0, 0])

@@ -144,14 +144,40 @@ def test_the_join_that_keeps_apart_still_joins_the_pieces_of_one_object(load_scr
 
 
 def test_the_chosen_variant_is_the_defaults(load_script):
-    """docs/experiments/2026-11-26-depth-unseen-2.md chose "apart+behind0" as the defaults: the demo's
-    own code path (no options) is the variant that was measured."""
+    """docs/experiments/2026-11-26-depth-unseen-3.md chose "far+floor" as the defaults (after
+    2026-11-26-depth-unseen-2.md had chosen "apart+behind0"): the demo's own code path (no options) is
+    the variant that was measured."""
     import inspect
 
     from ismb_lab.depth import DepthConfig
     from ismb_lab.silhouettes import silhouettes
 
-    fields, blobs = load_script("depth_layouts").VARIANTS["apart+behind0"]
+    fields, blobs = load_script("depth_layouts").VARIANTS["far+floor"]
     assert DepthConfig(**fields) == DepthConfig()
     defaults = inspect.signature(silhouettes).parameters
     assert all(defaults[name].default == value for name, value in blobs.items())
+
+
+@pytest.mark.parametrize("family, start, n, fix", [
+    ("unseen", 4000, 25, "far"),     # a narrow near box beside a wide far cylinder: one blob, the box lost
+    ("unseen", 4000, 119, "far"),    # a near box beside a far one: one blob, the far box lost
+    (None, 5000, 105, "floor"),      # repetitive: one background match, at 21 px, hides both objects
+])
+def test_development_layouts_that_lose_an_object_need_the_cut_far_apart_or_the_agreed_floor(
+        load_script, family, start, n, fix):
+    """Development layouts of docs/experiments/2026-11-26-depth-unseen-3.md that the defaults of the
+    second study ("apart+behind0") rank "missing": the rule named (`fix`) ranks them right, with one
+    object per object put in, and so do both rules together."""
+    from ismb_lab.scenes import UNSEEN, register_family, unregister_family
+
+    script = load_script("depth_layouts")
+    variants = {name: script.VARIANTS[name] for name in ("apart+behind0", fix, "far+floor")}
+    if family:
+        register_family(UNSEEN)
+    try:
+        layout, out = script.run_variants(start + n, n, (UNSEEN.name,) if family else None, variants)
+    finally:
+        if family:
+            unregister_family(UNSEEN.name)
+    assert out["apart+behind0"][1] == "missing" and out[fix][1] == "ok" and out["far+floor"][1] == "ok"
+    assert len(out[fix][0].objects) == len(layout.objects)

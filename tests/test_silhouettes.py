@@ -87,7 +87,8 @@ def test_two_objects_side_by_side_stay_apart_when_both_are_moved_at_once():
     once, each by its own shift, the two lay on the right image's change better than the union."""
     bg, sc = pairs_with([(100, 140, 80, 150, 12), (145, 195, 90, 160, 17)])
     assert silhouettes(bg, sc).disparity.tolist() == [12.0, 17.0]
-    assert silhouettes(bg, sc, join=True, split=True, keep_apart=False).disparity.tolist() == [12.0]
+    assert silhouettes(bg, sc, join=True, split=True, keep_apart=False, split_far_px=None
+                       ).disparity.tolist() == [12.0]
     kept = silhouettes(bg, sc, join=True, split=True, keep_apart=True)
     assert kept.disparity.tolist() == [12.0, 17.0] and kept.score.min() > 0.9
     # The pieces of one object, at one shift, are still one.
@@ -100,6 +101,27 @@ def test_one_object_is_not_cut():
     bg, sc = pairs_with([(90, 195, 80, 160, 14)])
     one = silhouettes(bg, sc, join=True, split=True)
     assert one.disparity.tolist() == [14.0] and one.score[0] > 0.95
+    assert silhouettes(bg, sc, split_far_px=5.0, split_far_score=0.94).disparity.tolist() == [14.0]
+
+
+def test_two_touching_objects_far_apart_in_depth_are_cut_when_both_parts_are_moved_at_once():
+    """A wide object at 10 px and a narrow one at 20 px touch in the left image; in the right image
+    the near one covers the far one's right end.  The narrow part, fitted alone, counts the far
+    object's change in its padding against it (Dice under 0.9), so the cut's own test keeps one
+    blob, at one shift (20), and the far object is lost.  Both parts moved at once, at 10 and 20,
+    lay on the right image's change better than one shift lays the blob."""
+    background = wall()
+    left, right = background.copy(), background.copy()
+    left[100:140, 100:181] = right[100:140, 90:171] = 200.0      # far: 81 px wide, at 10 px
+    left[100:140, 181:205] = right[100:140, 161:185] = 255.0     # near: 24 px wide, at 20 px, in front
+    bg, sc = load_pair(background, background), load_pair(left, right)
+    assert silhouettes(bg, sc, split_far_px=None).disparity.tolist() == [20.0]    # one object lost
+    cut = silhouettes(bg, sc)                                    # the defaults: split_far_px=5, 0.94
+    assert cut.disparity.tolist() == [10.0, 20.0]
+    assert cut.labels[120, 120] == 1 and cut.labels[120, 195] == 2
+    # Shifts 10 px apart are not 11 or more; the blob as a whole fits one shift at 0.95, not 0.99.
+    assert len(silhouettes(bg, sc, split_far_px=11.0, split_far_score=0.94)) == 1
+    assert len(silhouettes(bg, sc, split_far_px=5.0, split_far_score=0.99)) == 1
 
 
 def test_blobs_outside_the_roi_and_specks_are_not_objects():
@@ -127,6 +149,12 @@ def test_silhouettes_bad_input_names_the_parameter():
         silhouettes(bg, sc, join="yes")
     with pytest.raises(ParameterTypeError, match="'keep_apart' parameter of silhouettes"):
         silhouettes(bg, sc, keep_apart=1)
+    with pytest.raises(ParameterError, match="'split_far_px' parameter of silhouettes"):
+        silhouettes(bg, sc, split_far_px=-1)
+    with pytest.raises(ParameterError, match="'split_far_score' parameter of silhouettes"):
+        silhouettes(bg, sc, split_far_score=2)
+    with pytest.raises(ParameterTypeError, match="'floor_agreed' parameter of DepthConfig"):
+        DepthConfig(floor_agreed="yes")
     with pytest.raises(ParameterError, match="'silhouette_behind_px' parameter of DepthConfig"):
         DepthConfig(silhouette_behind_px=-1)
     with pytest.raises(ParameterTypeError, match="'outline_alone' parameter of DepthConfig"):
@@ -161,7 +189,7 @@ def blob_labels(*boxes):
 
 
 def test_a_trusted_blob_is_one_object_at_the_disparity_its_features_agree_on_with_its_outline():
-    background = matches([(x, y, 6.0) for x in range(20, 300, 40) for y in (20, 220)])
+    background = matches([(x, y, 6.0) for x in range(20, 300, 20) for y in (20, 220)])
     scene = matches([(105, 105, 22.0), (115, 110, 22.0), (125, 125, 21.0), (135, 130, 22.0),   # object A
                      (110, 120, 30.0), (120, 130, 30.0), (130, 105, 30.0),                    # A, one period off
                      (205, 105, 26.0), (215, 120, 26.0), (225, 130, 26.0),                    # B, all off
@@ -191,7 +219,7 @@ def test_a_trusted_blob_is_one_object_at_the_disparity_its_features_agree_on_wit
 
 
 def test_an_outline_no_features_agree_on_is_an_object_however_poor_its_fit():
-    background = matches([(x, y, 6.0) for x in range(20, 300, 40) for y in (20, 220)])
+    background = matches([(x, y, 6.0) for x in range(20, 300, 20) for y in (20, 220)])
     scene = matches([(105, 105, 22.0), (115, 110, 22.0), (125, 125, 22.0),     # on the trusted blob
                      (210, 110, 25.0), (220, 125, 12.0)])                      # two that disagree
     labels = blob_labels((100, 140, 100, 140), (200, 230, 100, 140), (250, 280, 100, 140))
@@ -224,6 +252,26 @@ def test_matches_behind_an_outline_do_not_count():
     behind = matches([(105, 105, 18.0), (115, 110, 18.0), (125, 125, 18.5)])
     alone = depth_from_matches(background, behind, DepthConfig(silhouette_behind_px=1.0), sil).objects[0]
     assert (alone.mean_disparity, alone.n_features) == (20.0, 0)
+
+
+def test_a_lone_background_match_does_not_put_well_fitting_outlines_behind_the_background():
+    """The background pair kept one match, a wrong one at 21 px, on a wall at 6.  Both outlines (21
+    and 11 px, Dice 0.99) then lie behind the smallest background disparity, so neither is trusted
+    and both objects are lost.  With no two background features agreeing on a disparity, there is
+    no floor to lie behind; where the wall's features agree, the floor stays as it was."""
+    lone = matches([(160, 200, 21.0)])
+    scene = matches([(110, 115, 21.0), (210, 115, 11.0)])
+    sil = Silhouettes(blob_labels((100, 140, 100, 140), (200, 230, 100, 140)), [21.0, 11.0], [0.99, 0.99],
+                      [[120.0, 120.0], [215.0, 120.0]])
+    assert depth_from_matches(lone, scene, DepthConfig(floor_agreed=False), sil).objects == ()
+    found = depth_from_matches(lone, scene, None, sil).objects           # the default
+    assert [o.silhouette_disparity for o in found] == [21.0, 11.0]
+    wall_matches = matches([(x, y, 6.0) for x in range(20, 300, 20) for y in (20, 220)] + [(160, 200, 21.0)])
+    for floor_agreed in (False, True):
+        r = depth_from_matches(wall_matches, scene, DepthConfig(floor_agreed=floor_agreed), sil)
+        assert [o.silhouette_disparity for o in r.objects] == [21.0, 11.0]
+    agreeing = matches([(160, 200, 21.0), (170, 200, 21.0)])      # two that agree: a floor, however wrong
+    assert depth_from_matches(agreeing, scene, DepthConfig(floor_agreed=True), sil).objects == ()
 
 
 def test_silhouettes_must_cover_the_scene():
