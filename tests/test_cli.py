@@ -88,6 +88,7 @@ def test_bad_input_is_one_line_on_stderr_with_exit_2(pair, tmp_path, capsys, mak
     assert "Traceback" not in err
 
 
+@pytest.mark.slow   # a fresh interpreter
 def test_a_real_process_fails_cleanly_too(pair, tmp_path):
     proc = run_cli("match", tmp_path / "missing.png", pair[1])
     assert proc.returncode == 2 and proc.stdout == ""
@@ -103,6 +104,7 @@ def test_a_flat_pair_is_an_empty_match_not_an_error(tmp_path, capsys):
     assert json.loads(out.read_text())["matches"] == []
 
 
+@pytest.mark.slow   # a fresh interpreter
 def test_help_lists_every_option():
     proc = run_cli("match", "--help")
     assert proc.returncode == 0

@@ -14,6 +14,8 @@ from pathlib import Path
 import pytest
 
 ROOT = Path(__file__).resolve().parent.parent
+
+pytestmark = pytest.mark.slow   # every test runs the CLI in a fresh interpreter
 LAB = ROOT / "images" / "lab"
 
 

@@ -193,6 +193,7 @@ def test_sigterm_and_sighup_stop_tune_and_write_the_best_so_far(cli, lab, hard_t
 
 @needs_proc
 @pytest.mark.parametrize("delay", [0.0, 0.05, 0.2, 0.5, 1.0])
+@pytest.mark.slow   # five fresh interpreters, each signalled
 def test_a_signal_during_start_up_exits_130_with_one_line(cli, lab, hard_targets, tmp_path, delay):
     # From the moment main() has its handlers: imports, loading the pair, numba's first
     # compilation or cache load, the first generation.
@@ -351,6 +352,7 @@ def test_help_lists_every_limit():
         assert f"{option} <= {default} ({variable})" in epilog
 
 
+@pytest.mark.slow   # a fresh interpreter
 def test_importing_the_cli_does_not_import_numpy():
     code = "import sys, ismb_lab.cli; print('numpy' in sys.modules, 'numba' in sys.modules)"
     proc = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120,
