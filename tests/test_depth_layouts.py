@@ -181,3 +181,28 @@ def test_development_layouts_that_lose_an_object_need_the_cut_far_apart_or_the_a
             unregister_family(UNSEEN.name)
     assert out["apart+behind0"][1] == "missing" and out[fix][1] == "ok" and out["far+floor"][1] == "ok"
     assert len(out[fix][0].objects) == len(layout.objects)
+
+
+@pytest.mark.parametrize("start, n, fix", [
+    (4000, 50, "cut"),      # a cylinder cut by the padded test into halves at 23 and 21
+    (5000, 202, "cut"),     # a cylinder cut into halves at 22 and 20
+    (5000, 222, "cut"),     # a box cut by the far test into parts at -2 and 16
+    (4000, 73, "weak"),     # a box near the wall in two pieces that fit at 0.84 and 0.83
+    (5000, 105, "weak"),    # a box in two pieces that fit at 0.86 and 0.81
+])
+def test_unseen_development_layouts_split_by_far_floor_need_the_placed_cut_or_the_join_of_weak_pieces(
+        load_script, start, n, fix):
+    """Development layouts of docs/experiments/2026-11-26-depth-unseen-4.md that "far+floor" splits
+    (an object reported twice): the rule named (`fix`) ranks them right, with one object per object
+    put in, and so do both rules together."""
+    from ismb_lab.scenes import UNSEEN, register_family, unregister_family
+
+    script = load_script("depth_layouts")
+    variants = {name: script.VARIANTS[name] for name in ("far+floor", fix, "cut+weak")}
+    register_family(UNSEEN)
+    try:
+        layout, out = script.run_variants(start + n, n, (UNSEEN.name,), variants)
+    finally:
+        unregister_family(UNSEEN.name)
+    assert out["far+floor"][1] == "split" and out[fix][1] == "ok" and out["cut+weak"][1] == "ok"
+    assert len(out[fix][0].objects) == len(layout.objects)
