@@ -309,10 +309,10 @@ def _join(masks: list, measure, gap_px: int, right: np.ndarray, pad: int, apart:
 def silhouettes(background, scene, roi="center", *, shifts=range(0, 41), threshold: float = 8.0,
                 sigma: float = 1.0, min_pixels: int = 20, pad_px: int = 8, merge_gap_px: int = 10,
                 merge_disparity_px: float = 1.0, max_fraction: float = 0.5, join: bool = True,
-                split: bool = True, split_score: float = 0.9, split_step_px: float = 2.0,
+                split: bool = True, split_score: float = 0.9, split_step_px: float = 3.0,
                 keep_apart: bool = True, split_far_px: float | None = 5.0,
-                split_far_score: float = 0.94, split_placed: bool = False,
-                join_weak: bool = False) -> Silhouettes:
+                split_far_score: float = 0.94, split_placed: bool = True,
+                join_weak: bool = True) -> Silhouettes:
     """Blobs of change of the scene's left image, each with the shift that lays it on the right's.
 
     Where the scene pair differs from the background pair is where the objects are, in
