@@ -139,6 +139,24 @@ def test_an_object_whose_halves_fit_shifts_two_pixels_apart_is_not_cut():
     assert one.disparity.tolist() == [14.0] and one.score[0] > 0.95
 
 
+def test_one_object_is_not_cut_where_its_parts_moved_at_once_lay_worse_than_one_shift():
+    """One rectangle at 14 px, with a notch at its left edge that looks like the wall in the left
+    image, and a patch inside that looks like the wall in the right image.  A left and a right part
+    then fit their own shifts (18 and 14) at 0.92 each, 4 px apart, and the cut's test of each part
+    takes them; both moved at once by those shifts lay on the right image's change worse than the
+    whole at 14, so with `split_placed` (the default) it is one object."""
+    background = wall()
+    left, right = background.copy(), background.copy()
+    left[80:160, 90:190] = right[80:160, 76:176] = 255.0
+    left[96:150, 90:94] = background[96:150, 90:94]
+    right[89:108, 130:136] = background[89:108, 130:136]
+    bg, sc = load_pair(background, background), load_pair(left, right)
+    two = silhouettes(bg, sc, split_placed=False)
+    assert two.disparity.tolist() == [18.0, 14.0] and two.score.min() > 0.9
+    one = silhouettes(bg, sc)
+    assert one.disparity.tolist() == [14.0] and one.score[0] > 0.95
+
+
 def test_pieces_of_one_object_that_fit_no_shift_well_are_joined():
     """One object in two pieces (a band between them looks like the wall in the left image only), at
     12 and 14 px.  Each piece's padding holds the other's change, so each fits its own shift under
