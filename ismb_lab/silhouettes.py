@@ -162,7 +162,7 @@ def _two_shifts(parts, start, whole: np.ndarray, right: np.ndarray, shifts, pad:
 
 
 def _cut(mask: np.ndarray, right: np.ndarray, shifts, min_pixels: int, step: float, least: float,
-         pad: int, far: float | None = None, far_score: float = 0.9):
+         pad: int, far: float | None = None, far_score: float = 0.9, placed: bool = False):
     """Two objects side by side in one blob: the column that cuts `mask` into a left and a right
     part that two shifts lay on `right` better (Dice) than one shift lays the whole, or None.
 
@@ -218,6 +218,9 @@ def _cut(mask: np.ndarray, right: np.ndarray, shifts, min_pixels: int, step: flo
     # Then the test every blob passes (padded), since a thin sliver, or a piece of stripes, can
     # fit its own columns at almost any shift.
     fits = [_best_shift(part, *find_objects(part.astype(int))[0], right, shifts, pad) for part in parts]
+    if placed and not any(np.isnan(f[1]) for f in fits) and _placed_dice(parts, [f[1] for f in fits], right, pad) \
+            < max(_placed_dice([mask], [s], right, pad) for s in shifts):
+        return None             # each part at its own shift, both at once, lay worse than one shift
     if min(f[0] for f in fits) >= least and abs(fits[0][1] - fits[1][1]) >= step:
         return parts
     # Each part's padding holds its neighbour's change, which counts against it when two objects
@@ -246,7 +249,8 @@ def _placed_dice(parts, shifts, right: np.ndarray, pad: int) -> float:
     return 2 * np.count_nonzero(mine & theirs) / total if total else 0.0
 
 
-def _join(masks: list, measure, gap_px: int, right: np.ndarray, pad: int, apart: bool = False) -> list:
+def _join(masks: list, measure, gap_px: int, right: np.ndarray, pad: int, apart: bool = False,
+          weak: float | None = None) -> list:
     """Join neighbouring blobs (boxes `gap_px` or less apart) while one shift lays their union
     on the right image at least as well as their own shifts lay them (Dice, weighted by size):
     the pieces of one object that looks like the wall in places, e.g. stripes; the best pair first.
@@ -256,7 +260,9 @@ def _join(masks: list, measure, gap_px: int, right: np.ndarray, pad: int, apart:
     moved by one shift, over the same rows and padded columns.  Two objects side by side then stay
     apart however well or poorly each fits alone (the padding of each part's own fit counts its
     neighbour's change against it).  A part narrower than ``2 * pad`` fits almost any shift, so it
-    is moved by its neighbour's (both: by the union's)."""
+    is moved by its neighbour's (both: by the union's).  With `weak` (a Dice), two neighbours
+    neither of which fits with a Dice of `weak` or more (neither a well-seen object) are joined
+    when the union fits at least as well as the better of them, whatever both moved at once give."""
     fits = [measure(m) for m in masks]
     sizes = [int(np.count_nonzero(m)) for m in masks]
     keys = [frozenset([k]) for k in range(len(masks))]
@@ -287,6 +293,8 @@ def _join(masks: list, measure, gap_px: int, right: np.ndarray, pad: int, apart:
                         own = [own[loose[0]]] * 2       # the firm part's shift for both
                     margin = (_placed_dice([masks[a] | masks[b]], [union[1]], right, pad)
                               - _placed_dice([masks[a], masks[b]], own, right, pad))
+                if weak is not None and max(fits[a][0], fits[b][0]) < weak:
+                    margin = max(margin, union[0] - max(fits[a][0], fits[b][0]))
                 if margin >= 0 and (best is None or margin > best[0]):
                     best = (margin, a, b, union)
         if best is None:
@@ -301,9 +309,10 @@ def _join(masks: list, measure, gap_px: int, right: np.ndarray, pad: int, apart:
 def silhouettes(background, scene, roi="center", *, shifts=range(0, 41), threshold: float = 8.0,
                 sigma: float = 1.0, min_pixels: int = 20, pad_px: int = 8, merge_gap_px: int = 10,
                 merge_disparity_px: float = 1.0, max_fraction: float = 0.5, join: bool = True,
-                split: bool = True, split_score: float = 0.9, split_step_px: float = 2.0,
+                split: bool = True, split_score: float = 0.9, split_step_px: float = 3.0,
                 keep_apart: bool = True, split_far_px: float | None = 5.0,
-                split_far_score: float = 0.94) -> Silhouettes:
+                split_far_score: float = 0.94, split_placed: bool = True,
+                join_weak: bool = True) -> Silhouettes:
     """Blobs of change of the scene's left image, each with the shift that lays it on the right's.
 
     Where the scene pair differs from the background pair is where the objects are, in
@@ -368,6 +377,15 @@ def silhouettes(background, scene, roi="center", *, shifts=range(0, 41), thresho
         part moved off the right image, does not count.
     split_far_score : float
         See `split_far_px`.
+    split_placed : bool
+        Take a cut only when its two parts, each moved by its own (padded) shift, both at once, lay
+        on the right image's change at least as well (one Dice over the same padded columns) as the
+        best single shift lays the blob: the halves of one object fit slightly different shifts
+        each, but not better together than the whole at one.
+    join_weak : bool
+        With `join` and `keep_apart`, two neighbours neither of which fits with a Dice of
+        `split_score` or more are joined when their union fits at least as well as the better of
+        them (such pieces are no well-seen objects; a cut would not make them either).
 
     Returns
     -------
@@ -406,7 +424,8 @@ def silhouettes(background, scene, roi="center", *, shifts=range(0, 41), thresho
     if split_far_px is not None:
         split_far_px = check_number(split_far_px, "split_far_px", own, low=0)
     split_far_score = check_number(split_far_score, "split_far_score", own, low=0, high=1)
-    for name, value in (("join", join), ("split", split), ("keep_apart", keep_apart)):
+    for name, value in (("join", join), ("split", split), ("keep_apart", keep_apart),
+                        ("split_placed", split_placed), ("join_weak", join_weak)):
         if not isinstance(value, bool):
             raise ParameterTypeError(message(name, own, "True or False", value))
     try:
@@ -441,14 +460,15 @@ def silhouettes(background, scene, roi="center", *, shifts=range(0, 41), thresho
     group = connected_components(link, directed=False)[1] if len(ks) else np.zeros(0, dtype=int)
     masks = [np.isin(blobs, ks[group == g]) for g in np.unique(group)]
     if join:
-        masks = _join(masks, measure, merge_gap_px, changed[1], pad_px, keep_apart)
+        masks = _join(masks, measure, merge_gap_px, changed[1], pad_px, keep_apart,
+                      split_score if join_weak and keep_apart else None)
     if split:
         todo, masks = [(m, split_far_px) for m in masks], []
         while todo:
             part, far = todo.pop()
             whole_view = np.count_nonzero(part[y:y + h, x:x + w]) > max_fraction * w * h
             two = None if whole_view else _cut(part, changed[1], shifts, min_pixels, split_step_px,
-                                               split_score, pad_px, far, split_far_score)
+                                               split_score, pad_px, far, split_far_score, split_placed)
             if two is None:
                 masks.append(part)
             else:

@@ -23,8 +23,8 @@ of the four families and of ``unseen``).  ``--held-out`` runs the held-out split
 
 The figures of the defaults on both splits, and of every variant tried on the development
 split, are in ``docs/experiments/2026-11-24-depth-layouts.md``,
-``docs/experiments/2026-11-25-depth-unseen.md``, ``docs/experiments/2026-11-26-depth-unseen-2.md`` and
-``docs/experiments/2026-11-26-depth-unseen-3.md``.
+``docs/experiments/2026-11-25-depth-unseen.md``, ``docs/experiments/2026-11-26-depth-unseen-2.md``,
+``docs/experiments/2026-11-26-depth-unseen-3.md`` and ``docs/experiments/2026-11-26-depth-unseen-4.md``.
 
     python scripts/depth_layouts.py --count 360     # development split, 360 layouts (2 min)
     python scripts/depth_layouts.py --count 120 --families unseen     # the unseen family's
@@ -32,6 +32,7 @@ split, are in ``docs/experiments/2026-11-24-depth-layouts.md``,
     python scripts/depth_layouts.py --held-out --seeds-from 1200000 --variants   # the second, every variant
     python scripts/depth_layouts.py --held-out --seeds-from 1600000 --variants   # the third (spent too)
     python scripts/depth_layouts.py --held-out --seeds-from 1700000 --variants   # the fourth (spent too)
+    python scripts/depth_layouts.py --held-out --seeds-from 1800000 --variants   # the fifth (spent too)
     python scripts/depth_layouts.py --held-out --cli                  # through the CLI (3 min)
     python scripts/depth_layouts.py --count 12      # the first 12 (the test's set)
     python scripts/depth_layouts.py --solver assign # a variant: --method, --solver, --set, --blobs
@@ -139,9 +140,11 @@ def describe(layout, result) -> str:
 
 
 BEFORE = ({"silhouette_score": 0.9, "outline_alone": False, "silhouette_behind_px": 3.0, "floor_agreed": False},
-          {"join": False, "split": False, "keep_apart": False, "split_far_px": None})
+          {"join": False, "split": False, "keep_apart": False, "split_far_px": None, "split_step_px": 2.0,
+           "split_placed": False, "join_weak": False})
 RULES = {"silhouette_score": 0.8, "outline_alone": True, "silhouette_behind_px": 3.0, "floor_agreed": False}
-BLOBS = {"join": True, "split": True, "keep_apart": False, "split_far_px": None}
+BLOBS = {"join": True, "split": True, "keep_apart": False, "split_far_px": None, "split_step_px": 2.0,
+         "split_placed": False, "join_weak": False}
 VARIANTS = {
     "before": BEFORE,
     "rules": (RULES, BLOBS),
@@ -157,6 +160,13 @@ VARIANTS.update({
     "floor": ({**_NOW[0], "floor_agreed": True}, _NOW[1]),
     "far+floor": ({**_NOW[0], "floor_agreed": True}, {**_NOW[1], **FAR}),
 })
+_NOW = VARIANTS["far+floor"]
+CUT = {"split_step_px": 3.0, "split_placed": True}
+VARIANTS.update({
+    "cut": (_NOW[0], {**_NOW[1], **CUT}),
+    "weak": (_NOW[0], {**_NOW[1], "join_weak": True}),
+    "cut+weak": (_NOW[0], {**_NOW[1], **CUT, "join_weak": True}),
+})
 """``--variants``: as DepthConfig fields and silhouettes options.  "before" is the defaults up to
 docs/experiments/2026-11-26-depth-unseen-2.md, "rules" the rules of
 docs/experiments/2026-11-25-depth-unseen.md, "apart" and "behind" the rules with the join's test of
@@ -166,7 +176,11 @@ and "far+floor" add to "apart+behind0" the cut
 of a blob that two shifts 5 px or more apart lay better than one (``silhouettes(split_far_px=5,
 split_far_score=0.94)``) and the background floor of agreeing matches only
 (``DepthConfig.floor_agreed``): docs/experiments/2026-11-26-depth-unseen-3.md; "far+floor" is the
-defaults since."""
+defaults from then to the fourth study.  "cut", "weak" and "cut+weak" add to "far+floor" a cut
+only of parts whose shifts differ by 3 px or more and that, both moved at once, lay no worse than one shift
+(``split_step_px=3, split_placed=True``), and the join of two neighbours neither of which fits
+well (``join_weak=True``): docs/experiments/2026-11-26-depth-unseen-4.md; "cut+weak" is the defaults
+since."""
 
 
 def run_variants(seed: int, n: int, names, variants: dict, **kw):
@@ -223,11 +237,11 @@ def main(argv=None) -> int:
     blobs = {}
     for item in args.blobs:
         name, _, value = item.partition("=")
-        if name not in ("join", "split", "keep_apart", "split_score", "split_step_px", "split_far_px",
-                        "split_far_score"):
-            parser.error(f"--blobs {item}: not join, split, keep_apart, split_score, split_step_px, "
+        flags = ("join", "split", "keep_apart", "split_placed", "join_weak")
+        if name not in (*flags, "split_score", "split_step_px", "split_far_px", "split_far_score"):
+            parser.error(f"--blobs {item}: not {', '.join(flags)}, split_score, split_step_px, "
                          "split_far_px or split_far_score")
-        blobs[name] = value == "True" if name in ("join", "split", "keep_apart") else float(value)
+        blobs[name] = value == "True" if name in flags else float(value)
     names = families() if args.families is None else tuple(args.families.split(","))
     if UNSEEN.name in names and UNSEEN.name not in families():
         register_family(UNSEEN)

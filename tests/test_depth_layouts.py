@@ -144,15 +144,15 @@ def test_the_join_that_keeps_apart_still_joins_the_pieces_of_one_object(load_scr
 
 
 def test_the_chosen_variant_is_the_defaults(load_script):
-    """docs/experiments/2026-11-26-depth-unseen-3.md chose "far+floor" as the defaults (after
-    2026-11-26-depth-unseen-2.md had chosen "apart+behind0"): the demo's own code path (no options) is
-    the variant that was measured."""
+    """docs/experiments/2026-11-26-depth-unseen-4.md chose "cut+weak" as the defaults (after
+    2026-11-26-depth-unseen-3.md had chosen "far+floor" and 2026-11-26-depth-unseen-2.md
+    "apart+behind0"): the demo's own code path (no options) is the variant that was measured."""
     import inspect
 
     from ismb_lab.depth import DepthConfig
     from ismb_lab.silhouettes import silhouettes
 
-    fields, blobs = load_script("depth_layouts").VARIANTS["far+floor"]
+    fields, blobs = load_script("depth_layouts").VARIANTS["cut+weak"]
     assert DepthConfig(**fields) == DepthConfig()
     defaults = inspect.signature(silhouettes).parameters
     assert all(defaults[name].default == value for name, value in blobs.items())
@@ -180,4 +180,32 @@ def test_development_layouts_that_lose_an_object_need_the_cut_far_apart_or_the_a
         if family:
             unregister_family(UNSEEN.name)
     assert out["apart+behind0"][1] == "missing" and out[fix][1] == "ok" and out["far+floor"][1] == "ok"
+    assert len(out[fix][0].objects) == len(layout.objects)
+
+
+@pytest.mark.parametrize("start, n, fix, without", [
+    (4000, 50, "cut", {"split_step_px": 2.0}),      # a cylinder cut by the padded test into halves at 23 and 21
+    (5000, 192, "cut", {"split_step_px": 2.0}),     # a box cut into halves at 11 and 13
+    (5000, 222, "cut", {"split_placed": False}),    # a box cut by the far test into parts at -2 and 16
+    (4000, 73, "weak", {"join_weak": False}),       # a box near the wall in two pieces that fit at 0.84 and 0.83
+    (5000, 105, "weak", {"join_weak": False}),      # a box in two pieces that fit at 0.86 and 0.81
+])
+def test_unseen_development_layouts_split_by_far_floor_need_the_placed_cut_or_the_join_of_weak_pieces(
+        load_script, start, n, fix, without):
+    """Development layouts of docs/experiments/2026-11-26-depth-unseen-4.md that "far+floor" splits
+    (an object reported twice): the rules named (`fix`) rank them right, with one object per object
+    put in, and so do both rules together; without the one rule that fixes each (`without`), the
+    object is split again."""
+    from ismb_lab.scenes import UNSEEN, register_family, unregister_family
+
+    script = load_script("depth_layouts")
+    variants = {name: script.VARIANTS[name] for name in ("far+floor", fix, "cut+weak")}
+    variants["without"] = (variants["cut+weak"][0], {**variants["cut+weak"][1], **without})
+    register_family(UNSEEN)
+    try:
+        layout, out = script.run_variants(start + n, n, (UNSEEN.name,), variants)
+    finally:
+        unregister_family(UNSEEN.name)
+    assert out["far+floor"][1] == "split" and out[fix][1] == "ok" and out["cut+weak"][1] == "ok"
+    assert out["without"][1] == "split"
     assert len(out[fix][0].objects) == len(layout.objects)

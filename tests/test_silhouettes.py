@@ -124,6 +124,57 @@ def test_two_touching_objects_far_apart_in_depth_are_cut_when_both_parts_are_mov
     assert len(silhouettes(bg, sc, split_far_px=5.0, split_far_score=0.99)) == 1
 
 
+def test_an_object_whose_halves_fit_shifts_two_pixels_apart_is_not_cut():
+    """An L-shaped object: its left half (taller) at 14 px, its right half at 16 px.  Each half fits
+    its own shift at 0.9 or more, so a cut of parts 2 px apart takes it for two objects; parts must
+    lie 3 px or more apart (the default) to be cut."""
+    background = wall()
+    left, right = background.copy(), background.copy()
+    left[80:160, 90:130] = right[80:160, 76:116] = 255.0
+    left[100:160, 130:170] = 255.0
+    right[100:160, 114:154] = 255.0
+    bg, sc = load_pair(background, background), load_pair(left, right)
+    assert silhouettes(bg, sc, split_step_px=2.0).disparity.tolist() == [14.0, 16.0]
+    one = silhouettes(bg, sc)
+    assert one.disparity.tolist() == [14.0] and one.score[0] > 0.95
+
+
+def test_one_object_is_not_cut_where_its_parts_moved_at_once_lay_worse_than_one_shift():
+    """One rectangle at 14 px, with a notch at its left edge that looks like the wall in the left
+    image, and a patch inside that looks like the wall in the right image.  A left and a right part
+    then fit their own shifts (18 and 14) at 0.92 each, 4 px apart, and the cut's test of each part
+    takes them; both moved at once by those shifts lay on the right image's change worse than the
+    whole at 14, so with `split_placed` (the default) it is one object."""
+    background = wall()
+    left, right = background.copy(), background.copy()
+    left[80:160, 90:190] = right[80:160, 76:176] = 255.0
+    left[96:150, 90:94] = background[96:150, 90:94]
+    right[89:108, 130:136] = background[89:108, 130:136]
+    bg, sc = load_pair(background, background), load_pair(left, right)
+    two = silhouettes(bg, sc, split_placed=False)
+    assert two.disparity.tolist() == [18.0, 14.0] and two.score.min() > 0.9
+    one = silhouettes(bg, sc)
+    assert one.disparity.tolist() == [14.0] and one.score[0] > 0.95
+
+
+def test_pieces_of_one_object_that_fit_no_shift_well_are_joined():
+    """One object in two pieces (a band between them looks like the wall in the left image only), at
+    12 and 14 px.  Each piece's padding holds the other's change, so each fits its own shift under
+    0.9, and both moved at once by their own shifts lay better than the union at one: the join that
+    keeps two objects apart refuses them.  Neither is a well-seen object, and the union fits better
+    than either (0.97), so they are joined."""
+    background = wall()
+    left, right = background.copy(), background.copy()
+    left[80:150, 100:126] = left[80:150, 132:160] = 255.0
+    right[80:150, 88:120] = 255.0
+    right[80:150, 118:146] = 255.0
+    bg, sc = load_pair(background, background), load_pair(left, right)
+    apart = silhouettes(bg, sc, join_weak=False)
+    assert apart.disparity.tolist() == [12.0, 14.0] and apart.score.max() < 0.9
+    one = silhouettes(bg, sc)
+    assert len(one) == 1 and one.score[0] > 0.95
+
+
 def test_blobs_outside_the_roi_and_specks_are_not_objects():
     bg, sc = pairs_with([(150, 190, 100, 140, 22), (30, 33, 30, 33, 5)])
     assert len(silhouettes(bg, sc, roi=(0, 0, 100, 100), min_pixels=50)) == 0
@@ -153,6 +204,9 @@ def test_silhouettes_bad_input_names_the_parameter():
         silhouettes(bg, sc, split_far_px=-1)
     with pytest.raises(ParameterError, match="'split_far_score' parameter of silhouettes"):
         silhouettes(bg, sc, split_far_score=2)
+    for name in ("split_placed", "join_weak"):
+        with pytest.raises(ParameterTypeError, match=f"'{name}' parameter of silhouettes"):
+            silhouettes(bg, sc, **{name: "yes"})
     with pytest.raises(ParameterTypeError, match="'floor_agreed' parameter of DepthConfig"):
         DepthConfig(floor_agreed="yes")
     with pytest.raises(ParameterError, match="'silhouette_behind_px' parameter of DepthConfig"):
