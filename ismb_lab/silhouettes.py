@@ -130,12 +130,12 @@ def _best_shift(mask: np.ndarray, rows: slice, cols: slice, right: np.ndarray, s
     return best
 
 
-def _two_shifts(parts, start, whole: np.ndarray, right: np.ndarray, shifts, pad: int, far: float,
+def _two_shifts(parts, start, one: float, right: np.ndarray, shifts, pad: int, far: float,
                 least: float):
-    """Whether two shifts `far` or more apart, one per part, lay `parts` on `right` better than one shift
-    lays `whole` (their union), both counted as one overlap over the same padded columns
-    (:func:`_placed_dice`), by at least 0.01, while that one shift lays `whole` with a Dice of `least`
-    or more (a blob that fits no shift well is no pair of well-seen objects either).
+    """Whether two shifts `far` or more apart, one per part, lay `parts` on `right` better than
+    `one`, the best Dice of their union at a single shift, both counted as one overlap over the
+    same padded columns (:func:`_placed_dice`), by at least 0.01, while `one` is `least` or more
+    (a blob that fits no shift well is no pair of well-seen objects either).
 
     The two shifts are found by coordinate ascent from `start` (each part's own padded fit).  Each
     must lie strictly inside `shifts` (a fit at the end of the range is no fit), and each part must
@@ -157,7 +157,6 @@ def _two_shifts(parts, start, whole: np.ndarray, right: np.ndarray, shifts, pad:
         return False
     if any(np.nonzero(part)[1].min() - s < 0 for part, s in zip(parts, d)):
         return False
-    one = max(_placed_dice([whole], [s], right, pad) for s in shifts)
     return one >= least and best >= one + 0.01
 
 
@@ -218,16 +217,19 @@ def _cut(mask: np.ndarray, right: np.ndarray, shifts, min_pixels: int, step: flo
     # Then the test every blob passes (padded), since a thin sliver, or a piece of stripes, can
     # fit its own columns at almost any shift.
     fits = [_best_shift(part, *find_objects(part.astype(int))[0], right, shifts, pad) for part in parts]
-    if placed and not any(np.isnan(f[1]) for f in fits) and _placed_dice(parts, [f[1] for f in fits], right, pad) \
-            < max(_placed_dice([mask], [s], right, pad) for s in shifts):
+    own = [f[1] for f in fits]
+    if any(np.isnan(d) for d in own):
+        return None             # a part that fits no shift: no cut, by any test below
+    one = max(_placed_dice([mask], [s], right, pad) for s in shifts)   # the whole at one shift
+    if placed and _placed_dice(parts, own, right, pad) < one:
         return None             # each part at its own shift, both at once, lay worse than one shift
     if min(f[0] for f in fits) >= least and abs(fits[0][1] - fits[1][1]) >= step:
         return parts
     # Each part's padding holds its neighbour's change, which counts against it when two objects
     # touch: then ask whether two shifts far apart lay both parts at once better than one shift.
-    if far is None or any(np.isnan(f[1]) for f in fits):
+    if far is None:
         return None
-    return parts if _two_shifts(parts, [f[1] for f in fits], mask, right, shifts, pad, far, far_score) else None
+    return parts if _two_shifts(parts, own, one, right, shifts, pad, far, far_score) else None
 
 
 def _placed_dice(parts, shifts, right: np.ndarray, pad: int) -> float:
