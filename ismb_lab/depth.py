@@ -139,6 +139,21 @@ class DepthConfig:
         ``min_features`` features agrees is still one object, at its silhouette disparity.
     floor_agreed : bool
         Only a background object (agreeing features), not a lone wrong match, can hide outlines.
+    band_cut : bool
+        Two objects in one blob.  The blob is cut in two when it is two pieces in the left image (an
+        empty column between them), its features agree on two bands of disparity ``band_step_px``
+        or more apart, each of ``band_features`` or more features, one band on each piece (a
+        feature, or one in ten, on the wrong side at most), each piece, both moved at once, lies
+        better on the right image's change at its own band's shift than at the other's
+        (:meth:`~ismb_lab.silhouettes.Silhouettes.cut_dice`), and each band lies within
+        ``silhouette_tol_px`` of the shift that lays its piece best
+        (:meth:`~ismb_lab.silhouettes.Silhouettes.cut_shifts`).  The outlines of two objects close
+        together can fit shifts a pixel apart (a cylinder's outline is its farthest part), which
+        joins their blobs; their features tell them apart.
+    band_features : int
+        See `band_cut`.
+    band_step_px : float
+        See `band_cut`.
     focal_px, baseline_m : float
         Focal length in pixels and baseline in metres (> 0); the defaults are
         :data:`ismb_lab.camera.FOCAL_PX` and :data:`~ismb_lab.camera.BASELINE_M` (the thesis' 10 cm rig).
@@ -172,6 +187,9 @@ class DepthConfig:
     outline_alone: bool = True
     silhouette_behind_px: float = 0.0
     floor_agreed: bool = True
+    band_cut: bool = False
+    band_features: int = 3
+    band_step_px: float = 3.0
     focal_px: float = FOCAL_PX
     baseline_m: float = BASELINE_M
     quantisation_px: float = 0.5
@@ -180,19 +198,21 @@ class DepthConfig:
         own = "DepthConfig"
         for name in ("position_tol_px", "disparity_tol_px", "consensus_px", "quantisation_px",
                      "link_disparity_px", "merge_px", "merge_disparity_px", "silhouette_tol_px",
-                     "silhouette_behind_px"):
+                     "silhouette_behind_px", "band_step_px"):
             object.__setattr__(self, name, check_number(getattr(self, name), name, own, low=0))
         for name in ("link_px", "local_px", "focal_px", "baseline_m"):
             object.__setattr__(self, name, check_number(getattr(self, name), name, own,
                                                         low=0, low_open=True))
         object.__setattr__(self, "min_features",
                            check_number(self.min_features, "min_features", own, low=1, integer=True))
+        object.__setattr__(self, "band_features",
+                           check_number(self.band_features, "band_features", own, low=1, integer=True))
         object.__setattr__(self, "silhouette_grow_px",
                            check_number(self.silhouette_grow_px, "silhouette_grow_px", own, low=0, integer=True))
         object.__setattr__(self, "silhouette_score",
                            check_number(self.silhouette_score, "silhouette_score", own, low=0, high=1))
         check_choice(self.grouping, "grouping", own, GROUPINGS)
-        for name in ("in_front", "outline_alone", "floor_agreed"):
+        for name in ("in_front", "outline_alone", "floor_agreed", "band_cut"):
             if not isinstance(getattr(self, name), bool):
                 raise ParameterTypeError(message(name, own, "True or False", getattr(self, name)))
 
@@ -514,6 +534,65 @@ def _on_blobs(xy, silhouettes: Silhouettes, grow: int) -> np.ndarray:
     return labels[ix[:, 1], ix[:, 0]]
 
 
+def _band_cut(idx, feature, first, d, config: DepthConfig, silhouettes: Silhouettes, k: int):
+    """Blob `k` as two objects by two bands of its features (``DepthConfig.band_cut``), or None.
+
+    Returns ``[(rows, centroid, shift), (rows, centroid, shift)]``, left part first, or None when
+    the features or the outline say one object.  The three largest bands are tried in pairs."""
+    from itertools import combinations
+
+    bands = [b for b in _peel(feature[idx], d[idx], config)
+             if len(np.unique(feature[idx][b])) >= config.band_features][:3]
+    for a, b in combinations(bands, 2):
+        cut = _cut_between(idx[a], idx[b], feature, first, d, config, silhouettes, k)
+        if cut is not None:
+            return cut
+    return None
+
+
+def _cut_between(one, two, feature, first, d, config: DepthConfig, silhouettes: Silhouettes, k: int):
+    """:func:`_band_cut` for the bands of match rows `one` and `two`."""
+    rows = [one, two]
+    shift = [float(np.mean(d[r])) for r in rows]
+    if abs(shift[0] - shift[1]) < config.band_step_px:
+        return None
+    x = [np.array([first[f][0] for f in np.unique(feature[r])]) for r in rows]
+    if np.median(x[0]) > np.median(x[1]):
+        rows, shift, x = rows[::-1], shift[::-1], x[::-1]
+    cuts = np.unique(np.concatenate(x))
+    wrong = [np.count_nonzero(x[0] >= c) + np.count_nonzero(x[1] < c) for c in cuts]
+    best = int(np.argmin(wrong))
+    if wrong[best] > max(1, 0.1 * (len(x[0]) + len(x[1]))):
+        return None
+    below = x[0][x[0] < cuts[best]]
+    hi = int(np.ceil(cuts[best]))
+    lo = int(np.floor(below.max())) + 1 if len(below) else hi
+    mask = silhouettes.labels == k
+    own = [int(round(v)) for v in shift]
+    empty = [c for c in range(lo, hi) if not mask[:, c].any()]
+    if not empty:
+        return None             # one piece: a cylinder's outline fits two shifts too
+    column = empty[len(empty) // 2]
+    cols = np.flatnonzero(mask.any(axis=0))
+    if min(column - cols.min(), cols.max() + 1 - column) < 2 * silhouettes.pad_px:
+        return None             # a sliver, as narrow as both paddings, fits almost any shift
+    # Each piece must lie better at its own band's shift than at the other's (both moved at once):
+    # a piece of a striped object whose features match one period off does not.
+    fit = silhouettes.cut_dice(k, column, own)
+    if not fit > max(silhouettes.cut_dice(k, column, [v, v]) for v in own):
+        return None
+    # And each band must agree with the shift its piece's outline takes (both pieces moved at once,
+    # each to its best shift), as a trusted blob's features must (``silhouette_tol_px``, either way:
+    # a cylinder's outline lies behind its front).
+    outline = silhouettes.cut_shifts(k, column, own)
+    if max(abs(a - b) for a, b in zip(shift, outline)) > config.silhouette_tol_px:
+        return None
+    xs = np.arange(mask.shape[1])
+    sides = (xs < column, xs >= column)
+    centroids = [np.argwhere(mask & side[None, :]).mean(axis=0)[::-1] for side in sides]
+    return [(rows[n], centroids[n], shift[n]) for n in (0, 1)]
+
+
 def _objects(feature, xy, d, config: DepthConfig, silhouettes: Silhouettes | None = None,
              trusted=None, infront=None) -> tuple[list, int]:
     """Group matches into objects; returns (objects near -> far, features dropped).
@@ -537,6 +616,13 @@ def _objects(feature, xy, d, config: DepthConfig, silhouettes: Silhouettes | Non
         for k in range(1, len(silhouettes) + 1):
             idx = np.flatnonzero(blob == k)
             dk, score = float(silhouettes.disparity[k - 1]), float(silhouettes.score[k - 1])
+            if config.band_cut and infront[k - 1] and score > 0 and len(idx):
+                two = _band_cut(idx, feature, first, d, config, silhouettes, k)
+                if two is not None:
+                    for rows, centroid, shift in two:
+                        used.update(np.unique(feature[rows]).tolist())
+                        found.append(_object(rows, feature, first, d, config, centroid, (shift, score)))
+                    continue
             if not trusted[k - 1]:
                 if (config.outline_alone and infront[k - 1] and score > 0
                         and not _peel(feature[idx], d[idx], config)):
