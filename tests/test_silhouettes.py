@@ -383,10 +383,25 @@ def test_a_cut_blob_is_measured_with_the_right_image_s_change():
 
 @pytest.mark.parametrize("field, value, error", [("band_features", 0, ParameterError),
                                                  ("band_step_px", -1.0, ParameterError),
+                                                 ("firm_outline", 1.5, ParameterError),
                                                  ("band_cut", "yes", ParameterTypeError)])
-def test_band_cut_options_are_checked(field, value, error):
+def test_band_cut_and_firm_outline_options_are_checked(field, value, error):
     with pytest.raises(error, match=f"'{field}' parameter of DepthConfig"):
         DepthConfig(**{field: value})
+
+
+def test_an_outline_that_fits_firmly_is_not_behind_a_background_matched_one_period_off():
+    """A striped wall at 6 px whose background matches all lie one period off, at 24: the floor is
+    24, and both objects (outlines 17 and 12, Dice 0.99 and 0.9) lie behind it and are lost.  A
+    surface seen in both images at its shift is not behind the wall: with ``firm_outline=0.95`` the
+    firm outline stands in front; the poor one (a sliver like the wall, say) still does not."""
+    wrong = matches([(104, 58, 24.0), (104, 81, 24.0), (104, 106, 24.0), (202, 137, 24.0)])
+    scene = matches([(110, 115, 17.0), (120, 120, 17.0), (210, 115, 12.0), (220, 120, 12.0)])
+    sil = Silhouettes(blob_labels((100, 140, 100, 140), (200, 230, 100, 140)), [17.0, 12.0], [0.99, 0.9],
+                      [[120.0, 120.0], [215.0, 120.0]])
+    assert depth_from_matches(wrong, scene, DepthConfig(firm_outline=None), sil).objects == ()
+    firm = depth_from_matches(wrong, scene, DepthConfig(firm_outline=0.95), sil).objects
+    assert [(o.silhouette_disparity, o.mean_disparity) for o in firm] == [(17.0, 17.0)]
 
 
 def test_silhouettes_must_cover_the_scene():
