@@ -152,6 +152,11 @@ class DepthConfig:
         joins their blobs; their features tell them apart.
     band_features : int
         See `band_cut`.
+    firm_outline : float or None
+        With a number, a blob whose outline fits with a Dice of this or more stands in front of the
+        background whatever the background's matches say: a surface seen in both images at that
+        shift is not behind the wall (the background's matches of a repetitive wall can all be one
+        period off, and put the floor above every object).
     band_step_px : float
         See `band_cut`.
     focal_px, baseline_m : float
@@ -187,9 +192,10 @@ class DepthConfig:
     outline_alone: bool = True
     silhouette_behind_px: float = 0.0
     floor_agreed: bool = True
-    band_cut: bool = False
+    band_cut: bool = True
     band_features: int = 3
     band_step_px: float = 3.0
+    firm_outline: float | None = 0.98
     focal_px: float = FOCAL_PX
     baseline_m: float = BASELINE_M
     quantisation_px: float = 0.5
@@ -205,6 +211,9 @@ class DepthConfig:
                                                         low=0, low_open=True))
         object.__setattr__(self, "min_features",
                            check_number(self.min_features, "min_features", own, low=1, integer=True))
+        if self.firm_outline is not None:
+            object.__setattr__(self, "firm_outline",
+                               check_number(self.firm_outline, "firm_outline", own, low=0, high=1))
         object.__setattr__(self, "band_features",
                            check_number(self.band_features, "band_features", own, low=1, integer=True))
         object.__setattr__(self, "silhouette_grow_px",
@@ -715,6 +724,8 @@ def depth_from_matches(background, scene, config: DepthConfig | None = None,
         infront = np.ones(len(silhouettes), dtype=bool)
         if config.in_front and len(bd) and (background_objects or not config.floor_agreed):
             infront = silhouettes.disparity > bd.min() + config.disparity_tol_px
+            if config.firm_outline is not None:
+                infront |= silhouettes.score >= config.firm_outline
         trusted = (silhouettes.score >= config.silhouette_score) & infront
     objects, dropped = _objects(sf[keep], sxy[keep], sd[keep], config, silhouettes, trusted, infront)
 
