@@ -24,7 +24,8 @@ of the four families and of ``unseen``).  ``--held-out`` runs the held-out split
 The figures of the defaults on both splits, and of every variant tried on the development
 split, are in ``docs/experiments/2026-11-24-depth-layouts.md``,
 ``docs/experiments/2026-11-25-depth-unseen.md``, ``docs/experiments/2026-11-26-depth-unseen-2.md``,
-``docs/experiments/2026-11-26-depth-unseen-3.md`` and ``docs/experiments/2026-11-26-depth-unseen-4.md``.
+``docs/experiments/2026-11-26-depth-unseen-3.md``, ``docs/experiments/2026-11-26-depth-unseen-4.md`` and
+``docs/experiments/2026-11-26-depth-unseen-5.md``.
 
     python scripts/depth_layouts.py --count 360     # development split, 360 layouts (2 min)
     python scripts/depth_layouts.py --count 120 --families unseen     # the unseen family's
@@ -33,6 +34,7 @@ split, are in ``docs/experiments/2026-11-24-depth-layouts.md``,
     python scripts/depth_layouts.py --held-out --seeds-from 1600000 --variants   # the third (spent too)
     python scripts/depth_layouts.py --held-out --seeds-from 1700000 --variants   # the fourth (spent too)
     python scripts/depth_layouts.py --held-out --seeds-from 1800000 --variants   # the fifth (spent too)
+    python scripts/depth_layouts.py --held-out --seeds-from 1900000 --variants   # the sixth (spent too)
     python scripts/depth_layouts.py --held-out --cli                  # through the CLI (3 min)
     python scripts/depth_layouts.py --count 12      # the first 12 (the test's set)
     python scripts/depth_layouts.py --solver assign # a variant: --method, --solver, --set, --blobs

@@ -312,12 +312,13 @@ def test_a_lone_background_match_does_not_put_well_fitting_outlines_behind_the_b
     """The background pair kept one match, a wrong one at 21 px, on a wall at 6.  Both outlines (21
     and 11 px, Dice 0.99) then lie behind the smallest background disparity, so neither is trusted
     and both objects are lost.  With no two background features agreeing on a disparity, there is
-    no floor to lie behind; where the wall's features agree, the floor stays as it was."""
+    no floor to lie behind; where the wall's features agree, the floor stays as it was.  (Outlines
+    this firm stand in front of any floor by default, ``firm_outline``: off here.)"""
     lone = matches([(160, 200, 21.0)])
     scene = matches([(110, 115, 21.0), (210, 115, 11.0)])
     sil = Silhouettes(blob_labels((100, 140, 100, 140), (200, 230, 100, 140)), [21.0, 11.0], [0.99, 0.99],
                       [[120.0, 120.0], [215.0, 120.0]])
-    assert depth_from_matches(lone, scene, DepthConfig(floor_agreed=False), sil).objects == ()
+    assert depth_from_matches(lone, scene, DepthConfig(floor_agreed=False, firm_outline=None), sil).objects == ()
     found = depth_from_matches(lone, scene, None, sil).objects           # the default
     assert [o.silhouette_disparity for o in found] == [21.0, 11.0]
     wall_matches = matches([(x, y, 6.0) for x in range(20, 300, 20) for y in (20, 220)] + [(160, 200, 21.0)])
@@ -325,7 +326,8 @@ def test_a_lone_background_match_does_not_put_well_fitting_outlines_behind_the_b
         r = depth_from_matches(wall_matches, scene, DepthConfig(floor_agreed=floor_agreed), sil)
         assert [o.silhouette_disparity for o in r.objects] == [21.0, 11.0]
     agreeing = matches([(160, 200, 21.0), (170, 200, 21.0)])      # two that agree: a floor, however wrong
-    assert depth_from_matches(agreeing, scene, DepthConfig(floor_agreed=True), sil).objects == ()
+    assert depth_from_matches(agreeing, scene, DepthConfig(floor_agreed=True, firm_outline=None), sil).objects == ()
+    assert len(depth_from_matches(agreeing, scene, None, sil).objects) == 2       # firm outlines
 
 
 def two_pieces(right_shifts=(20, 25), one_piece=False):
@@ -352,7 +354,8 @@ def test_two_objects_in_one_blob_are_cut_apart_by_their_features():
     objects = depth_from_matches(background, matches(left + right), cut, two_pieces()).objects
     assert [(o.mean_disparity, o.n_features) for o in objects] == [(25.0, 4), (20.0, 4)]
     assert [o.centroid_xy for o in objects] == [(169.5, 119.5), (119.5, 119.5)]
-    assert len(depth_from_matches(background, matches(left + right), DepthConfig(), two_pieces()).objects) == 1
+    assert len(depth_from_matches(background, matches(left + right), DepthConfig(band_cut=False),
+                                  two_pieces()).objects) == 1
     # One piece: a cylinder's outline fits two shifts as well.
     assert len(depth_from_matches(background, matches(left + right), cut, two_pieces(one_piece=True)).objects) == 1
     # The right piece's features one period off (33): its outline says 25.
