@@ -83,6 +83,7 @@ from ._validation import ParameterError, ParameterTypeError, check_choice, check
 from .camera import BASELINE_M, FOCAL_PX, StereoCamera
 from .matching import MatchResult
 from .silhouettes import Silhouettes
+from ._grouping import _band_cut, _clusters, _consensus, _local_background, _merge, _on_blobs, _peel
 
 __all__ = ["GROUPINGS", "Depth", "DepthConfig", "DepthObject", "DepthResult", "depth_from_matches", "metric_depth"]
 
@@ -139,6 +140,26 @@ class DepthConfig:
         ``min_features`` features agrees is still one object, at its silhouette disparity.
     floor_agreed : bool
         Only a background object (agreeing features), not a lone wrong match, can hide outlines.
+    band_cut : bool
+        Two objects in one blob.  The blob is cut in two when it is two pieces in the left image (an
+        empty column between them), its features agree on two bands of disparity ``band_step_px``
+        or more apart, each of ``band_features`` or more features, one band on each piece (a
+        feature, or one in ten, on the wrong side at most), each piece, both moved at once, lies
+        better on the right image's change at its own band's shift than at the other's
+        (:meth:`~ismb_lab.silhouettes.Silhouettes.cut_dice`), and each band lies within
+        ``silhouette_tol_px`` of the shift that lays its piece best
+        (:meth:`~ismb_lab.silhouettes.Silhouettes.cut_shifts`).  The outlines of two objects close
+        together can fit shifts a pixel apart (a cylinder's outline is its farthest part), which
+        joins their blobs; their features tell them apart.
+    band_features : int
+        See `band_cut`.
+    firm_outline : float or None
+        With a number, a blob whose outline fits with a Dice of this or more stands in front of the
+        background whatever the background's matches say: a surface seen in both images at that
+        shift is not behind the wall (the background's matches of a repetitive wall can all be one
+        period off, and put the floor above every object).
+    band_step_px : float
+        See `band_cut`.
     focal_px, baseline_m : float
         Focal length in pixels and baseline in metres (> 0); the defaults are
         :data:`ismb_lab.camera.FOCAL_PX` and :data:`~ismb_lab.camera.BASELINE_M` (the thesis' 10 cm rig).
@@ -172,6 +193,10 @@ class DepthConfig:
     outline_alone: bool = True
     silhouette_behind_px: float = 0.0
     floor_agreed: bool = True
+    band_cut: bool = True
+    band_features: int = 3
+    band_step_px: float = 3.0
+    firm_outline: float | None = 0.98
     focal_px: float = FOCAL_PX
     baseline_m: float = BASELINE_M
     quantisation_px: float = 0.5
@@ -180,19 +205,24 @@ class DepthConfig:
         own = "DepthConfig"
         for name in ("position_tol_px", "disparity_tol_px", "consensus_px", "quantisation_px",
                      "link_disparity_px", "merge_px", "merge_disparity_px", "silhouette_tol_px",
-                     "silhouette_behind_px"):
+                     "silhouette_behind_px", "band_step_px"):
             object.__setattr__(self, name, check_number(getattr(self, name), name, own, low=0))
         for name in ("link_px", "local_px", "focal_px", "baseline_m"):
             object.__setattr__(self, name, check_number(getattr(self, name), name, own,
                                                         low=0, low_open=True))
         object.__setattr__(self, "min_features",
                            check_number(self.min_features, "min_features", own, low=1, integer=True))
+        if self.firm_outline is not None:
+            object.__setattr__(self, "firm_outline",
+                               check_number(self.firm_outline, "firm_outline", own, low=0, high=1))
+        object.__setattr__(self, "band_features",
+                           check_number(self.band_features, "band_features", own, low=1, integer=True))
         object.__setattr__(self, "silhouette_grow_px",
                            check_number(self.silhouette_grow_px, "silhouette_grow_px", own, low=0, integer=True))
         object.__setattr__(self, "silhouette_score",
                            check_number(self.silhouette_score, "silhouette_score", own, low=0, high=1))
         check_choice(self.grouping, "grouping", own, GROUPINGS)
-        for name in ("in_front", "outline_alone", "floor_agreed"):
+        for name in ("in_front", "outline_alone", "floor_agreed", "band_cut"):
             if not isinstance(getattr(self, name), bool):
                 raise ParameterTypeError(message(name, own, "True or False", getattr(self, name)))
 
@@ -403,87 +433,6 @@ def _matches(result) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     return result.pairs[:, 0], result.left_match_xy, result.horizontal_disparity
 
 
-def _clusters(xy: np.ndarray, disparities: list, link_px: float, link_disparity_px: float) -> np.ndarray:
-    """Single-linkage labels (0, 1, ...): features linked when near and of a like disparity."""
-    from scipy.sparse import csr_matrix
-    from scipy.sparse.csgraph import connected_components
-
-    near = np.linalg.norm(xy[:, None, :] - xy[None, :, :], axis=2) <= link_px
-    for a, b in zip(*np.nonzero(np.triu(near, 1))):
-        gap = np.min(np.abs(disparities[a][:, None] - disparities[b][None, :]))
-        near[a, b] = near[b, a] = gap <= link_disparity_px
-    return connected_components(csr_matrix(near), directed=False)[1]
-
-
-def _consensus(d: np.ndarray, band: float) -> np.ndarray:
-    """Mask of the matches within `band` of the disparity that most matches agree with."""
-    near = np.abs(d[:, None] - d[None, :]) <= band
-    support = near.sum(axis=1)
-    spread = np.array([d[row].std() for row in near])
-    # Ties go to the tightest band: exact agreement is the stronger evidence.
-    centre = d[np.lexsort((spread, -support))[0]]
-    return np.abs(d - centre) <= band
-
-
-def _local_background(xy, bxy, bd, radius: float) -> np.ndarray:
-    """Smallest background disparity within `radius` of each point (overall where none is)."""
-    dist = np.linalg.norm(xy[:, None, :] - bxy[None, :, :], axis=2)
-    out = np.full(len(xy), float(np.min(bd)))
-    for n, row in enumerate(dist <= radius):
-        if row.any():
-            out[n] = np.min(bd[row])
-    return out
-
-
-def _peel(feature: np.ndarray, d: np.ndarray, config: DepthConfig) -> list:
-    """Consensus bands of one group, largest first: ``[(match mask, ...)]`` until too few features.
-
-    The band that most matches agree with is one object; its features leave the
-    group (with all their matches) and the rest is searched again, so that two
-    objects side by side at different depths, linked through a few in-between
-    matches, come out as two.
-    """
-    left = np.ones(len(d), dtype=bool)
-    bands = []
-    while left.sum():
-        inlier = np.zeros(len(d), dtype=bool)
-        inlier[left] = _consensus(d[left], config.consensus_px)
-        members = np.unique(feature[inlier])
-        if len(members) < config.min_features:
-            break
-        bands.append(inlier)
-        left &= ~np.isin(feature, members)
-    return bands
-
-
-def _merge(parts: list, config: DepthConfig) -> list:
-    """Union of parts (feature index arrays, median disparity, left xy) that are one object.
-
-    Two parts are one object when their median disparities differ by at most
-    ``merge_disparity_px`` and some feature of one lies within ``merge_px`` of
-    some feature of the other: the two halves of a sparsely textured object.
-    """
-    n = len(parts)
-    root = list(range(n))
-
-    def find(a):
-        while root[a] != a:
-            a = root[a]
-        return a
-
-    for a in range(n):
-        for b in range(a + 1, n):
-            if abs(parts[a][1] - parts[b][1]) > config.merge_disparity_px:
-                continue
-            gap = np.linalg.norm(parts[a][2][:, None, :] - parts[b][2][None, :, :], axis=2).min()
-            if gap <= config.merge_px:
-                root[find(b)] = find(a)
-    groups = {}
-    for a in range(n):
-        groups.setdefault(find(a), []).append(a)
-    return [np.concatenate([parts[a][0] for a in members]) for members in groups.values()]
-
-
 def _object(rows, feature, first, d, config: DepthConfig, centroid=None, silhouette=(None, None)) -> DepthObject:
     """One object from its consensus matches `rows` (positions of `feature` and `d`)."""
     members = np.unique(feature[rows])
@@ -499,19 +448,6 @@ def _object(rows, feature, first, d, config: DepthConfig, centroid=None, silhoue
                        readonly(pts), int(len(rows)), int(np.isin(feature, members).sum() - len(rows)),
                        median, float(np.median(np.abs(per_feature - median))) if len(per_feature) else 0.0,
                        *silhouette)
-
-
-def _on_blobs(xy, silhouettes: Silhouettes, grow: int) -> np.ndarray:
-    """Blob label of each left position: the blob within `grow` pixels (0: none)."""
-    from scipy.ndimage import grey_dilation
-
-    labels = silhouettes.labels
-    if grow:
-        # Where two grown blobs meet, a pixel goes to the one it lies on, then the larger label.
-        labels = np.where(labels > 0, labels, grey_dilation(labels, size=2 * grow + 1))
-    h, w = labels.shape
-    ix = np.clip(np.round(xy).astype(int).reshape(-1, 2), 0, [w - 1, h - 1])
-    return labels[ix[:, 1], ix[:, 0]]
 
 
 def _objects(feature, xy, d, config: DepthConfig, silhouettes: Silhouettes | None = None,
@@ -537,6 +473,13 @@ def _objects(feature, xy, d, config: DepthConfig, silhouettes: Silhouettes | Non
         for k in range(1, len(silhouettes) + 1):
             idx = np.flatnonzero(blob == k)
             dk, score = float(silhouettes.disparity[k - 1]), float(silhouettes.score[k - 1])
+            if config.band_cut and infront[k - 1] and score > 0 and len(idx):
+                two = _band_cut(idx, feature, first, d, config, silhouettes, k)
+                if two is not None:
+                    for rows, centroid, shift in two:
+                        used.update(np.unique(feature[rows]).tolist())
+                        found.append(_object(rows, feature, first, d, config, centroid, (shift, score)))
+                    continue
             if not trusted[k - 1]:
                 if (config.outline_alone and infront[k - 1] and score > 0
                         and not _peel(feature[idx], d[idx], config)):
@@ -629,6 +572,8 @@ def depth_from_matches(background, scene, config: DepthConfig | None = None,
         infront = np.ones(len(silhouettes), dtype=bool)
         if config.in_front and len(bd) and (background_objects or not config.floor_agreed):
             infront = silhouettes.disparity > bd.min() + config.disparity_tol_px
+            if config.firm_outline is not None:
+                infront |= silhouettes.score >= config.firm_outline
         trusted = (silhouettes.score >= config.silhouette_score) & infront
     objects, dropped = _objects(sf[keep], sxy[keep], sd[keep], config, silhouettes, trusted, infront)
 

@@ -24,7 +24,8 @@ of the four families and of ``unseen``).  ``--held-out`` runs the held-out split
 The figures of the defaults on both splits, and of every variant tried on the development
 split, are in ``docs/experiments/2026-11-24-depth-layouts.md``,
 ``docs/experiments/2026-11-25-depth-unseen.md``, ``docs/experiments/2026-11-26-depth-unseen-2.md``,
-``docs/experiments/2026-11-26-depth-unseen-3.md`` and ``docs/experiments/2026-11-26-depth-unseen-4.md``.
+``docs/experiments/2026-11-26-depth-unseen-3.md``, ``docs/experiments/2026-11-26-depth-unseen-4.md`` and
+``docs/experiments/2026-11-26-depth-unseen-5.md``.
 
     python scripts/depth_layouts.py --count 360     # development split, 360 layouts (2 min)
     python scripts/depth_layouts.py --count 120 --families unseen     # the unseen family's
@@ -33,6 +34,7 @@ split, are in ``docs/experiments/2026-11-24-depth-layouts.md``,
     python scripts/depth_layouts.py --held-out --seeds-from 1600000 --variants   # the third (spent too)
     python scripts/depth_layouts.py --held-out --seeds-from 1700000 --variants   # the fourth (spent too)
     python scripts/depth_layouts.py --held-out --seeds-from 1800000 --variants   # the fifth (spent too)
+    python scripts/depth_layouts.py --held-out --seeds-from 1900000 --variants   # the sixth (spent too)
     python scripts/depth_layouts.py --held-out --cli                  # through the CLI (3 min)
     python scripts/depth_layouts.py --count 12      # the first 12 (the test's set)
     python scripts/depth_layouts.py --solver assign # a variant: --method, --solver, --set, --blobs
@@ -139,10 +141,12 @@ def describe(layout, result) -> str:
     return f"truth [{truth}] wall {layout.wall_disparity:.1f} shift {layout.shift:g}; found [{found}]"
 
 
-BEFORE = ({"silhouette_score": 0.9, "outline_alone": False, "silhouette_behind_px": 3.0, "floor_agreed": False},
+BEFORE = ({"silhouette_score": 0.9, "outline_alone": False, "silhouette_behind_px": 3.0, "floor_agreed": False,
+           "band_cut": False, "firm_outline": None},
           {"join": False, "split": False, "keep_apart": False, "split_far_px": None, "split_step_px": 2.0,
            "split_placed": False, "join_weak": False})
-RULES = {"silhouette_score": 0.8, "outline_alone": True, "silhouette_behind_px": 3.0, "floor_agreed": False}
+RULES = {"silhouette_score": 0.8, "outline_alone": True, "silhouette_behind_px": 3.0, "floor_agreed": False,
+         "band_cut": False, "firm_outline": None}
 BLOBS = {"join": True, "split": True, "keep_apart": False, "split_far_px": None, "split_step_px": 2.0,
          "split_placed": False, "join_weak": False}
 VARIANTS = {
@@ -167,6 +171,12 @@ VARIANTS.update({
     "weak": (_NOW[0], {**_NOW[1], "join_weak": True}),
     "cut+weak": (_NOW[0], {**_NOW[1], **CUT, "join_weak": True}),
 })
+_NOW = VARIANTS["cut+weak"]
+VARIANTS.update({
+    "band": ({**_NOW[0], "band_cut": True}, _NOW[1]),
+    "firm": ({**_NOW[0], "firm_outline": 0.98}, _NOW[1]),
+    "band+firm": ({**_NOW[0], "band_cut": True, "firm_outline": 0.98}, _NOW[1]),
+})
 """``--variants``: as DepthConfig fields and silhouettes options.  "before" is the defaults up to
 docs/experiments/2026-11-26-depth-unseen-2.md, "rules" the rules of
 docs/experiments/2026-11-25-depth-unseen.md, "apart" and "behind" the rules with the join's test of
@@ -180,7 +190,11 @@ defaults from then to the fourth study.  "cut", "weak" and "cut+weak" add to "fa
 only of parts whose shifts differ by 3 px or more and that, both moved at once, lay no worse than one shift
 (``split_step_px=3, split_placed=True``), and the join of two neighbours neither of which fits
 well (``join_weak=True``): docs/experiments/2026-11-26-depth-unseen-4.md; "cut+weak" is the defaults
-since."""
+from then to the fifth study.  "band", "firm" and "band+firm" add to "cut+weak" the cut of a blob of
+two pieces whose features agree on two disparities (``DepthConfig.band_cut``) and an outline that
+fits with a Dice of 0.98 or more standing in front of the background whatever its matches say
+(``DepthConfig.firm_outline``): docs/experiments/2026-11-26-depth-unseen-5.md; "band+firm" is the
+defaults since."""
 
 
 def run_variants(seed: int, n: int, names, variants: dict, **kw):

@@ -144,15 +144,16 @@ def test_the_join_that_keeps_apart_still_joins_the_pieces_of_one_object(load_scr
 
 
 def test_the_chosen_variant_is_the_defaults(load_script):
-    """docs/experiments/2026-11-26-depth-unseen-4.md chose "cut+weak" as the defaults (after
-    2026-11-26-depth-unseen-3.md had chosen "far+floor" and 2026-11-26-depth-unseen-2.md
-    "apart+behind0"): the demo's own code path (no options) is the variant that was measured."""
+    """docs/experiments/2026-11-26-depth-unseen-5.md chose "band+firm" as the defaults (after
+    2026-11-26-depth-unseen-4.md had chosen "cut+weak", 2026-11-26-depth-unseen-3.md "far+floor" and
+    2026-11-26-depth-unseen-2.md "apart+behind0"): the demo's own code path (no options) is the
+    variant that was measured."""
     import inspect
 
     from ismb_lab.depth import DepthConfig
     from ismb_lab.silhouettes import silhouettes
 
-    fields, blobs = load_script("depth_layouts").VARIANTS["cut+weak"]
+    fields, blobs = load_script("depth_layouts").VARIANTS["band+firm"]
     assert DepthConfig(**fields) == DepthConfig()
     defaults = inspect.signature(silhouettes).parameters
     assert all(defaults[name].default == value for name, value in blobs.items())
@@ -208,4 +209,32 @@ def test_unseen_development_layouts_split_by_far_floor_need_the_placed_cut_or_th
         unregister_family(UNSEEN.name)
     assert out["far+floor"][1] == "split" and out[fix][1] == "ok" and out["cut+weak"][1] == "ok"
     assert out["without"][1] == "split"
+    assert len(out[fix][0].objects) == len(layout.objects)
+
+
+@pytest.mark.parametrize("family, start, n, fix, without", [
+    ("unseen", 1000, 9, "band", {"band_cut": False}),     # cylinders at 20.4 and 24.8 whose outlines fit 21 and 22
+    ("unseen", 5000, 50, "band", {"band_cut": False}),    # a box at 12.5 in pieces that fit its neighbour's 17
+    (None, 1600000, 17, "firm", {"firm_outline": None}),  # repetitive: every background match one period off, at 24
+])
+def test_development_layouts_that_lose_an_object_need_the_band_cut_or_the_firm_outline(
+        load_script, family, start, n, fix, without):
+    """Development layouts of docs/experiments/2026-11-26-depth-unseen-5.md that "cut+weak" ranks
+    "missing": the rule named (`fix`) ranks them right, with one object per object put in, and so do
+    both rules together (the defaults); without the one rule that fixes each, the object is lost
+    again."""
+    from ismb_lab.scenes import UNSEEN, register_family, unregister_family
+
+    script = load_script("depth_layouts")
+    variants = {name: script.VARIANTS[name] for name in ("cut+weak", fix, "band+firm")}
+    variants["without"] = ({**variants["band+firm"][0], **without}, variants["band+firm"][1])
+    if family:
+        register_family(UNSEEN)
+    try:
+        layout, out = script.run_variants(start + n, n, (UNSEEN.name,) if family else None, variants)
+    finally:
+        if family:
+            unregister_family(UNSEEN.name)
+    assert out["cut+weak"][1] == "missing" and out[fix][1] == "ok" and out["band+firm"][1] == "ok"
+    assert out["without"][1] == "missing"
     assert len(out[fix][0].objects) == len(layout.objects)

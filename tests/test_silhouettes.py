@@ -312,12 +312,13 @@ def test_a_lone_background_match_does_not_put_well_fitting_outlines_behind_the_b
     """The background pair kept one match, a wrong one at 21 px, on a wall at 6.  Both outlines (21
     and 11 px, Dice 0.99) then lie behind the smallest background disparity, so neither is trusted
     and both objects are lost.  With no two background features agreeing on a disparity, there is
-    no floor to lie behind; where the wall's features agree, the floor stays as it was."""
+    no floor to lie behind; where the wall's features agree, the floor stays as it was.  (Outlines
+    this firm stand in front of any floor by default, ``firm_outline``: off here.)"""
     lone = matches([(160, 200, 21.0)])
     scene = matches([(110, 115, 21.0), (210, 115, 11.0)])
     sil = Silhouettes(blob_labels((100, 140, 100, 140), (200, 230, 100, 140)), [21.0, 11.0], [0.99, 0.99],
                       [[120.0, 120.0], [215.0, 120.0]])
-    assert depth_from_matches(lone, scene, DepthConfig(floor_agreed=False), sil).objects == ()
+    assert depth_from_matches(lone, scene, DepthConfig(floor_agreed=False, firm_outline=None), sil).objects == ()
     found = depth_from_matches(lone, scene, None, sil).objects           # the default
     assert [o.silhouette_disparity for o in found] == [21.0, 11.0]
     wall_matches = matches([(x, y, 6.0) for x in range(20, 300, 20) for y in (20, 220)] + [(160, 200, 21.0)])
@@ -325,7 +326,85 @@ def test_a_lone_background_match_does_not_put_well_fitting_outlines_behind_the_b
         r = depth_from_matches(wall_matches, scene, DepthConfig(floor_agreed=floor_agreed), sil)
         assert [o.silhouette_disparity for o in r.objects] == [21.0, 11.0]
     agreeing = matches([(160, 200, 21.0), (170, 200, 21.0)])      # two that agree: a floor, however wrong
-    assert depth_from_matches(agreeing, scene, DepthConfig(floor_agreed=True), sil).objects == ()
+    assert depth_from_matches(agreeing, scene, DepthConfig(floor_agreed=True, firm_outline=None), sil).objects == ()
+    assert len(depth_from_matches(agreeing, scene, None, sil).objects) == 2       # firm outlines
+
+
+def two_pieces(right_shifts=(20, 25), one_piece=False):
+    """One blob of two pieces (left columns 100-139 and 150-189, rows 100-139; one piece when
+    `one_piece`), outline 22, and the right image's change: each piece moved by its shift."""
+    labels = blob_labels((100, 190 if one_piece else 140, 100, 140))
+    if not one_piece:
+        labels[100:140, 150:190] = 1
+    right = np.zeros((H, W), dtype=bool)
+    for (x0, x1), d in zip(((100, 140), (150, 190)), right_shifts):
+        right[100:140, x0 - d:x1 - d] = True
+    return Silhouettes(labels, [22.0], [0.97], [[145.0, 120.0]], right, 8, range(0, 41))
+
+
+def test_two_objects_in_one_blob_are_cut_apart_by_their_features():
+    """Two boxes 10 px apart whose outlines fit shifts close enough to make one blob (22): their
+    features say 20 and 25, one band on each piece, and each piece lies best at its band's shift.
+    Without the rule the blob is one object; the cut needs two pieces, bands that agree with the
+    pieces' outlines, and two bands on either side of the gap."""
+    background = matches([(x, y, 6.0) for x in range(20, 300, 20) for y in (20, 220)])
+    left = [(105, 105, 20.0), (115, 115, 20.0), (125, 125, 20.0), (135, 130, 20.0)]
+    right = [(155, 105, 25.0), (165, 115, 25.0), (175, 125, 25.0), (185, 130, 25.0)]
+    cut = DepthConfig(band_cut=True)
+    objects = depth_from_matches(background, matches(left + right), cut, two_pieces()).objects
+    assert [(o.mean_disparity, o.n_features) for o in objects] == [(25.0, 4), (20.0, 4)]
+    assert [o.centroid_xy for o in objects] == [(169.5, 119.5), (119.5, 119.5)]
+    assert len(depth_from_matches(background, matches(left + right), DepthConfig(band_cut=False),
+                                  two_pieces()).objects) == 1
+    # One piece: a cylinder's outline fits two shifts as well.
+    assert len(depth_from_matches(background, matches(left + right), cut, two_pieces(one_piece=True)).objects) == 1
+    # The right piece's features one period off (33): its outline says 25.
+    off = [(x, y, 33.0) for x, y, _ in right]
+    assert len(depth_from_matches(background, matches(left + off), cut, two_pieces()).objects) == 1
+    # Both pieces' outlines at 25: the left piece lies no better at 20 than at 25.
+    assert len(depth_from_matches(background, matches(left + right), cut, two_pieces((25, 25))).objects) == 1
+    # Bands mixed across the gap (two of each band on each piece) say nothing of where to cut.
+    mixed = left[:2] + [(x, y, 25.0) for x, y, _ in left[2:]] + right[:2] + [(x, y, 20.0) for x, y, _ in right[2:]]
+    assert len(depth_from_matches(background, matches(mixed), cut, two_pieces()).objects) == 1
+    # Three features each are enough; two are not (``band_features``).
+    assert len(depth_from_matches(background, matches(left[:3] + right[:3]), cut, two_pieces()).objects) == 2
+    assert len(depth_from_matches(background, matches(left[:2] + right), cut, two_pieces()).objects) == 1
+
+
+def test_a_cut_blob_is_measured_with_the_right_image_s_change():
+    s = two_pieces()
+    assert s.cut_dice(1, 145, (20, 25)) == 1.0 and s.cut_dice(1, 145, (22, 22)) < 0.92
+    assert s.cut_shifts(1, 145, (22, 22)) == (20, 25)
+    bare = Silhouettes(s.labels, s.disparity, s.score, s.centroid_xy)
+    assert np.isnan(bare.cut_dice(1, 145, (20, 25)))
+    with pytest.raises(ParameterError, match="'right' parameter of Silhouettes.cut_shifts"):
+        bare.cut_shifts(1, 145, (20, 25))
+    with pytest.raises(ParameterError, match=r"'right' parameter of Silhouettes must be a mask of the labels' shape"):
+        Silhouettes(s.labels, s.disparity, s.score, s.centroid_xy, np.zeros((4, 4), dtype=bool))
+    assert silhouettes(*pairs_with([(60, 100, 60, 110, 25)])).right.shape == (H, W)
+
+
+@pytest.mark.parametrize("field, value, error", [("band_features", 0, ParameterError),
+                                                 ("band_step_px", -1.0, ParameterError),
+                                                 ("firm_outline", 1.5, ParameterError),
+                                                 ("band_cut", "yes", ParameterTypeError)])
+def test_band_cut_and_firm_outline_options_are_checked(field, value, error):
+    with pytest.raises(error, match=f"'{field}' parameter of DepthConfig"):
+        DepthConfig(**{field: value})
+
+
+def test_an_outline_that_fits_firmly_is_not_behind_a_background_matched_one_period_off():
+    """A striped wall at 6 px whose background matches all lie one period off, at 24: the floor is
+    24, and both objects (outlines 17 and 12, Dice 0.99 and 0.9) lie behind it and are lost.  A
+    surface seen in both images at its shift is not behind the wall: with ``firm_outline=0.95`` the
+    firm outline stands in front; the poor one (a sliver like the wall, say) still does not."""
+    wrong = matches([(104, 58, 24.0), (104, 81, 24.0), (104, 106, 24.0), (202, 137, 24.0)])
+    scene = matches([(110, 115, 17.0), (120, 120, 17.0), (210, 115, 12.0), (220, 120, 12.0)])
+    sil = Silhouettes(blob_labels((100, 140, 100, 140), (200, 230, 100, 140)), [17.0, 12.0], [0.99, 0.9],
+                      [[120.0, 120.0], [215.0, 120.0]])
+    assert depth_from_matches(wrong, scene, DepthConfig(firm_outline=None), sil).objects == ()
+    firm = depth_from_matches(wrong, scene, DepthConfig(firm_outline=0.95), sil).objects
+    assert [(o.silhouette_disparity, o.mean_disparity) for o in firm] == [(17.0, 17.0)]
 
 
 def test_silhouettes_must_cover_the_scene():
