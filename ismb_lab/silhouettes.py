@@ -130,20 +130,7 @@ class Silhouettes:
             raise ParameterError(message("right", "Silhouettes.cut_shifts", "the right image's changed pixels",
                                          None))
         parts, right, line = self._cut_parts(k, column)
-        best = [int(v) for v in start]
-        top = _placed_dice(parts, best, right, self.pad_px, line)
-        for _ in range(3):
-            moved = False
-            for n in (0, 1):
-                for d in self.shifts:
-                    trial = list(best)
-                    trial[n] = d
-                    fit = _placed_dice(parts, trial, right, self.pad_px, line)
-                    if fit > top + 1e-12:
-                        top, best, moved = fit, trial, True
-            if not moved:
-                break
-        return tuple(best)
+        return tuple(int(v) for v in _ascend(parts, start, right, self.shifts, self.pad_px, line)[1])
 
     def _cut_parts(self, k: int, column: int):
         """Blob `k` cut at `column` (left part, right part), the right image's change with holes
@@ -228,19 +215,7 @@ def _two_shifts(parts, start, one: float, right: np.ndarray, shifts, pad: int, f
     The two shifts are found by coordinate ascent from `start` (each part's own padded fit).  Each
     must lie strictly inside `shifts` (a fit at the end of the range is no fit), and each part must
     lie wholly on the right image at its shift (a part across the image border fits any shift)."""
-    d = list(start)
-    best = _placed_dice(parts, d, right, pad)
-    for _ in range(3):
-        moved = False
-        for k in (0, 1):
-            for s in shifts:
-                trial = list(d)
-                trial[k] = s
-                score = _placed_dice(parts, trial, right, pad)
-                if score > best + 1e-12:
-                    best, d, moved = score, trial, True
-        if not moved:
-            break
+    best, d = _ascend(parts, start, right, shifts, pad)
     if abs(d[0] - d[1]) < far or min(d) <= min(shifts) or max(d) >= max(shifts):
         return False
     if any(np.nonzero(part)[1].min() - s < 0 for part, s in zip(parts, d)):
@@ -318,6 +293,25 @@ def _cut(mask: np.ndarray, right: np.ndarray, shifts, min_pixels: int, step: flo
     if far is None:
         return None
     return parts if _two_shifts(parts, own, one, right, shifts, pad, far, far_score) else None
+
+
+def _ascend(parts, start, right: np.ndarray, shifts, pad: int, line=None) -> tuple[float, list]:
+    """The best :func:`_placed_dice` of two `parts` and the shifts that give it: coordinate ascent
+    over `shifts` from `start`, each part in turn, until neither moves (at most three rounds)."""
+    d = list(start)
+    best = _placed_dice(parts, d, right, pad, line)
+    for _ in range(3):
+        moved = False
+        for k in (0, 1):
+            for s in shifts:
+                trial = list(d)
+                trial[k] = s
+                score = _placed_dice(parts, trial, right, pad, line)
+                if score > best + 1e-12:
+                    best, d, moved = score, trial, True
+        if not moved:
+            break
+    return best, d
 
 
 def _placed_dice(parts, shifts, right: np.ndarray, pad: int, line=None) -> float:

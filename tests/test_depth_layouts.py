@@ -18,6 +18,20 @@ pytestmark = pytest.mark.slow     # both tests run the demo on whole layouts (ab
 MEASURED, MARGIN, COUNT = 12, 1, 12
 
 
+def run_on(script, family, seed, n, variants):
+    """``script.run_variants`` of layout `n` from `seed`: of the unseen family when `family` is set
+    (registered for the call only), else of the four."""
+    from ismb_lab.scenes import UNSEEN, register_family, unregister_family
+
+    if family:
+        register_family(UNSEEN)
+    try:
+        return script.run_variants(seed, n, (UNSEEN.name,) if family else None, variants)
+    finally:
+        if family:
+            unregister_family(UNSEEN.name)
+
+
 def test_twelve_fixed_layouts_rank_as_measured_within_thirty_seconds(load_script):
     script = load_script("depth_layouts")
     start = time.perf_counter()
@@ -81,18 +95,12 @@ def test_unseen_development_layouts_the_defaults_get_wrong_are_ranked_right_by_t
     defaults lose or split an object, the rules (join, split, trust at 0.8, the outline alone) rank
     them right, and without the rule that fixes each (`fix`: the variant that leaves it out) it is
     wrong again."""
-    from ismb_lab.scenes import UNSEEN, register_family, unregister_family
-
     script = load_script("depth_layouts")
     rules, blobs = script.VARIANTS["rules"]
     variants = {"before": script.VARIANTS["before"], "rules": (rules, blobs),
                 "no split": (rules, {**blobs, "split": False}), "no join": (rules, {**blobs, "join": False}),
                 "join+split": ({**script.BEFORE[0], "silhouette_score": 0.8}, blobs)}
-    register_family(UNSEEN)
-    try:
-        layout, out = script.run_variants(script.DEV_START + n, n, (UNSEEN.name,), variants)
-    finally:
-        unregister_family(UNSEEN.name)
+    layout, out = run_on(script, "unseen", script.DEV_START + n, n, variants)
     assert len(layout.objects) == 3
     assert out["before"][1] == wrong and out["rules"][1] == "ok" and out[fix][1] != "ok"
     assert len(out["rules"][0].objects) == 3
@@ -108,17 +116,8 @@ def test_development_layouts_the_rules_get_wrong_need_the_join_that_keeps_apart_
         load_script, family, n, wrong, fix):
     """Development layouts (docs/experiments/2026-11-26-depth-unseen-2.md) that the rules of the first
     study rank wrong: the rule named (`fix`) ranks them right, and so do both rules together."""
-    from ismb_lab.scenes import UNSEEN, register_family, unregister_family
-
     script = load_script("depth_layouts")
-    if family:
-        register_family(UNSEEN)
-    try:
-        layout, out = script.run_variants(script.DEV_START + n, n, (UNSEEN.name,) if family else None,
-                                          script.VARIANTS)
-    finally:
-        if family:
-            unregister_family(UNSEEN.name)
+    layout, out = run_on(script, family, script.DEV_START + n, n, script.VARIANTS)
     assert out["rules"][1] == wrong and out[fix][1] == "ok" and out["apart+behind"][1] == "ok"
     assert len(out["apart+behind"][0].objects) == len(layout.objects)
 
@@ -128,18 +127,10 @@ def test_the_join_that_keeps_apart_still_joins_the_pieces_of_one_object(load_scr
     """Development layouts whose objects the rules rank right only by joining pieces (stripes that
     look like the wall, a sliver narrower than the padding): the join that keeps two objects apart
     joins them too."""
-    from ismb_lab.scenes import UNSEEN, register_family, unregister_family
-
     script = load_script("depth_layouts")
     variants = {name: script.VARIANTS[name] for name in ("rules", "apart")}
     variants["no join"] = (variants["rules"][0], {**variants["rules"][1], "join": False})
-    if family:
-        register_family(UNSEEN)
-    try:
-        layout, out = script.run_variants(script.DEV_START + n, n, (UNSEEN.name,) if family else None, variants)
-    finally:
-        if family:
-            unregister_family(UNSEEN.name)
+    layout, out = run_on(script, family, script.DEV_START + n, n, variants)
     assert out["no join"][1] == "split" and out["rules"][1] == "ok" and out["apart"][1] == "ok"
 
 
@@ -169,17 +160,9 @@ def test_development_layouts_that_lose_an_object_need_the_cut_far_apart_or_the_a
     """Development layouts of docs/experiments/2026-11-26-depth-unseen-3.md that the defaults of the
     second study ("apart+behind0") rank "missing": the rule named (`fix`) ranks them right, with one
     object per object put in, and so do both rules together."""
-    from ismb_lab.scenes import UNSEEN, register_family, unregister_family
-
     script = load_script("depth_layouts")
     variants = {name: script.VARIANTS[name] for name in ("apart+behind0", fix, "far+floor")}
-    if family:
-        register_family(UNSEEN)
-    try:
-        layout, out = script.run_variants(start + n, n, (UNSEEN.name,) if family else None, variants)
-    finally:
-        if family:
-            unregister_family(UNSEEN.name)
+    layout, out = run_on(script, family, start + n, n, variants)
     assert out["apart+behind0"][1] == "missing" and out[fix][1] == "ok" and out["far+floor"][1] == "ok"
     assert len(out[fix][0].objects) == len(layout.objects)
 
@@ -197,16 +180,10 @@ def test_unseen_development_layouts_split_by_far_floor_need_the_placed_cut_or_th
     (an object reported twice): the rules named (`fix`) rank them right, with one object per object
     put in, and so do both rules together; without the one rule that fixes each (`without`), the
     object is split again."""
-    from ismb_lab.scenes import UNSEEN, register_family, unregister_family
-
     script = load_script("depth_layouts")
     variants = {name: script.VARIANTS[name] for name in ("far+floor", fix, "cut+weak")}
     variants["without"] = (variants["cut+weak"][0], {**variants["cut+weak"][1], **without})
-    register_family(UNSEEN)
-    try:
-        layout, out = script.run_variants(start + n, n, (UNSEEN.name,), variants)
-    finally:
-        unregister_family(UNSEEN.name)
+    layout, out = run_on(script, "unseen", start + n, n, variants)
     assert out["far+floor"][1] == "split" and out[fix][1] == "ok" and out["cut+weak"][1] == "ok"
     assert out["without"][1] == "split"
     assert len(out[fix][0].objects) == len(layout.objects)
@@ -223,18 +200,10 @@ def test_development_layouts_that_lose_an_object_need_the_band_cut_or_the_firm_o
     "missing": the rule named (`fix`) ranks them right, with one object per object put in, and so do
     both rules together (the defaults); without the one rule that fixes each, the object is lost
     again."""
-    from ismb_lab.scenes import UNSEEN, register_family, unregister_family
-
     script = load_script("depth_layouts")
     variants = {name: script.VARIANTS[name] for name in ("cut+weak", fix, "band+firm")}
     variants["without"] = ({**variants["band+firm"][0], **without}, variants["band+firm"][1])
-    if family:
-        register_family(UNSEEN)
-    try:
-        layout, out = script.run_variants(start + n, n, (UNSEEN.name,) if family else None, variants)
-    finally:
-        if family:
-            unregister_family(UNSEEN.name)
+    layout, out = run_on(script, family, start + n, n, variants)
     assert out["cut+weak"][1] == "missing" and out[fix][1] == "ok" and out["band+firm"][1] == "ok"
     assert out["without"][1] == "missing"
     assert len(out[fix][0].objects) == len(layout.objects)
