@@ -43,7 +43,7 @@ class Silhouettes:
     centroid_xy : (n, 2) ndarray
         Mean left-image ``(x, y)`` of each blob's pixels.
     right : (H, W) bool ndarray or None
-        The right image's changed pixels (read-only), which :meth:`cut_gain` lays the blobs on;
+        The right image's changed pixels (read-only), which :meth:`cut_dice` lays the blobs on;
         None when not known.
     pad_px : int
         Columns on each side that an overlap counts as well (:func:`silhouettes`' `pad_px`).
