@@ -401,7 +401,7 @@ def silhouettes(background, scene, roi="center", *, shifts=range(0, 41), thresho
                 split: bool = True, split_score: float = 0.9, split_step_px: float = 3.0,
                 keep_apart: bool = True, split_far_px: float | None = 5.0,
                 split_far_score: float = 0.94, split_placed: bool = True,
-                join_weak: bool = True) -> Silhouettes:
+                join_weak: bool = True, link_score: float | None = None) -> Silhouettes:
     """Blobs of change of the scene's left image, each with the shift that lays it on the right's.
 
     Where the scene pair differs from the background pair is where the objects are, in
@@ -545,7 +545,10 @@ def silhouettes(background, scene, roi="center", *, shifts=range(0, 41), thresho
     for a, (_, da, (ra, ca)) in enumerate(found):
         for b, (_, db, (rb, cb)) in enumerate(found):
             gap = max(ra.start - rb.stop, rb.start - ra.stop, ca.start - cb.stop, cb.start - ca.stop, 0)
-            link[a, b] |= abs(da - db) <= merge_disparity_px and gap <= merge_gap_px
+            near = abs(da - db) <= merge_disparity_px and gap <= merge_gap_px
+            if near and da != db and link_score is not None:
+                near = min(found[a][0], found[b][0]) < link_score
+            link[a, b] |= near
     group = connected_components(link, directed=False)[1] if len(ks) else np.zeros(0, dtype=int)
     masks = [np.isin(blobs, ks[group == g]) for g in np.unique(group)]
     if join:
