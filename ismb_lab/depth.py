@@ -161,6 +161,23 @@ class DepthConfig:
         period off, and put the floor above every object).
     band_step_px : float
         See `band_cut`.
+    band_one_piece : float or None
+        With a number, `band_cut` cuts a blob of one piece too (two objects that touch in the left
+        image): at the column where the two bands' shifts lay the parts best, when they lay them
+        with a Dice of this or more, better than any one shift lays the blob, and the shifts that lay
+        the parts best are ``band_step_px`` or more apart (a cylinder's features can form two bands,
+        but its outline fits one shift).
+    band_join_px : float or None
+        With a number, two objects of neighbouring blobs, each on ``band_features`` or more
+        features, whose consensus disparities differ by this or less and some of whose features lie
+        within ``link_px`` of each other are one, when one of the two outlines fits with a Dice
+        below ``band_join_score``: the pieces of an object cut where it looks like the wall.
+    band_join_score : float
+        See `band_join_px`.
+    poor_one : bool
+        A blob in front of the background whose outline is not trusted but on which bands of
+        features agree is one object, at the largest band, centred on the blob (not one object per
+        band: the features of a low-contrast object are matched wrong as often as right).
     focal_px, baseline_m : float
         Focal length in pixels and baseline in metres (> 0); the defaults are
         :data:`ismb_lab.camera.FOCAL_PX` and :data:`~ismb_lab.camera.BASELINE_M` (the thesis' 10 cm rig).

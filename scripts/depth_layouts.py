@@ -141,14 +141,15 @@ def describe(layout, result) -> str:
     return f"truth [{truth}] wall {layout.wall_disparity:.1f} shift {layout.shift:g}; found [{found}]"
 
 
+SIXTH_OFF = {"band_one_piece": None, "band_join_px": None, "poor_one": False}
 BEFORE = ({"silhouette_score": 0.9, "outline_alone": False, "silhouette_behind_px": 3.0, "floor_agreed": False,
-           "band_cut": False, "firm_outline": None},
+           "band_cut": False, "firm_outline": None, **SIXTH_OFF},
           {"join": False, "split": False, "keep_apart": False, "split_far_px": None, "split_step_px": 2.0,
-           "split_placed": False, "join_weak": False})
+           "split_placed": False, "join_weak": False, "link_score": None})
 RULES = {"silhouette_score": 0.8, "outline_alone": True, "silhouette_behind_px": 3.0, "floor_agreed": False,
-         "band_cut": False, "firm_outline": None}
+         "band_cut": False, "firm_outline": None, **SIXTH_OFF}
 BLOBS = {"join": True, "split": True, "keep_apart": False, "split_far_px": None, "split_step_px": 2.0,
-         "split_placed": False, "join_weak": False}
+         "split_placed": False, "join_weak": False, "link_score": None}
 VARIANTS = {
     "before": BEFORE,
     "rules": (RULES, BLOBS),
@@ -176,6 +177,16 @@ VARIANTS.update({
     "band": ({**_NOW[0], "band_cut": True}, _NOW[1]),
     "firm": ({**_NOW[0], "firm_outline": 0.98}, _NOW[1]),
     "band+firm": ({**_NOW[0], "band_cut": True, "firm_outline": 0.98}, _NOW[1]),
+})
+_NOW = VARIANTS["band+firm"]
+SIXTH = {"band_one_piece": 0.97, "band_join_px": 1.0, "poor_one": True}
+VARIANTS.update({
+    "link": (_NOW[0], {**_NOW[1], "link_score": 0.9}),
+    "one": ({**_NOW[0], "band_one_piece": 0.97}, _NOW[1]),
+    "join": ({**_NOW[0], "band_join_px": 1.0}, _NOW[1]),
+    "poor": ({**_NOW[0], "poor_one": True}, _NOW[1]),
+    "link+one+join": ({**_NOW[0], "band_one_piece": 0.97, "band_join_px": 1.0}, {**_NOW[1], "link_score": 0.9}),
+    "sixth": ({**_NOW[0], **SIXTH}, {**_NOW[1], "link_score": 0.9}),
 })
 """``--variants``: as DepthConfig fields and silhouettes options.  "before" is the defaults up to
 docs/experiments/2026-11-26-depth-unseen-2.md, "rules" the rules of
