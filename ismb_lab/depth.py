@@ -215,10 +215,10 @@ class DepthConfig:
     band_features: int = 3
     band_step_px: float = 3.0
     firm_outline: float | None = 0.98
-    band_one_piece: float | None = None
-    band_join_px: float | None = None
+    band_one_piece: float | None = 0.97
+    band_join_px: float | None = 1.0
     band_join_score: float = 0.9
-    poor_one: bool = False
+    poor_one: bool = True
     focal_px: float = FOCAL_PX
     baseline_m: float = BASELINE_M
     quantisation_px: float = 0.5

@@ -408,7 +408,7 @@ def silhouettes(background, scene, roi="center", *, shifts=range(0, 41), thresho
                 split: bool = True, split_score: float = 0.9, split_step_px: float = 3.0,
                 keep_apart: bool = True, split_far_px: float | None = 5.0,
                 split_far_score: float = 0.94, split_placed: bool = True,
-                join_weak: bool = True, link_score: float | None = None) -> Silhouettes:
+                join_weak: bool = True, link_score: float | None = 0.9) -> Silhouettes:
     """Blobs of change of the scene's left image, each with the shift that lays it on the right's.
 
     Where the scene pair differs from the background pair is where the objects are, in
