@@ -258,7 +258,10 @@ def test_a_trusted_blob_is_one_object_at_the_disparity_its_features_agree_on_wit
     assert a.mean_disparity == pytest.approx(np.mean([22, 22, 21, 22])) and a.silhouette_score == 0.98
     # B: no feature agrees with its outline, so the outline alone places it.
     assert (b.n_features, b.mean_disparity, b.silhouette_disparity, b.n_matches) == (0, 14.0, 14.0, 0)
-    # C's outline is not trusted (two objects touching, say): its features decide, as without outlines.
+    # C's outline is not trusted (two objects touching, say): one object at its features' band, centred on
+    # the blob (``poor_one``); without that rule its features decide, as without outlines.
+    assert (c.n_features, c.mean_disparity, c.silhouette_disparity, c.centroid_xy) == (3, 10.0, 11.0, (265.0, 120.0))
+    c = depth_from_matches(background, scene, DepthConfig(silhouette_behind_px=3.0, poor_one=False), sil).objects[2]
     assert (c.n_features, c.mean_disparity, c.silhouette_disparity) == (3, 10.0, None)
     # The last outline lies behind the wall: a sliver that looks like the wall, not an object ...
     assert r.silhouettes is sil and r.to_dict()["grouping"] == "silhouettes"
@@ -356,8 +359,9 @@ def test_two_objects_in_one_blob_are_cut_apart_by_their_features():
     assert [o.centroid_xy for o in objects] == [(169.5, 119.5), (119.5, 119.5)]
     assert len(depth_from_matches(background, matches(left + right), DepthConfig(band_cut=False),
                                   two_pieces()).objects) == 1
-    # One piece: a cylinder's outline fits two shifts as well.
-    assert len(depth_from_matches(background, matches(left + right), cut, two_pieces(one_piece=True)).objects) == 1
+    # One piece: a cylinder's outline fits two shifts as well (unless ``band_one_piece`` asks of the outline).
+    assert len(depth_from_matches(background, matches(left + right), DepthConfig(band_one_piece=None),
+                                  two_pieces(one_piece=True)).objects) == 1
     # The right piece's features one period off (33): its outline says 25.
     off = [(x, y, 33.0) for x, y, _ in right]
     assert len(depth_from_matches(background, matches(left + off), cut, two_pieces()).objects) == 1
