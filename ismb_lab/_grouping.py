@@ -142,16 +142,26 @@ def _cut_between(one, two, feature, first, d, config, silhouettes: Silhouettes, 
     mask = silhouettes.labels == k
     own = [int(round(v)) for v in shift]
     empty = [c for c in range(lo, hi) if not mask[:, c].any()]
-    if not empty:
-        return None             # one piece: a cylinder's outline fits two shifts too
-    column = empty[len(empty) // 2]
     cols = np.flatnonzero(mask.any(axis=0))
+    wide = [c for c in range(lo, hi + 1) if min(c - cols.min(), cols.max() + 1 - c) >= 2 * silhouettes.pad_px]
+    if empty:
+        column = empty[len(empty) // 2]
+        one = own
+    elif config.band_one_piece is None or not wide:
+        return None             # one piece: a cylinder's outline fits two shifts too
+    else:
+        # One piece: two objects that touch in the image.  The cut goes where the two shifts lay the
+        # parts best, and the two must lay them firmly and better than any one shift lays the blob.
+        column = max(wide, key=lambda c: silhouettes.cut_dice(k, c, own))
+        if silhouettes.cut_dice(k, column, own) < config.band_one_piece:
+            return None
+        one = silhouettes.shifts
     if min(column - cols.min(), cols.max() + 1 - column) < 2 * silhouettes.pad_px:
         return None             # a sliver, as narrow as both paddings, fits almost any shift
     # Each piece must lie better at its own band's shift than at the other's (both moved at once):
     # a piece of a striped object whose features match one period off does not.
     fit = silhouettes.cut_dice(k, column, own)
-    if not fit > max(silhouettes.cut_dice(k, column, [v, v]) for v in own):
+    if not fit > max(silhouettes.cut_dice(k, column, [v, v]) for v in one):
         return None
     # And each band must agree with the shift its piece's outline takes (both pieces moved at once,
     # each to its best shift), as a trusted blob's features must (``silhouette_tol_px``, either way:
@@ -159,7 +169,45 @@ def _cut_between(one, two, feature, first, d, config, silhouettes: Silhouettes, 
     outline = silhouettes.cut_shifts(k, column, own)
     if max(abs(a - b) for a, b in zip(shift, outline)) > config.silhouette_tol_px:
         return None
+    if not empty and abs(outline[0] - outline[1]) < config.band_step_px:
+        return None             # one piece whose outline sees one shift: a cylinder's bands
     xs = np.arange(mask.shape[1])
     sides = (xs < column, xs >= column)
     centroids = [np.argwhere(mask & side[None, :]).mean(axis=0)[::-1] for side in sides]
     return [(rows[n], centroids[n], shift[n]) for n in (0, 1)]
+
+
+def _join_agreeing(found: list, blobs: list, silhouettes: Silhouettes, config, build) -> list:
+    """Objects of neighbouring blobs whose features agree, joined (``DepthConfig.band_join_px``).
+
+    `found` holds ``(rows, centroid, silhouette)`` per object and `blobs` the blob label of each
+    (None: a part of a cut blob, never joined).  Two objects are one when each rests on
+    ``band_features`` or more features, their consensus disparities differ by ``band_join_px`` or
+    less and some feature of one lies within ``link_px`` of some feature of the other: the halves
+    of one object whose outline fits two shifts (a cylinder cut where it looks like the wall).
+    `build` makes an object of ``(rows, centroid, silhouette)``; the closest pair is joined first."""
+    objects = [build(*f) for f in found]
+    while True:
+        best = None
+        for a in range(len(found)):
+            for b in range(a + 1, len(found)):
+                A, B = objects[a], objects[b]
+                if blobs[a] is None or blobs[b] is None:
+                    continue
+                if min(A.n_features, B.n_features) < config.band_features:
+                    continue
+                if min(A.silhouette_score, B.silhouette_score) >= config.band_join_score:
+                    continue        # two well-seen outlines at their own shifts: two objects
+                gap = abs(A.mean_disparity - B.mean_disparity)
+                near = np.linalg.norm(A.features[:, None, :] - B.features[None, :, :], axis=2).min()
+                if gap <= config.band_join_px and near <= config.link_px and (best is None or gap < best[0]):
+                    best = (gap, a, b)
+        if best is None:
+            return objects
+        _, a, b = best
+        union = np.isin(silhouettes.labels, blobs[a] + blobs[b])
+        rows = np.concatenate([found[a][0], found[b][0]])
+        found[a] = (rows, np.argwhere(union).mean(axis=0)[::-1], found[a][2])
+        blobs[a] = blobs[a] + blobs[b]
+        objects[a] = build(*found[a])
+        del found[b], blobs[b], objects[b]

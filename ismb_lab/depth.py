@@ -83,7 +83,8 @@ from ._validation import ParameterError, ParameterTypeError, check_choice, check
 from .camera import BASELINE_M, FOCAL_PX, StereoCamera
 from .matching import MatchResult
 from .silhouettes import Silhouettes
-from ._grouping import _band_cut, _clusters, _consensus, _local_background, _merge, _on_blobs, _peel
+from ._grouping import (_band_cut, _clusters, _consensus, _join_agreeing, _local_background, _merge, _on_blobs,
+                        _peel)
 
 __all__ = ["GROUPINGS", "Depth", "DepthConfig", "DepthObject", "DepthResult", "depth_from_matches", "metric_depth"]
 
@@ -160,6 +161,23 @@ class DepthConfig:
         period off, and put the floor above every object).
     band_step_px : float
         See `band_cut`.
+    band_one_piece : float or None
+        With a number, `band_cut` cuts a blob of one piece too (two objects that touch in the left
+        image): at the column where the two bands' shifts lay the parts best, when they lay them
+        with a Dice of this or more, better than any one shift lays the blob, and the shifts that lay
+        the parts best are ``band_step_px`` or more apart (a cylinder's features can form two bands,
+        but its outline fits one shift).
+    band_join_px : float or None
+        With a number, two objects of neighbouring blobs, each on ``band_features`` or more
+        features, whose consensus disparities differ by this or less and some of whose features lie
+        within ``link_px`` of each other are one, when one of the two outlines fits with a Dice
+        below ``band_join_score``: the pieces of an object cut where it looks like the wall.
+    band_join_score : float
+        See `band_join_px`.
+    poor_one : bool
+        A blob in front of the background whose outline is not trusted but on which bands of
+        features agree is one object, at the largest band, centred on the blob (not one object per
+        band: the features of a low-contrast object are matched wrong as often as right).
     focal_px, baseline_m : float
         Focal length in pixels and baseline in metres (> 0); the defaults are
         :data:`ismb_lab.camera.FOCAL_PX` and :data:`~ismb_lab.camera.BASELINE_M` (the thesis' 10 cm rig).
@@ -197,6 +215,10 @@ class DepthConfig:
     band_features: int = 3
     band_step_px: float = 3.0
     firm_outline: float | None = 0.98
+    band_one_piece: float | None = 0.97
+    band_join_px: float | None = 1.0
+    band_join_score: float = 0.9
+    poor_one: bool = True
     focal_px: float = FOCAL_PX
     baseline_m: float = BASELINE_M
     quantisation_px: float = 0.5
@@ -215,14 +237,19 @@ class DepthConfig:
         if self.firm_outline is not None:
             object.__setattr__(self, "firm_outline",
                                check_number(self.firm_outline, "firm_outline", own, low=0, high=1))
+        if self.band_one_piece is not None:
+            object.__setattr__(self, "band_one_piece",
+                               check_number(self.band_one_piece, "band_one_piece", own, low=0, high=1))
+        if self.band_join_px is not None:
+            object.__setattr__(self, "band_join_px", check_number(self.band_join_px, "band_join_px", own, low=0))
         object.__setattr__(self, "band_features",
                            check_number(self.band_features, "band_features", own, low=1, integer=True))
         object.__setattr__(self, "silhouette_grow_px",
                            check_number(self.silhouette_grow_px, "silhouette_grow_px", own, low=0, integer=True))
-        object.__setattr__(self, "silhouette_score",
-                           check_number(self.silhouette_score, "silhouette_score", own, low=0, high=1))
+        for name in ("silhouette_score", "band_join_score"):
+            object.__setattr__(self, name, check_number(getattr(self, name), name, own, low=0, high=1))
         check_choice(self.grouping, "grouping", own, GROUPINGS)
-        for name in ("in_front", "outline_alone", "floor_agreed", "band_cut"):
+        for name in ("in_front", "outline_alone", "floor_agreed", "band_cut", "poor_one"):
             if not isinstance(getattr(self, name), bool):
                 raise ParameterTypeError(message(name, own, "True or False", getattr(self, name)))
 
@@ -461,7 +488,7 @@ def _objects(feature, xy, d, config: DepthConfig, silhouettes: Silhouettes | Non
         return [], 0
     first = {f: xy[feature == f][0] for f in features}
     found, parts, used = [], [], set()
-    groups = []
+    groups, outlined, blobs = [], [], []
     if silhouettes is None:
         labels = _clusters(np.array([first[f] for f in features]).reshape(-1, 2),
                            [d[feature == f] for f in features], config.link_px, config.link_disparity_px)
@@ -478,14 +505,22 @@ def _objects(feature, xy, d, config: DepthConfig, silhouettes: Silhouettes | Non
                 if two is not None:
                     for rows, centroid, shift in two:
                         used.update(np.unique(feature[rows]).tolist())
-                        found.append(_object(rows, feature, first, d, config, centroid, (shift, score)))
+                        outlined.append((rows, centroid, (shift, score)))
+                        blobs.append(None)
                     continue
             if not trusted[k - 1]:
                 if (config.outline_alone and infront[k - 1] and score > 0
                         and not _peel(feature[idx], d[idx], config)):
                     # Nothing else tells where it is: the outline alone, however poor its fit.
-                    found.append(_object(idx[:0], feature, first, d, config, silhouettes.centroid_xy[k - 1],
-                                         (dk, score)))
+                    outlined.append((idx[:0], silhouettes.centroid_xy[k - 1], (dk, score)))
+                    blobs.append([k])
+                    continue
+                bands = _peel(feature[idx], d[idx], config) if config.poor_one else []
+                if bands and infront[k - 1] and score > 0:
+                    band = bands[0]
+                    used.update(np.unique(feature[idx[band]]).tolist())
+                    outlined.append((idx[band], silhouettes.centroid_xy[k - 1], (dk, score)))
+                    blobs.append([k])
                     continue
                 groups.append(idx)    # a poor outline: the features decide
                 continue
@@ -494,7 +529,13 @@ def _objects(feature, xy, d, config: DepthConfig, silhouettes: Silhouettes | Non
             near = idx[(gap >= -behind) & (gap <= config.silhouette_tol_px)]
             rows = near[_consensus(d[near], config.consensus_px)] if len(near) else near
             used.update(np.unique(feature[rows]).tolist())
-            found.append(_object(rows, feature, first, d, config, silhouettes.centroid_xy[k - 1], (dk, score)))
+            outlined.append((rows, silhouettes.centroid_xy[k - 1], (dk, score)))
+            blobs.append([k])
+        if config.band_join_px is None:
+            blobs = [None] * len(blobs)
+        found += _join_agreeing(outlined, blobs, silhouettes, config,
+                                lambda rows, centroid, outline: _object(rows, feature, first, d, config,
+                                                                         centroid, outline))
     for idx in groups:
         for band in _peel(feature[idx], d[idx], config):
             rows = idx[band]

@@ -24,8 +24,8 @@ of the four families and of ``unseen``).  ``--held-out`` runs the held-out split
 The figures of the defaults on both splits, and of every variant tried on the development
 split, are in ``docs/experiments/2026-11-24-depth-layouts.md``,
 ``docs/experiments/2026-11-25-depth-unseen.md``, ``docs/experiments/2026-11-26-depth-unseen-2.md``,
-``docs/experiments/2026-11-26-depth-unseen-3.md``, ``docs/experiments/2026-11-26-depth-unseen-4.md`` and
-``docs/experiments/2026-11-26-depth-unseen-5.md``.
+``docs/experiments/2026-11-26-depth-unseen-3.md``, ``docs/experiments/2026-11-26-depth-unseen-4.md``,
+``docs/experiments/2026-11-26-depth-unseen-5.md`` and ``docs/experiments/2026-11-26-depth-unseen-6.md``.
 
     python scripts/depth_layouts.py --count 360     # development split, 360 layouts (2 min)
     python scripts/depth_layouts.py --count 120 --families unseen     # the unseen family's
@@ -35,6 +35,7 @@ split, are in ``docs/experiments/2026-11-24-depth-layouts.md``,
     python scripts/depth_layouts.py --held-out --seeds-from 1700000 --variants   # the fourth (spent too)
     python scripts/depth_layouts.py --held-out --seeds-from 1800000 --variants   # the fifth (spent too)
     python scripts/depth_layouts.py --held-out --seeds-from 1900000 --variants   # the sixth (spent too)
+    python scripts/depth_layouts.py --held-out --seeds-from 1950000 --variants   # the seventh (spent too)
     python scripts/depth_layouts.py --held-out --cli                  # through the CLI (3 min)
     python scripts/depth_layouts.py --count 12      # the first 12 (the test's set)
     python scripts/depth_layouts.py --solver assign # a variant: --method, --solver, --set, --blobs
@@ -141,14 +142,15 @@ def describe(layout, result) -> str:
     return f"truth [{truth}] wall {layout.wall_disparity:.1f} shift {layout.shift:g}; found [{found}]"
 
 
+SIXTH_OFF = {"band_one_piece": None, "band_join_px": None, "poor_one": False}
 BEFORE = ({"silhouette_score": 0.9, "outline_alone": False, "silhouette_behind_px": 3.0, "floor_agreed": False,
-           "band_cut": False, "firm_outline": None},
+           "band_cut": False, "firm_outline": None, **SIXTH_OFF},
           {"join": False, "split": False, "keep_apart": False, "split_far_px": None, "split_step_px": 2.0,
-           "split_placed": False, "join_weak": False})
+           "split_placed": False, "join_weak": False, "link_score": None})
 RULES = {"silhouette_score": 0.8, "outline_alone": True, "silhouette_behind_px": 3.0, "floor_agreed": False,
-         "band_cut": False, "firm_outline": None}
+         "band_cut": False, "firm_outline": None, **SIXTH_OFF}
 BLOBS = {"join": True, "split": True, "keep_apart": False, "split_far_px": None, "split_step_px": 2.0,
-         "split_placed": False, "join_weak": False}
+         "split_placed": False, "join_weak": False, "link_score": None}
 VARIANTS = {
     "before": BEFORE,
     "rules": (RULES, BLOBS),
@@ -177,6 +179,16 @@ VARIANTS.update({
     "firm": ({**_NOW[0], "firm_outline": 0.98}, _NOW[1]),
     "band+firm": ({**_NOW[0], "band_cut": True, "firm_outline": 0.98}, _NOW[1]),
 })
+_NOW = VARIANTS["band+firm"]
+SIXTH = {"band_one_piece": 0.97, "band_join_px": 1.0, "poor_one": True}
+VARIANTS.update({
+    "link": (_NOW[0], {**_NOW[1], "link_score": 0.9}),
+    "one": ({**_NOW[0], "band_one_piece": 0.97}, _NOW[1]),
+    "join": ({**_NOW[0], "band_join_px": 1.0}, _NOW[1]),
+    "poor": ({**_NOW[0], "poor_one": True}, _NOW[1]),
+    "link+one+join": ({**_NOW[0], "band_one_piece": 0.97, "band_join_px": 1.0}, {**_NOW[1], "link_score": 0.9}),
+    "sixth": ({**_NOW[0], **SIXTH}, {**_NOW[1], "link_score": 0.9}),
+})
 """``--variants``: as DepthConfig fields and silhouettes options.  "before" is the defaults up to
 docs/experiments/2026-11-26-depth-unseen-2.md, "rules" the rules of
 docs/experiments/2026-11-25-depth-unseen.md, "apart" and "behind" the rules with the join's test of
@@ -194,7 +206,12 @@ from then to the fifth study.  "band", "firm" and "band+firm" add to "cut+weak" 
 two pieces whose features agree on two disparities (``DepthConfig.band_cut``) and an outline that
 fits with a Dice of 0.98 or more standing in front of the background whatever its matches say
 (``DepthConfig.firm_outline``): docs/experiments/2026-11-26-depth-unseen-5.md; "band+firm" is the
-defaults since."""
+defaults from then to the sixth study.  "link", "one", "join" and "poor" add to "band+firm" the link of
+outline pieces a pixel apart only when one fits poorly (``silhouettes(link_score=0.9)``), the band cut
+of a blob of one piece (``DepthConfig.band_one_piece``), the join of neighbouring objects whose
+features agree (``DepthConfig.band_join_px``) and one object per poorly fitting blob
+(``DepthConfig.poor_one``); "link+one+join" the first three, "sixth" all four:
+docs/experiments/2026-11-26-depth-unseen-6.md; "sixth" is the defaults since."""
 
 
 def run_variants(seed: int, n: int, names, variants: dict, **kw):

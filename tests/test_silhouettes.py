@@ -258,7 +258,10 @@ def test_a_trusted_blob_is_one_object_at_the_disparity_its_features_agree_on_wit
     assert a.mean_disparity == pytest.approx(np.mean([22, 22, 21, 22])) and a.silhouette_score == 0.98
     # B: no feature agrees with its outline, so the outline alone places it.
     assert (b.n_features, b.mean_disparity, b.silhouette_disparity, b.n_matches) == (0, 14.0, 14.0, 0)
-    # C's outline is not trusted (two objects touching, say): its features decide, as without outlines.
+    # C's outline is not trusted (two objects touching, say): one object at its features' band, centred on
+    # the blob (``poor_one``); without that rule its features decide, as without outlines.
+    assert (c.n_features, c.mean_disparity, c.silhouette_disparity, c.centroid_xy) == (3, 10.0, 11.0, (265.0, 120.0))
+    c = depth_from_matches(background, scene, DepthConfig(silhouette_behind_px=3.0, poor_one=False), sil).objects[2]
     assert (c.n_features, c.mean_disparity, c.silhouette_disparity) == (3, 10.0, None)
     # The last outline lies behind the wall: a sliver that looks like the wall, not an object ...
     assert r.silhouettes is sil and r.to_dict()["grouping"] == "silhouettes"
@@ -356,8 +359,9 @@ def test_two_objects_in_one_blob_are_cut_apart_by_their_features():
     assert [o.centroid_xy for o in objects] == [(169.5, 119.5), (119.5, 119.5)]
     assert len(depth_from_matches(background, matches(left + right), DepthConfig(band_cut=False),
                                   two_pieces()).objects) == 1
-    # One piece: a cylinder's outline fits two shifts as well.
-    assert len(depth_from_matches(background, matches(left + right), cut, two_pieces(one_piece=True)).objects) == 1
+    # One piece: a cylinder's outline fits two shifts as well (unless ``band_one_piece`` asks of the outline).
+    assert len(depth_from_matches(background, matches(left + right), DepthConfig(band_one_piece=None),
+                                  two_pieces(one_piece=True)).objects) == 1
     # The right piece's features one period off (33): its outline says 25.
     off = [(x, y, 33.0) for x, y, _ in right]
     assert len(depth_from_matches(background, matches(left + off), cut, two_pieces()).objects) == 1
@@ -458,3 +462,89 @@ def test_a_change_of_light_over_the_whole_view_is_no_outline(gain, offset):
     assert [o.mean_disparity for o in by_outline.objects] == [o.mean_disparity for o in by_features.objects]
     with pytest.raises(ParameterError, match="'max_fraction' parameter of silhouettes"):
         silhouettes(load_pair(bg.left, bg.right), scene, max_fraction=0)
+
+
+def test_outline_pieces_a_pixel_apart_are_linked_only_when_one_fits_poorly():
+    """Two boxes 8 px apart in the image at 14 and 15 px: the link of pieces whose shifts differ by
+    ``merge_disparity_px`` or less makes them one blob and one object is lost.  With ``link_score``
+    two pieces that both fit well stay apart; a piece that fits poorly (half of its change missing
+    in the right image) is still linked to its neighbour."""
+    bg, sc = pairs_with([(100, 140, 80, 150, 14), (148, 190, 90, 160, 15)])
+    assert len(silhouettes(bg, sc, link_score=None)) == 1
+    apart = silhouettes(bg, sc, link_score=0.9)
+    assert apart.disparity.tolist() == [14.0, 15.0] and apart.score.min() > 0.9
+    right = sc.right.copy()
+    right[125:160, 120:190] = bg.right[125:160, 120:190]
+    poor = load_pair(sc.left, right)
+    pieces = silhouettes(bg, poor, link_score=0.9, merge_disparity_px=0, join=False, split=False)
+    assert pieces.disparity.tolist() == [14.0, 15.0] and pieces.score[1] < 0.9
+    assert len(silhouettes(bg, poor, link_score=0.9)) == 1
+
+
+def test_two_objects_that_touch_are_cut_by_their_features_where_the_outline_sees_two_shifts():
+    """``band_one_piece``: one piece (the two boxes of :func:`two_pieces` touch) whose features say
+    20 and 25 is cut when the two shifts lay its parts firmly and the outline itself sees two
+    shifts 3 px or more apart; a one-piece outline at one shift (a cylinder whose features form
+    two bands), at shifts 2 px apart, or laid less firmly than asked, is not cut."""
+    background = matches([(x, y, 6.0) for x in range(20, 300, 20) for y in (20, 220)])
+    scene = matches([(105, 105, 20.0), (115, 115, 20.0), (125, 125, 20.0), (135, 130, 20.0),
+                     (155, 105, 25.0), (165, 115, 25.0), (175, 125, 25.0), (185, 130, 25.0)])
+    cut = DepthConfig(band_one_piece=0.97)
+    objects = depth_from_matches(background, scene, cut, two_pieces(one_piece=True)).objects
+    assert [(o.mean_disparity, o.n_features) for o in objects] == [(25.0, 4), (20.0, 4)]
+    assert objects[0].centroid_xy[0] > 145 > objects[1].centroid_xy[0]
+    assert len(depth_from_matches(background, scene, DepthConfig(band_one_piece=None),
+                                  two_pieces(one_piece=True)).objects) == 1
+    for shifts in ((22, 22), (21, 23)):
+        assert len(depth_from_matches(background, scene, cut, two_pieces(shifts, one_piece=True)).objects) == 1
+    blurred = two_pieces(one_piece=True)
+    right = blurred.right.copy()
+    right[100:112] = False                       # the right image's change misses a band of rows
+    blurred = Silhouettes(blurred.labels, blurred.disparity, blurred.score, blurred.centroid_xy, right, 8,
+                          blurred.shifts)
+    assert blurred.cut_dice(1, 145, (20, 25)) < 0.97
+    assert len(depth_from_matches(background, scene, cut, blurred).objects) == 1
+
+
+def test_neighbouring_objects_whose_features_agree_are_one_when_an_outline_fits_poorly():
+    """``band_join_px``: a cylinder cut into two blobs where it looks like the wall, whose pieces'
+    outlines fit 14 and 16 (Dice 0.9 and 0.82) while their features agree (15.5 and 16), is one
+    object, centred on both blobs.  Two outlines that both fit well are two objects whatever their
+    features say (a box matched like its neighbour)."""
+    background = matches([(x, y, 6.0) for x in range(20, 300, 20) for y in (20, 220)])
+    scene = matches([(110, 110, 15.5), (120, 120, 15.5), (130, 130, 15.5),
+                     (150, 110, 16.0), (160, 120, 16.0), (170, 130, 16.0)])
+    labels = blob_labels((100, 140, 100, 140), (146, 180, 100, 140))
+    centroids = [[119.5, 119.5], [162.5, 119.5]]
+    poor = Silhouettes(labels, [14.0, 16.0], [0.9, 0.82], centroids)
+    joined = depth_from_matches(background, scene, DepthConfig(band_join_px=1.0), poor).objects
+    assert [(o.n_features, o.silhouette_disparity) for o in joined] == [(6, 14.0)]
+    assert joined[0].centroid_xy == pytest.approx(((1600 * 119.5 + 1360 * 162.5) / 2960, 119.5))   # by area
+    assert len(depth_from_matches(background, scene, DepthConfig(band_join_px=None), poor).objects) == 2
+    assert len(depth_from_matches(background, scene, DepthConfig(band_join_px=0.2), poor).objects) == 2
+    firm = Silhouettes(labels, [14.0, 16.0], [0.95, 0.97], centroids)
+    assert len(depth_from_matches(background, scene, DepthConfig(band_join_px=1.0), firm).objects) == 2
+
+
+def test_a_poorly_fitting_outline_is_one_object_at_its_largest_band():
+    """``poor_one``: a blob in front of the wall whose outline fits poorly (Dice 0.7) holds four
+    features at 18 and three at 24 (low contrast, half of them matched wrong).  The features alone
+    make two objects of it; with the rule it is one, at the largest band, centred on the blob."""
+    background = matches([(x, y, 6.0) for x in range(20, 300, 20) for y in (20, 220)])
+    scene = matches([(105, 105, 18.0), (115, 110, 18.0), (125, 125, 18.0), (132, 130, 18.0),
+                     (108, 132, 24.0), (118, 102, 24.0), (128, 112, 24.0)])
+    sil = Silhouettes(blob_labels((100, 140, 100, 140)), [20.0], [0.7], [[119.5, 119.5]])
+    one = depth_from_matches(background, scene, DepthConfig(poor_one=True), sil).objects
+    assert [(o.mean_disparity, o.n_features, o.centroid_xy) for o in one] == [(18.0, 4, (119.5, 119.5))]
+    assert len(depth_from_matches(background, scene, DepthConfig(poor_one=False), sil).objects) == 2
+
+
+@pytest.mark.parametrize("field, value, error", [("band_one_piece", 1.5, ParameterError),
+                                                 ("band_join_px", -1.0, ParameterError),
+                                                 ("band_join_score", 2.0, ParameterError),
+                                                 ("poor_one", 1, ParameterTypeError)])
+def test_the_sixth_study_s_options_are_checked(field, value, error):
+    with pytest.raises(error, match=f"'{field}' parameter of DepthConfig"):
+        DepthConfig(**{field: value})
+    with pytest.raises(ParameterError, match="'link_score' parameter of silhouettes"):
+        silhouettes(*pairs_with([(60, 100, 60, 110, 25)]), link_score=-0.5)
