@@ -23,6 +23,20 @@ import ismb_lab.tuning
 from ismb_lab.cli import main
 
 
+@pytest.fixture(autouse=True)
+def signals_not_ignored():
+    """Each test as a command started from a terminal finds the signals: none ignored.  A test run
+    started under ``nohup`` (or as a background job) inherits SIGHUP (or SIGINT) ignored, and the
+    command rightly leaves an ignored signal ignored (see the last test)."""
+    saved = {sig: signal.getsignal(sig) for sig in (signal.SIGINT, signal.SIGTERM, signal.SIGHUP)}
+    for sig, handler in saved.items():
+        if handler == signal.SIG_IGN:
+            signal.signal(sig, signal.default_int_handler if sig == signal.SIGINT else signal.SIG_DFL)
+    yield
+    for sig, handler in saved.items():
+        signal.signal(sig, handler)
+
+
 @pytest.fixture
 def lab(hard_lab):
     """The pair and targets the GA never fits exactly: it stops only when told."""
@@ -188,3 +202,15 @@ def test_evaluate_signalled_while_writing_its_report_finishes_it(manifest, tmp_p
                  "--generations", "2", "--json", str(out)]) == 128 + signal.SIGTERM
     assert f"the report is complete and written to {out}" in one_line(capsys)
     assert "interrupted" not in json.loads(out.read_text())
+
+
+def test_a_hang_up_ignored_by_nohup_stays_ignored(lab, tmp_path, monkeypatch, capsys):
+    """``nohup ismb-lab tune ...`` asks to run on after a hang-up: the command installs no handler
+    for a signal it inherits ignored, so the hang-up neither stops nor shortens the run."""
+    signal.signal(signal.SIGHUP, signal.SIG_IGN)
+    signal_after_generation(monkeypatch, 1, signal.SIGHUP)
+    out = tmp_path / "params.json"
+    assert tune(lab, out, "--generations", "4") == 0
+    assert "interrupted" not in capsys.readouterr().err
+    data = json.loads(out.read_text())
+    assert data.get("interrupted") is not True and data["generations"] == 4
