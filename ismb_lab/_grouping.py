@@ -1,8 +1,9 @@
 """Grouping a scene's new matches into objects: the steps behind :func:`ismb_lab.depth.depth_from_matches`.
 
 Single linkage of features, the consensus band of a group's disparities and its peeling, the join of
-parts that are one object, the local background, the blob under each feature and the cut of a blob
-in two by its features' bands.  Step 3 and 4 of :mod:`ismb_lab.depth`'s docstring say what each does.
+parts that are one object, the local background, the blob under each feature, the cut of a blob in
+two by its features' bands and the join of neighbouring objects whose features agree.  Step 3 and 4
+of :mod:`ismb_lab.depth`'s docstring say what each does.
 """
 
 from __future__ import annotations
@@ -146,7 +147,7 @@ def _cut_between(one, two, feature, first, d, config, silhouettes: Silhouettes, 
     wide = [c for c in range(lo, hi + 1) if min(c - cols.min(), cols.max() + 1 - c) >= 2 * silhouettes.pad_px]
     if empty:
         column = empty[len(empty) // 2]
-        one = own
+        single = own
     elif config.band_one_piece is None or not wide:
         return None             # one piece: a cylinder's outline fits two shifts too
     else:
@@ -155,13 +156,13 @@ def _cut_between(one, two, feature, first, d, config, silhouettes: Silhouettes, 
         column = max(wide, key=lambda c: silhouettes.cut_dice(k, c, own))
         if silhouettes.cut_dice(k, column, own) < config.band_one_piece:
             return None
-        one = silhouettes.shifts
+        single = silhouettes.shifts
     if min(column - cols.min(), cols.max() + 1 - column) < 2 * silhouettes.pad_px:
         return None             # a sliver, as narrow as both paddings, fits almost any shift
     # Each piece must lie better at its own band's shift than at the other's (both moved at once):
     # a piece of a striped object whose features match one period off does not.
     fit = silhouettes.cut_dice(k, column, own)
-    if not fit > max(silhouettes.cut_dice(k, column, [v, v]) for v in one):
+    if not fit > max(silhouettes.cut_dice(k, column, [v, v]) for v in single):
         return None
     # And each band must agree with the shift its piece's outline takes (both pieces moved at once,
     # each to its best shift), as a trusted blob's features must (``silhouette_tol_px``, either way:
@@ -183,8 +184,9 @@ def _join_agreeing(found: list, blobs: list, silhouettes: Silhouettes, config, b
     `found` holds ``(rows, centroid, silhouette)`` per object and `blobs` the blob label of each
     (None: a part of a cut blob, never joined).  Two objects are one when each rests on
     ``band_features`` or more features, their consensus disparities differ by ``band_join_px`` or
-    less and some feature of one lies within ``link_px`` of some feature of the other: the halves
-    of one object whose outline fits two shifts (a cylinder cut where it looks like the wall).
+    less, some feature of one lies within ``link_px`` of some feature of the other and one of the two
+    outlines fits with a Dice below ``band_join_score``: the pieces of one object cut where it looks
+    like the wall (two outlines that both fit well are two objects, whatever their features say).
     `build` makes an object of ``(rows, centroid, silhouette)``; the closest pair is joined first."""
     objects = [build(*f) for f in found]
     while True:
