@@ -509,16 +509,19 @@ def relative_depth(background, scene, *, method=DEFAULT_METHOD, params=None, mat
     return replace(depth_from_matches(*results, config, blobs), scene_roi=scene_roi)
 
 
-def pair_silhouettes(prepared, *, texture_gain: float | None = 0.09, texture_poor: float | None = 0.9,
+def pair_silhouettes(prepared, *, texture_gain: float | None = None, texture_poor: float | None = None,
                      **options) -> Silhouettes:
     """:func:`~ismb_lab.silhouettes.silhouettes` of two pairs prepared by :func:`depth_pairs`, then
     :func:`~ismb_lab.texture.textured`.
 
     The blobs are sought in the background's ROI, at the whole-pixel shifts of the scene's
     candidate window (the disparities the matcher may find); `options` are passed on
-    (``join=False``, say).  Then the texture inside each blob cuts it where it steps by a share
-    `texture_gain` of its census cost, and moves a blob whose outline fits with a Dice below
-    `texture_poor` to the shift that its texture and outline agree on (None: not done).
+    (``join=False``, say).  With `texture_gain`, the texture inside each blob then cuts it where
+    it steps by that share of its census cost; with `texture_poor`, a blob whose outline fits with
+    a Dice below it moves to the shift that its texture and outline agree on
+    (:func:`~ismb_lab.texture.textured`; 0.09 and 0.9 were tried).  Both are off by default: on a
+    held-out draw they fixed no layout and split one cylinder
+    (docs/experiments/2026-11-26-depth-unseen-7.md).
 
     Examples
     --------

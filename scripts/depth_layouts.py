@@ -216,11 +216,11 @@ outline pieces a pixel apart only when one fits poorly (``silhouettes(link_score
 of a blob of one piece (``DepthConfig.band_one_piece``), the join of neighbouring objects whose
 features agree (``DepthConfig.band_join_px``) and one object per poorly fitting blob
 (``DepthConfig.poor_one``); "link+one+join" the first three, "sixth" all four:
-docs/experiments/2026-11-26-depth-unseen-6.md; "sixth" is the defaults from then to the seventh
-study.  "seventh" adds to "sixth" the texture inside each blob (census costs per column): a cut where
-it steps and a poorly fitting outline moved to the shift its texture and outline agree on
+docs/experiments/2026-11-26-depth-unseen-6.md; "sixth" is the defaults since.  "seventh" adds to
+"sixth" the texture inside each blob (census costs per column): a cut where it steps and a poorly
+fitting outline moved to the shift its texture and outline agree on
 (``pair_silhouettes(texture_gain=0.09, texture_poor=0.9)``, ``ismb_lab.texture.textured``):
-docs/experiments/2026-11-26-depth-unseen-7.md; "seventh" is the defaults since."""
+docs/experiments/2026-11-26-depth-unseen-7.md; it was the defaults for its held-out draw only."""
 
 
 def run_variants(seed: int, n: int, names, variants: dict, **kw):
