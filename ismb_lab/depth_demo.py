@@ -511,8 +511,8 @@ def relative_depth(background, scene, *, method=DEFAULT_METHOD, params=None, mat
 
 def pair_silhouettes(prepared, *, texture_gain: float | None = None, texture_poor: float | None = None,
                      **options) -> Silhouettes:
-    """:func:`~ismb_lab.silhouettes.silhouettes` of two pairs prepared by :func:`depth_pairs`, then
-    :func:`~ismb_lab.texture.textured`.
+    """:func:`~ismb_lab.silhouettes.silhouettes` of two pairs prepared by :func:`depth_pairs` (and,
+    when asked, :func:`~ismb_lab.texture.textured`).
 
     The blobs are sought in the background's ROI, at the whole-pixel shifts of the scene's
     candidate window (the disparities the matcher may find); `options` are passed on

@@ -30,7 +30,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ._validation import ParameterError, message
+from ._validation import ParameterError, ParameterTypeError, check_number, message
 
 __all__ = ["census", "column_costs", "two_shifts", "textured"]
 
@@ -104,7 +104,20 @@ def column_costs(left, right, mask, shifts, erode: int = 2, least: int = 5) -> t
     """
     from scipy.ndimage import binary_erosion
 
+    own = "column_costs"
+    for name, value in (("left", left), ("right", right)):
+        if not (isinstance(value, np.ndarray) and value.ndim == 3 and value.dtype == np.uint8):
+            raise ParameterTypeError(message(name, own, "a census (an (H, W, B) uint8 array)", value))
+    if left.shape != right.shape:
+        raise ParameterError(message("right", own, f"a census of the left one's shape {left.shape}",
+                                     f"shape {right.shape}"))
     mask = np.asarray(mask, dtype=bool)
+    if mask.shape != left.shape[:2]:
+        raise ParameterError(message("mask", own, f"a mask of the images' shape {left.shape[:2]}",
+                                     f"shape {mask.shape}"))
+    erode = check_number(erode, "erode", own, low=0, integer=True)
+    least = check_number(least, "least", own, low=1, integer=True)
+    shifts = [int(check_number(d, "shifts", own, integer=True)) for d in shifts]
     if erode:
         mask = binary_erosion(mask, np.ones((1, 2 * erode + 1), dtype=bool))
     counts = mask.sum(axis=0)
@@ -146,6 +159,11 @@ def two_shifts(costs, wide: int = 16):
     >>> two_shifts(costs, wide=10)
     (1.0, 25, 0, 2)
     """
+    costs = np.asarray(costs, dtype=float)
+    if costs.ndim != 2 or np.isnan(costs).any():
+        raise ParameterError(message("costs", "two_shifts", "a 2-D array of costs without nan",
+                                     f"shape {costs.shape}"))
+    wide = check_number(wide, "wide", "two_shifts", low=1, integer=True)
     n = len(costs)
     if n < 2 * wide:
         return None
@@ -209,8 +227,27 @@ def textured(silhouettes, scene, *, gain: float | None = 0.09, step_px: float = 
         there.
     """
 
+    from .io import StereoPair
     from .silhouettes import Silhouettes
 
+    own = "textured"
+    if not isinstance(silhouettes, Silhouettes) or silhouettes.right is None:
+        raise ParameterTypeError(message("silhouettes", own, "Silhouettes with the right image's change",
+                                         silhouettes))
+    if not isinstance(scene, StereoPair) or scene.shape != silhouettes.labels.shape:
+        raise ParameterTypeError(message("scene", own, f"a StereoPair of shape {silhouettes.labels.shape}",
+                                         scene))
+    gain = None if gain is None else check_number(gain, "gain", own, low=0, high=1)
+    poor = None if poor is None else check_number(poor, "poor", own, low=0, high=1)
+    step_px = check_number(step_px, "step_px", own, low=0)
+    slack = check_number(slack, "slack", own, low=0, high=1)
+    wide = check_number(wide, "wide", own, low=1, integer=True)
+    try:
+        low, high = (int(check_number(v, "window", own, integer=True)) for v in window)
+    except (TypeError, ValueError):
+        raise ParameterTypeError(message("window", own, "two whole pixels (low, high)", window)) from None
+    if low > high:
+        raise ParameterError(message("window", own, "low <= high", window))
     s = silhouettes
     codes = None
     masks, given, changed = [], [], False
@@ -220,7 +257,7 @@ def textured(silhouettes, scene, *, gain: float | None = 0.09, step_px: float = 
         kept = None
         if score > 0 and not np.isnan(dk):
             codes = codes or (census(scene.left), census(scene.right))
-            near = [d for d in s.shifts if int(dk) + window[0] <= d <= int(dk) + window[1]]
+            near = [d for d in s.shifts if int(dk) + low <= d <= int(dk) + high]
             cols, costs = column_costs(*codes, mask, near)
             fine = ~np.isnan(costs).any(axis=1)
             step = two_shifts(costs[fine], wide)

@@ -128,3 +128,29 @@ def test_pair_silhouettes_names_a_wrong_texture_option():
                                  ("texture_gain", "a", TypeError)):
         with pytest.raises(error, match=option):
             pair_silhouettes(prepared, **{option: value})
+
+
+def test_the_texture_functions_name_what_they_refuse():
+    (a,) = textures(0)
+    boxes = [(100, 160, 60, 140, 12, a)]
+    pair, changed = scene(boxes)
+    s = blob(boxes, 5, 0.8, changed)
+    codes = census(pair.left), census(pair.right)
+    mask = s.labels == 1
+    cases = [
+        (lambda: column_costs(pair.left, codes[1], mask, [1]), TypeError, "left"),
+        (lambda: column_costs(codes[0], codes[1][:10], mask, [1]), ValueError, "right"),
+        (lambda: column_costs(*codes, mask[:10], [1]), ValueError, "mask"),
+        (lambda: column_costs(*codes, mask, [1.5]), TypeError, "shifts"),
+        (lambda: two_shifts(np.ones(5)), ValueError, "costs"),
+        (lambda: two_shifts(np.ones((40, 3)), wide=0), ValueError, "wide"),
+        (lambda: textured(pair, pair), TypeError, "silhouettes"),
+        (lambda: textured(s, pair.left), TypeError, "scene"),
+        (lambda: textured(s, pair, gain=2), ValueError, "gain"),
+        (lambda: textured(s, pair, poor=-1), ValueError, "poor"),
+        (lambda: textured(s, pair, window=(6, -4)), ValueError, "window"),
+        (lambda: textured(s, pair, window=3), TypeError, "window"),
+    ]
+    for call, error, name in cases:
+        with pytest.raises(error, match=name):
+            call()
