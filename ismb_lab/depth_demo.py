@@ -49,6 +49,7 @@ from .params import Params
 from .similarity import mean_abs_difference
 from .silhouettes import Silhouettes, changed_in_roi, silhouettes
 from .solvers import ANNEAL, get_solver
+from .texture import textured
 
 __all__ = ["DEPTH_MATCH_CONFIG", "DEPTH_PARAMS", "DEPTH_SOLVER", "MASK_GROW", "REGION_CORNERS",
            "changed_regions", "changed_roi", "depth_match", "depth_pairs",
@@ -508,12 +509,19 @@ def relative_depth(background, scene, *, method=DEFAULT_METHOD, params=None, mat
     return replace(depth_from_matches(*results, config, blobs), scene_roi=scene_roi)
 
 
-def pair_silhouettes(prepared, **options) -> Silhouettes:
-    """:func:`~ismb_lab.silhouettes.silhouettes` of two pairs prepared by :func:`depth_pairs`.
+def pair_silhouettes(prepared, *, texture_gain: float | None = None, texture_poor: float | None = None,
+                     **options) -> Silhouettes:
+    """:func:`~ismb_lab.silhouettes.silhouettes` of two pairs prepared by :func:`depth_pairs` (and,
+    when asked, :func:`~ismb_lab.texture.textured`).
 
     The blobs are sought in the background's ROI, at the whole-pixel shifts of the scene's
     candidate window (the disparities the matcher may find); `options` are passed on
-    (``join=False``, say).
+    (``join=False``, say).  With `texture_gain`, the texture inside each blob then cuts it where
+    it steps by that share of its census cost; with `texture_poor`, a blob whose outline fits with
+    a Dice below it moves to the shift that its texture and outline agree on
+    (:func:`~ismb_lab.texture.textured`; 0.09 and 0.9 were tried).  Both are off by default: on a
+    held-out draw they fixed no layout and split one cylinder
+    (docs/experiments/2026-11-26-depth-unseen-7.md).
 
     Examples
     --------
@@ -522,7 +530,15 @@ def pair_silhouettes(prepared, **options) -> Silhouettes:
     >>> blobs.disparity.tolist()        # the two cars, near one first (left to right)
     [33.0, 25.0]
     """
+    own = "pair_silhouettes"
+    if texture_gain is not None:
+        texture_gain = check_number(texture_gain, "texture_gain", own, low=0, high=1)
+    if texture_poor is not None:
+        texture_poor = check_number(texture_poor, "texture_poor", own, low=0, high=1)
     (background, scene), config = (p.pair for p in prepared), prepared[1].config
     half = float(config.window_width) / 2
     shifts = range(int(np.floor(config.shift - half)), int(np.ceil(config.shift + half)) + 1)
-    return silhouettes(background, scene, prepared[0].config.roi, shifts=shifts, **options)
+    found = silhouettes(background, scene, prepared[0].config.roi, shifts=shifts, **options)
+    if texture_gain is None and texture_poor is None:
+        return found
+    return textured(found, scene, gain=texture_gain, poor=texture_poor)

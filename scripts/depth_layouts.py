@@ -143,14 +143,15 @@ def describe(layout, result) -> str:
 
 
 SIXTH_OFF = {"band_one_piece": None, "band_join_px": None, "poor_one": False}
+SEVENTH_OFF = {"texture_gain": None, "texture_poor": None}
 BEFORE = ({"silhouette_score": 0.9, "outline_alone": False, "silhouette_behind_px": 3.0, "floor_agreed": False,
            "band_cut": False, "firm_outline": None, **SIXTH_OFF},
           {"join": False, "split": False, "keep_apart": False, "split_far_px": None, "split_step_px": 2.0,
-           "split_placed": False, "join_weak": False, "link_score": None})
+           "split_placed": False, "join_weak": False, "link_score": None, **SEVENTH_OFF})
 RULES = {"silhouette_score": 0.8, "outline_alone": True, "silhouette_behind_px": 3.0, "floor_agreed": False,
          "band_cut": False, "firm_outline": None, **SIXTH_OFF}
 BLOBS = {"join": True, "split": True, "keep_apart": False, "split_far_px": None, "split_step_px": 2.0,
-         "split_placed": False, "join_weak": False, "link_score": None}
+         "split_placed": False, "join_weak": False, "link_score": None, **SEVENTH_OFF}
 VARIANTS = {
     "before": BEFORE,
     "rules": (RULES, BLOBS),
@@ -189,6 +190,10 @@ VARIANTS.update({
     "link+one+join": ({**_NOW[0], "band_one_piece": 0.97, "band_join_px": 1.0}, {**_NOW[1], "link_score": 0.9}),
     "sixth": ({**_NOW[0], **SIXTH}, {**_NOW[1], "link_score": 0.9}),
 })
+_NOW = VARIANTS["sixth"]
+VARIANTS.update({
+    "seventh": (_NOW[0], {**_NOW[1], "texture_gain": 0.09, "texture_poor": 0.9}),
+})
 """``--variants``: as DepthConfig fields and silhouettes options.  "before" is the defaults up to
 docs/experiments/2026-11-26-depth-unseen-2.md, "rules" the rules of
 docs/experiments/2026-11-25-depth-unseen.md, "apart" and "behind" the rules with the join's test of
@@ -211,7 +216,11 @@ outline pieces a pixel apart only when one fits poorly (``silhouettes(link_score
 of a blob of one piece (``DepthConfig.band_one_piece``), the join of neighbouring objects whose
 features agree (``DepthConfig.band_join_px``) and one object per poorly fitting blob
 (``DepthConfig.poor_one``); "link+one+join" the first three, "sixth" all four:
-docs/experiments/2026-11-26-depth-unseen-6.md; "sixth" is the defaults since."""
+docs/experiments/2026-11-26-depth-unseen-6.md; "sixth" is the defaults since.  "seventh" adds to
+"sixth" the texture inside each blob (census costs per column): a cut where it steps and a poorly
+fitting outline moved to the shift its texture and outline agree on
+(``pair_silhouettes(texture_gain=0.09, texture_poor=0.9)``, ``ismb_lab.texture.textured``):
+docs/experiments/2026-11-26-depth-unseen-7.md; it was the defaults for its held-out draw only."""
 
 
 def run_variants(seed: int, n: int, names, variants: dict, **kw):

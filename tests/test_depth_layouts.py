@@ -137,16 +137,18 @@ def test_the_join_that_keeps_apart_still_joins_the_pieces_of_one_object(load_scr
 def test_the_chosen_variant_is_the_defaults(load_script):
     """docs/experiments/2026-11-26-depth-unseen-6.md chose "sixth" as the defaults (after
     2026-11-26-depth-unseen-5.md had chosen "band+firm", 2026-11-26-depth-unseen-4.md "cut+weak",
-    2026-11-26-depth-unseen-3.md "far+floor" and 2026-11-26-depth-unseen-2.md "apart+behind0"): the
+    2026-11-26-depth-unseen-3.md "far+floor" and 2026-11-26-depth-unseen-2.md "apart+behind0";
+    2026-11-26-depth-unseen-7.md's "seventh" was the defaults for its held-out draw only): the
     demo's own code path (no options) is the variant that was measured."""
     import inspect
 
     from ismb_lab.depth import DepthConfig
+    from ismb_lab.depth_demo import pair_silhouettes
     from ismb_lab.silhouettes import silhouettes
 
     fields, blobs = load_script("depth_layouts").VARIANTS["sixth"]
     assert DepthConfig(**fields) == DepthConfig()
-    defaults = inspect.signature(silhouettes).parameters
+    defaults = {**inspect.signature(silhouettes).parameters, **inspect.signature(pair_silhouettes).parameters}
     assert all(defaults[name].default == value for name, value in blobs.items())
 
 
@@ -228,3 +230,24 @@ def test_unseen_development_layouts_need_the_sixth_study_s_rules(load_script, st
     assert out["band+firm"][1] != "ok" and out[fix][1] == "ok" and out["sixth"][1] == "ok"
     assert out["without"][1] == out["band+firm"][1]
     assert len(out[fix][0].objects) == len(layout.objects)
+
+
+@pytest.mark.parametrize("start, n, without", [
+    (5000, 39, {"texture_gain": None}),      # a cylinder at 20.2 touching a box at 16.6: outline 17
+    (1800000, 107, {"texture_gain": None}),  # boxes at 15.3 and 11.6 in one blob, outline 15
+    (1800000, 87, {"texture_poor": None}),   # a cylinder at 25.7 in two poor blobs, one fitting -4
+    (1950000, 57, {"texture_poor": None}),   # a box 20 px wide at 10.5 whose outline puts it at the wall
+])
+def test_unseen_development_layouts_need_the_texture(load_script, start, n, without):
+    """Unseen development layouts of docs/experiments/2026-11-26-depth-unseen-7.md that "sixth" ranks
+    wrong (an object lost or split): the texture's cut or move ranks each right ("seventh"), with one
+    object per object put in; without the one that fixes it, the layout is ranked wrong again the same
+    way."""
+    script = load_script("depth_layouts")
+    variants = {name: script.VARIANTS[name] for name in ("sixth", "seventh")}
+    fields, blobs = variants["seventh"]
+    variants["without"] = (fields, {**blobs, **without})
+    layout, out = run_on(script, "unseen", start + n, n, variants)
+    assert out["sixth"][1] != "ok" and out["seventh"][1] == "ok"
+    assert out["without"][1] == out["sixth"][1]
+    assert len(out["seventh"][0].objects) == len(layout.objects)
