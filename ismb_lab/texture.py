@@ -198,6 +198,29 @@ def _agreed(left, right, part, silhouettes):
     return shifts[j], float(dice[j])
 
 
+def _cut(s, k, mask, codes, near, gain, step_px, wide, slack):
+    """Blob `k`'s two parts and their agreed ``(shift, Dice)`` where its texture steps (see
+    :func:`textured`), or None."""
+    cols, costs = column_costs(*codes, mask, near)
+    fine = ~np.isnan(costs).any(axis=1)
+    step = two_shifts(costs[fine], wide)
+    if step is None or step[0] < gain or abs(near[step[2]] - near[step[3]]) < step_px:
+        return None
+    cut = int(cols[fine][step[1]])
+    left = mask.copy()
+    left[:, cut:] = False
+    parts = [left, mask & ~left]
+    agreed = [_agreed(*codes, p, s) for p in parts]
+    if None in agreed or abs(agreed[0][0] - agreed[1][0]) < step_px:
+        return None
+    if abs(agreed[0][0] - near[step[2]]) > 1 or abs(agreed[1][0] - near[step[3]]) > 1:
+        return None             # the texture's step and the parts' own shifts disagree
+    single = max(s.cut_dice(k, cut, (d, d)) for d in s.shifts)
+    if s.cut_dice(k, cut, (agreed[0][0], agreed[1][0])) < single - slack:
+        return None
+    return parts, agreed
+
+
 def textured(silhouettes, scene, *, gain: float | None = 0.09, step_px: float = 3.0,
              poor: float | None = 0.9, window=(-4, 6), wide: int = 16, slack: float = 0.01):
     """`silhouettes` with blobs cut, and poorly fitting outlines moved, where the texture says so.
@@ -209,9 +232,10 @@ def textured(silhouettes, scene, *, gain: float | None = 0.09, step_px: float = 
     scene : StereoPair
         The pair whose texture is compared.
     gain, step_px, window, wide : float or None, float, (int, int), int
-        With a `gain` (None: no cut), a blob with an outline is cut where its columns' census costs, over the shifts from its
-        outline's plus ``window[0]`` to plus ``window[1]``, fall by a share `gain` or more with
-        two shifts `step_px` or more apart (:func:`two_shifts`, each side `wide` columns or more).
+        With a `gain` (None: no cut), a blob with an outline is cut where its columns' census
+        costs, over the shifts from its outline's plus ``window[0]`` to plus ``window[1]``, fall
+        by a share `gain` or more with two shifts `step_px` or more apart (:func:`two_shifts`,
+        each side `wide` columns or more).
         Each part's shift must then be, by its texture and its outline together, within 1 px of
         the cut's and `step_px` or more from the other part's, and both parts moved at once by those
         shifts must lie within `slack` (Dice) of the best single shift's fit.
@@ -226,7 +250,6 @@ def textured(silhouettes, scene, *, gain: float | None = 0.09, step_px: float = 
         blob's disparity and score being the shift its texture and outline agree on and the Dice
         there.
     """
-
     from .io import StereoPair
     from .silhouettes import Silhouettes
 
@@ -249,29 +272,17 @@ def textured(silhouettes, scene, *, gain: float | None = 0.09, step_px: float = 
     if low > high:
         raise ParameterError(message("window", own, "low <= high", window))
     s = silhouettes
-    codes = None
+    codes = []          # both images' census, made when first needed
     masks, given, changed = [], [], False
     for k in range(1, len(s) + 1):
         mask = s.labels == k
         dk, score = float(s.disparity[k - 1]), float(s.score[k - 1])
         kept = None
-        if score > 0 and not np.isnan(dk):
-            codes = codes or (census(scene.left), census(scene.right))
-            near = [d for d in s.shifts if int(dk) + low <= d <= int(dk) + high]
-            cols, costs = column_costs(*codes, mask, near)
-            fine = ~np.isnan(costs).any(axis=1)
-            step = two_shifts(costs[fine], wide)
-            if gain is not None and step is not None and step[0] >= gain and abs(near[step[2]] - near[step[3]]) >= step_px:
-                cut = int(cols[fine][step[1]])
-                left = mask.copy()
-                left[:, cut:] = False
-                parts = [left, mask & ~left]
-                agreed = [_agreed(*codes, p, s) for p in parts]
-                if (None not in agreed and abs(agreed[0][0] - agreed[1][0]) >= step_px
-                        and abs(agreed[0][0] - near[step[2]]) <= 1 and abs(agreed[1][0] - near[step[3]]) <= 1):
-                    single = max(s.cut_dice(k, cut, (d, d)) for d in s.shifts)
-                    if s.cut_dice(k, cut, (agreed[0][0], agreed[1][0])) >= single - slack:
-                        kept = (parts, agreed)
+        if score > 0 and not np.isnan(dk) and (gain is not None or (poor is not None and score < poor)):
+            codes = codes or [census(scene.left), census(scene.right)]
+            if gain is not None:
+                near = [d for d in s.shifts if int(dk) + low <= d <= int(dk) + high]
+                kept = _cut(s, k, mask, codes, near, gain, step_px, wide, slack)
             if kept is None and poor is not None and score < poor:
                 moved = _agreed(*codes, mask, s)
                 if moved is not None and moved[0] != dk:
