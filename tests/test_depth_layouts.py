@@ -251,3 +251,18 @@ def test_unseen_development_layouts_need_the_texture(load_script, start, n, with
     assert out["sixth"][1] != "ok" and out["seventh"][1] == "ok"
     assert out["without"][1] == out["sixth"][1]
     assert len(out["seventh"][0].objects) == len(layout.objects)
+
+
+def test_a_repetitive_development_layout_needs_the_firm_outline_from_0_95(load_script):
+    """Repetitive 2000069 of docs/experiments/2026-11-26-depth-unseen-8.md: every background match
+    lies a period or two off the wall (the floor at 15), and a cylinder at 15.2 with no feature on it
+    fits shift 15 with a Dice of 0.973.  "sixth" (firm from 0.98) drops it; "eighth" (from 0.95)
+    keeps it and ranks the layout right, with one object per object put in."""
+    script = load_script("depth_layouts")
+    variants = {name: script.VARIANTS[name] for name in ("sixth", "eighth")}
+    layout, out = run_on(script, None, 2000069, 69, variants)
+    assert out["sixth"][1] == "missing" and out["eighth"][1] == "ok"
+    assert len(out["eighth"][0].objects) == len(layout.objects)
+    kept = [o for o in out["eighth"][0].objects if o.n_features == 0]
+    assert [round(o.silhouette_disparity) for o in kept] == [15]
+    assert 0.95 <= kept[0].silhouette_score < 0.98
