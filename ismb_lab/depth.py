@@ -158,7 +158,9 @@ class DepthConfig:
         With a number, a blob whose outline fits with a Dice of this or more stands in front of the
         background whatever the background's matches say: a surface seen in both images at that
         shift is not behind the wall (the background's matches of a repetitive wall can all be one
-        period off, and put the floor above every object).
+        period off, and put the floor above every object).  0.95: the middle of the values (0.93-0.97)
+        that lose the fewest objects on docs/experiments/2026-11-26-depth-unseen-8.md's development
+        layouts.
     band_step_px : float
         See `band_cut`.
     band_one_piece : float or None
@@ -214,7 +216,7 @@ class DepthConfig:
     band_cut: bool = True
     band_features: int = 3
     band_step_px: float = 3.0
-    firm_outline: float | None = 0.98
+    firm_outline: float | None = 0.95
     band_one_piece: float | None = 0.97
     band_join_px: float | None = 1.0
     band_join_score: float = 0.9

@@ -36,6 +36,8 @@ split, are in ``docs/experiments/2026-11-24-depth-layouts.md``,
     python scripts/depth_layouts.py --held-out --seeds-from 1800000 --variants   # the fifth (spent too)
     python scripts/depth_layouts.py --held-out --seeds-from 1900000 --variants   # the sixth (spent too)
     python scripts/depth_layouts.py --held-out --seeds-from 1950000 --variants   # the seventh (spent too)
+    python scripts/depth_layouts.py --held-out --seeds-from 2000000 --variants   # the eighth (spent too)
+    python scripts/depth_layouts.py --held-out --seeds-from 2050000 --variants   # the ninth
     python scripts/depth_layouts.py --held-out --cli                  # through the CLI (3 min)
     python scripts/depth_layouts.py --count 12      # the first 12 (the test's set)
     python scripts/depth_layouts.py --solver assign # a variant: --method, --solver, --set, --blobs
@@ -193,6 +195,7 @@ VARIANTS.update({
 _NOW = VARIANTS["sixth"]
 VARIANTS.update({
     "seventh": (_NOW[0], {**_NOW[1], "texture_gain": 0.09, "texture_poor": 0.9}),
+    "eighth": ({**_NOW[0], "firm_outline": 0.95}, _NOW[1]),
 })
 """``--variants``: as DepthConfig fields and silhouettes options.  "before" is the defaults up to
 docs/experiments/2026-11-26-depth-unseen-2.md, "rules" the rules of
@@ -220,7 +223,9 @@ docs/experiments/2026-11-26-depth-unseen-6.md; "sixth" is the defaults since.  "
 "sixth" the texture inside each blob (census costs per column): a cut where it steps and a poorly
 fitting outline moved to the shift its texture and outline agree on
 (``pair_silhouettes(texture_gain=0.09, texture_poor=0.9)``, ``ismb_lab.texture.textured``):
-docs/experiments/2026-11-26-depth-unseen-7.md; it was the defaults for its held-out draw only."""
+docs/experiments/2026-11-26-depth-unseen-7.md; it was the defaults for its held-out draw only.
+"eighth" is "sixth" with a firm outline from a Dice of 0.95 (``DepthConfig(firm_outline=0.95)``):
+docs/experiments/2026-11-26-depth-unseen-8.md."""
 
 
 def run_variants(seed: int, n: int, names, variants: dict, **kw):

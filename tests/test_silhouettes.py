@@ -250,7 +250,7 @@ def test_a_trusted_blob_is_one_object_at_the_disparity_its_features_agree_on_wit
                      (60, 60, 18.0), (62, 66, 18.0),                                          # on no blob
                      (255, 105, 10.0), (265, 115, 10.0), (275, 125, 10.0)])                   # C
     labels = blob_labels((100, 140, 100, 140), (200, 230, 100, 140), (250, 280, 100, 140), (290, 300, 100, 140))
-    sil = Silhouettes(labels, [22.0, 14.0, 11.0, -2.0], [0.98, 0.97, 0.5, 0.95],
+    sil = Silhouettes(labels, [22.0, 14.0, 11.0, -2.0], [0.98, 0.97, 0.5, 0.93],
                       [[120.0, 120.0], [215.0, 120.0], [265.0, 120.0], [295.0, 120.0]])
     r = depth_from_matches(background, scene, DepthConfig(silhouette_behind_px=3.0), sil)
     a, b, c = r.objects
@@ -263,7 +263,8 @@ def test_a_trusted_blob_is_one_object_at_the_disparity_its_features_agree_on_wit
     assert (c.n_features, c.mean_disparity, c.silhouette_disparity, c.centroid_xy) == (3, 10.0, 11.0, (265.0, 120.0))
     c = depth_from_matches(background, scene, DepthConfig(silhouette_behind_px=3.0, poor_one=False), sil).objects[2]
     assert (c.n_features, c.mean_disparity, c.silhouette_disparity) == (3, 10.0, None)
-    # The last outline lies behind the wall: a sliver that looks like the wall, not an object ...
+    # The last outline lies behind the wall and fits below ``firm_outline``: a sliver that looks like
+    # the wall, not an object ...
     assert r.silhouettes is sil and r.to_dict()["grouping"] == "silhouettes"
     # ... unless objects need not stand in front of the background.
     behind = depth_from_matches(background, scene, DepthConfig(in_front=False), sil)
