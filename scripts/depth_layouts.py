@@ -37,7 +37,8 @@ split, are in ``docs/experiments/2026-11-24-depth-layouts.md``,
     python scripts/depth_layouts.py --held-out --seeds-from 1900000 --variants   # the sixth (spent too)
     python scripts/depth_layouts.py --held-out --seeds-from 1950000 --variants   # the seventh (spent too)
     python scripts/depth_layouts.py --held-out --seeds-from 2000000 --variants   # the eighth (spent too)
-    python scripts/depth_layouts.py --held-out --seeds-from 2050000 --variants   # the ninth
+    python scripts/depth_layouts.py --held-out --seeds-from 2050000 --variants   # the ninth (spent too)
+    python scripts/depth_layouts.py --held-out --seeds-from 2100000 --variants   # the tenth (spent too)
     python scripts/depth_layouts.py --held-out --cli                  # through the CLI (3 min)
     python scripts/depth_layouts.py --count 12      # the first 12 (the test's set)
     python scripts/depth_layouts.py --solver assign # a variant: --method, --solver, --set, --blobs
@@ -287,13 +288,24 @@ def main(argv=None) -> int:
         overrides[name] = {"int": int, "str": str, "bool": lambda v: v == "True"}.get(fields[name], float)(value)
     config = DepthConfig(**overrides)
     blobs = {}
+    flags = ("join", "split", "keep_apart", "split_placed", "join_weak")
+    numbers = ("split_score", "split_step_px", "split_far_score")
+    optional = ("split_far_px", "split_far_poor_px", "link_score", "texture_gain", "texture_poor")
     for item in args.blobs:
         name, _, value = item.partition("=")
-        flags = ("join", "split", "keep_apart", "split_placed", "join_weak")
-        if name not in (*flags, "split_score", "split_step_px", "split_far_px", "split_far_score"):
-            parser.error(f"--blobs {item}: not {', '.join(flags)}, split_score, split_step_px, "
-                         "split_far_px or split_far_score")
-        blobs[name] = value == "True" if name in flags else float(value)
+        if name not in (*flags, *numbers, *optional):
+            parser.error(f"--blobs {item}: not one of {', '.join((*flags, *numbers, *optional))}")
+        if name in flags:
+            if value not in ("True", "False"):
+                parser.error(f"--blobs {item}: {name} takes True or False")
+            blobs[name] = value == "True"
+        elif name in optional and value == "None":
+            blobs[name] = None
+        else:
+            try:
+                blobs[name] = float(value)
+            except ValueError:
+                parser.error(f"--blobs {item}: {name} takes a number" + (" or None" if name in optional else ""))
     names = families() if args.families is None else tuple(args.families.split(","))
     if UNSEEN.name in names and UNSEEN.name not in families():
         register_family(UNSEEN)
