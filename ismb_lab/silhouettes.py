@@ -208,7 +208,7 @@ def _best_shift(mask: np.ndarray, rows: slice, cols: slice, right: np.ndarray, s
 
 
 def _two_shifts(parts, start, one: float, right: np.ndarray, shifts, pad: int, far: float,
-                least: float):
+                least: float, poor: float | None = None, fair: float = 0.9):
     """Whether two shifts `far` or more apart, one per part, lay `parts` on `right` better than
     `one`, the best Dice of their union at a single shift, both counted as one overlap over the
     same padded columns (:func:`_placed_dice`), by at least 0.01, while `one` is `least` or more
@@ -216,17 +216,25 @@ def _two_shifts(parts, start, one: float, right: np.ndarray, shifts, pad: int, f
 
     The two shifts are found by coordinate ascent from `start` (each part's own padded fit).  Each
     must lie strictly inside `shifts` (a fit at the end of the range is no fit), and each part must
-    lie wholly on the right image at its shift (a part across the image border fits any shift)."""
+    lie wholly on the right image at its shift (a part across the image border fits any shift).
+
+    With `poor`, a whole that fits with a Dice from `fair` up to `least` passes as well when the two
+    shifts lie `poor` or more apart and lay both parts with `least` or more: two objects far apart in
+    depth that touch in the image are what makes one shift fit them poorly."""
     best, d = _ascend(parts, start, right, shifts, pad)
     if abs(d[0] - d[1]) < far or min(d) <= min(shifts) or max(d) >= max(shifts):
         return False
     if any(np.nonzero(part)[1].min() - s < 0 for part, s in zip(parts, d)):
         return False
-    return one >= least and best >= one + 0.01
+    if one >= least:
+        return best >= one + 0.01
+    return (poor is not None and one >= fair and abs(d[0] - d[1]) >= poor and best >= least
+            and best >= one + 0.01)
 
 
 def _cut(mask: np.ndarray, right: np.ndarray, shifts, min_pixels: int, step: float, least: float,
-         pad: int, far: float | None = None, far_score: float = 0.9, placed: bool = False):
+         pad: int, far: float | None = None, far_score: float = 0.9, placed: bool = False,
+         far_poor: float | None = None):
     """Two objects side by side in one blob: the column that cuts `mask` into a left and a right
     part that two shifts lay on `right` better (Dice) than one shift lays the whole, or None.
 
@@ -294,7 +302,7 @@ def _cut(mask: np.ndarray, right: np.ndarray, shifts, min_pixels: int, step: flo
     # touch: then ask whether two shifts far apart lay both parts at once better than one shift.
     if far is None:
         return None
-    return parts if _two_shifts(parts, own, one, right, shifts, pad, far, far_score) else None
+    return parts if _two_shifts(parts, own, one, right, shifts, pad, far, far_score, far_poor, least) else None
 
 
 def _ascend(parts, start, right: np.ndarray, shifts, pad: int, line=None) -> tuple[float, list]:
@@ -408,7 +416,8 @@ def silhouettes(background, scene, roi="center", *, shifts=range(0, 41), thresho
                 split: bool = True, split_score: float = 0.9, split_step_px: float = 3.0,
                 keep_apart: bool = True, split_far_px: float | None = 5.0,
                 split_far_score: float = 0.94, split_placed: bool = True,
-                join_weak: bool = True, link_score: float | None = 0.9) -> Silhouettes:
+                join_weak: bool = True, link_score: float | None = 0.9,
+                split_far_poor_px: float | None = 8.0) -> Silhouettes:
     """Blobs of change of the scene's left image, each with the shift that lays it on the right's.
 
     Where the scene pair differs from the background pair is where the objects are, in
@@ -474,6 +483,12 @@ def silhouettes(background, scene, roi="center", *, shifts=range(0, 41), thresho
         part moved off the right image, does not count.
     split_far_score : float
         See `split_far_px`.
+    split_far_poor_px : float or None
+        With a number, the test of `split_far_px` also cuts a blob that the best single shift lays
+        with a Dice from `split_score` up to `split_far_score`, when two shifts this far apart or
+        more lay both parts at once with `split_far_score` or more (and better, by 0.01 or more,
+        than the single shift): two objects far apart in depth that touch in the image are what
+        makes one shift fit them poorly (docs/experiments/2026-11-26-depth-unseen-9.md).
     split_placed : bool
         Take a cut only when its two parts, each moved by its own (padded) shift, both at once, lay
         on the right image's change at least as well (one Dice over the same padded columns) as the
@@ -526,6 +541,8 @@ def silhouettes(background, scene, roi="center", *, shifts=range(0, 41), thresho
     if split_far_px is not None:
         split_far_px = check_number(split_far_px, "split_far_px", own, low=0)
     split_far_score = check_number(split_far_score, "split_far_score", own, low=0, high=1)
+    if split_far_poor_px is not None:
+        split_far_poor_px = check_number(split_far_poor_px, "split_far_poor_px", own, low=0)
     if link_score is not None:
         link_score = check_number(link_score, "link_score", own, low=0, high=1)
     for name, value in (("join", join), ("split", split), ("keep_apart", keep_apart),
@@ -575,7 +592,8 @@ def silhouettes(background, scene, roi="center", *, shifts=range(0, 41), thresho
             part, far = todo.pop()
             whole_view = np.count_nonzero(part[y:y + h, x:x + w]) > max_fraction * w * h
             two = None if whole_view else _cut(part, changed[1], shifts, min_pixels, split_step_px,
-                                               split_score, pad_px, far, split_far_score, split_placed)
+                                               split_score, pad_px, far, split_far_score, split_placed,
+                                               split_far_poor_px)
             if two is None:
                 masks.append(part)
             else:

@@ -37,7 +37,8 @@ split, are in ``docs/experiments/2026-11-24-depth-layouts.md``,
     python scripts/depth_layouts.py --held-out --seeds-from 1900000 --variants   # the sixth (spent too)
     python scripts/depth_layouts.py --held-out --seeds-from 1950000 --variants   # the seventh (spent too)
     python scripts/depth_layouts.py --held-out --seeds-from 2000000 --variants   # the eighth (spent too)
-    python scripts/depth_layouts.py --held-out --seeds-from 2050000 --variants   # the ninth
+    python scripts/depth_layouts.py --held-out --seeds-from 2050000 --variants   # the ninth (spent too)
+    python scripts/depth_layouts.py --held-out --seeds-from 2100000 --variants   # the tenth (spent too)
     python scripts/depth_layouts.py --held-out --cli                  # through the CLI (3 min)
     python scripts/depth_layouts.py --count 12      # the first 12 (the test's set)
     python scripts/depth_layouts.py --solver assign # a variant: --method, --solver, --set, --blobs
@@ -146,14 +147,15 @@ def describe(layout, result) -> str:
 
 SIXTH_OFF = {"band_one_piece": None, "band_join_px": None, "poor_one": False}
 SEVENTH_OFF = {"texture_gain": None, "texture_poor": None}
+NINTH_OFF = {"split_far_poor_px": None}
 BEFORE = ({"silhouette_score": 0.9, "outline_alone": False, "silhouette_behind_px": 3.0, "floor_agreed": False,
            "band_cut": False, "firm_outline": None, **SIXTH_OFF},
           {"join": False, "split": False, "keep_apart": False, "split_far_px": None, "split_step_px": 2.0,
-           "split_placed": False, "join_weak": False, "link_score": None, **SEVENTH_OFF})
+           "split_placed": False, "join_weak": False, "link_score": None, **SEVENTH_OFF, **NINTH_OFF})
 RULES = {"silhouette_score": 0.8, "outline_alone": True, "silhouette_behind_px": 3.0, "floor_agreed": False,
          "band_cut": False, "firm_outline": None, **SIXTH_OFF}
 BLOBS = {"join": True, "split": True, "keep_apart": False, "split_far_px": None, "split_step_px": 2.0,
-         "split_placed": False, "join_weak": False, "link_score": None, **SEVENTH_OFF}
+         "split_placed": False, "join_weak": False, "link_score": None, **SEVENTH_OFF, **NINTH_OFF}
 VARIANTS = {
     "before": BEFORE,
     "rules": (RULES, BLOBS),
@@ -197,6 +199,10 @@ VARIANTS.update({
     "seventh": (_NOW[0], {**_NOW[1], "texture_gain": 0.09, "texture_poor": 0.9}),
     "eighth": ({**_NOW[0], "firm_outline": 0.95}, _NOW[1]),
 })
+_NOW = VARIANTS["eighth"]
+VARIANTS.update({
+    "ninth": (_NOW[0], {**_NOW[1], "split_far_poor_px": 8.0}),
+})
 """``--variants``: as DepthConfig fields and silhouettes options.  "before" is the defaults up to
 docs/experiments/2026-11-26-depth-unseen-2.md, "rules" the rules of
 docs/experiments/2026-11-25-depth-unseen.md, "apart" and "behind" the rules with the join's test of
@@ -225,7 +231,9 @@ fitting outline moved to the shift its texture and outline agree on
 (``pair_silhouettes(texture_gain=0.09, texture_poor=0.9)``, ``ismb_lab.texture.textured``):
 docs/experiments/2026-11-26-depth-unseen-7.md; it was the defaults for its held-out draw only.
 "eighth" is "sixth" with a firm outline from a Dice of 0.95 (``DepthConfig(firm_outline=0.95)``):
-docs/experiments/2026-11-26-depth-unseen-8.md."""
+docs/experiments/2026-11-26-depth-unseen-8.md.  "ninth" adds to "eighth" the cut of a blob that one
+shift fits only fairly (Dice 0.9-0.94) when two shifts 8 px or more apart lay its parts with 0.94 or
+more (``silhouettes(split_far_poor_px=8.0)``): docs/experiments/2026-11-26-depth-unseen-9.md."""
 
 
 def run_variants(seed: int, n: int, names, variants: dict, **kw):
@@ -280,13 +288,24 @@ def main(argv=None) -> int:
         overrides[name] = {"int": int, "str": str, "bool": lambda v: v == "True"}.get(fields[name], float)(value)
     config = DepthConfig(**overrides)
     blobs = {}
+    flags = ("join", "split", "keep_apart", "split_placed", "join_weak")
+    numbers = ("split_score", "split_step_px", "split_far_score")
+    optional = ("split_far_px", "split_far_poor_px", "link_score", "texture_gain", "texture_poor")
     for item in args.blobs:
         name, _, value = item.partition("=")
-        flags = ("join", "split", "keep_apart", "split_placed", "join_weak")
-        if name not in (*flags, "split_score", "split_step_px", "split_far_px", "split_far_score"):
-            parser.error(f"--blobs {item}: not {', '.join(flags)}, split_score, split_step_px, "
-                         "split_far_px or split_far_score")
-        blobs[name] = value == "True" if name in flags else float(value)
+        if name not in (*flags, *numbers, *optional):
+            parser.error(f"--blobs {item}: not one of {', '.join((*flags, *numbers, *optional))}")
+        if name in flags:
+            if value not in ("True", "False"):
+                parser.error(f"--blobs {item}: {name} takes True or False")
+            blobs[name] = value == "True"
+        elif name in optional and value == "None":
+            blobs[name] = None
+        else:
+            try:
+                blobs[name] = float(value)
+            except ValueError:
+                parser.error(f"--blobs {item}: {name} takes a number" + (" or None" if name in optional else ""))
     names = families() if args.families is None else tuple(args.families.split(","))
     if UNSEEN.name in names and UNSEEN.name not in families():
         register_family(UNSEEN)

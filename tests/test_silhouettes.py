@@ -119,9 +119,32 @@ def test_two_touching_objects_far_apart_in_depth_are_cut_when_both_parts_are_mov
     cut = silhouettes(bg, sc)                                    # the defaults: split_far_px=5, 0.94
     assert cut.disparity.tolist() == [10.0, 20.0]
     assert cut.labels[120, 120] == 1 and cut.labels[120, 195] == 2
-    # Shifts 10 px apart are not 11 or more; the blob as a whole fits one shift at 0.95, not 0.99.
+    # Shifts 10 px apart are not 11 or more; the blob as a whole fits one shift at 0.95, not 0.99 (and
+    # without ``split_far_poor_px``, a whole that fits under `split_far_score` is not asked).
     assert len(silhouettes(bg, sc, split_far_px=11.0, split_far_score=0.94)) == 1
-    assert len(silhouettes(bg, sc, split_far_px=5.0, split_far_score=0.99)) == 1
+    assert len(silhouettes(bg, sc, split_far_px=5.0, split_far_score=0.99, split_far_poor_px=None)) == 1
+
+
+def test_two_touching_objects_that_one_shift_fits_only_fairly_are_cut_when_far_apart_in_depth():
+    """A far box at 12 px and a near one at 23 px touch in the left image, and the near one covers
+    the far one's right end in the right image.  One shift (14) lays the blob with a Dice under 0.94,
+    so the test of two shifts far apart does not ask; with ``split_far_poor_px`` (the defaults: 8),
+    shifts 8 px or more apart that lay both parts at once with 0.94 or more cut it at the true shifts."""
+    background = wall()
+    left, right = background.copy(), background.copy()
+    left[60:100, 40:90] = right[60:100, 28:78] = 255.0           # far: at 12 px
+    left[75:115, 90:125] = right[75:115, 67:102] = 200.0         # near: at 23 px, in front
+    bg, sc = load_pair(background, background), load_pair(left, right)
+    one = silhouettes(bg, sc, split_far_poor_px=None)
+    assert one.disparity.tolist() == [14.0] and 0.9 <= one.score[0] < 0.94     # the far box lost
+    cut = silhouettes(bg, sc)
+    assert cut.disparity.tolist() == [12.0, 23.0]
+    assert cut.labels[80, 60] == 1 and cut.labels[95, 110] == 2
+    # The two shifts lie 11 px apart, not 12 or more; the whole must fit with `split_score` or more,
+    # and both parts at once with `split_far_score` or more.
+    assert silhouettes(bg, sc, split_far_poor_px=12.0).disparity.tolist() == [14.0]
+    assert silhouettes(bg, sc, split_far_poor_px=8.0, split_score=0.95).disparity.tolist() == [14.0]
+    assert silhouettes(bg, sc, split_far_poor_px=8.0, split_far_score=0.99).disparity.tolist() == [14.0]
 
 
 def test_an_object_whose_halves_fit_shifts_two_pixels_apart_is_not_cut():
@@ -204,6 +227,8 @@ def test_silhouettes_bad_input_names_the_parameter():
         silhouettes(bg, sc, split_far_px=-1)
     with pytest.raises(ParameterError, match="'split_far_score' parameter of silhouettes"):
         silhouettes(bg, sc, split_far_score=2)
+    with pytest.raises(ParameterError, match="'split_far_poor_px' parameter of silhouettes"):
+        silhouettes(bg, sc, split_far_poor_px=-1)
     for name in ("split_placed", "join_weak"):
         with pytest.raises(ParameterTypeError, match=f"'{name}' parameter of silhouettes"):
             silhouettes(bg, sc, **{name: "yes"})
