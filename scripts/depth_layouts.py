@@ -285,8 +285,22 @@ def main(argv=None) -> int:
         name, _, value = item.partition("=")
         if name not in fields:
             parser.error(f"--set {item}: no DepthConfig field {name!r}")
-        overrides[name] = {"int": int, "str": str, "bool": lambda v: v == "True"}.get(fields[name], float)(value)
-    config = DepthConfig(**overrides)
+        kind = str(fields[name])
+        if value == "None" and "None" in kind:
+            overrides[name] = None
+        elif kind == "bool":
+            if value not in ("True", "False"):
+                parser.error(f"--set {item}: {name} takes True or False")
+            overrides[name] = value == "True"
+        else:
+            try:
+                overrides[name] = {"int": int, "str": str}.get(kind, float)(value)
+            except ValueError:
+                parser.error(f"--set {item}: {name} takes {kind}")
+    try:
+        config = DepthConfig(**overrides)
+    except (ValueError, TypeError) as error:
+        parser.error(f"--set {', '.join(args.set)}: {error}")
     blobs = {}
     flags = ("join", "split", "keep_apart", "split_placed", "join_weak")
     numbers = ("split_score", "split_step_px", "split_far_score")

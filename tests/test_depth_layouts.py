@@ -301,6 +301,25 @@ def test_a_bad_blobs_option_is_one_line_and_exit_code_2(load_script, capsys, ite
     assert said in err and "Traceback" not in err
 
 
+@pytest.mark.parametrize("item, said", [
+    ("nonsense=1", "no DepthConfig field 'nonsense'"),
+    ("in_front=yes", "in_front takes True or False"),
+    ("firm_outline=abc", "firm_outline takes float | None"),
+    ("min_features=2.5", "min_features takes int"),
+    ("firm_outline=2", "'firm_outline' parameter of DepthConfig"),
+])
+def test_a_bad_set_field_is_one_line_and_exit_code_2(load_script, capsys, item, said):
+    """``--set``: a wrong name, a value of the wrong kind or one DepthConfig refuses is one line on
+    stderr with exit code 2, before any layout is run; ``None`` sets an optional field."""
+    script = load_script("depth_layouts")
+    with pytest.raises(SystemExit) as stop:
+        script.main(["--set", item])
+    assert stop.value.code == 2
+    err = capsys.readouterr().err
+    assert said in err and "Traceback" not in err
+    assert script.main(["--set", "firm_outline=None", "--count", "0"]) == 0
+
+
 def test_blobs_options_reach_the_silhouettes(load_script, capsys):
     """``--blobs split_far_poor_px=None --blobs texture_gain=0.09``: the run's label names both, and
     the layout is ranked with them (one fixed layout, so the run takes seconds)."""
