@@ -63,7 +63,10 @@ import numpy as np
 
 from ismb_lab.depth import DepthConfig, depth_from_matches
 from ismb_lab.depth_demo import DEPTH_SOLVER, depth_pairs, layout_match_config, pair_silhouettes, relative_depth
+from ismb_lab.io import load_pair
 from ismb_lab.scenes import UNSEEN, families, object_layout, register_family
+from ismb_lab.silhouettes import silhouettes
+from ismb_lab.texture import textured
 
 
 DEV_START = 1000
@@ -257,6 +260,15 @@ def run_variants(seed: int, n: int, names, variants: dict, **kw):
     return layout, out
 
 
+def check_blobs(blobs: dict) -> None:
+    """Raise what the silhouettes (and the texture, for ``texture_*``) raise for `blobs`: asked on a blank
+    16 x 16 pair, so that a value out of range is refused before any layout is matched."""
+    blank = load_pair(np.zeros((16, 16)), np.zeros((16, 16)))
+    options = {k: v for k, v in blobs.items() if not k.startswith("texture_")}
+    found = silhouettes(blank, blank, "full", shifts=[0], **options)
+    textured(found, blank, gain=blobs.get("texture_gain"), poor=blobs.get("texture_poor"))
+
+
 def main(argv=None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--held-out", action="store_true", help="run the held-out split (once)")
@@ -320,6 +332,10 @@ def main(argv=None) -> int:
                 blobs[name] = float(value)
             except ValueError:
                 parser.error(f"--blobs {item}: {name} takes a number" + (" or None" if name in optional else ""))
+    try:
+        check_blobs(blobs)
+    except (ValueError, TypeError) as error:
+        parser.error(f"--blobs {', '.join(args.blobs)}: {error}")
     names = families() if args.families is None else tuple(args.families.split(","))
     if UNSEEN.name in names and UNSEEN.name not in families():
         register_family(UNSEEN)

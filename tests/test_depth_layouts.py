@@ -290,6 +290,8 @@ def test_unseen_development_layouts_need_the_cut_of_a_fairly_fitting_blob(load_s
     ("split=yes", "split takes True or False"),
     ("split_score=None", "split_score takes a number"),
     ("split_far_poor_px=abc", "split_far_poor_px takes a number or None"),
+    ("split_score=2", "'split_score' parameter of silhouettes"),
+    ("texture_gain=-0.5", "'gain' parameter of textured"),
 ])
 def test_a_bad_blobs_option_is_one_line_and_exit_code_2(load_script, capsys, item, said):
     """Every option of the silhouettes the variants use (``pair_silhouettes``' texture ones too) can be
