@@ -146,14 +146,17 @@ class Silhouettes:
         return [left, mask & ~left], self._closed, line
 
 
-def changed_in_roi(background, scene, roi, threshold, sigma, margin, own: str, name: str):
+def changed_in_roi(background, scene, roi, threshold, sigma, margin, own: str, name: str, low=None):
     """The pixels of `roi` whose smoothed difference exceeds `threshold`, the ROI and the margin.
 
     The one test of "changed" behind :func:`silhouettes` and
     :func:`ismb_lab.depth_demo.changed_roi` / :func:`~ismb_lab.depth_demo.changed_regions`:
     the absolute difference of two grey images, Gaussian-smoothed with `sigma`, above
-    `threshold` grey levels.  Bad values are named as parameters of `own`; `name` is the
-    parameter that holds `scene`.
+    `threshold` grey levels.  With `low` (a hysteresis threshold, named `threshold_low` to the
+    caller), pixels above `low` that connect to one above `threshold` count as well; `low` is
+    raised to twice the image's median smoothed difference (the noise floor, since most of the
+    image is unchanged), and at most to `threshold`.  Bad values are named as parameters of
+    `own`; `name` is the parameter that holds `scene`.
 
     Examples
     --------
@@ -176,7 +179,13 @@ def changed_in_roi(background, scene, roi, threshold, sigma, margin, own: str, n
     diff = np.abs(sc - bg)
     if sigma:
         diff = gaussian_filter(diff, sigma)
-    return diff[y:y + h, x:x + w] > threshold, (x, y, w, h), margin
+    if low is None:
+        return diff[y:y + h, x:x + w] > threshold, (x, y, w, h), margin
+    from skimage.filters import apply_hysteresis_threshold
+
+    low = check_number(low, "threshold_low", own, low=0, high=threshold)
+    low = min(max(low, 2 * float(np.median(diff))), threshold)
+    return apply_hysteresis_threshold(diff, low, threshold)[y:y + h, x:x + w], (x, y, w, h), margin
 
 
 def _best_shift(mask: np.ndarray, rows: slice, cols: slice, right: np.ndarray, shifts,
@@ -417,7 +426,7 @@ def silhouettes(background, scene, roi="center", *, shifts=range(0, 41), thresho
                 keep_apart: bool = True, split_far_px: float | None = 5.0,
                 split_far_score: float = 0.94, split_placed: bool = True,
                 join_weak: bool = True, link_score: float | None = 0.9,
-                split_far_poor_px: float | None = 8.0) -> Silhouettes:
+                split_far_poor_px: float | None = 8.0, threshold_low: float | None = None) -> Silhouettes:
     """Blobs of change of the scene's left image, each with the shift that lays it on the right's.
 
     Where the scene pair differs from the background pair is where the objects are, in
@@ -453,6 +462,13 @@ def silhouettes(background, scene, roi="center", *, shifts=range(0, 41), thresho
         Disparities to try (:func:`ismb_lab.depth_demo.relative_depth`: the candidate window's).
     threshold, sigma : float
         As :func:`ismb_lab.depth_demo.changed_roi`.
+    threshold_low : float or None
+        With a number (at most `threshold`), a pixel whose smoothed difference exceeds it, and twice
+        the image's median smoothed difference (noisy cameras), is changed too when it connects to
+        one above `threshold` (hysteresis, in both images): the outline of an object that looks
+        nearly like the wall behind it then breaks into fewer pieces, but neighbours are bridged
+        more often.  None (the default): `threshold` alone.  5 was tried
+        (docs/experiments/2026-11-26-depth-unseen-11.md).
     min_pixels : int
         Smaller blobs are camera noise.
     pad_px : int
@@ -556,7 +572,8 @@ def silhouettes(background, scene, roi="center", *, shifts=range(0, 41), thresho
     if not shifts:
         raise ParameterError(message("shifts", own, "at least one shift", shifts))
     shape = scene.shape
-    changed = [changed_in_roi(b, c, (0, 0, shape[1], shape[0]), threshold, sigma, 0, own, "scene")[0]
+    changed = [changed_in_roi(b, c, (0, 0, shape[1], shape[0]), threshold, sigma, 0, own, "scene",
+                              threshold_low)[0]
                for b, c in ((background.left, scene.left), (background.right, scene.right))]
     x, y, w, h = resolve_roi(roi, shape)
     blobs, n = label(changed[0], structure=np.ones((3, 3)))

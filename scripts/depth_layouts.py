@@ -151,14 +151,16 @@ def describe(layout, result) -> str:
 SIXTH_OFF = {"band_one_piece": None, "band_join_px": None, "poor_one": False}
 SEVENTH_OFF = {"texture_gain": None, "texture_poor": None}
 NINTH_OFF = {"split_far_poor_px": None}
+ELEVENTH_OFF = {"threshold_low": None}
 BEFORE = ({"silhouette_score": 0.9, "outline_alone": False, "silhouette_behind_px": 3.0, "floor_agreed": False,
            "band_cut": False, "firm_outline": None, **SIXTH_OFF},
           {"join": False, "split": False, "keep_apart": False, "split_far_px": None, "split_step_px": 2.0,
-           "split_placed": False, "join_weak": False, "link_score": None, **SEVENTH_OFF, **NINTH_OFF})
+           "split_placed": False, "join_weak": False, "link_score": None, **SEVENTH_OFF, **NINTH_OFF,
+           **ELEVENTH_OFF})
 RULES = {"silhouette_score": 0.8, "outline_alone": True, "silhouette_behind_px": 3.0, "floor_agreed": False,
          "band_cut": False, "firm_outline": None, **SIXTH_OFF}
 BLOBS = {"join": True, "split": True, "keep_apart": False, "split_far_px": None, "split_step_px": 2.0,
-         "split_placed": False, "join_weak": False, "link_score": None, **SEVENTH_OFF, **NINTH_OFF}
+         "split_placed": False, "join_weak": False, "link_score": None, **SEVENTH_OFF, **NINTH_OFF, **ELEVENTH_OFF}
 VARIANTS = {
     "before": BEFORE,
     "rules": (RULES, BLOBS),
@@ -206,6 +208,10 @@ _NOW = VARIANTS["eighth"]
 VARIANTS.update({
     "ninth": (_NOW[0], {**_NOW[1], "split_far_poor_px": 8.0}),
 })
+_NOW = VARIANTS["ninth"]
+VARIANTS.update({
+    "eleventh": (_NOW[0], {**_NOW[1], "threshold_low": 5.0}),
+})
 """``--variants``: as DepthConfig fields and silhouettes options.  "before" is the defaults up to
 docs/experiments/2026-11-26-depth-unseen-2.md, "rules" the rules of
 docs/experiments/2026-11-25-depth-unseen.md, "apart" and "behind" the rules with the join's test of
@@ -236,7 +242,9 @@ docs/experiments/2026-11-26-depth-unseen-7.md; it was the defaults for its held-
 "eighth" is "sixth" with a firm outline from a Dice of 0.95 (``DepthConfig(firm_outline=0.95)``):
 docs/experiments/2026-11-26-depth-unseen-8.md.  "ninth" adds to "eighth" the cut of a blob that one
 shift fits only fairly (Dice 0.9-0.94) when two shifts 8 px or more apart lay its parts with 0.94 or
-more (``silhouettes(split_far_poor_px=8.0)``): docs/experiments/2026-11-26-depth-unseen-9.md."""
+more (``silhouettes(split_far_poor_px=8.0)``): docs/experiments/2026-11-26-depth-unseen-9.md.
+"eleventh" adds to "ninth" changed pixels above 5 grey levels that connect to ones above 8 (hysteresis,
+``silhouettes(threshold_low=5.0)``): docs/experiments/2026-11-26-depth-unseen-11.md."""
 
 
 def run_variants(seed: int, n: int, names, variants: dict, **kw):
@@ -316,7 +324,8 @@ def main(argv=None) -> int:
     blobs = {}
     flags = ("join", "split", "keep_apart", "split_placed", "join_weak")
     numbers = ("split_score", "split_step_px", "split_far_score")
-    optional = ("split_far_px", "split_far_poor_px", "link_score", "texture_gain", "texture_poor")
+    optional = ("split_far_px", "split_far_poor_px", "link_score", "threshold_low", "texture_gain",
+                "texture_poor")
     for item in args.blobs:
         name, _, value = item.partition("=")
         if name not in (*flags, *numbers, *optional):

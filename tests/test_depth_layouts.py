@@ -292,6 +292,7 @@ def test_unseen_development_layouts_need_the_cut_of_a_fairly_fitting_blob(load_s
     ("split_far_poor_px=abc", "split_far_poor_px takes a number or None"),
     ("split_score=2", "'split_score' parameter of silhouettes"),
     ("texture_gain=-0.5", "'gain' parameter of textured"),
+    ("threshold_low=9", "'threshold_low' parameter of silhouettes"),
 ])
 def test_a_bad_blobs_option_is_one_line_and_exit_code_2(load_script, capsys, item, said):
     """Every option of the silhouettes the variants use (``pair_silhouettes``' texture ones too) can be
@@ -329,3 +330,17 @@ def test_blobs_options_reach_the_silhouettes(load_script, capsys):
     assert script.main(["--count", "1", "--blobs", "split_far_poor_px=None", "--blobs", "texture_gain=0.09"]) == 0
     out = capsys.readouterr().out
     assert "split_far_poor_px=None, texture_gain=0.09" in out and "1 / 1" in out
+
+
+@pytest.mark.parametrize("n, ninth, eleventh", [
+    (16, "split", "ok"),      # a low-contrast box whose outline broke in two, one piece fitting -7
+    (57, "ok", "missing"),    # hysteresis bridges a low-contrast cylinder and a box into one blob
+])
+def test_hysteresis_mends_one_broken_outline_and_bridges_two_objects_elsewhere(load_script, n, ninth, eleventh):
+    """Unseen development layouts 1700016 and 1700057 of docs/experiments/2026-11-26-depth-unseen-11.md:
+    "eleventh" (``silhouettes(threshold_low=5)``) keeps a faint object's outline whole, and joins
+    faint neighbours.  Both directions, since the study did not adopt it."""
+    script = load_script("depth_layouts")
+    variants = {name: script.VARIANTS[name] for name in ("ninth", "eleventh")}
+    layout, out = run_on(script, "unseen", 1700000 + n, n, variants)
+    assert out["ninth"][1] == ninth and out["eleventh"][1] == eleventh

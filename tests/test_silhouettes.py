@@ -574,3 +574,49 @@ def test_the_sixth_study_s_options_are_checked(field, value, error):
         DepthConfig(**{field: value})
     with pytest.raises(ParameterError, match="'link_score' parameter of silhouettes"):
         silhouettes(*pairs_with([(60, 100, 60, 110, 25)]), link_score=-0.5)
+
+
+def test_hysteresis_keeps_the_faint_half_of_an_object_with_its_outline():
+    """``threshold_low``: a box whose right half differs from the wall by 6 grey levels (under the
+    threshold of 8) and its left half by 40 is one outline of the whole box with hysteresis at 5, and
+    only its left half without."""
+    background = wall(3)
+    left, right = background.copy(), background.copy()
+    for image, x0 in ((left, 150), (right, 128)):               # 22 px nearer in the right image
+        image[80:140, x0:x0 + 25] += 40.0
+        image[80:140, x0 + 25:x0 + 50] += 6.0
+    bg, sc = load_pair(background, background), load_pair(left, right)
+    plain = silhouettes(bg, sc, roi=(0, 0, W, H), split=False)
+    faint = silhouettes(bg, sc, roi=(0, 0, W, H), split=False, threshold_low=5.0)
+    assert len(plain) == len(faint) == 1 and plain.disparity[0] == faint.disparity[0] == 22
+    width = [int(np.ptp(np.flatnonzero((s.labels == 1).any(axis=0)))) + 1 for s in (plain, faint)]
+    assert width[0] < 30 <= 45 < width[1]
+
+
+def test_hysteresis_is_raised_to_the_noise_of_the_cameras():
+    """With noisy cameras (noise of 4 grey levels, independent in the background and the scene), the
+    smoothed difference of an unchanged wall is about 4.5: a low threshold of 5 would join the noise
+    to whatever crosses 8, so it is raised to twice the median difference."""
+    from scipy.ndimage import gaussian_filter
+    from skimage.filters import apply_hysteresis_threshold
+
+    from ismb_lab.silhouettes import changed_in_roi
+
+    rng = np.random.default_rng(5)
+    base = wall(5)
+    background, scene = (base + rng.normal(0, 4.0, base.shape) for _ in range(2))
+    scene[100:140, 150:200] += 40.0
+    whole = (0, 0, W, H)
+    plain = changed_in_roi(background, scene, whole, 8.0, 1.0, 0, "test", "scene")[0]
+    low = changed_in_roi(background, scene, whole, 8.0, 1.0, 0, "test", "scene", low=5.0)[0]
+    diff = gaussian_filter(np.abs(scene - background), 1.0)
+    assert np.median(diff) > 4
+    unraised = apply_hysteresis_threshold(diff, 5.0, 8.0)
+    assert unraised.sum() > 2 * plain.sum()                    # the noise joined to the object
+    assert plain.sum() <= low.sum() < 1.2 * plain.sum() and not (plain & ~low).any()
+
+
+@pytest.mark.parametrize("value", [-1.0, 8.5])
+def test_the_low_threshold_lies_from_0_to_the_threshold(value):
+    with pytest.raises(ParameterError, match="'threshold_low' parameter of silhouettes"):
+        silhouettes(*pairs_with([(60, 100, 60, 110, 25)]), threshold_low=value)
