@@ -196,7 +196,8 @@ def silhouettes(background, scene, roi="center", *, shifts=range(0, 41), thresho
                 keep_apart: bool = True, split_far_px: float | None = 5.0,
                 split_far_score: float = 0.94, split_placed: bool = True,
                 join_weak: bool = True, link_score: float | None = 0.9,
-                split_far_poor_px: float | None = 8.0, threshold_low: float | None = None) -> Silhouettes:
+                split_far_poor_px: float | None = 8.0, threshold_low: float | None = None,
+                by_region: bool = False) -> Silhouettes:
     """Blobs of change of the scene's left image, each with the shift that lays it on the right's.
 
     Where the scene pair differs from the background pair is where the objects are, in
@@ -239,6 +240,10 @@ def silhouettes(background, scene, roi="center", *, shifts=range(0, 41), thresho
         nearly like the wall behind it then breaks into fewer pieces, but neighbours are bridged
         more often.  None (the default): `threshold` alone.  5 was tried
         (docs/experiments/2026-11-26-depth-unseen-11.md).
+    by_region : bool
+        With `threshold_low`, make the blobs both without and with it, and keep, in each region where
+        they overlap, those that fit better on average (mean Dice; docs/experiments/2026-11-26-depth-unseen-12.md):
+        hysteresis then mends a ragged outline without bridging the neighbours of another region.
     min_pixels : int
         Smaller blobs are camera noise.
     pad_px : int
@@ -307,6 +312,7 @@ def silhouettes(background, scene, roi="center", *, shifts=range(0, 41), thresho
     >>> s.disparity.tolist(), s.score.round(2).tolist(), s.centroid_xy.round().tolist()
     ([22.0], [1.0], [[169.0, 120.0]])
     """
+    options = dict(locals())        # first, so that it holds the arguments only
     from scipy.ndimage import find_objects, label
     from scipy.sparse.csgraph import connected_components
 
@@ -332,9 +338,12 @@ def silhouettes(background, scene, roi="center", *, shifts=range(0, 41), thresho
     if link_score is not None:
         link_score = check_number(link_score, "link_score", own, low=0, high=1)
     for name, value in (("join", join), ("split", split), ("keep_apart", keep_apart),
-                        ("split_placed", split_placed), ("join_weak", join_weak)):
+                        ("split_placed", split_placed), ("join_weak", join_weak), ("by_region", by_region)):
         if not isinstance(value, bool):
             raise ParameterTypeError(message(name, own, "True or False", value))
+    if by_region and threshold_low is not None:
+        options["by_region"] = False
+        return _by_region(silhouettes(**{**options, "threshold_low": None}), silhouettes(**options))
     try:
         shifts = [int(d) for d in shifts]
     except (TypeError, ValueError):
@@ -398,3 +407,38 @@ def silhouettes(background, scene, roi="center", *, shifts=range(0, 41), thresho
         score.append(dice)
     centroid = [centroids[j] for j in order]
     return Silhouettes(labels, disparity, score, np.array(centroid).reshape(-1, 2), changed[1], pad_px, shifts)
+
+
+def _by_region(plain: Silhouettes, grown: Silhouettes) -> Silhouettes:
+    """The blobs of `plain` or of `grown` (the same call with hysteresis), region by region.
+
+    A region is a set of blobs of the two that overlap, directly or through others.  Each region
+    keeps the blobs of the one whose blobs fit better on average (mean Dice; a tie keeps `plain`'s);
+    a region that only `grown` has (an object too faint for the threshold alone) keeps `grown`'s.
+    Each blob keeps its own Dice and shift.  The right image's change is `plain`'s, which the depth
+    stage's cuts of a blob (:meth:`Silhouettes.cut_dice`) lay blobs on.
+    """
+    from scipy.sparse.csgraph import connected_components
+
+    n = len(plain)
+    link = np.eye(n + len(grown), dtype=bool)
+    both = (plain.labels > 0) & (grown.labels > 0)
+    for a, b in set(zip(plain.labels[both].tolist(), grown.labels[both].tolist())):
+        link[a - 1, n + b - 1] = link[n + b - 1, a - 1] = True
+    group = connected_components(link, directed=False)[1]
+    kept = []
+    for g in np.unique(group):
+        mine = np.flatnonzero(group[:n] == g)
+        theirs = np.flatnonzero(group[n:] == g)
+        grow = len(theirs) and (not len(mine) or grown.score[theirs].mean() > plain.score[mine].mean())
+        kept += [(grown, k) for k in theirs] if grow else [(plain, k) for k in mine]
+    masks = [source.labels == k + 1 for source, k in kept]
+    centroid = [np.argwhere(m).mean(axis=0)[::-1] for m in masks]
+    order = np.argsort([c[0] for c in centroid], kind="stable")
+    labels = np.zeros(plain.labels.shape, dtype=np.int32)
+    for number, j in enumerate(order, 1):
+        labels[masks[j]] = number
+    return Silhouettes(labels, [kept[j][0].disparity[kept[j][1]] for j in order],
+                       [kept[j][0].score[kept[j][1]] for j in order],
+                       np.array([centroid[j] for j in order]).reshape(-1, 2), plain.right, plain.pad_px,
+                       plain.shifts)

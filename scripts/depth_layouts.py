@@ -210,7 +210,10 @@ VARIANTS.update({
 })
 _NOW = VARIANTS["ninth"]
 VARIANTS.update({
-    "eleventh": (_NOW[0], {**_NOW[1], "threshold_low": 5.0}),
+    "eleventh": (_NOW[0], {**_NOW[1], "threshold_low": 5.0, "by_region": False}),
+})
+VARIANTS.update({
+    "twelfth": (_NOW[0], {**_NOW[1], "threshold_low": 5.0, "by_region": True}),
 })
 """``--variants``: as DepthConfig fields and silhouettes options.  "before" is the defaults up to
 docs/experiments/2026-11-26-depth-unseen-2.md, "rules" the rules of
@@ -244,7 +247,9 @@ docs/experiments/2026-11-26-depth-unseen-8.md.  "ninth" adds to "eighth" the cut
 shift fits only fairly (Dice 0.9-0.94) when two shifts 8 px or more apart lay its parts with 0.94 or
 more (``silhouettes(split_far_poor_px=8.0)``): docs/experiments/2026-11-26-depth-unseen-9.md.
 "eleventh" adds to "ninth" changed pixels above 5 grey levels that connect to ones above 8 (hysteresis,
-``silhouettes(threshold_low=5.0)``): docs/experiments/2026-11-26-depth-unseen-11.md."""
+``silhouettes(threshold_low=5.0)``): docs/experiments/2026-11-26-depth-unseen-11.md.  "twelfth" makes the
+blobs of "ninth" and of "eleventh" and keeps, region by region, those that fit better on average
+(``silhouettes(threshold_low=5.0, by_region=True)``): docs/experiments/2026-11-26-depth-unseen-12.md."""
 
 
 def run_variants(seed: int, n: int, names, variants: dict, **kw):
@@ -322,7 +327,7 @@ def main(argv=None) -> int:
     except (ValueError, TypeError) as error:
         parser.error(f"--set {', '.join(args.set)}: {error}")
     blobs = {}
-    flags = ("join", "split", "keep_apart", "split_placed", "join_weak")
+    flags = ("join", "split", "keep_apart", "split_placed", "join_weak", "by_region")
     numbers = ("split_score", "split_step_px", "split_far_score")
     optional = ("split_far_px", "split_far_poor_px", "link_score", "threshold_low", "texture_gain",
                 "texture_poor")

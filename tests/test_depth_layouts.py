@@ -344,3 +344,18 @@ def test_hysteresis_mends_one_broken_outline_and_bridges_two_objects_elsewhere(l
     variants = {name: script.VARIANTS[name] for name in ("ninth", "eleventh")}
     layout, out = run_on(script, "unseen", 1700000 + n, n, variants)
     assert out["ninth"][1] == ninth and out["eleventh"][1] == eleventh
+
+
+@pytest.mark.parametrize("seed, ninth, eleventh, twelfth", [
+    (1700016, "split", "ok", "ok"),     # the region of the broken outline keeps the blob with hysteresis
+    (5009, "ok", "split", "ok"),        # a cylinder cut in two by its features only against the grown
+                                        # right image's change; each region keeps the threshold's here
+])
+def test_each_region_keeps_the_better_blobs_with_or_without_hysteresis(load_script, seed, ninth, eleventh, twelfth):
+    """Unseen development layouts of docs/experiments/2026-11-26-depth-unseen-12.md: "twelfth"
+    (``silhouettes(threshold_low=5, by_region=True)``) ranks right where either partition does."""
+    script = load_script("depth_layouts")
+    variants = {name: script.VARIANTS[name] for name in ("ninth", "eleventh", "twelfth")}
+    start = seed - seed % 1000 if seed < 10000 else seed - seed % 100000
+    layout, out = run_on(script, "unseen", seed, seed - start, variants)
+    assert [out[name][1] for name in variants] == [ninth, eleventh, twelfth]

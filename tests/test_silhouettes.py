@@ -616,6 +616,40 @@ def test_hysteresis_is_raised_to_the_noise_of_the_cameras():
     assert plain.sum() <= low.sum() < 1.2 * plain.sum() and not (plain & ~low).any()
 
 
+def test_each_region_keeps_the_blobs_that_fit_better_with_or_without_hysteresis():
+    """``by_region``: a plain box nearly the wall's grey has a ragged outline, which hysteresis mends;
+    a faint shadow beside a bright box joins that box under hysteresis and spoils its fit.  Region by
+    region, the box keeps the outline with hysteresis and the shadowed box the one without."""
+    rng = np.random.default_rng(0)
+    background = rng.uniform(0, 120, (H, W))
+    left, right = background.copy(), background.copy()
+    grey = 60 + rng.normal(0, 3, (70, 60))
+    left[80:150, 40:100] = grey
+    right[80:150, 18:78] = grey                                 # 22 px nearer
+    left[60:140, 180:215] = 250
+    right[60:140, 150:185] = 250                                # 30 px nearer
+    left[60:140, 225:265] = 230
+    right[60:140, 213:253] = 230                                # 12 px nearer
+    left[60:140, 215:225] += 6.0                                # the shadow, in the left image only
+    bg, sc = load_pair(background, background), load_pair(left, right)
+    plain, grown, chosen = (silhouettes(bg, sc, roi=(0, 0, W, H), **kw) for kw in
+                            ({}, {"threshold_low": 5.0}, {"threshold_low": 5.0, "by_region": True}))
+    assert plain.disparity.tolist() == grown.disparity.tolist() == chosen.disparity.tolist() == [22, 30, 12]
+    assert plain.score[0] < grown.score[0] == chosen.score[0]
+    assert (chosen.labels == 1).sum() > (plain.labels == 1).sum()
+    assert grown.score[2] < plain.score[2] == chosen.score[2]
+    assert np.array_equal(chosen.labels == 3, plain.labels == 3) and not np.array_equal(plain.labels, grown.labels)
+    assert chosen.right is plain.right or np.array_equal(chosen.right, plain.right)
+
+
+def test_by_region_without_a_low_threshold_is_the_threshold_alone():
+    pairs = pairs_with([(60, 100, 60, 110, 25), (150, 200, 80, 120, 10)])
+    plain, region = silhouettes(*pairs), silhouettes(*pairs, by_region=True)
+    assert np.array_equal(plain.labels, region.labels) and plain.disparity.tolist() == region.disparity.tolist()
+    with pytest.raises(ParameterTypeError, match="'by_region' parameter of silhouettes"):
+        silhouettes(*pairs, threshold_low=5.0, by_region=1)
+
+
 @pytest.mark.parametrize("value", [-1.0, 8.5])
 def test_the_low_threshold_lies_from_0_to_the_threshold(value):
     with pytest.raises(ParameterError, match="'threshold_low' parameter of silhouettes"):
