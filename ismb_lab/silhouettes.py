@@ -196,13 +196,15 @@ def silhouettes(background, scene, roi="center", *, shifts=range(0, 41), thresho
                 keep_apart: bool = True, split_far_px: float | None = 5.0,
                 split_far_score: float = 0.94, split_placed: bool = True,
                 join_weak: bool = True, link_score: float | None = 0.9,
-                split_far_poor_px: float | None = 8.0, threshold_low: float | None = None,
-                by_region: bool = False) -> Silhouettes:
+                split_far_poor_px: float | None = 8.0, threshold_low: float | None = 5.0,
+                by_region: bool = True) -> Silhouettes:
     """Blobs of change of the scene's left image, each with the shift that lays it on the right's.
 
     Where the scene pair differs from the background pair is where the objects are, in
     both images: the same changed pixels as :func:`ismb_lab.depth_demo.changed_regions`
-    (whole image, the blobs that reach into `roi`), and the right image's changed pixels.  A blob's
+    (whole image, the blobs that reach into `roi`), and the right image's changed pixels; by
+    default, fainter ones that connect to them as well, region by region (`threshold_low`,
+    `by_region`).  A blob's
     silhouette disparity is the shift ``d`` in `shifts` with the largest Dice overlap
     between the blob and the right image's changed pixels ``d`` pixels left, counted over
     the columns both images have (an object across the image border is seen in part).
@@ -238,12 +240,13 @@ def silhouettes(background, scene, roi="center", *, shifts=range(0, 41), thresho
         the image's median smoothed difference (noisy cameras), is changed too when it connects to
         one above `threshold` (hysteresis, in both images): the outline of an object that looks
         nearly like the wall behind it then breaks into fewer pieces, but neighbours are bridged
-        more often.  None (the default): `threshold` alone.  5 was tried
-        (docs/experiments/2026-11-26-depth-unseen-11.md).
+        more often.  None: `threshold` alone (docs/experiments/2026-11-26-depth-unseen-11.md).
     by_region : bool
-        With `threshold_low`, make the blobs both without and with it, and keep, in each region where
-        they overlap, those that fit better on average (mean Dice; docs/experiments/2026-11-26-depth-unseen-12.md):
-        hysteresis then mends a ragged outline without bridging the neighbours of another region.
+        With `threshold_low`, make the blobs both without and with it and keep, in each region (the
+        blobs of the two that overlap), those that fit better on average (mean Dice; a tie keeps
+        those without).  Hysteresis then mends the outlines it mends, and where it bridges two
+        neighbours into a blob that fits worse, the threshold's blobs stay.  The defaults
+        (docs/experiments/2026-11-26-depth-unseen-12.md); False: hysteresis everywhere.
     min_pixels : int
         Smaller blobs are camera noise.
     pad_px : int
@@ -310,7 +313,7 @@ def silhouettes(background, scene, roi="center", *, shifts=range(0, 41), thresho
     >>> left[100:140, 150:190] = right[100:140, 128:168] = 255.0     # an object 22 px nearer
     >>> s = silhouettes(load_pair(wall, wall), load_pair(left, right))
     >>> s.disparity.tolist(), s.score.round(2).tolist(), s.centroid_xy.round().tolist()
-    ([22.0], [1.0], [[169.0, 120.0]])
+    ([22.0], [1.0], [[170.0, 120.0]])
     """
     options = dict(locals())        # first, so that it holds the arguments only
     from scipy.ndimage import find_objects, label

@@ -135,8 +135,8 @@ def test_the_join_that_keeps_apart_still_joins_the_pieces_of_one_object(load_scr
 
 
 def test_the_chosen_variant_is_the_defaults(load_script):
-    """docs/experiments/2026-11-26-depth-unseen-9.md chose "ninth" as the defaults (after
-    2026-11-26-depth-unseen-8.md had chosen "eighth", 2026-11-26-depth-unseen-6.md "sixth",
+    """docs/experiments/2026-11-26-depth-unseen-12.md chose "twelfth" as the defaults (after
+    2026-11-26-depth-unseen-9.md had chosen "ninth", 2026-11-26-depth-unseen-8.md "eighth", 2026-11-26-depth-unseen-6.md "sixth",
     2026-11-26-depth-unseen-5.md "band+firm", 2026-11-26-depth-unseen-4.md "cut+weak",
     2026-11-26-depth-unseen-3.md "far+floor" and 2026-11-26-depth-unseen-2.md "apart+behind0";
     2026-11-26-depth-unseen-7.md's "seventh" was the defaults for its held-out draw only): the
@@ -147,7 +147,7 @@ def test_the_chosen_variant_is_the_defaults(load_script):
     from ismb_lab.depth_demo import pair_silhouettes
     from ismb_lab.silhouettes import silhouettes
 
-    fields, blobs = load_script("depth_layouts").VARIANTS["ninth"]
+    fields, blobs = load_script("depth_layouts").VARIANTS["twelfth"]
     assert DepthConfig(**fields) == DepthConfig()
     defaults = {**inspect.signature(silhouettes).parameters, **inspect.signature(pair_silhouettes).parameters}
     assert all(defaults[name].default == value for name, value in blobs.items())
