@@ -17,6 +17,7 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.ndimage import gaussian_filter
 
+from ._outline_fit import _ascend, _best_shift, _cut, _join, _placed_dice
 from ._validation import ParameterError, ParameterTypeError, check_number, message, readonly
 from .features import resolve_roi
 from .io import StereoPair
@@ -188,237 +189,6 @@ def changed_in_roi(background, scene, roi, threshold, sigma, margin, own: str, n
     return apply_hysteresis_threshold(diff, low, threshold)[y:y + h, x:x + w], (x, y, w, h), margin
 
 
-def _best_shift(mask: np.ndarray, rows: slice, cols: slice, right: np.ndarray, shifts,
-                pad: int) -> tuple[float, float]:
-    """The shift ``d`` that lays blob `mask` (a full-image mask, box `rows` x `cols`) best on
-    `right` shifted by ``d``, and its Dice overlap (ties: the first in `shifts`).
-
-    The two are compared over the box widened by `pad` columns on each side, so that
-    right-image change next to the shifted blob tells against the shift, and only over the
-    columns that both images have.  Without the padding a blob that touches the image's
-    left edge fits every shift from its true one up equally well: its left part has no
-    counterpart, and its right edge lands inside the right blob."""
-    width = right.shape[1]
-    c = np.arange(max(cols.start - pad, 0), min(cols.stop + pad, width))
-    mine = mask[rows, c.min():c.max() + 1]
-    size = np.count_nonzero(mine)
-    best = (0.0, float("nan"))
-    for d in shifts:
-        valid = (c - d >= 0) & (c - d < width)
-        m = mine[:, valid]
-        if 2 * np.count_nonzero(m) < size:
-            continue            # most of the blob would lie off the right image
-        patch = right[rows, c[valid] - d]
-        total = np.count_nonzero(m) + np.count_nonzero(patch)
-        dice = 2 * np.count_nonzero(m & patch) / total if total else 0.0
-        if dice > best[0]:
-            best = (dice, float(d))
-    return best
-
-
-def _two_shifts(parts, start, one: float, right: np.ndarray, shifts, pad: int, far: float,
-                least: float, poor: float | None = None, fair: float = 0.9):
-    """Whether two shifts `far` or more apart, one per part, lay `parts` on `right` better than
-    `one`, the best Dice of their union at a single shift, both counted as one overlap over the
-    same padded columns (:func:`_placed_dice`), by at least 0.01, while `one` is `least` or more
-    (a blob that fits no shift well is no pair of well-seen objects either).
-
-    The two shifts are found by coordinate ascent from `start` (each part's own padded fit).  Each
-    must lie strictly inside `shifts` (a fit at the end of the range is no fit), and each part must
-    lie wholly on the right image at its shift (a part across the image border fits any shift).
-
-    With `poor`, a whole that fits with a Dice from `fair` up to `least` passes as well when the two
-    shifts lie `poor` or more apart and lay both parts with `least` or more: two objects far apart in
-    depth that touch in the image are what makes one shift fit them poorly."""
-    best, d = _ascend(parts, start, right, shifts, pad)
-    if abs(d[0] - d[1]) < far or min(d) <= min(shifts) or max(d) >= max(shifts):
-        return False
-    if any(np.nonzero(part)[1].min() - s < 0 for part, s in zip(parts, d)):
-        return False
-    if one >= least:
-        return best >= one + 0.01
-    return (poor is not None and one >= fair and abs(d[0] - d[1]) >= poor and best >= least
-            and best >= one + 0.01)
-
-
-def _cut(mask: np.ndarray, right: np.ndarray, shifts, min_pixels: int, step: float, least: float,
-         pad: int, far: float | None = None, far_score: float = 0.9, placed: bool = False,
-         far_poor: float | None = None):
-    """Two objects side by side in one blob: the column that cuts `mask` into a left and a right
-    part that two shifts lay on `right` better (Dice) than one shift lays the whole, or None.
-
-    The cut is taken only when the two shifts differ by `step` or more and each part, measured
-    as every blob is (:func:`_best_shift`, padded by `pad`), fits with a Dice of `least` or more.
-    Dice of a part at shift ``d`` is counted over its own columns (those with a counterpart in
-    `right`): per column, the blob's pixels, the right image's changed pixels ``d`` to the left
-    and their overlap add up, so cumulative sums give every cut at once."""
-    from scipy.ndimage import find_objects
-
-    rows, cols = find_objects(mask.astype(int))[0]
-    width = right.shape[1]
-    c = np.arange(cols.start, cols.stop)
-    m = mask[rows, cols]
-    shifts = np.asarray(shifts)
-    a = np.zeros((len(shifts), len(c)))
-    b = np.zeros_like(a)
-    inter = np.zeros_like(a)
-    for k, d in enumerate(shifts):
-        valid = (c - d >= 0) & (c - d < width)
-        patch = right[rows, np.clip(c - d, 0, width - 1)]
-        a[k] = np.where(valid, m.sum(axis=0), 0)
-        b[k] = np.where(valid, patch.sum(axis=0), 0)
-        inter[k] = np.where(valid, (m & patch).sum(axis=0), 0)
-    count = np.concatenate([[0], np.cumsum(m.sum(axis=0))])
-    cum = [np.concatenate([np.zeros((len(shifts), 1)), np.cumsum(v, axis=1)], axis=1) for v in (a, b, inter)]
-
-    def best(lo, hi):
-        """Best shift index, overlap and (blob + right) counts of columns lo..hi-1."""
-        ai, bi, ii = (v[:, hi] - v[:, lo] for v in cum)
-        ok = 2 * ai >= count[hi] - count[lo]        # most of the part on the right image
-        dice = np.where(ok & (ai + bi > 0), 2 * ii / np.maximum(ai + bi, 1), 0.0)
-        k = int(np.argmax(dice))
-        return k, ii[k], ai[k] + bi[k], dice[k]
-
-    n = len(c)
-    whole = best(0, n)[3]
-    top = None
-    for x in range(1, n):
-        if min(count[x], count[n] - count[x]) < min_pixels or min(x, n - x) < 2 * pad:
-            continue            # a sliver narrower than both paddings can fit almost any shift
-        kl, il, tl, dl = best(0, x)
-        kr, ir, tr, dr = best(x, n)
-        score = 2 * (il + ir) / max(tl + tr, 1)
-        if (abs(shifts[kl] - shifts[kr]) >= step and min(dl, dr) >= least
-                and (top is None or score > top[0])):
-            top = (score, x)
-    if top is None or top[0] < whole:
-        return None
-    left = mask.copy()
-    left[:, cols.start + top[1]:] = False
-    parts = left, mask & ~left
-    # Then the test every blob passes (padded), since a thin sliver, or a piece of stripes, can
-    # fit its own columns at almost any shift.
-    fits = [_best_shift(part, *find_objects(part.astype(int))[0], right, shifts, pad) for part in parts]
-    own = [f[1] for f in fits]
-    if any(np.isnan(d) for d in own):
-        return None             # a part that fits no shift: no cut, by any test below
-    one = max(_placed_dice([mask], [s], right, pad) for s in shifts)   # the whole at one shift
-    if placed and _placed_dice(parts, own, right, pad) < one:
-        return None             # each part at its own shift, both at once, lay worse than one shift
-    if min(f[0] for f in fits) >= least and abs(fits[0][1] - fits[1][1]) >= step:
-        return parts
-    # Each part's padding holds its neighbour's change, which counts against it when two objects
-    # touch: then ask whether two shifts far apart lay both parts at once better than one shift.
-    if far is None:
-        return None
-    return parts if _two_shifts(parts, own, one, right, shifts, pad, far, far_score, far_poor, least) else None
-
-
-def _ascend(parts, start, right: np.ndarray, shifts, pad: int, line=None) -> tuple[float, list]:
-    """The best :func:`_placed_dice` of two `parts` and the shifts that give it: coordinate ascent
-    over `shifts` from `start`, each part in turn, until neither moves (at most three rounds)."""
-    d = list(start)
-    best = _placed_dice(parts, d, right, pad, line)
-    for _ in range(3):
-        moved = False
-        for k in (0, 1):
-            for s in shifts:
-                trial = list(d)
-                trial[k] = s
-                score = _placed_dice(parts, trial, right, pad, line)
-                if score > best + 1e-12:
-                    best, d, moved = score, trial, True
-        if not moved:
-            break
-    return best, d
-
-
-def _placed_dice(parts, shifts, right: np.ndarray, pad: int, line=None) -> float:
-    """Dice overlap of `parts` (full-image masks), each moved left by its shift, with `right`'s
-    change, over the rows of the parts and the columns they cover in `right` (padded by `pad`);
-    with `line`, the moved parts are closed by it first (as `right` should be)."""
-    width = right.shape[1]
-    placed = np.zeros_like(right)
-    for part, d in zip(parts, shifts):
-        rows, cols = np.nonzero(part)
-        keep = (cols - int(d) >= 0) & (cols - int(d) < width)
-        placed[rows[keep], cols[keep] - int(d)] = True
-    if line is not None and placed.any():
-        from scipy.ndimage import binary_closing
-
-        # Closed within the placed pixels' columns and a margin wider than the line, which gives
-        # what closing the whole image gives at a fraction of the cost.
-        cols = np.flatnonzero(placed.any(axis=0))
-        margin = 2 * line.shape[1]
-        c = slice(max(cols[0] - margin, 0), min(cols[-1] + 1 + margin, width))
-        placed[:, c] |= binary_closing(placed[:, c], line)
-    rows, cols = np.nonzero(placed)
-    if not len(rows):
-        return 0.0
-    r = slice(rows.min(), rows.max() + 1)
-    c = slice(max(cols.min() - pad, 0), min(cols.max() + 1 + pad, width))
-    mine, theirs = placed[r, c], right[r, c]
-    total = np.count_nonzero(mine) + np.count_nonzero(theirs)
-    return 2 * np.count_nonzero(mine & theirs) / total if total else 0.0
-
-
-def _join(masks: list, measure, gap_px: int, right: np.ndarray, pad: int, apart: bool = False,
-          weak: float | None = None) -> list:
-    """Join neighbouring blobs (boxes `gap_px` or less apart) while one shift lays their union
-    on the right image at least as well as their own shifts lay them (Dice, weighted by size):
-    the pieces of one object that looks like the wall in places, e.g. stripes; the best pair first.
-
-    With `apart`, "their own shifts lay them" is one overlap (:func:`_placed_dice`): both parts
-    moved at once, each by its own shift, against the right image's change, compared with the union
-    moved by one shift, over the same rows and padded columns.  Two objects side by side then stay
-    apart however well or poorly each fits alone (the padding of each part's own fit counts its
-    neighbour's change against it).  A part narrower than ``2 * pad`` fits almost any shift, so it
-    is moved by its neighbour's (both: by the union's).  With `weak` (a Dice), two neighbours
-    neither of which fits with a Dice of `weak` or more (neither a well-seen object) are joined
-    when the union fits at least as well as the better of them, whatever both moved at once give."""
-    fits = [measure(m) for m in masks]
-    sizes = [int(np.count_nonzero(m)) for m in masks]
-    keys = [frozenset([k]) for k in range(len(masks))]
-    unions = {}
-    while len(masks) > 1:
-        best = None
-        for a in range(len(masks)):
-            for b in range(a + 1, len(masks)):
-                (ra, ca), (rb, cb) = fits[a][2], fits[b][2]
-                gap = max(ra.start - rb.stop, rb.start - ra.stop, ca.start - cb.stop, cb.start - ca.stop, 0)
-                if gap > gap_px:
-                    continue
-                key = keys[a] | keys[b]
-                if key not in unions:
-                    unions[key] = measure(masks[a] | masks[b])
-                union = unions[key]
-                if not apart:
-                    margin = union[0] - (sizes[a] * fits[a][0] + sizes[b] * fits[b][0]) / (sizes[a] + sizes[b])
-                elif np.isnan(union[1]):
-                    continue            # the union has no shift: nothing to compare
-                else:
-                    own = [fits[a][1], fits[b][1]]
-                    loose = [bool(ca.stop - ca.start < 2 * pad or np.isnan(own[0])),
-                             bool(cb.stop - cb.start < 2 * pad or np.isnan(own[1]))]
-                    if all(loose):
-                        own = [union[1], union[1]]
-                    elif any(loose):
-                        own = [own[loose[0]]] * 2       # the firm part's shift for both
-                    margin = (_placed_dice([masks[a] | masks[b]], [union[1]], right, pad)
-                              - _placed_dice([masks[a], masks[b]], own, right, pad))
-                if weak is not None and max(fits[a][0], fits[b][0]) < weak:
-                    margin = max(margin, union[0] - max(fits[a][0], fits[b][0]))
-                if margin >= 0 and (best is None or margin > best[0]):
-                    best = (margin, a, b, union)
-        if best is None:
-            return masks
-        _, a, b, union = best
-        masks[a] = masks[a] | masks[b]
-        fits[a], sizes[a], keys[a] = union, sizes[a] + sizes[b], keys[a] | keys[b]
-        del masks[b], fits[b], sizes[b], keys[b]
-    return masks
-
-
 def silhouettes(background, scene, roi="center", *, shifts=range(0, 41), threshold: float = 8.0,
                 sigma: float = 1.0, min_pixels: int = 20, pad_px: int = 8, merge_gap_px: int = 10,
                 merge_disparity_px: float = 1.0, max_fraction: float = 0.5, join: bool = True,
@@ -426,12 +196,15 @@ def silhouettes(background, scene, roi="center", *, shifts=range(0, 41), thresho
                 keep_apart: bool = True, split_far_px: float | None = 5.0,
                 split_far_score: float = 0.94, split_placed: bool = True,
                 join_weak: bool = True, link_score: float | None = 0.9,
-                split_far_poor_px: float | None = 8.0, threshold_low: float | None = None) -> Silhouettes:
+                split_far_poor_px: float | None = 8.0, threshold_low: float | None = 5.0,
+                by_region: bool = True) -> Silhouettes:
     """Blobs of change of the scene's left image, each with the shift that lays it on the right's.
 
     Where the scene pair differs from the background pair is where the objects are, in
     both images: the same changed pixels as :func:`ismb_lab.depth_demo.changed_regions`
-    (whole image, the blobs that reach into `roi`), and the right image's changed pixels.  A blob's
+    (whole image, the blobs that reach into `roi`), and the right image's changed pixels; by
+    default, fainter ones that connect to them as well, region by region (`threshold_low`,
+    `by_region`).  A blob's
     silhouette disparity is the shift ``d`` in `shifts` with the largest Dice overlap
     between the blob and the right image's changed pixels ``d`` pixels left, counted over
     the columns both images have (an object across the image border is seen in part).
@@ -467,8 +240,13 @@ def silhouettes(background, scene, roi="center", *, shifts=range(0, 41), thresho
         the image's median smoothed difference (noisy cameras), is changed too when it connects to
         one above `threshold` (hysteresis, in both images): the outline of an object that looks
         nearly like the wall behind it then breaks into fewer pieces, but neighbours are bridged
-        more often.  None (the default): `threshold` alone.  5 was tried
-        (docs/experiments/2026-11-26-depth-unseen-11.md).
+        more often.  None: `threshold` alone (docs/experiments/2026-11-26-depth-unseen-11.md).
+    by_region : bool
+        With `threshold_low`, make the blobs both without and with it and keep, in each region (the
+        blobs of the two that overlap), those that fit better on average (mean Dice; a tie keeps
+        those without).  Hysteresis then mends the outlines it mends, and where it bridges two
+        neighbours into a blob that fits worse, the threshold's blobs stay.  The defaults
+        (docs/experiments/2026-11-26-depth-unseen-12.md); False: hysteresis everywhere.
     min_pixels : int
         Smaller blobs are camera noise.
     pad_px : int
@@ -535,8 +313,9 @@ def silhouettes(background, scene, roi="center", *, shifts=range(0, 41), thresho
     >>> left[100:140, 150:190] = right[100:140, 128:168] = 255.0     # an object 22 px nearer
     >>> s = silhouettes(load_pair(wall, wall), load_pair(left, right))
     >>> s.disparity.tolist(), s.score.round(2).tolist(), s.centroid_xy.round().tolist()
-    ([22.0], [1.0], [[169.0, 120.0]])
+    ([22.0], [1.0], [[170.0, 120.0]])
     """
+    options = dict(locals())        # first, so that it holds the arguments only
     from scipy.ndimage import find_objects, label
     from scipy.sparse.csgraph import connected_components
 
@@ -562,9 +341,12 @@ def silhouettes(background, scene, roi="center", *, shifts=range(0, 41), thresho
     if link_score is not None:
         link_score = check_number(link_score, "link_score", own, low=0, high=1)
     for name, value in (("join", join), ("split", split), ("keep_apart", keep_apart),
-                        ("split_placed", split_placed), ("join_weak", join_weak)):
+                        ("split_placed", split_placed), ("join_weak", join_weak), ("by_region", by_region)):
         if not isinstance(value, bool):
             raise ParameterTypeError(message(name, own, "True or False", value))
+    if by_region and threshold_low is not None:
+        options["by_region"] = False
+        return _by_region(silhouettes(**{**options, "threshold_low": None}), silhouettes(**options))
     try:
         shifts = [int(d) for d in shifts]
     except (TypeError, ValueError):
@@ -628,3 +410,38 @@ def silhouettes(background, scene, roi="center", *, shifts=range(0, 41), thresho
         score.append(dice)
     centroid = [centroids[j] for j in order]
     return Silhouettes(labels, disparity, score, np.array(centroid).reshape(-1, 2), changed[1], pad_px, shifts)
+
+
+def _by_region(plain: Silhouettes, grown: Silhouettes) -> Silhouettes:
+    """The blobs of `plain` or of `grown` (the same call with hysteresis), region by region.
+
+    A region is a set of blobs of the two that overlap, directly or through others.  Each region
+    keeps the blobs of the one whose blobs fit better on average (mean Dice; a tie keeps `plain`'s);
+    a region that only `grown` has (an object too faint for the threshold alone) keeps `grown`'s.
+    Each blob keeps its own Dice and shift.  The right image's change is `plain`'s, which the depth
+    stage's cuts of a blob (:meth:`Silhouettes.cut_dice`) lay blobs on.
+    """
+    from scipy.sparse.csgraph import connected_components
+
+    n = len(plain)
+    link = np.eye(n + len(grown), dtype=bool)
+    both = (plain.labels > 0) & (grown.labels > 0)
+    for a, b in set(zip(plain.labels[both].tolist(), grown.labels[both].tolist())):
+        link[a - 1, n + b - 1] = link[n + b - 1, a - 1] = True
+    group = connected_components(link, directed=False)[1]
+    kept = []
+    for g in np.unique(group):
+        mine = np.flatnonzero(group[:n] == g)
+        theirs = np.flatnonzero(group[n:] == g)
+        grow = len(theirs) and (not len(mine) or grown.score[theirs].mean() > plain.score[mine].mean())
+        kept += [(grown, k) for k in theirs] if grow else [(plain, k) for k in mine]
+    masks = [source.labels == k + 1 for source, k in kept]
+    centroid = [np.argwhere(m).mean(axis=0)[::-1] for m in masks]
+    order = np.argsort([c[0] for c in centroid], kind="stable")
+    labels = np.zeros(plain.labels.shape, dtype=np.int32)
+    for number, j in enumerate(order, 1):
+        labels[masks[j]] = number
+    return Silhouettes(labels, [kept[j][0].disparity[kept[j][1]] for j in order],
+                       [kept[j][0].score[kept[j][1]] for j in order],
+                       np.array([centroid[j] for j in order]).reshape(-1, 2), plain.right, plain.pad_px,
+                       plain.shifts)

@@ -183,7 +183,7 @@ def _agreed(left, right, part, silhouettes):
     """The shift (over :attr:`~ismb_lab.silhouettes.Silhouettes.shifts`) that minimises a part's
     census cost, relative to its best, plus one minus its outline's Dice; and that Dice.  None when
     no column of the part is measured at every shift."""
-    from .silhouettes import _placed_dice
+    from ._outline_fit import _placed_dice
 
     shifts = list(silhouettes.shifts)
     _, costs = column_costs(left, right, part, shifts)

@@ -210,7 +210,10 @@ VARIANTS.update({
 })
 _NOW = VARIANTS["ninth"]
 VARIANTS.update({
-    "eleventh": (_NOW[0], {**_NOW[1], "threshold_low": 5.0}),
+    "eleventh": (_NOW[0], {**_NOW[1], "threshold_low": 5.0, "by_region": False}),
+})
+VARIANTS.update({
+    "twelfth": (_NOW[0], {**_NOW[1], "threshold_low": 5.0, "by_region": True}),
 })
 """``--variants``: as DepthConfig fields and silhouettes options.  "before" is the defaults up to
 docs/experiments/2026-11-26-depth-unseen-2.md, "rules" the rules of
@@ -234,17 +237,20 @@ outline pieces a pixel apart only when one fits poorly (``silhouettes(link_score
 of a blob of one piece (``DepthConfig.band_one_piece``), the join of neighbouring objects whose
 features agree (``DepthConfig.band_join_px``) and one object per poorly fitting blob
 (``DepthConfig.poor_one``); "link+one+join" the first three, "sixth" all four:
-docs/experiments/2026-11-26-depth-unseen-6.md; "sixth" is the defaults since.  "seventh" adds to
-"sixth" the texture inside each blob (census costs per column): a cut where it steps and a poorly
+docs/experiments/2026-11-26-depth-unseen-6.md; "sixth" was the defaults from then to the eighth
+study.  "seventh" adds to "sixth" the texture inside each blob (census costs per column): a cut where it steps and a poorly
 fitting outline moved to the shift its texture and outline agree on
 (``pair_silhouettes(texture_gain=0.09, texture_poor=0.9)``, ``ismb_lab.texture.textured``):
 docs/experiments/2026-11-26-depth-unseen-7.md; it was the defaults for its held-out draw only.
 "eighth" is "sixth" with a firm outline from a Dice of 0.95 (``DepthConfig(firm_outline=0.95)``):
-docs/experiments/2026-11-26-depth-unseen-8.md.  "ninth" adds to "eighth" the cut of a blob that one
-shift fits only fairly (Dice 0.9-0.94) when two shifts 8 px or more apart lay its parts with 0.94 or
-more (``silhouettes(split_far_poor_px=8.0)``): docs/experiments/2026-11-26-depth-unseen-9.md.
+docs/experiments/2026-11-26-depth-unseen-8.md, the defaults to the ninth study.  "ninth" adds to
+"eighth" the cut of a blob that one shift fits only fairly (Dice 0.9-0.94) when two shifts 8 px or
+more apart lay its parts with 0.94 or more (``silhouettes(split_far_poor_px=8.0)``): docs/experiments/2026-11-26-depth-unseen-9.md.
 "eleventh" adds to "ninth" changed pixels above 5 grey levels that connect to ones above 8 (hysteresis,
-``silhouettes(threshold_low=5.0)``): docs/experiments/2026-11-26-depth-unseen-11.md."""
+``silhouettes(threshold_low=5.0)``): docs/experiments/2026-11-26-depth-unseen-11.md.  "twelfth" makes the
+blobs of "ninth" and of "eleventh" and keeps, region by region, those that fit better on average
+(``silhouettes(threshold_low=5.0, by_region=True)``): docs/experiments/2026-11-26-depth-unseen-12.md;
+"ninth" was the defaults from the ninth study to the twelfth, "twelfth" since."""
 
 
 def run_variants(seed: int, n: int, names, variants: dict, **kw):
@@ -322,7 +328,7 @@ def main(argv=None) -> int:
     except (ValueError, TypeError) as error:
         parser.error(f"--set {', '.join(args.set)}: {error}")
     blobs = {}
-    flags = ("join", "split", "keep_apart", "split_placed", "join_weak")
+    flags = ("join", "split", "keep_apart", "split_placed", "join_weak", "by_region")
     numbers = ("split_score", "split_step_px", "split_far_score")
     optional = ("split_far_px", "split_far_poor_px", "link_score", "threshold_low", "texture_gain",
                 "texture_poor")

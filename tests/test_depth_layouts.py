@@ -135,8 +135,8 @@ def test_the_join_that_keeps_apart_still_joins_the_pieces_of_one_object(load_scr
 
 
 def test_the_chosen_variant_is_the_defaults(load_script):
-    """docs/experiments/2026-11-26-depth-unseen-9.md chose "ninth" as the defaults (after
-    2026-11-26-depth-unseen-8.md had chosen "eighth", 2026-11-26-depth-unseen-6.md "sixth",
+    """docs/experiments/2026-11-26-depth-unseen-12.md chose "twelfth" as the defaults (after
+    2026-11-26-depth-unseen-9.md had chosen "ninth", 2026-11-26-depth-unseen-8.md "eighth", 2026-11-26-depth-unseen-6.md "sixth",
     2026-11-26-depth-unseen-5.md "band+firm", 2026-11-26-depth-unseen-4.md "cut+weak",
     2026-11-26-depth-unseen-3.md "far+floor" and 2026-11-26-depth-unseen-2.md "apart+behind0";
     2026-11-26-depth-unseen-7.md's "seventh" was the defaults for its held-out draw only): the
@@ -147,7 +147,7 @@ def test_the_chosen_variant_is_the_defaults(load_script):
     from ismb_lab.depth_demo import pair_silhouettes
     from ismb_lab.silhouettes import silhouettes
 
-    fields, blobs = load_script("depth_layouts").VARIANTS["ninth"]
+    fields, blobs = load_script("depth_layouts").VARIANTS["twelfth"]
     assert DepthConfig(**fields) == DepthConfig()
     defaults = {**inspect.signature(silhouettes).parameters, **inspect.signature(pair_silhouettes).parameters}
     assert all(defaults[name].default == value for name, value in blobs.items())
@@ -344,3 +344,18 @@ def test_hysteresis_mends_one_broken_outline_and_bridges_two_objects_elsewhere(l
     variants = {name: script.VARIANTS[name] for name in ("ninth", "eleventh")}
     layout, out = run_on(script, "unseen", 1700000 + n, n, variants)
     assert out["ninth"][1] == ninth and out["eleventh"][1] == eleventh
+
+
+@pytest.mark.parametrize("seed, ninth, eleventh, twelfth", [
+    (1700016, "split", "ok", "ok"),     # the region of the broken outline keeps the blob with hysteresis
+    (5009, "ok", "split", "ok"),        # a cylinder cut in two by its features only against the grown
+                                        # right image's change; each region keeps the threshold's here
+])
+def test_each_region_keeps_the_better_blobs_with_or_without_hysteresis(load_script, seed, ninth, eleventh, twelfth):
+    """Unseen development layouts of docs/experiments/2026-11-26-depth-unseen-12.md: "twelfth"
+    (``silhouettes(threshold_low=5, by_region=True)``) ranks right where either partition does."""
+    script = load_script("depth_layouts")
+    variants = {name: script.VARIANTS[name] for name in ("ninth", "eleventh", "twelfth")}
+    start = seed - seed % 1000 if seed < 10000 else seed - seed % 100000
+    layout, out = run_on(script, "unseen", seed, seed - start, variants)
+    assert [out[name][1] for name in variants] == [ninth, eleventh, twelfth]

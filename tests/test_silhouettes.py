@@ -115,7 +115,8 @@ def test_two_touching_objects_far_apart_in_depth_are_cut_when_both_parts_are_mov
     left[100:140, 100:181] = right[100:140, 90:171] = 200.0      # far: 81 px wide, at 10 px
     left[100:140, 181:205] = right[100:140, 161:185] = 255.0     # near: 24 px wide, at 20 px, in front
     bg, sc = load_pair(background, background), load_pair(left, right)
-    assert silhouettes(bg, sc, split_far_px=None).disparity.tolist() == [20.0]    # one object lost
+    alone = {"threshold_low": None}         # the threshold's blobs alone: the cut is what is tested
+    assert silhouettes(bg, sc, split_far_px=None, **alone).disparity.tolist() == [20.0]    # one object lost
     cut = silhouettes(bg, sc)                                    # the defaults: split_far_px=5, 0.94
     assert cut.disparity.tolist() == [10.0, 20.0]
     assert cut.labels[120, 120] == 1 and cut.labels[120, 195] == 2
@@ -135,16 +136,17 @@ def test_two_touching_objects_that_one_shift_fits_only_fairly_are_cut_when_far_a
     left[60:100, 40:90] = right[60:100, 28:78] = 255.0           # far: at 12 px
     left[75:115, 90:125] = right[75:115, 67:102] = 200.0         # near: at 23 px, in front
     bg, sc = load_pair(background, background), load_pair(left, right)
-    one = silhouettes(bg, sc, split_far_poor_px=None)
+    alone = {"threshold_low": None}         # the threshold's blobs alone: the cut is what is tested
+    one = silhouettes(bg, sc, split_far_poor_px=None, **alone)
     assert one.disparity.tolist() == [14.0] and 0.9 <= one.score[0] < 0.94     # the far box lost
     cut = silhouettes(bg, sc)
     assert cut.disparity.tolist() == [12.0, 23.0]
     assert cut.labels[80, 60] == 1 and cut.labels[95, 110] == 2
     # The two shifts lie 11 px apart, not 12 or more; the whole must fit with `split_score` or more,
     # and both parts at once with `split_far_score` or more.
-    assert silhouettes(bg, sc, split_far_poor_px=12.0).disparity.tolist() == [14.0]
-    assert silhouettes(bg, sc, split_far_poor_px=8.0, split_score=0.95).disparity.tolist() == [14.0]
-    assert silhouettes(bg, sc, split_far_poor_px=8.0, split_far_score=0.99).disparity.tolist() == [14.0]
+    assert silhouettes(bg, sc, split_far_poor_px=12.0, **alone).disparity.tolist() == [14.0]
+    assert silhouettes(bg, sc, split_far_poor_px=8.0, split_score=0.95, **alone).disparity.tolist() == [14.0]
+    assert silhouettes(bg, sc, split_far_poor_px=8.0, split_far_score=0.99, **alone).disparity.tolist() == [14.0]
 
 
 def test_an_object_whose_halves_fit_shifts_two_pixels_apart_is_not_cut():
@@ -586,8 +588,8 @@ def test_hysteresis_keeps_the_faint_half_of_an_object_with_its_outline():
         image[80:140, x0:x0 + 25] += 40.0
         image[80:140, x0 + 25:x0 + 50] += 6.0
     bg, sc = load_pair(background, background), load_pair(left, right)
-    plain = silhouettes(bg, sc, roi=(0, 0, W, H), split=False)
-    faint = silhouettes(bg, sc, roi=(0, 0, W, H), split=False, threshold_low=5.0)
+    plain = silhouettes(bg, sc, roi=(0, 0, W, H), split=False, threshold_low=None)
+    faint = silhouettes(bg, sc, roi=(0, 0, W, H), split=False, threshold_low=5.0, by_region=False)
     assert len(plain) == len(faint) == 1 and plain.disparity[0] == faint.disparity[0] == 22
     width = [int(np.ptp(np.flatnonzero((s.labels == 1).any(axis=0)))) + 1 for s in (plain, faint)]
     assert width[0] < 30 <= 45 < width[1]
@@ -614,6 +616,40 @@ def test_hysteresis_is_raised_to_the_noise_of_the_cameras():
     unraised = apply_hysteresis_threshold(diff, 5.0, 8.0)
     assert unraised.sum() > 2 * plain.sum()                    # the noise joined to the object
     assert plain.sum() <= low.sum() < 1.2 * plain.sum() and not (plain & ~low).any()
+
+
+def test_each_region_keeps_the_blobs_that_fit_better_with_or_without_hysteresis():
+    """``by_region``: a plain box nearly the wall's grey has a ragged outline, which hysteresis mends;
+    a faint shadow beside a bright box joins that box under hysteresis and spoils its fit.  Region by
+    region, the box keeps the outline with hysteresis and the shadowed box the one without."""
+    rng = np.random.default_rng(0)
+    background = rng.uniform(0, 120, (H, W))
+    left, right = background.copy(), background.copy()
+    grey = 60 + rng.normal(0, 3, (70, 60))
+    left[80:150, 40:100] = grey
+    right[80:150, 18:78] = grey                                 # 22 px nearer
+    left[60:140, 180:215] = 250
+    right[60:140, 150:185] = 250                                # 30 px nearer
+    left[60:140, 225:265] = 230
+    right[60:140, 213:253] = 230                                # 12 px nearer
+    left[60:140, 215:225] += 6.0                                # the shadow, in the left image only
+    bg, sc = load_pair(background, background), load_pair(left, right)
+    plain, grown, chosen = (silhouettes(bg, sc, roi=(0, 0, W, H), **kw) for kw in
+                            ({"threshold_low": None}, {"by_region": False}, {}))
+    assert plain.disparity.tolist() == grown.disparity.tolist() == chosen.disparity.tolist() == [22, 30, 12]
+    assert plain.score[0] < grown.score[0] == chosen.score[0]
+    assert (chosen.labels == 1).sum() > (plain.labels == 1).sum()
+    assert grown.score[2] < plain.score[2] == chosen.score[2]
+    assert np.array_equal(chosen.labels == 3, plain.labels == 3) and not np.array_equal(plain.labels, grown.labels)
+    assert chosen.right is plain.right or np.array_equal(chosen.right, plain.right)
+
+
+def test_by_region_without_a_low_threshold_is_the_threshold_alone():
+    pairs = pairs_with([(60, 100, 60, 110, 25), (150, 200, 80, 120, 10)])
+    plain, region = silhouettes(*pairs, threshold_low=None, by_region=False), silhouettes(*pairs, threshold_low=None)
+    assert np.array_equal(plain.labels, region.labels) and plain.disparity.tolist() == region.disparity.tolist()
+    with pytest.raises(ParameterTypeError, match="'by_region' parameter of silhouettes"):
+        silhouettes(*pairs, threshold_low=5.0, by_region=1)
 
 
 @pytest.mark.parametrize("value", [-1.0, 8.5])
