@@ -201,7 +201,7 @@ LISTED["07"] = [
     ("355 of 360", "record", "docs/experiments/2026-11-24-depth-layouts.md"),
     ("by its outline it is at 20 px", "library", "grouped(810001, 1, 'silhouettes')[0] == (20, 0)"),
     ("its neighbour 8 px\naway fits 17 px (true 17.8)", "library",
-     "unmerged(880022, 22) == ([16, 17, 21], 8, [22.3, 17.8, 13.9])"),
+     "unmerged(880022, 22) == ([16, 17, 22], 8, [22.3, 17.8, 13.9])"),
     ("doubles to 20 cm", "arithmetic", "2 * 10 == 20  # the rig's baseline, depth.BASELINE_M, in cm"),
 ]
 LISTED["08"] = [
