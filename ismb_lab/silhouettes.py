@@ -435,13 +435,10 @@ def _by_region(plain: Silhouettes, grown: Silhouettes) -> Silhouettes:
         theirs = np.flatnonzero(group[n:] == g)
         grow = len(theirs) and (not len(mine) or grown.score[theirs].mean() > plain.score[mine].mean())
         kept += [(grown, k) for k in theirs] if grow else [(plain, k) for k in mine]
-    masks = [source.labels == k + 1 for source, k in kept]
-    centroid = [np.argwhere(m).mean(axis=0)[::-1] for m in masks]
-    order = np.argsort([c[0] for c in centroid], kind="stable")
+    kept.sort(key=lambda blob: blob[0].centroid_xy[blob[1], 0])      # numbered left to right, as ever
     labels = np.zeros(plain.labels.shape, dtype=np.int32)
-    for number, j in enumerate(order, 1):
-        labels[masks[j]] = number
-    return Silhouettes(labels, [kept[j][0].disparity[kept[j][1]] for j in order],
-                       [kept[j][0].score[kept[j][1]] for j in order],
-                       np.array([centroid[j] for j in order]).reshape(-1, 2), plain.right, plain.pad_px,
-                       plain.shifts)
+    for number, (source, k) in enumerate(kept, 1):
+        labels[source.labels == k + 1] = number
+    return Silhouettes(labels, [source.disparity[k] for source, k in kept], [source.score[k] for source, k in kept],
+                       np.array([source.centroid_xy[k] for source, k in kept]).reshape(-1, 2), plain.right,
+                       plain.pad_px, plain.shifts)
