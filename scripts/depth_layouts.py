@@ -238,14 +238,15 @@ of a blob of one piece (``DepthConfig.band_one_piece``), the join of neighbourin
 features agree (``DepthConfig.band_join_px``) and one object per poorly fitting blob
 (``DepthConfig.poor_one``); "link+one+join" the first three, "sixth" all four:
 docs/experiments/2026-11-26-depth-unseen-6.md; "sixth" was the defaults from then to the eighth
-study.  "seventh" adds to "sixth" the texture inside each blob (census costs per column): a cut where it steps and a poorly
-fitting outline moved to the shift its texture and outline agree on
+study.  "seventh" adds to "sixth" the texture inside each blob (census costs per column): a cut
+where it steps and a poorly fitting outline moved to the shift its texture and outline agree on
 (``pair_silhouettes(texture_gain=0.09, texture_poor=0.9)``, ``ismb_lab.texture.textured``):
 docs/experiments/2026-11-26-depth-unseen-7.md; it was the defaults for its held-out draw only.
 "eighth" is "sixth" with a firm outline from a Dice of 0.95 (``DepthConfig(firm_outline=0.95)``):
 docs/experiments/2026-11-26-depth-unseen-8.md, the defaults to the ninth study.  "ninth" adds to
 "eighth" the cut of a blob that one shift fits only fairly (Dice 0.9-0.94) when two shifts 8 px or
-more apart lay its parts with 0.94 or more (``silhouettes(split_far_poor_px=8.0)``): docs/experiments/2026-11-26-depth-unseen-9.md.
+more apart lay its parts with 0.94 or more (``silhouettes(split_far_poor_px=8.0)``):
+docs/experiments/2026-11-26-depth-unseen-9.md.
 "eleventh" adds to "ninth" changed pixels above 5 grey levels that connect to ones above 8 (hysteresis,
 ``silhouettes(threshold_low=5.0)``): docs/experiments/2026-11-26-depth-unseen-11.md.  "twelfth" makes the
 blobs of "ninth" and of "eleventh" and keeps, region by region, those that fit better on average

@@ -136,7 +136,8 @@ def test_the_join_that_keeps_apart_still_joins_the_pieces_of_one_object(load_scr
 
 def test_the_chosen_variant_is_the_defaults(load_script):
     """docs/experiments/2026-11-26-depth-unseen-12.md chose "twelfth" as the defaults (after
-    2026-11-26-depth-unseen-9.md had chosen "ninth", 2026-11-26-depth-unseen-8.md "eighth", 2026-11-26-depth-unseen-6.md "sixth",
+    2026-11-26-depth-unseen-9.md had chosen "ninth", 2026-11-26-depth-unseen-8.md "eighth",
+    2026-11-26-depth-unseen-6.md "sixth",
     2026-11-26-depth-unseen-5.md "band+firm", 2026-11-26-depth-unseen-4.md "cut+weak",
     2026-11-26-depth-unseen-3.md "far+floor" and 2026-11-26-depth-unseen-2.md "apart+behind0";
     2026-11-26-depth-unseen-7.md's "seventh" was the defaults for its held-out draw only): the
@@ -353,7 +354,8 @@ def test_hysteresis_mends_one_broken_outline_and_bridges_two_objects_elsewhere(l
 ])
 def test_each_region_keeps_the_better_blobs_with_or_without_hysteresis(load_script, seed, ninth, eleventh, twelfth):
     """Unseen development layouts of docs/experiments/2026-11-26-depth-unseen-12.md: "twelfth"
-    (``silhouettes(threshold_low=5, by_region=True)``) ranks right where either partition does."""
+    (``silhouettes(threshold_low=5, by_region=True)``) ranks these two right, each of which one
+    partition alone gets wrong (not every such layout: 1700057 it loses, as "eleventh" does)."""
     script = load_script("depth_layouts")
     variants = {name: script.VARIANTS[name] for name in ("ninth", "eleventh", "twelfth")}
     start = seed - seed % 1000 if seed < 10000 else seed - seed % 100000
