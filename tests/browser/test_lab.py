@@ -112,6 +112,11 @@ def test_ga_runs_live_and_stops(open_notebook, kernel_exec, workspace, artifacts
     root = page.locator(".ismb-ga")
     status = root.locator(".ismb-status")
     bar = root.locator(".ismb-progress .progress-bar")
+    # Even on the project's pairs a quiet machine can run all 500 generations between the last look
+    # below and the click on Stop (the status then read "finished, generation 500/500").  A listener
+    # in the kernel holds each generation 50 ms, so the run lasts 25 s or more; the clicks are the
+    # student's.
+    kernel_exec(page, "import time; runner.model.listeners.append(lambda record: time.sleep(0.05))")
     root.locator("button.ismb-start").click()
     expect(status).to_contain_text("running, generation", timeout=60_000)
     assert "target fitness 1)" not in status.inner_text()   # the project's pairs, not one label
