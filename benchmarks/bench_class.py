@@ -54,7 +54,7 @@ from pathlib import Path
 from class_hub import (Client, Hub, Kernel, hub_side_mb, kernel_usage, memory_per_student, notebook_cells,
                        open_and_run, run_notebook, running_hub, stage_course)
 
-NOTEBOOK_05 = "ismb_lab/notebooks/05_genetic_algorithm.ipynb"
+NOTEBOOK_GA = "ismb_lab/notebooks/06_genetic_algorithm.ipynb"
 #: The click timed in the kernel: select (or release) left feature 1, with the full redraw.
 CLICK = ("_t = time.perf_counter(); labeler.click(*labeler.model.left_xy[0], side='left'); "
          "print(time.perf_counter() - _t)")
@@ -245,8 +245,8 @@ async def saves(hub: Hub, kernels: list) -> int:
 
 async def one_runs_05(hub: Hub, client: Client, name: str) -> None:
     """One student also opens notebook 05 (its GA cells as committed), beside notebook 04."""
-    kernel = await client.open_kernel(name, NOTEBOOK_05)
-    took = await run_notebook(kernel, notebook_cells(hub.homes / name, NOTEBOOK_05))
+    kernel = await client.open_kernel(name, NOTEBOOK_GA)
+    took = await run_notebook(kernel, notebook_cells(hub.homes / name, NOTEBOOK_GA))
     rss, uss, cpu = kernel_usage(hub.proc.pid, kernel)
     total = memory_per_student(hub.proc.pid, [name], with_kernel=True)[name]
     print(f"notebook 05 run by {name} in {took:.1f} s ({cpu:.1f} s CPU): its kernel RSS {rss:.0f} MB "

@@ -64,8 +64,8 @@ ASSIGNMENTS = {
     "01-harris": Assignment(("01_harris_features.ipynb",)),
     "02-hopfield": Assignment(("02_hopfield_network.ipynb",)),
     "03-methods": Assignment(("03_methods_compared.ipynb",)),
-    "05-genetic": Assignment(("05_genetic_algorithm.ipynb",)),
-    "06-explorer": Assignment(("06_parameter_explorer.ipynb",)),
+    "05-explorer": Assignment(("05_parameter_explorer.ipynb",)),
+    "06-genetic": Assignment(("06_genetic_algorithm.ipynb",)),
     "07-depth": Assignment(("07_toy_car_depth.ipynb",)),
     "08-peers": Assignment(("08_real_data_and_peers.ipynb",)),
 }

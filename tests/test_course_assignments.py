@@ -32,7 +32,7 @@ STUDENT = "ann"
 #: The library's own implementation of what an exercise asks for, by assignment.
 REFERENCES = {"00-start": ("transfer",), "01-harris": ("harris_response", "harris_from_tensor"),
               "02-hopfield": ("hopfield_form",),
-              "03-methods": ("euclidean_disparity",), "06-explorer": ("transfer",)}
+              "03-methods": ("euclidean_disparity",), "05-explorer": ("transfer",)}
 
 pytestmark = pytest.mark.slow
 

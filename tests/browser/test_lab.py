@@ -105,7 +105,7 @@ def test_ga_runs_live_and_stops(open_notebook, kernel_exec, workspace, artifacts
     labels = sorted((workspace / "notebooks").glob("targets-*-synthetic.json"))
     aside = [f.rename(f.with_name(f.name + ".aside")) for f in labels]
     try:
-        page = open_notebook("05_genetic_algorithm.ipynb")
+        page = open_notebook("06_genetic_algorithm.ipynb")
     finally:
         for moved, original in zip(aside, labels):
             moved.rename(original)
@@ -144,7 +144,7 @@ def test_ga_runs_live_and_stops(open_notebook, kernel_exec, workspace, artifacts
         for what, url in (("shown", shown), ("current", current)):
             (artifacts / f"05_fitness_{what}.png").write_bytes(base64.b64decode(url.split(",", 1)[1]))
     assert current == shown, "the fitness plot after Stop was not the current one"
-    root.screenshot(path=artifacts / "05_genetic_algorithm.png")
+    root.screenshot(path=artifacts / "06_genetic_algorithm.png")
 
 
 def test_toy_car_ranking_appears(open_notebook, ui, artifacts):

@@ -40,7 +40,7 @@ def test_stage_keeps_solutions_labels_and_locks_out_and_is_readable_by_all(repos
 
 def test_stage_copies_the_student_versions_of_the_exercises(repository, tmp_path):
     pytest.importorskip("nbgrader")
-    notebook = ROOT / "notebooks" / "06_parameter_explorer.ipynb"
+    notebook = ROOT / "notebooks" / "05_parameter_explorer.ipynb"
     assert "### BEGIN SOLUTION" in notebook.read_text(encoding="utf-8")
     (repository / "notebooks" / notebook.name).write_bytes(notebook.read_bytes())
     course = tmp_path / "course"

@@ -127,8 +127,8 @@ def test_05_and_06_use_the_labels_a_student_saved_in_04(run_notebook):
     key = load_targets(notebooks.parent / "images" / "synthetic" / "answer_key.json")
     save_targets(mine, TargetSet(key.left_xy[:6], key.right_xy[:6], key.left_sha256, key.right_sha256))
     try:
-        five = output_text(run_notebook("05_genetic_algorithm.ipynb"))
-        six = output_text(run_notebook("06_parameter_explorer.ipynb"))
+        five = output_text(run_notebook("06_genetic_algorithm.ipynb"))
+        six = output_text(run_notebook("05_parameter_explorer.ipynb"))
     finally:
         mine.unlink()
         for lock in notebooks.glob(f".{mine.name}.lock"):
@@ -154,7 +154,7 @@ def test_03_explains_method_one_by_its_post_processing(executed_notebook):
 
 
 def test_05_shows_the_plateau_it_describes(executed_notebook):
-    text = output_text(executed_notebook("05_genetic_algorithm.ipynb"))
+    text = output_text(executed_notebook("06_genetic_algorithm.ipynb"))
     best = [int(v) for v in re.search(r"best fitness per generation: \[([\d, ]+)\]", text).group(1).split(", ")]
     assert best[-1] == best[len(best) // 2]          # no gain over the second half of the run
     share = re.search(r"(\d+) of 30 chromosomes have the best fitness", text)
@@ -162,7 +162,7 @@ def test_05_shows_the_plateau_it_describes(executed_notebook):
 
 
 def test_05_adds_up_the_thesis_fig_5_10(executed_notebook):
-    text = output_text(executed_notebook("05_genetic_algorithm.ipynb"))
+    text = output_text(executed_notebook("06_genetic_algorithm.ipynb"))
     assert "the entries add up to C/E/T = 139/13/150 (C/T 92.67%); the thesis prints 125/14/137" in text
 
 
@@ -360,7 +360,7 @@ def test_the_number_rule_fails_on_a_changed_number(executed_notebook):
     gone, and 0.83 is neither printed nor listed), with a printed number changed (91.24 % is
     printed, 91.42 % is not), and with a small integer changed (the notebook prints "40
     generations", not "28 generations", though it prints 28 elsewhere)."""
-    name = "05_genetic_algorithm.ipynb"
+    name = "06_genetic_algorithm.ipynb"
     printed = output_text(executed_notebook(name))
     assert unaccounted(_source(name), printed) == []
     for old, new, cell_has in (("$p_c = 0.8$", "$p_c = 0.83$", "Arithmetic crossover"),
