@@ -59,6 +59,9 @@ NOTEBOOKS = ROOT / "notebooks"
 RUN_TIMES = NOTEBOOKS / "run_times.json"
 PATTERN = "0*.ipynb"
 COPIED = ("notebooks", "images", "manifests")
+#: Files of those folders a measuring run leaves out: what a class's runs write there.
+LEFT_OUT = (".ipynb_checkpoints", "targets-*.json", "my_targets*.json", "params-*.json", ".targets-*.lock",
+            "photos-*")
 HOMEWORK = "homework"
 
 #: Reading speeds: words a minute of plain prose and of prose that holds formulas; code lines a minute.
@@ -474,7 +477,8 @@ def stale(folder: Path = NOTEBOOKS, run_times: Path = RUN_TIMES) -> list[str]:
     found = []
     for path in sorted(Path(folder).glob(PATTERN)):
         entry = record.get(path.name)
-        if entry is None or entry.get("code_sha") != code_hash(json.loads(path.read_text(encoding="utf-8"))["cells"]):
+        cells = json.loads(path.read_text(encoding="utf-8"))["cells"]
+        if entry is None or entry.get("code_sha") != code_hash(cells):
             found.append(path.name)
     return found
 
@@ -573,12 +577,14 @@ def render(rows: list[Minutes], found: dict, record: dict) -> dict:
                  f"| 1 | teacher talk | | | | | {TEACHER_TALK} | | {s.teacher_min} |"]
         for n, r in enumerate(s.rows, 2):
             lines.append(f"| {n} | `{r.name}` | {_minutes(r.reading_min)} | {_minutes(r.code_min)} | "
-                         f"{r.figures_min} | {_minutes(r.run_min)} | {_tasks(r)} | {r.allowance_min} | {r.total_min} |")
+                         f"{r.figures_min} | {_minutes(r.run_min)} | {_tasks(r)} | {r.allowance_min} | "
+                         f"{r.total_min} |")
         lines.append(f"| {len(s.rows) + 2} | quiz | | | | | 5 questions, 1 min each | {s.quiz_min} | {s.quiz_min} |")
         steps = [s.teacher_min] + [r.total_min for r in s.rows] + [s.quiz_min]
         lines.append(f"| | **sum** | | | | | {' + '.join(map(str, steps))} = {s.total_min} | | **{s.total_min}** |")
         left = SESSION_MIN - s.total_min
-        lines.append(f"| | **left of {SESSION_MIN}** | | | | | {SESSION_MIN} − {s.total_min} = {left} | | **{left}** |")
+        lines.append(f"| | **left of {SESSION_MIN}** | | | | | {SESSION_MIN} − {s.total_min} = {left} | "
+                     f"| **{left}** |")
         work = [f"{r.name[:2]} ex. {', '.join(map(str, r.homework))}" for r in s.rows if r.homework]
         lines += ["", "**Homework** (cells tagged `homework`): " + ("; ".join(work) if work else "none") + "."]
         blocks[name] = "\n".join(lines)
@@ -601,7 +607,8 @@ def render(rows: list[Minutes], found: dict, record: dict) -> dict:
 
 
 def _block(name: str) -> re.Pattern:
-    return re.compile(rf"(^<!-- minutes:{re.escape(name)} -->\n)(.*?)(^<!-- /minutes:{re.escape(name)} -->$)", re.S | re.M)
+    tag = re.escape(name)
+    return re.compile(rf"(^<!-- minutes:{tag} -->\n)(.*?)(^<!-- /minutes:{tag} -->$)", re.S | re.M)
 
 
 def plan_blocks(folder: Path = NOTEBOOKS, run_times: Path = RUN_TIMES) -> dict:
@@ -738,7 +745,8 @@ def measure(root: Path, out: Path, command: str, timeout: int = 900, keep: Path 
     saved = {k: os.environ.get(k) for k in ("NUMBA_CACHE_DIR", "PYTHONPATH")}
     with tempfile.TemporaryDirectory(prefix="lesson-minutes-") as tmp:
         for name in COPIED:
-            shutil.copytree(root / name, Path(tmp) / name)
+            # a student's labels or parameters left in the folder would change what 05 and 06 run on
+            shutil.copytree(root / name, Path(tmp) / name, ignore=shutil.ignore_patterns(*LEFT_OUT))
         cache = Path(tmp) / "numba-cache"
         cache.mkdir()
         # the kernels inherit the environment: an empty numba cache, and this checkout's package
@@ -798,7 +806,8 @@ def _writable(out: Path) -> bool:
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(prog="lesson_minutes.py", description=__doc__.split("\n\n")[0],
                                      formatter_class=argparse.RawDescriptionHelpFormatter)
-    parser.add_argument("--notebooks", type=Path, default=NOTEBOOKS, help="folder of the notebooks (default notebooks/)")
+    parser.add_argument("--notebooks", type=Path, default=NOTEBOOKS,
+                        help="folder of the notebooks (default notebooks/)")
     parser.add_argument("--run-times", type=Path, default=RUN_TIMES,
                         help="measured run times and counts (default notebooks/run_times.json)")
     parser.add_argument("--json", action="store_true",
@@ -831,9 +840,10 @@ def main(argv: list[str] | None = None) -> int:
             return 0
         if args.write_plan:
             if not _writable(args.write_plan):
-                raise ValueError(f"--write-plan: will not replace {args.write_plan}: a symlink, a folder or read-only")
-            text = args.write_plan.read_text(encoding="utf-8")
-            args.write_plan.write_text(write_plan(text, plan_blocks(args.notebooks, args.run_times)), encoding="utf-8")
+                raise ValueError(f"--write-plan: will not replace {args.write_plan}: a symlink, a folder or "
+                                 "read-only")
+            text = write_plan(args.write_plan.read_text(encoding="utf-8"), plan_blocks(args.notebooks, args.run_times))
+            args.write_plan.write_text(text, encoding="utf-8")
             late = stale(args.notebooks, args.run_times)
             print(f"{args.write_plan}: tables written" + (f"; stale run times: {', '.join(late)}" if late else ""))
             return 0
