@@ -1,6 +1,7 @@
 """scripts/lesson_minutes.py on the command line, and its --measure on a tiny notebook."""
 
 import json
+import math
 import re
 import os
 from pathlib import Path
@@ -33,8 +34,10 @@ def test_the_table_lists_every_notebook_with_its_total(tool, capsys):
     assert tool.main(["--json"]) == 0
     rows = json.loads(capsys.readouterr().out)
     for row in rows:
-        assert row["total_min"] == row["reading_min"] + row["run_min"] + row["allowance_min"]
-        assert row["reading_min"] == -(-row["words"] // tool.WPM)
+        parts = row["reading_min"] + row["code_min"] + row["figures_min"] + row["run_min"] + row["allowance_min"]
+        assert row["total_min"] == math.ceil(round(parts, 9))
+        assert row["reading_min"] == math.ceil(round((row["plain_words"] / tool.PLAIN_WPM
+                                                      + row["formula_words"] / tool.FORMULA_WPM) * 10, 9)) / 10
 
 
 def test_check_plan_exits_1_on_a_false_plan(tool, tmp_path, capsys):
