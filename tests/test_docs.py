@@ -120,11 +120,17 @@ def test_the_readme_and_the_cli_reference_show_commands():
 @pytest.mark.parametrize("page, words", documented_commands(),
                          ids=[f"{page}-{n}-{words[0]}" for n, (page, words) in enumerate(documented_commands())])
 def test_every_printed_command_parses(page, words):
-    """The command's parser accepts it as printed: the command exists, and so do its options, their
-    choices and value types, and its positional arguments; not that its files exist or that it succeeds."""
+    """The command's parser accepts it as printed: the command exists, and so do its options (spelled
+    out), their choices and value types, and its positional arguments; not that its files exist or
+    that it succeeds."""
     from ismb_lab.cli import build_parser
 
     build_parser().parse_args(words)
+    parsers = subcommand_parsers()
+    command = " ".join(words[:2]) if " ".join(words[:2]) in parsers else words[0]
+    own = {o for a in parsers[command]._actions for o in a.option_strings}
+    # argparse takes an unambiguous prefix of an option too: the page must spell it out
+    assert [w for w in words if w.startswith("--") and w.split("=")[0] not in own] == []
 
 
 def subcommand_parsers() -> dict:
