@@ -50,8 +50,9 @@ def test_each_record_is_one_dated_markdown_file_with_a_title():
 
 
 def test_every_script_is_named_in_the_readme_the_docs_or_a_test():
-    named = "".join(p.read_text(encoding="utf-8") for p in [ROOT / "README.md", *sorted(DOCS.glob("*.md"))]) + "".join(
-        p.read_text(encoding="utf-8") for p in (ROOT / "tests").rglob("test_*.py") if p.name != "test_docs.py")
+    pages = [ROOT / "README.md", *sorted(DOCS.glob("*.md"))]
+    pages += [p for p in (ROOT / "tests").rglob("test_*.py") if p.name != "test_docs.py"]
+    named = "".join(p.read_text(encoding="utf-8") for p in pages)
     missing = [p.name for p in sorted((ROOT / "scripts").glob("*.py")) if p.stem not in named]
     assert missing == []
 
@@ -65,13 +66,23 @@ def test_readme_is_short_and_links_the_four_docs():
     assert {f"docs/{name}.md" for name in ("architecture", "cli", "depth", "matching")} <= linked
 
 
+def anchors(text: str) -> set:
+    """The anchors a Markdown renderer gives `text`'s headings (lower case, punctuation dropped,
+    spaces as hyphens)."""
+    return {re.sub(r"[^\w\- ]", "", heading.strip().lower()).replace(" ", "-")
+            for heading in re.findall(r"^#+ (.+)$", re.sub(r"```.*?```", "", text, flags=re.S), re.M)}
+
+
 def test_every_relative_link_of_the_readme_and_the_docs_names_a_file_of_the_repository():
     broken = []
     for page in [ROOT / "README.md", *sorted(DOCS.glob("*.md"))]:
-        for target in re.findall(r"\]\(([^)#:]+)(?:#[^)]*)?\)", page.read_text(encoding="utf-8")):
+        for target, anchor in re.findall(r"\]\(([^)#:]+)(?:#([^)]*))?\)", page.read_text(encoding="utf-8")):
+            path = page.parent / target
             # depth.md is written beside this page by its own change; a link to it is checked once it exists
-            if not (page.parent / target).exists() and not target.endswith("depth.md"):
-                broken.append(f"{page.relative_to(ROOT)}: {target}")
+            if not path.exists() and target.endswith("depth.md"):
+                continue
+            if not path.exists() or anchor and anchor not in anchors(path.read_text(encoding="utf-8")):
+                broken.append(f"{page.relative_to(ROOT)}: {target}#{anchor}")
     assert broken == []
 
 
@@ -114,11 +125,12 @@ def test_the_readme_and_the_cli_reference_show_commands():
     pages = {page for page, _ in documented_commands()}
     assert pages == {"README.md", "docs/cli.md"}
     commands = {words[0] for _, words in documented_commands()}
-    assert commands == {"match", "tune", "evaluate", "depth", "rectify", "calibrate", "render", "targets", "course"}
+    assert commands == {"match", "tune", "evaluate", "depth", "rectify", "calibrate", "render", "targets",
+                        "course"}
 
 
 @pytest.mark.parametrize("page, words", documented_commands(),
-                         ids=[f"{page}-{n}-{words[0]}" for n, (page, words) in enumerate(documented_commands())])
+                         ids=[f"{page}-{n}-{w[0]}" for n, (page, w) in enumerate(documented_commands())])
 def test_every_printed_command_parses(page, words):
     """The command's parser accepts it as printed: the command exists, and so do its options (spelled
     out), their choices and value types, and its positional arguments; not that its files exist or
