@@ -91,7 +91,6 @@ def shell_commands(text: str) -> list:
 
     Continued lines are joined, ``NAME=value`` lines define variables that later ``$NAME`` words
     use, ``NAME=value`` words before the command (its environment) are dropped, and a pipe ends it.
-
     """
     found = []
     for block in re.findall(r"```bash\n(.*?)```", text, re.S):
