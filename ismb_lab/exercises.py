@@ -12,15 +12,17 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ._validation import ParameterError, ParameterTypeError, check_number, check_points, message
+from ._validation import ParameterError, ParameterTypeError, check_number, check_points, check_rng, message
 from .coords import euclidean_disparity, horizontal_disparity, vertical_disparity
+from .depth import metric_depth
 from .evaluation import score
 from .features import harris_from_tensor, harris_response, image_gradients, structure_tensor
-from .hopfield import Network, hopfield_form
+from .hopfield import Network, energy, hopfield_form
 from .similarity import transfer
 
-__all__ = ["check_disparity", "check_energy_derivation", "check_fitness", "check_harris_response",
-           "check_transfer", "Feedback"]
+__all__ = ["check_depth_range", "check_disparity", "check_energy_derivation", "check_error_kinds",
+           "check_fitness", "check_harris_response", "check_hopfield_form", "check_transfer", "Feedback",
+           "random_network"]
 
 
 @dataclass(frozen=True)
@@ -73,9 +75,9 @@ def _close(a, b, atol: float = 1e-9) -> bool:
 def check_energy_derivation(W, I, net: Network) -> Feedback:
     """Check the weights and biases a student derived from the energy (3-15).
 
-    Compares them with :func:`ismb_lab.hopfield.hopfield_form` (``rule="exact"``) term by
-    term: the diagonal, neurons of the same left or right feature, neighbouring neurons,
-    neurons that do not interact, and the bias, and names the terms that are off.
+    Compares them with the package's own derivation (``rule="exact"``) term by term: the
+    diagonal, neurons of the same left or right feature, neighbouring neurons, neurons that
+    do not interact, and the bias, and names the terms that are off.
 
     Parameters
     ----------
@@ -95,11 +97,8 @@ def check_energy_derivation(W, I, net: Network) -> Feedback:
     >>> net = Network.from_arrays(2, 2, rows=[0, 0, 1, 1], cols=[0, 1, 0, 1],
     ...                           similarity=[0.5, -0.5, -0.5, 0.5],
     ...                           pair_a=[0, 1], pair_b=[3, 2], pair_c=[0.9, -0.9])
-    >>> W, I = hopfield_form(net)
-    >>> print(check_energy_derivation(W, I, net))
-    correct
-    >>> print(check_energy_derivation(W, I - 2, net))
-    I (the bias) is off by a constant; hint: expanding (1 - sum_k y_ik)^2 and (1 - sum_i y_ik)^2 leaves terms linear in y_ik: where do they go?
+    >>> print(check_energy_derivation(np.zeros((4, 4)), np.zeros(4), net))
+    W for two neurons of the same left feature (i = j) is off; hint: expand (1 - sum_k y_ik)^2 and ...
     """
     owner = "check_energy_derivation"
     if not isinstance(net, Network):
@@ -153,6 +152,113 @@ def check_energy_derivation(W, I, net: Network) -> Feedback:
                             "in y_ik")
     text = "; ".join(problems)
     return Feedback(False, text if text.endswith("?") else text + ".")
+
+
+def random_network(rng) -> Network:
+    """A small random network, for checking a derivation on more than one example.
+
+    2 to 5 features a side, random candidates (at least two), similarities, neighbouring
+    pairs, compatibilities and self-compatibilities, all in [-1, 1].
+
+    Parameters
+    ----------
+    rng : int or numpy.random.Generator
+
+    Returns
+    -------
+    net : Network
+
+    Examples
+    --------
+    >>> net = random_network(0)
+    >>> 2 <= net.n_neurons <= 25, bool(np.all(np.abs(net.similarity) <= 1))
+    (True, True)
+    """
+    gen = check_rng(rng, "rng", "random_network")
+    n_left, n_right = (int(v) for v in gen.integers(2, 6, size=2))
+    grid = gen.random((n_left, n_right)) < 0.7
+    grid[0, 0] = grid[-1, -1] = True
+    rows, cols = np.nonzero(grid)
+    n = len(rows)
+    a, b = np.triu_indices(n, 1)
+    keep = (rows[a] != rows[b]) & (cols[a] != cols[b]) & (gen.random(len(a)) < 0.5)
+    return Network.from_arrays(n_left, n_right, rows, cols, gen.uniform(-1, 1, n), a[keep], b[keep],
+                               gen.uniform(-1, 1, int(keep.sum())), self_c=gen.uniform(-1, 1, n))
+
+
+def _form_problems(W, I, net: Network, gen: np.random.Generator) -> list[str]:
+    """What the derivation must give, asked of `W`, `I` with the energy (3-15) itself."""
+    n = net.n_neurons
+    problems = []
+    if not _close(W, W.T):
+        problems.append("W is not symmetric, so a flip's energy change is not -u dy")
+    if not _close(np.diag(W), 0):
+        problems.append("W has a non-zero diagonal: a neuron feeds back on itself")
+    E = lambda y: energy(net, y)  # noqa: E731
+    zero = np.zeros(n, dtype=np.uint8)
+    const = E(zero)
+    states = [np.eye(n, dtype=np.uint8)[a] for a in range(n)]
+    states += [gen.integers(0, 2, n).astype(np.uint8) for _ in range(12)]
+    if not all(abs(E(y) - (const - 0.5 * y @ W @ y - I @ y)) <= 1e-6 for y in states):
+        problems.append("E(y) from (3-15) differs from E(0) - 1/2 y'Wy - I'y for some states y")
+    for y in states[n:n + 4]:
+        u = W @ y + I
+        for a in range(n):
+            flipped = y.copy()
+            flipped[a] = 1 - y[a]
+            if abs(E(flipped) - E(y) + u[a] * (int(flipped[a]) - int(y[a]))) > 1e-6:
+                problems.append("a single flip changes E by something other than -u dy, with u = W y + I")
+                return problems
+    return problems
+
+
+def check_hopfield_form(form, *, rng, n_networks: int = 3) -> Feedback:
+    """Check a student's function that writes the energy (3-15) of any network in Hopfield form.
+
+    ``form(net)`` must return ``(W, I)`` for a :class:`~ismb_lab.hopfield.Network`.  It is
+    called on `n_networks` random networks drawn from `rng` (:func:`random_network`), and on
+    each the check asks what the derivation must give, with the energy computed from (3-15)
+    directly: W symmetric with a zero diagonal, ``E(y) = E(0) - 1/2 y'Wy - I'y`` for every
+    one-neuron state and for random states, and ``dE = -u dy`` for every single flip of random
+    states, ``u = W y + I``.  Then :func:`check_energy_derivation` names a term that is off.
+
+    Parameters
+    ----------
+    form : callable
+        ``form(net) -> (W, I)``.
+    rng : int or numpy.random.Generator
+        Where the networks come from.
+    n_networks : int
+
+    Returns
+    -------
+    feedback : Feedback
+
+    Examples
+    --------
+    >>> print(check_hopfield_form(lambda net: (np.zeros((net.n_neurons,) * 2), np.zeros(net.n_neurons)), rng=0))
+    On a random network of 12 neurons: E(y) from (3-15) differs from E(0) - 1/2 y'Wy - I'y for some states y; ...
+    """
+    owner = "check_hopfield_form"
+    if not callable(form):
+        raise ParameterTypeError(message("form", owner, "a function of a Network returning (W, I)",
+                                         type(form).__name__))
+    gen = check_rng(rng, "rng", owner)
+    count = check_number(n_networks, "n_networks", owner, low=1, integer=True)
+    for _ in range(count):
+        net = random_network(gen)
+        n = net.n_neurons
+        answer = form(net)
+        if not isinstance(answer, tuple) or len(answer) != 2:
+            raise ParameterTypeError(message("form", owner, "a function returning a pair (W, I)",
+                                             type(answer).__name__))
+        W, I = _array(answer[0], "W", owner, (n, n)), _array(answer[1], "I", owner, (n,))
+        problems = _form_problems(W, I, net, gen)
+        terms = check_energy_derivation(W, I, net)
+        if problems or not terms:
+            text = "; ".join(problems) + (". " if problems else "") + (terms.text if not terms else "")
+            return Feedback(False, f"On a random network of {n} neurons: {text.strip()}")
+    return _OK
 
 
 def check_harris_response(R, image, sigma: float = 1.0, k: float = 0.04) -> Feedback:
@@ -321,6 +427,101 @@ def check_disparity(values, left_xy, right_xy) -> Feedback:
     worst = int(np.argmax(np.abs(values - expected)))
     return Feedback(False, f"Row {worst + 1} is off (yours: {values[worst]:g}). Hint: recompute it from "
                            f"its x_left, y_left, x_right and y_right.")
+
+
+def check_error_kinds(wrong, extra, pairs, targets) -> Feedback:
+    """Check a student's count of the two kinds of error of matched pairs against target pairs.
+
+    A *wrong partner* is a match of a left feature that has a target, to another right
+    feature; an *extra* is a match of a left feature that has no target (the split of
+    :func:`ismb_lab.evaluation.score`).  The usual slips are recognised.
+
+    Parameters
+    ----------
+    wrong, extra : int
+        The student's counts.
+    pairs, targets : (m, 2) int array_like
+        Matched and target ``(i, k)`` feature pairs.
+
+    Returns
+    -------
+    feedback : Feedback
+
+    Examples
+    --------
+    >>> pairs, targets = [[0, 0], [0, 1], [2, 2], [3, 0]], [[0, 0], [1, 1], [2, 3]]
+    >>> print(check_error_kinds(2, 1, pairs, targets))
+    correct
+    >>> print(check_error_kinds(3, 0, pairs, targets))
+    You counted every error as a wrong partner. Hint: an extra is a match of a left corner with no true partner at all; do all your errors have one?
+    """
+    owner = "check_error_kinds"
+    wrong = check_number(wrong, "wrong", owner, low=0, integer=True)
+    extra = check_number(extra, "extra", owner, low=0, integer=True)
+    s = score(pairs, targets)
+    if (wrong, extra) == (s.wrong_partner, s.extra):
+        return _OK
+    matches = np.asarray(pairs, dtype=np.int64).reshape(-1, 2)
+    true = np.asarray(targets, dtype=np.int64).reshape(-1, 2)
+    wanted = set(map(tuple, true.tolist()))
+    errors = [(i, k) for i, k in matches.tolist() if (i, k) not in wanted]
+    by_right = sum(k not in set(true[:, 1].tolist()) for _, k in errors)
+    if wrong + extra != s.errors:
+        return Feedback(False, f"Your two counts add up to {wrong + extra}, but {s.errors} of the "
+                               f"{len(matches)} matches are errors (not true matches). Hint: every error "
+                               "is of exactly one kind.")
+    if (wrong, extra) == (s.errors, 0) and s.extra:
+        return Feedback(False, "You counted every error as a wrong partner. Hint: an extra is a match of a "
+                               "left corner with no true partner at all; do all your errors have one?")
+    if (wrong, extra) == (s.extra, s.wrong_partner):
+        return Feedback(False, "The two counts are swapped. Hint: which kind of error has a true partner "
+                               "for its left corner?")
+    if (wrong, extra) == (len(errors) - by_right, by_right):
+        return Feedback(False, "You told the kinds apart by the right corner of each error. Hint: the "
+                               "definitions look at the left corner i of a match (i, k).")
+    return Feedback(False, f"The split is off (yours: {wrong} wrong partners and {extra} extras). Hint: "
+                           "for each error, ask whether its left corner has a true partner.")
+
+
+def check_depth_range(near, far, disparity, *, focal_px: float, baseline_m: float, error_px: float) -> Feedback:
+    """Check a student's depth range of a disparity with an error bar.
+
+    Compares ``(near, far)`` with :func:`ismb_lab.depth.metric_depth` of `disparity` and
+    recognises the usual slips, without naming the formula.
+
+    Parameters
+    ----------
+    near, far : float
+        The student's near and far ends, in metres.
+    disparity : float
+        The disparity d, pixels (> 0).
+    focal_px, baseline_m, error_px : float
+        f, B and the error bar q of the disparity.
+
+    Returns
+    -------
+    feedback : Feedback
+
+    Examples
+    --------
+    >>> print(check_depth_range(0.9, 1.2, 30.0, focal_px=300, baseline_m=0.1, error_px=0.5))
+    Your range [0.900, 1.200] m is off; the depth itself is 1.000 m. Hint: work out Z at each end of the disparity's error bar.
+    """
+    owner = "check_depth_range"
+    near = check_number(near, "near", owner)
+    far = check_number(far, "far", owner) if not (isinstance(far, float) and far == np.inf) else far
+    d = check_number(disparity, "disparity", owner, low=0, low_open=True)
+    want = metric_depth(d, focal_px, baseline_m, error_px)
+    if np.allclose((near, far), (want.near, want.far), rtol=1e-9, atol=1e-12):
+        return _OK
+    if np.allclose((far, near), (want.near, want.far), rtol=1e-9, atol=1e-12):
+        return Feedback(False, "Your near end is farther from the cameras than your far end. Hint: Z = fB/d; "
+                               "does a nearer point have the larger or the smaller disparity?")
+    if np.allclose((near, far), (want.z, want.z), rtol=1e-9):
+        return Feedback(False, "Both ends are the depth itself. Hint: the range comes from the disparity's "
+                               "error bar.")
+    return Feedback(False, f"Your range [{near:.3f}, {far:.3f}] m is off; the depth itself is {want.z:.3f} m. "
+                           "Hint: work out Z at each end of the disparity's error bar.")
 
 
 def check_fitness(value, pairs, targets, unknown=()) -> Feedback:

@@ -4,8 +4,9 @@ import numpy as np
 import pytest
 
 from ismb_lab import ParameterError, ParameterTypeError
-from ismb_lab.exercises import (check_disparity, check_energy_derivation, check_fitness,
-                                check_harris_response, check_transfer)
+from ismb_lab.exercises import (check_depth_range, check_disparity, check_energy_derivation, check_error_kinds,
+                                check_fitness, check_harris_response, check_hopfield_form, check_transfer,
+                                random_network)
 from ismb_lab.features import harris_response, image_gradients, structure_tensor
 from ismb_lab.hopfield import Network, hopfield_form
 from ismb_lab.similarity import transfer
@@ -258,6 +259,9 @@ ANSWERS = {
     "check_energy_derivation": ("W=2C", "I=2+S", "2*C-2*"),
     "check_disparity": ("||p-q||", "hypot(", "sqrt(dx"),
     "check_fitness": ("n_c-n_e", "f=n_c-", "n_c-(len("),
+    "check_hopfield_form": ("W=2C", "I=2+S", "2*C-2*", "hopfield_form(net"),
+    "check_error_kinds": ("len(errors)-", "inpartnered"),
+    "check_depth_range": ("fB/(d+q)", "fB/(d-q)", "/(d+q)", "/(d-q)"),
 }
 
 
@@ -269,3 +273,124 @@ def test_a_checks_docstring_does_not_state_the_answer(name):
 
     doc = re.sub(r"\s+", "", inspect.getdoc(getattr(exercises, name)))
     assert [a for a in ANSWERS[name] if a in doc] == [], f"{name}'s docstring states the answer"
+
+
+# --- the Hopfield form of any network (02, exercise 1) ------------------------------------------
+
+def _exact_form(net):
+    """W and I built from the energy (3-15) alone, by finite differences (no library derivation)."""
+    from ismb_lab.hopfield import energy
+
+    n = net.n_neurons
+    E = lambda y: energy(net, np.array(y, dtype=np.uint8))  # noqa: E731
+    zero = np.zeros(n, dtype=int)
+    I = np.array([E(zero) - E(np.eye(n, dtype=int)[a]) for a in range(n)])
+    W = np.zeros((n, n))
+    for a in range(n):
+        for b in range(n):
+            if a != b:
+                y = zero.copy(); y[[a, b]] = 1
+                W[a, b] = -(E(y) - E(zero)) - I[a] - I[b]
+    return W, I
+
+
+def test_a_form_derived_from_the_energy_passes_on_random_networks():
+    assert check_hopfield_form(_exact_form, rng=3, n_networks=4).correct
+
+
+@pytest.mark.parametrize("slip, expected", [
+    (lambda net: hopfield_form(net, "thesis"), "non-zero diagonal"),
+    (lambda net: (hopfield_form(net)[0] / 2, hopfield_form(net)[1]), "differs from E(0)"),
+    (lambda net: (np.triu(hopfield_form(net)[0]) * 2, hopfield_form(net)[1]), "not symmetric"),
+    (lambda net: (hopfield_form(net)[0], net.similarity), "differs from E(0)"),
+])
+def test_a_wrong_form_fails_and_says_which_property(slip, expected):
+    feedback = check_hopfield_form(slip, rng=3)
+    assert not feedback.correct and expected in feedback.text and feedback.text.startswith("On a random network")
+
+
+def test_a_form_right_only_on_the_small_network_of_the_notebook_fails():
+    """A student who fits the numbers of one network by hand passes the check of that network only."""
+    small = Network.from_arrays(2, 2, rows=[0, 0, 1, 1], cols=[0, 1, 0, 1], similarity=[0.5, -0.5, -0.5, 0.5],
+                                pair_a=[0, 1], pair_b=[3, 2], pair_c=[0.9, -0.9], self_c=[1, 1, 1, 1])
+    W, I = hopfield_form(small)
+    assert check_energy_derivation(W, I, small)
+    assert not check_hopfield_form(lambda net: (W, I) if net.n_neurons == 4 else
+                                   (np.zeros((net.n_neurons,) * 2), 2 + net.similarity), rng=3)
+
+
+def test_random_networks_are_valid_varied_and_reproducible():
+    nets = [random_network(np.random.default_rng(s)) for s in range(6)]
+    assert len({n.n_neurons for n in nets}) > 2 and all(n.n_pairs > 0 for n in nets)
+    again = random_network(np.random.default_rng(0))
+    assert np.array_equal(again.rows, nets[0].rows) and np.array_equal(again.pair_c, nets[0].pair_c)
+
+
+def test_hopfield_form_bad_input():
+    with pytest.raises(ParameterTypeError, match="'form' parameter of check_hopfield_form"):
+        check_hopfield_form("W", rng=0)
+    with pytest.raises(ParameterTypeError, match="'form' parameter of check_hopfield_form"):
+        check_hopfield_form(lambda net: hopfield_form(net)[0], rng=0)
+    with pytest.raises(ParameterError, match="'rng' parameter of check_hopfield_form"):
+        check_hopfield_form(hopfield_form, rng=-1)
+
+
+# --- the two kinds of error (00, exercise 1) ------------------------------------------------------
+
+@pytest.fixture
+def errors():
+    """Matches (0,0) right; (0,1) and (2,2) wrong partners; (3,0) and (4,1) extras."""
+    return [[0, 0], [0, 1], [2, 2], [3, 0], [4, 1]], [[0, 0], [1, 1], [2, 3]]
+
+
+def test_error_kinds_correct(errors):
+    assert check_error_kinds(2, 2, *errors).correct
+
+
+@pytest.mark.parametrize("wrong, extra, expected", [
+    (4, 0, "every error as a wrong partner"),
+    (2, 2 + 1, "add up to 5, but 4 of the 5 matches are errors"),
+    (3, 1, "told the kinds apart by the right corner"),
+    (0, 4, "The split is off (yours: 0 wrong partners and 4 extras)"),
+])
+def test_error_kinds_slips(errors, wrong, extra, expected):
+    feedback = check_error_kinds(wrong, extra, *errors)
+    assert not feedback.correct and expected in feedback.text, feedback.text
+
+
+def test_error_kinds_swapped():
+    pairs, targets = [[0, 1], [3, 0], [4, 4]], [[0, 0]]
+    assert "swapped" in check_error_kinds(2, 1, pairs, targets).text
+
+
+def test_error_kinds_bad_input(errors):
+    with pytest.raises(ParameterError, match="'wrong' parameter of check_error_kinds"):
+        check_error_kinds(-1, 0, *errors)
+    with pytest.raises(ParameterTypeError, match="'extra' parameter of check_error_kinds"):
+        check_error_kinds(1, "2", *errors)
+
+
+# --- a depth range (07, exercise 1) ---------------------------------------------------------------
+
+def test_depth_range_correct_and_slips():
+    fB, d, q = 300 * 0.10, 25.0, 0.5
+    ok = dict(focal_px=300, baseline_m=0.10, error_px=q)
+    assert check_depth_range(fB / (d + q), fB / (d - q), d, **ok).correct
+    swapped = check_depth_range(fB / (d - q), fB / (d + q), d, **ok)
+    assert not swapped and "farther from the cameras than your far end" in swapped.text
+    assert "Both ends are the depth itself" in check_depth_range(fB / d, fB / d, d, **ok).text
+    assert "is off; the depth itself is 1.200 m" in check_depth_range(1.0, 1.5, d, **ok).text
+    # a hint, never the answer: neither end's value appears in any message
+    for near, far in ((fB / (d - q), fB / (d + q)), (fB / d, fB / d), (1.0, 1.5)):
+        text = check_depth_range(near, far, d, **ok).text
+        assert f"{fB / (d + q):.3f}" not in text and f"{fB / (d - q):.3f}" not in text
+        assert "d - q" not in text and "d + q" not in text
+
+
+def test_depth_range_far_end_at_infinity():
+    assert check_depth_range(30 / 0.75, float("inf"), 0.25, focal_px=300, baseline_m=0.1, error_px=0.5).correct
+
+
+def test_depth_range_bad_input():
+    with pytest.raises(ParameterError, match="'disparity' parameter of check_depth_range"):
+        check_depth_range(1.0, 2.0, 0.0, focal_px=300, baseline_m=0.1, error_px=0.5)

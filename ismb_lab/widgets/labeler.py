@@ -338,8 +338,12 @@ class LabelModel:
 
 # --- view -------------------------------------------------------------------------------
 
+#: The labeller's lines: the answer key's verdicts (blue right, vermillion wrong, and black dashed
+#: for a pair of the key not labelled yet, so that no orange sits beside the vermillion), orange
+#: for a labelled pair before the key is shown, reddish purple for the selected pair.
 _KEY_COLOURS = {"correct": VERDICT_COLOURS["correct"], "wrong": VERDICT_COLOURS["wrong partner"],
-                "plain": OKABE_ITO["orange"], "selected": OKABE_ITO["reddish purple"]}
+                "missing": OKABE_ITO["black"], "plain": OKABE_ITO["orange"],
+                "selected": OKABE_ITO["reddish purple"]}
 
 
 def draw_labels(ax, model: LabelModel) -> dict:
@@ -355,7 +359,7 @@ def draw_labels(ax, model: LabelModel) -> dict:
                      number_labels(ax, model.right_xy + [model.offset, 0], RIGHT_COLOUR)]
     art["lines"].set_array(None)
     art["lines"].set_linewidths(1.6)
-    art["missing"] = LineCollection([], colors=_KEY_COLOURS["plain"], linestyles="dashed", linewidths=1.2)
+    art["missing"] = LineCollection([], colors=_KEY_COLOURS["missing"], linestyles="dashed", linewidths=1.4)
     ax.add_collection(art["missing"])
     art["pending"], = ax.plot([], [], "o", mfc="none", mec=_KEY_COLOURS["selected"], ms=12, mew=2)
     ax.set_xlim(-0.5, model.offset + model.width - 0.5)

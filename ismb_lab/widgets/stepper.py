@@ -145,6 +145,12 @@ class StepperModel:
 
 # --- view -------------------------------------------------------------------------------
 
+#: The cursor on the neuron just attempted: orange when it flipped, black when it kept its state
+#: (two colours apart in lightness and hue for every common colour-vision deficiency; the grid
+#: itself is grey, white and dark blue).
+CURSOR_COLOURS = {True: OKABE_ITO["orange"], False: OKABE_ITO["black"]}
+
+
 def _grid_colours():
     from matplotlib.colors import ListedColormap
 
@@ -171,7 +177,7 @@ def draw_grid(ax, model: StepperModel) -> dict:
                 offset_transform=below, ha="center")
     path_labels(ax, [(0, i) for i in rows], [i + 1 for i in rows], "black", size=7, shift=(-3, -2.5),
                 offset_transform=beside, ha="right")
-    cursor = Rectangle((-0.5, -0.5), 1, 1, fill=False, ec=OKABE_ITO["orange"], lw=2.5, visible=False)
+    cursor = Rectangle((-0.5, -0.5), 1, 1, fill=False, ec=CURSOR_COLOURS[False], lw=2.5, visible=False)
     ax.add_patch(cursor)
     return {"grid": grid, "cursor": cursor}
 
@@ -184,7 +190,7 @@ def update_grid(art: dict, model: StepperModel) -> None:
     else:
         cursor.set_visible(True)
         cursor.set_xy((model.last.k - 0.5, model.last.i - 0.5))
-        cursor.set_edgecolor(OKABE_ITO["vermillion"] if model.last.changed else OKABE_ITO["orange"])
+        cursor.set_edgecolor(CURSOR_COLOURS[bool(model.last.changed)])
 
 
 def draw_energy(ax, model: StepperModel) -> dict:

@@ -125,6 +125,7 @@ _THESIS_III = "the parameters of Method-III are set as [17.97, 24.02, 6.37, 2.2]
 
 LISTED["00"] = [
     ("30×40 window", "library", _WINDOW),
+    ("such as 14/2+0/16 in Fig. 5.10", "thesis", "Correct/Error/Target Testing: 14/2+0/16"),
     ("θ = 24.02 and λ = 2.2", "thesis", _THESIS_III),
     ("gives S = 0.5?", "count", "the value the exercise asks a student to solve for, not a claim"),
     ("Solve $f(M) = 0.5$", "count", "the same value the exercise asks for, repeated in its instruction"),
@@ -143,6 +144,7 @@ LISTED["01"] = [
     ("σ = 1.5, k = 0.05", "count", "the values the exercise sets for the student's own computation"),
     ("the 30 strongest", "library", "features.detect_corners.__kwdefaults__['n_max'] == 30"),
     ("T ← 0.8 T", "library", "features.detect_corners.__kwdefaults__['relax'] == 0.8"),
+    ("For k = 0.01, 0.02, …, 0.20", "count", "the values of k the exercise asks a student to try: the slider's range"),
 ]
 LISTED["02"] = [
     ("30-tall × 40-wide", "library", _WINDOW),
@@ -154,7 +156,8 @@ LISTED["03"] = [
     ("$[7.45, 15.20, 1.47, 4.08]$", "thesis", "[7.45, 15.20, 1.47, 4.08]"),
     ('"[7.45, 15.20, 1.47, 4.08]"', "thesis", "[7.45, 15.20, 1.47, 4.08]"),
     ("(120, 155)", "thesis", "3	8	4	155	120	158	98	22.20"),
-    ("a 240 × 320 render", "thesis", "240×320 pixels"),
+    ("20 and 20 in Fig. 5.3", "thesis",
+     "the left image with 20 feature points, (b) the right image with 20 feature points"),
 ]
 LISTED["04"] = [
     ("marks 13 target pairs", "thesis", "the target contains 13 matched pairs"),

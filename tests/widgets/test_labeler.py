@@ -304,3 +304,28 @@ def test_the_figure_fits_the_notebook_column_with_half_for_each_image(labeler):
     np.testing.assert_allclose(corners, [(0, 0), (width, height)], atol=1.0)
     image = width * model.width / (model.offset + model.width)
     assert image >= 0.45 * COLUMN_PX, f"each image gets {image:.0f} px"
+
+
+def test_the_key_draws_its_three_kinds_of_line_in_far_apart_colours(labeler, truth):
+    """Right, wrong and not yet labelled are shown together: no orange beside the vermillion,
+    every two of them far apart (CIE ΔE above 50, where orange and vermillion are about 37)."""
+    from matplotlib.colors import to_hex, to_rgb
+
+    def _lab(colour):
+        """CIE L*a*b* (D65) of a matplotlib colour."""
+        rgb = np.array(to_rgb(colour))
+        lin = np.where(rgb <= 0.04045, rgb / 12.92, ((rgb + 0.055) / 1.055) ** 2.4)
+        xyz = np.array([[0.4124, 0.3576, 0.1805], [0.2126, 0.7152, 0.0722], [0.0193, 0.1192, 0.9505]]) @ lin
+        f = lambda t: np.where(t > (6 / 29) ** 3, np.cbrt(t), t / (3 * (6 / 29) ** 2) + 4 / 29)  # noqa: E731
+        fx, fy, fz = f(xyz / np.array([0.9505, 1.0, 1.089]))
+        return np.array([116 * fy - 16, 500 * (fx - fy), 200 * (fy - fz)])
+
+    (i, k), (j, _) = truth[0], truth[1]
+    wrong_k = next(r for r in range(len(labeler.model.right_xy)) if r not in truth[:, 1])
+    labeler.add_pair(i, k)
+    labeler.add_pair(j, wrong_k)
+    labeler.key_toggle.value = True
+    shown = [to_hex(c) for c in labeler.artists["lines"].get_colors()] + \
+        [to_hex(c) for c in labeler.artists["missing"].get_colors()]
+    assert len(set(shown)) == 3, shown
+    assert all(np.linalg.norm(_lab(a) - _lab(b)) > 50 for a in set(shown) for b in set(shown) if a != b)

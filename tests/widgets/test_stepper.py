@@ -112,3 +112,37 @@ def test_from_folder_static_figure_and_classes(pair_folder):
     assert len(fig.axes) == 3
     with pytest.raises(ValueError, match="'folder' parameter"):
         HopfieldStepper.from_folder(pair_folder / "nowhere")
+
+
+def _lab(colour) -> np.ndarray:
+    """CIE L*a*b* (D65) of a matplotlib colour."""
+    from matplotlib.colors import to_rgb
+
+    rgb = np.array(to_rgb(colour))
+    lin = np.where(rgb <= 0.04045, rgb / 12.92, ((rgb + 0.055) / 1.055) ** 2.4)
+    xyz = np.array([[0.4124, 0.3576, 0.1805], [0.2126, 0.7152, 0.0722], [0.0193, 0.1192, 0.9505]]) @ lin
+    f = lambda t: np.where(t > (6 / 29) ** 3, np.cbrt(t), t / (3 * (6 / 29) ** 2) + 4 / 29)  # noqa: E731
+    fx, fy, fz = f(xyz / np.array([0.9505, 1.0, 1.089]))
+    return np.array([116 * fy - 16, 500 * (fx - fy), 200 * (fy - fz)])
+
+
+def test_the_cursor_tells_a_flip_from_a_kept_state_by_far_apart_colours(prepared):
+    """Orange beside vermillion differ mostly in lightness (ΔE about 37); the cursor's two
+    colours are far apart (ΔE above 50) and neither is vermillion."""
+    from ismb_lab.plotting import OKABE_ITO
+
+    stepper = HopfieldStepper(prepared, seed=0)
+    seen = {}
+    for _ in range(60):
+        stepper.step_button.click()
+        seen[bool(stepper.model.last.changed)] = stepper.grid_artists["cursor"].get_edgecolor()
+    assert set(seen) == {True, False}
+    assert np.linalg.norm(_lab(seen[True][:3]) - _lab(seen[False][:3])) > 50
+    assert np.linalg.norm(_lab(OKABE_ITO["orange"]) - _lab(OKABE_ITO["vermillion"])) < 50   # the rule can fail
+    assert OKABE_ITO["vermillion"] not in {mcolour(c) for c in seen.values()}
+
+
+def mcolour(rgba) -> str:
+    from matplotlib.colors import to_hex
+
+    return to_hex(rgba).upper()
