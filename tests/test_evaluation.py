@@ -49,7 +49,6 @@ def test_the_thesis_fig_5_10_rows_do_not_add_up_to_its_printed_total():
         w, x = e.split("+")
         total = total + Score(int(c), int(w), int(x), int(t))
     assert (total.correct, total.errors, total.targets) == (139, 13, 150)
-    assert (total.correct, total.errors, total.targets) != (125, 14, 137)
 
 
 # --- solvers in the protocol, on hand-made pairs -----------------------------------------------
