@@ -107,8 +107,28 @@ def browser(chromium):
         b.close()
 
 
+@pytest.fixture(scope="session")
+def rendered():
+    """A scene of :mod:`ismb_lab.scenes`, rendered once per session and shared by the tests that
+    ask for it: ``rendered(synthetic_scene, 0)`` is ``synthetic_scene(0)``.  A scene's arrays are
+    read-only, so no test can change what another sees; one takes about half a second to render,
+    and a few seeds serve many tests."""
+    import inspect
+
+    made = {}
+
+    def get(maker, *args, **kwargs):
+        key = (maker.__module__, maker.__qualname__,
+               tuple(inspect.signature(maker).bind(*args, **kwargs).arguments.items()))
+        if key not in made:
+            made[key] = maker(*args, **kwargs)
+        return made[key]
+
+    return get
+
+
 @pytest.fixture(scope="module")
-def pair(tmp_path_factory):
+def pair(tmp_path_factory, rendered):
     """The rendered synthetic scene (seed 3) as two PNG files: [left, right]."""
     import cv2
     import numpy as np
@@ -116,7 +136,7 @@ def pair(tmp_path_factory):
     from ismb_lab.scenes import synthetic_scene
 
     folder = tmp_path_factory.mktemp("pair")
-    scene = synthetic_scene(seed=3)
+    scene = rendered(synthetic_scene, seed=3)
     paths = []
     for name, image in (("left.png", scene.left), ("right.png", scene.right)):
         cv2.imwrite(str(folder / name), np.clip(np.rint(image), 0, 255).astype(np.uint8))
