@@ -2,19 +2,88 @@
 
 Chromium lives here, not in tests/browser/: the browser tests and the real-account hub test
 share one Playwright instance per session (Playwright's sync API refuses to start a second
-one in the same thread while the first runs)."""
+one in the same thread while the first runs).
+
+The compiled kernels are made ready once, before the first test (:func:`warm_kernels`):
+with an empty numba cache (a new checkout, or edited kernel sources) they compile there,
+all at once, instead of inside whichever test calls each first.  The summary at the end
+says how many had no cached code and how long the warm-up took."""
 
 import importlib.util
 import os
+import time
 from pathlib import Path
 
 import pytest
 
 from ismb_lab.datasets import SampleDataMissing, opencv_samples
 
+WARM = {}
+
 CHROMIUM = Path("/usr/bin/chromium")
 ARGS = ["--headless", "--no-sandbox", "--disable-gpu", "--disable-quic", "--no-first-run",
         "--disable-background-networking", "--disable-component-update", "--disable-sync"]
+
+
+def kernels() -> dict:
+    """The numba kernels of the package's modules imported so far, by dotted name."""
+    import sys
+
+    from numba.core.registry import CPUDispatcher
+
+    return {f"{module}.{name}": value for module, m in list(sys.modules.items())
+            if module.startswith("ismb_lab.") for name, value in vars(m).items()
+            if isinstance(value, CPUDispatcher) and value.py_func.__module__ == module}
+
+
+def warm_kernels() -> dict:
+    """Run every compiled path of the library once on a small pair, so that each kernel is
+    compiled, or loaded from numba's cache, here.
+
+    Returns ``{"cold": kernels that had no cached code before, "all": kernels}``."""
+    import numpy as np
+
+    from ismb_lab._numba import cold
+    from ismb_lab.annealing import iter_annealing
+    from ismb_lab.exact import exhaustive_minimum
+    from ismb_lab.genetic import initial_population
+    from ismb_lab.hopfield import Network
+    from ismb_lab.matching import MatchConfig, prepare, warm_up
+    from ismb_lab.methods import get_method, method_names
+    from ismb_lab.params import Params
+    from ismb_lab.protocol import Case
+    from ismb_lab.solvers import get_solver, solver_names
+    from ismb_lab.tuning import Fitness, evaluate, gene_bounds
+
+    found = kernels()
+    before = sum(cold(k) for k in found.values())
+    warm_up(tuple(solver_names()))                      # a match with every solver
+    texture = np.kron(np.random.default_rng(0).integers(0, 256, (60, 100)), np.ones((2, 2)))
+    prepared = prepare(texture, np.roll(texture, -8, axis=1), MatchConfig(roi="full", shift=8))
+    case = Case(prepared, np.array([[0, 0], [1, 1]]))
+    evaluate([case], "III", Params())
+    for method in method_names():                       # the GA's batched fitness of each method
+        for rule in ("exact", "thesis"):
+            Fitness([case], method, solver=get_solver("network", rule=rule))(
+                initial_population(0, gene_bounds(method), 2))
+    list(iter_annealing(get_method("III").network(prepared.problem, Params()), rng=0, t_end=1.0))
+    exhaustive_minimum(Network.from_arrays(1, 2, [0, 0], [0, 1], [0.5, -0.5], [], [], []))
+    return {"cold": before, "all": len(found)}
+
+
+@pytest.fixture(scope="session", autouse=True)
+def warm():
+    """:func:`warm_kernels`, once per session before the first test, timed for the summary."""
+    start = time.perf_counter()
+    WARM.update(warm_kernels(), seconds=time.perf_counter() - start)
+    return WARM
+
+
+def pytest_terminal_summary(terminalreporter):
+    if WARM:
+        terminalreporter.write_line(
+            f"numba kernels: {WARM['cold']} of {WARM['all']} had no cached code; made ready in "
+            f"{WARM['seconds']:.1f} s before the first test")
 
 
 @pytest.fixture(scope="session")
@@ -38,8 +107,28 @@ def browser(chromium):
         b.close()
 
 
+@pytest.fixture(scope="session")
+def rendered():
+    """A scene of :mod:`ismb_lab.scenes`, rendered once per session and shared by the tests that
+    ask for it: ``rendered(synthetic_scene, 0)`` is ``synthetic_scene(0)``.  A scene's arrays are
+    read-only, so no test can change what another sees; one takes about half a second to render,
+    and a few seeds serve many tests."""
+    import inspect
+
+    made = {}
+
+    def get(maker, *args, **kwargs):
+        key = (maker.__module__, maker.__qualname__,
+               tuple(inspect.signature(maker).bind(*args, **kwargs).arguments.items()))
+        if key not in made:
+            made[key] = maker(*args, **kwargs)
+        return made[key]
+
+    return get
+
+
 @pytest.fixture(scope="module")
-def pair(tmp_path_factory):
+def pair(tmp_path_factory, rendered):
     """The rendered synthetic scene (seed 3) as two PNG files: [left, right]."""
     import cv2
     import numpy as np
@@ -47,7 +136,7 @@ def pair(tmp_path_factory):
     from ismb_lab.scenes import synthetic_scene
 
     folder = tmp_path_factory.mktemp("pair")
-    scene = synthetic_scene(seed=3)
+    scene = rendered(synthetic_scene, seed=3)
     paths = []
     for name, image in (("left.png", scene.left), ("right.png", scene.right)):
         cv2.imwrite(str(folder / name), np.clip(np.rint(image), 0, 255).astype(np.uint8))

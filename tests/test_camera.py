@@ -18,10 +18,11 @@ from ismb_lab.plotting import frustum_lines
 from ismb_lab.scenes import lab_scene, synthetic_scene, toy_car_scene
 
 
-def test_the_default_camera_is_the_rendered_scenes_rig():
+def test_the_default_camera_is_the_rendered_scenes_rig(rendered):
     cam = StereoCamera()
     assert (cam.focal_px, cam.baseline_m, cam.size) == (FOCAL_PX, BASELINE_M, (320, 240))
-    assert synthetic_scene(0).rig.focal_px == FOCAL_PX and synthetic_scene(0).rig.baseline_m == BASELINE_M
+    rig = rendered(synthetic_scene, 0).rig
+    assert rig.focal_px == FOCAL_PX and rig.baseline_m == BASELINE_M
     assert cam.right_origin.tolist() == [BASELINE_M, 0.0, 0.0]
 
 
@@ -74,11 +75,12 @@ def test_the_camera_defaults_are_declared_once():
     assert found == []
 
 
-def test_a_depth_results_points_are_its_kept_matches_in_metres():
+def test_a_depth_results_points_are_its_kept_matches_in_metres(rendered):
     config = MatchConfig(roi=(40, 40, 240, 160), shift=22.0)
-    background, scene = (match(s.left, s.right, config=config) for s in (lab_scene(3), toy_car_scene(3)))
+    lab, cars = rendered(lab_scene, 3), rendered(toy_car_scene, 3)
+    background, scene = (match(s.left, s.right, config=config) for s in (lab, cars))
     result = depth_from_matches(background, scene, DepthConfig())
-    h, w = lab_scene(3).left.shape
+    h, w = lab.left.shape
     points = result.points(StereoCamera.pinhole(width=w, height=h, focal_px=FOCAL_PX, baseline_m=BASELINE_M))
     assert len(points) == len(result.kept_xy) > 0
     assert np.allclose(points[:, 2], FOCAL_PX * BASELINE_M / result.kept_disparity)
@@ -87,8 +89,8 @@ def test_a_depth_results_points_are_its_kept_matches_in_metres():
         result.points(None)
 
 
-def test_match_points_are_the_scene_points_on_a_rendered_pair():
-    scene = synthetic_scene(0)
+def test_match_points_are_the_scene_points_on_a_rendered_pair(rendered):
+    scene = rendered(synthetic_scene, 0)
     result = match(scene.left, scene.right)
     xyz = match_points(result, scene.rig)
     front = np.isfinite(xyz[:, 2])
@@ -98,8 +100,8 @@ def test_match_points_are_the_scene_points_on_a_rendered_pair():
     assert np.allclose(scene.rig.project_left(xyz[front]), result.left_match_xy[front], atol=1e-9)
 
 
-def test_mutual_best_keeps_only_pairs_that_are_each_others_most_similar():
-    scene = synthetic_scene(1)
+def test_mutual_best_keeps_only_pairs_that_are_each_others_most_similar(rendered):
+    scene = rendered(synthetic_scene, 1)
     prepared = prepare(scene.left, scene.right)
     result = match(prepared=prepared)
     kept = mutual_best(prepared, result)
@@ -123,8 +125,8 @@ def test_subpixel_finds_a_saddle_between_the_pixels():
     assert subpixel(image, np.zeros((0, 2)), 5).shape == (0, 2)
 
 
-def test_prepare_for_camera_refines_the_geometry_and_keeps_the_whole_pixel_similarity():
-    scene = synthetic_scene(2)
+def test_prepare_for_camera_refines_the_geometry_and_keeps_the_whole_pixel_similarity(rendered):
+    scene = rendered(synthetic_scene, 2)
     camera = StereoCamera(rms=0.3)
     prepared = prepare_for_camera(load_pair(scene.left, scene.right), MatchConfig(), camera)
     plain = prepare(prepared.pair, None, MatchConfig(window_height=prepared.config.window_height))

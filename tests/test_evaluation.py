@@ -49,7 +49,6 @@ def test_the_thesis_fig_5_10_rows_do_not_add_up_to_its_printed_total():
         w, x = e.split("+")
         total = total + Score(int(c), int(w), int(x), int(t))
     assert (total.correct, total.errors, total.targets) == (139, 13, 150)
-    assert (total.correct, total.errors, total.targets) != (125, 14, 137)
 
 
 # --- solvers in the protocol, on hand-made pairs -----------------------------------------------
@@ -176,12 +175,17 @@ def test_counting_refuses_an_index_outside_the_neurons(matched):
         scorer.count(scorer.neuron_codes([0, 0, 1], [0, 1, 1]), matched)
 
 
+@pytest.fixture(scope="module")
+def case7(rendered):
+    return Case.from_scene(rendered(synthetic_scene, 7))
+
+
 @pytest.mark.parametrize("method", ["I", "II", "III", "NM", "NM4"])
-def test_evaluate_is_the_score_of_to_matches_pairs_for_every_method(method):
+def test_evaluate_is_the_score_of_to_matches_pairs_for_every_method(case7, method):
     from ismb_lab.methods import get_method
     from ismb_lab.solvers import solve, to_matches
 
-    case = Case.from_scene(synthetic_scene(seed=7))
+    case = case7
     problem, m = case.prepared.problem, get_method(method)
     for theta_c in (2.0, 20.0, 60.0):
         params = Params(theta_c=theta_c, lambda_c=0.5, match_bias=0.0)

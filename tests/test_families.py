@@ -12,8 +12,8 @@ SCENES = {"contrast": contrast_scene, "repetitive": repetitive_scene, "border": 
 
 
 @pytest.fixture(scope="module")
-def layouts():
-    return [object_layout(seed, 2 + seed % 2, family=family) for family in FAMILIES for seed in (3, 4)]
+def layouts(rendered):
+    return [rendered(object_layout, seed, 2 + seed % 2, family=family) for family in FAMILIES for seed in (3, 4)]
 
 
 def test_disparity_at_each_object_centre_is_the_designed_one(layouts):
@@ -84,9 +84,9 @@ def test_camera_family_has_noise_and_gain_and_offset_that_differ_between_views()
     assert quiet.noise_std == 1.0
 
 
-def test_objects_near_the_border_are_partly_out_of_the_right_view():
+def test_objects_near_the_border_are_partly_out_of_the_right_view(rendered):
     for seed in range(6):
-        lay = object_layout(seed, 2 + seed % 2, family="border")
+        lay = rendered(object_layout, seed, 2 + seed % 2, family="border")
         o = min(lay.objects, key=lambda t: t.box_xy[0])
         mine = object_ids(lay.scene) == o.index
         cols = np.nonzero(mine)[1]

@@ -114,6 +114,5 @@ def test_matching_families_builds_cases_for_every_registered_family(dim, load_sc
 
 def test_depth_layouts_cycles_through_every_registered_family(dim, load_script):
     script = load_script("depth_layouts")
-    seen = [(script.layout_of(1000 + n, n).family, len(script.layout_of(1000 + n, n).objects))
-            for n in (0, 4, 5, 9)]
+    seen = [(lay.family, len(lay.objects)) for lay in (script.layout_of(1000 + n, n) for n in (0, 4, 5, 9))]
     assert seen == [("contrast", 2), ("dim", 2), ("contrast", 3), ("dim", 3)]

@@ -28,8 +28,8 @@ def test_render_reproduces_the_committed_images_byte_for_byte(tmp_path):
         assert (tmp_path / name).read_bytes() == (IMAGES / name).read_bytes(), name
 
 
-def test_committed_ground_truth_is_the_scene_disparity():
-    scene = synthetic_scene(seed=0)
+def test_committed_ground_truth_is_the_scene_disparity(rendered):
+    scene = rendered(synthetic_scene, seed=0)
     encoded = cv2.imread(str(IMAGES / "synthetic" / "disparity.png"), cv2.IMREAD_UNCHANGED)
     assert encoded.dtype == np.uint16
     disparity = decode_disparity(encoded)
@@ -58,8 +58,8 @@ def test_every_pair_folder_has_the_files_widgets_load(folder):
     assert len(set(snapped.pairs[:, 1].tolist())) == len(key)
 
 
-def test_the_answer_key_is_the_ground_truth():
-    scene = toy_car_scene(seed=0)
+def test_the_answer_key_is_the_ground_truth(rendered):
+    scene = rendered(toy_car_scene, seed=0)
     key = load_targets(IMAGES / "toy_cars" / "answer_key.json")
     truth = scene.correspond(key.left_xy)
     assert np.max(np.linalg.norm(truth - key.right_xy, axis=1)) <= 1.5

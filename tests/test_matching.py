@@ -18,14 +18,25 @@ HELD_OUT = range(10)
 
 
 @pytest.fixture(scope="module")
-def scenes():
-    out = []
-    for seed in HELD_OUT:
-        scene = synthetic_scene(seed=seed)
-        prepared = prepare(scene.left, scene.right)
-        truth = true_matches(scene, prepared.problem.left_xy, prepared.problem.right_xy)
-        out.append((scene, prepared, truth))
-    return out
+def held_out(rendered):
+    """``held_out(seed)``: (scene, prepared, truth) of a held-out scene, made on first use."""
+    made = {}
+
+    def get(seed):
+        if seed not in made:
+            scene = rendered(synthetic_scene, seed)
+            prepared = prepare(scene.left, scene.right)
+            truth = true_matches(scene, prepared.problem.left_xy, prepared.problem.right_xy)
+            made[seed] = scene, prepared, truth
+        return made[seed]
+
+    return get
+
+
+@pytest.fixture(scope="module")
+def scenes(held_out):
+    """All ten held-out scenes (about 5 s to render: for the slow tests)."""
+    return [held_out(seed) for seed in HELD_OUT]
 
 
 def tally(scenes, method, params):
@@ -49,6 +60,7 @@ def test_method_three_recovers_ground_truth_disparity_on_held_out_scenes(scenes)
     assert precision >= 0.90
 
 
+@pytest.mark.slow   # the ten scenes
 def test_thesis_parameters_find_partners_but_add_extra_matches(scenes):
     # Measured: about 90% of the partners but only about 70% precision.  The thesis'
     # theta_c = 17.97 px calls wrong pairs compatible, and the (1 - sum y)^2 term
@@ -75,8 +87,8 @@ def test_vertical_disparity_term_helps_an_unrectified_rig():
     assert results["III"] >= 0.9
 
 
-def test_every_method_runs_and_is_reproducible(scenes):
-    _, prepared, _ = scenes[0]
+def test_every_method_runs_and_is_reproducible(held_out):
+    _, prepared, _ = held_out(0)
     for method in ("I", "II", "III"):
         a = match(method=method, prepared=prepared, seed=7)
         b = match(method=method, prepared=prepared, seed=7)
@@ -86,14 +98,14 @@ def test_every_method_runs_and_is_reproducible(scenes):
         assert np.array_equal(a.pairs, slow.pairs) and a.energy == slow.energy
 
 
-def test_method_one_leaves_each_feature_matched_at_most_once(scenes):
-    for _, prepared, _ in scenes[:4]:
+def test_method_one_leaves_each_feature_matched_at_most_once(held_out):
+    for _, prepared, _ in map(held_out, HELD_OUT[:4]):
         pairs = match(method="I", prepared=prepared).pairs
         assert len(np.unique(pairs[:, 0])) == len(pairs) == len(np.unique(pairs[:, 1]))
 
 
-def test_literal_thesis_rule_misbehaves_on_a_real_problem(scenes):
-    _, prepared, _ = scenes[0]
+def test_literal_thesis_rule_misbehaves_on_a_real_problem(held_out):
+    _, prepared, _ = held_out(0)
     net = get_method("III").network(prepared.problem, THESIS_PARAMS["III"])
     energies = [u.energy for u in iter_updates(net, rng=0, rule="thesis", max_sweeps=30)]
     rises = sum(b > a + 1e-9 for a, b in zip(energies, energies[1:]))
@@ -102,8 +114,8 @@ def test_literal_thesis_rule_misbehaves_on_a_real_problem(scenes):
     assert result.stop_rule == "max_attempts" and "did not settle" in result.message
 
 
-def test_table_and_json_follow_the_thesis_and_the_contract(scenes):
-    _, prepared, _ = scenes[1]
+def test_table_and_json_follow_the_thesis_and_the_contract(held_out):
+    _, prepared, _ = held_out(1)
     result = match(prepared=prepared, params=SYNTHETIC_PARAMS, seed=3)
     lines = result.table().splitlines()
     assert lines[0].split() == ["Pair", "Left", "Right", "y_left", "x_left", "y_right", "x_right",
@@ -124,8 +136,8 @@ def test_a_flat_pair_gives_an_empty_match_with_a_reason():
     assert len(result.pairs) == 0 and "no corners" in result.message
 
 
-def test_no_candidates_is_an_empty_match_with_a_reason():
-    scene = synthetic_scene(seed=0)
+def test_no_candidates_is_an_empty_match_with_a_reason(rendered):
+    scene = rendered(synthetic_scene, 0)
     result = match(scene.left, scene.right, config=MatchConfig(shift=300, right_roi="same"))
     assert len(result.pairs) == 0 and "no candidate pairs" in result.message
 
@@ -139,8 +151,8 @@ def test_no_candidates_is_an_empty_match_with_a_reason():
     (dict(stop_rule="never"), ParameterError, "'stop_rule'"),
     (dict(config=MatchConfig(roi=(300, 0, 50, 50))), ParameterError, "'roi'"),
 ])
-def test_bad_input_names_the_parameter(kwargs, error, words):
-    scene = synthetic_scene(seed=0)
+def test_bad_input_names_the_parameter(rendered, kwargs, error, words):
+    scene = rendered(synthetic_scene, 0)
     args = dict(left=scene.left, right=scene.right)
     args.update(kwargs)
     with pytest.raises(error, match=words):

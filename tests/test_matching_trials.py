@@ -3,7 +3,7 @@
 import numpy as np
 
 
-def test_every_cleanup_keeps_a_subset_and_the_one_per_corner_ones_are_one_per_corner(load_script):
+def test_every_cleanup_keeps_a_subset_and_the_one_per_corner_ones_are_one_per_corner(load_script, rendered):
     from ismb_lab.matching import prepare
     from ismb_lab.methods import get_method
     from ismb_lab.params import Params
@@ -11,7 +11,7 @@ def test_every_cleanup_keeps_a_subset_and_the_one_per_corner_ones_are_one_per_co
     from ismb_lab.solvers import matched_neurons, one_match_per_corner, solve
 
     script = load_script("matching_trials")
-    scene = synthetic_scene(seed=3)
+    scene = rendered(synthetic_scene, seed=3)
     p = prepare(scene.left, scene.right).problem
     m = get_method("III")
     params = Params(theta_c=60.0, theta_s=24.0, lambda_c=2.0, lambda_s=2.0)   # corners matched twice

@@ -1,7 +1,8 @@
-"""The kernels import, and cache, for a user who can write neither beside the package nor in HOME.
+"""The kernels import, and cache, for a user who can write neither beside the package nor in
+HOME; and the test session's warm-up reaches every kernel.
 
-Each case runs a fresh interpreter on a copy of the package.  Its two default cache
-places are made unwritable in a way that holds for root as well, who ignores file
+Each cache case runs a fresh interpreter on a copy of the package (slow).  Its two default
+cache places are made unwritable in a way that holds for root as well, who ignores file
 modes: the copy's ``__pycache__`` is a regular file (no folder can be made there) and
 HOME is a regular file (nor under it).  A read-only mode would not stop root, and the
 interpreter under /work/main/.venv cannot be run by an unprivileged account.
@@ -18,8 +19,7 @@ import pytest
 
 ROOT = Path(__file__).resolve().parent.parent
 
-# each test starts fresh Python processes that load or compile the kernels: slow
-pytestmark = [pytest.mark.skipif(not hasattr(os, "getuid"), reason="POSIX users"), pytest.mark.slow]
+POSIX = pytest.mark.skipif(not hasattr(os, "getuid"), reason="POSIX users")
 
 PROBE = """
 import json, os
@@ -53,6 +53,8 @@ def probe(env):
     return json.loads(proc.stdout.splitlines()[-1])
 
 
+@pytest.mark.slow
+@POSIX
 def test_with_nowhere_to_cache_the_kernels_use_a_private_temporary_folder(nowhere):
     env, temp = nowhere
     folder = temp / f"ismb_lab-numba-{os.getuid()}"
@@ -62,6 +64,8 @@ def test_with_nowhere_to_cache_the_kernels_use_a_private_temporary_folder(nowher
     assert probe(env)["config"] == str(folder)   # and the next run uses it again
 
 
+@pytest.mark.slow
+@POSIX
 def test_a_fallback_folder_that_others_may_write_to_is_never_used(nowhere):
     env, temp = nowhere
     shared = temp / f"ismb_lab-numba-{os.getuid()}"
@@ -72,6 +76,8 @@ def test_a_fallback_folder_that_others_may_write_to_is_never_used(nowhere):
     assert not any(shared.iterdir())
 
 
+@pytest.mark.slow
+@POSIX
 def test_a_numba_cache_dir_that_is_set_always_wins(nowhere, tmp_path):
     env, temp = nowhere
     mine = tmp_path / "mine"
@@ -80,6 +86,8 @@ def test_a_numba_cache_dir_that_is_set_always_wins(nowhere, tmp_path):
     assert list(mine.rglob("*.nbi")) and not list(temp.iterdir())
 
 
+@pytest.mark.slow
+@POSIX
 def test_where_numba_can_cache_nothing_is_changed(tmp_path):
     env = {k: v for k, v in os.environ.items() if k != "NUMBA_CACHE_DIR"}
     env.update(HOME=str(tmp_path), TMPDIR=str(tmp_path))   # a writable HOME, as most users have
@@ -92,3 +100,33 @@ def test_where_numba_can_cache_nothing_is_changed(tmp_path):
     finally:
         (site / "ismb_lab").chmod(0o755)
     assert not list(tmp_path.glob("ismb_lab-numba-*"))
+
+
+
+WARM = """
+import importlib, importlib.util, json, pkgutil, sys
+spec = importlib.util.spec_from_file_location("shared_fixtures", sys.argv[1])
+fixtures = importlib.util.module_from_spec(spec)
+spec.loader.exec_module(fixtures)
+report = fixtures.warm_kernels()
+import ismb_lab
+from ismb_lab._numba import cold
+for info in pkgutil.walk_packages(ismb_lab.__path__, "ismb_lab."):
+    if not info.name.endswith(".__main__"):
+        importlib.import_module(info.name)
+found = fixtures.kernels()
+print(json.dumps({"report": report, "kernels": sorted(found), "cold": sorted(n for n, k in found.items() if cold(k))}))
+"""
+
+
+@pytest.mark.slow   # compiles every kernel from nothing (about 30 s)
+def test_the_session_warm_up_compiles_every_kernel_of_the_package(tmp_path):
+    """tests/conftest.py's warm-up, run with an empty cache, leaves no kernel of the package
+    without cached code: no test compiles a kernel of the library from nothing."""
+    env = {**os.environ, "NUMBA_CACHE_DIR": str(tmp_path), "PYTHONPATH": str(ROOT)}
+    proc = subprocess.run([sys.executable, "-c", WARM, str(ROOT / "tests" / "conftest.py")], env=env,
+                          capture_output=True, text=True, timeout=900, cwd=tmp_path)
+    assert proc.returncode == 0, proc.stderr[-3000:]
+    out = json.loads(proc.stdout.splitlines()[-1])
+    assert len(out["kernels"]) >= 20 and out["cold"] == []
+    assert out["report"] == {"cold": len(out["kernels"]), "all": len(out["kernels"])}

@@ -103,10 +103,10 @@ def test_graph_matching_leaves_the_global_backend_alone(monkeypatch):
 
 
 @pytest.fixture(scope="module")
-def scenes():
+def scenes(rendered):
     out = []
     for seed in range(3):
-        scene = synthetic_scene(seed)
+        scene = rendered(synthetic_scene, seed)
         p = prepare(scene.left, scene.right).problem
         partner = true_matches(scene, p.left_xy, p.right_xy)
         out.append((p, np.argwhere(partner >= 0).ravel(), partner))

@@ -13,13 +13,13 @@ from ismb_lab.solvers import AnnealSolver, NetworkSolver
 
 
 @pytest.fixture(scope="module")
-def targets(pair, tmp_path_factory):
+def targets(pair, tmp_path_factory, rendered):
     from ismb_lab.matching import prepare
     from ismb_lab.scenes import true_matches
     from ismb_lab.targets import save_targets, targets_from_matches
 
     prepared = prepare(*pair)
-    truth = true_matches(synthetic_scene(seed=3), prepared.problem.left_xy, prepared.problem.right_xy)
+    truth = true_matches(rendered(synthetic_scene, seed=3), prepared.problem.left_xy, prepared.problem.right_xy)
     found = [(i, k) for i, k in enumerate(truth) if k >= 0]
     return save_targets(tmp_path_factory.mktemp("targets") / "targets.json", targets_from_matches(
         found, prepared.problem.left_xy, prepared.problem.right_xy,

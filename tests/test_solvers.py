@@ -110,7 +110,7 @@ def test_one_match_per_corner_takes_any_order_and_checks_it():
         one_match_per_corner(p, [0, 1, 3], key=[1.0, 2.0])
 
 
-def test_one_to_one_in_match_the_cli_and_evaluate():
+def test_one_to_one_in_match_the_cli_and_evaluate(rendered):
 
     from ismb_lab.matching import match, prepare
     from ismb_lab.params import Params
@@ -120,7 +120,7 @@ def test_one_to_one_in_match_the_cli_and_evaluate():
     from ismb_lab.tuning import evaluate
     from ismb_lab.evaluation import score
 
-    scene = synthetic_scene(seed=3)
+    scene = rendered(synthetic_scene, seed=3)
     prepared = prepare(scene.left, scene.right)
     params = Params(theta_c=60.0, theta_s=24.0, lambda_c=2.0, lambda_s=2.0)   # strong support: corners matched twice
     plain = match(method="III", params=params, prepared=prepared, seed=0)
@@ -148,20 +148,11 @@ def get_method_network(problem, params):
     return get_method("III").network(problem, params)
 
 
-def test_match_one_to_one_on_the_command_line(tmp_path):
+def test_match_one_to_one_on_the_command_line(pair, tmp_path):
     import json
 
-    import cv2
-
-    from ismb_lab.scenes import synthetic_scene
-
-    scene = synthetic_scene(seed=3)
-    paths = []
-    for name, image in (("l.png", scene.left), ("r.png", scene.right)):
-        cv2.imwrite(str(tmp_path / name), np.clip(np.rint(image), 0, 255).astype(np.uint8))
-        paths.append(str(tmp_path / name))
     out = tmp_path / "m.json"
-    assert main(["match", *paths, "--theta-c", "60", "--one-to-one", "--json", str(out)]) == 0
+    assert main(["match", *map(str, pair), "--theta-c", "60", "--one-to-one", "--json", str(out)]) == 0
     data = json.loads(out.read_text())
     lefts = [m["left"] for m in data["matches"]]
     rights = [m["right"] for m in data["matches"]]
@@ -201,7 +192,7 @@ def test_the_anneal_schedule_reaches_the_annealer_and_the_name_stays_apart_from_
     assert np.array_equal(got.state, anneal(net, rng=seed, t_start=1.0, cooling=0.5, sweeps=1).state)
     assert np.array_equal(solve(net, "anneal", seed=seed).state, anneal(net, rng=seed).state)
     assert (got.solver, got.stop_rule) == ("anneal", "sweep")
-    exact = solve(net, "exact")
+    exact = solve(grid_network(500 + seed, 3, 4), "exact")   # a small one: a MILP of 30 neurons takes 1 s
     assert (exact.solver, exact.stop_rule) == ("exact", "minimum")
     assert solve(net, "network", seed=seed).solver == "network"
 

@@ -11,8 +11,7 @@ from ismb_lab.scenes import synthetic_scene, true_matches
 from ismb_lab.tuning import Fitness, evaluate, gene_bounds, to_chromosome, to_params, tune
 
 
-def case(seed):
-    scene = synthetic_scene(seed=seed)
+def case(scene, seed):
     prepared = prepare(scene.left, scene.right)
     truth = true_matches(scene, prepared.problem.left_xy, prepared.problem.right_xy)
     left = np.flatnonzero(truth >= 0)
@@ -20,8 +19,8 @@ def case(seed):
 
 
 @pytest.fixture(scope="module")
-def cases():
-    return [case(s) for s in (100, 101, 0, 1)]
+def cases(rendered):
+    return [case(rendered(synthetic_scene, seed=s), s) for s in (100, 101, 0, 1)]
 
 
 def test_genes_round_trip_and_bounds():

@@ -23,9 +23,9 @@ def prepared():
 
 
 @pytest.fixture(scope="session")
-def truth(prepared):
+def truth(prepared, rendered):
     """Ground-truth (i, k) feature pairs of images/synthetic, from the scene that rendered it."""
-    partner = true_matches(synthetic_scene(0), prepared.problem.left_xy, prepared.problem.right_xy)
+    partner = true_matches(rendered(synthetic_scene, 0), prepared.problem.left_xy, prepared.problem.right_xy)
     pairs = np.array([(i, k) for i, k in enumerate(partner) if k >= 0])
     # one partner per right feature, as a hand labeller would give
     _, first = np.unique(pairs[:, 1], return_index=True)

@@ -14,13 +14,13 @@ from ismb_lab.widgets.cloud import (MAX_NOTES, Cloud, PointCloudView, _cloud, bo
 IMAGES = Path(__file__).resolve().parents[2] / "images"
 
 
-def test_matches_in_3d_project_back_onto_their_pixels():
+def test_matches_in_3d_project_back_onto_their_pixels(rendered):
     """The cloud's points, seen again by the camera that placed them, fall on the matched pixels:
     on the left one exactly, and on the right one's column (the pinhole pair shares rows)."""
     from ismb_lab.matching import match
     from ismb_lab.scenes import synthetic_scene
 
-    scene = synthetic_scene(0)
+    scene = rendered(synthetic_scene, 0)
     result = match(scene.left, scene.right)
     h, w = scene.left.shape
     camera = StereoCamera.pinhole(width=w, height=h, focal_px=250.0, baseline_m=0.12)

@@ -63,7 +63,7 @@ def test_ranking_lists_objects_near_to_far(demo):
         assert f"d = {obj.mean_disparity:.1f} px, Z = {obj.depth_m:.2f} m ± " in line
         assert line.endswith(f" ({obj.n_features} features, spread {obj.disparity_spread:.1f} px; "
                              f"outline {obj.silhouette_disparity:.0f} px)")
-        assert obj.n_features == len(obj.features) >= 2 and obj.disparity_spread >= 0
+        assert len(obj.features) >= 2 and obj.disparity_spread >= 0
     assert demo.ranking.value == demo.model.ranking_html()
     assert lines[0] in demo.ranking.value and "the box" in demo.ranking.value
     assert f"{len(objects)} objects" in demo.status.value
