@@ -37,6 +37,7 @@ from __future__ import annotations
 import json
 import sys
 import threading
+import time
 import traceback
 import weakref
 
@@ -150,10 +151,13 @@ class Recorder:
                     continue
                 if fig not in self.serials:
                     self.serials[fig] = len(self.serials) + 1
+                wall, cpu = time.perf_counter(), time.process_time()
                 try:
                     record = measure(fig, self.column_px)
                 except Exception:
                     record = {"error": traceback.format_exc()}
+                # what measuring costs the notebook's run
+                record["seconds"] = [time.perf_counter() - wall, time.process_time() - cpu]
                 self.measured[fig] = getattr(fig, "_figure_text_draws", 0)
                 lines.append(json.dumps({"cell_count": cell, "figure": self.serials[fig], **record}))
         except Exception:
@@ -514,11 +518,17 @@ def lch(rgb):
 def hue_clash(c1, c2) -> str | None:
     """Why two colours (sRGB in [0, 1]) differ only in lightness, or None if they differ in hue
     (or are the same colour)."""
+    return _clash(lab(c1), lab(c2))
+
+
+def _clash(lab1, lab2) -> str | None:
     import numpy as np
 
-    if float(np.linalg.norm(lab(c1) - lab(c2))) < SAME_COLOUR_DE:
+    if float(np.linalg.norm(lab1 - lab2)) < SAME_COLOUR_DE:
         return None
-    (l1, k1, h1), (l2, k2, h2) = lch(c1), lch(c2)
+    (l1, k1, h1), (l2, k2, h2) = (
+        (float(c[0]), float(np.hypot(c[1], c[2])), float(np.degrees(np.arctan2(c[2], c[1])) % 360))
+        for c in (lab1, lab2))
     if k1 < NEUTRAL_CHROMA and k2 < NEUTRAL_CHROMA:
         return f"both neutral (L* {l1:.0f} and {l2:.0f})"
     if k1 >= NEUTRAL_CHROMA and k2 >= NEUTRAL_CHROMA:
@@ -532,9 +542,11 @@ def hue_clash(c1, c2) -> str | None:
 def hue_clashes(record) -> list:
     found = []
     for axes, entries in record.get("colours", {}).items():
+        labs = lab([c for _, c in entries])
         for i, (w1, c1) in enumerate(entries):
-            for w2, c2 in entries[i + 1:]:
-                why = hue_clash(c1, c2)
+            for j in range(i + 1, len(entries)):
+                w2, c2 = entries[j]
+                why = _clash(labs[i], labs[j])
                 if why:
                     found.append(f"in {axes}: {w1} ({_hex(c1)}) and {w2} ({_hex(c2)}): {why}")
     return found
