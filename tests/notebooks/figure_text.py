@@ -22,14 +22,15 @@ the angle of (a*, b*) and chroma its length.  Two colours clash when both are ch
 (chroma >= :data:`NEUTRAL_CHROMA`) and their hue angles are less than :data:`MIN_HUE_DEG`
 apart, or when both are neutral (black, greys, white: they can differ only in lightness).
 Why 30 degrees: Okabe and Ito's palette, which the project uses, holds two kinds of pairs.
-Orange/vermillion (22.0 degrees apart), orange/yellow (22.4) and sky blue/blue (15.3) are
-told apart mainly by lightness, and are the pairs that wash together on a projector (orange
-beside vermillion is the pair the lesson review flagged).  Every other pair of its colours
-is at least 44 degrees apart (yellow/vermillion 44.4, then bluish green/yellow 64.4).
-30 degrees (a twelfth of the hue circle, one step of a twelve-hue colour wheel) lies between
-the two groups, 7.5 degrees above the one and 14 below the other, so the rule does not hinge
-on the last digit of a conversion.  A chroma below 10 has no hue a reader
-can name (matplotlib's greys are 0; the palette's least chromatic colour, sky blue, is 37).
+Orange/vermillion (21.9 degrees apart by :func:`lch`), orange/yellow (22.5) and sky
+blue/blue (15.3) are told apart mainly by lightness, and are the pairs that wash together on
+a projector (orange beside vermillion is the pair the lesson review flagged).  Every other
+pair of its colours is at least 44 degrees apart (yellow/vermillion 44.4, then bluish
+green/yellow 64.4).  30 degrees (a twelfth of the hue circle, one step of a twelve-hue colour
+wheel) lies between the two groups, 7.5 degrees above the one and 14 below the other, so the
+rule does not hinge on the last digit of a conversion (test_figures.py checks these figures).
+Below a chroma of 10 a colour counts as neutral: matplotlib's greys have 0, the palette's
+least chromatic colour (sky blue) 37.
 """
 
 from __future__ import annotations
