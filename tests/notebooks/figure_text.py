@@ -454,21 +454,24 @@ def _visible(t):
     return v if v[2] > v[0] and v[3] > v[1] else None
 
 
-def _name(t) -> str:
+def _name(t, height: float) -> str:
+    """What a text is, what it says and where: its top left corner, in px from the top left
+    of what is shown (two labels may say the same)."""
     text = t["text"] if len(t["text"]) <= 40 else t["text"][:38] + "…"
-    return f"{t['what']} {text!r}"
+    return f"{t['what']} {text!r} at ({t['box'][0]:.0f}, {height - t['box'][3]:.0f})"
 
 
 def overlaps(record, tolerance: float = TOLERANCE_PX) -> list:
     """Pairs of rendered texts whose boxes overlap by more than `tolerance` px both ways."""
     texts = [(t, _visible(t)) for t in record.get("texts", [])]
     texts = [(t, v) for t, v in texts if v is not None]
+    height = record["size_css"][1]
     found = []
     for i, (a, va) in enumerate(texts):
         for b, vb in texts[i + 1:]:
             w, h = _intersection(va, vb)
             if w > tolerance and h > tolerance:
-                found.append(f"{_name(a)} overlaps {_name(b)} by {w:.1f} x {h:.1f} px")
+                found.append(f"{_name(a, height)} overlaps {_name(b, height)} by {w:.1f} x {h:.1f} px")
     return found
 
 
@@ -485,11 +488,11 @@ def cut_texts(record, tolerance: float = TOLERANCE_PX) -> list:
                 (("left", -visible[0]), ("bottom", -visible[1]), ("right", visible[2] - width),
                  ("top", visible[3] - height)) if d > tolerance]
         if past:
-            found.append(f"{_name(t)} is cut by the figure's edge ({', '.join(past)})")
+            found.append(f"{_name(t, height)} is cut by the figure's edge ({', '.join(past)})")
         elif t["clip"] is not None:
             lost = max(visible[0] - box[0], visible[1] - box[1], box[2] - visible[2], box[3] - visible[3])
             if lost > tolerance:
-                found.append(f"{_name(t)} is cut by its axes ({lost:.1f} px hidden)")
+                found.append(f"{_name(t, height)} is cut by its axes ({lost:.1f} px hidden)")
     return found
 
 
