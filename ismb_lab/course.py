@@ -13,7 +13,10 @@ code exercises keep a runnable first try outside ``### BEGIN SOLUTION`` ...
 hidden tests removed) still runs on Restart & Run All and prints the check's hint.
 :func:`student_notebook` makes that version with nbgrader's own preprocessors, for the
 hub's copy of the notebooks.  A notebook's ``../images/`` and ``../manifests/`` become
-``images/`` and ``manifests/`` inside the assignment, which holds copies of them.
+``images/`` and ``manifests/`` inside the assignment, which holds copies of them: in its code
+and in the commands its text prints (``ismb-lab match ../images/...``), so that a command
+works as printed in the notebook's own folder, the repository's ``notebooks/`` or the
+assignment's.
 
 An assignment folder holds its notebooks and, under ``images/``, the image pairs they
 open, so the fetched assignment (``~/labels/`` on a student's server) finds them
@@ -117,21 +120,34 @@ def _check_notebook(path: Path, every_cell: bool) -> dict:
     return nb
 
 
+#: A path into a shared folder in a markdown cell (a printed command): ``../images/<name>``.
+_TEXT_PATH = re.compile(rf"""(?<![\w./-])\.\./({'|'.join(_SHARED)})/([^/\s`'"()]*)""")
+
+
 def _references(nb: dict) -> dict:
-    """``{"images": {...}, "manifests": {...}}``: what the code cells open with ``../<folder>/<name>``."""
+    """``{"images": {...}, "manifests": {...}}``: what the code cells open with ``../<folder>/<name>``
+    and the markdown cells' commands name so."""
     code = "\n".join("".join(c["source"]) for c in nb["cells"] if c["cell_type"] == "code")
-    return {part: set(re.findall(rf"""["']\.\./{part}/([^/"']+)""", code)) for part in _SHARED}
+    text = "\n".join("".join(c["source"]) for c in nb["cells"] if c["cell_type"] == "markdown")
+    found = {part: set(re.findall(rf"""["']\.\./{part}/([^/"']+)""", code)) for part in _SHARED}
+    for part, name in _TEXT_PATH.findall(text):
+        if name:
+            found[part].add(name)
+    return found
 
 
 def _local_paths(nb: dict) -> bool:
-    """Make the code cells' ``../images/`` and ``../manifests/`` paths the assignment's own;
-    True if anything changed."""
+    """Make the ``../images/`` and ``../manifests/`` paths of the code cells (quoted) and of the
+    markdown cells (the commands they print) the assignment's own; True if anything changed."""
     changed = False
     for cell in nb["cells"]:
-        if cell["cell_type"] != "code":
-            continue
         source = "".join(cell["source"])
-        new = re.sub(rf"""(["'])\.\./({'|'.join(_SHARED)})/""", r"\1\2/", source)
+        if cell["cell_type"] == "code":
+            new = re.sub(rf"""(["'])\.\./({'|'.join(_SHARED)})/""", r"\1\2/", source)
+        elif cell["cell_type"] == "markdown":
+            new = _TEXT_PATH.sub(r"\1/\2", source)
+        else:
+            continue
         if new != source:
             cell["source"], changed = new, True
     return changed

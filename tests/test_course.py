@@ -2,7 +2,9 @@
 targets, and lock files no other user can hold."""
 
 import hashlib
+import json
 import os
+import re
 import stat
 from pathlib import Path
 
@@ -177,8 +179,15 @@ def test_the_assignment_source_is_generated_from_the_notebook(tmp_path):
     from ismb_lab.course import course_images, make_source
 
     folder = make_source(tmp_path / "course")
-    assert (folder / "04_label_targets.ipynb").read_bytes() == (
-        IMAGES.parent / "notebooks" / "04_label_targets.ipynb").read_bytes()
+    # the notebook's cells, but for its paths into ../images/, which are the assignment's own
+    # images/ in its code and in the commands its text prints
+    ours = json.loads((IMAGES.parent / "notebooks" / "04_label_targets.ipynb").read_text(encoding="utf-8"))
+    theirs = json.loads((folder / "04_label_targets.ipynb").read_text(encoding="utf-8"))
+    assert len(theirs["cells"]) == len(ours["cells"])
+    for mine, made in zip(ours["cells"], theirs["cells"]):
+        assert {k: v for k, v in made.items() if k != "source"} == {k: v for k, v in mine.items() if k != "source"}
+        assert "".join(made["source"]) == re.sub(r"(?<![\w./-])\.\./images/", "images/", "".join(mine["source"]))
+    assert "../images/" not in json.dumps(theirs) and "`ismb-lab match images/synthetic/left.png" in json.dumps(theirs)
     assert course_images("synthetic", folder) == folder / "images" / "synthetic"
     (folder / "stale.txt").write_text("hand-edited")
     assert make_source(tmp_path / "course") == folder and not (folder / "stale.txt").exists()
@@ -191,6 +200,33 @@ def test_the_assignment_source_is_generated_from_the_notebook(tmp_path):
     with pytest.raises(ValueError, match="unique grade_id"):
         make_source(tmp_path / "course", repo=repo)
     assert (folder / "04_label_targets.ipynb").is_file()
+
+
+def test_the_commands_a_notebook_prints_name_the_assignments_own_files(tmp_path):
+    """``ismb-lab evaluate ../images/realistic/manifest.json`` in notebooks/ is
+    ``ismb-lab evaluate images/realistic/manifest.json`` in the assignment, which holds it; a
+    path named only in the text is copied too, and prose and other paths are left alone."""
+    from ismb_lab.course import make_source
+
+    repo = tmp_path / "repo"
+    (repo / "notebooks").mkdir(parents=True)
+    (repo / "images").symlink_to(IMAGES)
+    cells = [{"cell_type": "markdown", "id": "a", "metadata": {"nbgrader": {"grade_id": "a"}},
+              "source": "Run `ismb-lab match ../images/lab/left.png ../images/lab/right.png`, or\n\n"
+                        "    ismb-lab evaluate ../images/realistic/manifest.json\n\n"
+                        "(not ../../images/x/ nor docs/../images/y)"},
+             {"cell_type": "code", "id": "b", "execution_count": None, "outputs": [],
+              "metadata": {"nbgrader": {"grade_id": "b", "grade": True, "points": 1}},
+              "source": "pair = load_pair('../images/synthetic/left.png', '../images/synthetic/right.png')"}]
+    nb = {"cells": cells, "metadata": {}, "nbformat": 4, "nbformat_minor": 5}
+    (repo / "notebooks" / "03_methods_compared.ipynb").write_text(json.dumps(nb))
+    folder = make_source(tmp_path / "course", "03-methods", repo=repo)
+    made = json.loads((folder / "03_methods_compared.ipynb").read_text())["cells"]
+    assert "".join(made[0]["source"]) == ("Run `ismb-lab match images/lab/left.png images/lab/right.png`, or\n\n"
+                                          "    ismb-lab evaluate images/realistic/manifest.json\n\n"
+                                          "(not ../../images/x/ nor docs/../images/y)")
+    assert "".join(made[1]["source"]) == "pair = load_pair('images/synthetic/left.png', 'images/synthetic/right.png')"
+    assert sorted(p.name for p in (folder / "images").iterdir()) == ["lab", "realistic", "synthetic"]
 
 
 def test_a_submission_is_private_and_filed_under_its_owner(tmp_path):

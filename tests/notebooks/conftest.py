@@ -1,13 +1,17 @@
 """Run the student versions of the teaching notebooks headlessly, from the notebooks/ folder, as
 Restart & Run All would."""
 
+import importlib.util
+import sys
 from pathlib import Path
 
 import nbformat
 import pytest
 from nbclient import NotebookClient
+from nbclient.util import ensure_async
 
 NOTEBOOKS = Path(__file__).resolve().parents[2] / "notebooks"
+FIGURE_TEXT = Path(__file__).resolve().with_name("figure_text.py")
 
 
 def errors(nb) -> list[str]:
@@ -46,20 +50,89 @@ def notebook_errors():
     return errors
 
 
-_EXECUTED: dict = {}
+class MeasuringClient(NotebookClient):
+    """A client that first runs `setup` in the kernel, silently: no cell of the notebook, no
+    history entry, so the notebook's cells keep their execution counts."""
+
+    def __init__(self, nb, setup: str, **kw):
+        super().__init__(nb, **kw)
+        self._setup = setup
+
+    async def async_execute_cell(self, cell, cell_index, execution_count=None, store_history=True):
+        if self._setup is not None:
+            source, self._setup = self._setup, None
+            # silent: no output, no history, no execution count; the cells' own messages are
+            # told apart from its by their parent message id
+            msg_id = await ensure_async(self.kc.execute(source, silent=True, store_history=False))
+            reply = await self.async_wait_for_reply(msg_id)
+            if reply is None or reply["content"]["status"] != "ok":
+                content = reply["content"] if reply else {}
+                raise RuntimeError(f"the measuring set-up failed: {content.get('ename')}: {content.get('evalue')}")
+        return await super().async_execute_cell(cell, cell_index, execution_count, store_history)
+
+
+def load_figure_text():
+    """figure_text.py, beside this file (pytest imports tests with --import-mode=importlib)."""
+    if "figure_text" not in sys.modules:
+        spec = importlib.util.spec_from_file_location("figure_text", FIGURE_TEXT)
+        module = importlib.util.module_from_spec(spec)
+        sys.modules["figure_text"] = module
+        spec.loader.exec_module(module)
+    return sys.modules["figure_text"]
 
 
 @pytest.fixture(scope="session")
-def executed_notebook():
+def figure_text():
+    return load_figure_text()
+
+
+_EXECUTED: dict = {}
+_FIGURES: dict = {}
+
+
+@pytest.fixture(scope="session")
+def executed_notebook(tmp_path_factory):
     """A notebook executed once per test session, as Restart & Run All would, shared by every
     test that only reads its outputs (a test must not change it).  A test whose run depends on
-    files it writes first, such as a student's saved labels, uses ``run_notebook`` instead."""
+    files it writes first, such as a student's saved labels, uses ``run_notebook`` instead.
+
+    The run also measures every figure the notebook draws (figure_text.py; the kernel writes
+    what it measured to a file, the notebook is unchanged): ``figure_records`` reads it."""
+    from ismb_lab.widgets._common import COLUMN_PX
+
+    setup_source = load_figure_text().setup_source
+    folder = tmp_path_factory.mktemp("figure_text")
+
     def get(name: str):
         if name not in _EXECUTED:
-            c = client(name)
+            found = folder / f"{name}.jsonl"
+            found.unlink(missing_ok=True)
+            plain = client(name)
+            c = MeasuringClient(plain.nb, setup_source(str(found), COLUMN_PX, str(FIGURE_TEXT)),
+                                timeout=plain.timeout, kernel_name=plain.kernel_name,
+                                resources=plain.resources)
             c.execute()
             _EXECUTED[name] = c.nb
+            _FIGURES[name] = found
         return _EXECUTED[name]
+    return get
+
+
+@pytest.fixture(scope="session")
+def figure_records(executed_notebook):
+    """``get(name) -> (nb, records)``: the executed notebook and what was measured of its
+    figures, one record per figure and cell at whose end it was new or changed, each with
+    ``cell`` (the cell's index in the notebook) and ``figure`` (a number per figure)."""
+    read_records = load_figure_text().read_records
+
+    def get(name: str):
+        nb = executed_notebook(name)
+        index = {c.execution_count: i for i, c in enumerate(nb.cells)
+                 if c.cell_type == "code" and c.execution_count}
+        records = read_records(_FIGURES[name])
+        for r in records:
+            r["cell"] = index.get(r["cell_count"])
+        return nb, records
     return get
 
 
