@@ -117,6 +117,8 @@ class GAModel:
         self.seed = check_number(seed, "seed", owner, low=0, integer=True)
         self.target = sum(len(c.targets) for c in self.cases)
         self.history: list[Generation] = []
+        #: Seconds the GA has computed so far in this run (pauses and listeners left out).
+        self.elapsed = 0.0
         self.status = "idle"
         self.error: BaseException | None = None
         self.listeners: list[Callable[[Generation], None]] = []
@@ -141,7 +143,7 @@ class GAModel:
         """Start a fresh run in a worker thread; False if one is running already."""
         if self.running:
             return False
-        self.history, self.error = [], None
+        self.history, self.error, self.elapsed = [], None, 0.0
         self._stop.clear()
         self._resume.set()
         self.status = "running"
@@ -153,7 +155,9 @@ class GAModel:
 
     def _work(self, records) -> None:
         try:
+            began = time.monotonic()
             for record in records:
+                self.elapsed += time.monotonic() - began
                 improved = not self.history or record.best > self.history[-1].best
                 self.history.append(record)
                 if improved and self.save_to is not None:
@@ -168,6 +172,7 @@ class GAModel:
                 if self._stop.is_set():
                     self.status = "stopped"
                     return
+                began = time.monotonic()
             self.status = "finished"
         except BaseException as exc:  # noqa: BLE001 - kept for the caller, the thread must end cleanly
             self.error, self.status = exc, "failed"
@@ -199,7 +204,7 @@ class GAModel:
         if g is None:
             return f"{head}: {self.status}"
         text = (f"{head}: {self.status}, generation {g.index}/{self.generations}, best {g.best:g}, "
-                f"mean {g.mean:.2f}, {g.evaluations} network evaluations")
+                f"mean {g.mean:.2f}, {g.evaluations} network evaluations in {self.elapsed:.1f} s")
         if self.status == "finished" and g.mean >= self.target:
             text += "; every chromosome reproduces the targets"
         if self.error is not None:

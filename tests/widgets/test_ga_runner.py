@@ -39,6 +39,18 @@ def test_model_records_equal_tune(case):
     assert model.best_params == to_params("III", expected[-1].best_chromosome)
 
 
+def test_the_status_says_how_long_the_ga_computed_without_its_pauses(endless):
+    """The runner reports the seconds of GA work; time spent in listeners (here a held
+    generation) and in pauses is not counted."""
+    model = GAModel([endless], population=6, generations=6, seed=0)
+    model.listeners.append(lambda record: time.sleep(0.3))
+    began = time.monotonic()
+    assert model.start() and model.wait(60) and model.status == "finished"
+    wall = time.monotonic() - began
+    assert 0 < model.elapsed < wall - 6 * 0.3 + 0.05, (model.elapsed, wall)
+    assert f"network evaluations in {model.elapsed:.1f} s" in model.describe()
+
+
 def test_stop_mid_run_ends_the_thread(endless):
     runner = GARunner(endless, population=6, generations=500, redraw_every=0.05)
     slow(runner)
