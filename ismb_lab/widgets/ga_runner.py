@@ -177,6 +177,15 @@ class GAModel:
         except BaseException as exc:  # noqa: BLE001 - kept for the caller, the thread must end cleanly
             self.error, self.status = exc, "failed"
 
+    def set_generations(self, generations: int) -> None:
+        """Run at most `generations` generations from the next Start on (refused while a run is going)."""
+        owner = "GAModel.set_generations"
+        if self.running:
+            raise ParameterError(message("generations", owner, "changed only while no GA is running (Stop it "
+                                         "first)", generations))
+        self.ga = self.ga.updated(owner, generations=generations)
+        self.generations = self.ga.generations
+
     def pause(self) -> None:
         if self.running:
             self._resume.clear()
@@ -274,8 +283,11 @@ class GARunner(Base):
 
     Notes
     -----
+    The ``generations`` field sets the most generations of the next run (the thesis stops at
+    500, which the project's pairs reach in seconds).
+
     CSS classes: root ``ismb-ga``; buttons ``ismb-start``, ``ismb-pause``, ``ismb-stop``,
-    ``ismb-apply``; ``ismb-solver``; ``ismb-progress``; figure ``ismb-fitness``; best chromosome
+    ``ismb-apply``; ``ismb-solver``; ``ismb-generations``; ``ismb-progress``; figure ``ismb-fitness``; best chromosome
     ``ismb-chromosome``; ``ismb-status``; ``ismb-log``.
     """
 
@@ -311,12 +323,17 @@ class GARunner(Base):
                                                           description="solver",
                                                           layout=ipywidgets.Layout(width="auto")), "ismb-solver")
         self.solver_menu.observe(self.guard(lambda c: self.set_solver(c["new"])), names="value")
+        self.generations_field = with_class(ipywidgets.BoundedIntText(
+            value=self.model.generations, min=1, max=100_000, description="generations",
+            layout=ipywidgets.Layout(width="190px")), "ismb-generations")
+        self.generations_field.observe(self.guard(lambda c: self.set_generations(c["new"])), names="value")
         self.start_button.on_click(self.guard(lambda _: self.start()))
         self.pause_button.on_click(self.guard(lambda _: self.toggle_pause()))
         self.stop_button.on_click(self.guard(lambda _: self.stop()))
         self.apply_button.on_click(self.guard(lambda _: self.apply()))
         self.model.listeners.append(self._on_generation)
-        bar = row([self.start_button, self.pause_button, self.stop_button, self.apply_button, self.solver_menu])
+        bar = row([self.start_button, self.pause_button, self.stop_button, self.apply_button, self.solver_menu,
+                   self.generations_field])
         self.widget = with_class(ipywidgets.VBox([bar, self.progress, self.status, self.pane.widget,
                                                   self.chromosome, self.log]), "ismb-ga")
         self.refresh()
@@ -343,6 +360,16 @@ class GARunner(Base):
         finally:
             with self.syncing():
                 self.solver_menu.value = self.model.solver
+        self.say(self.model.describe())
+
+    def set_generations(self, generations: int) -> None:
+        """Run at most `generations` generations from the next Start on (refused while a run is going)."""
+        try:
+            self.model.set_generations(generations)
+            self.progress.max = self.model.generations
+        finally:
+            with self.syncing():
+                self.generations_field.value = self.model.generations
         self.say(self.model.describe())
 
     def start(self) -> bool:
@@ -421,6 +448,7 @@ class GARunner(Base):
         self.pause_button.icon = "play" if self.model.status == "paused" else "pause"
         self.apply_button.disabled = self.model.best is None
         self.solver_menu.disabled = running
+        self.generations_field.disabled = running
 
     def refresh(self) -> None:
         with self._lock:
