@@ -194,7 +194,8 @@ LISTED["06"] = [
      _GA + " and protocol.protocol.__kwdefaults__['seeds'] == 5"),
     ("$[17.97, 24.02, 6.37, 2.2]$", "thesis", _THESIS_III),
     ("$125/137 = 91.24\\%$", "thesis", "Accurate rate 125/137=91.24%"),
-    ("stops by itself after 50\ngenerations", "code", "generations=50, seed=0"),
+    ("Set **generations** to 50", "count", "the limit the exercise asks the student to set in the runner"),
+    ("stops by itself after 50 generations", "code", "seed=0, generations=50)"),
     ("in steps of 0.1", "code", "np.arange(low, high + 1e-9, 0.1)"),
     ("(86 targets)", "arithmetic", "9 + 9 + 20 + 17 + 17 + 14 == 86  # pairs 01-06, printed by the first cell"),
 ]
