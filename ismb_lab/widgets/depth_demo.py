@@ -325,8 +325,6 @@ def update_scene(art: dict, model: DepthModel) -> None:
                for o in r.objects]
     art["labels"] = path_labels(art["ax"], label_positions(r.objects), strings, OKABE_ITO["yellow"],
                                 size=8, shift=(0, 6), ha="center")
-    art["labels"].set_edgecolor("black")      # yellow glyphs with a dark rim read on any grey
-    art["labels"].set_linewidth(0.5)
 
 
 def label_positions(objects, width: float = 45.0, height: float = 12.0) -> np.ndarray:
