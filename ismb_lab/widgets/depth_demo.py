@@ -324,12 +324,22 @@ def update_scene(art: dict, model: DepthModel) -> None:
     strings = [f"#{o.rank} " + (f"{o.depth_m:.2f} m" if o.depth_m is not None else o.depth.status)
                for o in r.objects]
     art["labels"] = path_labels(art["ax"], label_positions(r.objects), strings, OKABE_ITO["yellow"],
-                                size=8, shift=(0, 7), ha="center")
+                                size=8, shift=(0, 6), ha="center")
 
 
 def label_positions(objects, width: float = 45.0, height: float = 12.0) -> np.ndarray:
-    """Object centroids, each label moved up above the labels of nearer objects it would cover."""
-    xy = np.array([o.centroid_xy for o in objects], dtype=float).reshape(-1, 2)
+    """Where each object's label goes: above its topmost feature (its centroid when it rests on
+    its outline alone), moved up above the labels of nearer objects it would cover.
+
+    Examples
+    --------
+    >>> from types import SimpleNamespace as O
+    >>> label_positions([O(centroid_xy=(100, 150), features=np.array([[95, 140], [105, 160]])),
+    ...                  O(centroid_xy=(120, 145), features=np.zeros((0, 2)))]).tolist()
+    [[100.0, 140.0], [120.0, 128.0]]
+    """
+    xy = np.array([(o.centroid_xy[0], min([o.centroid_xy[1], *np.asarray(o.features, float).reshape(-1, 2)[:, 1]]))
+                   for o in objects], dtype=float).reshape(-1, 2)
     for n in range(1, len(xy)):
         for m in range(n):
             if abs(xy[n, 0] - xy[m, 0]) < width and abs(xy[n, 1] - xy[m, 1]) < height:

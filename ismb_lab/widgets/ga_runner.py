@@ -117,6 +117,8 @@ class GAModel:
         self.seed = check_number(seed, "seed", owner, low=0, integer=True)
         self.target = sum(len(c.targets) for c in self.cases)
         self.history: list[Generation] = []
+        #: Seconds the GA has computed so far in this run (pauses and listeners left out).
+        self.elapsed = 0.0
         self.status = "idle"
         self.error: BaseException | None = None
         self.listeners: list[Callable[[Generation], None]] = []
@@ -141,7 +143,7 @@ class GAModel:
         """Start a fresh run in a worker thread; False if one is running already."""
         if self.running:
             return False
-        self.history, self.error = [], None
+        self.history, self.error, self.elapsed = [], None, 0.0
         self._stop.clear()
         self._resume.set()
         self.status = "running"
@@ -153,7 +155,9 @@ class GAModel:
 
     def _work(self, records) -> None:
         try:
+            began = time.monotonic()
             for record in records:
+                self.elapsed += time.monotonic() - began
                 improved = not self.history or record.best > self.history[-1].best
                 self.history.append(record)
                 if improved and self.save_to is not None:
@@ -168,9 +172,19 @@ class GAModel:
                 if self._stop.is_set():
                     self.status = "stopped"
                     return
+                began = time.monotonic()
             self.status = "finished"
         except BaseException as exc:  # noqa: BLE001 - kept for the caller, the thread must end cleanly
             self.error, self.status = exc, "failed"
+
+    def set_generations(self, generations: int) -> None:
+        """Run at most `generations` generations from the next Start on (refused while a run is going)."""
+        owner = "GAModel.set_generations"
+        if self.running:
+            raise ParameterError(message("generations", owner, "changed only while no GA is running (Stop it "
+                                         "first)", generations))
+        self.ga = self.ga.updated(owner, generations=generations)
+        self.generations = self.ga.generations
 
     def pause(self) -> None:
         if self.running:
@@ -199,7 +213,7 @@ class GAModel:
         if g is None:
             return f"{head}: {self.status}"
         text = (f"{head}: {self.status}, generation {g.index}/{self.generations}, best {g.best:g}, "
-                f"mean {g.mean:.2f}, {g.evaluations} network evaluations")
+                f"mean {g.mean:.2f}, {g.evaluations} network evaluations in {self.elapsed:.1f} s")
         if self.status == "finished" and g.mean >= self.target:
             text += "; every chromosome reproduces the targets"
         if self.error is not None:
@@ -269,8 +283,11 @@ class GARunner(Base):
 
     Notes
     -----
+    The ``generations`` field sets the most generations of the next run (the thesis stops at
+    500, which the project's pairs reach in seconds).
+
     CSS classes: root ``ismb-ga``; buttons ``ismb-start``, ``ismb-pause``, ``ismb-stop``,
-    ``ismb-apply``; ``ismb-solver``; ``ismb-progress``; figure ``ismb-fitness``; best chromosome
+    ``ismb-apply``; ``ismb-solver``; ``ismb-generations``; ``ismb-progress``; figure ``ismb-fitness``; best chromosome
     ``ismb-chromosome``; ``ismb-status``; ``ismb-log``.
     """
 
@@ -306,12 +323,17 @@ class GARunner(Base):
                                                           description="solver",
                                                           layout=ipywidgets.Layout(width="auto")), "ismb-solver")
         self.solver_menu.observe(self.guard(lambda c: self.set_solver(c["new"])), names="value")
+        self.generations_field = with_class(ipywidgets.BoundedIntText(
+            value=self.model.generations, min=1, max=100_000, description="generations",
+            layout=ipywidgets.Layout(width="190px")), "ismb-generations")
+        self.generations_field.observe(self.guard(lambda c: self.set_generations(c["new"])), names="value")
         self.start_button.on_click(self.guard(lambda _: self.start()))
         self.pause_button.on_click(self.guard(lambda _: self.toggle_pause()))
         self.stop_button.on_click(self.guard(lambda _: self.stop()))
         self.apply_button.on_click(self.guard(lambda _: self.apply()))
         self.model.listeners.append(self._on_generation)
-        bar = row([self.start_button, self.pause_button, self.stop_button, self.apply_button, self.solver_menu])
+        bar = row([self.start_button, self.pause_button, self.stop_button, self.apply_button, self.solver_menu,
+                   self.generations_field])
         self.widget = with_class(ipywidgets.VBox([bar, self.progress, self.status, self.pane.widget,
                                                   self.chromosome, self.log]), "ismb-ga")
         self.refresh()
@@ -338,6 +360,16 @@ class GARunner(Base):
         finally:
             with self.syncing():
                 self.solver_menu.value = self.model.solver
+        self.say(self.model.describe())
+
+    def set_generations(self, generations: int) -> None:
+        """Run at most `generations` generations from the next Start on (refused while a run is going)."""
+        try:
+            self.model.set_generations(generations)
+            self.progress.max = self.model.generations
+        finally:
+            with self.syncing():
+                self.generations_field.value = self.model.generations
         self.say(self.model.describe())
 
     def start(self) -> bool:
@@ -416,6 +448,7 @@ class GARunner(Base):
         self.pause_button.icon = "play" if self.model.status == "paused" else "pause"
         self.apply_button.disabled = self.model.best is None
         self.solver_menu.disabled = running
+        self.generations_field.disabled = running
 
     def refresh(self) -> None:
         with self._lock:

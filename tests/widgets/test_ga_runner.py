@@ -39,6 +39,18 @@ def test_model_records_equal_tune(case):
     assert model.best_params == to_params("III", expected[-1].best_chromosome)
 
 
+def test_the_status_says_how_long_the_ga_computed_without_its_pauses(endless):
+    """The runner reports the seconds of GA work; time spent in listeners (here a held
+    generation) and in pauses is not counted."""
+    model = GAModel([endless], population=6, generations=6, seed=0)
+    model.listeners.append(lambda record: time.sleep(0.3))
+    began = time.monotonic()
+    assert model.start() and model.wait(60) and model.status == "finished"
+    wall = time.monotonic() - began
+    assert 0 < model.elapsed < wall - 6 * 0.3 + 0.05, (model.elapsed, wall)
+    assert f"network evaluations in {model.elapsed:.1f} s" in model.describe()
+
+
 def test_stop_mid_run_ends_the_thread(endless):
     runner = GARunner(endless, population=6, generations=500, redraw_every=0.05)
     slow(runner)
@@ -210,3 +222,32 @@ def test_solver_cannot_change_mid_run(endless):
     assert runner.model.solver == "network" and runner.solver_menu.value == "network"
     runner.stop_button.click()
     assert runner.wait(10) and not runner.solver_menu.disabled
+
+
+def test_the_generations_field_sets_the_length_of_the_next_run(endless):
+    """A class can stop the GA after a few generations: the field sets the next run's limit,
+    which the run keeps (the endless case never reaches its target), and the status and the
+    progress bar count to it."""
+    runner = GARunner(endless, population=6, generations=500, redraw_every=0.05)
+    runner.generations_field.value = 4
+    assert runner.model.generations == 4 and runner.progress.max == 4 and "(6 chromosomes" in runner.status.value
+    runner.start_button.click()
+    assert runner.wait(60) and runner.model.status == "finished"
+    assert [g.index for g in runner.model.history] == [0, 1, 2, 3, 4]
+    assert "generation 4/4" in runner.status.value and runner.progress.value == 4
+    expected = list(tune([endless], "III", rng=0, population=6, generations=4, seed=0))
+    assert [g.best for g in runner.model.history] == [g.best for g in expected]
+
+
+def test_generations_cannot_change_mid_run_or_below_one(endless):
+    runner = GARunner(endless, population=6, generations=500, redraw_every=0.05)
+    slow(runner)
+    runner.start_button.click()
+    assert runner.generations_field.disabled
+    with pytest.raises(ValueError, match="'generations' parameter of GAModel.set_generations"):
+        runner.set_generations(50)
+    assert runner.model.generations == 500 and runner.generations_field.value == 500
+    runner.stop_button.click()
+    assert runner.wait(10) and not runner.generations_field.disabled
+    with pytest.raises(ValueError, match="'generations' parameter of GAModel.set_generations must be"):
+        runner.model.set_generations(0)
