@@ -253,13 +253,16 @@ def grey_rgb(image) -> np.ndarray:
 
 
 def path_labels(ax, offsets, strings, colour, *, size: float = 7.0, shift=(2.5, 2.5),
-                offset_transform=None, ha: str = "left"):
+                offset_transform=None, ha: str = "left", declutter: bool = False):
     """Short strings drawn at `offsets` as glyph outlines in ONE collection.
 
     Each ``Text`` artist costs about 1 ms per Agg draw on a small classroom
     machine; the same glyphs as paths in a single collection cost well under 1 ms,
     which keeps a click or a step within the 30 ms a redraw may take.
     `shift` is in points; ``ha="center"`` or ``"right"`` aligns on the shifted point.
+    With `declutter`, a label that would cover one already placed moves to another corner of
+    its point (:func:`_declutter`), and is left out where none is free, so that no two numbers
+    are drawn over each other at the figure's size.
     """
     from matplotlib.collections import PathCollection
     from matplotlib.path import Path as MplPath
@@ -272,6 +275,11 @@ def path_labels(ax, offsets, strings, colour, *, size: float = 7.0, shift=(2.5, 
         width = path.get_extents().x1 if len(path.vertices) else 0.0
         dx = shift[0] - {"left": 0.0, "center": width / 2, "right": width}[ha]
         paths.append(MplPath(path.vertices + [dx, shift[1]], path.codes))
+    if declutter and paths:
+        where = (offset_transform or ax.transData).transform(np.asarray(offsets, float).reshape(-1, 2))
+        kept, paths = _declutter(paths, where, ax.figure.dpi / 72, shift)
+        offsets = np.asarray(offsets, float).reshape(-1, 2)[kept]
+        strings = [s for n, s in enumerate(strings) if n in set(kept)]
     points = Affine2D().scale(1 / 72) + ax.figure.dpi_scale_trans
     labels = PathCollection(paths, offsets=offsets, offset_transform=offset_transform or ax.transData,
                             transform=points, facecolors=colour, edgecolors="none")
@@ -280,9 +288,38 @@ def path_labels(ax, offsets, strings, colour, *, size: float = 7.0, shift=(2.5, 
     return labels
 
 
+def _declutter(paths, where, px_per_point: float, shift):
+    """Place each label (glyph `paths` in points, anchored at display pixels `where`) at the first
+    corner of its point where it covers no label placed before it.
+
+    Returns the indices kept and their moved paths; a label with no free corner is left out.
+    """
+    from matplotlib.path import Path as MplPath
+
+    placed, kept, moved = [], [], []
+    for n, path in enumerate(paths):
+        if not len(path.vertices):
+            continue
+        box = path.get_extents()
+        width, height = box.x1 - box.x0, box.y1 - box.y0
+        # right-above (as given), left-above, right-below, left-below of the point, in points
+        for dx, dy in ((0.0, 0.0), (-width - 2 * shift[0], 0.0), (0.0, -height - 2 * shift[1]),
+                       (-width - 2 * shift[0], -height - 2 * shift[1])):
+            x0 = where[n, 0] + (box.x0 + dx) * px_per_point
+            y0 = where[n, 1] + (box.y0 + dy) * px_per_point
+            x1, y1 = x0 + width * px_per_point, y0 + height * px_per_point
+            if all(x1 <= a0 or x0 >= a1 or y1 <= b0 or y0 >= b1 for a0, b0, a1, b1 in placed):
+                placed.append((x0, y0, x1, y1))
+                kept.append(n)
+                moved.append(MplPath(path.vertices + [dx, dy], path.codes))
+                break
+    return kept, moved
+
+
 def number_labels(ax, xy, colour, size: float = 7.0, start: int = 1):
-    """Number the points ``start, start + 1, ...`` beside them, as one artist (:func:`path_labels`)."""
-    return path_labels(ax, xy, range(start, start + len(xy)), colour, size=size)
+    """Number the points ``start, start + 1, ...`` beside them, as one artist (:func:`path_labels`);
+    a number that would cover another moves to a free corner of its point, or is left out."""
+    return path_labels(ax, xy, range(start, start + len(xy)), colour, size=size, declutter=True)
 
 
 def draw_pair(ax, model) -> dict:

@@ -281,7 +281,8 @@ def update_background(art: dict, model: DepthModel) -> None:
     art["features"].set_clim(*disparity_limits(model))
     if art["numbers"] is not None:
         art["numbers"].remove()
-    art["numbers"] = path_labels(art["ax"], xy, [f"{v:.0f}" for v in d], OKABE_ITO["sky blue"], size=6.5)
+    art["numbers"] = path_labels(art["ax"], xy, [f"{v:.0f}" for v in d], OKABE_ITO["sky blue"], size=6.5,
+                                  declutter=True)
 
 
 def draw_scene(ax, cax, model: DepthModel) -> dict:
