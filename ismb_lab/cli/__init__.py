@@ -32,6 +32,7 @@ from ._guard import LIMITS, Interrupts, interrupted_line, preflight
 __all__ = ["COMMANDS", "UsageError", "build_parser", "main"]
 
 def _epilog() -> str:
+    from .._files import MAX_JSON_BYTES
     from ..io import MAX_PIXELS, MOST_PIXELS, PIXELS_VARIABLE
     from ..targets import MAX_BYTES, MAX_PAIRS
     from ._guard import MOST
@@ -40,7 +41,8 @@ def _epilog() -> str:
             "above its limit is refused, a default above it is lowered to it with a note): " + "; ".join(
         f"{option} <= {default} ({variable})" for variable, default, _, option in LIMITS.values())
         + f"; pixels per image <= {MAX_PIXELS} ({PIXELS_VARIABLE}, at most {MOST_PIXELS}); targets files "
-        f"<= {MAX_PAIRS} pairs and {MAX_BYTES} bytes (fixed)")
+        f"<= {MAX_PAIRS} pairs and {MAX_BYTES} bytes, params, rig and manifest files <= {MAX_JSON_BYTES} bytes "
+        "(fixed)")
 
 
 def _commands():

@@ -14,7 +14,7 @@ Limits (each raised, or lowered, by an environment variable; ``ismb-lab --help``
 =========================  =========  =============================================
 variable                   default    what it bounds
 =========================  =========  =============================================
-ISMB_LAB_MAX_PIXELS        25000000   pixels of one image (read from the file header)
+ISMB_LAB_MAX_PIXELS        25000000   pixels of one image (its file's header, an array's shape)
 ISMB_LAB_MAX_CORNERS       500        ``--n-max``, corners per image
 ISMB_LAB_MAX_POPULATION    1000       ``--population`` of the GA
 ISMB_LAB_MAX_GENERATIONS   100000     ``--generations`` of the GA
@@ -38,7 +38,6 @@ the defaults of its limited options (``limit_defaults``) and the files it reads 
 
 from __future__ import annotations
 
-import inspect
 import json
 import math
 import os
@@ -97,12 +96,6 @@ def _short(text) -> str:
         from .._validation import _shown_int
         return _shown_int(text)
     return text if len(text) <= 40 else text[:37] + "..."
-
-
-def _keyword_default(function, name: str):
-    """The default of `function`'s keyword `name`; None for a stand-in without it (a test's)."""
-    parameter = inspect.signature(function).parameters.get(name)
-    return None if parameter is None else parameter.default
 
 
 def _bound(args, usage_error) -> None:
