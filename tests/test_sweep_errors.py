@@ -414,3 +414,15 @@ def test_orient_png_bytes_and_transfer_are_unchanged_on_good_values():
     theta = np.array([[10.0], [20.0]])
     assert np.array_equal(transfer(np.array([5.0, 15.0]), theta, 2.0),
                           -np.tanh(0.5 * 2.0 * (np.array([5.0, 15.0]) - theta)))
+
+
+def test_what_opencv_still_refuses_is_one_line(work, capsys, monkeypatch):
+    """The last guard of the class "tracebacks": a cv2.error no check foresaw is the input's."""
+    import ismb_lab.matching
+
+    def refuses(*args, **kwargs):
+        cv2.calibrateCamera([], [], (1, 1), None, None)   # raises cv2.error
+
+    monkeypatch.setattr(ismb_lab.matching, "prepare", refuses)
+    err = one_line(["match", work / "L.png", work / "R.png"], capsys, "OpenCV cannot work with this input")
+    assert "nimages > 0" in err

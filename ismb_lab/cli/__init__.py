@@ -229,6 +229,12 @@ def _announce_compiling() -> None:
               "(up to a minute); later runs start at once", file=sys.stderr, flush=True)
 
 
+def _opencv_error(exc) -> bool:
+    """Whether `exc` is a ``cv2.error`` (named, so that importing the CLI imports no OpenCV)."""
+    kind = type(exc)
+    return kind.__module__ == "cv2" and kind.__name__ == "error"
+
+
 def _main(argv, interrupts) -> int:
     usage_errors, args, running = (OutputError, OSError), None, False
     with interrupts:
@@ -262,6 +268,10 @@ def _main(argv, interrupts) -> int:
             elif isinstance(exc, MemoryError):
                 print("ismb-lab: error: out of memory: the input is too large for this machine "
                       "(see the limits in 'ismb-lab --help')", file=sys.stderr)
+            elif _opencv_error(exc):   # OpenCV refuses what no check here foresaw: still the input's fault
+                said = " ".join(str(exc).split())
+                print(f"ismb-lab: error: OpenCV cannot work with this input: "
+                      f"{said if len(said) <= 300 else said[:297] + '...'}", file=sys.stderr)
             else:
                 raise
     return 2
