@@ -256,3 +256,15 @@ def test_a_huge_harris_window_is_refused_and_an_empty_search_skips_the_response(
                                                      "ROI, at least 76 pixels from the image edge")
     flat = features.detect_corners(np.full((3000, 3000), 7.0), roi="full")
     assert flat.message == "no corners: the image is flat inside the ROI"
+
+
+def test_a_recipe_s_fit_seeds_are_held_to_the_seeds_limit(work, capsys, no_work, monkeypatch):
+    """--fit-seeds above ISMB_LAB_MAX_SEEDS was refused, the same number in a --recipe file ran."""
+    (work / "P.json").write_text(json.dumps({"version": 2, "method": "III", "params": {}, "fit_seeds": 10**6}))
+    argv = ["evaluate", work / "M.json", "--recipe", work / "P.json", "--jobs", "1"]
+    refused(argv, capsys, "ISMB_LAB_MAX_SEEDS=1000000")
+    with pytest.raises(AssertionError, match="the work started"):   # an option given replaces the file's
+        main([str(a) for a in argv + ["--fit-seeds", "2"]])
+    monkeypatch.setenv("ISMB_LAB_MAX_SEEDS", str(10**6))
+    with pytest.raises(AssertionError, match="the work started"):
+        main([str(a) for a in argv])

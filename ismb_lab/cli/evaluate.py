@@ -11,8 +11,8 @@ from ..protocol import format_protocol, load_manifest, protocol
 from ..solvers import DEFAULT_SOLVER, SOLVERS
 from ._common import (DEFAULT_METHOD, BestSoFar, UsageError, add_ga_options, add_method_option, given, seed,
                       add_one_to_one_option, add_solver_option, default_of, ga_config, progress_bar, said_changes)
-from ._guard import (Files, add_force_option, deferred_signals, interrupted, interrupted_line, is_interruption,
-                     json_text, output_path)
+from ._guard import (LIMITS, Files, add_force_option, deferred_signals, interrupted, interrupted_line,
+                     is_interruption, json_text, limit, output_path)
 
 __all__ = ["add_parser", "run"]
 
@@ -135,6 +135,11 @@ def given_recipe(args):
     recipe = replace(base, solver=solver, fit_seeds=base.fit_seeds if args.fit_seeds is None else args.fit_seeds,
                      one_to_one=base.one_to_one if args.one_to_one is None else args.one_to_one)
     if args.recipe is not None:
+        most = limit("fit_seeds")   # a file is held to the limit an option is held to
+        if args.fit_seeds is None and base.fit_seeds > most:
+            variable = LIMITS["fit_seeds"][0]
+            raise UsageError(f"--recipe {str(args.recipe)!r}: fit_seeds {base.fit_seeds} is above the limit of {most} "
+                             f"seeds; set {variable}={base.fit_seeds} to allow it, or give --fit-seeds")
         said_changes(args.recipe, base, recipe)
     return recipe
 
