@@ -26,8 +26,13 @@ import stat
 import tempfile
 from pathlib import Path
 
-__all__ = ["OutputError", "atomic_write_bytes", "atomic_write_text", "check_input", "check_output",
-           "check_replace"]
+__all__ = ["MAX_JSON_BYTES", "OutputError", "atomic_write_bytes", "atomic_write_text", "check_input",
+           "check_output", "check_replace", "read_json", "refuse_folder_name"]
+
+#: Most bytes of a params, rig or manifest JSON file, checked before it is parsed: the largest
+#: written by the package (a rig of 13 pairs with every corner) is about 110 KB, and parsing
+#: holds some ten times a file's size in memory.
+MAX_JSON_BYTES = 4 << 20
 
 
 class OutputError(ValueError):
@@ -80,6 +85,7 @@ def atomic_write_bytes(path, data: bytes) -> Path:
     >>> atomic_write_bytes(target, b"hello").read_bytes()
     b'hello'
     """
+    refuse_folder_name(path)
     path = Path(path)
     final = Path(os.path.realpath(path)) if path.is_symlink() else path
     try:
@@ -120,6 +126,64 @@ def _same(a: Path, b: Path) -> bool:
         return os.path.realpath(a) == os.path.realpath(b)
 
 
+def read_json(path, *, most_bytes: int = MAX_JSON_BYTES):
+    """The JSON value of the file at `path`, read in at most `most_bytes` bytes.
+
+    Whatever the file holds, the work is bounded before it starts: at most
+    ``most_bytes + 1`` bytes are read, and a file above the limit is refused unparsed.
+
+    Raises
+    ------
+    FileNotFoundError
+        The file does not exist.
+    OSError
+        It cannot be read (a folder, no permission).
+    ValueError
+        With a few words on why: larger than `most_bytes`, not UTF-8, not JSON, nested too
+        deeply, or holding an integer too long to convert (more than Python's 4300 digits).
+
+    Examples
+    --------
+    >>> import tempfile, pathlib
+    >>> path = pathlib.Path(tempfile.mkdtemp()) / "a.json"
+    >>> _ = path.write_text('{"n": 1}')
+    >>> read_json(path)
+    {'n': 1}
+    >>> _ = path.write_text('{"n": 1' + "0" * 5000 + '}')
+    >>> read_json(path)
+    Traceback (most recent call last):
+    ...
+    ValueError: it holds a number of more than 4300 digits
+    >>> read_json(path, most_bytes=100)
+    Traceback (most recent call last):
+    ...
+    ValueError: it is larger than 100 bytes
+    """
+    import json
+
+    check_input(path)   # a FIFO or a device is never opened
+    with open(path, "rb") as handle:
+        raw = handle.read(most_bytes + 1)
+    if len(raw) > most_bytes:
+        raise ValueError(f"it is larger than {most_bytes} bytes")
+    try:
+        text = raw.decode("utf-8")
+    except UnicodeDecodeError:
+        raise ValueError("it is not UTF-8 text") from None
+    try:
+        return json.loads(text)
+    except RecursionError:
+        raise ValueError("its JSON is nested too deeply") from None
+    except json.JSONDecodeError as exc:
+        raise ValueError(f"it is not valid JSON: {exc}") from None
+    except ValueError as exc:   # int() refuses more than sys.get_int_max_str_digits() digits
+        if "digits" in str(exc):
+            import sys
+
+            raise ValueError(f"it holds a number of more than {sys.get_int_max_str_digits()} digits") from None
+        raise ValueError(f"it is not valid JSON: {exc}") from None
+
+
 def check_input(path, *, what: str = "input") -> Path:
     """Refuse an input that exists but is not a regular file, before anything opens it.
 
@@ -143,6 +207,24 @@ def check_input(path, *, what: str = "input") -> Path:
             raise OutputError(f"{what} {str(path)!r}: a folder, not a file")
         raise OutputError(f"{what} {str(path)!r}: {_kind(mode)}, not a regular file")
     return path
+
+
+def refuse_folder_name(text, what: str = "output") -> None:
+    """Refuse an output name written as a folder's: ending in ``/`` (or ``/.``, ``/..``, or
+    being ``.`` or ``..``).  ``Path("out.json/")`` is ``out.json``: the check needs the text.
+
+    >>> refuse_folder_name("out.json/", "--json")
+    Traceback (most recent call last):
+    ...
+    ismb_lab._files.OutputError: --json 'out.json/' names a folder (it ends with '/'); give a file name
+    """
+    if not isinstance(text, (str, bytes)):
+        return
+    text = os.fsdecode(text)
+    last = text.replace(os.altsep or os.sep, os.sep).rsplit(os.sep, 1)[-1]
+    if last in ("", ".", ".."):
+        end = "/" if last == "" else last
+        raise OutputError(f"{what} {text!r} names a folder (it ends with {end!r}); give a file name")
 
 
 def check_output(path, *, inputs=(), force: bool = False, what: str = "output") -> Path:
@@ -179,7 +261,12 @@ def check_output(path, *, inputs=(), force: bool = False, what: str = "output") 
     Traceback (most recent call last):
     ...
     ismb_lab._files.OutputError: --out '.../nodir/p.json': the folder '.../nodir' does not exist
+    >>> check_output(str(folder) + "/p.json/", what="--json")
+    Traceback (most recent call last):
+    ...
+    ismb_lab._files.OutputError: --json '.../p.json/' names a folder (it ends with '/'); give a file name
     """
+    refuse_folder_name(path, what)
     path = Path(path)
     shown = f"{what} {str(path)!r}"
     for source in inputs:

@@ -42,6 +42,9 @@ _PILLOW = ((b"\xff\xd8\xff", "JPEG", "JPEG"), (b"BM", "BMP", "BMP"), (b"II*\x00"
 #: OpenCV's fgets() buffer for Radiance header lines: a longer line is read in pieces.
 _HDR_LINE = 127
 _HDR_SIZE = re.compile(rb"-Y\s*([+-]?\d+)\s*\+X\s*([+-]?\d+)")
+_DIGITS = re.compile(rb"\d+")
+#: The largest number OpenCV's PNM reader accepts (a C int).
+_INT_MAX = 2**31 - 1
 
 
 class HeaderError(ValueError):
@@ -78,11 +81,15 @@ def _pnm(data: bytes):
                 end = data.find(b"\n", pos)
                 pos = len(data) if end < 0 else end
             pos += 1
-        digits = re.match(rb"\d+", data[pos:pos + 64])
+        # OpenCV reads every digit, leading zeros included, and refuses a number above INT_MAX
+        digits = _DIGITS.match(data, pos)
         if digits is None:
             raise HeaderError("a PNM or PFM file whose header has no width and height")
-        numbers.append(int(digits.group()))
-        pos += digits.end()
+        value = digits.group().lstrip(b"0") or b"0"
+        if len(value) > len(str(_INT_MAX)) or int(value) > _INT_MAX:
+            raise HeaderError("a PNM or PFM file whose header declares a size above 2**31 - 1 pixels a side")
+        numbers.append(int(value))
+        pos = digits.end()
     return numbers[0], numbers[1]
 
 

@@ -46,7 +46,12 @@ from ._validation import ParameterError, ParameterTypeError, check_number, check
 from .hopfield import Network, Topology, energy, hopfield_form
 from .dynamics import run
 
-__all__ = ["anneal", "AnnealResult", "AnnealStep", "iter_annealing"]
+__all__ = ["MAX_SWEEPS", "anneal", "AnnealResult", "AnnealStep", "iter_annealing"]
+
+#: Most sweeps a schedule may run in all (its temperatures times `sweeps`), checked before it
+#: starts: the default schedule runs 88 (44 temperatures of 2 sweeps), one of ``cooling=0.9999``
+#: about 92,000.
+MAX_SWEEPS = 100_000
 
 
 @dataclass(frozen=True)
@@ -142,7 +147,8 @@ def iter_annealing(net: Network, *, rng=0, t_start: float = 2.0, t_end: float = 
     cooling : float
         Factor in (0, 1) between consecutive temperatures.
     sweeps : int
-        Asynchronous sweeps per temperature.
+        Asynchronous sweeps per temperature; the schedule runs at most :data:`MAX_SWEEPS`
+        sweeps in all (temperatures times `sweeps`), or is refused before it starts.
     settle : float
         In [0, 1/2): stop after the first temperature that moved no ``v`` across 1/2 and
         left every ``v`` within `settle` of 0 or 1; 0 runs the whole schedule.
@@ -180,13 +186,35 @@ def check_schedule(net, owner, t_start, t_end, cooling, sweeps):
     """The schedule's arguments, checked as `owner`'s."""
     if not isinstance(net, Network):
         raise ParameterTypeError(message("net", owner, "a Network", type(net).__name__))
+    return check_schedule_options(owner, t_start, t_end, cooling, sweeps)
+
+
+def check_schedule_options(owner, t_start, t_end, cooling, sweeps):
+    """The schedule's options, checked as `owner`'s (a solver's, before any network exists):
+    the schedule they make runs at most :data:`MAX_SWEEPS` sweeps in all."""
     t_end = check_number(t_end, "t_end", owner, low=0, low_open=True)
     t_start = check_number(t_start, "t_start", owner, low=t_end)
     cooling = check_number(cooling, "cooling", owner, low=0, low_open=True)
     if cooling >= 1:
         raise ParameterError(message("cooling", owner, "a number in (0, 1)", cooling))
-    sweeps = check_number(sweeps, "sweeps", owner, low=1, integer=True)
+    sweeps = check_number(sweeps, "sweeps", owner, low=1, high=MAX_SWEEPS, integer=True)
+    if _temperatures(t_start, t_end, cooling, MAX_SWEEPS // sweeps) is None:
+        raise ParameterError(message("cooling", owner, f"a factor that cools from t_start {t_start:g} to t_end "
+                                     f"{t_end:g} in at most {MAX_SWEEPS // sweeps} temperatures of {sweeps} sweeps "
+                                     f"({MAX_SWEEPS} sweeps in all)", cooling))
     return t_start, t_end, cooling, sweeps
+
+
+def _temperatures(t_start: float, t_end: float, cooling: float, most: int) -> list | None:
+    """The schedule's temperatures, or None as soon as there are more than `most`."""
+    temperatures = []
+    T = t_start
+    while T >= t_end * (1 - 1e-12):
+        if len(temperatures) == most:
+            return None
+        temperatures.append(T)
+        T *= cooling
+    return temperatures
 
 
 def _anneal(net, rng, t_start, t_end, cooling, sweeps, settle, holder):
@@ -234,11 +262,7 @@ def anneal(net: Network, *, rng=0, t_start: float = 2.0, t_end: float = 0.02, co
     rng = check_rng(rng, "rng", "anneal")
     t_start, t_end, cooling, sweeps = check_schedule(net, "anneal", t_start, t_end, cooling, sweeps)
     settle = check_settle(settle, "anneal")
-    temperatures = []
-    T = t_start
-    while T >= t_end * (1 - 1e-12):
-        temperatures.append(T)
-        T *= cooling
+    temperatures = _temperatures(t_start, t_end, cooling, MAX_SWEEPS // sweeps)
     v = 0.5 + 0.01 * rng.uniform(-1, 1, net.n_neurons)
     ptr, idx, pair = _neighbours(net.topology)
     W, w = _dense_and_listed(ptr, idx, pair, net.pair_c, 2.0 * net.uniqueness)

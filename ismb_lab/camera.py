@@ -27,14 +27,14 @@ from __future__ import annotations
 import json
 import math
 from dataclasses import dataclass, field
-from pathlib import Path
 
 import cv2
 import numpy as np
 
-from ._validation import ParameterError, check_number, check_points, message
+from ._validation import ParameterError, ParameterTypeError, check_number, check_points, message
 
-__all__ = ["BASELINE_M", "BOARD", "FOCAL_PX", "MAX_ZOOM", "SQUARE_M", "FORMAT", "HEIGHT", "WIDTH", "BoardPair", "StereoCamera", "load_camera"]
+__all__ = ["BASELINE_M", "BOARD", "FOCAL_PX", "MAX_BOARD_SIDE", "MAX_SQUARE_M", "MAX_ZOOM", "MIN_SQUARE_M", "SQUARE_M",
+           "FORMAT", "HEIGHT", "WIDTH", "BoardPair", "StereoCamera", "check_board", "load_camera"]
 
 #: The rendered scenes' camera, mimicking the thesis' webcams: 320 x 240 images, 10 cm apart.
 #: A focal length of 300 px gives a horizontal field of view of about 56 degrees
@@ -50,6 +50,10 @@ BOARD = (9, 6)
 #: a common printed board and gives a baseline of a few centimetres, as the rig's two small
 #: cameras suggest.  Every metric result scales with it.
 SQUARE_M = 0.025
+#: The range of a board's square side, in metres (10 micrometres to 10 m), and of its inner
+#: corners per row or column: OpenCV calibrates such boards; a size beyond them is a typing slip.
+MIN_SQUARE_M, MAX_SQUARE_M = 1e-5, 10.0
+MAX_BOARD_SIDE = 100
 #: Format of the rig files (v1 files, without the pairs, still load).
 FORMAT = "ismb_lab-rig-v2"
 _FORMATS = ("ismb_lab-rig-v1", FORMAT)
@@ -526,8 +530,33 @@ def _check_intrinsics(k, d, name: str, owner: str) -> None:
                                      "coefficients", d.ravel().tolist()))
 
 
+def check_board(board, square_m, owner: str) -> tuple:
+    """`board` (inner corners per row and per column) and `square_m` (metres), checked as
+    `owner`'s: whole numbers from 2 to :data:`MAX_BOARD_SIDE`, and a side from
+    :data:`MIN_SQUARE_M` to :data:`MAX_SQUARE_M`.  Returns them as ``(tuple, float)``.
+
+    >>> check_board([9, 6], 0.025, "calibrate_rig")
+    ((9, 6), 0.025)
+    >>> check_board((9, 6), -1, "the rig file")
+    Traceback (most recent call last):
+    ...
+    ismb_lab.ParameterError: The 'square_m' parameter of the rig file must be a finite number >= 1e-05 and <= 10.0. Got -1.0 instead.
+    """
+    rule = f"two whole numbers from 2 to {MAX_BOARD_SIDE} (inner corners per row, per column)"
+    if (not isinstance(board, (tuple, list)) or len(board) != 2
+            or not all(isinstance(v, (int, np.integer)) and not isinstance(v, bool) for v in board)):
+        raise ParameterTypeError(message("board", owner, rule, board))
+    if not all(2 <= v <= MAX_BOARD_SIDE for v in board):
+        raise ParameterError(message("board", owner, rule, tuple(board)))
+    square_m = check_number(square_m, "square_m", owner, low=MIN_SQUARE_M, high=MAX_SQUARE_M)
+    return tuple(int(v) for v in board), square_m
+
+
 def _check(camera: StereoCamera, owner: str) -> None:
     """Refuse a camera that cannot rectify: it would give black images or a crash, not an error."""
+    board, square_m = check_board(camera.board, camera.square_m, owner)
+    object.__setattr__(camera, "board", board)
+    object.__setattr__(camera, "square_m", square_m)
     for name in ("k_left", "d_left", "k_right", "d_right", "rotation", "translation"):
         object.__setattr__(camera, name, np.asarray(getattr(camera, name), dtype=float))
     for name in ("left", "right"):
@@ -549,12 +578,22 @@ def _check(camera: StereoCamera, owner: str) -> None:
 
 def load_camera(source) -> StereoCamera:
     """A calibrated camera from ``ismb-lab calibrate``'s JSON (a path or the text), validated."""
+    from ._files import MAX_JSON_BYTES, read_json
+
     owner = "load_camera"
     try:
-        text = Path(source).read_text() if not str(source).lstrip().startswith("{") else str(source)
-        data = json.loads(text)
+        if str(source).lstrip().startswith("{"):
+            if len(str(source)) > MAX_JSON_BYTES:
+                raise ValueError(f"it is larger than {MAX_JSON_BYTES} bytes")
+            data = json.loads(str(source))
+        else:
+            data = read_json(source)
+    except RecursionError:
+        raise ParameterError(message("source", owner, "a readable rig JSON file (its JSON is nested too deeply)",
+                                     str(source))) from None
     except (OSError, ValueError) as exc:
-        raise ParameterError(message("source", owner, "a readable rig JSON file", f"{source} ({exc})")) from None
+        why = exc.strerror if isinstance(exc, OSError) and exc.strerror else exc
+        raise ParameterError(message("source", owner, f"a readable rig JSON file ({why})", str(source))) from None
     if not isinstance(data, dict) or data.get("format") not in _FORMATS:
         raise ParameterError(message("source", owner, "a rig file written by 'ismb-lab calibrate' "
                                      f"(format {' or '.join(_FORMATS)})", str(source)))

@@ -221,7 +221,8 @@ def collected(folder, pattern: str = "targets-*.json") -> dict:
     `folder` is nbgrader's ``submitted/`` folder (or the course folder holding it): one
     folder per student, named by nbgrader from who handed the work in, with the files
     anywhere below it (``submitted/<student>/labels/targets-....json``).  The student is
-    the folder's name, never something read from a file.
+    the folder's name, never something read from a file.  Symbolic links are never followed:
+    a student's folder, a folder below it or a file that is a link is left out.
 
     >>> import tempfile, pathlib
     >>> course = pathlib.Path(tempfile.mkdtemp())
@@ -235,12 +236,20 @@ def collected(folder, pattern: str = "targets-*.json") -> dict:
     root = Path(folder)
     if not root.is_dir():
         raise ParameterError(message("folder", "collected", "an existing folder", str(root)))
+    if (root / "submitted").is_symlink():
+        raise ParameterError(message("folder", "collected", "a course folder whose submitted/ is a folder of its "
+                                     "own, not a symbolic link", str(root)))
     if (root / "submitted").is_dir():
         root = root / "submitted"
     found = {}
-    for student in sorted(p for p in root.iterdir() if p.is_dir() and not p.name.startswith(".")):
+    # A link is never followed: a student's "folder" that links to / would otherwise vote
+    # with every targets file on the machine.
+    students = sorted(p for p in root.iterdir() if p.is_dir() and not p.is_symlink() and not p.name.startswith("."))
+    for student in students:
+        inside = os.path.realpath(student) + os.sep
         files = sorted(p for p in student.rglob(pattern) if p.is_file() and not p.is_symlink()
-                       and not any(part.startswith(".") for part in p.relative_to(student).parts))
+                       and not any(part.startswith(".") for part in p.relative_to(student).parts)
+                       and os.path.realpath(p).startswith(inside))
         if files:
             found[student.name] = files
     if not found:

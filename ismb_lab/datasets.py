@@ -24,8 +24,8 @@ import numpy as np
 from ._validation import ParameterError, check_number, message
 
 __all__ = ["CHESSBOARD_PAIRS", "MOTORCYCLE_ROIS", "OPENCV_DATA", "OPENCV_DATA_VARIABLE", "SampleDataMissing",
-           "aloe", "books", "chessboard_pairs", "ground_truth_pairs", "GroundTruthPair", "motorcycle",
-           "opencv_samples"]
+           "aloe", "aloe_files", "books", "chessboard_pairs", "ground_truth_pairs", "GroundTruthPair", "motorcycle",
+           "motorcycle_files", "opencv_samples"]
 
 #: Where Debian's ``opencv-doc`` installs OpenCV's sample data.
 OPENCV_DATA = Path("/usr/share/doc/opencv-doc/examples/data")
@@ -104,6 +104,20 @@ def _scaled(left, right, disparity, width: int, name: str) -> GroundTruthPair:
     known_enough = share >= 0.5
     small[known_enough] = total[known_enough] / share[known_enough] * scale
     return GroundTruthPair(grey(left), grey(right), small, name)
+
+
+def motorcycle_files() -> tuple:
+    """The files :func:`motorcycle` reads: scikit-image's copies of the pair and its disparity."""
+    import skimage.data
+
+    folder = Path(skimage.data.__file__).parent
+    return tuple(folder / name for name in ("motorcycle_left.png", "motorcycle_right.png", "motorcycle_disp.npz"))
+
+
+def aloe_files(folder=None) -> tuple:
+    """The files :func:`aloe` reads (`folder`: see :func:`opencv_samples`)."""
+    root = opencv_samples(folder)
+    return tuple(root / name for name in ("aloeL.jpg", "aloeR.jpg", "aloeGT.png"))
 
 
 class SampleDataMissing(FileNotFoundError):

@@ -40,10 +40,12 @@ import numpy as np
 from ._validation import ParameterError, ParameterTypeError, check_number, message
 from .hopfield import SCALE, Network, energy, hopfield_form
 
-__all__ = ["MAX_EXHAUSTIVE", "exhaustive_minimum", "milp_minimum", "Minimum"]
+__all__ = ["MAX_EXHAUSTIVE", "MAX_TIME_LIMIT", "exhaustive_minimum", "milp_minimum", "Minimum"]
 
 #: Largest network :func:`exhaustive_minimum` accepts (``2**26`` states).
 MAX_EXHAUSTIVE = 26
+#: Longest time limit of :func:`milp_minimum`, in seconds: one hour.
+MAX_TIME_LIMIT = 3600.0
 
 
 @dataclass(frozen=True, eq=False)
@@ -146,8 +148,8 @@ def milp_minimum(net: Network, *, time_limit: float = 60.0) -> Minimum:
     ----------
     net : Network
     time_limit : float
-        Seconds the solver may take; a ``ParameterError`` says when it gave up
-        without proving optimality.
+        Seconds the solver may take, at most :data:`MAX_TIME_LIMIT`; a ``ParameterError``
+        says when it gave up without proving optimality.
 
     Returns
     -------
@@ -164,7 +166,7 @@ def milp_minimum(net: Network, *, time_limit: float = 60.0) -> Minimum:
     from scipy.sparse import coo_matrix
 
     net = _check_net(net, "milp_minimum")
-    limit = check_number(time_limit, "time_limit", "milp_minimum", low=0, low_open=True)
+    limit = check_number(time_limit, "time_limit", "milp_minimum", low=0, low_open=True, high=MAX_TIME_LIMIT)
     n = net.n_neurons
     if n == 0:
         empty = np.zeros(0, dtype=np.uint8)

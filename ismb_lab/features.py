@@ -18,8 +18,17 @@ from scipy import ndimage as ndi
 
 from ._validation import ParameterError, ParameterTypeError, check_number, message
 
-__all__ = ["Corners", "detect_corners", "harris_from_tensor", "harris_response", "image_gradients",
+__all__ = ["MAX_SIGMA", "Corners", "check_roi", "detect_corners", "harris_from_tensor", "harris_response", "image_gradients",
            "resolve_roi", "structure_tensor"]
+
+
+#: Largest Gaussian window (sigma, pixels) of the structure tensor: its cost grows with sigma
+#: (a kernel of 8 sigma + 1 taps a pass), and a window this wide already blurs every corner away.
+MAX_SIGMA = 50.0
+
+
+def _check_sigma(sigma, owner: str) -> float:
+    return check_number(sigma, "sigma", owner, low=0, low_open=True, high=MAX_SIGMA)
 
 
 def _check_image(image, owner: str) -> np.ndarray:
@@ -96,7 +105,7 @@ def structure_tensor(image, sigma: float = 1.0) -> tuple[np.ndarray, np.ndarray,
     >>> float(Axx[4, 4]), float(Axy[4, 4]), float(Ayy[4, 4])
     (1.0, 0.0, 0.0)
     """
-    sigma = check_number(sigma, "sigma", "structure_tensor", low=0, low_open=True)
+    sigma = _check_sigma(sigma, "structure_tensor")
     Ix, Iy = image_gradients(image)
     return tuple(ndi.gaussian_filter(p, sigma, mode="mirror") for p in (Ix * Ix, Ix * Iy, Iy * Iy))
 
@@ -152,7 +161,7 @@ def harris_response(image, sigma: float = 1.0, k: float = 0.04) -> np.ndarray:
     (True, True, True)
     """
     k = _check_k(k, "harris_response")
-    sigma = check_number(sigma, "sigma", "harris_response", low=0, low_open=True)
+    sigma = _check_sigma(sigma, "harris_response")
     return harris_from_tensor(*structure_tensor(image, sigma), k)
 
 
@@ -197,27 +206,51 @@ def resolve_roi(roi, shape) -> tuple[int, int, int, int]:
     height, width = (int(n) for n in shape)
     rule = ("'center', 'full', (x, y, w, h) or 'X,Y,W,H' with integers w, h >= 1 and the box "
             f"inside the {width}x{height} (width x height) image")
-    if isinstance(roi, str):
-        name = roi.strip().lower()
-        if name == "center":
-            return width // 4, height // 4, max(1, width // 2), max(1, height // 2)
-        if name == "full":
-            return 0, 0, width, height
-        parts = [p.strip() for p in name.split(",")]
-        if len(parts) != 4 or not all(p.lstrip("+-").isdigit() for p in parts):
-            raise ParameterError(message("roi", "resolve_roi", rule, roi))
-        box = tuple(int(p) for p in parts)
-    elif isinstance(roi, (tuple, list, np.ndarray)):
-        if len(roi) != 4 or not all(isinstance(v, numbers.Integral) and not isinstance(v, bool)
-                                    for v in roi):
-            raise ParameterError(message("roi", "resolve_roi", rule, roi))
-        box = tuple(int(v) for v in roi)
-    else:
-        raise ParameterTypeError(message("roi", "resolve_roi", rule, roi))
+    box = _roi_box(roi, rule)
+    if box in ("center", "full"):
+        return (width // 4, height // 4, max(1, width // 2), max(1, height // 2)) if box == "center" else \
+            (0, 0, width, height)
     x, y, w, h = box
     if w < 1 or h < 1 or x < 0 or y < 0 or x + w > width or y + h > height:
         raise ParameterError(message("roi", "resolve_roi", rule, roi))
     return box
+
+
+def check_roi(roi, owner: str):
+    """Check the form of `roi` (see :func:`resolve_roi`) before any image is read: a box
+    must have ``x, y >= 0`` and ``w, h >= 1``; whether it lies inside the image waits for the
+    image.  Returns `roi`.
+
+    >>> check_roi("10,20,30,40", "MatchConfig")
+    '10,20,30,40'
+    >>> check_roi("1,2,3", "MatchConfig")
+    Traceback (most recent call last):
+    ...
+    ismb_lab.ParameterError: The 'roi' parameter of MatchConfig must be 'center', 'full', (x, y, w, h) or 'X,Y,W,H' with integers x, y >= 0 and w, h >= 1. Got '1,2,3' instead.
+    """
+    rule = "'center', 'full', (x, y, w, h) or 'X,Y,W,H' with integers x, y >= 0 and w, h >= 1"
+    box = _roi_box(roi, rule, owner)
+    if box not in ("center", "full") and (box[0] < 0 or box[1] < 0 or box[2] < 1 or box[3] < 1):
+        raise ParameterError(message("roi", owner, rule, roi))
+    return roi
+
+
+def _roi_box(roi, rule: str, owner: str = "resolve_roi"):
+    """``"center"``, ``"full"`` or the ``(x, y, w, h)`` that `roi` spells, whatever the image."""
+    if isinstance(roi, str):
+        name = roi.strip().lower()
+        if name in ("center", "full"):
+            return name
+        parts = [p.strip() for p in name.split(",")]
+        if len(parts) != 4 or not all(p.lstrip("+-").isdigit() and len(p) <= 19 for p in parts):
+            raise ParameterError(message("roi", owner, rule, roi))
+        return tuple(int(p) for p in parts)
+    if isinstance(roi, (tuple, list, np.ndarray)):
+        if len(roi) != 4 or not all(isinstance(v, numbers.Integral) and not isinstance(v, bool)
+                                    for v in roi):
+            raise ParameterError(message("roi", owner, rule, roi))
+        return tuple(int(v) for v in roi)
+    raise ParameterTypeError(message("roi", owner, rule, roi))
 
 
 @dataclass(frozen=True, eq=False)
@@ -328,7 +361,7 @@ def detect_corners(image, *, roi="center", n_min: int = 20, n_max: int = 30,
         value suits every image; None starts at the strongest candidate, which
         lets the relaxation alone decide.
     sigma : float
-        Gaussian window of the structure tensor.
+        Gaussian window of the structure tensor, ``0 < sigma <= MAX_SIGMA``.
     k : float
         Harris' ``k``, ``0 < k < 0.25`` (the thesis: 0.04 to 0.06).
     min_distance : int
@@ -362,17 +395,24 @@ def detect_corners(image, *, roi="center", n_min: int = 20, n_max: int = 30,
     n_max = check_number(n_max, "n_max", owner, low=n_min, integer=True)
     if threshold is not None:
         threshold = check_number(threshold, "threshold", owner, low=0, low_open=True)
-    sigma = check_number(sigma, "sigma", owner, low=0, low_open=True)
+    sigma = _check_sigma(sigma, owner)
     k = _check_k(k, owner)
+    H, W = image.shape
     min_distance = check_number(min_distance, "min_distance", owner, low=1, integer=True)
     relax = check_number(relax, "relax", owner, low=0, low_open=True, high=1)
     if relax == 1:
         raise ParameterError(message("relax", owner, "a finite number > 0 and < 1", relax))
     box = resolve_roi(roi, image.shape)
 
-    R = harris_response(image, sigma, k)
     border = math.ceil(3 * sigma) + 1
-    rows, cols, values = _local_maxima(R, box, border, min_distance)
+    x, y, w, h = box
+    searched = max(y, border) < min(y + h, H - border) and max(x, border) < min(x + w, W - border)
+    if searched and image.min() < image.max():
+        R = harris_response(image, sigma, k)
+        # a radius beyond the image covers all of it, as the image's own size does
+        rows, cols, values = _local_maxima(R, box, border, min(min_distance, max(H, W)))
+    else:   # no pixel to search, or R = 0 everywhere: the same answer without computing R
+        values = ()
 
     if len(values) == 0:
         x, y, w, h = box

@@ -31,7 +31,7 @@ def _path_error(name: str, owner: str, why: str, path: str) -> ParameterError:
                       f"({why}). Got {path!r} instead.")
 
 
-#: Default most pixels of one image file; the environment variable ISMB_LAB_MAX_PIXELS
+#: Default most pixels of one image (a file or an array); the environment variable ISMB_LAB_MAX_PIXELS
 #: raises (or lowers) it.  The pipeline keeps several float64 copies of each image
 #: (grey, the Harris products, the response): ``ismb-lab match`` on a 4000x3000 pair
 #: peaked at 1.18 GB resident, about 90 bytes a pixel, so 25 million pixels is about 2.3 GB.
@@ -102,11 +102,51 @@ def orient(image: np.ndarray, orientation: int) -> np.ndarray:
 
     >>> orient(np.array([[1, 2], [3, 4]]), 6).tolist()   # 6: turn 90 degrees clockwise
     [[3, 1], [4, 2]]
+    >>> orient(np.zeros((2, 2)), 9)
+    Traceback (most recent call last):
+    ...
+    ismb_lab.ParameterError: The 'orientation' parameter of orient must be an integer >= 1 and <= 8. Got 9 instead.
     """
+    orientation = check_number(orientation, "orientation", "orient", low=1, high=8, integer=True)
+    image = np.asarray(image)
+    if image.ndim < 2:
+        raise ParameterError(message("image", "orient", "an image[y, x] of 2 or more dimensions",
+                                     f"an array of shape {image.shape}"))
     turned = {1: image, 2: image[:, ::-1], 3: image[::-1, ::-1], 4: image[::-1],
               5: np.swapaxes(image, 0, 1), 6: np.rot90(image, -1), 7: np.swapaxes(image, 0, 1)[::-1, ::-1],
               8: np.rot90(image, 1)}[orientation]
     return np.ascontiguousarray(turned)
+
+
+def _imdecode(data: bytes, flags: int):
+    """``cv2.imdecode``, and what it and its codecs (libpng, libjpeg) printed on stderr meanwhile.
+
+    The codecs print their complaints straight to file descriptor 2, before the caller can say
+    what went wrong in its own words; so fd 2 points to a temporary file during the call.  What
+    a decoded image's codec printed (a warning) is passed on to stderr as before; what a failed
+    one printed is returned, for the caller's one-line message.
+    """
+    buffer = np.frombuffer(data, dtype=np.uint8)
+    try:
+        saved = os.dup(2)
+    except OSError:   # no stderr at all: nothing to keep apart
+        return cv2.imdecode(buffer, flags), ""
+    import tempfile
+
+    try:
+        with tempfile.TemporaryFile() as capture:
+            os.dup2(capture.fileno(), 2)
+            try:
+                image = cv2.imdecode(buffer, flags)
+            finally:
+                os.dup2(saved, 2)
+            capture.seek(0)
+            said = capture.read(1 << 16)
+    finally:
+        os.close(saved)
+    if image is not None and said:
+        os.write(2, said)
+    return image, said.decode("utf-8", "replace")
 
 
 def decode(data: bytes, flags: int, error) -> np.ndarray:
@@ -126,9 +166,10 @@ def decode(data: bytes, flags: int, error) -> np.ndarray:
         raise error(str(exc)) from None
     if width * height > limit:
         raise _too_large(error, f"its header says {width}x{height}", limit)
-    image = cv2.imdecode(np.frombuffer(data, dtype=np.uint8), flags)
+    image, said = _imdecode(data, flags)
     if image is None:
-        raise error(f"OpenCV cannot decode it as a {kind} image")
+        said = next((line for line in said.splitlines() if "error" in line.lower()), "")
+        raise error(f"OpenCV cannot decode it as a {kind} image" + (f": {said.strip()[:200]}" if said else ""))
     if flags == cv2.IMREAD_UNCHANGED and kind == "JPEG":   # OpenCV turns the other reads itself
         image = orient(image, exif_orientation(data))
     if image.shape[0] * image.shape[1] > limit:
@@ -187,7 +228,13 @@ def _to_grey(image, name: str, owner: str, *, bgr: bool) -> np.ndarray:
 def _load(source, name: str, owner: str) -> np.ndarray:
     if _is_path(source):
         return _to_grey(_read(os.fspath(source), name, owner), name, owner, bgr=True)
-    return _to_grey(source, name, owner, bgr=False)
+    image = np.asarray(source)
+    limit = max_pixels()
+    if image.ndim >= 2 and image.shape[0] * image.shape[1] > limit:   # before any copy is made
+        raise ParameterError(message(name, owner, f"an image of at most {limit} pixels (set the environment "
+                                     f"variable {PIXELS_VARIABLE} to allow more)",
+                                     f"an array of shape {image.shape}"))
+    return _to_grey(image, name, owner, bgr=False)
 
 
 def load_image(source, name: str = "image") -> np.ndarray:
@@ -215,9 +262,10 @@ def load_image(source, name: str = "image") -> np.ndarray:
     Raises
     ------
     ValueError
-        A missing, empty or undecodable file, one in another format, one over the pixel
-        limit (:func:`max_pixels`, read from its header), a bad shape, or float values that are not
-        finite or lie outside ``[0, 255]``.
+        A missing, empty or undecodable file, one in another format, a file or an array over
+        the pixel limit (:func:`max_pixels`, read from the file's header or the array's shape,
+        before any copy), a bad shape, or float values that are not finite or lie outside
+        ``[0, 255]``.
     TypeError
         Any dtype other than ``uint8``, ``uint16`` or floating point (``bool`` included).
 
@@ -368,9 +416,18 @@ def png_bytes(image) -> bytes:
     >>> data[1:4], cv2.imdecode(np.frombuffer(data, np.uint8), cv2.IMREAD_UNCHANGED).tolist()
     (b'PNG', [[255, 255], [255, 255]])
     """
-    ok, data = cv2.imencode(".png", np.clip(np.rint(np.asarray(image, dtype=float)), 0, 255).astype(np.uint8))
-    if not ok:  # pragma: no cover - OpenCV fails here only on an empty image
-        raise ParameterError(message("image", "png_bytes", "a non-empty grey image", np.shape(image)))
+    rule = "a non-empty 2-D grey image of finite numbers, at most 2**31 - 1 pixels a side"
+    try:
+        grey = np.asarray(image, dtype=float)
+    except (TypeError, ValueError):
+        raise ParameterTypeError(message("image", "png_bytes", rule, image)) from None
+    if grey.ndim != 2 or grey.size == 0 or max(grey.shape) >= 2**31:
+        raise ParameterError(message("image", "png_bytes", rule, f"an array of shape {grey.shape}"))
+    if not np.all(np.isfinite(grey)):
+        raise ParameterError(message("image", "png_bytes", rule, "an array with NaN or infinite values"))
+    ok, data = cv2.imencode(".png", np.clip(np.rint(grey), 0, 255).astype(np.uint8))
+    if not ok:  # pragma: no cover - OpenCV refuses only what the checks above refuse
+        raise ParameterError(message("image", "png_bytes", rule, f"an array of shape {grey.shape}"))
     return data.tobytes()
 
 

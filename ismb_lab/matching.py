@@ -16,15 +16,15 @@ import numpy as np
 
 from ._validation import MAX_SEED, ParameterError, ParameterTypeError, check_choice, check_number, message
 from .coords import euclidean_disparity, horizontal_disparity
-from .features import Corners, detect_corners, resolve_roi
+from .features import MAX_SIGMA, Corners, check_roi, detect_corners, resolve_roi
 from .io import StereoPair, load_pair
 from .methods import DEFAULT_METHOD, Problem, build_problem, get_method
 from .params import Params
 from .similarity import mean_abs_difference
 from .solvers import DEFAULT_SOLVER, get_solver, one_match_per_corner, solve, to_matches
 
-__all__ = ["AUTO_MARGIN", "MatchConfig", "MatchResult", "Prepared", "auto_window", "match", "prepare", "shift_roi",
-           "warm_up"]
+__all__ = ["AUTO_MARGIN", "MatchConfig", "MatchResult", "Prepared", "auto_window", "check_window", "match", "prepare",
+           "shift_roi", "warm_up"]
 
 
 @dataclass(frozen=True)
@@ -78,7 +78,7 @@ class MatchConfig:
         check_number(self.n_max, "n_max", owner, low=self.n_min, integer=True)
         if self.threshold is not None:
             check_number(self.threshold, "threshold", owner, low=0, low_open=True)
-        check_number(self.harris_sigma, "harris_sigma", owner, low=0, low_open=True)
+        check_number(self.harris_sigma, "harris_sigma", owner, low=0, low_open=True, high=MAX_SIGMA)
         k = check_number(self.harris_k, "harris_k", owner, low=0, low_open=True)
         if k >= 0.25:
             raise ParameterError(message("harris_k", owner, "a finite number > 0 and < 0.25", k))
@@ -97,6 +97,7 @@ class MatchConfig:
         check_choice(self.right_roi, "right_roi", owner, ("shifted", "same"))
         if isinstance(self.roi, list):
             object.__setattr__(self, "roi", tuple(self.roi))
+        check_roi(self.roi, owner)   # its form now; whether it lies inside the images when they are read
 
     @property
     def min_shape(self) -> tuple[int, int]:
@@ -148,6 +149,30 @@ def auto_window(pair, config: MatchConfig, *, rows_px: float | None = None) -> M
     return replace(config, shift=round(float(lo + hi) / 2, 2), window_width=round(width, 2))
 
 
+def check_window(config: MatchConfig, shape) -> MatchConfig:
+    """Check, before any work on a pair of `shape` ``(height, width)``, that `config`'s ROI lies
+    in it and that its candidate window can reach it: a shift of more than ``width - 1 +
+    window_width / 2`` pixels either way puts every left corner's window outside the right
+    image, and no pair could be a candidate.  Returns `config`.
+
+    Examples
+    --------
+    >>> check_window(MatchConfig(shift=1e308), (240, 320))
+    Traceback (most recent call last):
+    ...
+    ismb_lab.ParameterError: The 'shift' parameter of MatchConfig must be at most 339 pixels either way, so that
+    the 40-pixel-wide candidate window can reach the 320-pixel-wide image. Got 1e+308 instead.
+    """
+    resolve_roi(config.roi, shape)
+    if config.shift != "auto":
+        most = shape[1] - 1 + config.window_width / 2
+        if abs(config.shift) > most:
+            raise ParameterError(message("shift", "MatchConfig", f"at most {most:g} pixels either way, so that the "
+                                         f"{config.window_width:g}-pixel-wide candidate window can reach the "
+                                         f"{shape[1]}-pixel-wide image", config.shift))
+    return config
+
+
 def shift_roi(roi, shift: float, shape) -> tuple[int, int, int, int]:
     """Move an ``(x, y, w, h)`` ROI ``shift`` pixels left, cropped to the image.
 
@@ -194,7 +219,9 @@ def prepare(left, right, config: MatchConfig | None = None) -> Prepared:
         raise ParameterTypeError(message("config", "prepare", "a MatchConfig", config))
     pair = left if isinstance(left, StereoPair) and right is None else load_pair(
         left, right, min_shape=config.min_shape)
+    check_window(config, pair.shape)
     config = auto_window(pair, config)
+    check_window(config, pair.shape)
     left_roi = resolve_roi(config.roi, pair.shape)
     right_roi = left_roi if config.right_roi == "same" else shift_roi(left_roi, config.shift, pair.shape)
     kwargs = dict(n_min=config.n_min, n_max=config.n_max, threshold=config.threshold,

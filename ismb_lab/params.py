@@ -20,6 +20,16 @@ Gene bounds
   ``S`` and ``C``) through 1/2 ("at most one", ``beta = 0``) to 1 (exactly one: the
   thesis).  ``S`` is in [-1, 1] and one compatible neighbour adds up to 2, so a
   wider range only repeats the ends.
+
+Parameter range
+---------------
+Outside a GA's search the parameters take any value in a range that still means something,
+checked when a :class:`Params` is made: ``theta_c`` and ``theta_s`` in [0, :data:`MAX_THETA`]
+(``M`` is at most 510 grey levels, and a tolerance of 1000 px calls every pair
+compatible), ``lambda_c`` and ``lambda_s`` in (0, :data:`MAX_LAMBDA`] (at 1000 the transfer
+function is a step 0.002 wide), and ``match_bias`` in [-:data:`MAX_BIAS`, :data:`MAX_BIAS`]
+(50 times the GA's range, which already spans "no match" to "exactly one").  Beyond them the
+arithmetic overflows and the matches are garbage.
 """
 
 from __future__ import annotations
@@ -28,9 +38,15 @@ from dataclasses import asdict, dataclass, fields
 
 from ._validation import ParameterError, ParameterTypeError, check_choice, check_number, message
 
-__all__ = ["LAMBDA_C", "LAMBDA_S", "MATCH_BIAS", "THETA_C", "THETA_S", "Gene", "Params"]
+__all__ = ["LAMBDA_C", "LAMBDA_S", "MATCH_BIAS", "MAX_BIAS", "MAX_LAMBDA", "MAX_THETA", "THETA_C", "THETA_S", "Gene",
+           "Params"]
 
-_INF = float("inf")
+#: Largest tolerance ``theta_c`` or ``theta_s`` (see "Parameter range").
+MAX_THETA = 1000.0
+#: Largest steepness ``lambda_c`` or ``lambda_s``.
+MAX_LAMBDA = 1000.0
+#: Largest ``|match_bias|``.
+MAX_BIAS = 100.0
 
 
 @dataclass(frozen=True, repr=False)
@@ -40,8 +56,7 @@ class Params:
 
     The defaults are the thesis' Method-III values ``[17.97, 24.02, 6.37, 2.2]``
     (§5.2.2), found by its GA on its own images.  Method-I reads only
-    ``theta_c`` and ``lambda_c``.  ``match_bias`` (``beta``, any finite number)
-    is optional: it is None unless set, and then left out of ``repr`` and
+    ``theta_c`` and ``lambda_c``.  ``match_bias`` (``beta``) is optional: it is None unless set, and then left out of ``repr`` and
     :meth:`to_dict`, so the four-parameter methods see exactly the thesis' record.
 
     Examples
@@ -53,7 +68,7 @@ class Params:
     >>> Params(lambda_c=-1)
     Traceback (most recent call last):
     ...
-    ismb_lab.ParameterError: The 'lambda_c' parameter of Params must be a finite number > 0. Got -1.0 instead.
+    ismb_lab.ParameterError: The 'lambda_c' parameter of Params must be a finite number > 0 and <= 1000.0. Got -1.0 instead.
     """
 
     theta_c: float = 17.97
@@ -65,17 +80,19 @@ class Params:
     def __post_init__(self):
         # A GA builds one Params per chromosome: plain floats in range pass without a call.
         t_c, t_s, l_c, l_s, beta = self.theta_c, self.theta_s, self.lambda_c, self.lambda_s, self.match_bias
-        if (type(t_c) is type(t_s) is type(l_c) is type(l_s) is float and 0.0 <= t_c < _INF
-                and 0.0 <= t_s < _INF and 0.0 < l_c < _INF and 0.0 < l_s < _INF
-                and (beta is None or type(beta) is float and -_INF < beta < _INF)):
+        if (type(t_c) is type(t_s) is type(l_c) is type(l_s) is float and 0.0 <= t_c <= MAX_THETA
+                and 0.0 <= t_s <= MAX_THETA and 0.0 < l_c <= MAX_LAMBDA and 0.0 < l_s <= MAX_LAMBDA
+                and (beta is None or type(beta) is float and -MAX_BIAS <= beta <= MAX_BIAS)):
             return
         for f in fields(self):
             if f.name == "match_bias":
                 if self.match_bias is not None:
-                    object.__setattr__(self, f.name, check_number(self.match_bias, f.name, "Params"))
+                    value = check_number(self.match_bias, f.name, "Params", low=-MAX_BIAS, high=MAX_BIAS)
+                    object.__setattr__(self, f.name, value)
                 continue
             strict = f.name.startswith("lambda")
-            value = check_number(getattr(self, f.name), f.name, "Params", low=0, low_open=strict)
+            value = check_number(getattr(self, f.name), f.name, "Params", low=0, low_open=strict,
+                                 high=MAX_LAMBDA if strict else MAX_THETA)
             object.__setattr__(self, f.name, value)
 
     def __repr__(self) -> str:

@@ -11,13 +11,13 @@ optionally scores other solvers of the same energy and the peer matchers of
 from __future__ import annotations
 
 import ctypes
-import json
 import multiprocessing
 import numbers
 import os
 import signal
 import sys
 from concurrent.futures import ProcessPoolExecutor
+from contextlib import contextmanager
 from dataclasses import dataclass, field, replace
 from functools import cached_property
 from pathlib import Path
@@ -153,6 +153,51 @@ def family_cases(family: str, start: int, count: int) -> list:
 SOURCES = {"middlebury-motorcycle": lambda: motorcycle(), "middlebury-aloe": lambda: aloe(320)}
 
 
+def _read_manifest(path: Path):
+    """The JSON of a manifest, read within :data:`ismb_lab._files.MAX_JSON_BYTES`."""
+    from ._files import read_json
+
+    try:
+        return read_json(path)
+    except FileNotFoundError:
+        raise ParameterError(message("path", "load_manifest", "an existing file", str(path))) from None
+    except OSError as exc:
+        raise ParameterError(message("path", "load_manifest", f"a readable JSON manifest ({exc.strerror or exc})",
+                                     str(path))) from None
+    except ValueError as exc:
+        raise ParameterError(message("path", "load_manifest", f"a JSON manifest ({exc})", str(path))) from None
+
+
+def source_files(name: str) -> tuple:
+    """The files a built-in source of :data:`SOURCES` reads (those that exist).
+
+    >>> [p.name for p in source_files("middlebury-motorcycle")][:2]
+    ['motorcycle_left.png', 'motorcycle_right.png']
+    """
+    from .datasets import SampleDataMissing, aloe_files, motorcycle_files
+
+    try:
+        found = {"middlebury-motorcycle": motorcycle_files, "middlebury-aloe": aloe_files}[name]()
+    except (KeyError, SampleDataMissing, ImportError):
+        return ()
+    return tuple(p for p in found if p.is_file())
+
+
+def manifest_files(path) -> list:
+    """Every file a manifest makes a run read: the files its pairs name, and those of its
+    built-in sources.  Best effort, for the check that no output is one of them: a manifest
+    that cannot be read gives none (its loader says why)."""
+    try:
+        data = _read_manifest(Path(path))
+        entries = data["pairs"]
+        named = [Path(path).parent / e[k] for e in entries for k in ("left", "right", "targets")
+                 if isinstance(e, dict) and isinstance(e.get(k), str)]
+        sources = {e["source"] for e in entries if isinstance(e, dict) and isinstance(e.get("source"), str)}
+    except (ParameterError, TypeError, KeyError):
+        return []
+    return named + [f for name in sorted(sources) for f in source_files(name)]
+
+
 def load_manifest(path, config: MatchConfig | None = None) -> list[Case]:
     """Read an evaluation manifest into :class:`Case` objects.
 
@@ -165,15 +210,7 @@ def load_manifest(path, config: MatchConfig | None = None) -> list[Case]:
     """
     path = Path(path)
     owner = f"the manifest '{path}'"
-    try:
-        data = json.loads(path.read_text(encoding="utf-8"))
-    except FileNotFoundError:
-        raise ParameterError(message("path", "load_manifest", "an existing file", str(path))) from None
-    except (OSError, UnicodeDecodeError, json.JSONDecodeError) as exc:
-        raise ParameterError(message("path", "load_manifest", f"a JSON manifest ({exc})", str(path))) from None
-    except RecursionError:
-        raise ParameterError(message("path", "load_manifest", "a JSON manifest (not nested too deeply)",
-                                     str(path))) from None
+    data = _read_manifest(path)
     entries = data.get("pairs") if isinstance(data, dict) else None
     if not isinstance(entries, list) or not entries:
         raise ParameterError(message("pairs", owner, "a non-empty list of pair entries", entries))
@@ -363,10 +400,11 @@ def protocol(cases, method=DEFAULT_METHOD, *, train: int = 0, seeds: int = 5, ga
     ProtocolReport
     """
     own = "protocol"
-    if not cases:
-        raise ParameterError(message("cases", own, "at least one pair", cases))
-    if not all(isinstance(c, Case) for c in cases):
+    if not hasattr(cases, "__len__") or not all(isinstance(c, Case) for c in cases):
         raise ParameterTypeError(message("cases", own, "a sequence of Case", cases))
+    if len(cases) < 2:   # the held-out figures would be 0/0
+        raise ParameterError(message("cases", own, "at least two pairs: one to fit the parameters on, one or more "
+                                     "to test them on", f"{len(cases)} pair{'s' if len(cases) != 1 else ''}"))
     method = get_method(method)
     train = check_number(train, "train", own, low=0, high=len(cases) - 1, integer=True)
     seeds = check_number(seeds, "seeds", own, low=1, integer=True)
@@ -387,11 +425,12 @@ def protocol(cases, method=DEFAULT_METHOD, *, train: int = 0, seeds: int = 5, ga
         raise ParameterTypeError(message("rng", own, "an integer seed when jobs > 1", rng))
     fitted = [train] + [n for n in range(len(cases)) if n != train and fit_all]
     fit = (method, rng, ga, fit_solver, fit_seeds)
-    with _workers(jobs) as pool:
+    with _workers(min(jobs, len(cases))) as pool:   # a worker more than the tasks would idle
         if pool is None:
             fits = {n: _fit(cases[n], *fit, progress) for n in fitted}
         else:
-            futures = {n: pool.submit(_fit, cases[n], *fit) for n in fitted}
+            with _starting_workers():
+                futures = {n: pool.submit(_fit, cases[n], *fit) for n in fitted}
             fits = {}
             for n, future in futures.items():
                 fits[n] = future.result()
@@ -403,7 +442,9 @@ def protocol(cases, method=DEFAULT_METHOD, *, train: int = 0, seeds: int = 5, ga
         if pool is None:
             scored = [_score_pair(c, p, *task) for c, p in zip(cases, owns)]
         else:
-            scored = list(pool.map(_score_pair, cases, owns, *([t] * len(cases) for t in task)))
+            with _starting_workers():   # map submits every task at once, and returns
+                results = pool.map(_score_pair, cases, owns, *([t] * len(cases) for t in task))
+            scored = list(results)
 
     rows = tuple(PairReport(c.name, s["testing"], s["training"], p) for c, s, p in zip(cases, scored, owns))
 
@@ -461,6 +502,26 @@ def _start_worker(parent: int) -> None:
     signal.signal(signal.SIGINT, signal.SIG_IGN)
 
 
+@contextmanager
+def _starting_workers():
+    """Within: SIGINT blocked in this thread, so that a worker process started here (a
+    pool starts them as tasks are submitted) is born with it blocked, and keeps it so.
+
+    Ctrl-C reaches the whole process group; a worker still importing the package when it
+    comes would print a KeyboardInterrupt traceback before :func:`_start_worker` ignores
+    SIGINT.  A Ctrl-C meanwhile waits for the block's end, then reaches this process.
+    """
+    block = getattr(signal, "pthread_sigmask", None)
+    if block is None:   # pragma: no cover - not POSIX
+        yield
+        return
+    old = block(signal.SIG_BLOCK, {signal.SIGINT})
+    try:
+        yield
+    finally:
+        block(signal.SIG_SETMASK, old)
+
+
 def _die_with_parent(parent: int) -> None:
     """On Linux, ask the kernel for SIGKILL when the parent dies, however it dies (SIGKILL too).
 
@@ -516,8 +577,14 @@ class _workers:
         return False
 
 
+def _percent(ratio: float, none: str) -> str:
+    """A ratio as a percentage; `none` says why there is none (a ratio of 0/0)."""
+    return f"{100 * ratio:.1f}%" if np.isfinite(ratio) else f"- ({none})"
+
+
 def _figures(s: Score) -> str:
-    return f"{s}   C/T {100 * s.recall:.1f}%   precision {100 * s.precision:.1f}%"
+    return (f"{s}   C/T {_percent(s.recall, 'no targets')}   "
+            f"precision {_percent(s.precision, 'no matches')}")
 
 
 def _over_seeds(scores, what: str) -> list[str]:

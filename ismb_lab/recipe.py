@@ -32,7 +32,7 @@ from typing import NamedTuple
 
 from ._files import atomic_write_text
 from ._validation import ParameterError, ParameterTypeError, check_number, message
-from .methods import DEFAULT_METHOD, Method, get_method, params_of, read_params_file
+from .methods import DEFAULT_METHOD, Method, get_method, params_of
 from .params import Params
 from .solvers import DEFAULT_SOLVER, Solver, get_solver
 
@@ -147,6 +147,24 @@ def save_recipe(path, recipe: Recipe, **extra) -> Path:
     return atomic_write_text(path, json.dumps({**recipe.to_dict(), **extra}, indent=2) + "\n")
 
 
+def _read_params_file(path, owner: str) -> dict:
+    """The JSON object of a params file, read within :data:`ismb_lab._files.MAX_JSON_BYTES`
+    (a params file is a few hundred bytes), checked to hold a ``"params"`` object."""
+    from ._files import read_json
+
+    try:
+        data = read_json(path)
+    except FileNotFoundError:
+        raise ParameterError(message("path", owner, "an existing params file", str(path))) from None
+    except OSError as exc:
+        raise ParameterError(message("path", owner, f"a readable JSON file ({exc.strerror or exc})", str(path))) from None
+    except ValueError as exc:
+        raise ParameterError(message("path", owner, f"a readable JSON file ({exc})", str(path))) from None
+    if not isinstance(data, dict) or not isinstance(data.get("params"), dict):
+        raise ParameterError(message("path", owner, "a JSON object with a 'params' object", str(path)))
+    return data
+
+
 def load_recipe(path, *, method=None, solver=DEFAULT_SOLVER, before: str | None = None) -> Loaded:
     """Read the recipe of a params file.
 
@@ -167,7 +185,7 @@ def load_recipe(path, *, method=None, solver=DEFAULT_SOLVER, before: str | None 
     Loaded
     """
     own = f"load_recipe('{path}')"
-    data = read_params_file(path, "load_recipe")
+    data = _read_params_file(path, "load_recipe")
     version = data.get("version", 1)
     if type(version) is not int or not 1 <= version <= RECIPE_VERSION:
         raise ParameterError(message("version", own, f"an integer from 1 to {RECIPE_VERSION}", version))

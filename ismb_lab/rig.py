@@ -29,8 +29,8 @@ from pathlib import Path
 import cv2
 import numpy as np
 
-from ._validation import ParameterError, ParameterTypeError, check_number, message
-from .camera import BOARD, FORMAT, MAX_ZOOM, SQUARE_M, BoardPair, StereoCamera
+from ._validation import ParameterError, message
+from .camera import BOARD, FORMAT, MAX_ZOOM, SQUARE_M, BoardPair, StereoCamera, check_board
 from .rectify import load_photo
 
 __all__ = ["BOARD", "MAX_ZOOM", "SQUARE_M", "board_depth", "board_points", "calibrate_rig", "find_board",
@@ -107,14 +107,11 @@ def calibrate_rig(pairs, board=BOARD, square_m: float = SQUARE_M, progress=None)
     Raises
     ------
     ParameterError
-        Fewer than 3 usable pairs, or images of different sizes.
+        Fewer than 3 usable pairs, images of different sizes, or a board or square size
+        out of range (:func:`~ismb_lab.camera.check_board`).
     """
     owner = "calibrate_rig"
-    square_m = check_number(square_m, "square_m", owner, low=0, low_open=True)
-    if (not isinstance(board, (tuple, list)) or len(board) != 2
-            or not all(isinstance(v, (int, np.integer)) and v >= 2 for v in board)):
-        raise ParameterTypeError(message("board", owner, "two integers >= 2 (inner corners per row, per column)",
-                                         board))
+    board, square_m = check_board(board, square_m, owner)
     found_pairs, used, skipped, size = [], [], [], None
     for name, left, right in pairs:
         names = _photo_name(left, f"{name} left"), _photo_name(right, f"{name} right")
@@ -158,15 +155,25 @@ def _calibrate(pairs, used, skipped, size, board, square_m, owner) -> StereoCame
     if len(pairs) < MIN_PAIRS:
         raise ParameterError(message("pairs", owner, f"at least {MIN_PAIRS} pairs with the {board[0]}x{board[1]} "
                                      "board found in both views", f"{len(pairs)} (skipped: {', '.join(skipped)})"))
+    corners = board[0] * board[1]
+    for p in pairs:
+        if len(p.left_corners) != corners:
+            raise ParameterError(message("pairs", owner, f"the {corners} corners of the {board[0]}x{board[1]} board "
+                                         "in each view", f"{len(p.left_corners)} corners in pair {p.left}"))
     objects = [board_points(board, square_m)] * len(pairs)
     left_points = [p.left_corners.astype(np.float32) for p in pairs]
     right_points = [p.right_corners.astype(np.float32) for p in pairs]
-    with _one_thread():          # the same corners give the same rig, bit for bit
-        _, k_l, d_l, _, _ = cv2.calibrateCamera(objects, left_points, size, None, None)
-        _, k_r, d_r, _, _ = cv2.calibrateCamera(objects, right_points, size, None, None)
-        rms, k_l, d_l, k_r, d_r, rotation, translation, _, _, rvecs, tvecs, per_view = cv2.stereoCalibrateExtended(
-            objects, left_points, right_points, k_l, d_l, k_r, d_r, size, None, None, criteria=_CRITERIA,
-            flags=cv2.CALIB_FIX_INTRINSIC)
+    try:
+        with _one_thread():          # the same corners give the same rig, bit for bit
+            _, k_l, d_l, _, _ = cv2.calibrateCamera(objects, left_points, size, None, None)
+            _, k_r, d_r, _, _ = cv2.calibrateCamera(objects, right_points, size, None, None)
+            rms, k_l, d_l, k_r, d_r, rotation, translation, _, _, rvecs, tvecs, per_view = \
+                cv2.stereoCalibrateExtended(objects, left_points, right_points, k_l, d_l, k_r, d_r, size, None, None,
+                                            criteria=_CRITERIA, flags=cv2.CALIB_FIX_INTRINSIC)
+    except cv2.error as exc:   # corners that no camera could have seen (edited by hand, for one)
+        said = next((line for line in str(exc).splitlines() if "error:" in line), str(exc)).strip()
+        raise ParameterError(message("pairs", owner, "corners from which OpenCV can calibrate the cameras",
+                                     f"{len(pairs)} pairs that OpenCV refuses: {said}")) from None
     # per_view holds each view's RMS; both views have as many corners, so the pair's is their quadratic mean.
     errors = np.sqrt(np.mean(np.square(per_view), axis=1))
     pairs = tuple(BoardPair(p.left, p.right, p.left_corners, p.right_corners, float(e), r, t)

@@ -8,12 +8,21 @@ compatibility measure ``X`` to ``C`` (3-13).
 
 from __future__ import annotations
 
+import numbers
+
 import numba
 import numpy as np
 
-from ._validation import ParameterError, check_number, check_points
+from ._validation import ParameterError, ParameterTypeError, check_number, check_points, message
 
-__all__ = ["candidate_mask", "mean_abs_difference", "no_match_cut", "patches", "transfer"]
+__all__ = ["MAX_CANDIDATE_PAIRS", "MAX_WINDOW_VALUES", "candidate_mask", "mean_abs_difference", "no_match_cut",
+           "patches", "transfer"]
+
+_INF = float("inf")
+#: Most values :func:`patches` returns (``N x size x size``), 800 MB of float64: 10**8.
+MAX_WINDOW_VALUES = 10**8
+#: Most (left, right) pairs :func:`candidate_mask` compares, one byte each in its mask: 10**8.
+MAX_CANDIDATE_PAIRS = 10**8
 
 
 def transfer(x, theta: float, lam: float) -> np.ndarray:
@@ -40,8 +49,29 @@ def transfer(x, theta: float, lam: float) -> np.ndarray:
     --------
     >>> transfer([0.0, 10.0, 1e6], theta=10.0, lam=2.0).round(4)
     array([ 1.,  0., -1.])
+    >>> transfer([1.0], theta=float("nan"), lam=2.0)
+    Traceback (most recent call last):
+    ...
+    ismb_lab.ParameterError: The 'theta' parameter of transfer must be a finite number. Got nan instead.
     """
-    return -np.tanh(0.5 * lam * (np.asarray(x, dtype=float) - theta))
+    if not (type(theta) is float and type(lam) is float and abs(theta) < _INF and abs(lam) < _INF):
+        theta, lam = _finite(theta, "theta"), _finite(lam, "lam")
+    with np.errstate(over="ignore"):   # lam (x - theta) beyond a float is +-inf, and tanh of it +-1
+        return -np.tanh(0.5 * lam * (np.asarray(x, dtype=float) - theta))
+
+
+def _finite(value, name: str):
+    """`value`, a finite number or an array of them (a GA's column of parameters), for transfer."""
+    if isinstance(value, numbers.Real):
+        return check_number(value, name, "transfer")
+    try:
+        finite = np.all(np.isfinite(np.asarray(value, dtype=float)))
+    except (TypeError, ValueError):
+        raise ParameterTypeError(message(name, "transfer", "a finite number or an array of them", value)) from None
+    if not finite:
+        raise ParameterError(message(name, "transfer", "a finite number or an array of them",
+                                     "an array with NaN or infinite values"))
+    return value
 
 
 def patches(image: np.ndarray, xy, size: int) -> np.ndarray:
@@ -55,7 +85,8 @@ def patches(image: np.ndarray, xy, size: int) -> np.ndarray:
         Points ``(x, y)``; they are rounded to the nearest pixel.
     size : int
         Odd window side length.  Windows that cross the border are completed by
-        mirroring the image (OpenCV's ``BORDER_REFLECT_101``).
+        mirroring the image (OpenCV's ``BORDER_REFLECT_101``), so `size` is at most
+        ``2 min(H, W) - 1``; and the windows hold at most :data:`MAX_WINDOW_VALUES` values.
 
     Returns
     -------
@@ -70,12 +101,21 @@ def patches(image: np.ndarray, xy, size: int) -> np.ndarray:
            [-1.,  0.,  1.],
            [ 4.,  5.,  6.]])
     """
-    size = check_number(size, "size", "patches", low=1, integer=True)
+    own = "patches"
+    image = np.asarray(image, dtype=float)
+    if image.ndim != 2 or image.size == 0:
+        raise ParameterError(message("image", own, "a non-empty 2-D grey image", f"an array of shape {image.shape}"))
+    # the mirror completes a window only while it reaches back no further than the image
+    most = 2 * min(image.shape) - 1
+    size = check_number(size, "size", own, low=1, high=most, integer=True)
     if size % 2 == 0:
         raise ParameterError(f"The 'size' parameter of patches must be an odd integer. Got {size} instead.")
-    xy = check_points(xy, "xy", "patches")
+    xy = check_points(xy, "xy", own)
+    if len(xy) * size * size > MAX_WINDOW_VALUES:
+        raise ParameterError(message("size", own, f"a window of which the {len(xy)} points' windows hold at most "
+                                     f"{MAX_WINDOW_VALUES} values (N x size x size)", size))
     half = size // 2
-    padded = np.pad(np.asarray(image, dtype=float), half, mode="reflect")
+    padded = np.pad(image, half, mode="reflect")
     cols = np.rint(xy[:, 0]).astype(int)
     rows = np.rint(xy[:, 1]).astype(int)
     offsets = np.arange(size)
@@ -293,7 +333,8 @@ def candidate_mask(left_xy, right_xy, *, shift: float = 20.0, height: float = 30
     Returns
     -------
     mask : (N_l, N_r) bool ndarray
-        ``True`` where the neuron ``y_ik`` is a candidate (it starts at 1).
+        ``True`` where the neuron ``y_ik`` is a candidate (it starts at 1).  At most
+        :data:`MAX_CANDIDATE_PAIRS` entries: more points are refused before any work.
 
     Examples
     --------
@@ -305,6 +346,14 @@ def candidate_mask(left_xy, right_xy, *, shift: float = 20.0, height: float = 30
     width = check_number(width, "width", "candidate_mask", low=0, low_open=True)
     lxy = check_points(left_xy, "left_xy", "candidate_mask")
     rxy = check_points(right_xy, "right_xy", "candidate_mask")
-    dx = rxy[None, :, 0] - (lxy[:, None, 0] - shift)
-    dy = rxy[None, :, 1] - lxy[:, None, 1]
-    return (np.abs(dx) <= width / 2) & (np.abs(dy) <= height / 2)
+    if len(lxy) * len(rxy) > MAX_CANDIDATE_PAIRS:
+        raise ParameterError(message("right_xy", "candidate_mask", f"points whose pairs with the {len(lxy)} left "
+                                     f"points number at most {MAX_CANDIDATE_PAIRS}", f"{len(rxy)} points"))
+    mask = np.empty((len(lxy), len(rxy)), dtype=bool)
+    rows = max(1, (1 << 22) // max(len(rxy), 1))   # the float differences a few rows at a time
+    for start in range(0, len(lxy), rows):
+        part = lxy[start:start + rows]
+        dx = rxy[None, :, 0] - (part[:, None, 0] - shift)
+        dy = rxy[None, :, 1] - part[:, None, 1]
+        mask[start:start + rows] = (np.abs(dx) <= width / 2) & (np.abs(dy) <= height / 2)
+    return mask

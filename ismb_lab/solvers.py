@@ -44,8 +44,8 @@ from typing import ClassVar, NamedTuple
 import numpy as np
 
 from ._validation import ParameterError, ParameterTypeError, check_choice, check_number, message
-from .annealing import anneal, check_settle
-from .exact import milp_minimum
+from .annealing import anneal, check_schedule_options, check_settle
+from .exact import MAX_TIME_LIMIT, milp_minimum
 from .hopfield import RULES, Network, _energy_of
 from .dynamics import KERNELS, STOP_RULES, run
 
@@ -186,11 +186,7 @@ class AnnealSolver(Solver):
 
     def __post_init__(self):
         own = "AnnealSolver"
-        check_number(self.t_end, "t_end", own, low=0, low_open=True)
-        check_number(self.t_start, "t_start", own, low=self.t_end)
-        if not 0 < check_number(self.cooling, "cooling", own, low=0, low_open=True) < 1:
-            raise ParameterError(message("cooling", own, "a number in (0, 1)", self.cooling))
-        check_number(self.sweeps, "sweeps", own, low=1, integer=True)
+        check_schedule_options(own, self.t_start, self.t_end, self.cooling, self.sweeps)
         check_settle(self.settle, own)
 
     def solve(self, net, seed) -> Solution:
@@ -209,7 +205,7 @@ class ExactSolver(Solver):
     time_limit: float = 60.0
 
     def __post_init__(self):
-        check_number(self.time_limit, "time_limit", "ExactSolver", low=0, low_open=True)
+        check_number(self.time_limit, "time_limit", "ExactSolver", low=0, low_open=True, high=MAX_TIME_LIMIT)
 
     def solve(self, net, seed) -> Solution:
         r = milp_minimum(net, time_limit=self.time_limit)

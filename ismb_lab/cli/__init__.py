@@ -10,9 +10,11 @@ a device, a FIFO or a read-only file unless ``--force``; symbolic links are writ
 through, never replaced).  SIGINT, SIGTERM and SIGHUP stop the work alike; the exit
 code is 128 + the signal's number (130 for Ctrl-C).
 
-A closed stdout or stderr (``ismb-lab match ... | head``) is not an error: what is
+A closed stdout or stderr (``ismb-lab match ... | head``, ``2>&-``) is not an error: what is
 printed after the reader left is dropped, the command's files are still written, and
-the exit code is the command's own (0 when it succeeded).
+the exit code is the command's own (0 when it succeeded).  A stdout that refuses what is
+written (``> /dev/full``) is an error: one line on stderr, and exit code 2.  A character that
+the terminal's encoding cannot show is printed as a backslash escape.
 
 The command modules are imported when the parser is built, not when this package
 is, so that a signal during start-up already finds the handlers of :func:`main`.
@@ -30,6 +32,7 @@ from ._guard import LIMITS, Interrupts, interrupted_line, preflight
 __all__ = ["COMMANDS", "UsageError", "build_parser", "main"]
 
 def _epilog() -> str:
+    from .._files import MAX_JSON_BYTES
     from ..io import MAX_PIXELS, MOST_PIXELS, PIXELS_VARIABLE
     from ..targets import MAX_BYTES, MAX_PAIRS
     from ._guard import MOST
@@ -38,7 +41,8 @@ def _epilog() -> str:
             "above its limit is refused, a default above it is lowered to it with a note): " + "; ".join(
         f"{option} <= {default} ({variable})" for variable, default, _, option in LIMITS.values())
         + f"; pixels per image <= {MAX_PIXELS} ({PIXELS_VARIABLE}, at most {MOST_PIXELS}); targets files "
-        f"<= {MAX_PAIRS} pairs and {MAX_BYTES} bytes (fixed)")
+        f"<= {MAX_PAIRS} pairs and {MAX_BYTES} bytes, params, rig and manifest files <= {MAX_JSON_BYTES} bytes "
+        "(fixed)")
 
 
 def _commands():
@@ -55,18 +59,6 @@ def __getattr__(name):
     raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
 
 
-def _add_safety_options(p) -> None:
-    options = p._option_string_actions
-    if any(o in options for o in ("--json", "--plot")) or (
-            "--out" in options and p.prog.split()[-1] != "render"):
-        p.add_argument("--force", action="store_true",
-                       help="replace a read-only output file, or write into an existing device "
-                       "or FIFO (an output that is an input is always refused)")
-    if p.prog.split()[-1] == "tune":
-        p.add_argument("--no-hash-check", action="store_true",
-                       help="accept targets labelled on images with other bytes (e.g. re-encoded)")
-
-
 def build_parser():
     from ._common import Parser
 
@@ -77,8 +69,6 @@ def build_parser():
     sub.required = True
     for command in _commands():
         command.add_parser(sub)
-    for p in sub.choices.values():
-        _add_safety_options(p)
     return parser
 
 
@@ -94,53 +84,103 @@ def _interrupted(interrupts, running: bool) -> int:
 
 
 class _ReaderMayLeave:
-    """A stand-in for sys.stdout or sys.stderr that drops what is printed once the reader of
-    its pipe has gone (a BrokenPipeError), instead of failing the command."""
+    """A stand-in for sys.stdout or sys.stderr that never fails the command: what is printed
+    once the reader of its pipe has gone (a BrokenPipeError) is dropped; a write the device
+    refuses (``> /dev/full``) is dropped too, and kept in `failed` for :func:`main` to report;
+    a character the stream's encoding cannot write (``PYTHONIOENCODING=ascii``) is written
+    as a backslash escape."""
 
     def __init__(self, stream):
         self._stream = stream
+        self.failed = None
 
     def write(self, text):
         try:
-            return self._stream.write(text)
+            try:
+                return self._stream.write(text)
+            except UnicodeEncodeError:
+                encoding = getattr(self._stream, "encoding", None) or "ascii"
+                return self._stream.write(text.encode(encoding, "backslashreplace").decode(encoding))
         except BrokenPipeError:
             self._to_devnull()
-            return len(text)
+        except OSError as exc:
+            self.failed = self.failed or exc
+            self._to_devnull()
+        return len(text)
 
     def flush(self):
         try:
             self._stream.flush()
         except BrokenPipeError:
             self._to_devnull()
+        except OSError as exc:
+            self.failed = self.failed or exc
+            self._to_devnull()
 
     def _to_devnull(self):
         # What is still buffered, and the interpreter's own flush at exit, go to /dev/null.
+        try:
+            fd = self._stream.fileno()
+        except (OSError, ValueError):   # a stream without a file (a test's capture)
+            return
         devnull = os.open(os.devnull, os.O_WRONLY)
         try:
-            os.dup2(devnull, self._stream.fileno())
+            os.dup2(devnull, fd)
         finally:
             os.close(devnull)
+        try:
+            self._stream.flush()
+        except OSError:
+            pass
 
     def __getattr__(self, name):
         return getattr(self._stream, name)
 
 
+def _open_standard_fds() -> None:
+    """Open /dev/null on each of the file descriptors 0, 1 and 2 that is closed (``2>&-``).
+
+    Else the next file opened gets that number, and whatever a C library writes to
+    "stderr" lands in it."""
+    for fd in (0, 1, 2):
+        try:
+            os.fstat(fd)
+        except OSError:
+            devnull = os.open(os.devnull, os.O_RDWR)
+            if devnull != fd:
+                os.dup2(devnull, fd)
+                os.close(devnull)
+
+
 class _closed_pipes_tolerated:
-    """``with _closed_pipes_tolerated():`` sys.stdout and sys.stderr as :class:`_ReaderMayLeave`."""
+    """``with _closed_pipes_tolerated():`` sys.stdout and sys.stderr as :class:`_ReaderMayLeave`;
+    a stream that is None (closed when the program started) as one on /dev/null."""
 
     NAMES = ("stdout", "stderr")
 
     def __enter__(self):
         self._old = {name: getattr(sys, name) for name in self.NAMES}
+        self._opened = []
         for name, stream in self._old.items():
-            if stream is not None:
-                setattr(sys, name, _ReaderMayLeave(stream))
+            if stream is None:
+                stream = open(os.devnull, "w")
+                self._opened.append(stream)
+            setattr(sys, name, _ReaderMayLeave(stream))
+        return self
+
+    def failed(self, name: str):
+        """The OSError that made writes to sys.`name` fail, if one did."""
+        stream = getattr(sys, name)
+        return stream.failed if isinstance(stream, _ReaderMayLeave) else None
 
     def __exit__(self, *exc):
+        for name in self.NAMES:
+            getattr(sys, name).flush()
+        self.errors = {name: self.failed(name) for name in self.NAMES}
         for name, stream in self._old.items():
-            if stream is not None:
-                getattr(sys, name).flush()
-                setattr(sys, name, stream)
+            setattr(sys, name, stream)
+        for stream in self._opened:
+            stream.close()
         return False
 
 
@@ -153,8 +193,19 @@ def main(argv=None) -> int:
     itself with SIGINT at exit instead of returning 130.
     """
     interrupts = Interrupts()
-    with _closed_pipes_tolerated():
+    if argv is None:
+        _open_standard_fds()
+    with _closed_pipes_tolerated() as streams:
         code = _main(argv, interrupts)
+    lost = streams.errors["stdout"]
+    if lost is not None and code == 0:
+        code = 2
+        if sys.stderr is not None:
+            try:
+                print(f"ismb-lab: error: cannot write the output to stdout: {lost.strerror or lost}",
+                      file=sys.stderr, flush=True)
+            except (OSError, ValueError):
+                pass
     if argv is None and interrupts.signum is not None:
         sys.stdout.flush()
         sys.stderr.flush()
@@ -176,6 +227,12 @@ def _announce_compiling() -> None:
     if sys.stderr.isatty() and cold(_solve):
         print("ismb-lab: compiling the network's kernels, once for this installation and user "
               "(up to a minute); later runs start at once", file=sys.stderr, flush=True)
+
+
+def _opencv_error(exc) -> bool:
+    """Whether `exc` is a ``cv2.error`` (named, so that importing the CLI imports no OpenCV)."""
+    kind = type(exc)
+    return kind.__module__ == "cv2" and kind.__name__ == "error"
 
 
 def _main(argv, interrupts) -> int:
@@ -211,6 +268,10 @@ def _main(argv, interrupts) -> int:
             elif isinstance(exc, MemoryError):
                 print("ismb-lab: error: out of memory: the input is too large for this machine "
                       "(see the limits in 'ismb-lab --help')", file=sys.stderr)
+            elif _opencv_error(exc):   # OpenCV refuses what no check here foresaw: still the input's fault
+                said = " ".join(str(exc).split())
+                print(f"ismb-lab: error: OpenCV cannot work with this input: "
+                      f"{said if len(said) <= 300 else said[:297] + '...'}", file=sys.stderr)
             else:
                 raise
     return 2

@@ -22,7 +22,7 @@ from ..methods import DEFAULT_METHOD, all_genes, get_method, method_names
 from ..solvers import SOLVERS, NetworkSolver
 from ._guard import UsageError, interrupted
 
-__all__ = ["ParameterError", "ParameterTypeError", "Parser", "UsageError", "add_ga_options",
+__all__ = ["ParameterError", "ParameterTypeError", "Parser", "UsageError", "add_ga_options", "given",
            "add_matching_options", "add_feature_options", "window_record", "add_solver_option",
            "add_solver_settings", "ga_config", "solver_settings", "with_settings",
            "gene_options", "match_config", "progress_bar", "resolve_recipe"]
@@ -267,6 +267,15 @@ def check_unused_genes(method: str, params) -> None:
     raise UsageError(f"match_bias {bias:g} is not used by Method-{method}, which {runs}; only "
                      f"{', '.join('Method-' + n for n in users)} take a match_bias (drop it, or use "
                      f"--method {users[0]})")
+
+
+def given(*named) -> tuple:
+    """The ``(option, path)`` pairs of `named` whose path was given (not None).
+
+    >>> given(("--rig", None), ("--json", "out.json"))
+    (('--json', 'out.json'),)
+    """
+    return tuple((what, path) for what, path in named if path is not None)
 
 
 def seed_setting(args) -> dict:

@@ -14,11 +14,12 @@ Limits (each raised, or lowered, by an environment variable; ``ismb-lab --help``
 =========================  =========  =============================================
 variable                   default    what it bounds
 =========================  =========  =============================================
-ISMB_LAB_MAX_PIXELS        25000000   pixels of one image (read from the file header)
+ISMB_LAB_MAX_PIXELS        25000000   pixels of one image (its file's header, an array's shape)
 ISMB_LAB_MAX_CORNERS       500        ``--n-max``, corners per image
 ISMB_LAB_MAX_POPULATION    1000       ``--population`` of the GA
 ISMB_LAB_MAX_GENERATIONS   100000     ``--generations`` of the GA
 ISMB_LAB_MAX_SEEDS         100        ``--seeds`` and ``--fit-seeds`` of evaluate
+ISMB_LAB_MAX_JOBS          64         ``--jobs`` of evaluate, worker processes
 =========================  =========  =============================================
 
 Each variable is a whole number from 1 to :data:`MOST` (ISMB_LAB_MAX_PIXELS: to
@@ -29,12 +30,14 @@ lowered to the limit, with a note on stderr.  So a teacher can lower a limit for
 class, and a plain ``ismb-lab tune`` still runs, within it.
 
 A targets file holds at most :data:`ismb_lab.targets.MAX_PAIRS` pairs in
-:data:`ismb_lab.targets.MAX_BYTES` bytes (fixed, not a variable).
+:data:`ismb_lab.targets.MAX_BYTES` bytes, and a params, rig or manifest file at most
+:data:`ismb_lab._files.MAX_JSON_BYTES` bytes (fixed, not variables).  Each command declares
+the defaults of its limited options (``limit_defaults``) and the files it reads and writes
+(``declare_files``, a :class:`Files`), so this module knows no command by name.
 """
 
 from __future__ import annotations
 
-import inspect
 import json
 import math
 import os
@@ -42,6 +45,7 @@ import signal
 import sys
 import threading
 from pathlib import Path
+from typing import NamedTuple
 
 from .._files import atomic_write_bytes, check_input, check_output
 
@@ -59,11 +63,8 @@ LIMITS = {
     "generations": ("ISMB_LAB_MAX_GENERATIONS", 100_000, "generations", "--generations"),
     "seeds": ("ISMB_LAB_MAX_SEEDS", 100, "seeds", "--seeds"),
     "fit_seeds": ("ISMB_LAB_MAX_SEEDS", 100, "seeds", "--fit-seeds"),
+    "jobs": ("ISMB_LAB_MAX_JOBS", 64, "worker processes", "--jobs"),
 }
-
-INPUTS = ("left", "right", "targets", "manifest", "params_file",
-          "bg_left", "bg_right", "scene_left", "scene_right", "rig")
-OUTPUTS = {"json": "--json", "plot": "--plot", "out": "--out"}
 
 _ACTIVE: list = []
 
@@ -97,32 +98,6 @@ def _short(text) -> str:
     return text if len(text) <= 40 else text[:37] + "..."
 
 
-def _defaults(command: str) -> dict:
-    """What each limited option of `command` is when it is left out."""
-    from ..genetic import GAConfig
-    from ..matching import MatchConfig
-
-    ga = GAConfig()
-    values = {"n_max": MatchConfig().n_max, "population": ga.population, "generations": ga.generations}
-    if command == "depth":
-        from ..depth_demo import DEPTH_MATCH_CONFIG
-        values["n_max"] = DEPTH_MATCH_CONFIG.n_max
-    if command == "tune":   # the library's defaults, which the commands fall back to
-        from ..tuning import tune
-        values["fit_seeds"] = _keyword_default(tune, "seeds")
-    if command == "evaluate":
-        from ..protocol import protocol
-        values.update(seeds=_keyword_default(protocol, "seeds"),
-                      fit_seeds=_keyword_default(protocol, "fit_seeds"))
-    return values
-
-
-def _keyword_default(function, name: str):
-    """The default of `function`'s keyword `name`; None for a stand-in without it (a test's)."""
-    parameter = inspect.signature(function).parameters.get(name)
-    return None if parameter is None else parameter.default
-
-
 def _bound(args, usage_error) -> None:
     """Refuse a typed value above its limit; lower a default above it, with a note."""
     defaults = None
@@ -135,7 +110,9 @@ def _bound(args, usage_error) -> None:
                 hint = f"set {variable}={value} to allow it" if value <= MOST else f"a limit is at most {MOST}"
                 raise usage_error(f"{option} {_short(value)} is above the limit of {most} {what}; {hint}")
             continue
-        defaults = _defaults(getattr(args, "command", "")) if defaults is None else defaults
+        if defaults is None:   # each command declares the defaults of its limited options
+            declared = getattr(args, "limit_defaults", None)
+            defaults = {} if declared is None else declared()
         default = defaults.get(name)
         if default is not None and default > most:
             setattr(args, name, most)
@@ -289,50 +266,85 @@ def save_figure(fig, path, **kwargs) -> Path:
     return atomic_write_bytes(path, buffer.getvalue())
 
 
-def _manifest_files(path) -> list:
-    """The files a manifest names (best effort: a bad manifest is reported by its loader)."""
-    try:
-        data = json.loads(Path(path).read_text(encoding="utf-8"))
-        entries = data["pairs"]
-        return [Path(path).parent / e[k] for e in entries for k in ("left", "right", "targets")
-                if isinstance(e, dict) and isinstance(e.get(k), str)]
-    except (OSError, ValueError, TypeError, KeyError, RecursionError):
-        return []
+class Files(NamedTuple):
+    """What a command reads and writes, as it declares it: each command's ``files(args)``,
+    set as the parser's default ``declare_files``.
+
+    Attributes
+    ----------
+    inputs : tuple of (str, path)
+        The files it opens, each with how the messages name it (``"--rig"``); each must be a
+        regular file (a missing one is left to its reader, which names it).
+    reads : tuple of path
+        The further files it reads: named inside an input (a manifest's pairs) or built in
+        (a manifest's ``"source"``).  No output may be one of them either.
+    outputs : tuple of (str, path)
+        The files it writes, each with its option; none may be an input or another output.
+    """
+
+    inputs: tuple = ()
+    reads: tuple = ()
+    outputs: tuple = ()
+
+
+def files_of(args) -> Files:
+    """The files that `args`' command declares (none for a command that declares nothing)."""
+    declared = getattr(args, "declare_files", None)
+    return Files() if declared is None else declared(args)
+
+
+def _check_plot(path, usage_error) -> None:
+    suffix = Path(path).suffix[1:].lower()
+    formats = _plot_formats()
+    if suffix and suffix not in formats:
+        raise usage_error(f"--plot {str(path)!r}: cannot draw a '.{suffix}' file "
+                          f"(formats: {', '.join(sorted(formats))})")
 
 
 def preflight(args, usage_error) -> None:
     """Check the limits, inputs and outputs of a parsed command line before its work starts.
 
     An option left out whose default is above its limit is set to the limit here (see
-    the module's description).  Raises `usage_error` (or :class:`ismb_lab._files.OutputError`)
-    with a one-line message.
+    the module's description).  The files are those the command declares (:class:`Files`):
+    every input a regular file, and no output an input, a file any input names, a built-in
+    file read, or another output, whatever link or spelling leads there.  Raises `usage_error`
+    (or :class:`ismb_lab._files.OutputError`) with a one-line message.
     """
     _bound(args, usage_error)
-    inputs = [getattr(args, a) for a in INPUTS if getattr(args, a, None) is not None]
-    for attr in INPUTS:
-        if getattr(args, attr, None) is not None:
-            check_input(getattr(args, attr), what=attr.replace("_", "-") if attr not in ("params_file", "rig")
-                        else "--" + attr.replace("_", "-"))
-    if getattr(args, "manifest", None) is not None:
-        inputs += _manifest_files(args.manifest)
-    if getattr(args, "command", None) == "render":
-        out = Path(args.out)
-        if out.exists() and not out.is_dir():
-            raise usage_error(f"--out {str(out)!r} is not a folder")
-        return
-    seen = {}
-    for attr, option in OUTPUTS.items():
-        path = getattr(args, attr, None)
-        if path is None:
-            continue
-        if attr == "plot":
-            suffix = Path(path).suffix[1:].lower()
-            formats = _plot_formats()
-            if suffix and suffix not in formats:
-                raise usage_error(f"--plot {str(path)!r}: cannot draw a '.{suffix}' file "
-                                  f"(formats: {', '.join(sorted(formats))})")
-        for other, other_path in seen.items():
+    declared = files_of(args)
+    for what, path in declared.inputs:
+        check_input(path, what=what)
+    read = [path for _, path in declared.inputs] + list(declared.reads)
+    seen = []
+    for what, path in declared.outputs:
+        if what == "--plot":
+            _check_plot(path, usage_error)
+        for other, other_path in seen:
             if os.path.realpath(other_path) == os.path.realpath(path):
-                raise usage_error(f"{option} and {other} name the same file {str(path)!r}")
-        check_output(path, inputs=inputs, force=getattr(args, "force", False), what=option)
-        seen[option] = path
+                raise usage_error(f"{what} and {other} name the same file {str(path)!r}")
+        check_output(path, inputs=read, force=getattr(args, "force", False), what=what)
+        seen.append((what, path))
+
+
+def add_force_option(p) -> None:
+    """``--force``, for a command that writes files the user names."""
+    p.add_argument("--force", action="store_true",
+                   help="replace a read-only output file, or write into an existing device "
+                   "or FIFO (an output that is an input is always refused)")
+
+
+def output_path(text: str) -> Path:
+    """An argparse type for an output file: a name that is not written as a folder's.
+
+    >>> output_path("out.json")
+    PosixPath('out.json')
+    """
+    import argparse
+
+    from .._files import OutputError, refuse_folder_name
+
+    try:
+        refuse_folder_name(text, "")
+    except OutputError as exc:
+        raise argparse.ArgumentTypeError(str(exc).strip()) from None
+    return Path(text)

@@ -6,7 +6,9 @@ from __future__ import annotations
 import sys
 from pathlib import Path
 
-__all__ = ["add_parser", "report", "run"]
+from ._guard import Files, add_force_option, output_path
+
+__all__ = ["add_parser", "files", "report", "run"]
 
 
 def add_parser(sub) -> None:
@@ -31,8 +33,17 @@ def add_parser(sub) -> None:
                    help=f"inner corners per row and per column (default: {BOARD[0]}x{BOARD[1]})")
     c.add_argument("--square-m", type=float, default=None, metavar="S",
                    help=f"side of one square in metres (default: {SQUARE_M}); B and Z scale with it")
-    c.add_argument("--out", type=Path, required=True, metavar="RIG.json", help="where the rig is written")
-    c.set_defaults(run=run)
+    c.add_argument("--out", type=output_path, required=True, metavar="RIG.json", help="where the rig is written")
+    add_force_option(c)
+    c.set_defaults(run=run, declare_files=files)
+
+
+def files(args) -> Files:
+    """The photos or the rig read; the rig written."""
+    inputs = tuple(("a photo", path) for path in args.pairs)
+    if args.source is not None:
+        inputs += (("--from", args.source),)
+    return Files(inputs=inputs, outputs=(("--out", args.out),))
 
 
 def report(rig) -> str:
@@ -51,17 +62,19 @@ def report(rig) -> str:
 
 
 def _board(text: str):
+    from ..camera import MAX_BOARD_SIDE
     from ._common import UsageError
-    try:
-        board = tuple(int(v) for v in text.lower().split("x"))
-        assert len(board) == 2 and min(board) >= 2
-    except (ValueError, AssertionError):
-        raise UsageError(f"--board must be COLSxROWS of inner corners, e.g. 9x6; got {text!r}") from None
-    return board
+
+    parts = [p.strip() for p in text.lower().split("x")]
+    if len(parts) != 2 or not all(p.isascii() and p.isdigit() and len(p) <= 4 and 2 <= int(p) <= MAX_BOARD_SIDE
+                                  for p in parts):
+        shown = text if len(text) <= 40 else text[:37] + "..."
+        raise UsageError(f"--board must be COLSxROWS of inner corners, each from 2 to {MAX_BOARD_SIDE}, e.g. 9x6; "
+                         f"got {shown!r}")
+    return tuple(int(p) for p in parts)
 
 
 def _from_rig(args):
-    from .._files import check_input
     from ..camera import load_camera
     from ..rig import recalibrate
     from ._common import UsageError
@@ -70,22 +83,18 @@ def _from_rig(args):
         raise UsageError("calibrate takes either photos or --from RIG.json, not both")
     if args.board is not None or args.square_m is not None:
         raise UsageError("--board and --square-m are the rig's own with --from; leave them out")
-    check_input(args.source, what="--from")
     return recalibrate(load_camera(args.source), args.drop)
 
 
 def run(args) -> int:
-    import math
-
-    from .._files import atomic_write_text, check_input, check_output
+    from .._files import atomic_write_text
+    from ..camera import MAX_SQUARE_M, MIN_SQUARE_M
     from ..rig import BOARD, SQUARE_M, calibrate_rig
     from ._common import UsageError, progress_bar
 
     if args.drop and args.source is None:
         raise UsageError("--drop leaves a pair out of a rig: give the rig with --from RIG.json")
-    inputs = list(args.pairs) + ([args.source] if args.source is not None else [])
     if args.source is not None:
-        check_output(args.out, inputs=inputs, force=getattr(args, "force", False), what="--out")
         rig = _from_rig(args)
     else:
         if len(args.pairs) % 2 or not args.pairs:
@@ -93,11 +102,8 @@ def run(args) -> int:
                              f"{len(args.pairs)} files")
         board = _board(args.board) if args.board is not None else BOARD
         square_m = SQUARE_M if args.square_m is None else args.square_m
-        if not square_m > 0 or math.isinf(square_m):
-            raise UsageError(f"--square-m must be a finite number > 0, got {square_m:g}")
-        for path in args.pairs:
-            check_input(path, what="a photo")
-        check_output(args.out, inputs=inputs, force=getattr(args, "force", False), what="--out")
+        if not MIN_SQUARE_M <= square_m <= MAX_SQUARE_M:
+            raise UsageError(f"--square-m must be a side from {MIN_SQUARE_M:g} to {MAX_SQUARE_M:g} m, got {square_m:g}")
         pairs = [(f"{args.pairs[n].name}+{args.pairs[n + 1].name}", args.pairs[n], args.pairs[n + 1])
                  for n in range(0, len(args.pairs), 2)]
         with progress_bar(len(pairs), "chessboards", unit="pair") as bar:

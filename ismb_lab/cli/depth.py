@@ -9,9 +9,9 @@ from .._files import atomic_write_text
 from .._validation import ParameterError
 from ..depth import GROUPINGS, DepthConfig
 from ..depth_demo import DEPTH_MATCH_CONFIG, DEPTH_METHOD, DEPTH_PARAMS, DEPTH_SOLVER
-from ._common import (UsageError, add_matching_options, add_solver_option, match_config, resolve_recipe,
+from ._common import (UsageError, add_matching_options, add_solver_option, given, match_config, resolve_recipe,
                       seed_setting, window_record)
-from ._guard import json_text, save_figure
+from ._guard import Files, add_force_option, json_text, output_path, save_figure
 
 __all__ = ["add_parser", "run"]
 
@@ -45,10 +45,24 @@ def add_parser(sub) -> None:
                     help="find the objects by their blobs of change in both images, each at the shift "
                     "that lays the left blob on the right one, refined by the features on it "
                     "(silhouettes, the default), or by the features alone as the thesis does (features)")
-    dp.add_argument("--json", type=Path, default=None, metavar="OUT", help="write the objects as JSON")
-    dp.add_argument("--plot", type=Path, default=None, metavar="OUT.png",
+    dp.add_argument("--json", type=output_path, default=None, metavar="OUT", help="write the objects as JSON")
+    dp.add_argument("--plot", type=output_path, default=None, metavar="OUT.png",
                     help="draw the scene's features by disparity with the ranked objects")
-    dp.set_defaults(run=run)
+    add_force_option(dp)
+    dp.set_defaults(run=run, declare_files=files, limit_defaults=limit_defaults)
+
+
+def limit_defaults() -> dict:
+    """The defaults of depth's limited options."""
+    return {"n_max": DEPTH_MATCH_CONFIG.n_max}
+
+
+def files(args) -> Files:
+    """The four images, the params file and the rig read; the JSON and the plot written."""
+    images = tuple((name.replace("_", "-"), getattr(args, name))
+                   for name in ("bg_left", "bg_right", "scene_left", "scene_right"))
+    return Files(inputs=images + given(("--params-file", args.params_file), ("--rig", args.rig)),
+                 outputs=given(("--json", args.json), ("--plot", args.plot)))
 
 
 def run(args) -> int:

@@ -9,9 +9,10 @@ from pathlib import Path
 from .._files import atomic_write_text
 from ..protocol import format_protocol, load_manifest, protocol
 from ..solvers import DEFAULT_SOLVER, SOLVERS
-from ._common import (DEFAULT_METHOD, BestSoFar, UsageError, add_ga_options, add_method_option, seed,
+from ._common import (DEFAULT_METHOD, BestSoFar, UsageError, add_ga_options, add_method_option, given, seed,
                       add_one_to_one_option, add_solver_option, default_of, ga_config, progress_bar, said_changes)
-from ._guard import deferred_signals, interrupted, interrupted_line, is_interruption, json_text
+from ._guard import (LIMITS, Files, add_force_option, deferred_signals, interrupted, interrupted_line,
+                     is_interruption, json_text, limit, output_path)
 
 __all__ = ["add_parser", "run"]
 
@@ -56,11 +57,30 @@ def add_parser(sub) -> None:
                    help=f"worker processes for the GA fits and the scores; the report is the same for "
                    f"every N (default: all cores, {available_cores()} here); the workers end with "
                    "the command, however it ends")
-    e.add_argument("--json", type=Path, default=None, metavar="OUT",
+    e.add_argument("--json", type=output_path, default=None, metavar="OUT",
                    help="write the report as JSON; when a signal stops the run, OUT gets the best "
                    "parameters so far, marked \"interrupted\": true (with --jobs above 1, of the last "
                    "fit that finished), or nothing, as the one line on stderr says")
-    e.set_defaults(run=run)
+    add_force_option(e)
+    e.set_defaults(run=run, declare_files=files, limit_defaults=limit_defaults)
+
+
+def limit_defaults() -> dict:
+    """The defaults of evaluate's limited options: the protocol's, which evaluate falls back to."""
+    from ..genetic import GAConfig
+
+    ga = GAConfig()
+    return {"population": ga.population, "generations": ga.generations, "seeds": DEFAULTS["seeds"],
+            "fit_seeds": DEFAULTS["fit_seeds"], "jobs": available_cores()}
+
+
+def files(args) -> Files:
+    """The manifest and the recipe read, with every file the manifest names or its built-in
+    sources read; the report written."""
+    from ..protocol import manifest_files
+
+    return Files(inputs=(("manifest", args.manifest),) + given(("--recipe", args.recipe)),
+                 reads=tuple(manifest_files(args.manifest)), outputs=given(("--json", args.json)))
 
 
 def available_cores() -> int:
@@ -115,6 +135,11 @@ def given_recipe(args):
     recipe = replace(base, solver=solver, fit_seeds=base.fit_seeds if args.fit_seeds is None else args.fit_seeds,
                      one_to_one=base.one_to_one if args.one_to_one is None else args.one_to_one)
     if args.recipe is not None:
+        most = limit("fit_seeds")   # a file is held to the limit an option is held to
+        if args.fit_seeds is None and base.fit_seeds > most:
+            variable = LIMITS["fit_seeds"][0]
+            raise UsageError(f"--recipe {str(args.recipe)!r}: fit_seeds {base.fit_seeds} is above the limit of {most} "
+                             f"seeds; set {variable}={base.fit_seeds} to allow it, or give --fit-seeds")
         said_changes(args.recipe, base, recipe)
     return recipe
 

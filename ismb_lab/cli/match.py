@@ -9,9 +9,9 @@ from .._files import atomic_write_text
 from .._validation import ParameterError
 from ..matching import MatchConfig
 from ..solvers import DEFAULT_SOLVER
-from ._common import (add_matching_options, add_solver_option, add_solver_settings, match_config, resolve_recipe,
-                      seed_setting, window_record)
-from ._guard import json_text, save_figure
+from ._common import (add_matching_options, add_solver_option, add_solver_settings, given, match_config,
+                      resolve_recipe, seed_setting, window_record)
+from ._guard import Files, add_force_option, json_text, output_path, save_figure
 
 __all__ = ["add_parser", "run"]
 
@@ -30,22 +30,36 @@ def add_parser(sub) -> None:
                    "matched as it is; stderr says which), refine the corners to sub-pixel, keep the "
                    "candidates on their rows, and give each match its point in metres (xyz_m, the rectified "
                    "left camera's frame: X right, Y down, Z forward); --shift is then auto unless given")
-    m.add_argument("--json", type=Path, default=None, metavar="OUT", help="write the result as JSON")
-    m.add_argument("--plot", type=Path, default=None, metavar="OUT.png",
+    m.add_argument("--json", type=output_path, default=None, metavar="OUT", help="write the result as JSON")
+    m.add_argument("--plot", type=output_path, default=None, metavar="OUT.png",
                    help="draw the pair with features and match lines")
-    m.set_defaults(run=run)
+    add_force_option(m)
+    m.set_defaults(run=run, declare_files=files, limit_defaults=limit_defaults)
+
+
+def limit_defaults() -> dict:
+    """The defaults of match's limited options."""
+    return {"n_max": MatchConfig().n_max}
+
+
+def files(args) -> Files:
+    """The images, the params file and the rig read; the JSON and the plot written."""
+    return Files(inputs=(("left", args.left), ("right", args.right))
+                 + given(("--params-file", args.params_file), ("--rig", args.rig)),
+                 outputs=given(("--json", args.json), ("--plot", args.plot)))
 
 
 def _prepared(args):
     """The prepared pair, after refusing a swapped one and warning about an unrectified one."""
     from ..io import load_pair
-    from ..matching import prepare
+    from ..matching import check_window, prepare
     from ..rectify import check_for_matching
     from ._common import UsageError
 
     config = match_config(args)
     pair = load_pair(args.left, args.right, min_shape=config.min_shape)
-    warning = check_for_matching(pair.left, pair.right, "ismb-lab match")
+    check_window(config, pair.shape)   # every option before any work on the pair
+    warning = "" if flat(pair) else check_for_matching(pair.left, pair.right, "ismb-lab match")
     if warning:
         print(warning, file=sys.stderr)
     try:
@@ -56,11 +70,18 @@ def _prepared(args):
         raise
 
 
+def flat(pair) -> bool:
+    """Whether an image of the pair has one grey level: it has no corner, so the match is empty
+    (and says why) without a look for robust matches, which would only cost time and memory."""
+    return any(image.min() == image.max() for image in (pair.left, pair.right))
+
+
 def _rig_pair(args):
     """The rig, the pair rectified with it (unless it already is) and the match settings."""
     from .._files import check_input
     from ..camera import load_camera
     from ..io import load_pair
+    from ..matching import check_window
     from ..metric import for_camera
     from ..rectify import check_for_matching
 
@@ -68,12 +89,14 @@ def _rig_pair(args):
     if args.shift is None:      # a photo's disparities are the pair's own, not the thesis' 20 px
         args.shift = "auto"
     config = match_config(args)
+    check_window(config, (camera.size[1], camera.size[0]))   # the rectified pair's size, before the work
     left, right, how = for_camera(args.left, args.right, camera)
+    pair = load_pair(left, right, min_shape=config.min_shape)
     print(f"--rig: {how}", file=sys.stderr)
-    warning = check_for_matching(left, right, "ismb-lab match --rig")
+    warning = "" if flat(pair) else check_for_matching(left, right, "ismb-lab match --rig")
     if warning:
         print(warning, file=sys.stderr)
-    return camera, load_pair(left, right, min_shape=config.min_shape), config
+    return camera, pair, config
 
 
 def run(args) -> int:

@@ -6,8 +6,8 @@ import os
 import sys
 from pathlib import Path
 
-from .._files import atomic_write_bytes, atomic_write_text, check_input, check_output
-from ._guard import json_text
+from .._files import atomic_write_bytes, atomic_write_text
+from ._guard import Files, add_force_option, json_text
 
 __all__ = ["add_parser", "run"]
 
@@ -30,28 +30,33 @@ def add_parser(sub) -> None:
                    help="folder for left.png, right.png and rectify.json (made if missing)")
     r.add_argument("--rig", type=Path, default=None, metavar="RIG.json",
                    help="rectify with this calibrated rig instead of from matches")
-    r.set_defaults(run=run)
+    add_force_option(r)
+    r.set_defaults(run=run, declare_files=files)
+
+
+def files(args) -> Files:
+    """The photos and the rig read; the three files written into the --out folder (checked
+    when it exists: a new one is made after the work, so a refused pair leaves nothing behind)."""
+    from ._common import UsageError, given
+
+    folder = Path(args.out_dir)
+    if folder.exists() and not folder.is_dir():
+        raise UsageError(f"--out {str(folder)!r} is not a folder")
+    if not folder.is_dir():
+        parent = folder.absolute().parent
+        if not parent.is_dir() or not os.access(parent, os.W_OK | os.X_OK):
+            raise UsageError(f"--out {str(folder)!r}: cannot make a folder in {str(parent)!r}")
+    outputs = tuple((f"--out {name}", folder / name) for name in FILES) if folder.is_dir() else ()
+    return Files(inputs=(("left", args.left), ("right", args.right)) + given(("--rig", args.rig)),
+                 outputs=outputs)
 
 
 def run(args) -> int:
     from ..io import png_bytes
     from ..rectify import rectify_pair
-    from ._common import UsageError
 
-    if args.rig is not None:
-        check_input(args.rig, what="--rig")
     folder = Path(args.out_dir)
-    if folder.exists() and not folder.is_dir():
-        raise UsageError(f"--out {str(folder)!r} is not a folder")
     targets = [folder / name for name in FILES]
-    if folder.is_dir():        # before the work: never an input, a device or a read-only file
-        for path in targets:
-            check_output(path, inputs=[args.left, args.right] + ([args.rig] if args.rig else []),
-                         force=args.force, what=f"--out {path.name}")
-    else:                      # made after the work, so a refused pair leaves nothing behind
-        parent = folder.absolute().parent
-        if not parent.is_dir() or not os.access(parent, os.W_OK | os.X_OK):
-            raise UsageError(f"--out {str(folder)!r}: cannot make a folder in {str(parent)!r}")
     if args.rig is not None:
         from ..camera import load_camera
 

@@ -12,7 +12,18 @@ def add_parser(sub) -> None:
                        description="Render the project's synthetic stereo pairs with their ground "
                        "truth. The output is byte for byte what is committed in images/.")
     r.add_argument("--out", type=Path, default=Path("images"), help="folder (default: images)")
-    r.set_defaults(run=run)
+    r.set_defaults(run=run, declare_files=files)
+
+
+def files(args):
+    """Render reads nothing; its --out is a folder, whose files :func:`check_outputs` checks."""
+    from ._common import UsageError
+    from ._guard import Files
+
+    out = Path(args.out)
+    if out.exists() and not out.is_dir():
+        raise UsageError(f"--out {str(out)!r} is not a folder")
+    return Files()
 
 
 def check_outputs(out: Path) -> None:

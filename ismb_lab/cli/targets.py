@@ -4,8 +4,8 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from .._files import check_input, check_output
-from ._common import UsageError
+from ._common import UsageError, given
+from ._guard import Files, add_force_option, output_path
 
 __all__ = ["add_parser", "run"]
 
@@ -28,7 +28,8 @@ def add_parser(sub) -> None:
                            description=MERGE_HELP)
     m.add_argument("files", type=Path, nargs="+", metavar="TARGETS.json|SUBMITTED/",
                    help="the students' files, or the folder 'nbgrader collect' filled")
-    m.add_argument("--out", type=Path, required=True, metavar="ALL.json", help="where to write the pooled targets")
+    m.add_argument("--out", type=output_path, required=True, metavar="ALL.json",
+                   help="where to write the pooled targets")
     m.add_argument("--answer-key", type=Path, default=None, metavar="KEY.json",
                    help="ground-truth targets of the same images (e.g. images/synthetic/answer_key.json)")
     m.add_argument("--min-votes", type=int, default=1, metavar="N",
@@ -38,7 +39,15 @@ def add_parser(sub) -> None:
     m.add_argument("--pattern", default="targets-*.json", metavar="GLOB",
                    help="the files to take from a collected folder (default 'targets-*.json'; "
                    "e.g. 'targets-*-synthetic.json' for one pair)")
-    m.set_defaults(run=run)
+    add_force_option(m)
+    m.set_defaults(run=run, declare_files=files)
+
+
+def files(args) -> Files:
+    """The students' files (those a collected folder holds) and the answer key read; the pool written."""
+    names, _ = _inputs(args)
+    inputs = tuple(("a targets file", path) for path in names)
+    return Files(inputs=inputs + given(("--answer-key", args.answer_key)), outputs=(("--out", args.out),))
 
 
 def _inputs(args) -> tuple[list, object]:
@@ -64,11 +73,7 @@ def run(args) -> int:
 
     if args.min_votes < 1:
         raise UsageError(f"--min-votes must be 1 or more, not {args.min_votes}")
-    files, source = _inputs(args)
-    inputs = files + ([args.answer_key] if args.answer_key is not None else [])
-    for path in inputs:
-        check_input(path, what="a targets file")
-    check_output(args.out, inputs=inputs, force=getattr(args, "force", False), what="--out")
+    _, source = _inputs(args)
     key = None if args.answer_key is None else load_targets(args.answer_key)
     pooled = pool(source, answer_key=key, min_votes=args.min_votes)
     print(pooled.report())

@@ -6,6 +6,7 @@ import sys
 from dataclasses import replace
 from pathlib import Path
 
+from ..genetic import GAConfig
 from ..matching import MatchConfig
 from ..protocol import Case
 from ..recipe import Recipe, save_recipe
@@ -14,7 +15,8 @@ from .. import tuning
 from ._common import (DEFAULT_METHOD, UsageError, add_feature_options, seed, add_ga_options, add_method_option,
                       add_solver_option, add_solver_settings, default_of, ga_config, match_config, progress_bar,
                       with_settings)
-from ._guard import deferred_signals, interrupted, interrupted_line, is_interruption
+from ._guard import (Files, add_force_option, deferred_signals, interrupted, interrupted_line, is_interruption,
+                     output_path)
 
 __all__ = ["add_parser", "run"]
 
@@ -43,9 +45,25 @@ def add_parser(sub) -> None:
                    help="record in the params file that matching keeps at most one match per corner, the "
                    "most similar (the GA's fitness does not apply it)")
     add_feature_options(t, MatchConfig())
-    t.add_argument("--out", type=Path, default=Path("params.json"), metavar="PARAMS.json",
+    t.add_argument("--out", type=output_path, default=Path("params.json"), metavar="PARAMS.json",
                    help="where to write the parameters (default: %(default)s)")
-    t.set_defaults(run=run)
+    add_force_option(t)
+    t.add_argument("--no-hash-check", action="store_true",
+                   help="accept targets labelled on images with other bytes (e.g. re-encoded)")
+    t.set_defaults(run=run, declare_files=files, limit_defaults=limit_defaults)
+
+
+def limit_defaults() -> dict:
+    """The defaults of tune's limited options: the library's, which tune falls back to."""
+    ga = GAConfig()
+    return {"n_max": MatchConfig().n_max, "population": ga.population, "generations": ga.generations,
+            "fit_seeds": FIT_SEEDS}
+
+
+def files(args) -> Files:
+    """The pair and its targets read; the parameters written."""
+    return Files(inputs=(("left", args.left), ("right", args.right), ("targets", args.targets)),
+                 outputs=(("--out", args.out),))
 
 
 class _Fit:
