@@ -24,7 +24,7 @@ VERDICT_COLOURS = {"correct": OKABE_ITO["blue"], "wrong partner": OKABE_ITO["ver
                    "extra": OKABE_ITO["reddish purple"]}
 
 #: Left and right features in every side-by-side view.
-LEFT_COLOUR, RIGHT_COLOUR = OKABE_ITO["yellow"], OKABE_ITO["sky blue"]
+LEFT_COLOUR, RIGHT_COLOUR = OKABE_ITO["yellow"], OKABE_ITO["bluish green"]
 
 
 def verdicts(pairs, targets, unknown=()) -> list:

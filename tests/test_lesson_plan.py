@@ -173,16 +173,16 @@ def test_a_wrong_number_in_the_plan_is_caught(tool):
 
 def test_more_words_or_a_homework_tag_change_the_plan(tool, copied):
     plan = PLAN.read_text(encoding="utf-8")
-    path, nb = load(copied, "00")
+    path, nb = load(copied, "01")
     before = tool.minutes(path, tool.read_record(copied / "run_times.json")["notebooks"][path.name])
     overview = next(c for c in nb["cells"] if "## Overview" in "".join(c["source"]))
     overview["source"] = "".join(overview["source"]) + "\n\n" + "word " * 300
     save(path, nb)
     problems = tool.check_plan(plan, copied, copied / "run_times.json")
-    assert any(p.startswith("notebooks: 00_start_here") for p in problems), problems
-    assert any(p.startswith("Session 1: 00_start_here") for p in problems), problems
+    assert any(p.startswith("notebooks: 01_harris_features") for p in problems), problems
+    assert any(p.startswith("Session 1: 01_harris_features") for p in problems), problems
     assert not any("measure again" in p for p in problems), problems        # markdown needs no new run
-    # exercise 1 of 00 (its text, starter and the grader's test) to homework
+    # exercise 1 of 01 (its text, starter and the grader's test) to homework
     cells = nb["cells"]
     first = next(n for n, c in enumerate(cells) if "**1.**" in "".join(c["source"]))
     for n in (first, first + 1, first + 2):
@@ -190,11 +190,11 @@ def test_more_words_or_a_homework_tag_change_the_plan(tool, copied):
     cells[first]["source"] = "### Homework\n\n" + "".join(cells[first]["source"])
     save(path, nb)
     after = tool.minutes(path, tool.read_record(copied / "run_times.json")["notebooks"][path.name])
-    assert (before.code, after.code, after.homework) == (1, 0, (1,))
+    assert (before.code, before.homework, after.code, after.homework) == (1, (2, 3, 4), 0, (1, 2, 3, 4))
     assert after.allowance_min == before.allowance_min - 6 and after.code_lines < before.code_lines
     assert tool.marking_problems(cells) == []
     text = tool.write_plan(plan, tool.plan_blocks(copied, copied / "run_times.json"))
-    assert "**Homework** (cells tagged `homework`): 00 ex. 1." in text
+    assert "**Homework** (cells tagged `homework`): 00 ex. 1, 2, 3; 01 ex. 1, 2, 3, 4;" in text
     assert tool.check_plan(text, copied, copied / "run_times.json") == []
 
 

@@ -167,6 +167,10 @@ def draw_grid(ax, model: StepperModel) -> dict:
     ax.set_ylabel("left feature i", labelpad=16)
     ax.set_xticks([])
     ax.set_yticks([])
+    # a key for the three states; the ticks sit at the middles of the colour map's three bins
+    key = ax.figure.colorbar(grid, ax=ax, ticks=[1 / 3, 1, 5 / 3], fraction=0.06, pad=0.03, shrink=0.75)
+    key.set_ticklabels(["no neuron", "off", "on"])
+    key.ax.tick_params(labelsize=8)
     # feature numbers (from 1, as in the thesis' tables) as cheap path labels, not tick texts
     n_left, n_right = model.network.n_left, model.network.n_right
     cols = [k for k in range(n_right) if k == 0 or (k + 1) % 5 == 0]
@@ -258,7 +262,7 @@ class HopfieldStepper(Base):
         self.energy_pane = Pane((5.8, 2.6), "ismb-energy")
         self.panes = (self.grid_pane, self.pair_pane, self.energy_pane)
         self.grid_ax = self.grid_pane.fig.add_subplot()
-        self.grid_pane.fig.subplots_adjust(left=0.18, bottom=0.16, right=0.97, top=0.97)
+        self.grid_pane.fig.subplots_adjust(left=0.18, bottom=0.16, right=0.76, top=0.97)
         self.grid_artists = draw_grid(self.grid_ax, self.model)
         self.pair_ax = self.pair_pane.fig.add_axes((0, 0, 1, 1))
         self.pair_artists = draw_pair(self.pair_ax, self.model)

@@ -109,7 +109,9 @@ def test_from_folder_static_figure_and_classes(pair_folder):
     assert "ismb-energy" in stepper.energy_pane.widget._dom_classes
     stepper.step(5)
     fig = stepper.static_figure()
-    assert len(fig.axes) == 3
+    assert [ax.get_label() for ax in fig.axes] == ["grid", "pair", "energy", "<colorbar>"]
+    key = fig.axes[-1]
+    assert [t.get_text() for t in key.get_yticklabels()] == ["no neuron", "off", "on"]
     with pytest.raises(ValueError, match="'folder' parameter"):
         HopfieldStepper.from_folder(pair_folder / "nowhere")
 
