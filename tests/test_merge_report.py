@@ -1,4 +1,5 @@
-"""What `targets merge` drops and why, and files two students handed in alike."""
+"""What `targets merge` drops and why, files two students handed in alike, and tune's word
+on a negative fitness."""
 
 import json
 import re
@@ -300,3 +301,48 @@ def test_targets_merge_names_copies_and_every_drop(tmp_path, capsys):
     assert "identical files, each a vote" in capsys.readouterr().out and len(load_targets(out)) == 2
     assert main(["targets", "merge", str(course), "--out", str(out), "--identical-files", "twice"]) == 2
     assert capsys.readouterr().err.count("\n") == 1
+
+
+# --- tune: a negative fitness explained ----------------------------------------------------
+
+@pytest.fixture(scope="module")
+def few_targets(tmp_path_factory):
+    key = load_targets(IMAGES / "synthetic" / "answer_key.json")
+    return save_targets(tmp_path_factory.mktemp("few") / "five.json",
+                        TargetSet(key.left_xy[:5], key.right_xy[:5], key.left_sha256, key.right_sha256))
+
+
+def test_tune_says_why_its_fitness_is_negative(few_targets, tmp_path, capsys):
+    out = tmp_path / "p.json"
+    pair = [str(IMAGES / "synthetic" / n) for n in ("left.png", "right.png")]
+    assert main(["tune", *pair, str(few_targets), "--generations", "1", "--population", "4",
+                 "--out", str(out)]) == 0
+    text = capsys.readouterr().out
+    fitness = json.loads(out.read_text())["fitness"]
+    c, w, e, t = map(int, re.search(r"C/E/T (\d+)/(\d+)\+(\d+)/(\d+)", text).groups())
+    assert fitness < 0 and c - w - e < 0, text
+    why = [line for line in text.splitlines() if line.startswith("negative fitness")]
+    assert len(why) == 1, text
+    corners = re.search(r"(\d+) of the (\d+) left corners have no target pair", why[0])
+    assert corners and int(corners[2]) - int(corners[1]) == t == 5
+    assert f"({c} - {w} - {e} = {c - w - e} in the C/E/T above)" in why[0]
+    assert f"the {e} extra are matches on left corners nobody labelled" in why[0]
+
+
+def test_tune_says_nothing_more_when_its_fitness_is_not_negative():
+    from ismb_lab.cli.tune import why_negative
+    from ismb_lab.evaluation import Score
+
+    assert why_negative(3, Score(5, 0, 2, 5), 40, 5) is None
+    assert why_negative(0, Score(2, 1, 1, 5), 40, 5) is None
+    assert why_negative(-1.5, Score(5, 1, 5, 6), 40, 6) == (
+        "negative fitness: fitness = correct - wrong - extra (5 - 1 - 5 = -1 in the C/E/T above); "
+        "the 5 extra are matches on left corners nobody labelled (34 of the 40 left corners have no "
+        "target pair): label more corners, or judge by C/T")
+    # the GA's mean over update-order seeds can be negative where the one run above is not
+    assert why_negative(-0.5, Score(3, 0, 2, 6), 40, 6).startswith(
+        "negative fitness: fitness = correct - wrong - extra (3 - 0 - 2 = 1 in the C/E/T above); the 2 extra")
+    # no extra: the wrong partners are the reason
+    assert why_negative(-1, Score(1, 2, 0, 6), 40, 6) == (
+        "negative fitness: fitness = correct - wrong - extra (1 - 2 - 0 = -1 in the C/E/T above); "
+        "more labelled corners got a wrong partner than the right one")
