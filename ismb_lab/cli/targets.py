@@ -38,9 +38,10 @@ def add_parser(sub) -> None:
                    "corners (default 1: students label different corners, so a floor would "
                    "drop the corners few of them found; raise it to 2 or 3 for a class)")
     m.add_argument("--identical-files", choices=("once", "each"), default="once",
-                   help="how files of different students that hold the same pairs vote: 'once' (default), "
-                   "one vote among those students, as a copy would; 'each', a vote per student, when you "
-                   "know they labelled the same corners alike on their own. Named in the report either way")
+                   help="how files of different students that hold the same pairs vote: 'once' (default): "
+                   "such a file's pairs are one vote among those students, as for a copy; 'each': a vote "
+                   "per student, when you know they labelled the same corners alike on their own. The "
+                   "report names them either way")
     m.add_argument("--pattern", default="targets-*.json", metavar="GLOB",
                    help="the files to take from a collected folder (default 'targets-*.json'; "
                    "e.g. 'targets-*-synthetic.json' for one pair)")
