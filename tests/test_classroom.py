@@ -92,10 +92,16 @@ def test_pool_keeps_majorities_and_reports_disagreement_and_agreement_with_the_k
     key, files = class_files(tmp_path)
     p = pool(files, answer_key=key)
     assert len(p.targets) == len(key)                 # two of three agree everywhere cy is wrong
-    assert len(p.disagreements) == 2                   # cy swapped the partners of points 0 and 1
+    # cy swapped the partners of points 0 and 1: left points 0 and 1, and right points 0 and 1,
+    # each have two partners, and cy's two pairs are dropped
+    assert [d.get("left_xy", d.get("right_xy")) for d in p.disagreements] == [
+        key.left_xy[0].tolist(), key.left_xy[1].tolist(), key.right_xy[0].tolist(), key.right_xy[1].tolist()]
+    assert [(d["left_xy"], d["right_xy"], d["votes"], d["reasons"]) for d in p.dropped] == sorted(
+        (key.left_xy[a].tolist(), key.right_xy[b].tolist(), 1, ["left", "right"]) for a, b in ((0, 1), (1, 0)))
     assert p.students["targets-ann-lab"] == {"pairs": len(key), "in_key": len(key), "key_share": 1.0}
     assert p.students["targets-cy-lab"]["in_key"] == 1
-    assert "2 left points with disagreeing partners" in p.report()
+    assert "2 left points with disagreeing partners; 2 right points given several left partners; " \
+           "2 pairs dropped" in p.report()
 
 
 def test_targets_merge_command_pools_a_class(tmp_path, capsys):

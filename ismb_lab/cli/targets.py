@@ -13,10 +13,11 @@ MERGE_HELP = ("Pool the targets files of a class (all for the same two images), 
               "Give the files, or the one folder that 'nbgrader collect' filled (the course's "
               "submitted/ folder, or the course folder holding it): there the student is the name of "
               "their folder, and all the files a student handed in make one vote. A student's pairs "
-              "that give a corner two partners get no vote. A pair is kept when a strict majority "
-              "of the students who labelled its left corner, and of those who labelled its right "
-              "corner, agree on it, and at least --min-votes students do. Prints every "
-              "disagreement and, with --answer-key, each student's agreement with the key.")
+              "that give a corner two partners get no vote. Files of different students that hold "
+              "the same pairs are named, and (by default) such a file is one vote among them. A pair "
+              "is kept when it has a strict majority of the votes on its left corner and of those on "
+              "its right corner, and at least --min-votes votes. Prints every pair dropped, with its "
+              "votes and why, and, with --answer-key, each student's agreement with the key.")
 
 
 def add_parser(sub) -> None:
@@ -33,9 +34,14 @@ def add_parser(sub) -> None:
     m.add_argument("--answer-key", type=Path, default=None, metavar="KEY.json",
                    help="ground-truth targets of the same images (e.g. images/synthetic/answer_key.json)")
     m.add_argument("--min-votes", type=int, default=1, metavar="N",
-                   help="students that must agree on a pair, on top of the strict majority of those "
-                   "who labelled it (default 1: students label different corners, so a floor would "
+                   help="votes a pair needs, on top of the strict majority of those cast on its "
+                   "corners (default 1: students label different corners, so a floor would "
                    "drop the corners few of them found; raise it to 2 or 3 for a class)")
+    m.add_argument("--identical-files", choices=("once", "each"), default="once",
+                   help="how files of different students that hold the same pairs vote: 'once' (default): "
+                   "such a file's pairs are one vote among those students, as for a copy; 'each': a vote "
+                   "per student, when you know they labelled the same corners alike on their own. The "
+                   "report names them either way")
     m.add_argument("--pattern", default="targets-*.json", metavar="GLOB",
                    help="the files to take from a collected folder (default 'targets-*.json'; "
                    "e.g. 'targets-*-synthetic.json' for one pair)")
@@ -75,7 +81,7 @@ def run(args) -> int:
         raise UsageError(f"--min-votes must be 1 or more, not {args.min_votes}")
     _, source = _inputs(args)
     key = None if args.answer_key is None else load_targets(args.answer_key)
-    pooled = pool(source, answer_key=key, min_votes=args.min_votes)
+    pooled = pool(source, answer_key=key, min_votes=args.min_votes, identical=args.identical_files)
     print(pooled.report())
     save_targets(args.out, pooled.targets)
     print(f"written to {args.out}")

@@ -18,7 +18,7 @@ from ._common import (DEFAULT_METHOD, UsageError, add_feature_options, seed, add
 from ._guard import (Files, add_force_option, deferred_signals, interrupted, interrupted_line, is_interruption,
                      output_path)
 
-__all__ = ["add_parser", "run"]
+__all__ = ["add_parser", "run", "why_negative"]
 
 #: The GA seed and the fitness's update-order seeds that :func:`ismb_lab.tuning.tune` uses by default.
 GA_SEED, FIT_SEEDS = default_of(tuning.tune, "rng"), default_of(tuning.tune, "seeds")
@@ -113,6 +113,24 @@ def _keep(fit: _Fit) -> str:
             f"after {fit.last.index} generations)")
 
 
+def why_negative(fitness, score, corners: int, labelled: int) -> str | None:
+    """The line that explains a negative `fitness` (the GA's best) from the `score` of one run
+    (its C/E/T), with `labelled` of the `corners` left corners in a target pair; None when
+    neither is negative.
+
+    A match on a left corner that no target pair covers counts as an extra, so a method
+    that matches many corners of a sparsely labelled pair scores below zero.
+    """
+    if fitness >= 0 and score.fitness >= 0:
+        return None
+    c, w, e = score.correct, score.wrong_partner, score.extra
+    head = f"negative fitness: fitness = correct - wrong - extra ({c} - {w} - {e} = {c - w - e} in the C/E/T above); "
+    if not e:
+        return head + "more labelled corners got a wrong partner than the right one"
+    return (head + f"the {e} extra are matches on left corners nobody labelled ({corners - labelled} of the "
+            f"{corners} left corners have no target pair): label more corners, or judge by C/T")
+
+
 def _run(args, fit: _Fit) -> int:
     ga, recipe = ga_config(args), fit.recipe
     method, solver = recipe.method.name, recipe.solver.name
@@ -138,5 +156,9 @@ def _run(args, fit: _Fit) -> int:
     after = ", one match per corner" if recipe.one_to_one else ""
     print(f"Method-{method} ({solver}{after}): best fitness {best.best:g} of {fit.targets} after "
           f"{best.index} generations; C/E/T {result}; parameters {params.to_dict()}")
+    why = why_negative(best.best, result, len(case.prepared.problem.left_xy),
+                       len(set(case.targets[:, 0].tolist())))
+    if why:
+        print(why)
     print(f"written to {args.out}")
     return 0
