@@ -38,7 +38,7 @@ def test_a_student_votes_once_however_many_copies_they_hand_in(tmp_path):
     course = tmp_path / "course"
     hand_in(course, "ann", subset([0, 1]))
     hand_in(course, "bob", subset([0, 1], [1, 0]))        # bob swapped the partners of 0 and 1
-    theirs = hand_in(course, "cy", subset([0, 1], [1, 0]))
+    theirs = hand_in(course, "cy", subset([0, 1, 2], [1, 0, 2]))   # so did cy, who labelled 2 as well
     # cy hands in three more copies of the same labels, two of them renamed: still one vote
     for name in ("targets-cy-lab-copy.json", "targets-ann-lab.json", "targets-dee-lab.json"):
         (theirs.parent / name).write_bytes(theirs.read_bytes())
@@ -46,23 +46,30 @@ def test_a_student_votes_once_however_many_copies_they_hand_in(tmp_path):
     assert sorted(groups) == ["ann", "bob", "cy"] and len(groups["cy"]) == 4
     p = pool(groups)
     # counting files, cy's four copies would outvote ann and bob; by student it is 2 against 1
-    assert sorted(map(tuple, p.targets.right_xy.tolist())) == sorted(map(tuple, KEY.right_xy[[1, 0]].tolist()))
-    assert {tuple(e["labelled_by"]) for e in p.targets.extras} == {("bob", "cy")}
-    assert p.students["cy"] == {"pairs": 2, "files": 4}
+    assert sorted(map(tuple, p.targets.right_xy.tolist())) == sorted(map(tuple, KEY.right_xy[[1, 0, 2]].tolist()))
+    assert {tuple(e["labelled_by"]) for e in p.targets.extras} == {("bob", "cy"), ("cy",)}
+    assert p.students["cy"] == {"pairs": 3, "files": 4} and p.identical == []
     assert "from 3 students (6 files)" in p.report()
 
 
-def test_a_renamed_copy_of_another_students_file_counts_for_who_handed_it_in(tmp_path):
+def test_a_renamed_copy_of_another_students_file_is_named_and_votes_once(tmp_path):
     course = tmp_path / "course"
     ann = hand_in(course, "ann", subset([0, 1, 2]))
-    # bob hands in ann's file under ann's own file name: the folder says it is bob's vote
-    (course / "submitted" / "bob" / "labels").mkdir(parents=True)
-    (course / "submitted" / "bob" / "labels" / ann.name).write_bytes(ann.read_bytes())
+    # bob hands in ann's file under ann's own file name: the folder says it is bob's
+    copy = course / "submitted" / "bob" / "labels" / ann.name
+    copy.parent.mkdir(parents=True)
+    copy.write_bytes(ann.read_bytes())
     hand_in(course, "cy", subset([0, 1, 2], [1, 0, 2]))
     p = pool(collected(course))
     assert set(p.students) == {"ann", "bob", "cy"}
-    assert sorted(e["labelled_by"] for e in p.targets.extras) == [["ann", "bob"], ["ann", "bob"],
-                                                                   ["ann", "bob", "cy"]]
+    assert p.identical == [{"students": ["ann", "bob"], "files": [str(ann), str(copy)], "pairs": 3}]
+    # one vote for ann's file ties with cy's on points 0 and 1; only 2, which cy agrees on, is kept
+    assert [(e["labelled_by"], e["votes"]) for e in p.targets.extras] == [(["ann", "bob", "cy"], 2)]
+    assert "identical files, counted as one vote: ann (targets-ann-lab.json), bob (targets-ann-lab.json)" \
+        in p.report()
+    each = pool(collected(course), identical="each")    # the teacher knows they labelled alike
+    assert sorted(e["labelled_by"] for e in each.targets.extras) == [["ann", "bob"], ["ann", "bob"],
+                                                                      ["ann", "bob", "cy"]]
 
 
 def test_the_same_file_collected_twice_votes_once(tmp_path):
@@ -71,11 +78,11 @@ def test_the_same_file_collected_twice_votes_once(tmp_path):
     again = tmp_path / "again" / ann.name
     again.write_bytes(ann.read_bytes())
     bob = save_targets(tmp_path / "targets-bob-lab.json", subset([0, 1], [1, 0]))
-    cy = save_targets(tmp_path / "targets-cy-lab.json", subset([0, 1], [1, 0]))
+    cy = save_targets(tmp_path / "targets-cy-lab.json", subset([0, 1, 2], [1, 0, 2]))
     # ann's file twice would tie 2 against 2 and drop the pairs bob and cy agree on
     p = pool([ann, again, bob, cy])
-    assert len(p.targets) == 2 and all(e["labelled_by"] == ["targets-bob-lab", "targets-cy-lab"]
-                                       for e in p.targets.extras)
+    assert [e["labelled_by"] for e in p.targets.extras] == [["targets-bob-lab", "targets-cy-lab"]] * 2 + [
+        ["targets-cy-lab"]]
 
 
 def test_many_to_one_pairs_are_reported_and_dropped(tmp_path):
@@ -94,7 +101,7 @@ def test_many_to_one_pairs_are_reported_and_dropped(tmp_path):
     assert [d["right_xy"] for d in p.disagreements if "right_xy" in d] == [KEY.right_xy[5].tolist()]
     report = p.report()
     assert "ann: 1 pairs; 2 pairs dropped: a corner given two partners" in report
-    assert "1 right points given several left partners (dropped)" in report
+    assert "1 right points given several left partners; 4 pairs dropped" in report
 
 
 def test_min_votes_sets_how_many_students_must_agree(tmp_path):
@@ -110,8 +117,8 @@ def test_min_votes_sets_how_many_students_must_agree(tmp_path):
 
 def test_targets_merge_reads_a_collected_folder(tmp_path, capsys):
     course = tmp_path / "course"
-    for who in ("ann", "bob"):
-        hand_in(course, who, subset([0, 1, 2]))
+    hand_in(course, "ann", subset([0, 1, 2]))
+    hand_in(course, "bob", subset([0, 1, 2, 3]))
     hand_in(course, "cy", subset([0, 1, 2], [1, 0, 2]))
     before = {p: hashlib.sha256(p.read_bytes()).hexdigest() for p in course.rglob("*.json")}
     out = tmp_path / "class.json"
