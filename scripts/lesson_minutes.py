@@ -23,7 +23,8 @@ tool counts, from the notebook's text and from a record of one measured run:
   ``homework`` is homework.
 
 Each part is rounded up to a tenth of a minute, and a notebook's total (their sum) up to a
-whole minute.  A session adds its teacher talk (:data:`TEACHER_MIN`) and its quiz
+whole minute.  A session adds its teacher talk (:data:`TEACHER_MIN`), its start-up time
+(:data:`SETUP_MIN`: the logins and the first run of the first session) and its quiz
 (:data:`QUIZ_MIN`) to its notebooks' totals (:data:`SESSIONS`).
 
 Figures, tables and widget tasks come from the executed notebooks, so ``--measure`` writes
@@ -31,7 +32,8 @@ them into the run-time record with the times, cell by cell, together with a hash
 notebook's code cells; a notebook whose code changed since is reported *stale* until it is
 measured again.  The lesson plan's generated tables sit between ``<!-- minutes:NAME -->``
 and ``<!-- /minutes:NAME -->``; ``--write-plan`` rewrites them and ``--check-plan`` reports
-every line that differs.
+every line that differs.  One of them is not minutes: what nbgrader grades in each notebook
+of a course assignment (:func:`grading`), read from the notebooks' nbgrader cells.
 
     python scripts/lesson_minutes.py --sessions                       # every notebook, and each session's total
     python scripts/lesson_minutes.py --json --sessions                # the same as JSON
@@ -77,17 +79,23 @@ WHY = {
     "question": "look up a table or change one argument, write two sentences",
     "widget": "one widget to try before the exercises: a few clicks or slider moves, read the status",
     "quiz": "five short questions on paper, a minute each",
+    "setup": "everyone logs in to the class's JupyterLab and opens 00; its first run compiles the network's "
+             "kernels on each new server (up to a minute, 00 says), with the whole class on one server at once",
 }
 
 #: A session's length, its teacher talk and its quiz, in minutes.
-SESSION_MIN, TEACHER_MIN, QUIZ_MIN = 90, 10, 5
+SESSION_MIN, TEACHER_MIN, QUIZ_MIN = 90, 15, 5
 #: The least teacher talk a session may plan.
 LEAST_TEACHER_MIN = 10
+#: Minutes before the first notebook, by session: the logins and the first run (:data:`WHY`).
+SETUP_MIN = {"Session 1": 5}
+#: The name of that step in the plan's session table.
+SETUP = "logins and first run"
 #: The notebooks of each session, by their two-digit prefix; the others are optional.
 SESSIONS = {"Session 1": ("00", "01", "02", "04"), "Session 2": ("05", "06", "07")}
 OPTIONAL = ("03", "08", "09")
 #: What the teacher talk of a session is for.
-TEACHER_TALK = "opening, a few minutes before each notebook, the questions to ask (below)"
+TEACHER_TALK = "an opening, a few minutes to introduce each notebook, and the discussions (the questions below)"
 
 #: An exercise starts a line of the Exercises section with its bold number: ``**2.**``, ``**4. Predict first.**``.
 _EXERCISE = re.compile(r"^\*\*(\d+)\.(.*?)\*\*", re.M)
@@ -278,6 +286,42 @@ def exercises(cells: list) -> list[Exercise]:
 def exercise_kinds(cells: list) -> dict:
     """``{number: kind}`` of :func:`exercises`, homework included."""
     return {e.number: e.kind for e in exercises(cells)}
+
+
+def grading(cells: list) -> dict:
+    """How nbgrader grades each exercise: ``{"auto": [...], "hand": [...], "none": [...]}``.
+
+    An exercise owns the cells after its markdown cell up to the next exercise's (when one
+    markdown cell holds several, the last of them owns them).  It is *auto* when one of them is
+    a grade cell without a solution (a hidden test, which ``nbgrader autograde`` runs), *hand*
+    when one is a grade cell with a solution or a task (an answer scored in the Formgrader),
+    and *none* otherwise.  Entries are ``(number, cell index)``; for *none* the exercise's own cell.
+
+    >>> md = lambda s, **g: {"cell_type": "markdown", "source": s, "metadata": {"nbgrader": g} if g else {}}
+    >>> grading([md("## Exercises\\n\\n**1.** Fix it."), {"cell_type": "code", "source": "x = 0  # fix"},
+    ...          {"cell_type": "code", "source": "assert x", "metadata": {"nbgrader": {"grade": True}}},
+    ...          md("**2.** Why?\\n\\n**3. Predict first.**"), md("YOUR ANSWER HERE", grade=True, solution=True),
+    ...          md("**4.** And?"), md("Your answer", grade=False, solution=False)])
+    {'auto': [(1, 2)], 'hand': [(3, 4)], 'none': [(2, 3), (4, 5)]}
+    """
+    found = {"auto": [], "hand": [], "none": []}
+    listed = exercises(cells)
+    for n, e in enumerate(listed):
+        later = [x.cell for x in listed[n + 1:] if x.cell > e.cell]
+        owned = [] if any(x.cell == e.cell for x in listed[n + 1:]) else \
+            range(e.cell + 1, later[0] if later else len(cells))
+        kinds = []
+        for m in owned:
+            meta = cells[m].get("metadata", {}).get("nbgrader", {})
+            if meta.get("grade") and not meta.get("solution"):
+                kinds.append(("auto", m))
+            elif (meta.get("grade") and meta.get("solution")) or meta.get("task"):
+                kinds.append(("hand", m))
+        if not kinds:
+            found["none"].append((e.number, e.cell))
+        for kind, m in kinds:
+            found[kind].append((e.number, m))
+    return found
 
 
 # --- what an executed notebook shows ---------------------------------------------------------
@@ -502,10 +546,14 @@ class Session:
     teacher_min: int
     quiz_min: int
     total_min: int
+    setup_min: int = 0
 
 
 def sessions(rows: list[Minutes], teacher_min: int = TEACHER_MIN) -> dict:
-    """``{"Session N": Session}`` of :data:`SESSIONS` from the notebooks' `rows`."""
+    """``{"Session N": Session}`` of :data:`SESSIONS` from the notebooks' `rows`.
+
+    A session's total is `teacher_min`, its :data:`SETUP_MIN`, its notebooks' totals and :data:`QUIZ_MIN`.
+    """
     by_prefix = {r.name[:2]: r for r in rows}
     found = {}
     for name, prefixes in SESSIONS.items():
@@ -513,8 +561,9 @@ def sessions(rows: list[Minutes], teacher_min: int = TEACHER_MIN) -> dict:
         if missing:
             raise ValueError(f"sessions: no notebook {', '.join(missing)} for {name}")
         picked = tuple(by_prefix[p] for p in prefixes)
+        setup = SETUP_MIN.get(name, 0)
         found[name] = Session(name, picked, teacher_min, QUIZ_MIN,
-                              teacher_min + QUIZ_MIN + sum(r.total_min for r in picked))
+                              teacher_min + setup + QUIZ_MIN + sum(r.total_min for r in picked), setup)
     return found
 
 
@@ -542,13 +591,39 @@ def _minutes(x: float) -> str:
     return f"{x:.1f}"
 
 
-def render(rows: list[Minutes], found: dict, record: dict) -> dict:
-    """The text of every generated block of the plan: ``{name: markdown}``."""
+def _assignments() -> dict:
+    """``{notebook file name: nbgrader assignment id}`` of the course (``ismb_lab.course.ASSIGNMENTS``)."""
+    from ismb_lab.course import ASSIGNMENTS
+
+    return {name: key for key, spec in ASSIGNMENTS.items() for name in spec.notebooks}
+
+
+def _graded(folder: Path, assignments: dict) -> str:
+    """The plan's table of what nbgrader grades in each notebook of `folder`."""
+    def listed(entries, cells=False):
+        return ", ".join(f"ex. {n}" + (f" (c{m})" if cells else "") for n, m in entries) or "none"
+
+    lines = ["| notebook | assignment | autograded: a hidden test | graded by hand in the Formgrader: the answer "
+             "cell | not graded |", "|---|---|---|---|---|"]
+    for path in sorted(Path(folder).glob(PATTERN)):
+        key = assignments.get(path.name)
+        if key is None:
+            lines.append(f"| `{path.stem}` | none | | | |")
+            continue
+        found = grading(json.loads(path.read_text(encoding="utf-8"))["cells"])
+        lines.append(f"| `{path.stem}` | `{key}` | {listed(found['auto'])} | {listed(found['hand'], True)} | "
+                     f"{listed(found['none'])} |")
+    return "\n".join(lines)
+
+
+def render(rows: list[Minutes], found: dict, record: dict, graded: str | None = None) -> dict:
+    """The text of every generated block of the plan: ``{name: markdown}``; `graded` is :func:`_graded`'s table."""
     blocks = {}
     blocks["rates"] = "\n".join([
         "| part | rate | what is counted |",
         "|---|---:|---|",
         f"| teacher talk | {TEACHER_MIN} min a session | {TEACHER_TALK}; at least {LEAST_TEACHER_MIN} |",
+        *(f"| {SETUP} | {minutes} min in {name} | {WHY['setup']} |" for name, minutes in SETUP_MIN.items()),
         f"| plain prose | {PLAIN_WPM} words a minute | the words of markdown paragraphs, list items and headings "
         "without LaTeX math |",
         f"| prose with formulas | {FORMULA_WPM} words a minute | the words of a paragraph, list item or heading that "
@@ -575,12 +650,17 @@ def render(rows: list[Minutes], found: dict, record: dict) -> dict:
                  "| tasks min | total min |",
                  "|---:|---|---:|---:|---:|---:|---|---:|---:|",
                  f"| 1 | teacher talk | | | | | {TEACHER_TALK} | | {s.teacher_min} |"]
-        for n, r in enumerate(s.rows, 2):
+        if s.setup_min:
+            lines.append(f"| 2 | {SETUP} | | | | | {WHY['setup']} | | {s.setup_min} |")
+        first = 3 if s.setup_min else 2
+        for n, r in enumerate(s.rows, first):
             lines.append(f"| {n} | `{r.name}` | {_minutes(r.reading_min)} | {_minutes(r.code_min)} | "
                          f"{r.figures_min} | {_minutes(r.run_min)} | {_tasks(r)} | {r.allowance_min} | "
                          f"{r.total_min} |")
-        lines.append(f"| {len(s.rows) + 2} | quiz | | | | | 5 questions, 1 min each | {s.quiz_min} | {s.quiz_min} |")
-        steps = [s.teacher_min] + [r.total_min for r in s.rows] + [s.quiz_min]
+        lines.append(f"| {len(s.rows) + first} | quiz | | | | | 5 questions, 1 min each | {s.quiz_min} | "
+                     f"{s.quiz_min} |")
+        steps = [s.teacher_min] + ([s.setup_min] if s.setup_min else []) + [r.total_min for r in s.rows] \
+            + [s.quiz_min]
         lines.append(f"| | **sum** | | | | | {' + '.join(map(str, steps))} = {s.total_min} | | **{s.total_min}** |")
         left = SESSION_MIN - s.total_min
         lines.append(f"| | **left of {SESSION_MIN}** | | | | | {SESSION_MIN} − {s.total_min} = {left} | "
@@ -597,6 +677,8 @@ def render(rows: list[Minutes], found: dict, record: dict) -> dict:
                 parts.append(f"{label} " + ", ".join(f"c{n}" + (f" ×{k}" if k > 1 else "") for n, k in cells))
         where.append(f"* `{r.name}`: " + ("; ".join(parts) or "none") + ".")
     blocks["where"] = "\n".join(where)
+    if graded is not None:
+        blocks["graded"] = graded
     notebooks = record.get("notebooks", {})
     blocks["measured"] = "\n".join([
         f"Measured {record.get('date', '?')} with `{record.get('command', '?')}` on {record.get('cpus', '?')} cores, "
@@ -614,7 +696,7 @@ def _block(name: str) -> re.Pattern:
 def plan_blocks(folder: Path = NOTEBOOKS, run_times: Path = RUN_TIMES) -> dict:
     """The generated blocks for the notebooks of `folder` and the record `run_times`."""
     rows = table(folder, run_times)
-    return render(rows, sessions(rows), read_record(run_times))
+    return render(rows, sessions(rows), read_record(run_times), _graded(folder, _assignments()))
 
 
 def write_plan(text: str, blocks: dict) -> str:
@@ -860,12 +942,14 @@ def main(argv: list[str] | None = None) -> int:
         notebooks = [asdict(r) for r in rows]
         print(json.dumps({"notebooks": notebooks,
                           "sessions": {n: {"notebooks": [r.name for r in s.rows], "teacher_min": s.teacher_min,
-                                           "quiz_min": s.quiz_min, "total_min": s.total_min}
+                                           "setup_min": s.setup_min, "quiz_min": s.quiz_min,
+                                           "total_min": s.total_min}
                                        for n, s in found.items()}} if found else notebooks, indent=1))
         return 0
     print(format_table(rows))
     for s in found.values():
-        print(f"{s.name}: {s.teacher_min} teacher + " + " + ".join(f"{r.total_min} ({r.name[:2]})" for r in s.rows)
+        print(f"{s.name}: {s.teacher_min} teacher + " + (f"{s.setup_min} {SETUP} + " if s.setup_min else "")
+              + " + ".join(f"{r.total_min} ({r.name[:2]})" for r in s.rows)
               + f" + {s.quiz_min} quiz = {s.total_min} min of {SESSION_MIN}")
     return 0
 
