@@ -228,7 +228,13 @@ def test_a_swallowed_ctrl_c_still_stops_tune(lab, hard_targets, tmp_path, monkey
 
     monkeypatch.setattr(ismb_lab.tuning, "tune", swallowing)
     out = tmp_path / "p.json"
-    code = main(["tune", *map(str, lab[:2]), str(hard_targets), "--generations", "400", "--out", str(out)])
+    # as from a terminal: a run started as a background job inherits SIGINT ignored, which the
+    # command rightly leaves ignored (tests/test_cli_signals.py)
+    saved = signal.signal(signal.SIGINT, signal.default_int_handler)
+    try:
+        code = main(["tune", *map(str, lab[:2]), str(hard_targets), "--generations", "400", "--out", str(out)])
+    finally:
+        signal.signal(signal.SIGINT, saved)
     assert code == 130, capsys.readouterr().err
     assert json.loads(out.read_text())["generations"] <= 3
 
