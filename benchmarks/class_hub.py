@@ -11,6 +11,8 @@ settings (ports, state folder, venv, course, users) pointed at the run, loaded w
 * the server command: this environment's ``jupyterhub.singleuser``, with the deployment's
   arguments plus ``--allow-root`` as root, the home as root folder, and no
   ``pre_spawn_hook``; :func:`stage_course` gives each home its copy of the course instead;
+* Jupyter's runtime folder (the kernels' Unix sockets) in the run's folder, with a short path
+  as ``hub_start serve`` gives each server;
 * a numba cache in each home, as students get who cannot write into the venv, and the
   teacher's compiled kernels (``ISMB_NUMBA_SHARED``) only when a run passes a folder of them
   (``hub_start stage`` compiles them into ``COURSE/numba``; here the course is the repository);
@@ -101,7 +103,9 @@ c.Spawner.args.extend({args!r})
 c.Spawner.notebook_dir = "~"
 c.Spawner.pre_spawn_hook = None
 c.Spawner.environment.update({{"NUMBA_CACHE_DIR": lambda spawner: spawner.home_dir + "/.cache/numba",
-                              "ISMB_NUMBA_SHARED": {str(shared_kernels or "")!r}}})
+                              "ISMB_NUMBA_SHARED": {str(shared_kernels or "")!r},
+                              # short: the kernels' Unix sockets (hub_start serve makes one in /tmp)
+                              "JUPYTER_RUNTIME_DIR": lambda spawner: {str(work / "rt")!r} + "/" + spawner.user.name}})
 c.JupyterHub.services.append({{"name": "bench-class", "api_token": {token!r}}})
 c.JupyterHub.load_roles.append({{"name": "bench-class", "services": ["bench-class"],
     "scopes": ["admin:users", "admin:servers", "access:servers"]}})

@@ -127,9 +127,9 @@ c.Spawner.environment = {
     "JUPYTERHUB_ACTIVITY_INTERVAL": str(max(5, min(300, CULL_TIMEOUT // 4))),
 }
 # A kernel whose tab closed (no connection) and that has been idle is shut down. Kernels talk
-# to their server over Unix sockets in the student's private runtime folder, not TCP ports:
-# thirty kernels starting at once raced for free ports ("Address already in use", kernel
-# died), and a port on 127.0.0.1 is open to every account of the machine.
+# to their server over Unix sockets in the student's private runtime folder (hub_start serve
+# makes it), not TCP ports: thirty kernels starting at once raced for free ports ("Address
+# already in use", kernel died), and a port on 127.0.0.1 is open to every account.
 c.Spawner.args = [f"--MappingKernelManager.cull_idle_timeout={KERNEL_CULL_TIMEOUT}",
                   f"--MappingKernelManager.cull_interval={max(5, min(300, KERNEL_CULL_TIMEOUT // 4))}",
                   "--MappingKernelManager.cull_connected=False",

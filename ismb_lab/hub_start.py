@@ -46,6 +46,7 @@ import re
 import resource
 import shlex
 import shutil
+import stat
 import sys
 import tempfile
 from pathlib import Path
@@ -53,7 +54,7 @@ from pathlib import Path
 from ._validation import ParameterError, message
 
 __all__ = ["PARTS", "IGNORE", "TEACHER_TOOLS", "STUDENT_SERVER_OFF", "parse_size", "stage", "profile",
-           "copy_course", "cgroup_dirs", "make_cgroups", "enter", "remove_cgroups", "main"]
+           "copy_course", "runtime_folder", "cgroup_dirs", "make_cgroups", "enter", "remove_cgroups", "main"]
 
 #: What a student gets a copy of.
 PARTS = ("notebooks", "images", "manifests")
@@ -318,11 +319,37 @@ def remove_cgroups(cgroups) -> list[Path]:
     return busy
 
 
+def runtime_folder(temp: str | None = None) -> str:
+    """A folder of this account's alone with a short path for Jupyter's runtime files:
+    ``<temp>/ismb-lab-rt-<uid>`` (made 0700) if it is a private folder of this account's, else
+    a new private one there.  The kernels' Unix sockets live in it, and a socket's path holds
+    at most 107 bytes (``~/.local/share/jupyter/runtime/kernel-<36 characters>-ipc-4`` leaves
+    28 for the home folder)."""
+    temp = temp or tempfile.gettempdir()
+    path = os.path.join(temp, f"ismb-lab-rt-{os.getuid()}")
+    try:
+        os.mkdir(path, 0o700)
+    except FileExistsError:
+        pass
+    try:
+        info = os.lstat(path)
+        if stat.S_ISDIR(info.st_mode) and info.st_uid == os.getuid() and not info.st_mode & 0o077:
+            return path
+    except OSError:
+        pass
+    return tempfile.mkdtemp(prefix="ismb-lab-rt-", dir=temp)     # someone else's name: not ours
+
+
 def serve(args, course) -> None:
     """The single-user server's start command: new files private (umask 077), the course
-    copied as this account, then ``jupyterhub-singleuser`` with `args` in this process."""
+    copied as this account, Jupyter's runtime files in :func:`runtime_folder`, then
+    ``jupyterhub-singleuser`` with `args` in this process."""
     os.umask(0o077)
     home = pwd.getpwuid(os.getuid()).pw_dir
+    try:
+        os.environ["JUPYTER_RUNTIME_DIR"] = runtime_folder()
+    except OSError as error:      # Jupyter's own folder in the home, then
+        print(f"ismb_lab: no runtime folder in {tempfile.gettempdir()}: {error}", file=sys.stderr, flush=True)
     try:
         if not course or not Path(course).is_dir():
             raise FileNotFoundError(errno.ENOENT, "no course folder (ISMB_HUB_COURSE)", str(course))

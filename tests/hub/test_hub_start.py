@@ -178,3 +178,17 @@ def test_the_profile_gives_login_shells_the_venv_the_course_config_and_the_kerne
     assert root["PATH"].split(":")[-1] == bin_ and root["PATH"].split(":")[0] == "/usr/local/sbin"
     teacher = login_shell(profile, False, {"JUPYTER_CONFIG_PATH": "/srv/teacher-config"})   # a server's own
     assert teacher["JUPYTER_CONFIG_PATH"] == "/srv/teacher-config"
+
+
+def test_the_runtime_folder_is_private_and_short(tmp_path):
+    folder = Path(hub_start.runtime_folder(str(tmp_path)))
+    assert folder == tmp_path / f"ismb-lab-rt-{os.getuid()}" and stat.S_IMODE(folder.stat().st_mode) == 0o700
+    assert hub_start.runtime_folder(str(tmp_path)) == str(folder)          # the same one next time
+    folder.chmod(0o755)                        # opened to others (or made by someone else): not used
+    other = Path(hub_start.runtime_folder(str(tmp_path)))
+    assert other != folder and other.parent == tmp_path and stat.S_IMODE(other.stat().st_mode) == 0o700
+    link = tmp_path / "elsewhere"
+    folder.chmod(0o700)
+    folder.rename(link)
+    folder.symlink_to(link)                    # a link in its place: not followed
+    assert Path(hub_start.runtime_folder(str(tmp_path))) not in (folder, link)
