@@ -1,6 +1,7 @@
 """A class on one JupyterHub: start-up, memory per student, latency, and saves with no label lost.
 
     python benchmarks/bench_class.py [--students 30] [--repeats 30] [--savers 10] [--burst 5]
+                                     [--numba shared|private] [--first-runs]
     python benchmarks/bench_class.py --smoke        # two students, a few repeats
 
 The hub runs ``deploy/jupyterhub_config.py`` (see ``class_hub.py`` for the few settings a
@@ -10,7 +11,11 @@ heavy for a benchmark, and ``tests/hub/`` tests the real-account hub.  So every 
 as the user who starts the script, with a home folder in a temporary folder, and the
 deployment's memory limits (cgroups, RLIMIT_DATA) are not applied.  Each home gets its copy
 of the course before start-up (timed on its own), and a numba cache of its own, as students
-who cannot write into the venv: every kernel compiles the numba kernels on its first run.
+who cannot write into the venv.  ``--numba shared`` (the default, as deployed): the teacher's
+step compiles the kernels once into a read-only folder (``ismb_lab._numba_share.compile_into``,
+what ``hub_start stage`` runs; timed), and each student's process copies them into their
+own cache.  ``--numba private`` (the deployment before that step): every student's kernels
+compile on their first run.
 
 No browser: each student's own single-user server runs their kernel, driven through the
 hub's proxy with the Jupyter server's sessions and kernel websocket API, as JupyterLab does.
@@ -23,8 +28,10 @@ Measured, in order:
 2. **memory, idle:** each single-user server's resident memory (RSS) and its own share
    (USS, not shared with other processes), read with psutil, and how far the machine's
    available memory fell;
-3. **notebook 04** opened and run by every student at once, cell by cell (Run All), then
-   each student's server + kernel memory;
+3. **notebooks 00, then 04**, opened and run by every student at once, cell by cell (Run
+   All), each student closing 00's kernel before opening 04: when the last student's first
+   cell, warm-up cell and whole notebook were done, and the CPU time of each student's two
+   kernels; then each student's server + kernel memory (``--first-runs`` stops here);
 4. **one execution while the others idle:** one student repeats a labeller click with its
    redraw, and a one-line cell, median and 90th percentile (round trip through the proxy,
    and the click's time inside the kernel);
@@ -51,8 +58,8 @@ import tempfile
 import time
 from pathlib import Path
 
-from class_hub import (Client, Hub, Kernel, hub_side_mb, kernel_usage, memory_per_student, notebook_cells,
-                       open_and_run, run_notebook, running_hub, stage_course)
+from class_hub import (NOTEBOOK_00, Client, Hub, Kernel, hub_side_mb, kernel_usage, memory_per_student,
+                       notebook_cells, open_and_run, run_notebook, running_hub, shut_down, stage_course)
 
 NOTEBOOK_GA = "ismb_lab/notebooks/06_genetic_algorithm.ipynb"
 #: The click timed in the kernel: select (or release) left feature 1, with the full redraw.
@@ -175,6 +182,29 @@ async def saves_at_once(kernels: list, homes: Path, rounds: int = 3) -> tuple:
 
 
 # --- the run -----------------------------------------------------------------------------
+def teachers_step(work: Path) -> Path:
+    """The kernels compiled once, as ``hub_start stage`` does, for the package the servers
+    import (this repository, on their PYTHONPATH); the folder, made read-only."""
+    import resource
+
+    from ismb_lab._numba_share import compile_into
+
+    root = Path(__file__).resolve().parents[1]
+    os.environ["PYTHONPATH"] = os.pathsep.join(filter(None, [str(root), os.environ.get("PYTHONPATH")]))
+    folder, before, t0 = work / "teacher" / "numba", resource.getrusage(resource.RUSAGE_CHILDREN), time.perf_counter()
+    report = compile_into(folder, isolated=False)
+    after = resource.getrusage(resource.RUSAGE_CHILDREN)
+    cpu = after.ru_utime + after.ru_stime - before.ru_utime - before.ru_stime
+    for top, _, names in os.walk(work / "teacher"):
+        os.chmod(top, 0o755)
+        for name in names:
+            os.chmod(os.path.join(top, name), 0o644)
+    print(f"the teacher's step: {report['kernels']} kernels compiled once in {time.perf_counter() - t0:.1f} s "
+          f"({cpu:.1f} CPU-s){'; not compiled: ' + ', '.join(report['cold']) if report['cold'] else ''}; "
+          "each student's process copies them into their own cache")
+    return folder
+
+
 def machine() -> str:
     import psutil
 
@@ -197,27 +227,45 @@ async def class_starts(hub: Hub, client: Client, names: list, timeout: float) ->
     print(f"CPU time of a server's start: {spread((v[2] for v in idle.values()), 1, 's')}")
 
 
-async def class_runs_04(hub: Hub, client: Client, names: list) -> list:
-    """Every student opens notebook 04 and runs it, all at once; returns their kernels."""
+async def first_runs(client: Client, name: str, cells: tuple, t0: float, pid: int) -> dict:
+    """`name` runs notebook 00, closes its kernel, then runs notebook 04 (kept open)."""
+    k00, done00 = await open_and_run(client, name, cells[0], t0, NOTEBOOK_00)
+    cpu00 = kernel_usage(pid, k00)[2]
+    await shut_down(client, k00)
+    k04, done04 = await open_and_run(client, name, cells[1], t0)
+    return {"kernel": k04, "00": done00, "04": done04, "cpu00": cpu00, "cpu04": kernel_usage(pid, k04)[2]}
+
+
+async def class_runs_00_and_04(hub: Hub, client: Client, names: list) -> list:
+    """Every student opens notebook 00 and runs it, then 04, all at once; returns their 04 kernels."""
     import psutil
 
-    available, cells, t0 = psutil.virtual_memory().available, notebook_cells(hub.homes / names[0]), time.perf_counter()
-    kernels, took = zip(*await asyncio.gather(*(open_and_run(client, n, cells, t0) for n in names)))
-    print(f"notebook 04 opened and run by all {len(names)} at once: all done {max(took):.1f} s after asking "
-          f"(first {min(took):.1f} s, median {statistics.median(took):.1f} s)")
+    home = hub.homes / names[0]
+    cells = (notebook_cells(home, NOTEBOOK_00), notebook_cells(home))
+    warm = next(i for i, code in enumerate(cells[0]) if "warm_up()" in code)
+    available, t0 = psutil.virtual_memory().available, time.perf_counter()
+    runs = await asyncio.gather(*(first_runs(client, n, cells, t0, hub.proc.pid) for n in names))
+    last = {what: max(r[nb][i] for r in runs) for what, nb, i in
+            (("first", "00", 0), ("warm", "00", warm), ("00", "00", -1), ("04", "04", -1))}
+    print(f"notebooks 00 then 04 run by all {len(names)} at once, seconds until the last student was done: "
+          f"00's first cell {last['first']:.1f} s, its warm-up cell {last['warm']:.1f} s, notebook 00 "
+          f"{last['00']:.1f} s, notebook 04 {last['04']:.1f} s")
+    print(f"CPU time per student: 00's kernel {spread((r['cpu00'] for r in runs), 1, 's')}, "
+          f"04's kernel {spread((r['cpu04'] for r in runs), 1, 's')}, both "
+          f"{spread((r['cpu00'] + r['cpu04'] for r in runs), 1, 's')}")
+    kernels = [r["kernel"] for r in runs]
     after = memory_per_student(hub.proc.pid, names, with_kernel=True)
     rss, uss = [v[0] for v in after.values()], [v[1] for v in after.values()]
     alone = [kernel_usage(hub.proc.pid, k) for k in kernels]
     print(f"memory after notebook 04, server + kernel: RSS {mb(rss)}, USS {mb(uss)}; the kernel alone: "
           f"RSS {mb(v[0] for v in alone)}, USS {mb(v[1] for v in alone)}")
-    print(f"CPU time of a kernel's start and notebook 04: {spread((v[2] for v in alone), 1, 's')}")
     side = hub_side_mb(hub.proc.pid, names)
     fell = (available - psutil.virtual_memory().available) / 2**20
     print(f"hub, proxy and services: RSS {side:.0f} MB")
     print(f"the class of {len(names)}: RSS {sum(rss) + side:.0f} MB in all, USS {sum(uss):.0f} MB for the "
-          f"students; available memory fell {fell:.0f} MB while the kernels started and ran notebook 04 "
+          f"students; available memory fell {fell:.0f} MB while the kernels started and ran notebooks 00 and 04 "
           "(every process on the machine moves this figure)")
-    return list(kernels)
+    return kernels
 
 
 async def latency(kernels: list, repeats: int, burst: int) -> None:
@@ -257,7 +305,9 @@ async def one_runs_05(hub: Hub, client: Client, name: str) -> None:
 async def measure(hub: Hub, names: list, args) -> int:
     client = Client(hub, args.students)
     await class_starts(hub, client, names, args.timeout)
-    kernels = await class_runs_04(hub, client, names)
+    kernels = await class_runs_00_and_04(hub, client, names)
+    if args.first_runs:
+        return 0
     await latency(kernels, args.repeats, args.burst)
     status = await saves(hub, kernels[:args.savers])
     if args.notebook05:
@@ -274,6 +324,11 @@ def main(argv=None) -> int:
     parser.add_argument("--timeout", type=float, default=600.0, help="seconds to wait for the servers")
     parser.add_argument("--no-notebook05", dest="notebook05", action="store_false",
                         help="leave out one student's run of notebook 05")
+    parser.add_argument("--numba", choices=("shared", "private"), default="shared",
+                        help="shared: the teacher's step compiles the kernels once and every student loads "
+                             "them (as deployed); private: every student compiles their own")
+    parser.add_argument("--first-runs", action="store_true",
+                        help="stop after the class's first runs of notebooks 00 and 04")
     parser.add_argument("--smoke", action="store_true", help="two students, five repeats, no notebook 05")
     args = parser.parse_args(argv)
     if args.smoke:
@@ -281,7 +336,7 @@ def main(argv=None) -> int:
     if min(args.students, args.repeats, args.savers, args.burst) < 1:
         parser.error("--students, --repeats, --savers and --burst must be at least 1")
     args.savers, args.burst = min(args.savers, args.students), min(args.burst, args.students)
-    print(f"before: {machine()}")
+    print(f"{time.strftime('%Y-%m-%d %H:%M')}, numba kernels: {args.numba}; before: {machine()}")
     with tempfile.TemporaryDirectory(prefix="bench-class-") as tmp:
         work = Path(tmp)
         t0 = time.perf_counter()
@@ -290,7 +345,8 @@ def main(argv=None) -> int:
             stage_course(work / "homes" / name)
         print(f"course copy: {(time.perf_counter() - t0) / args.students:.2f} s per student "
               "(made before start-up, not in its figure)")
-        with running_hub(work, names) as hub:
+        kernels = teachers_step(work) if args.numba == "shared" else None
+        with running_hub(work, names, kernels) as hub:
             try:
                 status = asyncio.run(measure(hub, names, args))
             except Exception:

@@ -11,7 +11,11 @@ settings (ports, state folder, venv, course, users) pointed at the run, loaded w
 * the server command: this environment's ``jupyterhub.singleuser``, with the deployment's
   arguments plus ``--allow-root`` as root, the home as root folder, and no
   ``pre_spawn_hook``; :func:`stage_course` gives each home its copy of the course instead;
-* a numba cache in each home, as students get who cannot write into the venv;
+* Jupyter's runtime folder (the kernels' Unix sockets) in the run's folder, with a short path
+  as ``hub_start serve`` gives each server;
+* a numba cache in each home, as students get who cannot write into the venv, and the
+  teacher's compiled kernels (``ISMB_NUMBA_SHARED``) only when a run passes a folder of them
+  (``hub_start stage`` compiles them into ``COURSE/numba``; here the course is the repository);
 * a service of its own whose token asks the REST API for users and servers, and reaches
   each server through the proxy.
 
@@ -39,6 +43,7 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parents[1]
 DEPLOY = ROOT / "deploy" / "jupyterhub_config.py"
 NOTEBOOK = "ismb_lab/notebooks/04_label_targets.ipynb"
+NOTEBOOK_00 = "ismb_lab/notebooks/00_start_here.ipynb"
 COURSE = ("notebooks", "images", "manifests")
 LEFT_OUT = ("solutions", ".ipynb_checkpoints", "targets-*.json", "my_targets*.json", "params-*.json",
             ".targets-*.lock", "photos-*")
@@ -72,7 +77,7 @@ class Hub:
     log: Path
 
 
-def hub_config(work: Path, token: str, ports: tuple, proxy: str) -> str:
+def hub_config(work: Path, token: str, ports: tuple, proxy: str, shared_kernels: Path | None = None) -> str:
     """The benchmark's config: the deployment's, with only the overrides the docstring lists."""
     port, hub_port, api_port = ports
     args = ["--allow-root"] if os.geteuid() == 0 else []
@@ -97,7 +102,10 @@ c.Spawner.cmd = [{sys.executable!r}, "-m", "jupyterhub.singleuser"]
 c.Spawner.args.extend({args!r})
 c.Spawner.notebook_dir = "~"
 c.Spawner.pre_spawn_hook = None
-c.Spawner.environment.update({{"NUMBA_CACHE_DIR": lambda spawner: spawner.home_dir + "/.cache/numba"}})
+c.Spawner.environment.update({{"NUMBA_CACHE_DIR": lambda spawner: spawner.home_dir + "/.cache/numba",
+                              "ISMB_NUMBA_SHARED": {str(shared_kernels or "")!r},
+                              # short: the kernels' Unix sockets (hub_start serve makes one in /tmp)
+                              "JUPYTER_RUNTIME_DIR": lambda spawner: {str(work / "rt")!r} + "/" + spawner.user.name}})
 c.JupyterHub.services.append({{"name": "bench-class", "api_token": {token!r}}})
 c.JupyterHub.load_roles.append({{"name": "bench-class", "services": ["bench-class"],
     "scopes": ["admin:users", "admin:servers", "access:servers"]}})
@@ -155,11 +163,12 @@ def deploy_settings(work: Path, ports: tuple, students: list) -> dict:
 
 
 @contextmanager
-def running_hub(work: Path, students: list):
-    """Start the hub in `work` (its cwd, state and homes) and stop it, whatever happens."""
+def running_hub(work: Path, students: list, shared_kernels: Path | None = None):
+    """Start the hub in `work` (its cwd, state and homes) and stop it, whatever happens; with
+    `shared_kernels`, the servers get that folder of compiled kernels (``ISMB_NUMBA_SHARED``)."""
     token, ports = secrets.token_hex(32), (free_port(), free_port(), free_port())
     config = work / "bench_config.py"
-    config.write_text(hub_config(work, token, ports, proxy_command()))
+    config.write_text(hub_config(work, token, ports, proxy_command(), shared_kernels))
     log = work / "hub.log"
     path = os.pathsep.join(filter(None, [str(ROOT), os.environ.get("PYTHONPATH")]))
     env = dict(os.environ, PYTHONPATH=path, JUPYTER_RUNTIME_DIR=str(work / "runtime"), MPLBACKEND="Agg",
@@ -295,19 +304,33 @@ def notebook_cells(home: Path, notebook: str = NOTEBOOK) -> list:
     return [cell.source for cell in nb.cells if cell.cell_type == "code"]
 
 
-async def run_notebook(kernel: Kernel, cells: list) -> float:
-    t0 = time.perf_counter()
+async def run_cells(kernel: Kernel, cells: list, t0: float) -> list:
+    """Run `cells` in order; the seconds from `t0` at which each was done."""
+    done = []
     for code in cells:
         await kernel.run_ok(code)
+        done.append(time.perf_counter() - t0)
     await kernel.run_ok("import json, time")
+    return done
+
+
+async def run_notebook(kernel: Kernel, cells: list) -> float:
+    t0 = time.perf_counter()
+    await run_cells(kernel, cells, t0)
     return time.perf_counter() - t0
 
 
-async def open_and_run(client: Client, name: str, cells: list, t0: float) -> tuple:
-    """`name` opens notebook 04 and runs it; (their kernel, seconds from `t0` until done)."""
-    kernel = await client.open_kernel(name)
-    await run_notebook(kernel, cells)
-    return kernel, time.perf_counter() - t0
+async def open_and_run(client: Client, name: str, cells: list, t0: float, notebook: str = NOTEBOOK) -> tuple:
+    """`name` opens `notebook` and runs it; (their kernel, the seconds from `t0` at which each
+    cell was done)."""
+    kernel = await client.open_kernel(name, notebook)
+    return kernel, await run_cells(kernel, cells, t0)
+
+
+async def shut_down(client: Client, kernel: Kernel) -> None:
+    """Close `kernel` as JupyterLab's "Shut Down Kernel" does."""
+    kernel.conn.close()
+    await client.call("DELETE", f"/user/{kernel.name}/api/kernels/{kernel.id}", allow_nonstandard_methods=True)
 
 
 # --- processes and memory ----------------------------------------------------------------

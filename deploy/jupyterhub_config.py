@@ -3,15 +3,19 @@
 Start it as root (so that it can start each student's server as that student), from the
 venv that deploy/README.md has you build, with the class's settings in the environment:
 
-    ISMB_HUB_GROUP=ismbclass ISMB_HUB_ADMINS=teacher \\
-        /opt/ismb-lab/venv/bin/jupyterhub -f deploy/jupyterhub_config.py
+    ISMB_HUB_GROUP=ismbclass ISMB_HUB_ADMINS=teacher nohup /opt/ismb-lab/venv/bin/jupyterhub \\
+        -f /opt/ismb-lab/repo/deploy/jupyterhub_config.py >> /var/log/ismb-hub.log 2>&1 &
+
+and stop it with ``kill "$(cat /var/lib/ismb-hub/jupyterhub.pid)"``.
 
 Every setting a course changes is an ``ISMB_HUB_*`` environment variable, listed with its
 default in deploy/README.md; nothing else needs editing. Each student logs in with their
 own account (PAM) and gets their own JupyterLab, started as them by
 ``python -m ismb_lab.hub_start serve``: that command copies the course folder into
 ``~/ismb_lab`` (mode 700) with the student's own rights, then starts the server. Root
-never writes in a home.
+never writes in a home. The course folder's ``config`` is the students' Jupyter config,
+its ``teacher-config`` the teachers' (hub admins'), its ``numba`` the compiled kernels that
+every student's process copies (all made by ``python -m ismb_lab.hub_start stage``).
 """
 
 import os
@@ -67,13 +71,24 @@ os.chmod(STATE, 0o700)
 c.JupyterHub.db_url = f"sqlite:///{STATE / 'jupyterhub.sqlite'}"
 c.JupyterHub.cookie_secret_file = str(STATE / "jupyterhub_cookie_secret")
 c.ConfigurableHTTPProxy.pid_file = str(STATE / "jupyterhub-proxy.pid")
+# The hub's own PID, to stop it (kill "$(cat .../jupyterhub.pid)": it stops the proxy and the servers).
+c.JupyterHub.pid_file = str(STATE / "jupyterhub.pid")
 
 
 class CourseSpawner(LocalProcessSpawner):
     """LocalProcessSpawner whose servers start inside the student's cgroups (where the machine
-    has writable cgroup v1) and under RLIMIT_DATA, before they drop root."""
+    has writable cgroup v1) and under RLIMIT_DATA, before they drop root; a teacher's (a hub
+    admin's) server reads the teachers' Jupyter config folder, with the Formgrader on."""
 
     cgroups = []
+
+    def get_env(self):
+        env = super().get_env()
+        if self.user.admin and (COURSE / "teacher-config").is_dir():
+            env["JUPYTER_CONFIG_PATH"] = str(COURSE / "teacher-config")
+            if os.environ.get("ISMB_COURSE_ROOT"):
+                env["ISMB_COURSE_ROOT"] = os.environ["ISMB_COURSE_ROOT"]
+        return env
 
     async def start(self):
         self.cgroups = hub_start.make_cgroups(self.user.name, MEM_LIMIT)
@@ -104,15 +119,21 @@ c.Spawner.environment = {
     "ISMB_HUB_COURSE": str(COURSE),
     # nbgrader's course and exchange (deploy/course/), teacher tools hidden: staged by hub_start.
     "JUPYTER_CONFIG_PATH": str(COURSE / "config"),
+    # The kernels the teacher compiled once (hub_start stage): each student's process copies them.
+    "ISMB_NUMBA_SHARED": str(COURSE / "numba"),
     **{name: os.environ[name] for name in ("ISMB_COURSE_ID", "ISMB_NBGRADER_EXCHANGE") if name in os.environ},
     "PATH": f"{VENV / 'bin'}:/usr/local/bin:/usr/bin:/bin",
     # Activity reports often enough for the culler's timeout.
     "JUPYTERHUB_ACTIVITY_INTERVAL": str(max(5, min(300, CULL_TIMEOUT // 4))),
 }
-# A kernel whose tab closed (no connection) and that has been idle is shut down.
+# A kernel whose tab closed (no connection) and that has been idle is shut down. Kernels talk
+# to their server over Unix sockets in the student's private runtime folder (hub_start serve
+# makes it), not TCP ports: thirty kernels starting at once raced for free ports ("Address
+# already in use", kernel died), and a port on 127.0.0.1 is open to every account.
 c.Spawner.args = [f"--MappingKernelManager.cull_idle_timeout={KERNEL_CULL_TIMEOUT}",
                   f"--MappingKernelManager.cull_interval={max(5, min(300, KERNEL_CULL_TIMEOUT // 4))}",
-                  "--MappingKernelManager.cull_connected=False"]
+                  "--MappingKernelManager.cull_connected=False",
+                  "--KernelManager.transport=ipc"]
 c.Spawner.default_url = f"/lab/tree/{hub_start.COPY}/notebooks/00_start_here.ipynb"
 c.Spawner.notebook_dir = "~"
 c.Spawner.start_timeout = 120
@@ -123,7 +144,7 @@ c.JupyterHub.last_activity_interval = max(5, min(300, CULL_TIMEOUT // 4))
 c.JupyterHub.services = [{
     "name": "idle-culler",
     "command": [sys.executable, "-m", "jupyterhub_idle_culler", f"--timeout={CULL_TIMEOUT}",
-                f"--cull-every={max(5, min(600, CULL_TIMEOUT // 4))}"],
+                f"--cull-every={max(5, min(300, CULL_TIMEOUT // 4))}"],
 }]
 c.JupyterHub.load_roles = [{
     "name": "idle-culler",

@@ -5,7 +5,12 @@
   own submit leaves them 0644 in a 0777 folder, hidden only by an unguessable name.
 * :class:`OwnerCollect`: a submission counts for the account that owns it in the
   exchange, never for the name it claims (``nbgrader submit --student=someone``); the
-  folder ``submitted/<student>/`` is therefore who handed the work in.
+  folder ``submitted/<student>/`` is therefore who handed the work in.  Every collect takes
+  each student's latest submission, replacing an older one collected before (nbgrader's
+  ``--update``, on by default here).
+* :class:`KeylessRelease`: a released assignment holds no ground truth of an image pair
+  (``answer_key.json``, ``disparity.png``, ``scene.json``) that none of its notebooks reads
+  (the labels assignment: the answer key is what the students label).
 """
 
 from __future__ import annotations
@@ -15,10 +20,16 @@ import pwd
 import shutil
 
 from nbgrader.exchange.default.collect import ExchangeCollect
+from nbgrader.exchange.default.release_assignment import ExchangeReleaseAssignment
 from nbgrader.exchange.default.submit import ExchangeSubmit
 from nbgrader.utils import ignore_patterns
+from traitlets import Bool
 
-__all__ = ["OwnerCollect", "PrivateSubmit"]
+__all__ = ["GROUND_TRUTH", "KeylessRelease", "OwnerCollect", "PrivateSubmit"]
+
+#: An image pair's ground truth (ismb_lab.gallery.PAIR_FILES): the answer key, the disparity map
+#: it is computed from, and the scene's description.
+GROUND_TRUTH = ("answer_key.json", "disparity.png", "scene.json")
 
 FILE_MODE, FOLDER_MODE = 0o640, 0o2770
 
@@ -70,7 +81,11 @@ class PrivateSubmit(ExchangeSubmit):
 
 
 class OwnerCollect(ExchangeCollect):
-    """nbgrader's collect, filing each submission under the account that owns it."""
+    """nbgrader's collect, filing each submission under the account that owns it, and taking
+    a newer submission than the one collected before."""
+
+    update = Bool(True, help="Replace a collected submission by a newer one (nbgrader's --update; "
+                             "on by default: collect always takes the latest)").tag(config=True)
 
     def _path_to_record(self, path):
         record = super()._path_to_record(path)
@@ -80,3 +95,33 @@ class OwnerCollect(ExchangeCollect):
                              path, record["username"], owner, owner)
             record["username"] = owner
         return record
+
+
+def _unread(folder: str) -> list:
+    """The ground-truth file names that no notebook in `folder` names (notebook 00 scores a
+    match with the answer key, so its assignment keeps it)."""
+    texts = []
+    for top, _, names in os.walk(folder):
+        for name in names:
+            if name.endswith(".ipynb"):
+                with open(os.path.join(top, name), encoding="utf-8") as text:
+                    texts.append(text.read())
+    return [name for name in GROUND_TRUTH if not any(name in text for text in texts)]
+
+
+class KeylessRelease(ExchangeReleaseAssignment):
+    """nbgrader's release, leaving out an image pair's ground truth (answer key, disparity map,
+    scene description) that no notebook of the assignment reads: the labels assignment asks
+    the students for what the answer key holds."""
+
+    def do_copy(self, src, dest, log=None):
+        unread = _unread(src) if os.path.abspath(dest) == os.path.abspath(self.dest_path) else []
+        if not unread:
+            return super().do_copy(src, dest, log)
+        kept = list(self.coursedir.ignore)
+        self.coursedir.ignore = [*kept, *unread]
+        try:
+            super().do_copy(src, dest, log)
+        finally:
+            self.coursedir.ignore = kept
+        self.log.info("Left out %s: no notebook of %s reads them", ", ".join(unread), self.coursedir.assignment_id)

@@ -7,11 +7,26 @@ yet, then becomes ``jupyterhub-singleuser``. Root never writes in a home, so a s
 link the student swaps in mid-copy leads only where the student could write anyway.
 
 The teacher prepares the course folder once with ``python -m ismb_lab.hub_start stage
-REPOSITORY COURSE``: the notebooks (their student versions: exercise solutions and hidden
-tests cleared as ``nbgrader generate_assignment`` clears them), images and manifests, without
-the solutions folder, labels or lock files, readable by everyone, and ``COURSE/config``, the folder the hub puts on the
-students' ``JUPYTER_CONFIG_PATH``: the course's ``nbgrader_config.py`` (its exchange, from
-``deploy/course/``) and a page config that hides nbgrader's teacher tools from students.
+REPOSITORY COURSE``, run with the class venv's python:
+
+* the notebooks (their student versions: exercise solutions and hidden tests cleared as
+  ``nbgrader generate_assignment`` clears them), images and manifests, without the solutions
+  folder, labels or lock files;
+* ``COURSE/numba``: the kernels, compiled once for the venv's copy of the package
+  (:mod:`ismb_lab._numba_share`), which every student's process loads instead of compiling;
+* ``COURSE/config``, the students' Jupyter config folder (the hub puts it on their
+  ``JUPYTER_CONFIG_PATH``): the course's ``nbgrader_config.py`` (its course id and
+  exchange, from ``deploy/course/``), a page config that hides nbgrader's teacher tools and
+  a server config that does not load the Formgrader's server extension;
+* ``COURSE/teacher-config``, the teachers' (hub admins') folder: the same nbgrader config
+  with the teacher's course folder as ``CourseDirectory.root`` (``ISMB_COURSE_ROOT``,
+  default ``~/course``), and nbgrader's tools all on;
+* ``COURSE/lab-settings/overrides.json``: JupyterLab asks no one about news;
+* ``COURSE/profile.sh``, installed by root as ``/etc/profile.d/ismb-lab.sh``: every login
+  shell (JupyterLab's terminals, ``su -``, ssh) finds the venv's commands, the course's
+  nbgrader config and the compiled kernels.
+
+All of it readable by everyone and writable by no one but its owner (root).
 
 Memory: :func:`make_cgroups` (run by the hub, as root) gives each student a memory and
 a CPU cgroup (cgroup v1) where the machine has them; :func:`enter` (run in the new
@@ -29,15 +44,17 @@ import os
 import pwd
 import re
 import resource
+import shlex
 import shutil
+import stat
 import sys
 import tempfile
 from pathlib import Path
 
 from ._validation import ParameterError, message
 
-__all__ = ["PARTS", "IGNORE", "TEACHER_TOOLS", "parse_size", "stage", "copy_course", "cgroup_dirs", "make_cgroups",
-           "enter", "remove_cgroups", "main"]
+__all__ = ["PARTS", "IGNORE", "TEACHER_TOOLS", "STUDENT_SERVER_OFF", "parse_size", "stage", "profile",
+           "copy_course", "runtime_folder", "cgroup_dirs", "make_cgroups", "enter", "remove_cgroups", "main"]
 
 #: What a student gets a copy of.
 PARTS = ("notebooks", "images", "manifests")
@@ -47,6 +64,10 @@ IGNORE = (".ipynb_checkpoints", "targets-*.json", "my_targets*.json", "params-*.
 #: nbgrader's JupyterLab plugins that only a teacher's course folder can use.
 TEACHER_TOOLS = ("@jupyter/nbgrader:formgrader", "@jupyter/nbgrader:create-assignment",
                  "@jupyter/nbgrader:course-list")
+#: nbgrader's server extensions that students' servers do not load (the teachers' do).
+STUDENT_SERVER_OFF = ("nbgrader.server_extensions.formgrader", "nbgrader.server_extensions.course_list")
+#: JupyterLab's settings for everyone: no question about news, no update check.
+LAB_OVERRIDES = {"@jupyterlab/apputils-extension:notification": {"fetchNews": "false", "checkForUpdates": False}}
 #: The folder in each home, and the cgroup folder that holds one cgroup per student.
 COPY = "ismb_lab"
 CGROUP_GROUP = "ismb-hub"
@@ -79,9 +100,10 @@ def _copy_parts(source: Path, target: Path) -> list[str]:
     return copied
 
 
-def stage(repository, course) -> list[str]:
+def stage(repository, course, kernels: bool = True) -> list[str]:
     """The teacher's step: copy the course parts of `repository` into a new folder `course`
-    that every account can read (folders 755, files 644); returns the parts copied.
+    that every account can read (folders 755, files 644), with the Jupyter config folders,
+    the login shells' profile and (with `kernels`) the compiled kernels; returns what was made.
 
     `course` must not exist yet, so that nothing staged earlier is mixed in.
     """
@@ -99,8 +121,21 @@ def stage(repository, course) -> list[str]:
         raise ParameterError(message("repository", "stage", "notebooks whose solutions nbgrader can "
                                      "clear (install the [course] extra)", str(source))) from None
     if (source / "deploy" / "course" / "nbgrader_config.py").is_file():
-        _stage_config(source / "deploy" / "course", course / "config")
-        copied.append("config")
+        _stage_config(source / "deploy" / "course", course)
+        copied += ["config", "teacher-config", "lab-settings"]
+    (course / "profile.sh").write_text(profile(course))
+    copied.append("profile.sh")
+    if kernels:
+        from ._numba_share import compile_into
+
+        try:
+            report = compile_into(course / "numba")
+        except OSError as error:
+            shutil.rmtree(course)
+            raise OSError(f"{course}: {error}") from None
+        copied.append(f"numba ({report['kernels']} kernels compiled in {report['seconds']} s for "
+                      f"{report['source']}" + (f"; not compiled: {', '.join(report['cold'])}" if report["cold"]
+                                               else "") + ")")
     for folder, dirs, files in os.walk(course):
         os.chmod(folder, 0o755)
         for name in files:
@@ -120,12 +155,64 @@ def _student_versions(folder: Path) -> None:
             nbformat.write(student_notebook(nbformat.reads(text, as_version=4)), path)
 
 
-def _stage_config(course_config: Path, target: Path) -> None:
-    """The students' Jupyter config folder: the course's nbgrader config, teacher tools hidden."""
-    (target / "labconfig").mkdir(parents=True)
-    shutil.copy(course_config / "nbgrader_config.py", target / "nbgrader_config.py")
-    page = {"disabledExtensions": {name: True for name in TEACHER_TOOLS}}
-    (target / "labconfig" / "page_config.json").write_text(json.dumps(page, indent=1) + "\n")
+_STAGED = """
+# Written by `python -m ismb_lab.hub_start stage`: the course id and exchange it was run with
+# are this course's, for every server and login shell that reads this folder.
+import os  # noqa: E402
+
+c.CourseDirectory.course_id = os.environ.get("ISMB_COURSE_ID", {course_id!r})
+c.Exchange.root = os.environ.get("ISMB_NBGRADER_EXCHANGE", {exchange!r})
+"""
+_TEACHER = """
+# The teacher's course folder (source/, release/, submitted/, gradebook.db): the Formgrader of
+# the teacher's server and nbgrader in its terminals work on it, from whatever folder.
+c.CourseDirectory.root = os.path.expanduser(os.environ.get("ISMB_COURSE_ROOT", "~/course"))
+"""
+
+
+def _json(path: Path, value) -> None:
+    path.parent.mkdir(parents=True, exist_ok=True)
+    path.write_text(json.dumps(value, indent=1) + "\n")
+
+
+def _stage_config(course_config: Path, course: Path) -> None:
+    """The students' and the teachers' Jupyter config folders, and JupyterLab's settings."""
+    text = (course_config / "nbgrader_config.py").read_text(encoding="utf-8").rstrip("\n") + "\n"
+    text += _STAGED.format(course_id=os.environ.get("ISMB_COURSE_ID", "ismb_lab"),
+                           exchange=os.environ.get("ISMB_NBGRADER_EXCHANGE", "/srv/nbgrader/exchange"))
+    settings = course.resolve() / "lab-settings"
+    _json(settings / "overrides.json", LAB_OVERRIDES)
+    lab = {"news_url": None, "app_settings_dir": str(settings)}
+    students, teachers = course / "config", course / "teacher-config"
+    students.mkdir()
+    (students / "nbgrader_config.py").write_text(text)
+    _json(students / "labconfig" / "page_config.json", {"disabledExtensions": {name: True for name in TEACHER_TOOLS}})
+    _json(students / "jupyter_server_config.json",
+          {"ServerApp": {"jpserver_extensions": {name: False for name in STUDENT_SERVER_OFF}}, "LabApp": lab})
+    teachers.mkdir()
+    (teachers / "nbgrader_config.py").write_text(text + _TEACHER)
+    _json(teachers / "jupyter_server_config.json", {"LabApp": lab})
+
+
+def profile(course) -> str:
+    """``/etc/profile.d/ismb-lab.sh`` for a course staged in `course` by this interpreter's
+    venv: login shells (Debian's ``/etc/profile`` resets PATH) find the venv's commands
+    (after the system's for root, so root's ``python3`` and ``pip`` stay Debian's), the
+    course's nbgrader config and the compiled kernels; values a server set are kept."""
+    course, bin_ = Path(course).resolve(), Path(sys.prefix).resolve() / "bin"
+    quoted = shlex.quote(str(bin_))
+    return f"""# ismb_lab's class hub: written by `python -m ismb_lab.hub_start stage`, installed as
+# /etc/profile.d/ismb-lab.sh (deploy/README.md). Login shells (JupyterLab's terminals, su -,
+# ssh) find the class venv's commands, the course's nbgrader config and compiled kernels.
+case ":${{PATH}}:" in
+    *:{quoted}:*) ;;
+    *) if [ "$(id -u)" -eq 0 ]; then PATH="${{PATH}}:"{quoted}; else PATH={quoted}":${{PATH}}"; fi ;;
+esac
+export PATH
+JUPYTER_CONFIG_PATH=${{JUPYTER_CONFIG_PATH:-{shlex.quote(str(course / 'config'))}}}
+ISMB_NUMBA_SHARED=${{ISMB_NUMBA_SHARED:-{shlex.quote(str(course / 'numba'))}}}
+export JUPYTER_CONFIG_PATH ISMB_NUMBA_SHARED
+"""
 
 
 def _private_folder(path: Path) -> bool:
@@ -232,11 +319,37 @@ def remove_cgroups(cgroups) -> list[Path]:
     return busy
 
 
+def runtime_folder(temp: str | None = None) -> str:
+    """A folder of this account's alone with a short path for Jupyter's runtime files:
+    ``<temp>/ismb-lab-rt-<uid>`` (made 0700) if it is a private folder of this account's, else
+    a new private one there.  The kernels' Unix sockets live in it, and a socket's path holds
+    at most 107 bytes (``~/.local/share/jupyter/runtime/kernel-<36 characters>-ipc-4`` leaves
+    28 for the home folder)."""
+    temp = temp or tempfile.gettempdir()
+    path = os.path.join(temp, f"ismb-lab-rt-{os.getuid()}")
+    try:
+        os.mkdir(path, 0o700)
+    except FileExistsError:
+        pass
+    try:
+        info = os.lstat(path)
+        if stat.S_ISDIR(info.st_mode) and info.st_uid == os.getuid() and not info.st_mode & 0o077:
+            return path
+    except OSError:
+        pass
+    return tempfile.mkdtemp(prefix="ismb-lab-rt-", dir=temp)     # someone else's name: not ours
+
+
 def serve(args, course) -> None:
     """The single-user server's start command: new files private (umask 077), the course
-    copied as this account, then ``jupyterhub-singleuser`` with `args` in this process."""
+    copied as this account, Jupyter's runtime files in :func:`runtime_folder`, then
+    ``jupyterhub-singleuser`` with `args` in this process."""
     os.umask(0o077)
     home = pwd.getpwuid(os.getuid()).pw_dir
+    try:
+        os.environ["JUPYTER_RUNTIME_DIR"] = runtime_folder()
+    except OSError as error:      # Jupyter's own folder in the home, then
+        print(f"ismb_lab: no runtime folder in {tempfile.gettempdir()}: {error}", file=sys.stderr, flush=True)
     try:
         if not course or not Path(course).is_dir():
             raise FileNotFoundError(errno.ENOENT, "no course folder (ISMB_HUB_COURSE)", str(course))
@@ -256,16 +369,20 @@ def main(argv=None) -> int:
                                      epilog="serve [ARGS...]: copy the course into ~/ismb_lab, then start "
                                             "jupyterhub-singleuser with ARGS (the hub's start command)")
     sub = parser.add_subparsers(dest="command", required=True)
-    staging = sub.add_parser("stage", help="copy the course parts of a repository into a new course folder")
+    staging = sub.add_parser("stage", help="copy the course parts of a repository into a new course folder, "
+                                           "with its config and the compiled kernels")
     staging.add_argument("repository")
     staging.add_argument("course")
+    staging.add_argument("--skip-kernels", action="store_true",
+                         help="do not compile the kernels (every student then compiles their own)")
     options = parser.parse_args(argv)
     try:
-        copied = stage(options.repository, options.course)
+        copied = stage(options.repository, options.course, kernels=not options.skip_kernels)
     except (ParameterError, OSError) as error:
         print(f"ismb_lab.hub_start: {error}", file=sys.stderr)
         return 2
     print(f"staged {', '.join(copied)} in {options.course}")
+    print(f"then, as root: install -m 0644 {Path(options.course).resolve() / 'profile.sh'} /etc/profile.d/ismb-lab.sh")
     return 0
 
 

@@ -22,6 +22,12 @@ c.CourseDirectory.ignore = [".ipynb_checkpoints", "*.pyc", "__pycache__", "feedb
 # that handed them in (ismb_lab/course_exchange.py).
 c.ExchangeFactory.submit = "ismb_lab.course_exchange.PrivateSubmit"
 c.ExchangeFactory.collect = "ismb_lab.course_exchange.OwnerCollect"
+# Every collect takes each student's latest submission, also one handed in after an earlier
+# collect (nbgrader skips it otherwise: "Submission already exists, use --update").
+c.ExchangeCollect.update = True
+# A released assignment holds no ground truth of a pair that none of its notebooks reads: the
+# labels assignment goes out without the answer key its students are asked to label.
+c.ExchangeFactory.release_assignment = "ismb_lab.course_exchange.KeylessRelease"
 # The exercise assignments keep a runnable first try beside each solution: the student
 # version gets a comment in the solution's place, not nbgrader's raise NotImplementedError(),
 # so it still runs on Restart & Run All (ismb_lab.course.CODE_STUB).

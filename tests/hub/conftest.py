@@ -7,10 +7,17 @@ its processes first, even when the test fails.
 Students cannot run the interpreter under ``/root`` (mode 700), so their servers and
 commands run from :func:`student_python`'s venv: Debian's ``/usr/bin/python3`` in a folder
 every user can read.
+
+:func:`deployment` does deploy/README.md's root steps for one test, in a temporary folder
+standing for ``/opt/ismb-lab`` and ``/srv/nbgrader``: the repository readable by root and the
+teacher only, the course staged from it with the venv's python (its kernels compiled once
+per session, :func:`teacher_kernels`), the exchange, and the course's profile installed as
+``/etc/profile.d/ismb-lab.sh`` (one test at a time on the machine; an earlier file is put back).
 """
 
 from __future__ import annotations
 
+import fcntl
 import grp
 import os
 import pwd
@@ -22,6 +29,7 @@ import tempfile
 import time
 from dataclasses import dataclass
 from pathlib import Path
+from types import SimpleNamespace
 
 import pytest
 
@@ -72,6 +80,12 @@ class Accounts:
         """``su -s /bin/sh NAME -c COMMAND``: the command as that student, in their home."""
         return subprocess.run(["su", "-s", "/bin/sh", account.name, "-c", f"cd && {command}"],
                               capture_output=True, text=True, timeout=timeout, **kwargs)
+
+    def login(self, account: Account, command: str, timeout: float = 300, **kwargs):
+        """``su - NAME -c COMMAND``: the command in that user's login shell (``/etc/profile``
+        and ``/etc/profile.d``, environment reset), as the docs have users type it."""
+        return subprocess.run(["su", "-", account.name, "-c", command], capture_output=True, text=True,
+                              timeout=timeout, **kwargs)
 
     def popen_as(self, account: Account, command: str, **kwargs) -> subprocess.Popen:
         return subprocess.Popen(["su", "-s", "/bin/sh", account.name, "-c", f"cd && {command}"], **kwargs)
@@ -154,3 +168,90 @@ def student_python():
         yield venv
     finally:
         shutil.rmtree(folder, ignore_errors=True)
+
+
+#: What deploy/README.md has root install from the repository (the rest is the venv's).
+REPOSITORY_PARTS = ("notebooks", "images", "manifests", "deploy")
+PROFILE = Path("/etc/profile.d/ismb-lab.sh")
+PROFILE_LOCK = Path("/run/lock/ismb-lab-hub-test.lock") if Path("/run/lock").is_dir() else \
+    Path(tempfile.gettempdir()) / "ismb-lab-hub-test.lock"
+
+
+def _read_only_for_all(folder: Path) -> None:
+    for top, _, names in os.walk(folder):
+        os.chmod(top, 0o755)
+        for name in names:
+            os.chmod(os.path.join(top, name), 0o644)
+
+
+@pytest.fixture(scope="session")
+def teacher_kernels(student_python):
+    """The kernels compiled once for the session by the students' venv (a cache root as
+    ``stage`` leaves it: root's, read-only); each test's ``stage`` starts from it, and compiles
+    only what changed (nothing)."""
+    from ismb_lab._numba_share import compile_into
+
+    folder = Path(tempfile.mkdtemp(prefix="ismb-hub-kernels-"))
+    try:
+        started = time.monotonic()
+        report = compile_into(folder / "numba", python=str(student_python / "bin" / "python"))
+        _read_only_for_all(folder)
+        print(f"the teacher's kernels: {report}, {time.monotonic() - started:.0f} s")
+        assert not report["cold"], report
+        yield folder / "numba"
+    finally:
+        shutil.rmtree(folder, ignore_errors=True)
+
+
+def venv_env(venv: Path, **extra) -> dict:
+    """Root's environment for the venv's commands: no PYTHONPATH (the venv's own copy of the
+    package is the one the students run)."""
+    env = {k: v for k, v in os.environ.items() if k not in ("PYTHONPATH", "NUMBA_CACHE_DIR")}
+    return {**env, "PATH": f"{venv / 'bin'}:{env.get('PATH', '/usr/bin:/bin')}", **extra}
+
+
+@pytest.fixture
+def deployment(accounts, student_python, teacher_kernels):
+    """deploy/README.md's root steps; yields a namespace: ``teacher``, ``repo``, ``course``,
+    ``exchange``, ``course_id``, ``venv``, ``shared`` (the /opt stand-in) and ``env`` (the
+    course's variables, for the hub and the teacher alike)."""
+    teacher = accounts.add("teach", in_group=False)
+    shared = Path(tempfile.mkdtemp(prefix="ismb-hub-opt-"))
+    lock, installed, saved = open(PROFILE_LOCK, "a"), False, None
+    try:
+        shared.chmod(0o755)
+        # the repository: root's, readable by the teacher's group only (it holds the solutions)
+        repo = shared / "repo"
+        subprocess.run(["install", "-d", "-m", "0750", "-o", "root", "-g", str(teacher.gid), str(repo)], check=True)
+        for part in REPOSITORY_PARTS:
+            shutil.copytree(ROOT / part, repo / part, ignore=shutil.ignore_patterns(
+                ".ipynb_checkpoints", "targets-*.json", "params-*.json", ".*.lock", "__pycache__"))
+        subprocess.run(["chmod", "-R", "o-rwx", str(repo)], check=True)
+        subprocess.run(["chgrp", "-R", str(teacher.gid), str(repo)], check=True)
+        # the exchange
+        srv = shared / "srv"
+        subprocess.run(["install", "-d", "-m", "0755", str(srv)], check=True)
+        subprocess.run(["install", "-d", "-m", "1777", str(srv / "exchange")], check=True)
+        course_id = f"{accounts.tag}course"
+        env = {"ISMB_COURSE_ID": course_id, "ISMB_NBGRADER_EXCHANGE": str(srv / "exchange")}
+        # the course, staged with the venv's python (the kernels: from the session's, unchanged)
+        course = shared / "course"
+        started = time.monotonic()
+        staged = subprocess.run([str(student_python / "bin" / "python"), "-m", "ismb_lab.hub_start", "stage",
+                                 str(repo), str(course)], cwd=shared, capture_output=True, text=True,
+                                env=venv_env(student_python, ISMB_NUMBA_SHARED=str(teacher_kernels), **env))
+        assert staged.returncode == 0, staged.stderr
+        print(f"stage: {time.monotonic() - started:.1f} s: {staged.stdout.strip()}")
+        fcntl.flock(lock, fcntl.LOCK_EX)       # one test's profile at a time on this machine
+        saved, installed = (PROFILE.read_bytes() if PROFILE.exists() else None), True
+        subprocess.run(["install", "-m", "0644", str(course / "profile.sh"), str(PROFILE)], check=True)
+        yield SimpleNamespace(teacher=teacher, repo=repo, course=course, exchange=srv / "exchange",
+                              course_id=course_id, venv=student_python, shared=shared, env=env)
+    finally:
+        if installed and saved is None:
+            PROFILE.unlink(missing_ok=True)
+        elif installed:
+            PROFILE.write_bytes(saved)
+        fcntl.flock(lock, fcntl.LOCK_UN)
+        lock.close()
+        shutil.rmtree(shared, ignore_errors=True)

@@ -17,7 +17,6 @@ import signal
 import socket
 import stat
 import subprocess
-import sys
 import tempfile
 import time
 import uuid
@@ -26,6 +25,8 @@ from pathlib import Path
 import pytest
 
 from ismb_lab import hub_start
+
+from .conftest import venv_env
 
 pytestmark = pytest.mark.hub
 
@@ -122,6 +123,32 @@ class Student:
         return self.http.request(method, f"{self.url}/user/{self.name}/api/{path}", headers=headers,
                                  timeout=60, **kwargs)
 
+    def terminal(self, commands: str, timeout: float = 180) -> str:
+        """Type `commands` into a new JupyterLab terminal of this student's (the terminals API and
+        its websocket, as JupyterLab's Terminal tab does); what the terminal showed."""
+        import websocket
+
+        made = self.api("POST", "terminals")
+        assert made.status_code == 200, (made.status_code, made.text[:300])
+        name = made.json()["name"]
+        url = f"{self.url.replace('http', 'ws', 1)}/user/{self.name}/terminals/websocket/{name}"
+        cookie = "; ".join(f"{c.name}={c.value}" for c in self.http.cookies)
+        xsrf = self.http.cookies.get("_xsrf", path=f"/user/{self.name}/")
+        ws = websocket.create_connection(f"{url}?_xsrf={xsrf}" if xsrf else url, header=[f"Cookie: {cookie}"],
+                                         timeout=timeout)
+        shown, deadline = "", time.monotonic() + timeout
+        try:
+            # the mark is split in what is typed, so only its output completes it
+            ws.send(json.dumps(["stdin", f"{commands}; echo ISMB-TERM''INAL-DONE\r"]))
+            while "ISMB-TERMINAL-DONE" not in shown and time.monotonic() < deadline:
+                message = json.loads(ws.recv())
+                if message[0] == "stdout":
+                    shown += message[1]
+        finally:
+            ws.close()
+            self.api("DELETE", f"terminals/{name}")
+        return shown
+
     def start_kernel(self) -> str:
         answer = self.api("POST", "kernels", json={"name": "python3"})
         assert answer.status_code == 201, (answer.status_code, answer.text[:300])
@@ -202,10 +229,11 @@ print(swaps)
 
 
 @pytest.fixture
-def class_hub(request, proxy_folder, accounts, student_python, tmp_path):
-    """deploy/jupyterhub_config.py as root with three students, one outsider and a teacher;
-    yields a namespace of what the test needs. Stops the hub, the students' processes, and
-    removes the cgroups, the staged course and the state folder. An indirect parameter
+def class_hub(request, proxy_folder, accounts, deployment, tmp_path):
+    """deploy/jupyterhub_config.py (the deployment's copy of the repository) run by the venv's
+    jupyterhub as root, with three students, one outsider and the teacher (conftest.deployment);
+    yields a namespace of what the test needs. Stops the hub by the PID file the docs use, the
+    students' processes, and removes the cgroups and the state folder. An indirect parameter
     changes documented variables (e.g. ``{"MEM_LIMIT": "2G"}``)."""
     settings = {"MEM_LIMIT": MEM_LIMIT, "CULL_TIMEOUT": str(CULL_TIMEOUT),
                 "KERNEL_CULL_TIMEOUT": str(KERNEL_CULL_TIMEOUT), **getattr(request, "param", {})}
@@ -214,25 +242,21 @@ def class_hub(request, proxy_folder, accounts, student_python, tmp_path):
         import websocket  # noqa: F401
     except ImportError as error:
         _unavailable(f"{error.name} is missing (pip install -e '.[test]')")
-    path = f"{proxy_folder}:{os.environ.get('PATH', '/usr/bin:/bin')}"
     students = [accounts.add(role) for role in ("ann", "bob", "cat")]
-    outsider, teacher = accounts.add("out", in_group=False), accounts.add("teach", in_group=False)
-    shared = Path(tempfile.mkdtemp(prefix="ismb-hub-test-"))
-    shared.chmod(0o755)
-    course, state = shared / "course", tmp_path / "state"
-    staged = subprocess.run([sys.executable, "-m", "ismb_lab.hub_start", "stage", str(ROOT), str(course)],
-                            capture_output=True, text=True)
-    assert staged.returncode == 0, staged.stderr
+    outsider, teacher = accounts.add("out", in_group=False), deployment.teacher
+    shared, course, state = deployment.shared, deployment.course, tmp_path / "state"
     port = free_port()
-    env = dict(os.environ, PATH=path, ISMB_HUB_GROUP=accounts.group, ISMB_HUB_ADMINS=teacher.name,
-               ISMB_HUB_IP="127.0.0.1", ISMB_HUB_PORT=str(port), ISMB_HUB_API_PORT=str(free_port()),
-               ISMB_HUB_HUB_PORT=str(free_port()), ISMB_HUB_VENV=str(student_python),
-               ISMB_HUB_COURSE=str(course), ISMB_HUB_STATE=str(state),
-               **{f"ISMB_HUB_{name}": value for name, value in settings.items()})
+    env = venv_env(deployment.venv, PATH=f"{proxy_folder}:{deployment.venv / 'bin'}:/usr/bin:/bin",
+                   ISMB_HUB_GROUP=accounts.group, ISMB_HUB_ADMINS=teacher.name,
+                   ISMB_HUB_IP="127.0.0.1", ISMB_HUB_PORT=str(port), ISMB_HUB_API_PORT=str(free_port()),
+                   ISMB_HUB_HUB_PORT=str(free_port()), ISMB_HUB_VENV=str(deployment.venv),
+                   ISMB_HUB_COURSE=str(course), ISMB_HUB_STATE=str(state), **deployment.env,
+                   **{f"ISMB_HUB_{name}": value for name, value in settings.items()})
     log = tmp_path / "hub.log"
-    with open(log, "w") as out:
-        hub = subprocess.Popen([sys.executable, "-m", "jupyterhub", "-f", str(DEPLOY)], cwd=tmp_path, env=env,
-                               stdout=out, stderr=subprocess.STDOUT)
+    with open(log, "w") as out:      # deploy/README.md: nohup ... >> LOG 2>&1 &
+        hub = subprocess.Popen([str(deployment.venv / "bin" / "jupyterhub"), "-f",
+                                str(deployment.repo / "deploy" / "jupyterhub_config.py")],
+                               cwd=tmp_path, env=env, stdout=out, stderr=subprocess.STDOUT)
     url = f"http://127.0.0.1:{port}"
     try:
         import requests
@@ -246,23 +270,25 @@ def class_hub(request, proxy_folder, accounts, student_python, tmp_path):
                 return False
         wait_for(healthy, 90, "the hub's health check")
         yield dict(url=url, students=students, outsider=outsider, teacher=teacher, course=course,
-                   state=state, log=log, hub=hub, shared=shared)
+                   state=state, log=log, hub=hub, shared=shared, deployment=deployment)
     finally:
-        if hub.poll() is None:       # the hub stops the proxy and the servers it started
-            hub.send_signal(signal.SIGTERM)
+        if hub.poll() is None:       # as the docs stop it: SIGTERM to the PID in the state folder
+            pid_file = state / "jupyterhub.pid"
+            pid = int(pid_file.read_text()) if pid_file.exists() else hub.pid
+            assert pid == hub.pid, (pid, hub.pid)
+            os.kill(pid, signal.SIGTERM)   # the hub stops the proxy and the servers it started
             try:
                 hub.wait(60)
             except subprocess.TimeoutExpired:
                 hub.kill()
                 hub.wait(10)
         ARTIFACTS.mkdir(exist_ok=True)
-        shutil.copy(log, ARTIFACTS / "hub_real_accounts.log")
+        shutil.copy(log, ARTIFACTS / f"hub_real_accounts_{request.node.name[:40]}.log")
         for account in accounts.made:
             accounts.stop_processes(account)
             busy = hub_start.remove_cgroups(hub_start.cgroup_dirs(account.name))
             assert not busy, f"cgroups left behind: {busy}"
         hub_start.remove_cgroups({d.parent for d in hub_start.cgroup_dirs("any")})   # if no other hub uses it
-        shutil.rmtree(shared, ignore_errors=True)
 
 
 def test_real_accounts_log_in_to_private_copies_with_culling_and_a_memory_limit(class_hub, accounts):
@@ -489,3 +515,172 @@ def test_a_student_logs_in_in_chromium_and_labels_a_pair_in_notebook_04(class_hu
     assert len(load_targets(saved[0])) == 1
     assert saved[0].stat().st_uid == ann.uid and stat.S_IMODE(saved[0].stat().st_mode) == 0o600
     assert root_owned(ann.home) == []
+
+
+# --- the class from the docs: terminals, grading, no solution in reach, compiled kernels -----
+
+#: Run as a student with Debian's python3: every file under the given folders that this
+#: account can read, searched for solutions and hidden tests.  A marker counts where a line
+#: (or a notebook's source line, also as an escaped "\\n" inside JSON) starts with it, not
+#: where code or prose mentions it.  Files that pip installed for other distributions are
+#: counted apart (nbgrader ships example notebooks with markers).
+SEARCH = r"""
+import json, os, sys, time
+MARKERS = (b"### BEGIN SOLUTION", b"### BEGIN HIDDEN TESTS")
+started, roots = time.monotonic(), sys.argv[1:]
+seen = {"files": 0, "mb": 0.0, "unreadable": 0, "unlisted_folders": 0, "hits": [], "third_party_hits": 0,
+        "solution_paths": []}
+third = set()
+for root in roots:
+    for top, dirs, names in os.walk(root):
+        name = os.path.basename(top)
+        if name.endswith(".dist-info") and "RECORD" in names and not name.lower().startswith("ismb_lab"):
+            try:
+                for line in open(os.path.join(top, "RECORD"), encoding="utf-8"):
+                    if line.strip():
+                        third.add(os.path.normpath(os.path.join(os.path.dirname(top), line.rsplit(",", 2)[0])))
+            except OSError:
+                pass
+
+def marked(data):
+    for marker in MARKERS:
+        at = data.find(marker)
+        while at >= 0:
+            newline, escaped = data.rfind(b"\n", 0, at), data.rfind(b"\\n", 0, at)
+            start = max(newline + 1, escaped + 2 if escaped >= 0 else 0)
+            if data[start:at].strip().lstrip(b'"') == b"":
+                return marker.decode()
+            at = data.find(marker, at + 1)
+    return None
+
+def walk_error(error):
+    seen["unlisted_folders"] += 1
+
+for root in roots:
+    if os.path.isfile(root):
+        entries = [(os.path.dirname(root), [], [os.path.basename(root)])]
+    else:
+        entries = os.walk(root, onerror=walk_error)
+    for top, dirs, names in entries:
+        for name in dirs + names:
+            path = os.path.join(top, name)
+            if "notebooks/solutions" in path and os.access(path, os.R_OK):
+                seen["solution_paths"].append(path)
+        for name in names:
+            path = os.path.join(top, name)
+            if os.path.islink(path) or not os.path.isfile(path):
+                continue
+            try:
+                with open(path, "rb") as handle:
+                    data = handle.read(64 << 20)
+            except OSError:
+                seen["unreadable"] += 1
+                continue
+            seen["files"] += 1
+            seen["mb"] += len(data) / 2**20
+            found = marked(data) if b"### BEGIN" in data else None
+            if found and os.path.normpath(path) in third:
+                seen["third_party_hits"] += 1
+            elif found:
+                seen["hits"].append([path, found])
+seen["mb"] = round(seen["mb"], 1)
+seen["seconds"] = round(time.monotonic() - started, 1)
+print(json.dumps(seen))
+"""
+
+WARM_UP = """
+import json, time
+t0 = time.process_time()
+from ismb_lab import _numba_share
+from ismb_lab.matching import warm_up
+wall = warm_up()
+kernels = _numba_share._kernels().values()
+print(json.dumps({"cpu_s": round(time.process_time() - t0, 2), "warm_up_s": round(wall, 2),
+                  "hits": sum(sum(k.stats.cache_hits.values()) for k in kernels),
+                  "misses": sum(sum(k.stats.cache_misses.values()) for k in kernels),
+                  "cache": _numba_share.own_cache_folder()}))
+"""
+
+
+def search_as(accounts, account, roots) -> dict:
+    done = subprocess.run(["su", "-s", "/bin/sh", account.name, "-c",
+                           "cd && /usr/bin/python3 - " + " ".join(shlex_quote(str(r)) for r in roots)],
+                          input=SEARCH, capture_output=True, text=True, timeout=600)
+    assert done.returncode == 0, done.stderr[-2000:]
+    return json.loads(done.stdout.strip().splitlines()[-1])
+
+
+def config_data(student, path: str) -> dict:
+    page = student.http.get(f"{student.url}/user/{student.name}/{path}", timeout=60).text
+    found = re.search(r'<script id="jupyter-config-data" type="application/json">(.*?)</script>', page, re.S)
+    return json.loads(found.group(1))
+
+
+@pytest.mark.parametrize("class_hub", [{"MEM_LIMIT": "2G", "CULL_TIMEOUT": "600",
+                                        "KERNEL_CULL_TIMEOUT": "600"}], indirect=True)
+def test_the_class_from_the_docs_terminals_grading_no_solution_in_reach_and_compiled_kernels(class_hub, accounts):
+    figures, url = {}, class_hub["url"]
+    ann, teacher, deployment = class_hub["students"][0], class_hub["teacher"], class_hub["deployment"]
+    # deploy/course/README.md, "Each term, as the teacher", in the teacher's login shell
+    setup = accounts.login(teacher, "mkdir -p -m 700 ~/course && cd ~/course && ismb-lab course source . --repo "
+                                    f"{shlex_quote(str(deployment.repo))} && nbgrader generate_assignment labels "
+                                    "&& nbgrader release_assignment labels")
+    assert setup.returncode == 0, setup.stdout + setup.stderr
+    sessions = {a.name: Student(url, a) for a in (ann, teacher)}
+    for session in sessions.values():
+        assert session.log_in() == 302
+        session.spawn()
+    for session in sessions.values():
+        session.open_lab()
+    student, grader = sessions[ann.name], sessions[teacher.name]
+
+    # A student's JupyterLab terminal (a login shell: /etc/profile resets PATH) finds the tools
+    # and the course: deploy/course/README.md's terminal route fetches the assignment.
+    started = time.monotonic()
+    shown = student.terminal("nbgrader --version; ismb-lab --version; nbgrader fetch_assignment labels")
+    figures["terminal_s"] = round(time.monotonic() - started, 1)
+    assert "command not found" not in shown and "No nbgrader_config.py" not in shown, shown
+    assert re.search(r"nbgrader version \d", shown, re.I) and re.search(r"ismb-lab \d", shown), shown
+    assert (ann.home / "labels" / "04_label_targets.ipynb").is_file(), shown
+
+    # The Formgrader: the teacher's server lists the course's assignments; a student's has none.
+    listed = grader.http.get(f"{url}/user/{teacher.name}/formgrader/api/assignments", timeout=60)
+    assert listed.status_code == 200, listed.text[:500]
+    figures["formgrader_assignments"] = [a["name"] for a in listed.json()]
+    assert figures["formgrader_assignments"] == ["labels"]
+    assert student.http.get(f"{url}/user/{ann.name}/formgrader/api/assignments", timeout=60).status_code == 404
+    assert "@jupyter/nbgrader:formgrader" in config_data(student, "lab")["disabledExtensions"]
+    assert "@jupyter/nbgrader:formgrader" not in config_data(grader, "lab")["disabledExtensions"]
+    news = student.http.get(f"{url}/user/{ann.name}/lab/api/settings/@jupyterlab/apputils-extension:notification",
+                            timeout=60).json()["schema"]["properties"]["fetchNews"]["default"]
+    assert news == "false"            # nobody is asked about Jupyter news
+
+    # A student's first warm-up loads the teacher's kernels, copied into their own cache.
+    kernel = student.start_kernel()
+    ran = student.execute(kernel, WARM_UP, timeout=300)
+    assert ran["status"] == "ok", ran
+    warm = json.loads(ran["stdout"].strip().splitlines()[-1])
+    figures["first_warm_up"] = warm
+    assert warm["misses"] == 0 and warm["hits"] > 0, warm
+    own = Path(warm["cache"])
+    assert ann.home in own.parents
+    shared = {p.name: p.stat().st_mtime_ns for p in (deployment.course / "numba").rglob("*.nb*")}
+    copies = [p for p in own.iterdir() if shared.get(p.name) == p.stat().st_mtime_ns]
+    assert len(copies) == len(shared) and all(p.stat().st_uid == ann.uid and stat.S_IMODE(p.stat().st_mode) == 0o600
+                                              for p in copies)
+
+    # No solution or hidden test in any file the student can read under the documented paths;
+    # the teacher, who can read the repository, finds them (so the search can find them).
+    homes = sorted({str(a.home) for a in accounts.made})
+    roots = [deployment.shared, deployment.venv.parent, *homes, "/etc/profile.d/ismb-lab.sh", class_hub["state"]]
+    found = search_as(accounts, ann, roots)
+    figures["student_search"] = {k: v for k, v in found.items() if k != "hits"}
+    assert found["hits"] == [] and found["solution_paths"] == [], found
+    assert found["files"] > 1000
+    control = search_as(accounts, teacher, [deployment.repo, teacher.home])
+    figures["teacher_search_hits"] = len(control["hits"])
+    assert any("/notebooks/" in path for path, _ in control["hits"]) and control["solution_paths"]
+
+    ARTIFACTS.mkdir(exist_ok=True)
+    (ARTIFACTS / "hub_docs_walk.json").write_text(json.dumps(figures, indent=2))
+    print(json.dumps(figures, indent=2))
