@@ -29,7 +29,7 @@ def _needs_proxy(script):
     local = BENCHMARKS.parent / ".node" / "node_modules" / ".bin" / "configurable-http-proxy"
     if script != "bench_class.py" or local.exists() or shutil.which("configurable-http-proxy"):
         return
-    text = "configurable-http-proxy is missing (npm install --prefix .node configurable-http-proxy)"
+    text = "configurable-http-proxy is missing (npm install --prefix .node configurable-http-proxy@5.2.0)"
     if os.environ.get("CI", "").lower() in ("1", "true", "yes"):
         pytest.fail(text)
     pytest.skip(text)

@@ -75,7 +75,7 @@ def test_a_class_hands_in_labels_and_the_teachers_second_collect_takes_the_lates
 
         run(ann, label("0:0 1:1 2:2") + " && cd && nbgrader submit labels")
         run(bob, label("0:1 1:0 2:2 3:3 5:6") + " && cd && nbgrader submit labels")  # swaps 0/1; 5 -> 6's right
-        run(cy, label("0:0 1:1 2:2") + " && cd && nbgrader submit labels")
+        run(cy, label("0:0 1:1 2:2 4:4") + " && cd && nbgrader submit labels")   # not ann's file: one more pair
 
         # the exchange: students can neither list the inbound folder nor read a submission
         inbound = deployment.exchange / deployment.course_id / "inbound"
@@ -104,11 +104,11 @@ def test_a_class_hands_in_labels_and_the_teachers_second_collect_takes_the_lates
         def ann_pairs(pool):
             return sum(ann.name in p["labelled_by"] for p in pool["pairs"])
 
-        # first: key pairs 0-3 and bob's 5 -> 6; second: ann's 3 and 4 join, and 6 is disputed
+        # first: key pairs 0-4 and bob's 5 -> 6; second: ann's 3 and 4 join, and 6 is disputed
         # (ann's left 6 and bob's left 5 both take right 6: one vote each, neither kept)
         assert ann_pairs(first) == 3 and ann_pairs(second) == 5
-        assert len(first["pairs"]) == 5 and len(second["pairs"]) == 5
-        assert sorted(len(p["labelled_by"]) for p in first["pairs"]) == [1, 1, 2, 2, 3]
-        assert sorted(len(p["labelled_by"]) for p in second["pairs"]) == [1, 2, 2, 2, 3]
+        assert len(first["pairs"]) == 6 and len(second["pairs"]) == 5
+        assert sorted(len(p["labelled_by"]) for p in first["pairs"]) == [1, 1, 1, 2, 2, 3]
+        assert sorted(len(p["labelled_by"]) for p in second["pairs"]) == [2, 2, 2, 2, 3]
     finally:
         shutil.rmtree(keys, ignore_errors=True)
