@@ -453,7 +453,7 @@ class TargetLabeler(Base):
         self.pair_name = pair_name or prepared.pair.left_sha256[:12]
         ask = path is None and voila_without_hub()
         if path is None and not ask:
-            path = targets_path(self.pair_name, Path.cwd())
+            path = targets_path(self.pair_name, Path.cwd(), also=())
         self.model = LabelModel(prepared, path=path, answer_key=answer_key, exclusive=ask)
         # each image gets half the column (286 px of 320 px images); on larger photos the
         # toolbar's zoom tells corners apart, and clicks still land in image coordinates
@@ -550,7 +550,7 @@ class TargetLabeler(Base):
         """Choose the visitor's own targets file by their name (Voilà without a hub)."""
         if not isinstance(name, str):
             raise ParameterTypeError(message("name", "TargetLabeler.set_name", "a str", name))
-        self.model.path = targets_path(self.pair_name, Path.cwd(), user=name) if name.strip() else None
+        self.model.path = targets_path(self.pair_name, Path.cwd(), user=name, also=()) if name.strip() else None
         self._show_path()
 
     def _show_path(self) -> None:
