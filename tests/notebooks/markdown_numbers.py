@@ -182,6 +182,7 @@ LISTED["04"] = [
     ("at least 5 pairs", "count", "how many pairs the exercise asks a student to label"),
     ("(the thesis' parameters, seed 0)", "code", 'labeler.score_saved("III", seed=0)'),
     ("numbered from 1 as in the table", "count", "the labeller's table numbers features from 1, as the cell prints them"),
+    ("numbered from 1 like the labeller's", "count", "ismb-lab match prints its table numbered from 1, as the labeller does"),
 ]
 _GA = "genetic.GAConfig().generations == 500"
 LISTED["05"] = [
