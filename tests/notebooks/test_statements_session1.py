@@ -211,7 +211,8 @@ def test_02_takes_the_literal_rules_two_changes_apart(executed_notebook):
             assert int(settled_with) == 0 and float(high) <= -1, name
     assert [f[1:3] for f in found if f[0] == "III"] == [("-1", "-1")]
     said = " ".join(markdown(source("02_hopfield_network.ipynb")).split())
-    assert "**The quadratic part is halved**" in said and "a flip can **raise** $E$" in said
+    assert "**The quadratic part is halved**" in said
+    assert "a flip no longer changes $E$ by $-u\\,\\Delta y$, and it can **raise** $E$" in said
     assert "**Each neuron gets a self-weight**" in said and "the network **need not settle**" in said
     assert "has exactly $-1$" in said
 
