@@ -4,6 +4,9 @@
   (``JUPYTERHUB_USER`` on a hub, else the login name) and the pair, so thirty
   students on one server never write the same file.  Voilà without a hub serves every
   visitor under one login (:func:`voila_without_hub`): there the labeller asks for a name.
+  A notebook that reads the file finds it beside itself (the hub's copy, where every
+  notebook shares one folder) or in the sibling folder ``../labels/`` (nbgrader's release,
+  where notebook 04 is the assignment "labels" and each notebook has its own folder).
 * :func:`save_merging` saves under a lock and merges with whatever another process
   saved since we last read the file (a three-way merge): nobody's pair is lost.
 * :func:`pool` pools a class's files into one targets set, one vote per student (the
@@ -30,7 +33,7 @@ import numpy as np
 from ._validation import ParameterError, ParameterTypeError, check_choice, check_number, message
 from .targets import TargetSet, load_targets, save_targets
 
-__all__ = ["collected", "Merged", "Pool", "pool", "save_merging", "targets_path", "user_name",
+__all__ = ["collected", "Merged", "Pool", "pool", "save_merging", "SIBLINGS", "targets_path", "user_name",
            "voila_without_hub"]
 
 _UNSAFE = re.compile(r"[^A-Za-z0-9._-]+")
@@ -56,16 +59,48 @@ def voila_without_hub() -> bool:
             and not os.environ.get("JUPYTERHUB_USER"))
 
 
-def targets_path(pair: str, folder=".", user: str | None = None) -> Path:
-    """The default targets file of `user` (default :func:`user_name`) for `pair` in `folder`.
+#: Where else a notebook looks for a targets file, relative to its folder: nbgrader's folder
+#: of the assignment "labels" (notebook 04, :data:`ismb_lab.course.ASSIGNMENTS`) beside its own.
+SIBLINGS = ("../labels",)
 
-    >>> str(targets_path("synthetic", "work", user="ann lee"))
+
+def targets_path(pair: str, folder=".", user: str | None = None, *, also=SIBLINGS) -> Path:
+    """The targets file of `user` (default :func:`user_name`) for `pair`, in `folder` or beside it.
+
+    Parameters
+    ----------
+    pair : str
+        The image pair's name (``"synthetic"``).
+    folder : str or os.PathLike
+        The notebook's folder.
+    user : str, optional
+    also : tuple or list of str or os.PathLike
+        Folders, relative to `folder`, where the file may be instead (default: nbgrader's
+        ``../labels/``).  The file in `folder` wins; else the first of these that holds it;
+        else the path in `folder` (where a save would put it).  ``also=()`` names the file
+        in `folder` only: what the labeller saves to.
+
+    Returns
+    -------
+    path : Path
+        ``folder/targets-<user>-<pair>.json``, or the same name in one of `also`.
+
+    Examples
+    --------
+    >>> str(targets_path("synthetic", "work", user="ann lee", also=()))
     'work/targets-ann-lee-synthetic.json'
     """
     if not isinstance(pair, str) or not pair:
         raise ParameterTypeError(message("pair", "targets_path", "a non-empty name of the image pair", pair))
+    folders = tuple(also) if isinstance(also, (tuple, list)) else None
+    if folders is None or not all(isinstance(f, (str, os.PathLike)) for f in folders):
+        raise ParameterTypeError(message("also", "targets_path", "a tuple or list of folder names", also))
     who = user_name() if user is None else _UNSAFE.sub("-", str(user)).strip("-.") or "student"
-    return Path(folder) / f"targets-{who}-{_UNSAFE.sub('-', pair).strip('-.')}.json"
+    name = f"targets-{who}-{_UNSAFE.sub('-', pair).strip('-.')}.json"
+    here = Path(folder) / name
+    if here.is_file():
+        return here
+    return next((p for p in (Path(folder) / f / name for f in folders) if p.is_file()), here)
 
 
 def _key(left, right) -> tuple:

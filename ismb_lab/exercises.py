@@ -303,8 +303,9 @@ def check_harris_response(R, image, sigma: float = 1.0, k: float = 0.04) -> Feed
         (det, "The k tr(M)^2 term is missing: you have det(M) alone. Hint: read (2-6) again."),
         (det + k * trace ** 2, "The sign of the k tr(M)^2 term is flipped. Hint: an edge must give "
                                "a negative R."),
-        (det - k * trace, "tr(M) must be squared. Hint: R must not change its units when the image "
-                          "is brightened."),
+        # the starter's slip: the hint leads to the fix without stating it
+        (det - k * trace, "det(M) is right; the k term is off. Hint: double the image's contrast: "
+                          "det(M) grows 16 times. Does your k term grow as much?"),
         (Axx * Ayy + Axy ** 2 - k * trace ** 2,
          "det(M) is off. Hint: the determinant of [[a, b], [b, c]]."),
         (harris_from_tensor(Ix * Ix, Ix * Iy, Iy * Iy, k),

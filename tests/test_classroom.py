@@ -63,6 +63,55 @@ def test_each_student_and_pair_has_its_own_file(monkeypatch):
         targets_path("")
 
 
+def test_a_notebook_finds_the_labels_saved_in_the_released_labels_folder(tmp_path, monkeypatch):
+    """nbgrader's release: 04 is the assignment "labels", 05 and 06 have folders of their own
+    beside it (``~/labels/``, ``~/05-explorer/``, ``~/06-genetic/``).  Labels saved by the
+    labeller in ``labels/`` are what 05 and 06 read with ``targets_path(pair)`` in theirs."""
+    from ismb_lab.course import ASSIGNMENTS
+    from ismb_lab.widgets.labeler import TargetLabeler
+
+    monkeypatch.setenv("JUPYTERHUB_USER", "ann")
+    names = [name for name in ASSIGNMENTS if name != "labels" and
+             any(nb.startswith(("05_", "06_")) for nb in ASSIGNMENTS[name].notebooks)]
+    assert "labels" in ASSIGNMENTS and len(names) == 2
+    for name in ["labels", *names]:
+        (tmp_path / name).mkdir()
+    monkeypatch.chdir(tmp_path / "labels")
+    labeler = TargetLabeler.from_folder(IMAGES / "synthetic")
+    labeler.add_pair(0, 0)
+    saved = labeler.save().resolve()
+    assert saved == (tmp_path / "labels" / "targets-ann-synthetic.json").resolve()
+    for name in names:
+        monkeypatch.chdir(tmp_path / name)
+        found = targets_path("synthetic")
+        assert found.is_file() and found.resolve() == saved, (name, found)
+        assert load_targets(found).left_xy.tolist() == load_targets(saved).left_xy.tolist()
+    # no labels anywhere: the path in the notebook's own folder, which does not exist
+    monkeypatch.setenv("JUPYTERHUB_USER", "bob")
+    assert targets_path("synthetic") == Path("targets-bob-synthetic.json")
+
+
+def test_the_hub_copy_reads_and_saves_the_labels_beside_the_notebooks(tmp_path, monkeypatch):
+    """The hub's copy keeps every notebook in one folder: the file there is the one read, even
+    when a ``../labels/`` beside it holds another; and the labeller never saves elsewhere."""
+    from ismb_lab.widgets.labeler import TargetLabeler
+
+    monkeypatch.setenv("JUPYTERHUB_USER", "ann")
+    (tmp_path / "notebooks").mkdir()
+    (tmp_path / "labels").mkdir()
+    other = save_targets(tmp_path / "labels" / "targets-ann-synthetic.json", TargetSet([[1, 1]], [[0, 1]]))
+    monkeypatch.chdir(tmp_path / "notebooks")
+    labeler = TargetLabeler.from_folder(IMAGES / "synthetic")
+    assert labeler.model.path == Path.cwd() / "targets-ann-synthetic.json"    # not ../labels/
+    labeler.add_pair(0, 0)
+    saved = labeler.save()
+    assert targets_path("synthetic") == Path("targets-ann-synthetic.json") and saved.parent == Path.cwd()
+    assert len(load_targets(other)) == 1
+    assert targets_path("synthetic", also=()) == Path("targets-ann-synthetic.json")
+    with pytest.raises(TypeError, match="'also' parameter of targets_path"):
+        targets_path("synthetic", also="../labels")
+
+
 def test_a_merge_refuses_a_file_for_other_images(tmp_path):
     path = save_targets(tmp_path / "t.json", TargetSet([[1, 1]], [[0, 1]], "a" * 64, "b" * 64))
     with pytest.raises(ValueError, match="same images"):

@@ -125,13 +125,21 @@ def test_harris_slips(image):
     cases = [
         (det, "k tr(M)^2 term is missing"),
         (det + k * tr ** 2, "sign of the k tr(M)^2 term is flipped"),
-        (det - k * tr, "tr(M) must be squared"),
+        (det - k * tr, "the k term is off"),
         (Axx * Ayy + Axy ** 2 - k * tr ** 2, "det(M) is off"),
         (Ix * Ix * Iy * Iy - (Ix * Iy) ** 2 - k * (Ix * Ix + Iy * Iy) ** 2, "not windowed"),
     ]
     for R, expected in cases:
         feedback = check_harris_response(R, image, sigma, k)
         assert not feedback.correct and expected in feedback.text, expected
+
+
+def test_harris_hint_on_the_starters_slip_does_not_state_the_fix(image):
+    """01's starter leaves tr(M) unsquared: the check says which term is off, not how to write it."""
+    Axx, Axy, Ayy = structure_tensor(image, 1.5)
+    text = check_harris_response(Axx * Ayy - Axy ** 2 - 0.05 * (Axx + Ayy), image, 1.5, 0.05).text
+    assert "k term is off" in text
+    assert not re.search(r"squar|\^ ?2|\*\* ?2|tr\(M\)", text), text
 
 
 def test_harris_other_error_names_the_place(image):

@@ -21,13 +21,14 @@ from pathlib import Path
 import numpy as np
 
 from .._validation import ParameterError, ParameterTypeError, check_choice, check_number, message
-from ..matching import MatchConfig, Prepared, prepare
+from ..evaluation import Score, score
+from ..matching import MatchConfig, Prepared, match, prepare
 from ..plotting import GAP, LEFT_COLOUR, OKABE_ITO, RIGHT_COLOUR, VERDICT_COLOURS, plot_matches
 from ..classroom import save_merging, targets_path, voila_without_hub
 from ..targets import TargetSet, load_targets, snap, targets_from_matches
 from ._common import Base, Pane, button, column_figsize, grey_rgb, number_labels, pair_files, with_class
 
-__all__ = ["COLUMNS", "Comparison", "draw_labels", "LabelModel", "pairs_html", "TargetLabeler",
+__all__ = ["COLUMNS", "Comparison", "draw_labels", "LabelModel", "pairs_html", "SavedScore", "TargetLabeler",
            "update_labels"]
 
 COLUMNS = ("Pair", "Left", "Right", "y_left", "x_left", "y_right", "x_right", "disparity")
@@ -49,6 +50,28 @@ class Comparison:
     def __str__(self) -> str:
         text = f"{len(self.correct)} correct, {len(self.wrong)} wrong, {len(self.missing)} missing"
         return text + (f" ({self.off_feature} key pairs lie off the features)" if self.off_feature else "")
+
+
+@dataclass(frozen=True, eq=False)
+class SavedScore:
+    """A method's matches scored against the labels saved in a file (:meth:`LabelModel.score_saved`).
+
+    Labels cover only some corners, so C/E/T reads: C, the matches among the saved pairs;
+    E, the matches of a labelled left corner to another right corner (wrong partners; no
+    extras, since a corner without a label says nothing); T, the number of saved pairs.
+    """
+
+    path: Path
+    method: str
+    seed: int
+    pairs: np.ndarray
+    score: Score
+    errors: np.ndarray
+
+    def __str__(self) -> str:
+        wrong = [(int(i) + 1, int(k) + 1) for i, k in self.errors]
+        return (f"{self.path.name}: {len(self.pairs)} pairs; Method-{self.method}, seed {self.seed}: "
+                f"C/E/T = {self.score}; its errors (left, right), numbered from 1: {wrong}")
 
 
 def _pair_array(pairs) -> np.ndarray:
@@ -308,6 +331,35 @@ class LabelModel:
         self._say(f"saved {len(self._pairs)} pairs to {path}{others}")
         return path
 
+    def score_saved(self, method="III", *, seed: int = 0, params=None, path=None) -> SavedScore | None:
+        """Match the pair with `method` and score it against the labels saved in `path`
+        (default: the labeller's file); None when nothing is saved there yet.
+
+        Matches of the left corners that have no saved label are not counted: the labels
+        say nothing about them (see :class:`SavedScore`).
+
+        Examples
+        --------
+        >>> import tempfile, pathlib
+        >>> from ismb_lab.scenes import synthetic_scene
+        >>> scene = synthetic_scene(0)
+        >>> model = LabelModel(prepare(scene.left, scene.right), path=pathlib.Path(tempfile.mkdtemp()) / "t.json")
+        >>> model.score_saved() is None
+        True
+        """
+        owner = "LabelModel.score_saved"
+        path = self._path(path, owner)
+        if not path.is_file():
+            return None
+        saved = snap(load_targets(path, pair=self.prepared.pair), self.left_xy, self.right_xy).pairs
+        result = match(prepared=self.prepared, method=method, params=params, seed=seed)
+        unlabelled = np.setdiff1d(np.arange(len(self.left_xy)), saved[:, 0])
+        mine = set(map(tuple, saved.tolist()))
+        labelled = set(saved[:, 0].tolist())
+        errors = [(i, k) for i, k in result.pairs.tolist() if i in labelled and (i, k) not in mine]
+        return SavedScore(path, result.method, seed, saved, score(result.pairs, saved, unknown=unlabelled),
+                          np.array(errors, dtype=np.intp).reshape(-1, 2))
+
     def load(self, path=None) -> int:
         """Replace the labels by a targets file's; any error leaves the labels as they were.
 
@@ -453,7 +505,7 @@ class TargetLabeler(Base):
         self.pair_name = pair_name or prepared.pair.left_sha256[:12]
         ask = path is None and voila_without_hub()
         if path is None and not ask:
-            path = targets_path(self.pair_name, Path.cwd())
+            path = targets_path(self.pair_name, Path.cwd(), also=())
         self.model = LabelModel(prepared, path=path, answer_key=answer_key, exclusive=ask)
         # each image gets half the column (286 px of 320 px images); on larger photos the
         # toolbar's zoom tells corners apart, and clicks still land in image coordinates
@@ -550,7 +602,7 @@ class TargetLabeler(Base):
         """Choose the visitor's own targets file by their name (Voilà without a hub)."""
         if not isinstance(name, str):
             raise ParameterTypeError(message("name", "TargetLabeler.set_name", "a str", name))
-        self.model.path = targets_path(self.pair_name, Path.cwd(), user=name) if name.strip() else None
+        self.model.path = targets_path(self.pair_name, Path.cwd(), user=name, also=()) if name.strip() else None
         self._show_path()
 
     def _show_path(self) -> None:
@@ -581,6 +633,10 @@ class TargetLabeler(Base):
             raise
         finally:
             self.refresh()
+
+    def score_saved(self, method="III", *, seed: int = 0, params=None, path=None) -> SavedScore | None:
+        """:meth:`LabelModel.score_saved`: `method`'s matches against the saved labels."""
+        return self.model.score_saved(method, seed=seed, params=params, path=path)
 
     def _save_quietly(self):
         try:

@@ -132,6 +132,7 @@ LISTED["00"] = [
     ("gives S = 0.5?", "count", "the value the exercise asks a student to solve for, not a claim"),
     ("Solve $f(M) = 0.5$", "count", "the same value the exercise asks for, repeated in its instruction"),
     ("30 rows tall", "library", _WINDOW),
+    ("(features numbered from 1)", "count", "the numbering of the table the next cell prints"),
 ]
 LISTED["01"] = [
     ("0.04$–$0.06", "thesis", "k = 0.04 \\sim 0.06"),
@@ -141,8 +142,7 @@ LISTED["01"] = [
     ("(the thesis uses [20, 30])", "thesis", "the feature points is set as [20, 30]"),
     ("relaxed by 0.8", "library", "features.detect_corners.__kwdefaults__['relax'] == 0.8"),
     ("1/255 for 8-bit images", "arithmetic", "1/255 == 1 / (2 ** 8 - 1)"),
-    ("the thesis uses T = 30", "thesis", "the threshold T is set as 30"),
-    ("relaxing by\n  0.8", "library", "features.detect_corners.__kwdefaults__['relax'] == 0.8"),
+    ("a fixed T = 30", "thesis", "the threshold T is set as 30"),
     ("σ = 1.5, k = 0.05", "count", "the values the exercise sets for the student's own computation"),
     ("the 30 strongest", "library", "features.detect_corners.__kwdefaults__['n_max'] == 30"),
     ("T ← 0.8 T", "library", "features.detect_corners.__kwdefaults__['relax'] == 0.8"),
@@ -153,6 +153,17 @@ LISTED["02"] = [
     ("40 × 40 region", "library", "matching.MatchConfig().neighbour_radius * 2 == 40"),
     ("C = 0.9", "count", "the compatibility the 2 × 2 example sets for both neighbouring pairs"),
     ("only 16 states", "arithmetic", "2 ** 4 == 16"),
+    ("$(x_i - 20, y_i)$", "library", "matching.MatchConfig().shift == 20"),
+    ("near 1 when $X$ is small, near −1 when it is large, and 0", "formula",
+     "(3-13) tends to 1 for small X and to -1 for large X; (3-12) gives non-neighbours none"),
+    ("$C$ and $-1$ instead of $2C$ and $-2$", "formula",
+     "the literal weights of (3-16)/(3-17) against the exact Hopfield form above them"),
+    ("has exactly $-1$", "printed", "Method-III: self-weights C_ikik - 2 from -1 to -1"),
+    ("lies between 0 and 1", "formula",
+     "with a self-weight of -1 the update (3-19) turns an off neuron on when the rest r > 0 and off again when r - 1 < 0"),
+    ("$(M_{ik} + M_{jl})/2$", "formula", "the mean of the two windows' M in Method-I's measure, as in notebook 03"),
+    ("is $-1$ flip", "printed", "Method-III: self-weights C_ikik - 2 from -1 to -1"),
+    ("between 0 and 1?", "formula", "the same range of the rest of the input as in the thesis section above"),
 ]
 LISTED["03"] = [
     ("$[7.45, 15.20, 1.47, 4.08]$", "thesis", "[7.45, 15.20, 1.47, 4.08]"),
@@ -160,13 +171,18 @@ LISTED["03"] = [
     ("(120, 155)", "thesis", "3	8	4	155	120	158	98	22.20"),
     ("20 and 20 in Fig. 5.3", "thesis",
      "the left image with 20 feature points, (b) the right image with 20 feature points"),
+    ("(the 40 × 40 box", "library", "matching.MatchConfig().neighbour_radius * 2 == 40"),
+    ("left corner (numbered from 1)", "count", "the numbering of the listing the next cell prints"),
 ]
 LISTED["04"] = [
     ("marks 13 target pairs", "thesis", "the target contains 13 matched pairs"),
     ("among 39 candidates", "thesis", "there are 39 pairs to be considered"),
     ("SHA-256", "count", "the name of the hash function, stored by ismb_lab.targets"),
     ("numbers features from 1", "count", "the table's numbering, shown by the table above it"),
-    ("at least 10 pairs", "count", "how many pairs the exercise asks a student to label"),
+    ("at least 5 pairs", "count", "how many pairs the exercise asks a student to label"),
+    ("(the thesis' parameters, seed 0)", "code", 'labeler.score_saved("III", seed=0)'),
+    ("numbered from 1 as in the table", "count", "the labeller's table numbers features from 1, as the cell prints them"),
+    ("numbered from 1 like the labeller's", "count", "ismb-lab match prints its table numbered from 1, as the labeller does"),
 ]
 _GA = "genetic.GAConfig().generations == 500"
 LISTED["05"] = [

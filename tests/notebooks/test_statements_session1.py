@@ -191,3 +191,101 @@ def test_02_names_no_function_that_returns_its_exercise_answer():
     assert not re.search(r"(?<!check_)hopfield_form", text) and "from ismb_lab import hopfield" not in text
     doc = inspect.getdoc(exercises.check_energy_derivation)
     assert not re.search(r"(?<!check_)hopfield_form", doc) and "correct" not in doc.split("Examples")[1]
+
+
+def test_02_takes_the_literal_rules_two_changes_apart(executed_notebook):
+    """02 says the halved weights let the energy rise and the self-weight keeps the network from
+    settling (the thesis section), and exercise 3's reveal measures it: without the self-weight
+    the energy still rises and every run settles; with it, Methods I and III never settle."""
+    nb = executed_notebook("02_hopfield_network.ipynb")
+    text = output_text(nb)
+    found = re.findall(r"Method-(I+): self-weights C_ikik - 2 from (\S+) to (\S+)\n"
+                       r"  literal rule without its self-weight: the energy rose in (\d+)/20 runs, settled in (\d+)/20\n"
+                       r"\s*literal rule with its self-weight: the energy rose in (\d+)/20 runs, settled in (\d+)/20", text)
+    assert [f[0] for f in found] == ["I", "II", "III"], text
+    table = dict(re.findall(r"Method-(I+): settled in 20/20 runs with the exact rule, (\d+)/20 with the thesis rule", text))
+    for name, low, high, rose_without, settled_without, rose_with, settled_with in found:
+        assert int(rose_without) > 0 and int(settled_without) == 20, name
+        assert int(settled_with) == int(table[name]), name           # the same runs as the seed table
+        if name != "II":
+            assert int(settled_with) == 0 and float(high) <= -1, name
+    assert [f[1:3] for f in found if f[0] == "III"] == [("-1", "-1")]
+    said = " ".join(markdown(source("02_hopfield_network.ipynb")).split())
+    assert "**The quadratic part is halved**" in said
+    assert "a flip no longer changes $E$ by $-u\\,\\Delta y$, and it can **raise** $E$" in said
+    assert "**Each neuron gets a self-weight**" in said and "the network **need not settle**" in said
+    assert "has exactly $-1$" in said
+
+
+def test_02_the_parameters_decide_whether_the_literal_rule_settles(executed_notebook):
+    text = output_text(executed_notebook("02_hopfield_network.ipynb"))
+    swapped = dict(re.findall(r"Method-(I+) with Method-I+'s parameters: settled in (\d+)/20 runs", text))
+    assert swapped == {"II": "0", "III": "20"}, text
+    said = " ".join(markdown(source("02_hopfield_network.ipynb")).split())
+    assert "Method-II with Method-III's parameters never settles, Method-III with Method-II's settles in every run" \
+        in said
+
+
+def test_02_the_rule_figure_shows_both_curves_and_zooms_on_the_rises():
+    """The exact curve under the literal one stays visible (a wide line under a dashed one) and a
+    second panel zooms past the first fall, where the literal rule's rises of about 1 show."""
+    code = next(c.source for c in source("02_hopfield_network.ipynb").cells if c.id == "02-07")
+    assert 'ls="--"' in code and "lw=4" in code and "panels[1].set_xlim(100" in code
+
+
+def test_00_says_what_its_printed_sweep_means(executed_notebook):
+    nb = executed_notebook("00_start_here.ipynb")
+    printed = next(i for i, c in enumerate(nb.cells) if c.cell_type == "code"
+                   and "stopped by 'sweep'" in output_text(nbformat.v4.new_notebook(cells=[c])))
+    before = " ".join(" ".join(c.source for c in nb.cells[:printed] if c.cell_type == "markdown").split())
+    assert "a **sweep**, one update attempt at every candidate neuron, changed nothing" in before
+
+
+def test_01_exercise_2s_starter_shows_no_change_of_the_relaxations():
+    """The starter of 01's exercise 2 must not print the answer (where the relaxations change)."""
+    from ismb_lab.features import detect_corners
+    from ismb_lab.io import load_pair
+
+    code = next(c.source for c in source("01_harris_features.ipynb").cells if c.id == "01-ex2")
+    tried = re.search(r"for k in \(([\d., ]+)\):   # a first try", code)
+    pair = load_pair(ROOT / "images" / "synthetic" / "left.png", ROOT / "images" / "synthetic" / "right.png")
+    counts = {detect_corners(pair.left, k=float(k)).iterations for k in tried.group(1).split(",")}
+    every = {detect_corners(pair.left, k=k).iterations for k in np.round(np.arange(0.01, 0.201, 0.01), 2)}
+    assert len(counts) == 1 and len(every) > 1
+
+
+def test_04_exercise_1_scores_the_saved_labels_as_the_key_says(tmp_path):
+    """04's exercise 1 calls labeler.score_saved; the key's figures: every true pair labelled gives
+    C/E/T = 19/5+0/19, the errors at left corners 2, 4, 9, 10 and 13 (numbered from 1)."""
+    from ismb_lab.matching import prepare
+    from ismb_lab.targets import load_targets, snap
+    from ismb_lab.widgets.labeler import LabelModel
+
+    code = "\n".join(c.source for c in source("04_label_targets.ipynb").cells if c.cell_type == "code")
+    assert 'labeler.score_saved("III", seed=0)' in code
+    images = ROOT / "images" / "synthetic"
+    prepared = prepare(images / "left.png", images / "right.png")
+    model = LabelModel(prepared, path=tmp_path / "t.json")
+    key = snap(load_targets(images / "answer_key.json", pair=prepared.pair), model.left_xy, model.right_xy).pairs
+    for i, k in key.tolist():
+        model.add_pair(i, k)
+    model.save()
+    found = model.score_saved("III", seed=0)
+    assert str(found.score) == "19/5+0/19"
+    assert [i + 1 for i, _ in found.errors.tolist()] == [2, 4, 9, 10, 13]
+    said = " ".join(markdown(source("04_label_targets.ipynb")).split())
+    assert "its matches of left corners you did not label are not counted" in said
+
+
+def test_03_method_one_gains_its_precision_from_its_post_processing(executed_notebook):
+    """03: on the realistic pairs Method-I's precision before its post-processing is close to II's
+    and III's, after it far above; the step also drops correct matches."""
+    text = output_text(executed_notebook("03_methods_compared.ipynb"))
+    rows = re.findall(r"Method-I on the eleven realistic pairs, seed \d: before its post-processing "
+                      r"(\d+)/\d+\+\d+/\d+ \(precision (\d+)%\), after (\d+)/\d+\+\d+/\d+ \(precision (\d+)%\)", text)
+    assert len(rows) == 3, text
+    others = [int(p) for m in ("II", "III") for p in re.findall(
+        r"precision (\d+)%\)", re.search(rf"Method-{m:>3} on the eleven realistic pairs.*", text).group(0))]
+    for c0, p0, c1, p1 in rows:
+        assert int(c1) < int(c0) and int(p1) > max(others) + 10
+        assert min(others) - 5 <= int(p0) <= max(others) + 5

@@ -329,3 +329,32 @@ def test_the_key_draws_its_three_kinds_of_line_in_far_apart_colours(labeler, tru
         [to_hex(c) for c in labeler.artists["missing"].get_colors()]
     assert len(set(shown)) == 3, shown
     assert all(np.linalg.norm(_lab(a) - _lab(b)) > 50 for a in set(shown) for b in set(shown) if a != b)
+
+
+def test_score_saved_counts_the_labelled_corners_only(prepared, tmp_path, truth):
+    """04's exercise: Method-III against a student's saved labels, which cover some corners."""
+    from ismb_lab.evaluation import score
+    from ismb_lab.matching import match
+
+    labeler = TargetLabeler(prepared, path=tmp_path / "t.json")
+    assert labeler.score_saved() is None                      # nothing saved yet
+    result = match(prepared=prepared, method="III", seed=0).pairs.tolist()
+    # every second true pair, and one wrong label: a corner's true partner replaced by another
+    mine = [tuple(p) for p in truth[::2].tolist()]
+    used = {b for _, b in mine}
+    i, other = next((a, b) for a, b in zip(prepared.problem.rows.tolist(), prepared.problem.cols.tolist())
+                    if a in dict(mine) and b not in used)
+    mine[[a for a, _ in mine].index(i)] = (i, other)
+    for p in mine:
+        labeler.add_pair(*p)
+    labeler.save()
+    unsaved = next(p for p in truth[1::2].tolist() if p[1] != other)
+    labeler.add_pair(*unsaved)                                  # not saved: not scored
+    found = labeler.score_saved("III", seed=0)
+    lefts = {a for a, _ in mine}
+    assert found.score.correct == sum(tuple(p) in mine for p in result)
+    assert found.errors.tolist() == [p for p in result if p[0] in lefts and tuple(p) not in mine]
+    assert (found.score.wrong_partner, found.score.extra, found.score.targets) == (len(found.errors), 0, len(mine))
+    assert found.score == score(result, mine, unknown=sorted(set(range(len(prepared.problem.left_xy))) - lefts))
+    assert f"{len(mine)} pairs; Method-III, seed 0: C/E/T = {found.score}" in str(found)
+    assert str([(a + 1, b + 1) for a, b in found.errors.tolist()]) in str(found)
