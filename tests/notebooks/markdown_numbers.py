@@ -186,7 +186,8 @@ LISTED["04"] = [
 ]
 _GA = "genetic.GAConfig().generations == 500"
 LISTED["05"] = [
-    ("±0.76 within $2/\\lambda$", "arithmetic", "round(math.tanh(1), 2) == 0.76 and 2 == 2"),
+    ("−0.76 and 0.76 (that is, $\\tanh 1$) only within $2/\\lambda$ of θ, a ramp $4/\\lambda$ wide", "arithmetic",
+     "round(math.tanh(1), 2) == 0.76 and 2 * 2 == 4"),
     ("$2/6.37 \\approx 0.3$", "arithmetic", "round(2/6.37, 1) == 0.3"),
     ("$X = 18$", "arithmetic", "round(17.97) == 18  # θc of the thesis' Method-III"),
     ("$2/2.2 \\approx 0.9$", "arithmetic", "round(2/2.2, 1) == 0.9"),
@@ -194,10 +195,14 @@ LISTED["05"] = [
     ("$[\\theta_c, \\theta_s, \\lambda_c, \\lambda_s] = [17.97, 24.02, 6.37, 2.2]$", "thesis", _THESIS_III),
     ("Find, to 0.01 px,", "count", "the precision the exercise asks for, the explorer's slider step"),
     ("scans θc in steps of 1 px", "code", "np.arange(2, 30, 1)"),
-    ("and 0.01 px above\nit", "code", "my_theta_c + 0.01"),
+    ("and 0.01 px above\nit", "code", "theta + 0.01"),
+    ("rounds your θc to 0.01 px (so a value such as\n12.339999…", "arithmetic",
+     "round(12.339999, 2) == 12.34 and round(0.01, 2) == 0.01  # what the check's round(my_theta_c, 2) does"),
+    ("counts as 12.34)", "arithmetic", "round(12.339999, 2) == 12.34  # the example's value, rounded as the check does"),
     ("steps θs by 0.01", "code", "for step in (-0.01, 0.01):"),
-    ("$|S| < 0.76$, is θs ± 2/λs = θs ± 20 grey levels wide, from about 4 to 44", "arithmetic",
-     "round(math.tanh(1), 2) == 0.76 and 2 / 0.1 == 20 and (round(24.02 - 20), round(24.02 + 20)) == (4, 44)"),
+    ("$|S| < 0.76$, is θs ± 2/λs: θs ± 20 grey levels at λs = 0.1, from about 4 to\n44, and θs ± 0.2 at λs = 10",
+     "arithmetic", "round(math.tanh(1), 2) == 0.76 and 2 / 0.1 == 20 and (round(24.02 - 20), round(24.02 + 20)) == "
+     "(4, 44) and 2 / 10 == 0.2"),
 ]
 LISTED["06"] = [
     ("bred for up to 500 generations", "library", _GA),
@@ -205,7 +210,6 @@ LISTED["06"] = [
     ("after 500 generations", "library", _GA),
     ("$\\lambda = 0.25$", "count", "the crossover weight the code cell below it sets for the demonstration"),
     ("$125/14/137 = 91.24\\%$", "thesis", "Total: C/E/T = 125/14/137 | Accurate rate 125/137=91.24%"),
-    ("as in its entry 14/2+0/16", "thesis", "Testing: 14/2+0/16"),
     ("as in 14/2+0/16", "thesis", "Testing: 14/2+0/16"),
     ("up to 500 generations", "library", _GA),
     ("(not 500)", "library", _GA),
@@ -333,12 +337,13 @@ _EVERY = {
         ("above 1 a step,\n  below 1 a gentle ramp", "count", "the thesis' Fig. 3.3 draws λs above and below 1"),
         ("the output is 0 at θ", "formula", "f(θ) = 2/(1 + 1) - 1 = 0"),
         ("almost ±1 everywhere", "formula", "the transfer function's range is [-1, 1]"),
+        ("it is nearer ±1", "formula", "the transfer function's range is [-1, 1]"),
     ],
     "06": [
         ("until there are 30.", "library", "genetic.GAConfig().population == 30"),
         ("**60 generations**", "code", "generations=60, seeds=3"),
-        ("Fit the GA (60 generations)", "code", "generations=60"),
-        ("for seeds 0–2", "count", "the seeds the exercise asks for, as in the cells above"),
+        ("fit the GA (60 generations", "code", "generations=60"),
+        ("update-order seeds 0–2", "count", "the seeds the reveal cell runs, range(3) as in the cells above"),
     ],
     "07": [
         ("off by at most 1 px", "arithmetic", "0.5 + 0.5 == 1"),
@@ -346,7 +351,7 @@ _EVERY = {
         ("takes $q = 0.5$ px", "library", "depth.DepthConfig().quantisation_px == 0.5"),
         ("$q = 0.5$ px is a little more than one standard deviation", "arithmetic",
          "0.5 > math.sqrt(2 / 12)  # q against the rounding error's standard deviation"),
-        ("between 0 and 1 instead of 0\nor 1", "formula", "a neuron's state: a value in [0, 1] instead of {0, 1}"),
+        ("between 0 and 1 instead of 0 or 1", "formula", "a neuron's state: a value in [0, 1] instead of {0, 1}"),
         ("commit to 0 or 1", "formula", "the states of the discrete network, {0, 1}"),
         ("10 cm to its right", "library", "depth.BASELINE_M == 0.10 and 10 == 10"),
         ("0 = unknown", "library", "gallery.decode_disparity.__doc__.count('0') > 0 and 0 == 0"),
@@ -379,6 +384,8 @@ _EVERY = {
         ("thesis' 20 px", "library", _SHIFT),
         ("phone 3 to 5 cm", "count", "how far the exercise asks a student to move the phone"),
         ("as in part 2", "count", "a reference to part 2 of this notebook"),
+        ("turns the left books photo by 5°", "code", "np.radians(5)"),
+        ("$K R K^{-1}$", "formula", "a turn about the camera's centre as a homography, K R K^-1"),
     ],
 }
 for _key, _entries in _EVERY.items():
