@@ -89,23 +89,6 @@ def configure() -> str | None:
 
 configure()
 # On the class hub: the kernels the teacher compiled, copied into this user's own cache.
-from ._numba_share import seed as _seed  # noqa: E402
+from ._numba_share import cold, seed as _seed  # noqa: E402,F401  (cold: re-exported)
 
 _seed()
-
-
-def cold(kernel) -> bool:
-    """Whether numba holds no cached machine code of `kernel` (a ``cache=True`` dispatcher) yet,
-    so that its first call will compile.  False when numba's cache cannot be inspected.
-
-    >>> import numba
-    >>> cold(numba.njit(lambda x: x))      # no cache at all: nothing to announce
-    False
-    """
-    try:
-        folder = kernel._cache._cache_path
-        stem = f"{kernel.py_func.__module__.rsplit('.', 1)[-1]}.{kernel.py_func.__qualname__}-"
-        names = os.listdir(folder) if os.path.isdir(folder) else []
-    except (AttributeError, OSError):
-        return False
-    return not any(name.startswith(stem) and name.endswith(".nbi") for name in names)

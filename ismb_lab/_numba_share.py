@@ -177,7 +177,6 @@ def compile_kernels() -> dict:
     import numpy as np
 
     from . import annealing, exact, hopfield, tuning
-    from ._numba import cold
     from .matching import warm_up
     from .methods import get_method
     from .protocol import Case
@@ -241,3 +240,20 @@ def compile_into(folder, python=None, isolated: bool = True, timeout: float = 18
         last = (done.stderr.strip().splitlines() or ["no message"])[-1]
         raise OSError(f"compiling the kernels failed (exit {done.returncode}): {last}")
     return json.loads(done.stdout.strip().splitlines()[-1])
+
+
+def cold(kernel) -> bool:
+    """Whether numba holds no cached machine code of `kernel` (a ``cache=True`` dispatcher) yet,
+    so that its first call will compile.  False when numba's cache cannot be inspected.
+
+    >>> import numba
+    >>> cold(numba.njit(lambda x: x))      # no cache at all: nothing to announce
+    False
+    """
+    try:
+        folder = kernel._cache._cache_path
+        stem = f"{kernel.py_func.__module__.rsplit('.', 1)[-1]}.{kernel.py_func.__qualname__}-"
+        names = os.listdir(folder) if os.path.isdir(folder) else []
+    except (AttributeError, OSError):
+        return False
+    return not any(name.startswith(stem) and name.endswith(".nbi") for name in names)

@@ -100,12 +100,6 @@ def test_the_core_never_imports_pyplot_or_ipywidgets():
             assert not [n for n in names if "pyplot" in n or n.startswith("ipywidgets")], path
 
 
-def test_no_module_is_much_longer_than_600_lines():
-    long = {str(p.relative_to(PACKAGE)): n for p in MODULES
-            if (n := len(p.read_text(encoding="utf-8").splitlines())) > 650}
-    assert not long
-
-
 def test_every_public_module_declares_all():
     missing = [module_name(p) for p in MODULES
                if not p.name.startswith("_") and "__all__" not in p.read_text(encoding="utf-8")]

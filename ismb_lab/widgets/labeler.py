@@ -23,6 +23,7 @@ import numpy as np
 from .._validation import ParameterError, ParameterTypeError, check_choice, check_number, message
 from ..evaluation import Score, score
 from ..matching import MatchConfig, Prepared, match, prepare
+from ..methods import DEFAULT_METHOD
 from ..plotting import GAP, LEFT_COLOUR, OKABE_ITO, RIGHT_COLOUR, VERDICT_COLOURS, plot_matches
 from ..classroom import save_merging, targets_path, voila_without_hub
 from ..targets import TargetSet, load_targets, snap, targets_from_matches
@@ -331,7 +332,7 @@ class LabelModel:
         self._say(f"saved {len(self._pairs)} pairs to {path}{others}")
         return path
 
-    def score_saved(self, method="III", *, seed: int = 0, params=None, path=None) -> SavedScore | None:
+    def score_saved(self, method=DEFAULT_METHOD, *, seed: int = 0, params=None, path=None) -> SavedScore | None:
         """Match the pair with `method` and score it against the labels saved in `path`
         (default: the labeller's file); None when nothing is saved there yet.
 
@@ -634,7 +635,7 @@ class TargetLabeler(Base):
         finally:
             self.refresh()
 
-    def score_saved(self, method="III", *, seed: int = 0, params=None, path=None) -> SavedScore | None:
+    def score_saved(self, method=DEFAULT_METHOD, *, seed: int = 0, params=None, path=None) -> SavedScore | None:
         """:meth:`LabelModel.score_saved`: `method`'s matches against the saved labels."""
         return self.model.score_saved(method, seed=seed, params=params, path=path)
 
