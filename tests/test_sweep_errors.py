@@ -250,7 +250,10 @@ def test_ctrl_c_as_evaluate_starts_its_workers_prints_one_line(hard_manifest):
     for delay in (0.0, 0.1, 0.3):
         proc = subprocess.Popen([sys.executable, "-m", "ismb_lab.cli", "evaluate", str(hard_manifest), "--jobs", "2",
                                  "--generations", "50", "--population", "6", "--seeds", "1"], cwd=ROOT,
-                                stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, start_new_session=True)
+                                stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, start_new_session=True,
+                                # as from a terminal: a run started as a background job inherits
+                                # SIGINT ignored, which the command rightly leaves ignored
+                                preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))
         deadline = time.monotonic() + 120
         while time.monotonic() < deadline and proc.poll() is None:   # until both workers exist
             children = subprocess.run(["pgrep", "-P", str(proc.pid)], capture_output=True, text=True).stdout.split()
