@@ -2,8 +2,8 @@
 
 Single linkage of features, the consensus band of a group's disparities and its peeling, the join of
 parts that are one object, the local background, the blob under each feature, the cut of a blob in
-two by its features' bands and the join of neighbouring objects whose features agree.  Step 3 and 4
-of :mod:`ismb_lab.depth`'s docstring say what each does.
+two by its features' bands and the join of neighbouring objects whose features agree.  Sections 3-5
+of ``docs/depth.md`` say what each does.
 """
 
 from __future__ import annotations
@@ -108,7 +108,7 @@ def _on_blobs(xy, silhouettes: Silhouettes, grow: int) -> np.ndarray:
 
 
 def _band_cut(idx, feature, first, d, config, silhouettes: Silhouettes, k: int):
-    """Blob `k` as two objects by two bands of its features (``DepthConfig.band_cut``), or None.
+    """Blob `k` as two objects by two bands of its features (``DepthConfig.band_features``), or None.
 
     Returns ``[(rows, centroid, shift), (rows, centroid, shift)]``, left part first, or None when
     the features or the outline say one object.  The three largest bands are tried in pairs."""
@@ -148,8 +148,8 @@ def _cut_between(one, two, feature, first, d, config, silhouettes: Silhouettes, 
     if empty:
         column = empty[len(empty) // 2]
         single = own
-    elif config.band_one_piece is None or not wide:
-        return None             # one piece: a cylinder's outline fits two shifts too
+    elif not wide:
+        return None             # one piece too narrow to cut
     else:
         # One piece: two objects that touch in the image.  The cut goes where the two shifts lay the
         # parts best, and the two must lay them firmly and better than any one shift lays the blob.
