@@ -28,8 +28,7 @@ from ._validation import ParameterError, ParameterTypeError, check_choice, check
 from .camera import BASELINE_M, FOCAL_PX, StereoCamera
 from .matching import MatchResult
 from .silhouettes import OutlineConfig, Silhouettes
-from ._grouping import (_band_cut, _clusters, _consensus, _join_agreeing, _local_background, _merge, _on_blobs,
-                        _peel)
+from ._grouping import _band_cut, _clusters, _consensus, _local_background, _merge, _on_blobs, _peel
 
 __all__ = ["GROUPINGS", "Depth", "DepthConfig", "DepthObject", "DepthResult", "depth_from_matches", "metric_depth"]
 
@@ -92,11 +91,6 @@ class DepthConfig:
         A blob whose outline fits with a Dice of this or more stands in front of the background
         whatever the background's matches say: the background's matches of a repetitive wall can
         all be one period off, and put the floor above every object.
-    band_join_px, band_join_score : float
-        Two objects of neighbouring blobs, each on ``band_features`` or more features, whose
-        consensus disparities differ by ``band_join_px`` or less and some of whose features lie
-        within ``link_px`` of each other are one, when one of the two outlines fits with a Dice
-        below ``band_join_score``: the pieces of an object cut where it looks like the wall.
     outline : OutlineConfig
         How the blobs of change and their shifts are found (:func:`ismb_lab.silhouettes.silhouettes`).
     focal_px, baseline_m : float
@@ -132,8 +126,6 @@ class DepthConfig:
     band_step_px: float = 3.0
     band_one_piece: float = 0.97
     firm_outline: float = 0.95
-    band_join_px: float = 1.0
-    band_join_score: float = 0.9
     outline: OutlineConfig = field(default_factory=OutlineConfig)
     focal_px: float = FOCAL_PX
     baseline_m: float = BASELINE_M
@@ -143,7 +135,7 @@ class DepthConfig:
         own = "DepthConfig"
         for name in ("position_tol_px", "disparity_tol_px", "consensus_px", "quantisation_px",
                      "link_disparity_px", "merge_px", "merge_disparity_px", "silhouette_tol_px",
-                     "band_step_px", "band_join_px"):
+                     "band_step_px"):
             object.__setattr__(self, name, check_number(getattr(self, name), name, own, low=0))
         for name in ("link_px", "local_px", "focal_px", "baseline_m"):
             object.__setattr__(self, name, check_number(getattr(self, name), name, own,
@@ -152,7 +144,7 @@ class DepthConfig:
             object.__setattr__(self, name, check_number(getattr(self, name), name, own, low=1, integer=True))
         object.__setattr__(self, "silhouette_grow_px",
                            check_number(self.silhouette_grow_px, "silhouette_grow_px", own, low=0, integer=True))
-        for name in ("silhouette_score", "band_one_piece", "firm_outline", "band_join_score"):
+        for name in ("silhouette_score", "band_one_piece", "firm_outline"):
             object.__setattr__(self, name, check_number(getattr(self, name), name, own, low=0, high=1))
         check_choice(self.grouping, "grouping", own, GROUPINGS)
         if not isinstance(self.outline, OutlineConfig):
@@ -386,15 +378,15 @@ def _objects(feature, xy, d, config: DepthConfig, silhouettes: Silhouettes | Non
              trusted=None, infront=None) -> tuple[list, int]:
     """Group matches into objects; returns (objects near -> far, features dropped).
 
-    With `silhouettes`, blob ``k`` is one object when ``trusted[k - 1]``, or when ``infront[k - 1]``
-    and its outline has a score (at its largest band of features, or at its outline alone); the
-    features of the other blobs are grouped as without silhouettes."""
+    With `silhouettes`, blob ``k`` is one object when ``trusted[k - 1]``, or at its outline alone when
+    ``infront[k - 1]``, its outline has a score and no band of its features agrees; the features of
+    the other blobs are grouped as without silhouettes."""
     features = np.unique(feature)
     if not len(features) and silhouettes is None:
         return [], 0
     first = {f: xy[feature == f][0] for f in features}
     found, parts, used = [], [], set()
-    groups, outlined, blobs = [], [], []
+    groups, outlined = [], []
     if silhouettes is None:
         labels = _clusters(np.array([first[f] for f in features]).reshape(-1, 2),
                            [d[feature == f] for f in features], config.link_px, config.link_disparity_px)
@@ -412,26 +404,19 @@ def _objects(feature, xy, d, config: DepthConfig, silhouettes: Silhouettes | Non
                     for rows, centroid, shift in two:
                         used.update(np.unique(feature[rows]).tolist())
                         outlined.append((rows, centroid, (shift, score)))
-                        blobs.append(None)
                     continue
             if trusted[k - 1]:
                 gap = d[idx] - dk
                 near = idx[(gap >= 0) & (gap <= config.silhouette_tol_px)]
                 rows = near[_consensus(d[near], config.consensus_px)] if len(near) else near
-            elif infront[k - 1] and score > 0:
-                # A poor outline in front: one object at its largest band, or at its outline alone
-                # when no band agrees (nothing else tells where it is).
-                bands = _peel(feature[idx], d[idx], config)
-                rows = idx[bands[0]] if bands else idx[:0]
+            elif infront[k - 1] and score > 0 and not _peel(feature[idx], d[idx], config):
+                rows = idx[:0]        # a poor outline in front that no features agree on: nothing else places it
             else:
-                groups.append(idx)    # no outline to speak of: the features decide
+                groups.append(idx)    # the features decide
                 continue
             used.update(np.unique(feature[rows]).tolist())
             outlined.append((rows, silhouettes.centroid_xy[k - 1], (dk, score)))
-            blobs.append([k])
-        found += _join_agreeing(outlined, blobs, silhouettes, config,
-                                lambda rows, centroid, outline: _object(rows, feature, first, d, config,
-                                                                         centroid, outline))
+        found += [_object(rows, feature, first, d, config, centroid, outline) for rows, centroid, outline in outlined]
     for idx in groups:
         for band in _peel(feature[idx], d[idx], config):
             rows = idx[band]

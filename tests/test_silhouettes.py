@@ -195,6 +195,7 @@ def test_pieces_of_one_object_that_fit_no_shift_well_are_joined():
     assert len(one) == 1 and one.score[0] > 0.95
 
 
+
 def test_blobs_outside_the_roi_and_specks_are_not_objects():
     bg, sc = pairs_with([(150, 190, 100, 140, 22), (30, 33, 30, 33, 5)])
     assert len(silhouettes(bg, sc, roi=(0, 0, 100, 100), config=outline(min_pixels=50))) == 0
@@ -264,9 +265,8 @@ def test_a_trusted_blob_is_one_object_at_the_disparity_its_features_agree_on_wit
     assert a.mean_disparity == 22.0 and a.silhouette_score == 0.98      # the match at 21 lies behind 22
     # B: no feature agrees with its outline, so the outline alone places it.
     assert (b.n_features, b.mean_disparity, b.silhouette_disparity, b.n_matches) == (0, 14.0, 14.0, 0)
-    # C's outline is not trusted (two objects touching, say): one object at its features' band, centred on
-    # the blob.
-    assert (c.n_features, c.mean_disparity, c.silhouette_disparity, c.centroid_xy) == (3, 10.0, 11.0, (265.0, 120.0))
+    # C's outline is not trusted (two objects touching, say): its features decide, as without outlines.
+    assert (c.n_features, c.mean_disparity, c.silhouette_disparity) == (3, 10.0, None)
     # The last outline lies behind the wall and fits below ``firm_outline``: a sliver that looks like
     # the wall, not an object.
     assert r.silhouettes is sil and r.to_dict()["grouping"] == "silhouettes"
@@ -327,6 +327,7 @@ def test_a_lone_background_match_does_not_put_well_fitting_outlines_behind_the_b
     assert len(depth_from_matches(agreeing, scene, None, sil).objects) == 2       # firm outlines
 
 
+
 def two_pieces(right_shifts=(20, 25), one_piece=False):
     """One blob of two pieces (left columns 100-139 and 150-189, rows 100-139; one piece when
     `one_piece`), outline 22, and the right image's change: each piece moved by its shift."""
@@ -381,8 +382,6 @@ def test_a_cut_blob_is_measured_with_the_right_image_s_change():
                                                  ("band_step_px", -1.0, ParameterError),
                                                  ("firm_outline", 1.5, ParameterError),
                                                  ("band_one_piece", 1.5, ParameterError),
-                                                 ("band_join_px", -1.0, ParameterError),
-                                                 ("band_join_score", 2.0, ParameterError),
                                                  ("silhouette_grow_px", -1, ParameterError)])
 def test_the_band_and_outline_values_are_checked(field, value, error):
     with pytest.raises(error, match=f"'{field}' parameter of DepthConfig"):
@@ -494,36 +493,17 @@ def test_two_objects_that_touch_are_cut_by_their_features_where_the_outline_sees
     assert len(depth_from_matches(background, scene, cut, blurred).objects) == 1
 
 
-def test_neighbouring_objects_whose_features_agree_are_one_when_an_outline_fits_poorly():
-    """``band_join_px``: a cylinder cut into two blobs where it looks like the wall, whose pieces'
-    outlines fit 14 and 16 (Dice 0.9 and 0.82) while their features agree (15.5 and 16), is one
-    object, centred on both blobs.  Two outlines that both fit well are two objects whatever their
-    features say (a box matched like its neighbour)."""
-    background = matches([(x, y, 6.0) for x in range(20, 300, 20) for y in (20, 220)])
-    scene = matches([(110, 110, 15.5), (120, 120, 15.5), (130, 130, 15.5),
-                     (150, 110, 16.0), (160, 120, 16.0), (170, 130, 16.0)])
-    labels = blob_labels((100, 140, 100, 140), (146, 180, 100, 140))
-    centroids = [[119.5, 119.5], [162.5, 119.5]]
-    poor = Silhouettes(labels, [14.0, 16.0], [0.9, 0.82], centroids)
-    joined = depth_from_matches(background, scene, None, poor).objects
-    assert [(o.n_features, o.silhouette_disparity) for o in joined] == [(6, 14.0)]
-    assert joined[0].centroid_xy == pytest.approx(((1600 * 119.5 + 1360 * 162.5) / 2960, 119.5))   # by area
-    assert len(depth_from_matches(background, scene, DepthConfig(band_join_px=0.2), poor).objects) == 2
-    firm = Silhouettes(labels, [14.0, 16.0], [0.95, 0.97], centroids)
-    assert len(depth_from_matches(background, scene, None, firm).objects) == 2
-
-
-def test_a_poorly_fitting_outline_is_one_object_at_its_largest_band():
+def test_the_features_on_a_poorly_fitting_outline_decide():
     """A blob in front of the wall whose outline fits poorly (Dice 0.7) holds four features at 18 and
-    three at 24 (low contrast, half of them matched wrong).  The features alone would make two objects
-    of it; it is one, at the largest band, centred on the blob."""
+    three at 24: its features decide, as without outlines (two objects)."""
     background = matches([(x, y, 6.0) for x in range(20, 300, 20) for y in (20, 220)])
     scene = matches([(105, 105, 18.0), (115, 110, 18.0), (125, 125, 18.0), (132, 130, 18.0),
                      (108, 132, 24.0), (118, 102, 24.0), (128, 112, 24.0)])
     sil = Silhouettes(blob_labels((100, 140, 100, 140)), [20.0], [0.7], [[119.5, 119.5]])
-    one = depth_from_matches(background, scene, None, sil).objects
-    assert [(o.mean_disparity, o.n_features, o.centroid_xy) for o in one] == [(18.0, 4, (119.5, 119.5))]
-    assert len(depth_from_matches(background, scene).objects) == 2
+    found = depth_from_matches(background, scene, None, sil).objects
+    assert [(o.mean_disparity, o.n_features, o.silhouette_disparity) for o in found] == [(24.0, 3, None),
+                                                                                       (18.0, 4, None)]
+    assert [o.mean_disparity for o in depth_from_matches(background, scene).objects] == [24.0, 18.0]
 
 
 def hysteresis_everywhere(bg, sc):
@@ -577,7 +557,7 @@ def test_hysteresis_is_raised_to_the_noise_of_the_cameras():
 
 
 def test_each_region_keeps_the_blobs_that_fit_better_with_or_without_hysteresis():
-    """``by_region``: a plain box nearly the wall's grey has a ragged outline, which hysteresis mends;
+    """A plain box nearly the wall's grey has a ragged outline, which hysteresis mends;
     a faint shadow beside a bright box joins that box under hysteresis and spoils its fit.  Region by
     region, the box keeps the outline with hysteresis and the shadowed box the one without."""
     rng = np.random.default_rng(0)
