@@ -136,7 +136,7 @@ def _cut_between(one, two, feature, first, d, config, silhouettes: Silhouettes, 
     wrong = [np.count_nonzero(x[0] >= c) + np.count_nonzero(x[1] < c) for c in cuts]
     best = int(np.argmin(wrong))
     if wrong[best] > max(1, 0.1 * (len(x[0]) + len(x[1]))):
-        return None
+        return None             # the bands interleave: no column between them
     below = x[0][x[0] < cuts[best]]
     hi = int(np.ceil(cuts[best]))
     lo = int(np.floor(below.max())) + 1 if len(below) else hi
@@ -157,8 +157,6 @@ def _cut_between(one, two, feature, first, d, config, silhouettes: Silhouettes, 
         if silhouettes.cut_dice(k, column, own) < config.band_one_piece:
             return None
         single = silhouettes.shifts
-    if min(column - cols.min(), cols.max() + 1 - column) < 2 * silhouettes.pad_px:
-        return None             # a sliver, as narrow as both paddings, fits almost any shift
     # Each piece must lie better at its own band's shift than at the other's (both moved at once):
     # a piece of a striped object whose features match one period off does not.
     fit = silhouettes.cut_dice(k, column, own)

@@ -18,13 +18,10 @@ def _best_shift(mask: np.ndarray, rows: slice, cols: slice, right: np.ndarray, s
     width = right.shape[1]
     c = np.arange(max(cols.start - pad, 0), min(cols.stop + pad, width))
     mine = mask[rows, c.min():c.max() + 1]
-    size = np.count_nonzero(mine)
     best = (0.0, float("nan"))
     for d in shifts:
         valid = (c - d >= 0) & (c - d < width)
         m = mine[:, valid]
-        if 2 * np.count_nonzero(m) < size:
-            continue            # most of the blob would lie off the right image
         patch = right[rows, c[valid] - d]
         total = np.count_nonzero(m) + np.count_nonzero(patch)
         dice = 2 * np.count_nonzero(m & patch) / total if total else 0.0
@@ -40,9 +37,9 @@ def _two_shifts(parts, start, one: float, right: np.ndarray, shifts, config) -> 
     ``config.split_far_score`` or more (a blob that fits no shift well is no pair of well-seen
     objects either).
 
-    The two shifts are found by coordinate ascent from `start` (each part's own padded fit).  Each
-    must lie strictly inside `shifts` (a fit at the end of the range is no fit), and each part must
-    lie wholly on the right image at its shift (a part across the image border fits any shift).
+    The two shifts are found by coordinate ascent from `start` (each part's own padded fit), and each
+    part must lie wholly on the right image at its shift (a part across the image border fits any
+    shift).
 
     A whole that fits with a Dice from ``config.split_score`` up to ``split_far_score`` passes as
     well when the two shifts lie ``config.split_far_poor_px`` or more apart and lay both parts with
@@ -50,7 +47,7 @@ def _two_shifts(parts, start, one: float, right: np.ndarray, shifts, config) -> 
     makes one shift fit them poorly."""
     least, fair = config.split_far_score, config.split_score
     best, d = _ascend(parts, start, right, shifts, config.pad_px)
-    if abs(d[0] - d[1]) < config.split_far_px or min(d) <= min(shifts) or max(d) >= max(shifts):
+    if abs(d[0] - d[1]) < config.split_far_px:
         return False
     if any(np.nonzero(part)[1].min() - s < 0 for part, s in zip(parts, d)):
         return False
