@@ -1,9 +1,9 @@
 """Grouping a scene's new matches into objects: the steps behind :func:`ismb_lab.depth.depth_from_matches`.
 
 Single linkage of features, the consensus band of a group's disparities and its peeling, the join of
-parts that are one object, the local background, the blob under each feature, the cut of a blob in
-two by its features' bands and the join of neighbouring objects whose features agree.  Step 3 and 4
-of :mod:`ismb_lab.depth`'s docstring say what each does.
+parts that are one object, the local background, the blob under each feature and the cut of a blob in
+two by its features' bands.  Sections 3-5
+of ``docs/depth.md`` say what each does.
 """
 
 from __future__ import annotations
@@ -108,7 +108,7 @@ def _on_blobs(xy, silhouettes: Silhouettes, grow: int) -> np.ndarray:
 
 
 def _band_cut(idx, feature, first, d, config, silhouettes: Silhouettes, k: int):
-    """Blob `k` as two objects by two bands of its features (``DepthConfig.band_cut``), or None.
+    """Blob `k` as two objects by two bands of its features (``DepthConfig.band_features``), or None.
 
     Returns ``[(rows, centroid, shift), (rows, centroid, shift)]``, left part first, or None when
     the features or the outline say one object.  The three largest bands are tried in pairs."""
@@ -136,7 +136,7 @@ def _cut_between(one, two, feature, first, d, config, silhouettes: Silhouettes, 
     wrong = [np.count_nonzero(x[0] >= c) + np.count_nonzero(x[1] < c) for c in cuts]
     best = int(np.argmin(wrong))
     if wrong[best] > max(1, 0.1 * (len(x[0]) + len(x[1]))):
-        return None
+        return None             # the bands interleave: no column between them
     below = x[0][x[0] < cuts[best]]
     hi = int(np.ceil(cuts[best]))
     lo = int(np.floor(below.max())) + 1 if len(below) else hi
@@ -148,8 +148,8 @@ def _cut_between(one, two, feature, first, d, config, silhouettes: Silhouettes, 
     if empty:
         column = empty[len(empty) // 2]
         single = own
-    elif config.band_one_piece is None or not wide:
-        return None             # one piece: a cylinder's outline fits two shifts too
+    elif not wide:
+        return None             # one piece too narrow to cut
     else:
         # One piece: two objects that touch in the image.  The cut goes where the two shifts lay the
         # parts best, and the two must lay them firmly and better than any one shift lays the blob.
@@ -157,8 +157,6 @@ def _cut_between(one, two, feature, first, d, config, silhouettes: Silhouettes, 
         if silhouettes.cut_dice(k, column, own) < config.band_one_piece:
             return None
         single = silhouettes.shifts
-    if min(column - cols.min(), cols.max() + 1 - column) < 2 * silhouettes.pad_px:
-        return None             # a sliver, as narrow as both paddings, fits almost any shift
     # Each piece must lie better at its own band's shift than at the other's (both moved at once):
     # a piece of a striped object whose features match one period off does not.
     fit = silhouettes.cut_dice(k, column, own)
@@ -176,40 +174,3 @@ def _cut_between(one, two, feature, first, d, config, silhouettes: Silhouettes, 
     sides = (xs < column, xs >= column)
     centroids = [np.argwhere(mask & side[None, :]).mean(axis=0)[::-1] for side in sides]
     return [(rows[n], centroids[n], shift[n]) for n in (0, 1)]
-
-
-def _join_agreeing(found: list, blobs: list, silhouettes: Silhouettes, config, build) -> list:
-    """Objects of neighbouring blobs whose features agree, joined (``DepthConfig.band_join_px``).
-
-    `found` holds ``(rows, centroid, silhouette)`` per object and `blobs` the blob label of each
-    (None: a part of a cut blob, never joined).  Two objects are one when each rests on
-    ``band_features`` or more features, their consensus disparities differ by ``band_join_px`` or
-    less, some feature of one lies within ``link_px`` of some feature of the other and one of the two
-    outlines fits with a Dice below ``band_join_score``: the pieces of one object cut where it looks
-    like the wall (two outlines that both fit well are two objects, whatever their features say).
-    `build` makes an object of ``(rows, centroid, silhouette)``; the closest pair is joined first."""
-    objects = [build(*f) for f in found]
-    while True:
-        best = None
-        for a in range(len(found)):
-            for b in range(a + 1, len(found)):
-                A, B = objects[a], objects[b]
-                if blobs[a] is None or blobs[b] is None:
-                    continue
-                if min(A.n_features, B.n_features) < config.band_features:
-                    continue
-                if min(A.silhouette_score, B.silhouette_score) >= config.band_join_score:
-                    continue        # two well-seen outlines at their own shifts: two objects
-                gap = abs(A.mean_disparity - B.mean_disparity)
-                near = np.linalg.norm(A.features[:, None, :] - B.features[None, :, :], axis=2).min()
-                if gap <= config.band_join_px and near <= config.link_px and (best is None or gap < best[0]):
-                    best = (gap, a, b)
-        if best is None:
-            return objects
-        _, a, b = best
-        union = np.isin(silhouettes.labels, blobs[a] + blobs[b])
-        rows = np.concatenate([found[a][0], found[b][0]])
-        found[a] = (rows, np.argwhere(union).mean(axis=0)[::-1], found[a][2])
-        blobs[a] = blobs[a] + blobs[b]
-        objects[a] = build(*found[a])
-        del found[b], blobs[b], objects[b]

@@ -18,13 +18,10 @@ def _best_shift(mask: np.ndarray, rows: slice, cols: slice, right: np.ndarray, s
     width = right.shape[1]
     c = np.arange(max(cols.start - pad, 0), min(cols.stop + pad, width))
     mine = mask[rows, c.min():c.max() + 1]
-    size = np.count_nonzero(mine)
     best = (0.0, float("nan"))
     for d in shifts:
         valid = (c - d >= 0) & (c - d < width)
         m = mine[:, valid]
-        if 2 * np.count_nonzero(m) < size:
-            continue            # most of the blob would lie off the right image
         patch = right[rows, c[valid] - d]
         total = np.count_nonzero(m) + np.count_nonzero(patch)
         dice = 2 * np.count_nonzero(m & patch) / total if total else 0.0
@@ -33,43 +30,48 @@ def _best_shift(mask: np.ndarray, rows: slice, cols: slice, right: np.ndarray, s
     return best
 
 
-def _two_shifts(parts, start, one: float, right: np.ndarray, shifts, pad: int, far: float,
-                least: float, poor: float | None = None, fair: float = 0.9):
-    """Whether two shifts `far` or more apart, one per part, lay `parts` on `right` better than
-    `one`, the best Dice of their union at a single shift, both counted as one overlap over the
-    same padded columns (:func:`_placed_dice`), by at least 0.01, while `one` is `least` or more
-    (a blob that fits no shift well is no pair of well-seen objects either).
+def _two_shifts(parts, start, one: float, right: np.ndarray, shifts, config) -> bool:
+    """Whether two shifts ``config.split_far_px`` or more apart, one per part, lay `parts` on `right`
+    better than `one`, the best Dice of their union at a single shift, both counted as one overlap
+    over the same padded columns (:func:`_placed_dice`), by at least 0.01, while `one` is
+    ``config.split_far_score`` or more (a blob that fits no shift well is no pair of well-seen
+    objects either).
 
-    The two shifts are found by coordinate ascent from `start` (each part's own padded fit).  Each
-    must lie strictly inside `shifts` (a fit at the end of the range is no fit), and each part must
-    lie wholly on the right image at its shift (a part across the image border fits any shift).
+    The two shifts are found by coordinate ascent from `start` (each part's own padded fit), and each
+    part must lie wholly on the right image at its shift (a part across the image border fits any
+    shift).
 
-    With `poor`, a whole that fits with a Dice from `fair` up to `least` passes as well when the two
-    shifts lie `poor` or more apart and lay both parts with `least` or more: two objects far apart in
-    depth that touch in the image are what makes one shift fit them poorly."""
-    best, d = _ascend(parts, start, right, shifts, pad)
-    if abs(d[0] - d[1]) < far or min(d) <= min(shifts) or max(d) >= max(shifts):
+    A whole that fits with a Dice from ``config.split_score`` up to ``split_far_score`` passes as
+    well when the two shifts lie ``config.split_far_poor_px`` or more apart and lay both parts with
+    ``split_far_score`` or more: two objects far apart in depth that touch in the image are what
+    makes one shift fit them poorly."""
+    least, fair = config.split_far_score, config.split_score
+    best, d = _ascend(parts, start, right, shifts, config.pad_px)
+    if abs(d[0] - d[1]) < config.split_far_px:
         return False
     if any(np.nonzero(part)[1].min() - s < 0 for part, s in zip(parts, d)):
         return False
     if one >= least:
         return best >= one + 0.01
-    return (poor is not None and one >= fair and abs(d[0] - d[1]) >= poor and best >= least
-            and best >= one + 0.01)
+    return one >= fair and abs(d[0] - d[1]) >= config.split_far_poor_px and best >= least and best >= one + 0.01
 
 
-def _cut(mask: np.ndarray, right: np.ndarray, shifts, min_pixels: int, step: float, least: float,
-         pad: int, far: float | None = None, far_score: float = 0.9, placed: bool = False,
-         far_poor: float | None = None):
+def _cut(mask: np.ndarray, right: np.ndarray, shifts, config, far: bool):
     """Two objects side by side in one blob: the column that cuts `mask` into a left and a right
     part that two shifts lay on `right` better (Dice) than one shift lays the whole, or None.
 
-    The cut is taken only when the two shifts differ by `step` or more and each part, measured
-    as every blob is (:func:`_best_shift`, padded by `pad`), fits with a Dice of `least` or more.
+    The cut is taken only when the two shifts differ by ``config.split_step_px`` or more, each part,
+    measured as every blob is (:func:`_best_shift`, padded by ``config.pad_px``), fits with a Dice
+    of ``config.split_score`` or more, and the two parts, each moved by its own shift, both at once,
+    lay on `right` at least as well as the best single shift lays the blob (the halves of one object
+    fit slightly different shifts, but not better together than the whole at one).  With `far`, a
+    blob whose parts fail the first test may still be cut by :func:`_two_shifts`.
     Dice of a part at shift ``d`` is counted over its own columns (those with a counterpart in
     `right`): per column, the blob's pixels, the right image's changed pixels ``d`` to the left
     and their overlap add up, so cumulative sums give every cut at once."""
     from scipy.ndimage import find_objects
+
+    min_pixels, step, least, pad = config.min_pixels, config.split_step_px, config.split_score, config.pad_px
 
     rows, cols = find_objects(mask.astype(int))[0]
     width = right.shape[1]
@@ -120,15 +122,15 @@ def _cut(mask: np.ndarray, right: np.ndarray, shifts, min_pixels: int, step: flo
     if any(np.isnan(d) for d in own):
         return None             # a part that fits no shift: no cut, by any test below
     one = max(_placed_dice([mask], [s], right, pad) for s in shifts)   # the whole at one shift
-    if placed and _placed_dice(parts, own, right, pad) < one:
+    if _placed_dice(parts, own, right, pad) < one:
         return None             # each part at its own shift, both at once, lay worse than one shift
     if min(f[0] for f in fits) >= least and abs(fits[0][1] - fits[1][1]) >= step:
         return parts
     # Each part's padding holds its neighbour's change, which counts against it when two objects
     # touch: then ask whether two shifts far apart lay both parts at once better than one shift.
-    if far is None:
+    if not far:
         return None
-    return parts if _two_shifts(parts, own, one, right, shifts, pad, far, far_score, far_poor, least) else None
+    return parts if _two_shifts(parts, own, one, right, shifts, config) else None
 
 
 def _ascend(parts, start, right: np.ndarray, shifts, pad: int, line=None) -> tuple[float, list]:
@@ -179,22 +181,18 @@ def _placed_dice(parts, shifts, right: np.ndarray, pad: int, line=None) -> float
     return 2 * np.count_nonzero(mine & theirs) / total if total else 0.0
 
 
-def _join(masks: list, measure, gap_px: int, right: np.ndarray, pad: int, apart: bool = False,
-          weak: float | None = None) -> list:
-    """Join neighbouring blobs (boxes `gap_px` or less apart) while one shift lays their union
-    on the right image at least as well as their own shifts lay them (Dice, weighted by size):
-    the pieces of one object that looks like the wall in places, e.g. stripes; the best pair first.
+def _join(masks: list, measure, gap_px: int, right: np.ndarray, pad: int, weak: float) -> list:
+    """Join neighbouring blobs (boxes `gap_px` or less apart) while one shift lays their union on
+    the right image's change at least as well as their own shifts, both parts moved at once, lay
+    them (:func:`_placed_dice`, one overlap over the same rows and padded columns): the pieces of one
+    object that looks like the wall in places, e.g. stripes; the best pair first.
 
-    With `apart`, "their own shifts lay them" is one overlap (:func:`_placed_dice`): both parts
-    moved at once, each by its own shift, against the right image's change, compared with the union
-    moved by one shift, over the same rows and padded columns.  Two objects side by side then stay
-    apart however well or poorly each fits alone (the padding of each part's own fit counts its
-    neighbour's change against it).  A part narrower than ``2 * pad`` fits almost any shift, so it
-    is moved by its neighbour's (both: by the union's).  With `weak` (a Dice), two neighbours
-    neither of which fits with a Dice of `weak` or more (neither a well-seen object) are joined
-    when the union fits at least as well as the better of them, whatever both moved at once give."""
+    Two objects side by side then stay apart however well or poorly each fits alone (the padding of
+    each part's own fit counts its neighbour's change against it).  A part narrower than ``2 * pad``
+    fits almost any shift, so it is moved by its neighbour's (both: by the union's).  Two neighbours
+    neither of which fits with a Dice of `weak` or more (neither a well-seen object) are joined when
+    the union fits at least as well as the better of them, whatever both moved at once give."""
     fits = [measure(m) for m in masks]
-    sizes = [int(np.count_nonzero(m)) for m in masks]
     keys = [frozenset([k]) for k in range(len(masks))]
     unions = {}
     while len(masks) > 1:
@@ -209,21 +207,18 @@ def _join(masks: list, measure, gap_px: int, right: np.ndarray, pad: int, apart:
                 if key not in unions:
                     unions[key] = measure(masks[a] | masks[b])
                 union = unions[key]
-                if not apart:
-                    margin = union[0] - (sizes[a] * fits[a][0] + sizes[b] * fits[b][0]) / (sizes[a] + sizes[b])
-                elif np.isnan(union[1]):
+                if np.isnan(union[1]):
                     continue            # the union has no shift: nothing to compare
-                else:
-                    own = [fits[a][1], fits[b][1]]
-                    loose = [bool(ca.stop - ca.start < 2 * pad or np.isnan(own[0])),
-                             bool(cb.stop - cb.start < 2 * pad or np.isnan(own[1]))]
-                    if all(loose):
-                        own = [union[1], union[1]]
-                    elif any(loose):
-                        own = [own[loose[0]]] * 2       # the firm part's shift for both
-                    margin = (_placed_dice([masks[a] | masks[b]], [union[1]], right, pad)
-                              - _placed_dice([masks[a], masks[b]], own, right, pad))
-                if weak is not None and max(fits[a][0], fits[b][0]) < weak:
+                own = [fits[a][1], fits[b][1]]
+                loose = [bool(ca.stop - ca.start < 2 * pad or np.isnan(own[0])),
+                         bool(cb.stop - cb.start < 2 * pad or np.isnan(own[1]))]
+                if all(loose):
+                    own = [union[1], union[1]]
+                elif any(loose):
+                    own = [own[loose[0]]] * 2       # the firm part's shift for both
+                margin = (_placed_dice([masks[a] | masks[b]], [union[1]], right, pad)
+                          - _placed_dice([masks[a], masks[b]], own, right, pad))
+                if max(fits[a][0], fits[b][0]) < weak:
                     margin = max(margin, union[0] - max(fits[a][0], fits[b][0]))
                 if margin >= 0 and (best is None or margin > best[0]):
                     best = (margin, a, b, union)
@@ -231,6 +226,6 @@ def _join(masks: list, measure, gap_px: int, right: np.ndarray, pad: int, apart:
             return masks
         _, a, b, union = best
         masks[a] = masks[a] | masks[b]
-        fits[a], sizes[a], keys[a] = union, sizes[a] + sizes[b], keys[a] | keys[b]
-        del masks[b], fits[b], sizes[b], keys[b]
+        fits[a], keys[a] = union, keys[a] | keys[b]
+        del masks[b], fits[b], keys[b]
     return masks

@@ -7,65 +7,10 @@ disparity, the nearer the object (Fig. 5.14).  This module holds the steps after
 matching, :func:`depth_from_matches`; :mod:`ismb_lab.depth_demo` runs the whole demo
 from four images.  With the rig's calibration it also gives metric depth ``Z = f B / d``.
 
-How it works
-------------
-1. *Background removal.*  A scene feature belongs to the background when one of its
-   matches lies within ``position_tol_px`` of a background match (left image) with a
-   horizontal disparity within ``disparity_tol_px`` of it.  Its matches are dropped.
-2. *In front of the background.*  An object put into the scene stands in front of
-   what was there, so (with ``in_front``) a scene match is dropped unless its
-   disparity exceeds the local background disparity (the smallest disparity of the
-   background matches within ``local_px``, i.e. the farthest surface there; the
-   smallest of all where none is that close) by more than ``disparity_tol_px``.
-   This drops wrong matches and background corners that the background pair did not
-   match right.  The smallest, not the median, because whole groups of background
-   corners can be matched wrongly, at too large a disparity.
-3. *Objects.*  With :class:`~ismb_lab.silhouettes.Silhouettes` (what
-   :func:`ismb_lab.depth_demo.relative_depth` passes; ``DepthConfig.grouping``), an
-   object is a blob of the left image where the
-   scene differs from the background, and its disparity is the shift that lays that
-   blob on the right image's blob of change (its silhouette disparity, whole pixels).
-   The features on the blob (``silhouette_grow_px`` around it) with matches at most
-   ``silhouette_tol_px`` above that shift and at most ``silhouette_behind_px`` below it (an
-   outline is its object's farthest visible part) give the object's disparity (their consensus
-   band); a blob none of whose matches agree is still an object, found by its outline
-   alone (``n_features == 0``).  A silhouette is trusted only when the two blobs
-   overlap well (Dice ``>= silhouette_score``) and, with ``in_front``, when its shift
-   exceeds the smallest background disparity by more than ``disparity_tol_px`` (a
-   sliver of an object that looks like the wall can fit a shift behind it); otherwise
-   -- a narrow object whose outline is blurred, or the piece of one -- its features are
-   grouped as below; with ``outline_alone``, when no ``min_features`` of them agree, the
-   blob (in front of the background) is still one object at its silhouette disparity,
-   since nothing else tells where it is.  So
-   a striped object matched one period off, or cut into bands, stays one object at its
-   true disparity, and a feature off every blob is not an object.
-
-   Without silhouettes the remaining features are grouped by single linkage: two features
-   are linked when they lie within ``link_px`` of each other (left image) and have
-   matches whose disparities differ by at most ``link_disparity_px``; a group is a
-   connected component of these links (:func:`scipy.sparse.csgraph.connected_components`),
-   so a car next to a box in the image but nearer stays apart from it.
-4. *An object's disparity.*  The network may give a feature several matches.  In each
-   group, the disparity with the most matches within ``consensus_px`` (a
-   fronto-parallel object has one disparity; ties go to the band with the smallest
-   spread) makes one object of the features with a match in that band; those
-   features leave the group and the band search repeats on the rest, as long as a
-   band holds ``min_features`` features.  So two objects side by side, chained into
-   one group by a few in-between matches, come out as two (*peeling*).  Then two
-   objects whose median disparities differ by at most ``merge_disparity_px`` and
-   whose features come within ``merge_px`` of each other are one: the halves of a
-   sparsely textured 60 px box, which single linkage at 30 px splits, join again.
-   An object's ``mean_disparity`` is the mean of its consensus matches (a mean over
-   a 2 px band, so a wrong match far off cannot move it); its ``median_disparity``
-   the median of its features' disparities; its confidence is
-   ``n_features`` and ``disparity_spread`` (median absolute deviation).  Groups
-   whose best band has fewer than ``min_features`` features are dropped as noise:
-   two features that agree are kept, one is not.
-5. *Depth.*  Objects are ranked by their consensus disparity ``mean_disparity``,
-   largest (nearest) first.  Metric depth is ``f B / d``; quantised disparities are off by up to ``quantisation_px``,
-   so the depth lies in ``[f B / (d + q), f B / (d - q)]`` (infinite far end when
-   ``d <= q``).  Zero disparity is "at infinity", negative disparity "invalid":
-   no depth, never a division by zero.
+The steps, each with the :class:`DepthConfig` value that rules it, are described in
+``docs/depth.md``: background removal, "in front of the background", objects by their
+outlines (:mod:`ismb_lab.silhouettes`) or by their features alone (the thesis' grouping),
+and depth with its error bar.  The grouping's helpers are in :mod:`ismb_lab._grouping`.
 
 Disparities are horizontal, ``x_left - x_right`` (:mod:`ismb_lab.coords`), the
 quantity that ``f B / Z`` predicts for a parallel rig even when the right image is
@@ -75,16 +20,15 @@ shifted vertically.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, replace
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
 from ._validation import ParameterError, ParameterTypeError, check_choice, check_number, message, readonly
 from .camera import BASELINE_M, FOCAL_PX, StereoCamera
 from .matching import MatchResult
-from .silhouettes import Silhouettes
-from ._grouping import (_band_cut, _clusters, _consensus, _join_agreeing, _local_background, _merge, _on_blobs,
-                        _peel)
+from .silhouettes import OutlineConfig, Silhouettes
+from ._grouping import _band_cut, _clusters, _consensus, _local_background, _merge, _on_blobs, _peel
 
 __all__ = ["GROUPINGS", "Depth", "DepthConfig", "DepthObject", "DepthResult", "depth_from_matches", "metric_depth"]
 
@@ -114,72 +58,41 @@ class DepthConfig:
     merge_px, merge_disparity_px : float
         Two objects whose features come within ``merge_px`` of each other and whose
         median disparities differ by at most ``merge_disparity_px`` are one object.
-    in_front : bool
-        Drop scene matches not in front of the local background disparity.
     local_px : float
         Radius of the local background around a scene match.
     grouping : {"silhouettes", "features"}
         How :func:`ismb_lab.depth_demo.relative_depth` finds objects: by the blobs of
         change of both images (:class:`~ismb_lab.silhouettes.Silhouettes`, the default),
-        or by the features alone (steps 3-4 of the module's docstring without
-        silhouettes, as the thesis does).
+        or by the features alone, as the thesis does.
     silhouette_tol_px : float
-        Largest difference between a match's disparity and its blob's silhouette
-        disparity for the match to count.
+        A match counts for its blob when its disparity lies from the blob's silhouette disparity
+        to this much above it (an outline is its object's farthest visible part).
     silhouette_score : float
-        Least Dice overlap (0-1) of the left blob and the shifted right one for the
-        silhouette to decide the object alone.
+        Least Dice overlap (0-1) of the left blob and the shifted right one for the blob,
+        in front of the background, to be *trusted*: one object at the consensus of the
+        features that agree with its shift, or at its shift when none does.  A blob in front
+        that is not trusted is one object at its largest band of features (or at its shift).
     silhouette_grow_px : int
         A feature within this many pixels of a blob lies on it (corners sit on outlines).
-    silhouette_behind_px : float
-        Largest amount by which a match's disparity may lie below its blob's silhouette
-        disparity for the match to count (at most ``silhouette_tol_px``).  An object's
-        surface is not behind its outline: the outline of an upright cylinder is its
-        farthest visible part, its front is nearer.
-    outline_alone : bool
-        A blob in front of the background that is not trusted and on which no band of
-        ``min_features`` features agrees is still one object, at its silhouette disparity.
-    floor_agreed : bool
-        Only a background object (agreeing features), not a lone wrong match, can hide outlines.
-    band_cut : bool
-        Two objects in one blob.  The blob is cut in two when it is two pieces in the left image (an
-        empty column between them), its features agree on two bands of disparity ``band_step_px``
-        or more apart, each of ``band_features`` or more features, one band on each piece (a
-        feature, or one in ten, on the wrong side at most), each piece, both moved at once, lies
-        better on the right image's change at its own band's shift than at the other's
-        (:meth:`~ismb_lab.silhouettes.Silhouettes.cut_dice`), and each band lies within
+    band_features, band_step_px : int, float
+        Two objects in one blob: two bands of its features' disparities ``band_step_px`` or more
+        apart, each of ``band_features`` or more features, one on each side of a column, cut the
+        blob there when each piece, both moved at once, lies better on the right image's change at
+        its own band's shift than at the other's
+        (:meth:`~ismb_lab.silhouettes.Silhouettes.cut_dice`) and each band lies within
         ``silhouette_tol_px`` of the shift that lays its piece best
-        (:meth:`~ismb_lab.silhouettes.Silhouettes.cut_shifts`).  The outlines of two objects close
-        together can fit shifts a pixel apart (a cylinder's outline is its farthest part), which
-        joins their blobs; their features tell them apart.
-    band_features : int
-        See `band_cut`.
-    firm_outline : float or None
-        With a number, a blob whose outline fits with a Dice of this or more stands in front of the
-        background whatever the background's matches say: a surface seen in both images at that
-        shift is not behind the wall (the background's matches of a repetitive wall can all be one
-        period off, and put the floor above every object).  0.95: the middle of the values (0.93-0.97)
-        that lose the fewest objects on docs/experiments/2026-11-26-depth-unseen-8.md's development
-        layouts.
-    band_step_px : float
-        See `band_cut`.
-    band_one_piece : float or None
-        With a number, `band_cut` cuts a blob of one piece too (two objects that touch in the left
-        image): at the column where the two bands' shifts lay the parts best, when they lay them
-        with a Dice of this or more, better than any one shift lays the blob, and the shifts that lay
-        the parts best are ``band_step_px`` or more apart (a cylinder's features can form two bands,
-        but its outline fits one shift).
-    band_join_px : float or None
-        With a number, two objects of neighbouring blobs, each on ``band_features`` or more
-        features, whose consensus disparities differ by this or less and some of whose features lie
-        within ``link_px`` of each other are one, when one of the two outlines fits with a Dice
-        below ``band_join_score``: the pieces of an object cut where it looks like the wall.
-    band_join_score : float
-        See `band_join_px`.
-    poor_one : bool
-        A blob in front of the background whose outline is not trusted but on which bands of
-        features agree is one object, at the largest band, centred on the blob (not one object per
-        band: the features of a low-contrast object are matched wrong as often as right).
+        (:meth:`~ismb_lab.silhouettes.Silhouettes.cut_shifts`).
+    band_one_piece : float
+        A blob of one piece (two objects that touch in the left image) is cut so only at the column
+        where the two bands' shifts lay the parts with a Dice of this or more, better than any one
+        shift lays the blob, and where the shifts that lay the parts best are ``band_step_px`` or
+        more apart (a cylinder's features can form two bands, but its outline fits one shift).
+    firm_outline : float
+        A blob whose outline fits with a Dice of this or more stands in front of the background
+        whatever the background's matches say: the background's matches of a repetitive wall can
+        all be one period off, and put the floor above every object.
+    outline : OutlineConfig
+        How the blobs of change and their shifts are found (:func:`ismb_lab.silhouettes.silhouettes`).
     focal_px, baseline_m : float
         Focal length in pixels and baseline in metres (> 0); the defaults are
         :data:`ismb_lab.camera.FOCAL_PX` and :data:`~ismb_lab.camera.BASELINE_M` (the thesis' 10 cm rig).
@@ -204,23 +117,16 @@ class DepthConfig:
     min_features: int = 2
     merge_px: float = 45.0
     merge_disparity_px: float = 1.5
-    in_front: bool = True
     local_px: float = 40.0
     grouping: str = "silhouettes"
     silhouette_tol_px: float = 3.0
     silhouette_score: float = 0.8
     silhouette_grow_px: int = 3
-    outline_alone: bool = True
-    silhouette_behind_px: float = 0.0
-    floor_agreed: bool = True
-    band_cut: bool = True
     band_features: int = 3
     band_step_px: float = 3.0
-    firm_outline: float | None = 0.95
-    band_one_piece: float | None = 0.97
-    band_join_px: float | None = 1.0
-    band_join_score: float = 0.9
-    poor_one: bool = True
+    band_one_piece: float = 0.97
+    firm_outline: float = 0.95
+    outline: OutlineConfig = field(default_factory=OutlineConfig)
     focal_px: float = FOCAL_PX
     baseline_m: float = BASELINE_M
     quantisation_px: float = 0.5
@@ -229,31 +135,20 @@ class DepthConfig:
         own = "DepthConfig"
         for name in ("position_tol_px", "disparity_tol_px", "consensus_px", "quantisation_px",
                      "link_disparity_px", "merge_px", "merge_disparity_px", "silhouette_tol_px",
-                     "silhouette_behind_px", "band_step_px"):
+                     "band_step_px"):
             object.__setattr__(self, name, check_number(getattr(self, name), name, own, low=0))
         for name in ("link_px", "local_px", "focal_px", "baseline_m"):
             object.__setattr__(self, name, check_number(getattr(self, name), name, own,
                                                         low=0, low_open=True))
-        object.__setattr__(self, "min_features",
-                           check_number(self.min_features, "min_features", own, low=1, integer=True))
-        if self.firm_outline is not None:
-            object.__setattr__(self, "firm_outline",
-                               check_number(self.firm_outline, "firm_outline", own, low=0, high=1))
-        if self.band_one_piece is not None:
-            object.__setattr__(self, "band_one_piece",
-                               check_number(self.band_one_piece, "band_one_piece", own, low=0, high=1))
-        if self.band_join_px is not None:
-            object.__setattr__(self, "band_join_px", check_number(self.band_join_px, "band_join_px", own, low=0))
-        object.__setattr__(self, "band_features",
-                           check_number(self.band_features, "band_features", own, low=1, integer=True))
+        for name in ("min_features", "band_features"):
+            object.__setattr__(self, name, check_number(getattr(self, name), name, own, low=1, integer=True))
         object.__setattr__(self, "silhouette_grow_px",
                            check_number(self.silhouette_grow_px, "silhouette_grow_px", own, low=0, integer=True))
-        for name in ("silhouette_score", "band_join_score"):
+        for name in ("silhouette_score", "band_one_piece", "firm_outline"):
             object.__setattr__(self, name, check_number(getattr(self, name), name, own, low=0, high=1))
         check_choice(self.grouping, "grouping", own, GROUPINGS)
-        for name in ("in_front", "outline_alone", "floor_agreed", "band_cut", "poor_one"):
-            if not isinstance(getattr(self, name), bool):
-                raise ParameterTypeError(message(name, own, "True or False", getattr(self, name)))
+        if not isinstance(self.outline, OutlineConfig):
+            raise ParameterTypeError(message("outline", own, "an OutlineConfig", self.outline))
 
 
 @dataclass(frozen=True)
@@ -483,14 +378,15 @@ def _objects(feature, xy, d, config: DepthConfig, silhouettes: Silhouettes | Non
              trusted=None, infront=None) -> tuple[list, int]:
     """Group matches into objects; returns (objects near -> far, features dropped).
 
-    With `silhouettes`, blob ``k`` is one object when ``trusted[k - 1]``, or (``outline_alone``)
-    when ``infront[k - 1]`` and no band of its features agrees."""
+    With `silhouettes`, blob ``k`` is one object when ``trusted[k - 1]``, or at its outline alone when
+    ``infront[k - 1]``, its outline has a score and no band of its features agrees; the features of
+    the other blobs are grouped as without silhouettes."""
     features = np.unique(feature)
     if not len(features) and silhouettes is None:
         return [], 0
     first = {f: xy[feature == f][0] for f in features}
     found, parts, used = [], [], set()
-    groups, outlined, blobs = [], [], []
+    groups, outlined = [], []
     if silhouettes is None:
         labels = _clusters(np.array([first[f] for f in features]).reshape(-1, 2),
                            [d[feature == f] for f in features], config.link_px, config.link_disparity_px)
@@ -502,42 +398,25 @@ def _objects(feature, xy, d, config: DepthConfig, silhouettes: Silhouettes | Non
         for k in range(1, len(silhouettes) + 1):
             idx = np.flatnonzero(blob == k)
             dk, score = float(silhouettes.disparity[k - 1]), float(silhouettes.score[k - 1])
-            if config.band_cut and infront[k - 1] and score > 0 and len(idx):
+            if infront[k - 1] and score > 0 and len(idx):
                 two = _band_cut(idx, feature, first, d, config, silhouettes, k)
                 if two is not None:
                     for rows, centroid, shift in two:
                         used.update(np.unique(feature[rows]).tolist())
                         outlined.append((rows, centroid, (shift, score)))
-                        blobs.append(None)
                     continue
-            if not trusted[k - 1]:
-                if (config.outline_alone and infront[k - 1] and score > 0
-                        and not _peel(feature[idx], d[idx], config)):
-                    # Nothing else tells where it is: the outline alone, however poor its fit.
-                    outlined.append((idx[:0], silhouettes.centroid_xy[k - 1], (dk, score)))
-                    blobs.append([k])
-                    continue
-                bands = _peel(feature[idx], d[idx], config) if config.poor_one else []
-                if bands and infront[k - 1] and score > 0:
-                    band = bands[0]
-                    used.update(np.unique(feature[idx[band]]).tolist())
-                    outlined.append((idx[band], silhouettes.centroid_xy[k - 1], (dk, score)))
-                    blobs.append([k])
-                    continue
-                groups.append(idx)    # a poor outline: the features decide
+            if trusted[k - 1]:
+                gap = d[idx] - dk
+                near = idx[(gap >= 0) & (gap <= config.silhouette_tol_px)]
+                rows = near[_consensus(d[near], config.consensus_px)] if len(near) else near
+            elif infront[k - 1] and score > 0 and not _peel(feature[idx], d[idx], config):
+                rows = idx[:0]        # a poor outline in front that no features agree on: nothing else places it
+            else:
+                groups.append(idx)    # the features decide
                 continue
-            gap = d[idx] - dk
-            behind = min(config.silhouette_behind_px, config.silhouette_tol_px)
-            near = idx[(gap >= -behind) & (gap <= config.silhouette_tol_px)]
-            rows = near[_consensus(d[near], config.consensus_px)] if len(near) else near
             used.update(np.unique(feature[rows]).tolist())
             outlined.append((rows, silhouettes.centroid_xy[k - 1], (dk, score)))
-            blobs.append([k])
-        if config.band_join_px is None:
-            blobs = [None] * len(blobs)
-        found += _join_agreeing(outlined, blobs, silhouettes, config,
-                                lambda rows, centroid, outline: _object(rows, feature, first, d, config,
-                                                                         centroid, outline))
+        found += [_object(rows, feature, first, d, config, centroid, outline) for rows, centroid, outline in outlined]
     for idx in groups:
         for band in _peel(feature[idx], d[idx], config):
             rows = idx[band]
@@ -604,19 +483,19 @@ def depth_from_matches(background, scene, config: DepthConfig | None = None,
     removed = np.unique(sf[same])
     keep = ~np.isin(sf, removed)
     behind = np.zeros(len(sf), dtype=bool)
-    if config.in_front and len(bd):
+    if len(bd):
         behind = keep & (sd <= _local_background(sxy, bxy, bd, config.local_px)
                          + config.disparity_tol_px)
     keep &= ~behind
     trusted = infront = None
     if silhouettes is not None:
         # An object stands in front of what was there: an outline at the background's
-        # disparity or behind it is a poor outline (a sliver that looks like the wall).
+        # disparity or behind it is a poor outline (a sliver that looks like the wall), unless
+        # it fits firmly.  Only a background object, not a lone wrong match, sets that floor.
         infront = np.ones(len(silhouettes), dtype=bool)
-        if config.in_front and len(bd) and (background_objects or not config.floor_agreed):
-            infront = silhouettes.disparity > bd.min() + config.disparity_tol_px
-            if config.firm_outline is not None:
-                infront |= silhouettes.score >= config.firm_outline
+        if len(bd) and background_objects:
+            infront = ((silhouettes.disparity > bd.min() + config.disparity_tol_px)
+                       | (silhouettes.score >= config.firm_outline))
         trusted = (silhouettes.score >= config.silhouette_score) & infront
     objects, dropped = _objects(sf[keep], sxy[keep], sd[keep], config, silhouettes, trusted, infront)
 

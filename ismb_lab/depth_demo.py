@@ -9,8 +9,8 @@ objects left.
 of its ROI, and textured posters have stronger corners than a small toy car, so with
 the thesis' ROI a far car can end with one corner or none.  The demo knows the
 background, so it looks for the scene pair's corners only in the bounding box of the
-ROI's pixels whose smoothed left-image difference from the background exceeds 8 grey
-levels, plus a margin (:func:`changed_roi`).  The box still holds some background, so
+ROI's pixels whose smoothed left-image difference from the background exceeds
+:data:`~ismb_lab.silhouettes.CHANGE_THRESHOLD` grey levels, plus a margin (:func:`changed_roi`).  The box still holds some background, so
 the background removal has work to do; where nothing changed, or everything did
 (another day's lighting), it is the whole ROI.  The background pair keeps the ROI.
 The figures behind this choice are in ``benchmarks/README.md``.
@@ -20,8 +20,8 @@ in the right image, are the objects' outlines: :func:`ismb_lab.silhouettes.silho
 gives each left blob of change the shift that lays it on the right image's blobs, and
 :func:`ismb_lab.depth.depth_from_matches` makes each well-fitting blob one object at the
 disparity its agreeing features give (``DepthConfig.grouping``; ``"features"`` is the
-thesis' grouping).  ``scripts/depth_layouts.py`` scores it on random object layouts; its
-figures, against the features alone, are in ``docs/experiments/2026-11-24-depth-layouts.md``.
+thesis' grouping).  ``docs/depth.md`` describes the method as it runs;
+``scripts/depth_layouts.py`` scores it on random object layouts.
 
 The demo's defaults, :data:`DEPTH_PARAMS`, :data:`DEPTH_MATCH_CONFIG` and
 :data:`DEPTH_SOLVER`, are declared here once; the command line and the widget read them.
@@ -35,9 +35,9 @@ The demo's defaults, :data:`DEPTH_PARAMS`, :data:`DEPTH_MATCH_CONFIG` and
 from __future__ import annotations
 
 from dataclasses import replace
+from pathlib import Path
 
 import numpy as np
-from scipy.ndimage import gaussian_filter
 
 from ._validation import ParameterError, ParameterTypeError, check_number, message
 from .depth import DepthConfig, DepthResult, depth_from_matches
@@ -47,13 +47,12 @@ from .matching import MatchConfig, MatchResult, Prepared, auto_window, match, pr
 from .methods import DEFAULT_METHOD, build_problem, get_method
 from .params import Params
 from .similarity import mean_abs_difference
-from .silhouettes import Silhouettes, changed_in_roi, silhouettes
+from .silhouettes import CHANGE_SIGMA, CHANGE_THRESHOLD, Silhouettes, changed_in_roi, silhouettes
 from .solvers import ANNEAL, get_solver
-from .texture import textured
 
-__all__ = ["DEPTH_MATCH_CONFIG", "DEPTH_PARAMS", "DEPTH_SOLVER", "MASK_GROW", "REGION_CORNERS",
+__all__ = ["DEPTH_MATCH_CONFIG", "DEPTH_PARAMS", "DEPTH_SOLVER", "REGION_CORNERS",
            "changed_regions", "changed_roi", "depth_match", "depth_pairs",
-           "layout_match_config", "relative_depth", "scene_match_config",
+           "layout_match_config", "load_stereo", "relative_depth", "scene_match_config",
            "pair_silhouettes", "scene_prepared"]
 
 #: Corners of the depth demo: the thesis' centre quarter, but 40 to 60 corners instead of
@@ -74,12 +73,6 @@ DEPTH_METHOD = "III"
 
 #: Corners per blob of change in the scene pair (:func:`scene_prepared`): at least, at most.
 REGION_CORNERS = (20, 40)
-
-#: When > 0, scene corners count only within this many pixels of a changed pixel
-#: (:func:`scene_prepared`).  Off: on the development layouts of ``scripts/depth_layouts.py``
-#: its effect was noise (``docs/experiments/2026-11-24-depth-layouts.md``), and it leaves the
-#: background removal of §5.2.3 nothing to remove.
-MASK_GROW = 0
 
 #: How the demo solves the energy, a name in :data:`ismb_lab.solvers.SOLVERS`: mean-field
 #: annealing ranked the cars right on more development layouts than the discrete network
@@ -119,8 +112,8 @@ def layout_match_config(layout, match_config=None) -> MatchConfig:
                    shift=check_number(layout.shift, "layout.shift", own))
 
 
-def changed_roi(background_left, scene_left, roi="center", *, threshold: float = 8.0,
-                sigma: float = 1.0, margin: int = 4):
+def changed_roi(background_left, scene_left, roi="center", *, threshold: float = CHANGE_THRESHOLD,
+                sigma: float = CHANGE_SIGMA, margin: int = 4):
     """The box of `roi` where the scene's left image differs from the background's.
 
     Parameters
@@ -198,7 +191,7 @@ def scene_match_config(background, scene, match_config=None):
     if not isinstance(match_config, MatchConfig):
         raise ParameterTypeError(message("match_config", own, "a MatchConfig", match_config))
     if match_config.shift == "auto" and background is not None:
-        match_config = auto_window(_load(background, "background", own), match_config)
+        match_config = auto_window(load_stereo(background, "background", own), match_config)
     for name, value in (("background", background), ("scene", scene)):
         if not isinstance(value, StereoPair):
             raise ParameterTypeError(message(name, own, "a StereoPair", value))
@@ -207,8 +200,8 @@ def scene_match_config(background, scene, match_config=None):
     return match_config if box is None else replace(match_config, roi=box)
 
 
-def changed_regions(background_image, scene_image, roi="center", *, threshold: float = 8.0,
-                    sigma: float = 1.0, margin: int = 4, min_pixels: int = 20) -> list:
+def changed_regions(background_image, scene_image, roi="center", *, threshold: float = CHANGE_THRESHOLD,
+                    sigma: float = CHANGE_SIGMA, margin: int = 4, min_pixels: int = 20) -> list:
     """Boxes of the separate blobs of `roi` where `scene_image` differs from `background_image`.
 
     The pixels that :func:`changed_roi` counts as changed, split into connected
@@ -241,26 +234,15 @@ def changed_regions(background_image, scene_image, roi="center", *, threshold: f
                   for k, (rows, cols) in enumerate(find_objects(blobs), 1) if sizes[k] >= min_pixels)
 
 
-def _changed(background_image, scene_image, grow: int) -> np.ndarray:
-    """Pixels within `grow` of a change (the smoothed difference of :func:`changed_roi`)."""
-    from scipy.ndimage import binary_dilation
-
-    diff = gaussian_filter(np.abs(np.asarray(scene_image, float) - np.asarray(background_image, float)), 1.0)
-    return binary_dilation(diff > 8.0, iterations=grow) if grow else diff > 8.0
-
-
-def _region_corners(image, boxes, config: MatchConfig, n_min: int, n_max: int, mask=None) -> Corners:
+def _region_corners(image, boxes, config: MatchConfig, n_min: int, n_max: int) -> Corners:
     """Corners of every box (the first with ``config``'s numbers, each other its own
-    `n_min`..`n_max`), merged row-major, duplicates once; only those on `mask` when given."""
+    `n_min`..`n_max`), merged row-major, duplicates once."""
     kw = dict(threshold=config.threshold, sigma=config.harris_sigma, k=config.harris_k,
               min_distance=config.min_distance)
     found = [detect_corners(image, roi=box, n_min=config.n_min if not n else n_min,
                             n_max=config.n_max if not n else n_max, **kw) for n, box in enumerate(boxes)]
     xy = np.vstack([c.xy for c in found]).reshape(-1, 2)
     response = np.concatenate([c.response for c in found])
-    if mask is not None:
-        on = mask[xy[:, 1].astype(int), xy[:, 0].astype(int)]
-        xy, response = xy[on], response[on]
     xy, first = np.unique(xy, axis=0, return_index=True)
     order = np.lexsort((xy[:, 0], xy[:, 1]))
     xs = [b[0] for b in boxes] + [b[0] + b[2] for b in boxes]
@@ -317,10 +299,8 @@ def scene_prepared(background, scene, match_config=None) -> Prepared:
     # background), plus each blob's.
     left, right = [config.roi] + left, [shift_roi(config.roi, base.shift, scene.shape)] + right
     lo, hi = REGION_CORNERS
-    masks = [None, None] if not MASK_GROW else [_changed(b, c, MASK_GROW) for b, c in
-                                               ((background.left, scene.left), (background.right, scene.right))]
-    lc = _region_corners(scene.left, left, config, lo, hi, masks[0])
-    rc = _region_corners(scene.right, right, config, lo, hi, masks[1])
+    lc = _region_corners(scene.left, left, config, lo, hi)
+    rc = _region_corners(scene.right, right, config, lo, hi)
     M = mean_abs_difference(scene.left, scene.right, lc.xy, rc.xy, config.patch_size)
     problem = build_problem(lc.xy, rc.xy, M, shift=config.shift, window_height=config.window_height,
                             window_width=config.window_width, radius=config.neighbour_radius,
@@ -335,15 +315,34 @@ def _check_same_size(background, scene, owner: str):
                                      "(width x height)", f"images of size {w2}x{h2}"))
 
 
-def _load(value, name: str, owner: str) -> StereoPair:
-    """A StereoPair from a StereoPair, a (left, right) pair or an object with .left and .right."""
+def load_stereo(value, name: str, owner: str) -> StereoPair:
+    """A pair as the demo takes it: a StereoPair, a pair folder (``left.png`` and ``right.png``),
+    a ``(left, right)`` pair of images or paths, or an object with ``.left`` and ``.right``.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> load_stereo((np.zeros((40, 60)), np.zeros((40, 60))), "background", "demo").shape
+    (40, 60)
+    >>> load_stereo(42, "background", "demo")
+    Traceback (most recent call last):
+    ...
+    ismb_lab.ParameterTypeError: The 'background' parameter of demo must be a pair folder, a (left, right) pair of images or paths, or an object with .left and .right. Got 42 instead.
+    """
     if isinstance(value, StereoPair):
         return value
+    if isinstance(value, (str, Path)):
+        folder = Path(value)
+        missing = [f for f in ("left.png", "right.png") if not (folder / f).is_file()]
+        if missing:
+            raise ParameterError(message(name, owner, "a pair folder holding left.png and right.png "
+                                         f"(this one has no {missing[0]})", str(folder)))
+        return load_pair(folder / "left.png", folder / "right.png")
     if hasattr(value, "left") and hasattr(value, "right"):
         return load_pair(value.left, value.right)
     if isinstance(value, (tuple, list)) and len(value) == 2:
         return load_pair(value[0], value[1])
-    raise ParameterTypeError(message(name, owner, "a (left, right) pair of images or "
+    raise ParameterTypeError(message(name, owner, "a pair folder, a (left, right) pair of images or "
                                      "paths, or an object with .left and .right", value))
 
 
@@ -396,10 +395,10 @@ def _prepared(pair, background, match_config, own: str) -> Prepared:
     if not isinstance(match_config, MatchConfig):
         raise ParameterTypeError(message("match_config", own, "a MatchConfig", match_config))
     if match_config.shift == "auto" and background is not None:
-        match_config = auto_window(_load(background, "background", own), match_config)
-    pair = _load(pair, "pair", own)
+        match_config = auto_window(load_stereo(background, "background", own), match_config)
+    pair = load_stereo(pair, "pair", own)
     if background is not None:
-        return scene_prepared(_load(background, "background", own), pair, match_config)
+        return scene_prepared(load_stereo(background, "background", own), pair, match_config)
     return prepare(pair, None, match_config)
 
 
@@ -430,7 +429,7 @@ def depth_pairs(background, scene, match_config=None) -> tuple[Prepared, Prepare
 
 
 def _depth_pairs(background, scene, match_config, own: str) -> tuple[Prepared, Prepared]:
-    bg, sc = _load(background, "background", own), _load(scene, "scene", own)
+    bg, sc = load_stereo(background, "background", own), load_stereo(scene, "scene", own)
     if isinstance(match_config, MatchConfig) and match_config.shift == "auto":
         match_config = auto_window(bg, match_config)   # one window for both pairs, from the background
     _check_same_size(bg, sc, own)
@@ -445,8 +444,8 @@ def relative_depth(background, scene, *, method=DEFAULT_METHOD, params=None, mat
 
     Parameters
     ----------
-    background, scene : (left, right) or object with ``.left`` and ``.right``
-        The two stereo pairs of the same view, as image arrays or paths (a
+    background, scene : pair folder, (left, right) or object with ``.left`` and ``.right``
+        The two stereo pairs of the same view (:func:`load_stereo`; a
         :class:`~ismb_lab.scenes.Scene` works too).  All four images must have one size.
     method : str
         Energy recipe, see :mod:`ismb_lab.methods` (the thesis uses Method-III).
@@ -468,8 +467,8 @@ def relative_depth(background, scene, *, method=DEFAULT_METHOD, params=None, mat
         `match_config` (which are then not read again): a change of method, parameters,
         seed or tolerances need not find the corners again.
     silhouettes : Silhouettes, optional
-        :func:`pair_silhouettes` of these `prepared` pairs, found once as well; used
-        when ``config.grouping`` is ``"silhouettes"``.
+        :func:`pair_silhouettes` of these `prepared` pairs, found once as well (with
+        ``config.grouping`` ``"silhouettes"`` only).
     one_to_one : bool
         Keep at most one match per corner in both pairs (:func:`ismb_lab.matching.match`).
     **network
@@ -492,36 +491,37 @@ def relative_depth(background, scene, *, method=DEFAULT_METHOD, params=None, mat
     solver = get_solver(solver, own, **network)
     if prepared is None:
         prepared = _depth_pairs(background, scene, match_config, own)
-    elif not (isinstance(prepared, tuple) and len(prepared) == 2 and all(isinstance(p, Prepared) for p in prepared)):
-        raise ParameterTypeError(message("prepared", own, "None or the (background, scene) pair of Prepared "
-                                         "that depth_pairs returns", prepared))
+    _check_prepared(prepared, own)
     config = DepthConfig() if config is None else config
     if not isinstance(config, DepthConfig):
         raise ParameterTypeError(message("config", own, "a DepthConfig", config))
-    if silhouettes is not None and not isinstance(silhouettes, Silhouettes):
-        raise ParameterTypeError(message("silhouettes", own, "None or the Silhouettes that pair_silhouettes "
-                                         "returns", silhouettes))
+    if silhouettes is not None:
+        if not isinstance(silhouettes, Silhouettes):
+            raise ParameterTypeError(message("silhouettes", own, "None or the Silhouettes that pair_silhouettes "
+                                             "returns", silhouettes))
+        if config.grouping != "silhouettes":
+            raise ParameterError(message("silhouettes", own, "None when config.grouping is "
+                                         f"{config.grouping!r} (the features alone group the objects)",
+                                         "a Silhouettes"))
     results = [_match(p, method, params, seed, solver, one_to_one) for p in prepared]
     scene_roi = resolve_roi(prepared[1].config.roi, prepared[1].pair.shape)
     blobs = None
     if config.grouping == "silhouettes":
-        blobs = pair_silhouettes(prepared) if silhouettes is None else silhouettes
+        blobs = pair_silhouettes(prepared, config) if silhouettes is None else silhouettes
     return replace(depth_from_matches(*results, config, blobs), scene_roi=scene_roi)
 
 
-def pair_silhouettes(prepared, *, texture_gain: float | None = None, texture_poor: float | None = None,
-                     **options) -> Silhouettes:
-    """:func:`~ismb_lab.silhouettes.silhouettes` of two pairs prepared by :func:`depth_pairs` (and,
-    when asked, :func:`~ismb_lab.texture.textured`).
+def _check_prepared(prepared, own: str) -> None:
+    if not (isinstance(prepared, tuple) and len(prepared) == 2 and all(isinstance(p, Prepared) for p in prepared)):
+        raise ParameterTypeError(message("prepared", own, "the (background, scene) pair of Prepared "
+                                         "that depth_pairs returns", prepared))
+
+
+def pair_silhouettes(prepared, config: DepthConfig | None = None) -> Silhouettes:
+    """:func:`~ismb_lab.silhouettes.silhouettes` of two pairs prepared by :func:`depth_pairs`.
 
     The blobs are sought in the background's ROI, at the whole-pixel shifts of the scene's
-    candidate window (the disparities the matcher may find); `options` are passed on
-    (``join=False``, say).  With `texture_gain`, the texture inside each blob then cuts it where
-    it steps by that share of its census cost; with `texture_poor`, a blob whose outline fits with
-    a Dice below it moves to the shift that its texture and outline agree on
-    (:func:`~ismb_lab.texture.textured`; 0.09 and 0.9 were tried).  Both are off by default: on a
-    held-out draw they fixed no layout and split one cylinder
-    (docs/experiments/2026-11-26-depth-unseen-7.md).
+    candidate window (the disparities the matcher may find), as ``config.outline`` says.
 
     Examples
     --------
@@ -529,16 +529,17 @@ def pair_silhouettes(prepared, *, texture_gain: float | None = None, texture_poo
     >>> blobs = pair_silhouettes(depth_pairs(lab_scene(0), toy_car_scene(0)))
     >>> blobs.disparity.tolist()        # the two cars, near one first (left to right)
     [33.0, 25.0]
+    >>> pair_silhouettes(None)
+    Traceback (most recent call last):
+    ...
+    ismb_lab.ParameterTypeError: The 'prepared' parameter of pair_silhouettes must be the (background, scene) pair of Prepared that depth_pairs returns. Got None instead.
     """
     own = "pair_silhouettes"
-    if texture_gain is not None:
-        texture_gain = check_number(texture_gain, "texture_gain", own, low=0, high=1)
-    if texture_poor is not None:
-        texture_poor = check_number(texture_poor, "texture_poor", own, low=0, high=1)
-    (background, scene), config = (p.pair for p in prepared), prepared[1].config
-    half = float(config.window_width) / 2
-    shifts = range(int(np.floor(config.shift - half)), int(np.ceil(config.shift + half)) + 1)
-    found = silhouettes(background, scene, prepared[0].config.roi, shifts=shifts, **options)
-    if texture_gain is None and texture_poor is None:
-        return found
-    return textured(found, scene, gain=texture_gain, poor=texture_poor)
+    _check_prepared(prepared, own)
+    config = DepthConfig() if config is None else config
+    if not isinstance(config, DepthConfig):
+        raise ParameterTypeError(message("config", own, "None or a DepthConfig", config))
+    (background, scene), window = (p.pair for p in prepared), prepared[1].config
+    half = float(window.window_width) / 2
+    shifts = range(int(np.floor(window.shift - half)), int(np.ceil(window.shift + half)) + 1)
+    return silhouettes(background, scene, prepared[0].config.roi, shifts=shifts, config=config.outline)

@@ -7,7 +7,8 @@ shift that lays it best on the right image's change (its *silhouette disparity*)
 :func:`ismb_lab.depth.depth_from_matches` makes each well-fitting blob one object, at the
 disparity its agreeing features give.  The outline does not depend on texture, so it
 holds where the features are ambiguous (stripes, tiles) or missing (a plain object).
-This goes beyond the thesis, which groups the features alone.
+This goes beyond the thesis, which groups the features alone; ``docs/depth.md`` describes
+the method step by step.
 """
 
 from __future__ import annotations
@@ -22,7 +23,87 @@ from ._validation import ParameterError, ParameterTypeError, check_number, messa
 from .features import resolve_roi
 from .io import StereoPair
 
-__all__ = ["Silhouettes", "changed_in_roi", "silhouettes"]
+__all__ = ["CHANGE_SIGMA", "CHANGE_THRESHOLD", "OutlineConfig", "Silhouettes", "changed_in_roi", "silhouettes"]
+
+#: Grey levels (0-255) by which the smoothed difference of a scene image from its background
+#: must exceed to count as a change (camera noise stays below it): the one threshold of the
+#: corners' boxes (:func:`ismb_lab.depth_demo.changed_roi`) and of the outlines.
+CHANGE_THRESHOLD = 8.0
+
+#: Standard deviation (px) of the Gaussian that smooths that difference first.
+CHANGE_SIGMA = 1.0
+
+
+@dataclass(frozen=True)
+class OutlineConfig:
+    """How :func:`silhouettes` finds the blobs of change and their shifts (``DepthConfig.outline``).
+
+    Attributes
+    ----------
+    threshold_low : float
+        Hysteresis: a pixel whose smoothed difference exceeds this (0 to :data:`CHANGE_THRESHOLD`),
+        and twice the image's median smoothed difference (noisy cameras), is changed too when it
+        connects to one above :data:`CHANGE_THRESHOLD`.  The blobs are made with and without it, and
+        each region keeps those that fit better.
+    min_pixels : int
+        Smaller blobs are camera noise.
+    pad_px : int
+        Columns on each side of a blob's box that its overlap counts as well.
+    merge_gap_px : int
+        Largest gap between the boxes of two blobs that may be one object.
+    merge_disparity_px : float
+        Blobs whose shifts differ by this or less (and whose boxes are `merge_gap_px` apart or less)
+        are one object cut where it looks like the wall ...
+    link_score : float
+        ... unless their shifts differ and both fit with a Dice of this or more.
+    max_fraction : float
+        A blob covering more of the ROI than this is a change of the light or of the view: its
+        score is 0.
+    split_score : float
+        Least Dice of each part of a blob cut in two (each part at least ``2 * pad_px`` wide); also
+        the fit under which two neighbouring pieces count as weak.
+    split_step_px : float
+        Least difference of the two parts' shifts.
+    split_far_px, split_far_score : float
+        A blob that one shift lays with a Dice of `split_far_score` or more is cut as well when two
+        shifts `split_far_px` or more apart, both parts moved at once, lay it better.
+    split_far_poor_px : float
+        ... and one that one shift lays with a Dice from `split_score` up to `split_far_score`, when
+        two shifts this far apart or more lay both parts at once with `split_far_score` or more.
+
+    Examples
+    --------
+    >>> OutlineConfig(pad_px=6).pad_px
+    6
+    >>> OutlineConfig(threshold_low=9)
+    Traceback (most recent call last):
+    ...
+    ismb_lab.ParameterError: The 'threshold_low' parameter of OutlineConfig must be a finite number >= 0 and <= 8.0. Got 9.0 instead.
+    """
+
+    threshold_low: float = 5.0
+    min_pixels: int = 20
+    pad_px: int = 8
+    merge_gap_px: int = 10
+    merge_disparity_px: float = 1.0
+    link_score: float = 0.9
+    max_fraction: float = 0.5
+    split_score: float = 0.9
+    split_step_px: float = 3.0
+    split_far_px: float = 5.0
+    split_far_score: float = 0.94
+    split_far_poor_px: float = 8.0
+
+    def __post_init__(self):
+        own = "OutlineConfig"
+        checks = {"threshold_low": dict(low=0, high=CHANGE_THRESHOLD), "min_pixels": dict(low=1, integer=True),
+                  "pad_px": dict(low=0, integer=True), "merge_gap_px": dict(low=0, integer=True),
+                  "merge_disparity_px": dict(low=0), "link_score": dict(low=0, high=1),
+                  "max_fraction": dict(low=0, high=1, low_open=True), "split_score": dict(low=0, high=1),
+                  "split_step_px": dict(low=0), "split_far_px": dict(low=0), "split_far_score": dict(low=0, high=1),
+                  "split_far_poor_px": dict(low=0)}
+        for name, rule in checks.items():
+            object.__setattr__(self, name, check_number(getattr(self, name), name, own, **rule))
 
 
 @dataclass(frozen=True, eq=False)
@@ -39,15 +120,15 @@ class Silhouettes:
         Blob ``k``'s silhouette disparity at index ``k - 1``: the whole-pixel shift
         ``x_left - x_right`` with the largest Dice overlap.
     score : (n,) ndarray
-        That overlap, 0-1; 0 for a blob that covers more than half of the ROI, which is a
-        change of the light or of the view rather than an object.
+        That overlap, 0-1; 0 for a blob that covers more than :attr:`OutlineConfig.max_fraction`
+        of the ROI, which is a change of the light or of the view rather than an object.
     centroid_xy : (n, 2) ndarray
         Mean left-image ``(x, y)`` of each blob's pixels.
     right : (H, W) bool ndarray or None
         The right image's changed pixels (read-only), which :meth:`cut_dice` lays the blobs on;
         None when not known.
     pad_px : int
-        Columns on each side that an overlap counts as well (:func:`silhouettes`' `pad_px`).
+        Columns on each side that an overlap counts as well (:attr:`OutlineConfig.pad_px`).
     shifts : tuple of int
         The shifts tried.
     """
@@ -189,41 +270,25 @@ def changed_in_roi(background, scene, roi, threshold, sigma, margin, own: str, n
     return apply_hysteresis_threshold(diff, low, threshold)[y:y + h, x:x + w], (x, y, w, h), margin
 
 
-def silhouettes(background, scene, roi="center", *, shifts=range(0, 41), threshold: float = 8.0,
-                sigma: float = 1.0, min_pixels: int = 20, pad_px: int = 8, merge_gap_px: int = 10,
-                merge_disparity_px: float = 1.0, max_fraction: float = 0.5, join: bool = True,
-                split: bool = True, split_score: float = 0.9, split_step_px: float = 3.0,
-                keep_apart: bool = True, split_far_px: float | None = 5.0,
-                split_far_score: float = 0.94, split_placed: bool = True,
-                join_weak: bool = True, link_score: float | None = 0.9,
-                split_far_poor_px: float | None = 8.0, threshold_low: float | None = 5.0,
-                by_region: bool = True) -> Silhouettes:
+def silhouettes(background, scene, roi="center", *, shifts=range(0, 41),
+                config: OutlineConfig | None = None) -> Silhouettes:
     """Blobs of change of the scene's left image, each with the shift that lays it on the right's.
 
-    Where the scene pair differs from the background pair is where the objects are, in
-    both images: the same changed pixels as :func:`ismb_lab.depth_demo.changed_regions`
-    (whole image, the blobs that reach into `roi`), and the right image's changed pixels; by
-    default, fainter ones that connect to them as well, region by region (`threshold_low`,
-    `by_region`).  A blob's
-    silhouette disparity is the shift ``d`` in `shifts` with the largest Dice overlap
-    between the blob and the right image's changed pixels ``d`` pixels left, counted over
-    the columns both images have (an object across the image border is seen in part).
-    The outline does not depend on texture, so a striped object whose stripes match
-    one period off still has its true shift; the features then give it to a fraction
-    of a pixel (:func:`ismb_lab.depth.depth_from_matches`).
+    Where the scene pair differs from the background pair is where the objects are, in both
+    images: the pixels :func:`changed_in_roi` counts as changed (whole image; the blobs of the left
+    one that reach into `roi`).  The blobs are made twice, by the threshold alone and with
+    hysteresis (:attr:`OutlineConfig.threshold_low`), and each region keeps the blobs that fit
+    better (:func:`_by_region`).  A blob's silhouette disparity is the shift ``d`` in `shifts`
+    with the largest Dice overlap between the blob and the right image's changed pixels ``d``
+    pixels left, counted over the blob's columns padded by ``pad_px`` and only where both images
+    see it.  The outline does not depend on texture, so a striped object whose stripes match one
+    period off still has its true shift; the features then give it to a fraction of a pixel
+    (:func:`ismb_lab.depth.depth_from_matches`).
 
-    Blobs with shifts within `merge_disparity_px` and boxes within `merge_gap_px` of
-    each other are one object cut in two where it looks like the wall behind it (with
-    `link_score`, only when one of them fits poorly).  With
-    `join`, so are neighbours (boxes within `merge_gap_px`) whose union one shift lays on
-    the right image's change at least as well as their own shifts lay them (Dice weighted by
-    size): the pieces of a striped object, each of which fits some shift poorly.  With
-    `split`, a blob that two shifts `split_step_px` or more apart lay better than one, cut at a
-    column into a left and a right part that each fit with a Dice of `split_score` or more,
-    is two objects side by side that touch in the image (cut again while that holds).  With
-    `keep_apart` as well, two neighbours are joined only when one shift lays their union at least
-    as well as their own two shifts, applied at once, lay both together (one Dice over the same
-    padded columns): two objects side by side at different depths stay apart.
+    In each partition (:func:`_partition`) blobs that are one object cut where it looks like the
+    wall are linked, neighbours are joined while one shift lays their union at least as well as
+    their own shifts lay both at once, and a blob that two shifts lay better than one is cut into
+    two objects that touch in the image.
 
     Parameters
     ----------
@@ -232,71 +297,8 @@ def silhouettes(background, scene, roi="center", *, shifts=range(0, 41), thresho
     roi : str or (x, y, w, h)
         Where the objects may be, as :attr:`ismb_lab.matching.MatchConfig.roi`.
     shifts : iterable of int
-        Disparities to try (:func:`ismb_lab.depth_demo.relative_depth`: the candidate window's).
-    threshold, sigma : float
-        As :func:`ismb_lab.depth_demo.changed_roi`.
-    threshold_low : float or None
-        With a number (at most `threshold`), a pixel whose smoothed difference exceeds it, and twice
-        the image's median smoothed difference (noisy cameras), is changed too when it connects to
-        one above `threshold` (hysteresis, in both images): the outline of an object that looks
-        nearly like the wall behind it then breaks into fewer pieces, but neighbours are bridged
-        more often.  None: `threshold` alone (docs/experiments/2026-11-26-depth-unseen-11.md).
-    by_region : bool
-        With `threshold_low`, make the blobs both without and with it and keep, in each region (the
-        blobs of the two that overlap), those that fit better on average (mean Dice; a tie keeps
-        those without).  Hysteresis then mends the outlines it mends, and where it bridges two
-        neighbours into a blob that fits worse, the threshold's blobs stay.  The defaults
-        (docs/experiments/2026-11-26-depth-unseen-12.md); False: hysteresis everywhere.
-    min_pixels : int
-        Smaller blobs are camera noise.
-    pad_px : int
-        Columns on each side of a blob's box that the overlap counts as well.
-    merge_gap_px, merge_disparity_px : float
-        See above.
-    max_fraction : float
-        A blob that covers more of the ROI than this is no object's outline but a change
-        of the light or of the view: its score is 0, so its features are grouped alone.
-    join, split : bool
-        Join the pieces of one object, cut two touching objects apart (see above).
-    keep_apart : bool
-        With `join`, compare the union with both parts moved at once by their own shifts (a part
-        narrower than ``2 * pad_px`` by its neighbour's) rather than with the parts' own fits.
-    split_score : float
-        Least Dice (0-1) of each part of a cut blob (measured as every blob is, padded by
-        `pad_px`); each part is at least ``2 * pad_px`` columns wide.
-    split_step_px : float
-        Least difference of the two parts' shifts, pixels.
-    split_far_px : float or None
-        With a number (None: no such cut), a blob that the cut's test of each part (padded) does not cut is still cut
-        when two shifts this far apart or more, one per part, lay both parts at once on the right
-        image's change (one Dice over the same padded columns) better, by 0.01 or more, than the
-        best single shift lays the blob, while that single shift lays it with a Dice of
-        `split_far_score` or more.  Each part's padding holds its neighbour's change, which counts
-        against it when two objects at different depths touch in the image; both moved at once
-        do not.  Asked once per blob, not of its parts; a shift at either end of `shifts`, or a
-        part moved off the right image, does not count.
-    split_far_score : float
-        See `split_far_px`.
-    split_far_poor_px : float or None
-        With a number, the test of `split_far_px` also cuts a blob that the best single shift lays
-        with a Dice from `split_score` up to `split_far_score`, when two shifts this far apart or
-        more lay both parts at once with `split_far_score` or more (and better, by 0.01 or more,
-        than the single shift): two objects far apart in depth that touch in the image are what
-        makes one shift fit them poorly (docs/experiments/2026-11-26-depth-unseen-9.md).
-    split_placed : bool
-        Take a cut only when its two parts, each moved by its own (padded) shift, both at once, lay
-        on the right image's change at least as well (one Dice over the same padded columns) as the
-        best single shift lays the blob: the halves of one object fit slightly different shifts
-        each, but not better together than the whole at one.
-    join_weak : bool
-        With `join` and `keep_apart`, two neighbours neither of which fits with a Dice of
-        `split_score` or more are joined when their union fits at least as well as the better of
-        them (such pieces are no well-seen objects; a cut would not make them either).
-    link_score : float or None
-        With a number, blobs whose shifts differ (by `merge_disparity_px` or less) are linked only
-        when one of them fits with a Dice below it: two pieces that both fit well, at shifts a pixel
-        apart, are two objects (a cylinder's outline lies 1-3 px behind its front, so a cylinder
-        and a box 3 px behind it can fit shifts a pixel apart).
+        Disparities to try (:func:`ismb_lab.depth_demo.pair_silhouettes`: the candidate window's).
+    config : OutlineConfig, optional
 
     Returns
     -------
@@ -315,10 +317,6 @@ def silhouettes(background, scene, roi="center", *, shifts=range(0, 41), thresho
     >>> s.disparity.tolist(), s.score.round(2).tolist(), s.centroid_xy.round().tolist()
     ([22.0], [1.0], [[170.0, 120.0]])
     """
-    options = dict(locals())        # first, so that it holds the arguments only
-    from scipy.ndimage import find_objects, label
-    from scipy.sparse.csgraph import connected_components
-
     own = "silhouettes"
     for name, value in (("background", background), ("scene", scene)):
         if not isinstance(value, StereoPair):
@@ -326,100 +324,92 @@ def silhouettes(background, scene, roi="center", *, shifts=range(0, 41), thresho
     if background.shape != scene.shape:
         raise ParameterError(message("scene", own, "images of the background's size",
                                      f"images of shape {scene.shape}"))
-    min_pixels = check_number(min_pixels, "min_pixels", own, low=1, integer=True)
-    merge_gap_px = check_number(merge_gap_px, "merge_gap_px", own, low=0, integer=True)
-    pad_px = check_number(pad_px, "pad_px", own, low=0, integer=True)
-    merge_disparity_px = check_number(merge_disparity_px, "merge_disparity_px", own, low=0)
-    max_fraction = check_number(max_fraction, "max_fraction", own, low=0, high=1, low_open=True)
-    split_score = check_number(split_score, "split_score", own, low=0, high=1)
-    split_step_px = check_number(split_step_px, "split_step_px", own, low=0)
-    if split_far_px is not None:
-        split_far_px = check_number(split_far_px, "split_far_px", own, low=0)
-    split_far_score = check_number(split_far_score, "split_far_score", own, low=0, high=1)
-    if split_far_poor_px is not None:
-        split_far_poor_px = check_number(split_far_poor_px, "split_far_poor_px", own, low=0)
-    if link_score is not None:
-        link_score = check_number(link_score, "link_score", own, low=0, high=1)
-    for name, value in (("join", join), ("split", split), ("keep_apart", keep_apart),
-                        ("split_placed", split_placed), ("join_weak", join_weak), ("by_region", by_region)):
-        if not isinstance(value, bool):
-            raise ParameterTypeError(message(name, own, "True or False", value))
-    if by_region and threshold_low is not None:
-        options["by_region"] = False
-        return _by_region(silhouettes(**{**options, "threshold_low": None}), silhouettes(**options))
+    config = OutlineConfig() if config is None else config
+    if not isinstance(config, OutlineConfig):
+        raise ParameterTypeError(message("config", own, "None or an OutlineConfig", config))
     try:
         shifts = [int(d) for d in shifts]
     except (TypeError, ValueError):
         raise ParameterTypeError(message("shifts", own, "an iterable of whole pixels", shifts)) from None
     if not shifts:
         raise ParameterError(message("shifts", own, "at least one shift", shifts))
-    shape = scene.shape
-    changed = [changed_in_roi(b, c, (0, 0, shape[1], shape[0]), threshold, sigma, 0, own, "scene",
-                              threshold_low)[0]
-               for b, c in ((background.left, scene.left), (background.right, scene.right))]
-    x, y, w, h = resolve_roi(roi, shape)
-    blobs, n = label(changed[0], structure=np.ones((3, 3)))
+    h, w = scene.shape
+    box = resolve_roi(roi, scene.shape)
+    partitions = []
+    for low in (None, config.threshold_low):
+        changed = [changed_in_roi(b, c, (0, 0, w, h), CHANGE_THRESHOLD, CHANGE_SIGMA, 0, own, "scene", low)[0]
+                   for b, c in ((background.left, scene.left), (background.right, scene.right))]
+        partitions.append(_partition(*changed, box, shifts, config))
+    return _by_region(*partitions)
+
+
+def _partition(left, right, box, shifts, config: OutlineConfig) -> Silhouettes:
+    """:func:`silhouettes` of the changed pixels `left` and `right` (full-image masks): the blobs of
+    `left` that reach into `box`, linked, joined and cut."""
+    from scipy.ndimage import find_objects, label
+    from scipy.sparse.csgraph import connected_components
+
+    x, y, w, h = box
+    pad = config.pad_px
+    blobs, n = label(left, structure=np.ones((3, 3)))
     sizes = np.bincount(blobs.ravel(), minlength=n + 1)
     inside = np.zeros(n + 1, dtype=bool)
     inside[np.unique(blobs[y:y + h, x:x + w])] = True
-    keep = (sizes >= min_pixels) & inside
+    keep = (sizes >= config.min_pixels) & inside
     keep[0] = False
     blobs = np.where(keep[blobs], blobs, 0)
 
     def measure(mask):
         rows, cols = find_objects(mask.astype(int))[0]
-        return (*_best_shift(mask, rows, cols, changed[1], shifts, pad_px), (rows, cols))
+        return (*_best_shift(mask, rows, cols, right, shifts, pad), (rows, cols))
+
+    def whole_view(mask):
+        return np.count_nonzero(mask[y:y + h, x:x + w]) > config.max_fraction * w * h
 
     ks = np.flatnonzero(keep)
     found = [measure(blobs == k) for k in ks]
     link = np.eye(len(ks), dtype=bool)
-    for a, (_, da, (ra, ca)) in enumerate(found):
-        for b, (_, db, (rb, cb)) in enumerate(found):
+    for a, (fa, da, (ra, ca)) in enumerate(found):
+        for b, (fb, db, (rb, cb)) in enumerate(found):
             gap = max(ra.start - rb.stop, rb.start - ra.stop, ca.start - cb.stop, cb.start - ca.stop, 0)
-            near = abs(da - db) <= merge_disparity_px and gap <= merge_gap_px
-            if near and da != db and link_score is not None:
-                near = min(found[a][0], found[b][0]) < link_score
+            near = abs(da - db) <= config.merge_disparity_px and gap <= config.merge_gap_px
+            if near and da != db:
+                near = min(fa, fb) < config.link_score     # two pieces that both fit well are two objects
             link[a, b] |= near
     group = connected_components(link, directed=False)[1] if len(ks) else np.zeros(0, dtype=int)
     masks = [np.isin(blobs, ks[group == g]) for g in np.unique(group)]
-    if join:
-        masks = _join(masks, measure, merge_gap_px, changed[1], pad_px, keep_apart,
-                      split_score if join_weak and keep_apart else None)
-    if split:
-        todo, masks = [(m, split_far_px) for m in masks], []
-        while todo:
-            part, far = todo.pop()
-            whole_view = np.count_nonzero(part[y:y + h, x:x + w]) > max_fraction * w * h
-            two = None if whole_view else _cut(part, changed[1], shifts, min_pixels, split_step_px,
-                                               split_score, pad_px, far, split_far_score, split_placed,
-                                               split_far_poor_px)
-            if two is None:
-                masks.append(part)
-            else:
-                todo += [(p, None) for p in two]      # the test of two shifts far apart: once per blob
-    centroids = [np.argwhere(m).mean(axis=0)[::-1] for m in masks]
-    labels = np.zeros(shape, dtype=np.int32)
-    disparity, score = [], []
+    masks = _join(masks, measure, config.merge_gap_px, right, pad, config.split_score)
+    todo, masks = [(m, True) for m in masks], []
+    while todo:
+        part, far = todo.pop()
+        two = None if whole_view(part) else _cut(part, right, shifts, config, far)
+        if two is None:
+            masks.append(part)
+        else:
+            todo += [(p, False) for p in two]      # the test of two shifts far apart: once per blob
+    fits = [measure(m) for m in masks]
+    return _numbered(masks, [0.0 if whole_view(m) else f[0] for m, f in zip(masks, fits)],
+                     [f[1] for f in fits], [np.argwhere(m).mean(axis=0)[::-1] for m in masks], right, pad, shifts)
+
+
+def _numbered(masks, score, disparity, centroids, right, pad, shifts) -> Silhouettes:
+    """Blobs `masks` with their fits and centroids, numbered left to right by centroid."""
+    labels = np.zeros(right.shape, dtype=np.int32)
     order = np.argsort([c[0] for c in centroids], kind="stable")
     for k, j in enumerate(order, 1):
         labels[masks[j]] = k
-        dice, d, _ = measure(masks[j])
-        if np.count_nonzero(masks[j][y:y + h, x:x + w]) > max_fraction * w * h:
-            dice = 0.0          # the whole view changed (another light, a moved camera): no outline
-        disparity.append(d)
-        score.append(dice)
-    centroid = [centroids[j] for j in order]
-    return Silhouettes(labels, disparity, score, np.array(centroid).reshape(-1, 2), changed[1], pad_px, shifts)
+    return Silhouettes(labels, [disparity[j] for j in order], [score[j] for j in order],
+                       np.array([centroids[j] for j in order]).reshape(-1, 2), right, pad, shifts)
 
 
 def _by_region(plain: Silhouettes, grown: Silhouettes) -> Silhouettes:
-    """The blobs of `plain` or of `grown` (the same call with hysteresis), region by region.
+    """The blobs of `plain` or of `grown` (the same with hysteresis), region by region.
 
     A region is a set of blobs of the two that overlap, directly or through others.  Each region
     keeps the blobs of the one whose blobs fit better on average (mean Dice; a tie keeps `plain`'s);
     a region that only `grown` has (an object too faint for the threshold alone) keeps `grown`'s.
-    Each blob keeps its own Dice and shift.  The right image's change is `plain`'s, which the depth
-    stage's cuts of a blob (:meth:`Silhouettes.cut_dice`) lay blobs on.
+    Each blob keeps its own Dice, shift and centroid.  The right image's change is `plain`'s, which
+    the depth stage's cuts of a blob (:meth:`Silhouettes.cut_dice`) lay blobs on.
     """
     from scipy.sparse.csgraph import connected_components
 
@@ -435,10 +425,6 @@ def _by_region(plain: Silhouettes, grown: Silhouettes) -> Silhouettes:
         theirs = np.flatnonzero(group[n:] == g)
         grow = len(theirs) and (not len(mine) or grown.score[theirs].mean() > plain.score[mine].mean())
         kept += [(grown, k) for k in theirs] if grow else [(plain, k) for k in mine]
-    kept.sort(key=lambda blob: blob[0].centroid_xy[blob[1], 0])      # numbered left to right, as ever
-    labels = np.zeros(plain.labels.shape, dtype=np.int32)
-    for number, (source, k) in enumerate(kept, 1):
-        labels[source.labels == k + 1] = number
-    return Silhouettes(labels, [source.disparity[k] for source, k in kept], [source.score[k] for source, k in kept],
-                       np.array([source.centroid_xy[k] for source, k in kept]).reshape(-1, 2), plain.right,
-                       plain.pad_px, plain.shifts)
+    return _numbered([s.labels == k + 1 for s, k in kept], [s.score[k] for s, k in kept],
+                     [s.disparity[k] for s, k in kept], [s.centroid_xy[k] for s, k in kept], plain.right,
+                     plain.pad_px, plain.shifts)

@@ -1,6 +1,6 @@
-"""How ismb_lab.depth.DEPTH_PARAMS were fitted: the GA on the background pair images/lab only.
+"""How ismb_lab.depth_demo.DEPTH_PARAMS were fitted: the GA on the background pair images/lab only.
 
-The depth demo finds corners with ``ismb_lab.depth.DEPTH_MATCH_CONFIG`` (more corners
+The depth demo finds corners with ``ismb_lab.depth_demo.DEPTH_MATCH_CONFIG`` (more corners
 than the thesis' 20-30, so that the small toy cars get some).  The GA (Method-III,
 ``ismb_lab.tuning.tune``) fits on images/lab with its answer key, scored as
 ``ismb-lab tune`` scores it: fitness (4-1) ``n_c - n_e``, where a match of a corner the
@@ -8,7 +8,7 @@ key does not list counts as an error (the key lists the corners of the default
 matcher, so the denser corners' matches must earn their place).  Each chromosome is scored over
 ``--seeds`` update orders, so that parameters working for one visiting order only
 score lower.  No toy-car scene is used.  The demo solves the energy with mean-field
-annealing (``ismb_lab.depth.DEPTH_SOLVER``); the GA scores with the discrete network,
+annealing (``ismb_lab.depth_demo.DEPTH_SOLVER``); the GA scores with the discrete network,
 and the script also prints the fitted parameters' score under annealing.
 
     python scripts/fit_depth_params.py [--out PARAMS.json] [--generations 500] [--seed 0]

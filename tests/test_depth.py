@@ -14,6 +14,8 @@ from ismb_lab.depth_demo import (
     changed_roi,
     depth_match,
     depth_pairs,
+    load_stereo,
+    pair_silhouettes,
     relative_depth,
     scene_match_config,
 )
@@ -21,6 +23,7 @@ from ismb_lab.features import resolve_roi
 from ismb_lab.io import load_pair
 from ismb_lab.matching import match, prepare
 from ismb_lab.scenes import lab_scene, toy_car_scene
+from ismb_lab.silhouettes import Silhouettes
 
 IMAGES = __import__("pathlib").Path(__file__).resolve().parent.parent / "images"
 
@@ -179,7 +182,13 @@ def test_to_dict_is_the_json_contract(committed):
     (lambda: DepthConfig(focal_px=-1), "focal_px", ValueError),
     (lambda: DepthConfig(baseline_m=0), "baseline_m", ValueError),
     (lambda: DepthConfig(min_features=0), "min_features", ValueError),
-    (lambda: DepthConfig(in_front="yes"), "in_front", TypeError),
+    (lambda: DepthConfig(outline={"pad_px": 4}), "outline", TypeError),
+    (lambda: pair_silhouettes(None), "prepared", TypeError),
+    (lambda: pair_silhouettes(("a", "b")), "prepared", TypeError),
+    (lambda: relative_depth((np.zeros((60, 80)),) * 2, (np.zeros((60, 80)),) * 2, config=DepthConfig(grouping="features"),
+                            silhouettes=Silhouettes(np.zeros((60, 80), dtype=int), [], [], np.zeros((0, 2)))),
+     "silhouettes", ValueError),
+    (lambda: relative_depth(IMAGES, IMAGES / "toy_cars"), "background", ValueError),
     (lambda: metric_depth(1.0, focal_px=0), "focal_px", ValueError),
     (lambda: depth_from_matches(None, None), "background", TypeError),
     (lambda: relative_depth(5, (np.zeros((60, 80)),) * 2), "background", TypeError),
@@ -210,3 +219,13 @@ def test_pairs_prepared_once_give_what_preparing_them_each_time_gives(committed)
                 == relative_depth(lab, cars, seed=seed, method=method).to_dict())
     with pytest.raises(ParameterTypeError, match="'prepared' parameter of relative_depth"):
         relative_depth(lab, cars, prepared=prepared[:1])
+
+
+def test_one_loader_takes_a_folder_a_pair_of_files_and_a_scene():
+    files = load_pair(IMAGES / "lab" / "left.png", IMAGES / "lab" / "right.png")
+    for value in (IMAGES / "lab", str(IMAGES / "lab"), (IMAGES / "lab" / "left.png", IMAGES / "lab" / "right.png"),
+                  files):
+        pair = load_stereo(value, "background", "test")
+        assert np.array_equal(pair.left, files.left) and np.array_equal(pair.right, files.right)
+    scene = lab_scene(0, supersample=1)
+    assert np.array_equal(load_stereo(scene, "background", "test").left, load_pair(scene.left, scene.right).left)

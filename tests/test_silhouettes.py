@@ -5,7 +5,7 @@ import pytest
 
 from ismb_lab import ParameterError, ParameterTypeError
 from ismb_lab.depth import DepthConfig, depth_from_matches
-from ismb_lab.silhouettes import Silhouettes, silhouettes
+from ismb_lab.silhouettes import CHANGE_THRESHOLD, OutlineConfig, Silhouettes, silhouettes
 from ismb_lab.io import load_pair
 from ismb_lab.matching import MatchResult
 from ismb_lab.params import Params
@@ -15,6 +15,14 @@ H, W = 240, 320
 
 def wall(seed=0):
     return np.random.default_rng(seed).uniform(0, 120, (H, W))
+
+
+#: The threshold's blobs alone (hysteresis from the threshold itself), where a cut is what is tested.
+ALONE = OutlineConfig(threshold_low=CHANGE_THRESHOLD)
+
+
+def outline(**kw) -> OutlineConfig:
+    return OutlineConfig(**kw)
 
 
 def pairs_with(objects, seed=0):
@@ -46,10 +54,8 @@ def test_objects_across_the_image_border_are_compared_where_both_images_see_them
     # One best shift, not a tie that the order of trying decides.
     backwards = silhouettes(bg, sc, roi=(0, 0, W, H), shifts=range(40, -1, -1))
     assert backwards.disparity.tolist() == [20.0]
-    if x0 < 0:    # the blob touches the left edge: without padding every larger shift fits as well
-        assert silhouettes(bg, sc, roi=(0, 0, W, H), shifts=range(40, -1, -1), pad_px=0, sigma=0,
-                           split=False).disparity[0] > 20
-        assert silhouettes(bg, sc, roi=(0, 0, W, H), shifts=range(40, -1, -1), sigma=0).disparity[0] == 20
+    if x0 < 0:    # the blob touches the left edge: without padding, slivers of it fit any shift
+        assert len(silhouettes(bg, sc, roi=(0, 0, W, H), shifts=range(40, -1, -1), config=outline(pad_px=0))) > 2
 
 
 def test_an_object_cut_in_two_where_it_looks_like_the_wall_is_one():
@@ -59,7 +65,7 @@ def test_an_object_cut_in_two_where_it_looks_like_the_wall_is_one():
     left[:, 170:180] = bg.left[:, 170:180]
     right[:, 148:158] = bg.right[:, 148:158]
     cut = load_pair(left, right)
-    apart = silhouettes(bg, cut, merge_disparity_px=0, merge_gap_px=0)
+    apart = silhouettes(bg, cut, config=outline(merge_disparity_px=0, merge_gap_px=0))
     whole = silhouettes(bg, cut)
     assert len(apart) == 2 and apart.disparity.tolist() == [22.0, 22.0]
     assert len(whole) == 1 and whole.disparity.tolist() == [22.0] and whole.score[0] > 0.95
@@ -70,38 +76,33 @@ def test_two_objects_that_touch_in_one_blob_are_cut_apart_at_the_column_between_
     left, right = sc.left.copy(), sc.right.copy()
     left[120:124, 140:150] = right[120:124, 130:140] = 255.0      # a bridge: one blob in each image
     touching = load_pair(left, right)
-    whole = silhouettes(bg, touching, split=False)
-    assert len(whole) == 1                                       # one shift for both: one is lost
-    cut = silhouettes(bg, touching, split=True)
+    cut = silhouettes(bg, touching)
     assert cut.disparity.tolist() == [10.0, 20.0] and cut.score.min() >= 0.9
     assert cut.labels[100, 100] == 1 and cut.labels[150, 180] == 2
-    # Each part must fit as well as a trusted blob does, and their shifts must differ.
-    assert len(silhouettes(bg, touching, split=True, split_score=0.99)) == 1
-    assert len(silhouettes(bg, touching, split=True, split_step_px=11)) == 1
+    # Each part must fit as well as a trusted blob does, and their shifts must differ: else one shift
+    # lays the one blob, and one object is lost.
+    assert len(silhouettes(bg, touching, config=outline(split_score=0.99))) == 1
+    assert len(silhouettes(bg, touching, config=outline(split_step_px=11))) == 1
 
 
 def test_two_objects_side_by_side_stay_apart_when_both_are_moved_at_once():
     """Two objects 5 px apart in the image, at 12 and 17 px.  Each one's own fit counts the change
-    of its neighbour, in its padding, against it; so one shift lays their union better than either
-    alone, the join takes it and the object at 17 px is lost (the cut does not undo it).  Moved at
-    once, each by its own shift, the two lay on the right image's change better than the union."""
+    of its neighbour, in its padding, against it, so one shift lays their union better than either
+    alone.  Moved at once, each by its own shift, the two lay on the right image's change better
+    than the union, so the join leaves them apart."""
     bg, sc = pairs_with([(100, 140, 80, 150, 12), (145, 195, 90, 160, 17)])
-    assert silhouettes(bg, sc).disparity.tolist() == [12.0, 17.0]
-    assert silhouettes(bg, sc, join=True, split=True, keep_apart=False, split_far_px=None
-                       ).disparity.tolist() == [12.0]
-    kept = silhouettes(bg, sc, join=True, split=True, keep_apart=True)
+    kept = silhouettes(bg, sc)
     assert kept.disparity.tolist() == [12.0, 17.0] and kept.score.min() > 0.9
     # The pieces of one object, at one shift, are still one.
-    one = silhouettes(bg, pairs_with([(100, 140, 80, 150, 12), (145, 195, 80, 150, 12)])[1], join=True,
-                      keep_apart=True)
+    one = silhouettes(bg, pairs_with([(100, 140, 80, 150, 12), (145, 195, 80, 150, 12)])[1])
     assert one.disparity.tolist() == [12.0]
 
 
 def test_one_object_is_not_cut():
     bg, sc = pairs_with([(90, 195, 80, 160, 14)])
-    one = silhouettes(bg, sc, join=True, split=True)
+    one = silhouettes(bg, sc)
     assert one.disparity.tolist() == [14.0] and one.score[0] > 0.95
-    assert silhouettes(bg, sc, split_far_px=5.0, split_far_score=0.94).disparity.tolist() == [14.0]
+    assert silhouettes(bg, sc, config=ALONE).disparity.tolist() == [14.0]
 
 
 def test_two_touching_objects_far_apart_in_depth_are_cut_when_both_parts_are_moved_at_once():
@@ -115,15 +116,15 @@ def test_two_touching_objects_far_apart_in_depth_are_cut_when_both_parts_are_mov
     left[100:140, 100:181] = right[100:140, 90:171] = 200.0      # far: 81 px wide, at 10 px
     left[100:140, 181:205] = right[100:140, 161:185] = 255.0     # near: 24 px wide, at 20 px, in front
     bg, sc = load_pair(background, background), load_pair(left, right)
-    alone = {"threshold_low": None}         # the threshold's blobs alone: the cut is what is tested
-    assert silhouettes(bg, sc, split_far_px=None, **alone).disparity.tolist() == [20.0]    # one object lost
-    cut = silhouettes(bg, sc)                                    # the defaults: split_far_px=5, 0.94
+    cut = silhouettes(bg, sc)                                    # split_far_px=5, split_far_score=0.94
     assert cut.disparity.tolist() == [10.0, 20.0]
     assert cut.labels[120, 120] == 1 and cut.labels[120, 195] == 2
-    # Shifts 10 px apart are not 11 or more; the blob as a whole fits one shift at 0.95, not 0.99 (and
-    # without ``split_far_poor_px``, a whole that fits under `split_far_score` is not asked).
-    assert len(silhouettes(bg, sc, split_far_px=11.0, split_far_score=0.94)) == 1
-    assert len(silhouettes(bg, sc, split_far_px=5.0, split_far_score=0.99, split_far_poor_px=None)) == 1
+    # Shifts 10 px apart are not 11 or more: one blob at one shift, the far object lost.
+    assert silhouettes(bg, sc, config=outline(split_far_px=11.0, threshold_low=CHANGE_THRESHOLD)
+                       ).disparity.tolist() == [20.0]
+    # The blob as a whole fits one shift at 0.95, not 0.99; nor are the two shifts 11 px apart, as a
+    # whole that fits under `split_far_score` needs (``split_far_poor_px``).
+    assert len(silhouettes(bg, sc, config=outline(split_far_score=0.99, split_far_poor_px=11.0))) == 1
 
 
 def test_two_touching_objects_that_one_shift_fits_only_fairly_are_cut_when_far_apart_in_depth():
@@ -136,17 +137,15 @@ def test_two_touching_objects_that_one_shift_fits_only_fairly_are_cut_when_far_a
     left[60:100, 40:90] = right[60:100, 28:78] = 255.0           # far: at 12 px
     left[75:115, 90:125] = right[75:115, 67:102] = 200.0         # near: at 23 px, in front
     bg, sc = load_pair(background, background), load_pair(left, right)
-    alone = {"threshold_low": None}         # the threshold's blobs alone: the cut is what is tested
-    one = silhouettes(bg, sc, split_far_poor_px=None, **alone)
-    assert one.disparity.tolist() == [14.0] and 0.9 <= one.score[0] < 0.94     # the far box lost
     cut = silhouettes(bg, sc)
     assert cut.disparity.tolist() == [12.0, 23.0]
     assert cut.labels[80, 60] == 1 and cut.labels[95, 110] == 2
-    # The two shifts lie 11 px apart, not 12 or more; the whole must fit with `split_score` or more,
-    # and both parts at once with `split_far_score` or more.
-    assert silhouettes(bg, sc, split_far_poor_px=12.0, **alone).disparity.tolist() == [14.0]
-    assert silhouettes(bg, sc, split_far_poor_px=8.0, split_score=0.95, **alone).disparity.tolist() == [14.0]
-    assert silhouettes(bg, sc, split_far_poor_px=8.0, split_far_score=0.99, **alone).disparity.tolist() == [14.0]
+    # The two shifts lie 11 px apart, not 12 or more: one shift fits the blob fairly, the far box lost.
+    one = silhouettes(bg, sc, config=outline(split_far_poor_px=12.0, threshold_low=CHANGE_THRESHOLD))
+    assert one.disparity.tolist() == [14.0] and 0.9 <= one.score[0] < 0.94
+    # The whole must fit with `split_score` or more, and both parts at once with `split_far_score` or more.
+    for kw in ({"split_score": 0.95}, {"split_far_score": 0.99}):
+        assert silhouettes(bg, sc, config=outline(threshold_low=CHANGE_THRESHOLD, **kw)).disparity.tolist() == [14.0]
 
 
 def test_an_object_whose_halves_fit_shifts_two_pixels_apart_is_not_cut():
@@ -159,7 +158,7 @@ def test_an_object_whose_halves_fit_shifts_two_pixels_apart_is_not_cut():
     left[100:160, 130:170] = 255.0
     right[100:160, 114:154] = 255.0
     bg, sc = load_pair(background, background), load_pair(left, right)
-    assert silhouettes(bg, sc, split_step_px=2.0).disparity.tolist() == [14.0, 16.0]
+    assert silhouettes(bg, sc, config=outline(split_step_px=2.0)).disparity.tolist() == [14.0, 16.0]
     one = silhouettes(bg, sc)
     assert one.disparity.tolist() == [14.0] and one.score[0] > 0.95
 
@@ -169,15 +168,13 @@ def test_one_object_is_not_cut_where_its_parts_moved_at_once_lay_worse_than_one_
     image, and a patch inside that looks like the wall in the right image.  A left and a right part
     then fit their own shifts (18 and 14) at 0.92 each, 4 px apart, and the cut's test of each part
     takes them; both moved at once by those shifts lay on the right image's change worse than the
-    whole at 14, so with `split_placed` (the default) it is one object."""
+    whole at 14, so it is one object."""
     background = wall()
     left, right = background.copy(), background.copy()
     left[80:160, 90:190] = right[80:160, 76:176] = 255.0
     left[96:150, 90:94] = background[96:150, 90:94]
     right[89:108, 130:136] = background[89:108, 130:136]
     bg, sc = load_pair(background, background), load_pair(left, right)
-    two = silhouettes(bg, sc, split_placed=False)
-    assert two.disparity.tolist() == [18.0, 14.0] and two.score.min() > 0.9
     one = silhouettes(bg, sc)
     assert one.disparity.tolist() == [14.0] and one.score[0] > 0.95
 
@@ -194,16 +191,15 @@ def test_pieces_of_one_object_that_fit_no_shift_well_are_joined():
     right[80:150, 88:120] = 255.0
     right[80:150, 118:146] = 255.0
     bg, sc = load_pair(background, background), load_pair(left, right)
-    apart = silhouettes(bg, sc, join_weak=False)
-    assert apart.disparity.tolist() == [12.0, 14.0] and apart.score.max() < 0.9
     one = silhouettes(bg, sc)
     assert len(one) == 1 and one.score[0] > 0.95
 
 
+
 def test_blobs_outside_the_roi_and_specks_are_not_objects():
     bg, sc = pairs_with([(150, 190, 100, 140, 22), (30, 33, 30, 33, 5)])
-    assert len(silhouettes(bg, sc, roi=(0, 0, 100, 100), min_pixels=50)) == 0
-    assert len(silhouettes(bg, sc, roi=(0, 0, 100, 100), min_pixels=5)) == 1
+    assert len(silhouettes(bg, sc, roi=(0, 0, 100, 100), config=outline(min_pixels=50))) == 0
+    assert len(silhouettes(bg, sc, roi=(0, 0, 100, 100), config=outline(min_pixels=5))) == 1
     assert len(silhouettes(bg, bg)) == 0
 
 
@@ -215,31 +211,15 @@ def test_silhouettes_bad_input_names_the_parameter():
         silhouettes((bg.left, bg.right), sc)
     with pytest.raises(ParameterError, match="'scene' parameter of silhouettes"):
         silhouettes(bg, load_pair(sc.left[:200], sc.right[:200]))
-    with pytest.raises(ParameterError, match="'min_pixels' parameter of silhouettes"):
-        silhouettes(bg, sc, min_pixels=0)
-    with pytest.raises(ParameterError, match="'split_score' parameter of silhouettes"):
-        silhouettes(bg, sc, split_score=1.5)
-    with pytest.raises(ParameterError, match="'split_step_px' parameter of silhouettes"):
-        silhouettes(bg, sc, split_step_px=-1)
-    with pytest.raises(ParameterTypeError, match="'join' parameter of silhouettes"):
-        silhouettes(bg, sc, join="yes")
-    with pytest.raises(ParameterTypeError, match="'keep_apart' parameter of silhouettes"):
-        silhouettes(bg, sc, keep_apart=1)
-    with pytest.raises(ParameterError, match="'split_far_px' parameter of silhouettes"):
-        silhouettes(bg, sc, split_far_px=-1)
-    with pytest.raises(ParameterError, match="'split_far_score' parameter of silhouettes"):
-        silhouettes(bg, sc, split_far_score=2)
-    with pytest.raises(ParameterError, match="'split_far_poor_px' parameter of silhouettes"):
-        silhouettes(bg, sc, split_far_poor_px=-1)
-    for name in ("split_placed", "join_weak"):
-        with pytest.raises(ParameterTypeError, match=f"'{name}' parameter of silhouettes"):
-            silhouettes(bg, sc, **{name: "yes"})
-    with pytest.raises(ParameterTypeError, match="'floor_agreed' parameter of DepthConfig"):
-        DepthConfig(floor_agreed="yes")
-    with pytest.raises(ParameterError, match="'silhouette_behind_px' parameter of DepthConfig"):
-        DepthConfig(silhouette_behind_px=-1)
-    with pytest.raises(ParameterTypeError, match="'outline_alone' parameter of DepthConfig"):
-        DepthConfig(outline_alone=1)
+    with pytest.raises(ParameterTypeError, match="'config' parameter of silhouettes"):
+        silhouettes(bg, sc, config=DepthConfig())
+    for name, value in (("min_pixels", 0), ("split_score", 1.5), ("split_step_px", -1), ("split_far_px", -1),
+                        ("split_far_score", 2), ("split_far_poor_px", -1), ("link_score", -0.5),
+                        ("max_fraction", 0), ("threshold_low", -1.0), ("threshold_low", 8.5)):
+        with pytest.raises(ParameterError, match=f"'{name}' parameter of OutlineConfig"):
+            OutlineConfig(**{name: value})
+    with pytest.raises(ParameterTypeError, match="'outline' parameter of DepthConfig"):
+        DepthConfig(outline={"pad_px": 4})
     with pytest.raises(ParameterError, match="'grouping' parameter of DepthConfig"):
         DepthConfig(grouping="blobs")
     with pytest.raises(ParameterError, match="'silhouette_score' parameter of DepthConfig"):
@@ -279,23 +259,17 @@ def test_a_trusted_blob_is_one_object_at_the_disparity_its_features_agree_on_wit
     labels = blob_labels((100, 140, 100, 140), (200, 230, 100, 140), (250, 280, 100, 140), (290, 300, 100, 140))
     sil = Silhouettes(labels, [22.0, 14.0, 11.0, -2.0], [0.98, 0.97, 0.5, 0.93],
                       [[120.0, 120.0], [215.0, 120.0], [265.0, 120.0], [295.0, 120.0]])
-    r = depth_from_matches(background, scene, DepthConfig(silhouette_behind_px=3.0), sil)
+    r = depth_from_matches(background, scene, None, sil)
     a, b, c = r.objects
-    assert (a.rank, a.n_features, a.silhouette_disparity, a.centroid_xy) == (1, 4, 22.0, (120.0, 120.0))
-    assert a.mean_disparity == pytest.approx(np.mean([22, 22, 21, 22])) and a.silhouette_score == 0.98
+    assert (a.rank, a.n_features, a.silhouette_disparity, a.centroid_xy) == (1, 3, 22.0, (120.0, 120.0))
+    assert a.mean_disparity == 22.0 and a.silhouette_score == 0.98      # the match at 21 lies behind 22
     # B: no feature agrees with its outline, so the outline alone places it.
     assert (b.n_features, b.mean_disparity, b.silhouette_disparity, b.n_matches) == (0, 14.0, 14.0, 0)
-    # C's outline is not trusted (two objects touching, say): one object at its features' band, centred on
-    # the blob (``poor_one``); without that rule its features decide, as without outlines.
-    assert (c.n_features, c.mean_disparity, c.silhouette_disparity, c.centroid_xy) == (3, 10.0, 11.0, (265.0, 120.0))
-    c = depth_from_matches(background, scene, DepthConfig(silhouette_behind_px=3.0, poor_one=False), sil).objects[2]
+    # C's outline is not trusted (two objects touching, say): its features decide, as without outlines.
     assert (c.n_features, c.mean_disparity, c.silhouette_disparity) == (3, 10.0, None)
     # The last outline lies behind the wall and fits below ``firm_outline``: a sliver that looks like
-    # the wall, not an object ...
+    # the wall, not an object.
     assert r.silhouettes is sil and r.to_dict()["grouping"] == "silhouettes"
-    # ... unless objects need not stand in front of the background.
-    behind = depth_from_matches(background, scene, DepthConfig(in_front=False), sil)
-    assert [o.silhouette_disparity for o in behind.objects][-1] == -2.0
     assert r.to_dict()["objects"][1]["silhouette_disparity"] == 14.0
     # Without outlines the off-period bands and the stray pair are objects of their own.
     alone = depth_from_matches(background, scene, DepthConfig())
@@ -310,32 +284,25 @@ def test_an_outline_no_features_agree_on_is_an_object_however_poor_its_fit():
     labels = blob_labels((100, 140, 100, 140), (200, 230, 100, 140), (250, 280, 100, 140))
     sil = Silhouettes(labels, [22.0, 16.0, 3.0], [0.98, 0.6, 0.7],
                       [[120.0, 120.0], [215.0, 120.0], [265.0, 120.0]])
-    r = depth_from_matches(background, scene, DepthConfig(outline_alone=True), sil)
+    r = depth_from_matches(background, scene, None, sil)
     assert [(o.silhouette_disparity, o.n_features) for o in r.objects] == [(22.0, 3), (16.0, 0)]
     assert r.objects[1].centroid_xy == (215.0, 120.0) and r.objects[1].silhouette_score == 0.6
-    assert [(o.silhouette_disparity, o.n_features) for o in depth_from_matches(background, scene, None, sil).objects
-            ] == [(22.0, 3), (16.0, 0)]                                # the default
-    # The third lies behind the wall: no object.  Without the rule the second is lost too.
-    lost = depth_from_matches(background, scene, DepthConfig(outline_alone=False), sil)
-    assert [o.silhouette_disparity for o in lost.objects] == [22.0]
+    # The third lies behind the wall: no object.
 
 
 def test_matches_behind_an_outline_do_not_count():
     """An upright cylinder's outline is its farthest visible part: its silhouette disparity (20) is
-    below its front (22).  Three wrong matches 2 px behind the outline outvote the two on the front
-    while they count (3 px either side); 1 px behind, the front decides.  With no match left, the
-    outline places the object."""
+    below its front (22).  Three wrong matches 2 px behind the outline would outvote the two on the
+    front; they do not count, and the front decides.  With no match left, the outline places the
+    object."""
     background = matches([(x, y, 6.0) for x in range(20, 300, 40) for y in (20, 220)])
     scene = matches([(105, 105, 18.0), (115, 110, 18.0), (125, 125, 18.0),     # a period off
                      (120, 120, 22.0), (122, 130, 22.0)])                      # the front
     sil = Silhouettes(blob_labels((100, 140, 100, 140)), [20.0], [0.98], [[120.0, 120.0]])
-    both = depth_from_matches(background, scene, DepthConfig(silhouette_behind_px=3.0), sil).objects[0]
-    front = depth_from_matches(background, scene, DepthConfig(silhouette_behind_px=1.0), sil).objects[0]
-    assert depth_from_matches(background, scene, None, sil).objects[0].mean_disparity == 22.0   # the default
-    assert (both.mean_disparity, both.n_features) == (18.0, 3)
+    front = depth_from_matches(background, scene, None, sil).objects[0]
     assert (front.mean_disparity, front.n_features) == (22.0, 2)
-    behind = matches([(105, 105, 18.0), (115, 110, 18.0), (125, 125, 18.5)])
-    alone = depth_from_matches(background, behind, DepthConfig(silhouette_behind_px=1.0), sil).objects[0]
+    behind = matches([(105, 105, 18.0), (115, 110, 18.0), (125, 125, 19.5)])
+    alone = depth_from_matches(background, behind, None, sil).objects[0]
     assert (alone.mean_disparity, alone.n_features) == (20.0, 0)
 
 
@@ -344,21 +311,21 @@ def test_a_lone_background_match_does_not_put_well_fitting_outlines_behind_the_b
     and 11 px, Dice 0.99) then lie behind the smallest background disparity, so neither is trusted
     and both objects are lost.  With no two background features agreeing on a disparity, there is
     no floor to lie behind; where the wall's features agree, the floor stays as it was.  (Outlines
-    this firm stand in front of any floor by default, ``firm_outline``: off here.)"""
+    this firm stand in front of any floor, ``firm_outline``: raised out of reach here.)"""
     lone = matches([(160, 200, 21.0)])
     scene = matches([(110, 115, 21.0), (210, 115, 11.0)])
     sil = Silhouettes(blob_labels((100, 140, 100, 140), (200, 230, 100, 140)), [21.0, 11.0], [0.99, 0.99],
                       [[120.0, 120.0], [215.0, 120.0]])
-    assert depth_from_matches(lone, scene, DepthConfig(floor_agreed=False, firm_outline=None), sil).objects == ()
-    found = depth_from_matches(lone, scene, None, sil).objects           # the default
+    not_firm = DepthConfig(firm_outline=1.0)
+    found = depth_from_matches(lone, scene, not_firm, sil).objects
     assert [o.silhouette_disparity for o in found] == [21.0, 11.0]
     wall_matches = matches([(x, y, 6.0) for x in range(20, 300, 20) for y in (20, 220)] + [(160, 200, 21.0)])
-    for floor_agreed in (False, True):
-        r = depth_from_matches(wall_matches, scene, DepthConfig(floor_agreed=floor_agreed), sil)
-        assert [o.silhouette_disparity for o in r.objects] == [21.0, 11.0]
+    r = depth_from_matches(wall_matches, scene, not_firm, sil)
+    assert [o.silhouette_disparity for o in r.objects] == [21.0, 11.0]
     agreeing = matches([(160, 200, 21.0), (170, 200, 21.0)])      # two that agree: a floor, however wrong
-    assert depth_from_matches(agreeing, scene, DepthConfig(floor_agreed=True, firm_outline=None), sil).objects == ()
+    assert depth_from_matches(agreeing, scene, not_firm, sil).objects == ()
     assert len(depth_from_matches(agreeing, scene, None, sil).objects) == 2       # firm outlines
+
 
 
 def two_pieces(right_shifts=(20, 25), one_piece=False):
@@ -376,20 +343,15 @@ def two_pieces(right_shifts=(20, 25), one_piece=False):
 def test_two_objects_in_one_blob_are_cut_apart_by_their_features():
     """Two boxes 10 px apart whose outlines fit shifts close enough to make one blob (22): their
     features say 20 and 25, one band on each piece, and each piece lies best at its band's shift.
-    Without the rule the blob is one object; the cut needs two pieces, bands that agree with the
-    pieces' outlines, and two bands on either side of the gap."""
+    The cut needs two pieces, bands that agree with the pieces' outlines, and two bands on either
+    side of the gap."""
     background = matches([(x, y, 6.0) for x in range(20, 300, 20) for y in (20, 220)])
     left = [(105, 105, 20.0), (115, 115, 20.0), (125, 125, 20.0), (135, 130, 20.0)]
     right = [(155, 105, 25.0), (165, 115, 25.0), (175, 125, 25.0), (185, 130, 25.0)]
-    cut = DepthConfig(band_cut=True)
+    cut = DepthConfig()
     objects = depth_from_matches(background, matches(left + right), cut, two_pieces()).objects
     assert [(o.mean_disparity, o.n_features) for o in objects] == [(25.0, 4), (20.0, 4)]
     assert [o.centroid_xy for o in objects] == [(169.5, 119.5), (119.5, 119.5)]
-    assert len(depth_from_matches(background, matches(left + right), DepthConfig(band_cut=False),
-                                  two_pieces()).objects) == 1
-    # One piece: a cylinder's outline fits two shifts as well (unless ``band_one_piece`` asks of the outline).
-    assert len(depth_from_matches(background, matches(left + right), DepthConfig(band_one_piece=None),
-                                  two_pieces(one_piece=True)).objects) == 1
     # The right piece's features one period off (33): its outline says 25.
     off = [(x, y, 33.0) for x, y, _ in right]
     assert len(depth_from_matches(background, matches(left + off), cut, two_pieces()).objects) == 1
@@ -419,8 +381,9 @@ def test_a_cut_blob_is_measured_with_the_right_image_s_change():
 @pytest.mark.parametrize("field, value, error", [("band_features", 0, ParameterError),
                                                  ("band_step_px", -1.0, ParameterError),
                                                  ("firm_outline", 1.5, ParameterError),
-                                                 ("band_cut", "yes", ParameterTypeError)])
-def test_band_cut_and_firm_outline_options_are_checked(field, value, error):
+                                                 ("band_one_piece", 1.5, ParameterError),
+                                                 ("silhouette_grow_px", -1, ParameterError)])
+def test_the_band_and_outline_values_are_checked(field, value, error):
     with pytest.raises(error, match=f"'{field}' parameter of DepthConfig"):
         DepthConfig(**{field: value})
 
@@ -434,7 +397,7 @@ def test_an_outline_that_fits_firmly_is_not_behind_a_background_matched_one_peri
     scene = matches([(110, 115, 17.0), (120, 120, 17.0), (210, 115, 12.0), (220, 120, 12.0)])
     sil = Silhouettes(blob_labels((100, 140, 100, 140), (200, 230, 100, 140)), [17.0, 12.0], [0.99, 0.9],
                       [[120.0, 120.0], [215.0, 120.0]])
-    assert depth_from_matches(wrong, scene, DepthConfig(firm_outline=None), sil).objects == ()
+    assert depth_from_matches(wrong, scene, DepthConfig(firm_outline=1.0), sil).objects == ()
     firm = depth_from_matches(wrong, scene, DepthConfig(firm_outline=0.95), sil).objects
     assert [(o.silhouette_disparity, o.mean_disparity) for o in firm] == [(17.0, 17.0)]
 
@@ -464,9 +427,10 @@ def test_silhouettes_found_once_give_what_finding_them_each_time_gives():
     each = relative_depth(layout.background, layout.scene, match_config=config)
     assert once.silhouettes is blobs and once.to_dict() == each.to_dict()
     np.testing.assert_array_equal(each.silhouettes.labels, blobs.labels)
-    features = relative_depth(layout.background, layout.scene, match_config=config, prepared=prepared,
-                              silhouettes=blobs, config=DepthConfig(grouping="features"))
-    assert features.silhouettes is None
+    with pytest.raises(ParameterError, match="'silhouettes' parameter of relative_depth must be None when "
+                                             "config.grouping is 'features'"):
+        relative_depth(layout.background, layout.scene, prepared=prepared, silhouettes=blobs,
+                       config=DepthConfig(grouping="features"))
     with pytest.raises(ParameterTypeError, match="'silhouettes' parameter of relative_depth"):
         relative_depth(layout.background, layout.scene, prepared=prepared, silhouettes=blobs.labels)
 
@@ -488,25 +452,22 @@ def test_a_change_of_light_over_the_whole_view_is_no_outline(gain, offset):
     by_features = relative_depth(None, None, prepared=prepared, config=DepthConfig(grouping="features"))
     assert len(by_outline.objects) == 2
     assert [o.mean_disparity for o in by_outline.objects] == [o.mean_disparity for o in by_features.objects]
-    with pytest.raises(ParameterError, match="'max_fraction' parameter of silhouettes"):
-        silhouettes(load_pair(bg.left, bg.right), scene, max_fraction=0)
+
 
 
 def test_outline_pieces_a_pixel_apart_are_linked_only_when_one_fits_poorly():
     """Two boxes 8 px apart in the image at 14 and 15 px: the link of pieces whose shifts differ by
-    ``merge_disparity_px`` or less makes them one blob and one object is lost.  With ``link_score``
-    two pieces that both fit well stay apart; a piece that fits poorly (half of its change missing
-    in the right image) is still linked to its neighbour."""
+    ``merge_disparity_px`` or less would make them one blob, and one object would be lost: two pieces
+    that both fit with ``link_score`` or more stay apart; a piece that fits poorly (half of its change
+    missing in the right image) is still linked to its neighbour."""
     bg, sc = pairs_with([(100, 140, 80, 150, 14), (148, 190, 90, 160, 15)])
-    assert len(silhouettes(bg, sc, link_score=None)) == 1
-    apart = silhouettes(bg, sc, link_score=0.9)
+    assert len(silhouettes(bg, sc, config=outline(link_score=1.0))) == 1      # every pair counts as poor
+    apart = silhouettes(bg, sc)
     assert apart.disparity.tolist() == [14.0, 15.0] and apart.score.min() > 0.9
     right = sc.right.copy()
     right[125:160, 120:190] = bg.right[125:160, 120:190]
     poor = load_pair(sc.left, right)
-    pieces = silhouettes(bg, poor, link_score=0.9, merge_disparity_px=0, join=False, split=False)
-    assert pieces.disparity.tolist() == [14.0, 15.0] and pieces.score[1] < 0.9
-    assert len(silhouettes(bg, poor, link_score=0.9)) == 1
+    assert len(silhouettes(bg, poor)) == 1
 
 
 def test_two_objects_that_touch_are_cut_by_their_features_where_the_outline_sees_two_shifts():
@@ -517,12 +478,10 @@ def test_two_objects_that_touch_are_cut_by_their_features_where_the_outline_sees
     background = matches([(x, y, 6.0) for x in range(20, 300, 20) for y in (20, 220)])
     scene = matches([(105, 105, 20.0), (115, 115, 20.0), (125, 125, 20.0), (135, 130, 20.0),
                      (155, 105, 25.0), (165, 115, 25.0), (175, 125, 25.0), (185, 130, 25.0)])
-    cut = DepthConfig(band_one_piece=0.97)
+    cut = DepthConfig()            # band_one_piece=0.97
     objects = depth_from_matches(background, scene, cut, two_pieces(one_piece=True)).objects
     assert [(o.mean_disparity, o.n_features) for o in objects] == [(25.0, 4), (20.0, 4)]
     assert objects[0].centroid_xy[0] > 145 > objects[1].centroid_xy[0]
-    assert len(depth_from_matches(background, scene, DepthConfig(band_one_piece=None),
-                                  two_pieces(one_piece=True)).objects) == 1
     for shifts in ((22, 22), (21, 23)):
         assert len(depth_from_matches(background, scene, cut, two_pieces(shifts, one_piece=True)).objects) == 1
     blurred = two_pieces(one_piece=True)
@@ -534,62 +493,41 @@ def test_two_objects_that_touch_are_cut_by_their_features_where_the_outline_sees
     assert len(depth_from_matches(background, scene, cut, blurred).objects) == 1
 
 
-def test_neighbouring_objects_whose_features_agree_are_one_when_an_outline_fits_poorly():
-    """``band_join_px``: a cylinder cut into two blobs where it looks like the wall, whose pieces'
-    outlines fit 14 and 16 (Dice 0.9 and 0.82) while their features agree (15.5 and 16), is one
-    object, centred on both blobs.  Two outlines that both fit well are two objects whatever their
-    features say (a box matched like its neighbour)."""
-    background = matches([(x, y, 6.0) for x in range(20, 300, 20) for y in (20, 220)])
-    scene = matches([(110, 110, 15.5), (120, 120, 15.5), (130, 130, 15.5),
-                     (150, 110, 16.0), (160, 120, 16.0), (170, 130, 16.0)])
-    labels = blob_labels((100, 140, 100, 140), (146, 180, 100, 140))
-    centroids = [[119.5, 119.5], [162.5, 119.5]]
-    poor = Silhouettes(labels, [14.0, 16.0], [0.9, 0.82], centroids)
-    joined = depth_from_matches(background, scene, DepthConfig(band_join_px=1.0), poor).objects
-    assert [(o.n_features, o.silhouette_disparity) for o in joined] == [(6, 14.0)]
-    assert joined[0].centroid_xy == pytest.approx(((1600 * 119.5 + 1360 * 162.5) / 2960, 119.5))   # by area
-    assert len(depth_from_matches(background, scene, DepthConfig(band_join_px=None), poor).objects) == 2
-    assert len(depth_from_matches(background, scene, DepthConfig(band_join_px=0.2), poor).objects) == 2
-    firm = Silhouettes(labels, [14.0, 16.0], [0.95, 0.97], centroids)
-    assert len(depth_from_matches(background, scene, DepthConfig(band_join_px=1.0), firm).objects) == 2
-
-
-def test_a_poorly_fitting_outline_is_one_object_at_its_largest_band():
-    """``poor_one``: a blob in front of the wall whose outline fits poorly (Dice 0.7) holds four
-    features at 18 and three at 24 (low contrast, half of them matched wrong).  The features alone
-    make two objects of it; with the rule it is one, at the largest band, centred on the blob."""
+def test_the_features_on_a_poorly_fitting_outline_decide():
+    """A blob in front of the wall whose outline fits poorly (Dice 0.7) holds four features at 18 and
+    three at 24: its features decide, as without outlines (two objects)."""
     background = matches([(x, y, 6.0) for x in range(20, 300, 20) for y in (20, 220)])
     scene = matches([(105, 105, 18.0), (115, 110, 18.0), (125, 125, 18.0), (132, 130, 18.0),
                      (108, 132, 24.0), (118, 102, 24.0), (128, 112, 24.0)])
     sil = Silhouettes(blob_labels((100, 140, 100, 140)), [20.0], [0.7], [[119.5, 119.5]])
-    one = depth_from_matches(background, scene, DepthConfig(poor_one=True), sil).objects
-    assert [(o.mean_disparity, o.n_features, o.centroid_xy) for o in one] == [(18.0, 4, (119.5, 119.5))]
-    assert len(depth_from_matches(background, scene, DepthConfig(poor_one=False), sil).objects) == 2
+    found = depth_from_matches(background, scene, None, sil).objects
+    assert [(o.mean_disparity, o.n_features, o.silhouette_disparity) for o in found] == [(24.0, 3, None),
+                                                                                       (18.0, 4, None)]
+    assert [o.mean_disparity for o in depth_from_matches(background, scene).objects] == [24.0, 18.0]
 
 
-@pytest.mark.parametrize("field, value, error", [("band_one_piece", 1.5, ParameterError),
-                                                 ("band_join_px", -1.0, ParameterError),
-                                                 ("band_join_score", 2.0, ParameterError),
-                                                 ("poor_one", 1, ParameterTypeError)])
-def test_the_sixth_study_s_options_are_checked(field, value, error):
-    with pytest.raises(error, match=f"'{field}' parameter of DepthConfig"):
-        DepthConfig(**{field: value})
-    with pytest.raises(ParameterError, match="'link_score' parameter of silhouettes"):
-        silhouettes(*pairs_with([(60, 100, 60, 110, 25)]), link_score=-0.5)
+def hysteresis_everywhere(bg, sc):
+    """The blobs :func:`silhouettes` makes with hysteresis, before it chooses region by region."""
+    from ismb_lab.silhouettes import CHANGE_SIGMA, _partition, changed_in_roi
+
+    changed = [changed_in_roi(b, c, (0, 0, W, H), CHANGE_THRESHOLD, CHANGE_SIGMA, 0, "test", "scene", 5.0)[0]
+               for b, c in ((bg.left, sc.left), (bg.right, sc.right))]
+    return _partition(*changed, (0, 0, W, H), list(range(41)), OutlineConfig())
 
 
 def test_hysteresis_keeps_the_faint_half_of_an_object_with_its_outline():
     """``threshold_low``: a box whose right half differs from the wall by 6 grey levels (under the
     threshold of 8) and its left half by 40 is one outline of the whole box with hysteresis at 5, and
-    only its left half without."""
+    only its left half by the threshold alone.  (Region by region, :func:`silhouettes` keeps the
+    half here: it fits better.)"""
     background = wall(3)
     left, right = background.copy(), background.copy()
     for image, x0 in ((left, 150), (right, 128)):               # 22 px nearer in the right image
         image[80:140, x0:x0 + 25] += 40.0
         image[80:140, x0 + 25:x0 + 50] += 6.0
     bg, sc = load_pair(background, background), load_pair(left, right)
-    plain = silhouettes(bg, sc, roi=(0, 0, W, H), split=False, threshold_low=None)
-    faint = silhouettes(bg, sc, roi=(0, 0, W, H), split=False, threshold_low=5.0, by_region=False)
+    plain = silhouettes(bg, sc, roi=(0, 0, W, H), config=ALONE)
+    faint = hysteresis_everywhere(bg, sc)
     assert len(plain) == len(faint) == 1 and plain.disparity[0] == faint.disparity[0] == 22
     width = [int(np.ptp(np.flatnonzero((s.labels == 1).any(axis=0)))) + 1 for s in (plain, faint)]
     assert width[0] < 30 <= 45 < width[1]
@@ -619,7 +557,7 @@ def test_hysteresis_is_raised_to_the_noise_of_the_cameras():
 
 
 def test_each_region_keeps_the_blobs_that_fit_better_with_or_without_hysteresis():
-    """``by_region``: a plain box nearly the wall's grey has a ragged outline, which hysteresis mends;
+    """A plain box nearly the wall's grey has a ragged outline, which hysteresis mends;
     a faint shadow beside a bright box joins that box under hysteresis and spoils its fit.  Region by
     region, the box keeps the outline with hysteresis and the shadowed box the one without."""
     rng = np.random.default_rng(0)
@@ -634,25 +572,11 @@ def test_each_region_keeps_the_blobs_that_fit_better_with_or_without_hysteresis(
     right[60:140, 213:253] = 230                                # 12 px nearer
     left[60:140, 215:225] += 6.0                                # the shadow, in the left image only
     bg, sc = load_pair(background, background), load_pair(left, right)
-    plain, grown, chosen = (silhouettes(bg, sc, roi=(0, 0, W, H), **kw) for kw in
-                            ({"threshold_low": None}, {"by_region": False}, {}))
+    plain, chosen = (silhouettes(bg, sc, roi=(0, 0, W, H), config=c) for c in (ALONE, None))
+    grown = hysteresis_everywhere(bg, sc)
     assert plain.disparity.tolist() == grown.disparity.tolist() == chosen.disparity.tolist() == [22, 30, 12]
     assert plain.score[0] < grown.score[0] == chosen.score[0]
     assert (chosen.labels == 1).sum() > (plain.labels == 1).sum()
     assert grown.score[2] < plain.score[2] == chosen.score[2]
     assert np.array_equal(chosen.labels == 3, plain.labels == 3) and not np.array_equal(plain.labels, grown.labels)
     assert chosen.right is plain.right or np.array_equal(chosen.right, plain.right)
-
-
-def test_by_region_without_a_low_threshold_is_the_threshold_alone():
-    pairs = pairs_with([(60, 100, 60, 110, 25), (150, 200, 80, 120, 10)])
-    plain, region = silhouettes(*pairs, threshold_low=None, by_region=False), silhouettes(*pairs, threshold_low=None)
-    assert np.array_equal(plain.labels, region.labels) and plain.disparity.tolist() == region.disparity.tolist()
-    with pytest.raises(ParameterTypeError, match="'by_region' parameter of silhouettes"):
-        silhouettes(*pairs, threshold_low=5.0, by_region=1)
-
-
-@pytest.mark.parametrize("value", [-1.0, 8.5])
-def test_the_low_threshold_lies_from_0_to_the_threshold(value):
-    with pytest.raises(ParameterError, match="'threshold_low' parameter of silhouettes"):
-        silhouettes(*pairs_with([(60, 100, 60, 110, 25)]), threshold_low=value)

@@ -1,6 +1,6 @@
 """Which toy car is nearer: the thesis' depth demonstration as a widget (§5.2.3, Figs. 5.11-5.14).
 
-:class:`DepthModel` runs :func:`ismb_lab.depth.relative_depth` on a background pair
+:class:`DepthModel` runs :func:`ismb_lab.depth_demo.relative_depth` on a background pair
 and a scene pair and words its ranking; :class:`DepthDemo` adds the background's
 matches and disparities (Fig. 5.12), the scene's new features coloured by
 disparity with the background's removed (Fig. 5.14), and controls for the seed,
@@ -12,14 +12,12 @@ from __future__ import annotations
 import html
 import math
 from dataclasses import fields, replace
-from pathlib import Path
 
 import numpy as np
 
 from .._validation import ParameterTypeError, check_number, message
 from ..depth import DepthConfig, DepthObject, DepthResult
-from ..depth_demo import DEPTH_MATCH_CONFIG, DEPTH_SOLVER, depth_pairs, pair_silhouettes, relative_depth
-from ..io import StereoPair, load_pair
+from ..depth_demo import DEPTH_MATCH_CONFIG, DEPTH_SOLVER, depth_pairs, load_stereo, pair_silhouettes, relative_depth
 from ..methods import DEFAULT_METHOD, get_method, method_names
 from ..params import Params
 from ..plotting import OKABE_ITO, outlines
@@ -29,7 +27,7 @@ from .cloud import PointCloudView, depth_cloud
 
 __all__ = ["CMAP", "GROUPING_LABELS", "TOLERANCES", "depth_text", "support_text", "DepthDemo",
            "DepthModel", "disparity_limits", "draw_background", "draw_scene", "label_positions",
-           "load_stereo", "update_background", "update_scene"]
+           "update_background", "update_scene"]
 
 #: The DepthConfig fields of the background removal that get a slider, with their labels.
 TOLERANCES = {"position_tol_px": "same place (px)", "disparity_tol_px": "same disparity (px)",
@@ -37,21 +35,6 @@ TOLERANCES = {"position_tol_px": "same place (px)", "disparity_tol_px": "same di
 CMAP = "plasma"
 #: The choices of "objects by": blobs of change in both images, or the thesis' features alone.
 GROUPING_LABELS = (("outlines and features", "silhouettes"), ("features only (thesis)", "features"))
-
-
-def load_stereo(value, name: str, owner: str) -> StereoPair:
-    """A pair folder, a ``(left, right)`` pair or an object with ``.left`` and ``.right``, loaded."""
-    if isinstance(value, (str, Path)):
-        left, right, _ = pair_files(value, owner)
-        return load_pair(left, right)
-    if isinstance(value, StereoPair):
-        return value
-    if isinstance(value, (tuple, list)) and len(value) == 2:
-        return load_pair(value[0], value[1])
-    if hasattr(value, "left") and hasattr(value, "right"):
-        return load_pair(value.left, value.right)
-    raise ParameterTypeError(message(name, owner, "a pair folder, a (left, right) pair of images or "
-                                     "paths, or an object with .left and .right", value))
 
 
 def _tolerance_defaults() -> dict:
@@ -64,7 +47,7 @@ class DepthModel:
     Parameters
     ----------
     background, scene : pair folder, (left, right) or object with ``.left`` and ``.right``
-        The two stereo pairs of the same view (see :func:`ismb_lab.depth.relative_depth`).
+        The two stereo pairs of the same view (:func:`ismb_lab.depth_demo.load_stereo`).
     method : {"I", "II", "III", "NM"}
     params : Params, optional
         None: the thesis' values of whichever method is chosen.
@@ -111,7 +94,7 @@ class DepthModel:
         self.seed = check_number(seed, "seed", owner, low=0, integer=True)
         # corners, M and the blobs of change do not depend on the controls: found once, reused
         self.prepared = depth_pairs(self.background, self.scene, match_config)
-        self.silhouettes = pair_silhouettes(self.prepared)
+        self.silhouettes, self._outline = None, None
         self.result: DepthResult = self._compute(self.method, self.params, self.seed, self.config)
 
     @staticmethod
@@ -126,10 +109,19 @@ class DepthModel:
             raise ParameterTypeError(message("config", owner, "None or a DepthConfig", config))
         return config
 
+    def _blobs(self, config):
+        """The blobs of change for `config` (None for the features alone), found again only when its
+        outline settings change."""
+        if config.grouping != "silhouettes":
+            return None
+        if self.silhouettes is None or self._outline != config.outline:
+            self.silhouettes, self._outline = pair_silhouettes(self.prepared, config), config.outline
+        return self.silhouettes
+
     def _compute(self, method, params, seed, config) -> DepthResult:
         return relative_depth(self.background, self.scene, method=method, params=params,
-                              match_config=self.match_config, config=config, seed=seed,
-                              prepared=self.prepared, silhouettes=self.silhouettes, solver=self.solver,
+                              match_config=self.match_config, config=config, seed=seed, prepared=self.prepared,
+                              silhouettes=self._blobs(config), solver=self.solver,
                               one_to_one=self.one_to_one)
 
     def set(self, *, method=None, params: Params | None = None, seed=None, config=None,

@@ -364,7 +364,7 @@ def test_the_depth_page_states_the_library_defaults():
     `name = value`; each is the library's default today."""
     import inspect
 
-    from ismb_lab import depth, depth_demo, silhouettes
+    from ismb_lab import depth, depth_demo
     from ismb_lab.depth import DepthConfig
 
     import ast
@@ -379,13 +379,14 @@ def test_the_depth_page_states_the_library_defaults():
     stated = [(name, literal(value)) for name, value in re.findall(r"`([A-Za-z_][\w.]*) = ([^`]+)`", text)
               if literal(value) is not None]
     assert len(stated) >= 40, stated
-    functions = {"changed_roi": depth_demo.changed_roi, "changed_regions": depth_demo.changed_regions,
-                 "silhouettes": silhouettes.silhouettes}
+    functions = {"changed_roi": depth_demo.changed_roi, "changed_regions": depth_demo.changed_regions}
     wrong = []
     for name, value in stated:
         owner, _, attribute = name.rpartition(".")
         if owner == "DepthConfig":
             actual = getattr(DepthConfig(), attribute)
+        elif owner == "DepthConfig.outline":
+            actual = getattr(DepthConfig().outline, attribute)
         elif owner in functions:
             actual = inspect.signature(functions[owner]).parameters[attribute].default
         elif owner == "DEPTH_MATCH_CONFIG":

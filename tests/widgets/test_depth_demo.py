@@ -43,12 +43,30 @@ def test_a_seed_change_does_not_find_the_corners_again(monkeypatch):
     def refuse(*args, **kwargs):
         raise AssertionError("the pairs were prepared again")
 
+    import ismb_lab.widgets.depth_demo as widget
+
+    blobs = model.silhouettes
     monkeypatch.setattr(depth_demo, "prepare", refuse)
     monkeypatch.setattr(depth_demo, "scene_prepared", refuse)
+    for owner in (depth_demo, widget):
+        monkeypatch.setattr(owner, "pair_silhouettes", refuse)
     model.set(seed=5, method="II", position_tol_px=4.0)
     monkeypatch.undo()
-    assert model.prepared is prepared
+    assert model.prepared is prepared and model.silhouettes is blobs
     assert model.result.to_dict() == expected(method="II", seed=5, config=model.config)
+
+
+def test_an_outline_setting_finds_the_blobs_again():
+    from dataclasses import replace
+
+    from ismb_lab.silhouettes import OutlineConfig
+
+    model = DepthModel(IMAGES / "lab", IMAGES / "toy_cars")
+    blobs = model.silhouettes
+    config = replace(model.config, outline=OutlineConfig(pad_px=6))
+    model.set(config=config)
+    assert model.silhouettes is not blobs and model.silhouettes.pad_px == 6
+    assert model.result.to_dict() == expected(config=config)
 
 
 def test_ranking_lists_objects_near_to_far(demo):
