@@ -22,7 +22,7 @@ import numpy as np
 
 from ._validation import ParameterError, message
 
-__all__ = ["Score", "Scorer", "score"]
+__all__ = ["Score", "Scorer", "score", "unlabelled"]
 
 
 @dataclass(frozen=True)
@@ -164,6 +164,22 @@ def _tally(codes, matched):
         elif code == 3:
             extra += 1
     return correct, wrong, extra
+
+
+def unlabelled(targets, n_left: int) -> np.ndarray:
+    """The left features ``0 .. n_left - 1`` that no target starts from.
+
+    A person who labels some corners says nothing about the others: passed to :func:`score`
+    as `unknown`, their matches are not counted.  The thesis' fitness (4-1) counts every
+    match that is not a target as an error, because its targets are all the true pairs.
+
+    Examples
+    --------
+    >>> unlabelled([[0, 3], [2, 1]], 4).tolist()
+    [1, 3]
+    """
+    first = np.asarray(targets, dtype=np.int64).reshape(-1, 2)[:, 0]
+    return np.setdiff1d(np.arange(int(n_left), dtype=np.int64), first)
 
 
 def score(pairs, targets, unknown=()) -> Score:

@@ -26,7 +26,7 @@ import numpy as np
 
 from ._validation import MAX_SEED, ParameterError, ParameterTypeError, check_number, message
 from .datasets import aloe, ground_truth_pairs, motorcycle
-from .evaluation import Score, Scorer, score
+from .evaluation import Score, Scorer, score, unlabelled
 from .genetic import GAConfig
 from .matching import MatchConfig, Prepared, prepare
 from .methods import DEFAULT_METHOD, get_method
@@ -81,20 +81,27 @@ class Case:
 
     @classmethod
     def from_files(cls, left, right, targets, config: MatchConfig | None = None,
-                   name: str | None = None, check_hash: bool = True) -> "Case":
+                   name: str | None = None, check_hash: bool = True, partial: bool = False) -> "Case":
         """A case from two image files and a targets file (as the labeller saves it).
 
         The targets are checked against the images' hashes (unless not `check_hash`) and
         snapped to the corners that `config` finds.  A file that gives a corner two partners
         is refused (:func:`ismb_lab.targets.check_one_to_one`): no fitness can reach both.
+        With `partial`, the file labels only some corners (a person's labels, as notebook 04
+        saves them): matches of the other left corners are not scored
+        (:func:`ismb_lab.evaluation.unlabelled`).  Without it, as in the thesis, the file
+        holds every true pair and any other match is an error.
         """
+        if not isinstance(partial, bool):
+            raise ParameterTypeError(message("partial", "Case.from_files", "True or False", partial))
         prepared = prepare(left, right, config)
         target_set = check_one_to_one(load_targets(targets, pair=prepared.pair, check_hash=check_hash),
                                       str(targets), "Case.from_files")
         snapped = snap(target_set, prepared.problem.left_xy, prepared.problem.right_xy)
         left_out = np.union1d(snapped.missing_left, snapped.missing_right).astype(np.int64)
-        return cls(prepared, snapped.pairs.astype(np.int64), name=str(left) if name is None else name,
-                   left_out=left_out)
+        pairs = snapped.pairs.astype(np.int64)
+        unknown = unlabelled(pairs, len(prepared.problem.left_xy)) if partial else np.zeros(0, np.int64)
+        return cls(prepared, pairs, unknown, name=str(left) if name is None else name, left_out=left_out)
 
     @classmethod
     def from_scene(cls, scene, config: MatchConfig | None = None, name: str = "") -> "Case":

@@ -166,3 +166,45 @@ def test_the_general_path_scores_each_chromosome_over_its_seeds_as_evaluate_does
         fitness = Fitness(cases[:2], "NM3", solver=solver, seeds=3, seed=2)
         assert fitness._batch(population) is None
         assert np.array_equal(fitness(population), _one_at_a_time(fitness, population))
+
+
+def test_a_persons_few_labels_are_scored_only_at_the_corners_they_label(tmp_path):
+    """Five true pairs saved, as a student saves them in notebook 04: read as the thesis' full
+    target list, every other match is an extra and the fitness is far below 5; read as partial
+    labels, only the five corners count, as notebook 04 scores them."""
+    import cv2
+
+    from ismb_lab.matching import match, prepare
+    from ismb_lab.protocol import Case
+    from ismb_lab.scenes import synthetic_scene, true_matches
+    from ismb_lab.targets import save_targets, targets_from_matches
+    from ismb_lab.widgets.explorer import ParameterExplorer
+
+    scene = synthetic_scene(seed=3)
+    files = [tmp_path / "left.png", tmp_path / "right.png"]
+    for path, image in zip(files, (scene.left, scene.right)):
+        cv2.imwrite(str(path), np.clip(np.rint(image), 0, 255).astype(np.uint8))
+    prepared = prepare(*files)
+    truth = true_matches(scene, prepared.problem.left_xy, prepared.problem.right_xy)
+    found = match(prepared=prepared, method="III", seed=0).pairs
+    five = [(i, k) for i, k in found.tolist() if truth[i] == k][:5]
+    assert len(five) == 5 and len(found) >= 10
+    path = save_targets(tmp_path / "mine.json", targets_from_matches(
+        five, prepared.problem.left_xy, prepared.problem.right_xy,
+        left_sha256=prepared.pair.left_sha256, right_sha256=prepared.pair.right_sha256))
+
+    whole, partial = Case.from_files(*files, path), Case.from_files(*files, path, partial=True)
+    assert whole.unknown.size == 0 and sorted(set(partial.unknown.tolist()) | {i for i, _ in five}) \
+        == list(range(len(prepared.problem.left_xy)))
+    from ismb_lab.methods import THESIS_PARAMS
+
+    as_whole, as_partial = (evaluate([c], "III", THESIS_PARAMS["III"]) for c in (whole, partial))
+    assert as_whole.extra == len(found) - 5 and as_whole.fitness < 0
+    assert str(as_partial) == "5/0+0/5" and as_partial.fitness == 5
+
+    explorer = ParameterExplorer(*files, targets=path, partial=True)
+    assert explorer.model.score == as_partial
+    with pytest.raises(TypeError, match="'partial' parameter of ParameterExplorer.*True or False.*'yes'"):
+        ParameterExplorer(*files, targets=path, partial="yes")
+    with pytest.raises(TypeError, match="'partial' parameter of Case.from_files"):
+        Case.from_files(*files, path, partial=1)

@@ -13,7 +13,7 @@ from dataclasses import replace
 import numpy as np
 
 from .._validation import ParameterTypeError, check_number, message
-from ..evaluation import Score, score
+from ..evaluation import Score, score, unlabelled
 from ..matching import MatchConfig, MatchResult, Prepared, match, prepare
 from ..methods import DEFAULT_METHOD, all_genes, get_method, method_names
 from ..plotting import OKABE_ITO
@@ -40,6 +40,9 @@ class ExplorerModel:
         Update-order seed.
     targets : (t, 2) int array_like, optional
         Target ``(i, k)`` feature pairs (see :func:`ismb_lab.targets.snap`).
+    solver : str
+    unknown : int array_like
+        Left features whose matches are not scored (see :func:`ismb_lab.evaluation.unlabelled`).
 
     Examples
     --------
@@ -52,7 +55,7 @@ class ExplorerModel:
     """
 
     def __init__(self, prepared: Prepared, method=DEFAULT_METHOD, params: Params | None = None, seed: int = 0,
-                 targets=None, solver: str = DEFAULT_SOLVER):
+                 targets=None, solver: str = DEFAULT_SOLVER, unknown=()):
         owner = "ExplorerModel"
         self.solver = get_solver(solver, owner).name
         if not isinstance(prepared, Prepared):
@@ -64,6 +67,7 @@ class ExplorerModel:
             raise ParameterTypeError(message("params", owner, "None or a Params", params))
         self.seed = check_number(seed, "seed", owner, low=0, integer=True)
         self.targets = None if targets is None else np.asarray(targets, dtype=np.intp).reshape(-1, 2)
+        self.unknown = np.asarray(unknown, dtype=np.intp).ravel()
         self.result: MatchResult | None = None
         self.score: Score | None = None
         self.rematch()
@@ -103,7 +107,7 @@ class ExplorerModel:
     def rematch(self) -> "ExplorerModel":
         self.result = match(prepared=self.prepared, method=self.method, params=self.params, seed=self.seed,
                             solver=self.solver)
-        self.score = None if self.targets is None else score(self.result.pairs, self.targets)
+        self.score = None if self.targets is None else score(self.result.pairs, self.targets, self.unknown)
         return self
 
     @property
@@ -209,6 +213,10 @@ class ParameterExplorer(Base):
     config : MatchConfig, optional
     targets : TargetSet, path, or (t, 2) feature pairs, optional
         What C/E/T is scored against.
+    solver : str
+    partial : bool
+        The targets label only some corners (a person's labels): matches of the other left
+        corners are not scored (see :meth:`ismb_lab.protocol.Case.from_files`).
 
     Notes
     -----
@@ -218,7 +226,8 @@ class ParameterExplorer(Base):
     """
 
     def __init__(self, left, right=None, *, method=DEFAULT_METHOD, params: Params | None = None, seed: int = 0,
-                 config: MatchConfig | None = None, targets=None, solver: str = DEFAULT_SOLVER):
+                 config: MatchConfig | None = None, targets=None, solver: str = DEFAULT_SOLVER,
+                 partial: bool = False):
         import ipywidgets
 
         super().__init__()
@@ -227,7 +236,10 @@ class ParameterExplorer(Base):
             if not isinstance(targets, TargetSet):
                 targets = load_targets(targets, pair=prepared.pair)
             targets = snap(targets, prepared.problem.left_xy, prepared.problem.right_xy).pairs
-        self.model = ExplorerModel(prepared, method, params, seed, targets, solver)
+        if not isinstance(partial, bool):
+            raise ParameterTypeError(message("partial", "ParameterExplorer", "True or False", partial))
+        unknown = unlabelled(targets, len(prepared.problem.left_xy)) if partial and targets is not None else ()
+        self.model = ExplorerModel(prepared, method, params, seed, targets, solver, unknown)
         self.pair_pane = Pane(pair_figsize(prepared.pair), "ismb-matches")
         self.transfer_pane = Pane((5.8, 2.2), "ismb-transfer")
         self.panes = (self.pair_pane, self.transfer_pane)

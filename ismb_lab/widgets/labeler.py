@@ -21,7 +21,7 @@ from pathlib import Path
 import numpy as np
 
 from .._validation import ParameterError, ParameterTypeError, check_choice, check_number, message
-from ..evaluation import Score, score
+from ..evaluation import Score, score, unlabelled
 from ..matching import MatchConfig, Prepared, match, prepare
 from ..methods import DEFAULT_METHOD
 from ..plotting import GAP, LEFT_COLOUR, OKABE_ITO, RIGHT_COLOUR, VERDICT_COLOURS, plot_matches
@@ -354,11 +354,11 @@ class LabelModel:
             return None
         saved = snap(load_targets(path, pair=self.prepared.pair), self.left_xy, self.right_xy).pairs
         result = match(prepared=self.prepared, method=method, params=params, seed=seed)
-        unlabelled = np.setdiff1d(np.arange(len(self.left_xy)), saved[:, 0])
         mine = set(map(tuple, saved.tolist()))
         labelled = set(saved[:, 0].tolist())
         errors = [(i, k) for i, k in result.pairs.tolist() if i in labelled and (i, k) not in mine]
-        return SavedScore(path, result.method, seed, saved, score(result.pairs, saved, unknown=unlabelled),
+        unknown = unlabelled(saved, len(self.left_xy))
+        return SavedScore(path, result.method, seed, saved, score(result.pairs, saved, unknown),
                           np.array(errors, dtype=np.intp).reshape(-1, 2))
 
     def load(self, path=None) -> int:
