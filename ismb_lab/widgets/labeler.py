@@ -29,10 +29,14 @@ from ..classroom import save_merging, targets_path, voila_without_hub
 from ..targets import TargetSet, load_targets, snap, targets_from_matches
 from ._common import Base, Pane, button, column_figsize, grey_rgb, number_labels, pair_files, with_class
 
-__all__ = ["COLUMNS", "Comparison", "draw_labels", "LabelModel", "pairs_html", "SavedScore", "TargetLabeler",
+__all__ = ["COLUMNS", "KEY_AFTER", "Comparison", "draw_labels", "LabelModel", "pairs_html", "SavedScore", "TargetLabeler",
            "update_labels"]
 
 COLUMNS = ("Pair", "Left", "Right", "y_left", "x_left", "y_right", "x_right", "disparity")
+
+#: The answer key opens once this many pairs of the student's own are saved (or loaded), and
+#: then stays open: notebook 04's exercise asks for five before it compares anything.
+KEY_AFTER = 5
 
 
 @dataclass(frozen=True)
@@ -137,6 +141,7 @@ class LabelModel:
         self._pairs: list[tuple[int, int]] = []
         self._history: list[tuple] = []
         self._saved: tuple = ()
+        self.key_open = False      # see KEY_AFTER
         self._base: TargetSet | None = None   # the file as last loaded or saved here
         self._base_path: Path | None = None
         self.pending: int | None = None   # a left feature waiting for its partner
@@ -326,6 +331,7 @@ class LabelModel:
         snapped = snap(merged.targets, self.left_xy, self.right_xy)
         self._pairs = sorted(set(map(tuple, snapped.pairs.tolist())))
         self._saved = tuple(self._pairs)
+        self.key_open = self.key_open or len(self._pairs) >= KEY_AFTER
         self._base, self._base_path = merged.targets, path
         others = (f"; kept {merged.kept_from_disk} pairs saved to it meanwhile from another tab"
                   if merged.kept_from_disk else "")
@@ -383,6 +389,7 @@ class LabelModel:
         self._remember()
         self._pairs = sorted(map(tuple, snapped.pairs.tolist()))
         self._saved = tuple(self._pairs)
+        self.key_open = self.key_open or len(self._pairs) >= KEY_AFTER
         self._base, self._base_path = targets, path
         self.pending = self.selected = None
         self._say(f"loaded {len(self._pairs)} pairs from {path}")
@@ -523,7 +530,7 @@ class TargetLabeler(Base):
                                   icon="folder-open")
         self.key_toggle = with_class(ipywidgets.ToggleButton(
             description="Show answer key", disabled=True, layout=ipywidgets.Layout(width="auto"),
-            tooltip="Label a pair first, then compare your pairs with the ground truth"
+            tooltip=f"Save {KEY_AFTER} pairs of your own first, then compare them with the ground truth"
             if answer_key is not None else "This pair has no answer key"), "ismb-answer-key")
         self.dirty_label = with_class(ipywidgets.HTML(""), "ismb-dirty")
         self.path_label = with_class(ipywidgets.HTML(""), "ismb-path")
@@ -662,8 +669,7 @@ class TargetLabeler(Base):
     # --- view ---------------------------------------------------------------------------
     def refresh(self) -> None:
         """Update the figure, table, flags and status from the model, then draw."""
-        # the answer key opens once the student has labelled something of their own
-        locked = self.model.answer_key is None or not len(self.model.pairs)
+        locked = self.model.answer_key is None or not self.model.key_open
         if locked and self.key_toggle.value:
             with self.syncing():
                 self.key_toggle.value = False

@@ -216,6 +216,7 @@ def test_answer_key_counts_and_markers(labeler, truth):
     wrong_k = next(r for r in range(len(labeler.model.right_xy)) if r not in truth[:, 1])
     labeler.add_pair(i, k)
     labeler.add_pair(j, wrong_k)
+    labeler.model.key_open = True        # as after five saved pairs (the gate has its own test)
     labeler.key_toggle.value = True
     c = labeler.model.compare()
     assert (len(c.correct), len(c.wrong), len(c.missing)) == (1, 1, len(truth) - 1)
@@ -227,14 +228,25 @@ def test_answer_key_counts_and_markers(labeler, truth):
     assert labeler.key_summary.value == "" and len(labeler.artists["missing"].get_segments()) == 0
 
 
-def test_from_folder_finds_the_answer_key(pair_folder):
+def test_from_folder_finds_the_answer_key_and_opens_it_after_five_saved_pairs(pair_folder):
+    from ismb_lab.widgets.labeler import KEY_AFTER
+
     labeler = TargetLabeler.from_folder(pair_folder, path=pair_folder / "mine.json")
-    assert labeler.key_toggle.disabled            # label first, then compare
-    labeler.add_pair(0, 0)
+    assert labeler.key_toggle.disabled and KEY_AFTER == 5      # label first, then compare
+    for i in range(KEY_AFTER - 1):
+        labeler.add_pair(i, i)
+    labeler.save()
+    assert labeler.key_toggle.disabled                          # four saved: still the student's own work
+    labeler.add_pair(KEY_AFTER - 1, KEY_AFTER - 1)
+    assert labeler.key_toggle.disabled                          # five labelled, not yet saved
+    labeler.save()
     assert not labeler.key_toggle.disabled
     labeler.key_toggle.value = True
     labeler.undo()
-    assert labeler.key_toggle.disabled and not labeler.key_toggle.value
+    assert not labeler.key_toggle.disabled and labeler.key_toggle.value   # once open, it stays open
+    reopened = TargetLabeler.from_folder(pair_folder, path=pair_folder / "mine.json")
+    reopened.load()
+    assert not reopened.key_toggle.disabled                     # five of one's own, loaded back
     assert "ismb-labeler" in labeler.widget._dom_classes
     assert "ismb-stereo" in labeler.pane.widget._dom_classes
     (pair_folder / "answer_key.json").unlink()
@@ -324,6 +336,7 @@ def test_the_key_draws_its_three_kinds_of_line_in_far_apart_colours(labeler, tru
     wrong_k = next(r for r in range(len(labeler.model.right_xy)) if r not in truth[:, 1])
     labeler.add_pair(i, k)
     labeler.add_pair(j, wrong_k)
+    labeler.model.key_open = True
     labeler.key_toggle.value = True
     shown = [to_hex(c) for c in labeler.artists["lines"].get_colors()] + \
         [to_hex(c) for c in labeler.artists["missing"].get_colors()]
