@@ -127,8 +127,9 @@ def printed(outputs) -> str:
     return "".join(o["text"] for o in outputs if o.get("output_type") == "stream" and o.get("name") == "stdout")
 
 
-def test_05_and_06_use_the_labels_a_student_saved_in_04(run_notebook):
-    """One thread through the class: 04's saved labels feed 05's explorer and 06's GA."""
+def test_06_trains_on_the_labels_a_student_saved_in_04_and_05_keeps_the_shared_key(run_notebook):
+    """One thread through the class: 04's saved labels feed 06's GA, scored only at the labelled
+    corners, so its fitness can reach their number; 05 stays on the lab pair and its key."""
     from pathlib import Path
 
     from ismb_lab.classroom import targets_path
@@ -147,7 +148,9 @@ def test_05_and_06_use_the_labels_a_student_saved_in_04(run_notebook):
         for lock in notebooks.glob(f".{mine.name}.lock"):
             lock.unlink()
     assert f"The GA below trains on your 6 labelled pairs ({mine.name})" in six
-    assert f"Scored against your labels ({mine.name})" in five and "C/E/T" in five and "/6" in five
+    fitted = re.search(r"the GA after \d+ generations: fitness (-?[\d.]+) of (\d+) on its training pairs", six)
+    assert fitted and fitted.group(2) == "6" and float(fitted.group(1)) == 6, six
+    assert "scored against the lab pair's answer key" in five and mine.name not in five
 
 
 def test_06_shows_the_plateau_it_describes(executed_notebook):
