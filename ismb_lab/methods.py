@@ -54,7 +54,7 @@ from .params import LAMBDA_C, LAMBDA_S, MATCH_BIAS, THETA_C, THETA_S, Gene, Para
 from .similarity import candidate_mask, no_match_cut, transfer
 
 __all__ = ["BATCHED", "all_genes", "Method", "MethodI", "MethodII", "MethodIII", "MethodNM", "MethodNM3", "MethodNM4",
-           "DEFAULT_METHOD", "Problem", "THESIS_PARAMS", "build_problem", "get_method", "load_params", "method_names",
+           "DEFAULT_METHOD", "Problem", "THESIS_PARAMS", "build_problem", "get_method", "method_names",
            "register_method", "save_params", "unregister_method"]
 
 
@@ -530,8 +530,9 @@ def save_params(path, method, params: Params, **extra) -> Path:
     >>> import tempfile, pathlib
     >>> path = pathlib.Path(tempfile.mkdtemp()) / "p.json"
     >>> _ = save_params(path, "II", Params(theta_c=5.0), fitness=3)
-    >>> load_params(path)
-    ('II', Params(theta_c=5.0, theta_s=24.02, lambda_c=6.37, lambda_s=2.2))
+    >>> saved = json.loads(path.read_text())
+    >>> saved["method"], saved["params"]["theta_c"], saved["fitness"]
+    ('II', 5.0, 3)
     """
     m = get_method(method)
     if not isinstance(params, Params):
@@ -540,37 +541,13 @@ def save_params(path, method, params: Params, **extra) -> Path:
     return atomic_write_text(path, json.dumps(data, indent=2) + "\n")
 
 
-def load_params(path, method: str | None = None) -> tuple[str | None, Params]:
-    """Read a params file: its method (None if it names none) and its parameters.
-
-    Values the file leaves out take the defaults of its method, else of `method`,
-    else of :data:`DEFAULT_METHOD`.  Extra top-level keys are allowed; unknown parameter
-    names and values out of range are errors that name the file.  The whole recipe of a
-    params file (solver, fit seeds, one-to-one) is read by :func:`ismb_lab.recipe.load_recipe`.
-    """
-    return params_of(read_params_file(path), path, method)
-
-
-def read_params_file(path, owner: str = "load_params") -> dict:
-    """The JSON object of a params file, checked to hold a ``"params"`` object."""
-    try:
-        data = json.loads(Path(path).read_text(encoding="utf-8"))
-    except FileNotFoundError:
-        raise ParameterError(message("path", owner, "an existing params file", str(path))) from None
-    except RecursionError:
-        raise ParameterError(message("path", owner, "a JSON file that is not nested too deeply",
-                                     str(path))) from None
-    except (OSError, UnicodeDecodeError, ValueError) as exc:
-        raise ParameterError(message("path", owner, f"a readable JSON file ({type(exc).__name__})",
-                                     str(path))) from None
-    if not isinstance(data, dict) or not isinstance(data.get("params"), dict):
-        raise ParameterError(message("path", owner, "a JSON object with a 'params' object", str(path)))
-    return data
-
-
 def params_of(data: dict, path, method: str | None = None,
-              owner: str = "load_params") -> tuple[str | None, Params]:
-    """:func:`load_params`' answer for the object `data` read from `path`."""
+              owner: str = "params_of") -> tuple[str | None, Params]:
+    """The method (None if `data` names none) and the parameters of a params file's object
+    `data`, read from `path`.  Values it leaves out take the defaults of its method, else of
+    `method`, else of :data:`DEFAULT_METHOD`; unknown names and values out of range are errors
+    that name the file.  The whole recipe of a params file is read by
+    :func:`ismb_lab.recipe.load_recipe`."""
     named = data.get("method")
     if named is not None:
         named = get_method(named).name if isinstance(named, str) and named in _METHODS else None

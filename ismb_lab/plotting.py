@@ -9,7 +9,7 @@ from __future__ import annotations
 import numpy as np
 
 __all__ = ["GAP", "LEFT_COLOUR", "OKABE_ITO", "RIGHT_COLOUR", "VERDICT_COLOURS", "frustum_lines", "outlines",
-           "plot_depth", "plot_matches", "plot_top_down", "side_by_side", "verdicts"]
+           "plot_depth", "plot_matches", "side_by_side", "verdicts"]
 
 GAP = 8  # pixels between the left and right image in side-by-side views
 
@@ -205,38 +205,3 @@ def frustum_lines(camera, depth_m: float) -> np.ndarray:
         centre, rim = np.array([offset, 0.0, 0.0]), far + [offset, 0.0, 0.0]
         segments += [(centre, p) for p in rim] + [(rim[n], rim[(n + 1) % 4]) for n in range(4)]
     return np.array(segments)
-
-
-def plot_top_down(ax, points, camera=None, *, depth_m: float | None = None, cmap: str = "viridis") -> dict:
-    """Draw points seen from above (X right, Z up the page), coloured by depth, with the
-    cameras' views when `camera` is given.
-
-    Parameters
-    ----------
-    ax : matplotlib.axes.Axes
-    points : (N, 3) ndarray
-        Metres, in the rectified left camera's frame (NaN rows are left out).
-    camera : ismb_lab.camera.StereoCamera, optional
-    depth_m : float, optional
-        How far the cameras' views are drawn (default: the farthest point).
-
-    Returns
-    -------
-    artists : dict
-        ``points`` (the scatter) and ``cameras`` (None without `camera`).
-    """
-    from matplotlib.collections import LineCollection
-
-    xyz = np.asarray(points, dtype=float).reshape(-1, 3)
-    xyz = xyz[np.all(np.isfinite(xyz), axis=1)]
-    scatter = ax.scatter(xyz[:, 0], xyz[:, 2], c=xyz[:, 2], cmap=cmap, s=14)
-    drawn = None
-    if camera is not None:
-        reach = depth_m if depth_m is not None else (float(xyz[:, 2].max()) if len(xyz) else 1.0)
-        lines = frustum_lines(camera, reach)[:, :, [0, 2]]
-        drawn = ax.add_collection(LineCollection(lines, colors="0.4", linewidths=0.8))
-    ax.set_xlabel("X (m)")
-    ax.set_ylabel("Z, depth (m)")
-    ax.set_aspect("equal", adjustable="datalim")
-    ax.autoscale_view()
-    return {"points": scatter, "cameras": drawn}
