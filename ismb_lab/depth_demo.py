@@ -43,10 +43,9 @@ from ._validation import ParameterError, ParameterTypeError, check_number, messa
 from .depth import DepthConfig, DepthResult, depth_from_matches
 from .features import Corners, detect_corners, resolve_roi
 from .io import StereoPair, load_pair
-from .matching import MatchConfig, MatchResult, Prepared, auto_window, match, prepare, shift_roi
-from .methods import DEFAULT_METHOD, build_problem, get_method
+from .matching import MatchConfig, MatchResult, Prepared, auto_window, corner_problem, match, prepare, shift_roi
+from .methods import DEFAULT_METHOD, get_method
 from .params import Params
-from .similarity import mean_abs_difference
 from .silhouettes import CHANGE_SIGMA, CHANGE_THRESHOLD, Silhouettes, changed_in_roi, silhouettes
 from .solvers import ANNEAL, get_solver
 
@@ -301,11 +300,7 @@ def scene_prepared(background, scene, match_config=None) -> Prepared:
     lo, hi = REGION_CORNERS
     lc = _region_corners(scene.left, left, config, lo, hi)
     rc = _region_corners(scene.right, right, config, lo, hi)
-    M = mean_abs_difference(scene.left, scene.right, lc.xy, rc.xy, config.patch_size)
-    problem = build_problem(lc.xy, rc.xy, M, shift=config.shift, window_height=config.window_height,
-                            window_width=config.window_width, radius=config.neighbour_radius,
-                            neighbourhood=config.neighbourhood)
-    return Prepared(scene, config, lc, rc, problem)
+    return Prepared(scene, config, lc, rc, corner_problem(scene, lc.xy, rc.xy, config))
 
 
 def _check_same_size(background, scene, owner: str):

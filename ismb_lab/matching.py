@@ -23,8 +23,8 @@ from .params import Params
 from .similarity import mean_abs_difference
 from .solvers import DEFAULT_SOLVER, get_solver, one_match_per_corner, solve, to_matches
 
-__all__ = ["AUTO_MARGIN", "MatchConfig", "MatchResult", "Prepared", "auto_window", "check_window", "match", "prepare",
-           "shift_roi", "warm_up"]
+__all__ = ["AUTO_MARGIN", "MatchConfig", "MatchResult", "Prepared", "auto_window", "check_window", "corner_problem",
+           "match", "prepare", "shift_roi", "warm_up"]
 
 
 @dataclass(frozen=True)
@@ -228,11 +228,32 @@ def prepare(left, right, config: MatchConfig | None = None) -> Prepared:
                   sigma=config.harris_sigma, k=config.harris_k, min_distance=config.min_distance)
     lc = detect_corners(pair.left, roi=left_roi, **kwargs)
     rc = detect_corners(pair.right, roi=right_roi, **kwargs)
-    M = mean_abs_difference(pair.left, pair.right, lc.xy, rc.xy, config.patch_size)
-    problem = build_problem(lc.xy, rc.xy, M, shift=config.shift,
-                            window_height=config.window_height, window_width=config.window_width,
-                            radius=config.neighbour_radius, neighbourhood=config.neighbourhood)
-    return Prepared(pair, config, lc, rc, problem)
+    return Prepared(pair, config, lc, rc, corner_problem(pair, lc.xy, rc.xy, config))
+
+
+def corner_problem(pair: StereoPair, left_xy, right_xy, config: MatchConfig, dissimilarity=None) -> Problem:
+    """The energy's ingredients for corners of `pair`: the window dissimilarity ``M`` (3-8)
+    (unless given) and the candidates and neighbour pairs that `config`'s search window
+    and neighbourhood allow (:func:`ismb_lab.methods.build_problem`).
+
+    Every way to a :class:`Prepared` goes through here: :func:`prepare`, the depth demo's
+    corners per changed region, and a rig's sub-pixel corners.
+
+    Examples
+    --------
+    >>> from ismb_lab.io import load_pair
+    >>> from ismb_lab.scenes import synthetic_scene
+    >>> s = synthetic_scene(0)
+    >>> p = prepare(s.left, s.right)
+    >>> q = corner_problem(p.pair, p.left_corners.xy, p.right_corners.xy, p.config)
+    >>> bool((q.rows == p.problem.rows).all()), q.dissimilarity.shape == p.problem.dissimilarity.shape
+    (True, True)
+    """
+    M = (mean_abs_difference(pair.left, pair.right, left_xy, right_xy, config.patch_size)
+         if dissimilarity is None else dissimilarity)
+    return build_problem(left_xy, right_xy, M, shift=config.shift, window_height=config.window_height,
+                         window_width=config.window_width, radius=config.neighbour_radius,
+                         neighbourhood=config.neighbourhood)
 
 
 @dataclass(frozen=True, eq=False)
