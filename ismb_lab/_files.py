@@ -26,7 +26,7 @@ import stat
 import tempfile
 from pathlib import Path
 
-__all__ = ["MAX_JSON_BYTES", "OutputError", "atomic_write_bytes", "atomic_write_text", "check_input",
+__all__ = ["MAX_JSON_BYTES", "OutputError", "atomic_write_bytes", "atomic_write_text", "check_input", "private_folder",
            "check_output", "check_replace", "read_json", "refuse_folder_name"]
 
 #: Most bytes of a params, rig or manifest JSON file, checked before it is parsed: the largest
@@ -342,3 +342,29 @@ def check_replace(path, *, what: str = "output") -> Path:
         raise OutputError(f"{shown} is a read-only file, which is never replaced; make it writable "
                           "or remove it first")
     return check_output(path, what=what) if path.parent.is_dir() else path
+
+
+def private_folder(name: str, temp: str | None = None) -> str:
+    """``<temp>/<name>-<uid>``, made with mode 0700, if it is a folder (not a link) of this
+    account's that no one else may read or write; else a new private folder there (someone
+    else took the name: never use theirs).  Raises OSError if `temp` (default: the system's)
+    cannot be written.
+
+    >>> import tempfile
+    >>> folder = private_folder("ismb-doc", tempfile.mkdtemp())
+    >>> oct(os.stat(folder).st_mode & 0o777), folder == private_folder("ismb-doc", os.path.dirname(folder))
+    ('0o700', True)
+    """
+    temp = temp or tempfile.gettempdir()
+    path = os.path.join(temp, f"{name}-{os.getuid()}")
+    try:
+        os.mkdir(path, 0o700)
+    except FileExistsError:
+        pass
+    try:
+        info = os.lstat(path)
+        if stat.S_ISDIR(info.st_mode) and info.st_uid == os.getuid() and not info.st_mode & 0o077:
+            return path
+    except OSError:
+        pass
+    return tempfile.mkdtemp(prefix=f"{name}-", dir=temp)

@@ -14,7 +14,6 @@ A ``NUMBA_CACHE_DIR`` that is already set always wins.
 from __future__ import annotations
 
 import os
-import stat
 import sys
 import tempfile
 
@@ -38,28 +37,15 @@ def writable(folder) -> bool:
     return True
 
 
-def _private(path: str) -> bool:
-    """A folder (not a link) of this user's that no one else may write to or read."""
-    try:
-        info = os.lstat(path)
-    except OSError:
-        return False
-    return (stat.S_ISDIR(info.st_mode) and info.st_uid == os.getuid()
-            and not info.st_mode & (stat.S_IRWXG | stat.S_IRWXO))
-
-
 def fallback_folder(temp: str | None = None) -> str:
     """``<temp>/ismb_lab-numba-<uid>`` (made 0700) if it is private to this user, else a new
     private folder there.  Raises OSError if `temp` (default: the system's) cannot be written."""
-    temp = temp or tempfile.gettempdir()
-    path = os.path.join(temp, f"ismb_lab-numba-{os.getuid()}")
-    try:
-        os.mkdir(path, 0o700)
-    except FileExistsError:
-        pass
-    if _private(path) and writable(path):
+    from ._files import private_folder
+
+    path = private_folder("ismb_lab-numba", temp)
+    if writable(path):
         return path
-    return tempfile.mkdtemp(prefix="ismb_lab-numba-", dir=temp)   # someone else's: never load it
+    return tempfile.mkdtemp(prefix="ismb_lab-numba-", dir=temp or tempfile.gettempdir())
 
 
 def _user_wide_cache() -> str:

@@ -46,11 +46,11 @@ import re
 import resource
 import shlex
 import shutil
-import stat
 import sys
 import tempfile
 from pathlib import Path
 
+from ._files import private_folder
 from ._validation import ParameterError, message
 
 __all__ = ["PARTS", "IGNORE", "TEACHER_TOOLS", "STUDENT_SERVER_OFF", "parse_size", "stage", "profile",
@@ -325,19 +325,7 @@ def runtime_folder(temp: str | None = None) -> str:
     a new private one there.  The kernels' Unix sockets live in it, and a socket's path holds
     at most 107 bytes (``~/.local/share/jupyter/runtime/kernel-<36 characters>-ipc-4`` leaves
     28 for the home folder)."""
-    temp = temp or tempfile.gettempdir()
-    path = os.path.join(temp, f"ismb-lab-rt-{os.getuid()}")
-    try:
-        os.mkdir(path, 0o700)
-    except FileExistsError:
-        pass
-    try:
-        info = os.lstat(path)
-        if stat.S_ISDIR(info.st_mode) and info.st_uid == os.getuid() and not info.st_mode & 0o077:
-            return path
-    except OSError:
-        pass
-    return tempfile.mkdtemp(prefix="ismb-lab-rt-", dir=temp)     # someone else's name: not ours
+    return private_folder("ismb-lab-rt", temp)
 
 
 def serve(args, course) -> None:
