@@ -188,6 +188,22 @@ def hard_lab(tmp_path):
 
 
 @pytest.fixture
+def work(tmp_path):
+    """images/lab's pair as L.png, R.png and its answer key as T.json, with manifests of two
+    pairs (M.json, "a" and "b") and of one (M1.json): the command sweeps' working folder."""
+    import json
+    import shutil
+
+    lab = Path(__file__).resolve().parent.parent / "images" / "lab"
+    for name, target in (("left.png", "L.png"), ("right.png", "R.png"), ("answer_key.json", "T.json")):
+        shutil.copy(lab / name, tmp_path / target)
+    entry = {"left": "L.png", "right": "R.png", "targets": "T.json"}
+    (tmp_path / "M.json").write_text(json.dumps({"pairs": [{**entry, "name": "a"}, {**entry, "name": "b"}]}))
+    (tmp_path / "M1.json").write_text(json.dumps({"pairs": [{**entry, "name": "a"}]}))
+    return tmp_path
+
+
+@pytest.fixture
 def hard_manifest(hard_lab, tmp_path):
     """A manifest of two pairs, "a" and "b", both :func:`hard_lab`'s."""
     import json

@@ -5,7 +5,6 @@ of issue 42: "Tracebacks", "A closed stderr", "More than one line", "Exit 0 with
 import io
 import json
 import os
-import shutil
 import subprocess
 import sys
 import zlib
@@ -21,16 +20,6 @@ from ismb_lab.cli import main
 
 ROOT = Path(__file__).resolve().parent.parent
 LAB = ROOT / "images" / "lab"
-
-
-@pytest.fixture
-def work(tmp_path):
-    for name, target in (("left.png", "L.png"), ("right.png", "R.png"), ("answer_key.json", "T.json")):
-        shutil.copy(LAB / name, tmp_path / target)
-    entry = {"left": "L.png", "right": "R.png", "targets": "T.json"}
-    (tmp_path / "M.json").write_text(json.dumps({"pairs": [{**entry, "name": "a"}, {**entry, "name": "b"}]}))
-    (tmp_path / "M1.json").write_text(json.dumps({"pairs": [{**entry, "name": "a"}]}))
-    return tmp_path
 
 
 def one_line(argv, capsys, match: str = "") -> str:

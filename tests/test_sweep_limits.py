@@ -2,8 +2,6 @@
 file or the environment (the sweep of issue 42, "Limits that bound nothing")."""
 
 import json
-import shutil
-import time
 from pathlib import Path
 
 import numpy as np
@@ -19,17 +17,20 @@ LAB = ROOT / "images" / "lab"
 
 
 @pytest.fixture
-def work(tmp_path):
-    for name, target in (("left.png", "L.png"), ("right.png", "R.png"), ("answer_key.json", "T.json")):
-        shutil.copy(LAB / name, tmp_path / target)
-    entry = {"left": "L.png", "right": "R.png", "targets": "T.json"}
-    (tmp_path / "M.json").write_text(json.dumps({"pairs": [{**entry, "name": "a"}, {**entry, "name": "b"}]}))
-    return tmp_path
-
-
-@pytest.fixture
 def no_work(monkeypatch):
-    """Any matching work fails the test: a refusal must come before it."""
+    """Any matching work fails the test: a refusal must come before it.  Every module that
+    binds ``prepare`` at import is imported first, so none binds the stand-in for later tests."""
+    import importlib
+    import pkgutil
+
+    import ismb_lab.cli
+
+    for module in pkgutil.iter_modules(ismb_lab.cli.__path__):
+        if module.name != "__main__":
+            importlib.import_module(f"ismb_lab.cli.{module.name}")
+    import ismb_lab.depth_demo  # noqa: F401
+    import ismb_lab.metric  # noqa: F401
+
     def work(*args, **kwargs):
         raise AssertionError("the work started before the refusal")
 
@@ -38,11 +39,9 @@ def no_work(monkeypatch):
 
 
 def refused(argv, capsys, match: str):
-    start = time.monotonic()
     assert main([str(a) for a in argv]) == 2
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and match in err, err
-    assert time.monotonic() - start < 10
     return err
 
 
@@ -80,14 +79,12 @@ def test_the_library_bounds_a_schedule_before_it_starts():
 
     net = Network.from_arrays(1, 2, rows=[0, 0], cols=[0, 1], similarity=[0.5, -0.7], pair_a=[], pair_b=[],
                               pair_c=[])
-    start = time.monotonic()
     for call in (lambda: anneal(net, sweeps=10**9), lambda: anneal(net, cooling=1 - 1e-11),
                  lambda: iter_annealing(net, cooling=1 - 1e-11), lambda: AnnealSolver(sweeps=MAX_SWEEPS + 1),
                  lambda: AnnealSolver(sweeps=MAX_SWEEPS // 44 + 1), lambda: ExactSolver(time_limit=1e308),
                  lambda: milp_minimum(net, time_limit=float("inf"))):
         with pytest.raises(ParameterError):
             call()
-    assert time.monotonic() - start < 5
     assert anneal(net, sweeps=MAX_SWEEPS // 44).state.tolist() == [1, 0]   # the longest default schedule runs
 
 
@@ -167,10 +164,8 @@ def test_read_json_reads_no_more_than_the_cap(tmp_path):
     path = tmp_path / "big.json"
     with open(path, "wb") as handle:   # 1 GB of holes: reading it all would take a while and the memory
         handle.truncate(1 << 30)
-    start = time.monotonic()
     with pytest.raises(ValueError, match="larger than 100 bytes"):
         read_json(path, most_bytes=100)
-    assert time.monotonic() - start < 1
 
 
 @pytest.mark.parametrize("header, size", [
@@ -207,12 +202,10 @@ def test_an_array_image_is_held_to_the_pixel_limit_before_any_copy(monkeypatch):
     from ismb_lab.io import load_image, load_pair
 
     huge = np.broadcast_to(np.uint8(0), (65537, 16385))   # no memory: a view of one byte
-    start = time.monotonic()
     with pytest.raises(ParameterError, match="ISMB_LAB_MAX_PIXELS"):
         load_image(huge)
     with pytest.raises(ParameterError, match="'right'"):
         load_pair(np.zeros((4, 4)), np.broadcast_to(np.float64(0), (6000, 5000)))
-    assert time.monotonic() - start < 2
     monkeypatch.setenv("ISMB_LAB_MAX_PIXELS", "20")
     with pytest.raises(ParameterError, match="at most 20 pixels"):
         load_image(np.zeros((5, 5)))
@@ -243,13 +236,11 @@ def test_a_huge_harris_window_is_refused_and_an_empty_search_skips_the_response(
     import ismb_lab.features as features
 
     image = np.random.default_rng(0).uniform(0, 255, (60, 80))
-    start = time.monotonic()
     for call in (lambda: features.detect_corners(image, sigma=1e6),
                  lambda: features.structure_tensor(image, sigma=51),
                  lambda: features.harris_response(image, sigma=1e300)):
         with pytest.raises(ParameterError, match="'sigma'"):
             call()
-    assert time.monotonic() - start < 1
     monkeypatch.setattr(features, "harris_response", lambda *a: pytest.fail("R computed for nothing"))
     corners = features.detect_corners(image, sigma=25, roi="full")   # a border of 76 px: nothing to search
     assert len(corners) == 0 and corners.message == ("no corners: R has no positive local maximum inside the "
