@@ -23,13 +23,12 @@ def no_work(monkeypatch):
     import importlib
     import pkgutil
 
-    import ismb_lab.cli
-
-    for module in pkgutil.iter_modules(ismb_lab.cli.__path__):
+    commands = importlib.import_module("ismb_lab.cli")
+    for module in pkgutil.iter_modules(commands.__path__):
         if module.name != "__main__":
             importlib.import_module(f"ismb_lab.cli.{module.name}")
-    import ismb_lab.depth_demo  # noqa: F401
-    import ismb_lab.metric  # noqa: F401
+    for name in ("depth_demo", "metric"):
+        importlib.import_module(f"ismb_lab.{name}")
 
     def work(*args, **kwargs):
         raise AssertionError("the work started before the refusal")
