@@ -30,6 +30,7 @@ from __future__ import annotations
 import json
 import math
 import numbers
+import re
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -747,10 +748,12 @@ def _read_opencv(path, owner: str) -> tuple:
                                      f"{shown} ({most} bytes)"))
     try:
         storage = cv2.FileStorage(shown, cv2.FILE_STORAGE_READ)
-    except cv2.error as exc:
+    except (cv2.error, SystemError) as exc:   # a parse error can reach Python as a SystemError
+        exc = exc.__cause__ if isinstance(exc, SystemError) and exc.__cause__ is not None else exc
         said = next((line for line in str(exc).splitlines() if "error:" in line), str(exc)).strip()
-        raise ParameterError(message("paths", owner, "an OpenCV FileStorage file (YAML, XML or JSON)",
-                                     f"{shown} ({said})")) from None
+        said = re.sub(r"^.*?error: \([^)]*\)\s*", "", said)
+        raise ParameterError(message("paths", owner, f"an OpenCV FileStorage file (YAML, XML or JSON) that "
+                                     f"OpenCV can parse (it says: {said})", shown)) from None
     if not storage.isOpened():
         raise ParameterError(message("paths", owner, "an OpenCV FileStorage file (YAML, XML or JSON)", shown))
     try:
