@@ -318,3 +318,19 @@ def test_ply_needs_a_rig_and_obeys_the_output_rules(lab_pair, capsys):
     (folder / "ro.ply").chmod(0o444)
     one_line(["match", *pair, "--rig", folder / "rig.json", "--ply", folder / "ro.ply"], capsys, "read-only")
     assert not (folder / "m.ply").exists()
+
+
+def test_depth_writes_its_scene_points_as_ply(tmp_path, capsys):
+    from pathlib import Path
+
+    images = Path(__file__).resolve().parents[1] / "images"
+    argv = ["depth", images / "lab" / "left.png", images / "lab" / "right.png", images / "toy_cars" / "left.png",
+            images / "toy_cars" / "right.png", "--json", tmp_path / "d.json", "--ply", tmp_path / "d.ply"]
+    assert main([str(a) for a in argv]) == 0
+    record = json.loads((tmp_path / "d.json").read_text())
+    cloud = read_ply((tmp_path / "d.ply").read_bytes())
+    z = np.array(cloud["z"])
+    assert len(z) >= 5 and np.all(z > 0)
+    depths = [o["depth_m"] for o in record["objects"] if o["depth_m"] is not None]
+    assert depths and z.min() <= min(depths) * 1.05 and max(depths) * 0.95 <= z.max()
+    one_line([*argv[:5], "--ply", images / "lab" / "left.png"], capsys, "--ply")
