@@ -10,7 +10,10 @@ the image size.  Two kinds are made with it:
   axis and with its image shifted down;
 * a calibrated rig (:func:`ismb_lab.rig.calibrate_rig`, or :func:`load_camera` from
   ``ismb-lab calibrate``'s JSON), which also keeps the calibration's record: its RMS error,
-  the board and each pair's corners (:class:`BoardPair`).
+  the board and each pair's corners (:class:`BoardPair`);
+* a factory calibration: a rectified camera's focal length, principal point and baseline
+  (:meth:`StereoCamera.from_factory`, ``ismb-lab rig``), or the two cameras' matrices,
+  distortions and pose from an OpenCV ``FileStorage`` file (:meth:`StereoCamera.from_opencv`).
 
 The rectification (``cv2.stereoRectify``) turns both cameras to a common orientation so that
 a point's two images are on one row.  Cameras with distortion are rectified with
@@ -26,15 +29,19 @@ from __future__ import annotations
 
 import json
 import math
+import numbers
+import re
 from dataclasses import dataclass, field
+from pathlib import Path
 
 import cv2
 import numpy as np
 
 from ._validation import ParameterError, ParameterTypeError, check_number, check_points, message
 
-__all__ = ["BASELINE_M", "BOARD", "FOCAL_PX", "MAX_BOARD_SIDE", "MAX_SQUARE_M", "MAX_ZOOM", "MIN_SQUARE_M", "SQUARE_M",
-           "FORMAT", "HEIGHT", "WIDTH", "BoardPair", "StereoCamera", "check_board", "load_camera"]
+__all__ = ["BASELINE_M", "BOARD", "FOCAL_PX", "MAX_BASELINE_M", "MAX_BOARD_SIDE", "MAX_SQUARE_M", "MAX_ZOOM",
+           "MIN_SQUARE_M", "SQUARE_M", "FORMAT", "HEIGHT", "OPENCV_NAMES", "UNITS", "WIDTH", "BoardPair",
+           "StereoCamera", "check_board", "load_camera"]
 
 #: The rendered scenes' camera, mimicking the thesis' webcams: 320 x 240 images, 10 cm apart.
 #: A focal length of 300 px gives a horizontal field of view of about 56 degrees
@@ -59,6 +66,17 @@ FORMAT = "ismb_lab-rig-v2"
 _FORMATS = ("ismb_lab-rig-v1", FORMAT)
 #: Above this rectified zoom (rectified focal length over the cameras' own), the rig warns.
 MAX_ZOOM = 1.3
+#: The longest baseline a factory calibration may give, in metres: a longer one is a baseline
+#: typed in millimetres (``from_opencv``'s `units`), not a stereo camera.
+MAX_BASELINE_M = 10.0
+#: The units a factory file's translation may be in, as metres per unit.
+UNITS = {"m": 1.0, "cm": 0.01, "mm": 0.001}
+#: The names an OpenCV ``FileStorage`` file may give each matrix (the first is the usual one;
+#: ``M1`` ... are OpenCV's stereo_calib sample's, ``cameraMatrix1`` ... ``cv2.stereoCalibrate``'s
+#: own argument names).
+OPENCV_NAMES = {"k_left": ("K1", "M1", "cameraMatrix1"), "d_left": ("D1", "distCoeffs1"),
+                "k_right": ("K2", "M2", "cameraMatrix2"), "d_right": ("D2", "distCoeffs2"),
+                "rotation": ("R",), "translation": ("T",)}
 
 
 def _rotate(vectors: np.ndarray, matrix: np.ndarray) -> np.ndarray:
@@ -231,6 +249,154 @@ class StereoCamera:
                    _intrinsics(focal_px, cx, cy + offset), np.zeros((1, 5)), rotation,
                    (-(rotation @ origin)).reshape(3, 1), _origin=origin)
 
+    @classmethod
+    def from_factory(cls, focal_px: float, baseline_m: float, size, centre=None) -> StereoCamera:
+        """A rectified stereo camera from its factory calibration (OAK-D, RealSense, ZED, ...).
+
+        Such a camera delivers rectified pairs and ships the rectified focal length, principal
+        point and baseline.  The rig is two distortion-free cameras with that matrix, side by
+        side: rectifying changes no pixel (:attr:`is_rectified`), and ``Z = f B / d``.
+
+        Parameters
+        ----------
+        focal_px : float
+            Rectified focal length in pixels (> 0).
+        baseline_m : float
+            Distance between the two cameras' centres in metres (> 0, at most
+            :data:`MAX_BASELINE_M`).
+        size : (int, int)
+            Width and height of the rectified images.
+        centre : (float, float), optional
+            Principal point ``(cx, cy)`` of the rectified views, inside the image (default: the
+            image centre ``((width - 1) / 2, (height - 1) / 2)``).
+
+        Returns
+        -------
+        StereoCamera
+            With no measured reprojection error: ``rms`` is NaN (``"rms_px": null`` in its
+            file), and no board.
+
+        Notes
+        -----
+        **The search band.**  A rig's candidates are kept within
+        :func:`ismb_lab.metric.row_tolerance` pixels of their row: ``2 rms`` for a calibrated
+        rig.  A factory rig has no RMS to go by, and none is guessed: the band is then the one
+        the function gives a camera without one, 1 px up and down (a window 2 px tall), for
+        sub-pixel and whole-pixel corners alike.  That is about what a good chessboard
+        calibration gives (``2 rms`` is 0.90 px on OpenCV's 13 sample pairs, at 0.448 px), and
+        the tolerance the rest of the package holds a rectified pair to (its median row
+        difference under 1 px).  A guessed, smaller RMS narrows the band without saying so, and
+        a narrower band *widens* the window: the disparity range ``shift='auto'`` measures on
+        row-only SIFT matches keeps fewer true matches and more stray ones.  On OpenCV's pairs
+        01, 02, 09 and 14 rectified by the 13-pair rig, the window is 109, 198, 134 and 164 px
+        wide with the 1 px band, and 253, 275, 153 and 178 px with a guessed RMS of 0.25 px.
+        ``ismb-lab match --rig`` says on stderr which band it used and why.
+
+        Examples
+        --------
+        >>> cam = StereoCamera.from_factory(520.8, 0.0836, (640, 480), centre=(350.6, 243.1))
+        >>> cam.focal_px, cam.baseline_m, cam.rectified_centre.tolist(), cam.is_rectified
+        (520.8, 0.0836, [350.6, 243.1], True)
+        >>> import math; math.isnan(cam.rms)
+        True
+        >>> StereoCamera.from_factory(520.8, 0.0, (640, 480))
+        Traceback (most recent call last):
+        ...
+        ismb_lab.ParameterError: The 'baseline_m' parameter of StereoCamera.from_factory must be a finite number > 0 and <= 10.0. Got 0.0 instead.
+        """
+        own = "StereoCamera.from_factory"
+        size = _check_size(size, own)
+        focal_px = check_number(focal_px, "focal_px", own, low=0, low_open=True)
+        baseline_m = check_number(baseline_m, "baseline_m", own, low=0, low_open=True, high=MAX_BASELINE_M)
+        width, height = size
+        if centre is None:
+            centre = ((width - 1) / 2, (height - 1) / 2)
+        rule = f"a principal point (cx, cy) inside the {width}x{height} image"
+        if not isinstance(centre, (tuple, list, np.ndarray)) or len(centre) != 2:
+            raise ParameterTypeError(message("centre", own, rule, centre))
+        cx, cy = (check_number(v, "centre", own) for v in centre)
+        if not (0 <= cx <= width - 1 and 0 <= cy <= height - 1):
+            raise ParameterError(message("centre", own, rule, (cx, cy)))
+        k = _intrinsics(focal_px, cx, cy)
+        return cls(size, k, np.zeros((1, 5)), k.copy(), np.zeros((1, 5)), np.eye(3),
+                   np.array([[-baseline_m], [0.0], [0.0]]))
+
+    @classmethod
+    def from_opencv(cls, *paths, size=None, units: str = "m") -> StereoCamera:
+        """A rig from an OpenCV ``FileStorage`` file (YAML, XML or JSON) of a stereo calibration.
+
+        The file holds the two cameras' matrices ``K1``, ``K2`` (or ``M1``, ``M2``, or
+        ``cameraMatrix1``, ``cameraMatrix2``), their distortions ``D1``, ``D2`` (or
+        ``distCoeffs1``, ``distCoeffs2``) and the right camera's pose ``R`` (a 3x3 matrix or a
+        Rodrigues vector) and ``T``, as ``cv2.stereoCalibrate`` returns them
+        (:data:`OPENCV_NAMES`).  They may be split over several files (OpenCV's stereo_calib
+        sample writes ``intrinsics.yml`` and ``extrinsics.yml``); a name given twice is refused.
+
+        Parameters
+        ----------
+        *paths : str or Path
+            The files, read in turn (each at most :data:`ismb_lab._files.MAX_JSON_BYTES` bytes).
+        size : (int, int), optional
+            Image width and height.  Default: the file's ``image_width`` and ``image_height``
+            (or ``imageSize``); one of them is needed, and they must agree.
+        units : {"m", "cm", "mm"}
+            The unit of ``T`` (:data:`UNITS`): the calibration board's, often millimetres.
+
+        Returns
+        -------
+        StereoCamera
+            Raw photos are rectified with it like a calibrated rig's; it has no measured RMS,
+            so its search band is 1 px (see :meth:`from_factory`).
+        """
+        own = "StereoCamera.from_opencv"
+        if not paths:
+            raise ParameterError(message("paths", own, "at least one FileStorage file", "none"))
+        if not isinstance(units, str) or units not in UNITS:
+            raise ParameterError(message("units", own, f"one of {', '.join(UNITS)}", units))
+        found, given_size = {}, None
+        for path in paths:
+            read, file_size = _read_opencv(path, own)
+            for name, value in read.items():
+                if name in found:
+                    raise ParameterError(message("paths", own, f"files that give {_opencv_shown(name)} once",
+                                                 f"it again in {str(path)!r}"))
+                found[name] = value
+            if file_size is not None:
+                if given_size is not None and file_size != given_size:
+                    raise ParameterError(message("paths", own, "files of one image size",
+                                                 f"{given_size} and {file_size}"))
+                given_size = file_size
+        missing = [_opencv_shown(name) for name in OPENCV_NAMES if name not in found]
+        if missing:
+            raise ParameterError(message("paths", own, "files that give K1, D1, K2, D2, R and T",
+                                         f"no {', '.join(missing)} in {', '.join(map(str, paths))}"))
+        if size is None:
+            if given_size is None:
+                raise ParameterError(message("size", own, "the image size (width, height), as the files do not "
+                                             "give image_width and image_height", None))
+            size = given_size
+        size = _check_size(size, own)
+        if given_size is not None and tuple(given_size) != size:
+            raise ParameterError(message("size", own, f"the files' own image size {given_size[0]}x{given_size[1]}",
+                                         f"{size[0]}x{size[1]}"))
+        rotation = found["rotation"]
+        if rotation.size == 3:
+            rotation, _ = cv2.Rodrigues(rotation.reshape(3, 1))
+        translation = found["translation"] * UNITS[units]
+        if translation.size == 3 and np.linalg.norm(translation) > MAX_BASELINE_M:
+            raise ParameterError(message("units", own, f"the unit of T that gives a baseline of at most "
+                                         f"{MAX_BASELINE_M:g} m (millimetres: units='mm')",
+                                         f"{units!r}, a baseline of {np.linalg.norm(translation):g} m"))
+        try:
+            return cls(size, found["k_left"], found["d_left"].reshape(1, -1), found["k_right"],
+                       found["d_right"].reshape(1, -1), rotation, translation)
+        except ParameterError as exc:   # name the file's own matrix
+            text = str(exc)
+            for name in OPENCV_NAMES:
+                text = text.replace(f"'{name}' parameter of StereoCamera",
+                                    f"'{OPENCV_NAMES[name][0]}' matrix of {', '.join(map(str, paths))}")
+            raise ParameterError(text) from None
+
     # ------------------------------------------------------------------ the two cameras
 
     @property
@@ -272,6 +438,19 @@ class StereoCamera:
     def distorted(self) -> bool:
         """Whether either camera has lens distortion."""
         return bool(np.any(self.d_left) or np.any(self.d_right))
+
+    @property
+    def is_rectified(self) -> bool:
+        """Whether the two cameras already are a rectified pair (a factory-rectified camera, the
+        rendered scenes' rig): the same matrix, no distortion, no rotation, the right camera
+        straight to the right.  Rectifying such a pair changes no pixel.
+
+        >>> StereoCamera().is_rectified, StereoCamera.pinhole(roll_deg=1).is_rectified
+        (True, False)
+        """
+        t = self.translation.reshape(3)
+        return bool(not self.distorted and np.array_equal(self.k_left, self.k_right)
+                    and np.array_equal(self.rotation, np.eye(3)) and t[0] < 0 and t[1] == 0 and t[2] == 0)
 
     def _pixels(self, cam: np.ndarray, k: np.ndarray) -> np.ndarray:
         # The left camera's principal point plus the right one's offset from it: the order
@@ -505,10 +684,14 @@ class StereoCamera:
         return measured(warp(left, lx, ly), warp(right, rx, ry), np.eye(3), np.eye(3), "rig")
 
     def to_dict(self) -> dict:
-        return {"format": FORMAT, "size": list(self.size), "rms_px": self.rms,
+        """The rig file's record (format :data:`FORMAT`): ``rms_px`` is None when no error was
+        measured, and ``board`` and ``square_m`` are None for a rig calibrated from no board."""
+        boarded = bool(self.used)
+        return {"format": FORMAT, "size": list(self.size), "rms_px": self.rms if math.isfinite(self.rms) else None,
                 "focal_px": self.focal_px, "baseline_m": self.baseline_m, "zoom": self.zoom,
-                "cropped": list(self.cropped()), "board": list(self.board),
-                "square_m": self.square_m, "used": list(self.used), "skipped": list(self.skipped),
+                "cropped": list(self.cropped()), "board": list(self.board) if boarded else None,
+                "square_m": self.square_m if boarded else None, "used": list(self.used),
+                "skipped": list(self.skipped),
                 "k_left": self.k_left.tolist(), "d_left": self.d_left.ravel().tolist(),
                 "k_right": self.k_right.tolist(), "d_right": self.d_right.ravel().tolist(),
                 "rotation": self.rotation.tolist(), "translation": self.translation.ravel().tolist(),
@@ -516,6 +699,94 @@ class StereoCamera:
 
     def to_json(self) -> str:
         return json.dumps(self.to_dict(), indent=2)
+
+
+_RMS_RULE = ("a finite number > 0 (the calibration's RMS reprojection error in pixels, which sets the search "
+             "band), or NaN when none was measured")
+
+
+def _check_size(size, owner: str) -> tuple:
+    """`size` as ``(width, height)``: two whole numbers from 1 to 65536."""
+    rule = f"(width, height), whole numbers from 1 to {1 << 16}"
+    if (not isinstance(size, (tuple, list)) or len(size) != 2
+            or not all(isinstance(v, (int, np.integer)) and not isinstance(v, bool) for v in size)):
+        raise ParameterTypeError(message("size", owner, rule, size))
+    if not all(1 <= v <= 1 << 16 for v in size):
+        raise ParameterError(message("size", owner, rule, tuple(size)))
+    return tuple(int(v) for v in size)
+
+
+def _opencv_shown(name: str) -> str:
+    return OPENCV_NAMES[name][0]
+
+
+def _opencv_values(node) -> np.ndarray | None:
+    """A FileStorage node's numbers (a matrix, or a sequence of numbers), or None."""
+    if node.isSeq():
+        items = [node.at(i) for i in range(node.size())]
+        if not all(item.isReal() or item.isInt() for item in items):
+            return None
+        return np.array([item.real() for item in items], dtype=float)
+    if node.isReal() or node.isInt():
+        return np.array([node.real()], dtype=float)
+    value = node.mat()
+    return None if value is None else np.asarray(value, dtype=float)
+
+
+def _read_opencv(path, owner: str) -> tuple:
+    """The matrices of one FileStorage file by :data:`OPENCV_NAMES`' keys, and its image size."""
+    from ._files import MAX_JSON_BYTES
+
+    shown = str(path)
+    try:
+        most = Path(path).stat().st_size
+    except OSError as exc:
+        raise ParameterError(message("paths", owner, f"a readable OpenCV FileStorage file ({exc.strerror})",
+                                     shown)) from None
+    if most > MAX_JSON_BYTES:
+        raise ParameterError(message("paths", owner, f"a FileStorage file of at most {MAX_JSON_BYTES} bytes",
+                                     f"{shown} ({most} bytes)"))
+    try:
+        storage = cv2.FileStorage(shown, cv2.FILE_STORAGE_READ)
+    except (cv2.error, SystemError) as exc:   # a parse error can reach Python as a SystemError
+        exc = exc.__cause__ if isinstance(exc, SystemError) and exc.__cause__ is not None else exc
+        said = next((line for line in str(exc).splitlines() if "error:" in line), str(exc)).strip()
+        said = re.sub(r"^.*?error: \([^)]*\)\s*", "", said)
+        raise ParameterError(message("paths", owner, f"an OpenCV FileStorage file (YAML, XML or JSON) that "
+                                     f"OpenCV can parse (it says: {said})", shown)) from None
+    if not storage.isOpened():
+        raise ParameterError(message("paths", owner, "an OpenCV FileStorage file (YAML, XML or JSON)", shown))
+    try:
+        found = {}
+        for name, aliases in OPENCV_NAMES.items():
+            for alias in aliases:
+                node = storage.getNode(alias)
+                if node.empty():
+                    continue
+                if name in found:
+                    raise ParameterError(message("paths", owner, f"a file that gives {aliases[0]} once "
+                                                 f"(as one of {', '.join(aliases)})", f"two of them in {shown}"))
+                values = _opencv_values(node)
+                if values is None or not values.size or not np.isfinite(values).all():
+                    raise ParameterError(message("paths", owner, f"a matrix of finite numbers as {alias}",
+                                                 f"something else in {shown}"))
+                found[name] = values
+        size = None
+        width, height = storage.getNode("image_width"), storage.getNode("image_height")
+        both = storage.getNode("imageSize")
+        if not width.empty() and not height.empty():
+            size = (width.real(), height.real())
+        elif not both.empty():
+            values = _opencv_values(both)
+            size = tuple(values.ravel()) if values is not None else None
+        if size is not None:
+            if len(size) != 2 or not all(float(v).is_integer() and 1 <= v <= 1 << 16 for v in size):
+                raise ParameterError(message("paths", owner, "an image size of two whole numbers from 1 to "
+                                             f"{1 << 16}", f"{size} in {shown}"))
+            size = tuple(int(v) for v in size)
+    finally:
+        storage.release()
+    return found, size
 
 
 def _check_intrinsics(k, d, name: str, owner: str) -> None:
@@ -553,7 +824,14 @@ def check_board(board, square_m, owner: str) -> tuple:
 
 
 def _check(camera: StereoCamera, owner: str) -> None:
-    """Refuse a camera that cannot rectify: it would give black images or a crash, not an error."""
+    """Refuse a camera that cannot rectify: it would give black images or a crash, not an error;
+    and an RMS error that would set no search band (0, or infinite)."""
+    rms = camera.rms
+    if isinstance(rms, bool) or not isinstance(rms, numbers.Real):
+        raise ParameterTypeError(message("rms", owner, _RMS_RULE, rms))
+    if not (math.isnan(rms) or (math.isfinite(rms) and rms > 0)):
+        raise ParameterError(message("rms", owner, _RMS_RULE, rms))
+    object.__setattr__(camera, "rms", float(rms))
     board, square_m = check_board(camera.board, camera.square_m, owner)
     object.__setattr__(camera, "board", board)
     object.__setattr__(camera, "square_m", square_m)
@@ -576,8 +854,169 @@ def _check(camera: StereoCamera, owner: str) -> None:
                                      f"focal length {camera.focal_px} px, baseline {camera.baseline_m} m"))
 
 
+#: The fields of a rig file that every rig has (``used``, ``skipped`` and ``pairs`` may be left
+#: out; ``focal_px``, ``baseline_m``, ``zoom`` and ``cropped`` are derived, and checked if given).
+REQUIRED = ("format", "size", "rms_px", "board", "square_m", "k_left", "d_left", "k_right", "d_right",
+            "rotation", "translation")
+
+
+class _Fields:
+    """The checks of one rig file's fields, each error naming the field, the rule and the value."""
+
+    def __init__(self, data: dict, owner: str):
+        self.data, self.owner = data, owner
+
+    def fail(self, name: str, rule: str, value, kind=ParameterError):
+        return kind(message(name, self.owner, rule, value))
+
+    def get(self, name: str, rule: str):
+        if name not in self.data:
+            raise self.fail(name, f"given: a complete rig file has {', '.join(REQUIRED)}; here it must be {rule}",
+                            _Missing())
+        return self.data[name]
+
+    def numbers(self, name: str, value, shape: tuple, rule: str) -> np.ndarray:
+        """`value` (nested lists of JSON numbers) as a float array of `shape` (-1: any length)."""
+        def plain(v):
+            if isinstance(v, list):
+                return all(plain(x) for x in v)
+            return isinstance(v, (int, float)) and not isinstance(v, bool)
+
+        if not plain(value):
+            raise self.fail(name, rule, value, ParameterTypeError)
+        try:
+            array = np.asarray(value, dtype=float)
+        except (OverflowError, ValueError):   # an integer of hundreds of digits, ragged lists
+            raise self.fail(name, rule, value) from None
+        try:
+            array = array.reshape(shape)
+        except ValueError:
+            raise self.fail(name, rule, value) from None
+        if array.ndim != len(shape) or any(s != -1 and a != s for a, s in zip(array.shape, shape)) \
+                or not np.isfinite(array).all():
+            raise self.fail(name, rule, value)
+        return array
+
+    def names(self, name: str) -> tuple:
+        value = self.data.get(name, [])
+        if not isinstance(value, list) or not all(isinstance(v, str) for v in value):
+            raise self.fail(name, "a list of names (strings)", value, ParameterTypeError)
+        return tuple(value)
+
+
+class _Missing:
+    def __repr__(self) -> str:
+        return "nothing"
+
+
+def _number(fields: _Fields, name: str, value, **bounds) -> float:
+    try:
+        return check_number(value, name, fields.owner, **bounds)
+    except ParameterTypeError as exc:
+        raise ParameterTypeError(str(exc)) from None
+
+
+def _from_record(data, owner: str) -> StereoCamera:
+    """The camera of a rig file's parsed JSON; each bad field is named (see :func:`load_camera`)."""
+    fields = _Fields(data, owner)
+    size = fields.get("size", "(width, height)")
+    size = _check_size(size, owner)
+    rule = ("null (no error measured: a 1 px search band) or a finite number > 0 (the calibration's RMS "
+            "reprojection error in pixels, which sets the search band)")
+    rms = fields.get("rms_px", rule)
+    if rms is not None:
+        if not isinstance(rms, (int, float)) or isinstance(rms, bool):
+            raise fields.fail("rms_px", rule, rms, ParameterTypeError)
+        try:
+            value = float(rms)
+        except OverflowError:   # an integer of hundreds of digits
+            value = math.inf
+        if not (math.isfinite(value) and value > 0):
+            raise fields.fail("rms_px", rule, rms)
+    rms = math.nan if rms is None else value
+    used, skipped = fields.names("used"), fields.names("skipped")
+    board, square_m = fields.get("board", "[columns, rows]"), fields.get("square_m", "a side in metres")
+    if board is None and square_m is None and not used:   # a rig calibrated from no board
+        board, square_m = BOARD, SQUARE_M
+    elif board is None or square_m is None:
+        name = "board" if board is None else "square_m"
+        raise fields.fail(name, "given (null only in a rig calibrated from no board: no 'used' pairs)", None)
+    board, square_m = check_board(board, square_m, owner)
+    matrix = "a 3x3 camera matrix [[fx, 0, cx], [0, fy, cy], [0, 0, 1]] of finite numbers"
+    arrays = {"k_left": (matrix, (3, 3)), "k_right": (matrix, (3, 3)),
+              "d_left": ("4, 5, 8, 12 or 14 finite distortion coefficients", (1, -1)),
+              "d_right": ("4, 5, 8, 12 or 14 finite distortion coefficients", (1, -1)),
+              "rotation": ("a 3x3 rotation matrix of finite numbers", (3, 3)),
+              "translation": ("a finite (x, y, z) offset of the right camera, in metres", (3, 1))}
+    values = {name: fields.numbers(name, fields.get(name, rule), shape, rule)
+              for name, (rule, shape) in arrays.items()}
+    pairs = data.get("pairs", [])
+    if not isinstance(pairs, list):
+        raise fields.fail("pairs", "a list of the calibration's pairs", pairs, ParameterTypeError)
+    pairs = tuple(_pair(fields, n, p) for n, p in enumerate(pairs))
+    try:
+        camera = StereoCamera(size, values["k_left"], values["d_left"], values["k_right"], values["d_right"],
+                              values["rotation"], values["translation"], rms, board, square_m, used, skipped, pairs)
+    except ParameterError as exc:   # a degenerate rig: name the file
+        raise ParameterError(str(exc).replace("of StereoCamera", f"of {owner}")) from None
+    for name, have in (("focal_px", camera.focal_px), ("baseline_m", camera.baseline_m)):
+        if name in data:   # derived: a value edited by hand would not be used, so it must agree
+            given = _number(fields, name, data[name])
+            if not math.isclose(given, have, rel_tol=1e-6):
+                raise fields.fail(name, f"the value the cameras give, {have:.10g} (it is derived: change k_left, "
+                                  "k_right and translation, or write the rig with 'ismb-lab rig')", given)
+    if "zoom" in data:
+        _number(fields, "zoom", data["zoom"], low=0, low_open=True)
+    fields.names("cropped")
+    return camera
+
+
+def _pair(fields: _Fields, n: int, record) -> BoardPair:
+    """Calibration pair `n` of a rig file, each field named ``pairs[n].field``."""
+    at = f"pairs[{n}]"
+    if not isinstance(record, dict):
+        raise fields.fail(at, "a pair's record {left, right, left_corners, right_corners, rms_px, rvec, tvec}",
+                          record, ParameterTypeError)
+    sub = _Fields(record, fields.owner)
+    for name in ("left", "right", "left_corners", "right_corners", "rms_px", "rvec", "tvec"):
+        if name not in record:
+            raise fields.fail(f"{at}.{name}", "given in every pair", _Missing())
+    for name in ("left", "right"):
+        if not isinstance(record[name], str):
+            raise fields.fail(f"{at}.{name}", "a photo's name", record[name], ParameterTypeError)
+    corners = "finite (x, y) corners, one [x, y] per corner"
+    left = sub.numbers(f"{at}.left_corners", record["left_corners"], (-1, 2), corners)
+    right = sub.numbers(f"{at}.right_corners", record["right_corners"], (-1, 2), corners)
+    if left.shape != right.shape or not len(left):
+        raise fields.fail(f"{at}.right_corners", "as many corners as left_corners (at least one)",
+                          f"{len(right)} against {len(left)}")
+    rms = _number(fields, f"{at}.rms_px", record["rms_px"], low=0)
+    vectors = [sub.numbers(f"{at}.{name}", record[name], (3,), "three finite numbers (a Rodrigues vector "
+                           "or a translation in metres)") for name in ("rvec", "tvec")]
+    return BoardPair(record["left"], record["right"], left, right, rms, *vectors)
+
+
 def load_camera(source) -> StereoCamera:
-    """A calibrated camera from ``ismb-lab calibrate``'s JSON (a path or the text), validated."""
+    """A rig from its file (``ismb-lab calibrate``'s or ``ismb-lab rig``'s JSON; a path or the text).
+
+    Every field is checked by name: a field that is missing, of the wrong type or out of its
+    range raises a ParameterError (or ParameterTypeError) naming it, its rule and the value.
+    ``rms_px`` is the calibration's RMS reprojection error, > 0, or null when none was measured
+    (a factory rig: its search band is then 1 px, see :meth:`StereoCamera.from_factory`);
+    ``board`` and ``square_m`` are null only for a rig that no board calibrated.  The derived
+    ``focal_px`` and ``baseline_m`` must agree with the cameras' (an edited value would not be
+    used).
+
+    Examples
+    --------
+    >>> cam = load_camera(StereoCamera.from_factory(500.0, 0.06, (640, 480)).to_json())
+    >>> cam.focal_px, cam.baseline_m, cam.is_rectified
+    (500.0, 0.06, True)
+    >>> load_camera('{"format": "ismb_lab-rig-v2", "size": [640, 480], "rms_px": 0}')
+    Traceback (most recent call last):
+    ...
+    ismb_lab.ParameterError: The 'rms_px' parameter of the rig file must be null (no error measured: a 1 px search band) or a finite number > 0 (the calibration's RMS reprojection error in pixels, which sets the search band). Got 0 instead.
+    """
     from ._files import MAX_JSON_BYTES, read_json
 
     owner = "load_camera"
@@ -597,17 +1036,5 @@ def load_camera(source) -> StereoCamera:
     if not isinstance(data, dict) or data.get("format") not in _FORMATS:
         raise ParameterError(message("source", owner, "a rig file written by 'ismb-lab calibrate' "
                                      f"(format {' or '.join(_FORMATS)})", str(source)))
-    try:
-        arr = lambda key, shape: np.asarray(data[key], dtype=float).reshape(shape)
-        camera = StereoCamera(tuple(int(v) for v in data["size"]), arr("k_left", (3, 3)), arr("d_left", (1, -1)),
-                              arr("k_right", (3, 3)), arr("d_right", (1, -1)), arr("rotation", (3, 3)),
-                              arr("translation", (3, 1)), float(data["rms_px"]), tuple(data["board"]),
-                              float(data["square_m"]), tuple(data.get("used", ())), tuple(data.get("skipped", ())),
-                              tuple(BoardPair(str(p["left"]), str(p["right"]), p["left_corners"],
-                                              p["right_corners"], float(p["rms_px"]), p["rvec"], p["tvec"])
-                                    for p in data.get("pairs", ())))
-    except ParameterError as exc:   # a degenerate rig: name the file
-        raise ParameterError(str(exc).replace("of StereoCamera", f"of the rig file {str(source)!r}")) from None
-    except (KeyError, TypeError, ValueError, OverflowError) as exc:
-        raise ParameterError(message("source", owner, "a complete rig file", f"{source} ({exc})")) from None
-    return camera
+    shown = "the rig file" if str(source).lstrip().startswith("{") else f"the rig file {str(source)!r}"
+    return _from_record(data, shown)

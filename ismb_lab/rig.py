@@ -25,6 +25,7 @@ from __future__ import annotations
 
 from contextlib import contextmanager
 from pathlib import Path
+from typing import NamedTuple
 
 import cv2
 import numpy as np
@@ -33,8 +34,8 @@ from ._validation import ParameterError, message
 from .camera import BOARD, FORMAT, MAX_ZOOM, SQUARE_M, BoardPair, StereoCamera, check_board
 from .rectify import load_photo
 
-__all__ = ["BOARD", "MAX_ZOOM", "SQUARE_M", "board_depth", "board_points", "calibrate_rig", "find_board",
-           "outliers", "recalibrate"]
+__all__ = ["BOARD", "MAX_ZOOM", "SQUARE_M", "HeldOut", "board_depth", "board_points", "calibrate_rig",
+           "find_board", "leave_one_out", "outliers", "recalibrate"]
 
 #: Fewest pairs in which the board is found in both views for a calibration.
 MIN_PAIRS = 3
@@ -184,7 +185,8 @@ def _calibrate(pairs, used, skipped, size, board, square_m, owner) -> StereoCame
 
 def recalibrate(rig: StereoCamera, drop=()) -> StereoCamera:
     """`rig` calibrated again from its own corners without the pairs named in `drop` (a
-    pair is named by its left or its right photo, or by its name in ``rig.used``).
+    pair is named by its left or its right photo, or by its name in ``rig.used``; a photo's
+    path, ``boards/left02.jpg``, names it by its file name).
 
     Raises
     ------
@@ -196,15 +198,91 @@ def recalibrate(rig: StereoCamera, drop=()) -> StereoCamera:
     if not rig.pairs:
         raise ParameterError(message("rig", owner, "a rig that keeps its pairs' corners (format "
                                      f"{FORMAT}); calibrate it again from the photos", "a rig without them"))
-    drop = (drop,) if isinstance(drop, str) else tuple(str(name) for name in drop)
+    drop = (drop,) if isinstance(drop, (str, Path)) else tuple(drop)
     known = lambda name: any(name in (*p.names, u) for p, u in zip(rig.pairs, rig.used))
-    unknown = [name for name in drop if not known(name)]
+    # a path as typed (boards/left02.jpg) names its photo: the rig keeps the photos' names only
+    typed = tuple(str(name) for name in drop)
+    drop = tuple(name if known(name) else Path(name).name for name in typed)
+    unknown = [name for name, own in zip(typed, drop) if not known(own)]
     if unknown:
         raise ParameterError(message("drop", owner, "photos of the rig's pairs ("
                                      + ", ".join(p.left for p in rig.pairs) + ")", ", ".join(unknown)))
     kept = [(p, u) for p, u in zip(rig.pairs, rig.used) if not set(drop) & {*p.names, u}]
     return _calibrate([p for p, _ in kept], tuple(u for _, u in kept), rig.skipped, tuple(rig.size),
                       tuple(rig.board), rig.square_m, owner)
+
+
+class HeldOut(NamedTuple):
+    """One pair's figures under the rig calibrated without it (:func:`leave_one_out`)."""
+
+    reprojection_px: float
+    depth_error: float
+
+
+def _held_out(rig: StereoCamera, pair: BoardPair) -> HeldOut:
+    """`pair`'s board under `rig`, which was calibrated without it."""
+    grid = board_points(rig.board, rig.square_m).astype(np.float64)
+    ok, rvec, tvec = cv2.solvePnP(grid, pair.left_corners, rig.k_left, rig.d_left)
+    if not ok:
+        return HeldOut(float("nan"), float("nan"))
+    pose, _ = cv2.Rodrigues(rvec)
+    left, _ = cv2.projectPoints(grid, rvec, tvec, rig.k_left, rig.d_left)
+    right_pose, _ = cv2.Rodrigues(rig.rotation @ pose)
+    right, _ = cv2.projectPoints(grid, right_pose, rig.rotation @ tvec.reshape(3, 1) + rig.translation,
+                                 rig.k_right, rig.d_right)
+    residuals = np.concatenate([left.reshape(-1, 2) - pair.left_corners, right.reshape(-1, 2) - pair.right_corners])
+    reprojection = float(np.sqrt(np.mean(np.sum(residuals ** 2, axis=1))))
+    disparity = rig.rectify_points(pair.left_corners, "left")[:, 0] - rig.rectify_points(pair.right_corners,
+                                                                                         "right")[:, 0]
+    with np.errstate(divide="ignore", invalid="ignore"):
+        stereo = rig.focal_px * rig.baseline_m / disparity
+    seen = ((grid @ pose.T + tvec.reshape(1, 3)) @ rig.left_to_rectified.T)[:, 2]
+    return HeldOut(reprojection, float(np.median(np.abs(stereo - seen) / seen)))
+
+
+def leave_one_out(rig: StereoCamera, progress=None) -> tuple:
+    """Each pair of `rig` held out in turn: its board under the rig calibrated from the others.
+
+    The fit's RMS error falls with every pair dropped, whether the pair was bad or not; a
+    held-out board's error does not, so it tells when dropping stops helping.  For each pair,
+    the rig is calibrated from its other pairs' corners (:func:`recalibrate`), and the pair's
+    board is seen through it two ways:
+
+    * ``reprojection_px``: the board's pose from its left view alone (``cv2.solvePnP``),
+      carried to the right camera by the rig's ``R`` and ``T``; the RMS reprojection error of
+      its corners over both views, in pixels;
+    * ``depth_error``: each corner's depth ``Z = f B / d`` from its two rectified views against
+      its depth in that pose (in the rectified frame), ``|Z_stereo - Z_pose| / Z_pose``; the
+      median over the corners.
+
+    Parameters
+    ----------
+    rig : StereoCamera
+        A rig that keeps its pairs' corners (format ``ismb_lab-rig-v2``), of at least 4 pairs.
+    progress : callable, optional
+        Called once per pair.
+
+    Returns
+    -------
+    tuple of HeldOut
+        One per pair of ``rig.pairs``, in order; NaN where the others do not calibrate.
+    """
+    owner = "leave_one_out"
+    if len(rig.pairs) <= MIN_PAIRS:
+        raise ParameterError(message("rig", owner, f"a rig that keeps the corners of more than {MIN_PAIRS} pairs "
+                                     f"(format {FORMAT})", f"{len(rig.pairs)} pairs"))
+    found = []
+    for n, pair in enumerate(rig.pairs):
+        others = [(p, u) for m, (p, u) in enumerate(zip(rig.pairs, rig.used)) if m != n]
+        try:
+            without = _calibrate([p for p, _ in others], tuple(u for _, u in others), rig.skipped, tuple(rig.size),
+                                 tuple(rig.board), rig.square_m, owner)
+            found.append(_held_out(without, pair))
+        except (ParameterError, cv2.error):
+            found.append(HeldOut(float("nan"), float("nan")))
+        if progress is not None:
+            progress(n)
+    return tuple(found)
 
 
 def board_depth(rig: StereoCamera, left, right) -> dict:

@@ -12,7 +12,7 @@ import pytest
 from ismb_lab._validation import ParameterError
 from ismb_lab.datasets import CHESSBOARD_PAIRS, chessboard_pairs
 from ismb_lab.camera import MAX_ZOOM, BoardPair, load_camera
-from ismb_lab.rig import calibrate_rig, outliers, recalibrate
+from ismb_lab.rig import calibrate_rig, leave_one_out, outliers, recalibrate
 
 
 def cli(*args):
@@ -36,12 +36,13 @@ def files(folder, names):
 
 @pytest.fixture(scope="module")
 def runs(opencv_data, tmp_path_factory):
-    """The CLI on all 13 pairs, on the 12 without pair 02, and --from the first --drop left02.jpg."""
+    """The CLI on all 13 pairs, on the 12 without pair 02, and --from the first --drop .../left02.jpg."""
     out = tmp_path_factory.mktemp("calibrate")
     all13 = cli("calibrate", *files(opencv_data, CHESSBOARD_PAIRS), "--out", out / "all.json")
     direct = cli("calibrate", *files(opencv_data, [n for n in CHESSBOARD_PAIRS if n != "02"]),
                  "--out", out / "direct.json")
-    dropped = cli("calibrate", "--from", out / "all.json", "--drop", "left02.jpg", "--out", out / "dropped.json")
+    dropped = cli("calibrate", "--from", out / "all.json", "--drop", opencv_data / "left02.jpg",   # as typed
+                  "--out", out / "dropped.json")
     for proc in (all13, direct, dropped):
         assert proc.returncode == 0, proc.stderr
     return out, all13, direct, dropped
@@ -178,3 +179,54 @@ def test_calibration_runs_opencv_on_one_thread_and_restores_its_setting(monkeypa
         assert again.d_left.tobytes() == rig.d_left.tobytes() and again.rms == rig.rms
     finally:
         cv2.setNumThreads(before)
+
+
+def test_drop_takes_a_path_as_typed_or_the_bare_name(rig):
+    by_name = recalibrate(rig, ["02 left"])
+    assert [p.left for p in by_name.pairs] == [p.left for p in rig.pairs if p.left != "02 left"]
+    assert recalibrate(rig, ["boards/02 left"]).rms == by_name.rms
+    with pytest.raises(ParameterError, match="Got 'boards/99 left' instead"):
+        recalibrate(rig, ["boards/99 left"])
+
+
+def test_leave_one_out_holds_each_pair_out_and_scores_it_under_the_others(rig):
+    import time
+
+    start = time.perf_counter()
+    held = leave_one_out(rig)
+    seconds = time.perf_counter() - start
+    assert len(held) == 13 and seconds < 30                        # 0.7 s measured for the 13 pairs
+    px = np.array([h.reprojection_px for h in held])
+    assert np.isfinite(px).all() and int(np.argmax(px)) == CHESSBOARD_PAIRS.index("02")
+    # held out, a board fits worse than inside the fit, pair by pair (0.19 to 1.25 px against 0.17 to 1.22)
+    assert np.all(px >= np.array([p.rms_px for p in rig.pairs]) - 1e-3)
+    # the figure is the pair's own under the rig without it: computed here again for one pair
+    without = recalibrate(rig, ["05 left"])
+    pair = rig.pairs[CHESSBOARD_PAIRS.index("05")]
+    cols, rows = rig.board
+    grid = np.zeros((rows * cols, 3))
+    grid[:, :2] = np.mgrid[0:cols, 0:rows].T.reshape(-1, 2) * rig.square_m
+    _, rvec, tvec = cv2.solvePnP(grid, pair.left_corners, without.k_left, without.d_left)
+    left, _ = cv2.projectPoints(grid, rvec, tvec, without.k_left, without.d_left)
+    pose, _ = cv2.Rodrigues(rvec)
+    right, _ = cv2.projectPoints(grid, cv2.Rodrigues(without.rotation @ pose)[0],
+                                 without.rotation @ tvec + without.translation, without.k_right, without.d_right)
+    residual = np.concatenate([left.reshape(-1, 2) - pair.left_corners, right.reshape(-1, 2) - pair.right_corners])
+    assert held[CHESSBOARD_PAIRS.index("05")].reprojection_px == pytest.approx(
+        np.sqrt(np.mean(np.sum(residual ** 2, axis=1))), rel=1e-5)
+    depth = np.array([h.depth_error for h in held])
+    assert np.all((depth >= 0) & (depth < 0.01))                   # 0.06 to 0.25 % measured
+    with pytest.raises(ParameterError, match="more than 3 pairs"):
+        leave_one_out(calibrate_rig(chessboard_pairs()[:3]))
+
+
+@pytest.mark.slow
+def test_the_report_gives_the_held_out_figures_beside_the_rms(runs):
+    _, all13, _, dropped = runs
+    rows = [line for line in all13.stdout.splitlines() if line.startswith("left") and ".jpg" in line]
+    assert all(len(row.split()) >= 5 and row.split()[4].endswith("%") for row in rows)
+    for proc in (all13, dropped):
+        summary = [line for line in proc.stdout.splitlines() if line.startswith("leave-one-out:")]
+        assert len(summary) == 1 and "held-out boards" in summary[0] and "median depth error" in summary[0]
+    held = lambda proc: float(proc.stdout.split("RMS reprojection error ")[1].split(" px")[0])
+    assert held(dropped) < held(all13)                            # 0.342 against 0.479 px measured

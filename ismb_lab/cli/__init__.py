@@ -46,8 +46,8 @@ def _epilog() -> str:
 
 
 def _commands():
-    from . import calibrate, course, depth, evaluate, match, rectify, render, targets, tune
-    return (match, tune, evaluate, depth, rectify, calibrate, render, targets, course)
+    from . import calibrate, course, depth, evaluate, match, rectify, render, rig, targets, tune
+    return (match, tune, evaluate, depth, rectify, calibrate, rig, render, targets, course)
 
 
 def __getattr__(name):

@@ -21,14 +21,16 @@ def add_parser(sub) -> None:
                        "and each pair's corners. Pairs where the board is not found in both views are "
                        "skipped and named. The table of pairs marks with '<-- outlier' a pair whose error "
                        f"is above both {OUTLIER_RATIO:g}x the median and {OUTLIER_PX:g} px; drop it with "
-                       "--from RIG.json --drop LEFT.jpg. A rectified zoom above "
+                       "--from RIG.json --drop LEFT.jpg; each pair's error when it is held out (the rig calibrated from "
+                       "the others) tells when dropping stops helping. A rectified zoom above "
                        f"{MAX_ZOOM:g}x, or a board leaving the rectified view, is warned about.")
     c.add_argument("pairs", type=Path, nargs="*", metavar="LEFT RIGHT",
                    help="photos in pairs: left1 right1 left2 right2 ... (at least 3 pairs)")
     c.add_argument("--from", dest="source", type=Path, default=None, metavar="RIG.json",
                    help="calibrate again from this rig's corners instead of photos (no photos then)")
     c.add_argument("--drop", action="append", default=[], metavar="PHOTO",
-                   help="with --from: leave out the pair of this left or right photo (repeatable)")
+                   help="with --from: leave out the pair of this left or right photo, named as typed "
+                   "(boards/left02.jpg) or by its file name (left02.jpg) (repeatable)")
     c.add_argument("--board", default=None, metavar="COLSxROWS",
                    help=f"inner corners per row and per column (default: {BOARD[0]}x{BOARD[1]})")
     c.add_argument("--square-m", type=float, default=None, metavar="S",
@@ -46,18 +48,38 @@ def files(args) -> Files:
     return Files(inputs=inputs, outputs=(("--out", args.out),))
 
 
-def report(rig) -> str:
-    """The table of the rig's pairs, their errors and the outliers' marks."""
+def report(rig, held=()) -> str:
+    """The table of the rig's pairs, their errors and the outliers' marks; with `held`
+    (:func:`ismb_lab.rig.leave_one_out`), each pair's errors when held out, and their summary."""
+    import math
+
+    import numpy as np
+
     from ..rig import OUTLIER_PX, OUTLIER_RATIO, outliers
 
     marked = set(outliers(rig.pairs))
     width = max([len("left")] + [len(p.left) for p in rig.pairs])
-    lines = [f"{'left':<{width}}  {'right':<{width}}  rms_px"]
-    lines += [f"{p.left:<{width}}  {p.right:<{width}}  {p.rms_px:6.3f}" + ("  <-- outlier" if n in marked else "")
-              for n, p in enumerate(rig.pairs)]
+    extra = "  held_out_px  depth_error" if held else ""
+    lines = [f"{'left':<{width}}  {'right':<{width}}  rms_px{extra}"]
+    for n, p in enumerate(rig.pairs):
+        row = f"{p.left:<{width}}  {p.right:<{width}}  {p.rms_px:6.3f}"
+        if held:
+            h = held[n]
+            row += f"  {h.reprojection_px:11.3f}  " + (f"{100 * h.depth_error:10.2f}%" if math.isfinite(h.depth_error)
+                                                       else f"{'-':>11}")
+        lines.append(row + ("  <-- outlier" if n in marked else ""))
     if marked:
         lines.append(f"outlier: above both {OUTLIER_RATIO:g}x the median and {OUTLIER_PX:g} px; to leave one "
                      "out: ismb-lab calibrate --from RIG.json --drop LEFT --out NEW.json")
+    if held:
+        px = np.array([h.reprojection_px for h in held])
+        depth = np.array([h.depth_error for h in held])
+        ok = np.isfinite(px) & np.isfinite(depth)
+        if ok.any():
+            lines.append(f"leave-one-out: each pair held out, the rig calibrated from the others: RMS reprojection "
+                         f"error {np.sqrt(np.mean(px[ok] ** 2)):.3f} px over the held-out boards (the fit's: "
+                         f"{rig.rms:.3f} px), median depth error {100 * np.median(depth[ok]):.2f}%. Dropping a pair "
+                         "always lowers the fit's error; drop while the held-out figures fall too")
     return "\n".join(lines)
 
 
@@ -108,10 +130,15 @@ def run(args) -> int:
                  for n in range(0, len(args.pairs), 2)]
         with progress_bar(len(pairs), "chessboards", unit="pair") as bar:
             rig = calibrate_rig(pairs, board, square_m, progress=lambda _: bar.update(1))
+    from ..rig import MIN_PAIRS, leave_one_out
+
+    held = leave_one_out(rig) if len(rig.pairs) > MIN_PAIRS else ()
     atomic_write_text(args.out, rig.to_json())
     if rig.skipped:
         print(f"board not found in both views, skipped: {', '.join(rig.skipped)}")
-    print(report(rig))
+    print(report(rig, held))
+    if not held:
+        print(f"leave-one-out: needs more than {MIN_PAIRS} pairs")
     print(f"{len(rig.used)} pairs: RMS reprojection error {rig.rms:.3f} px, focal length {rig.focal_px:.1f} px, "
           f"baseline {rig.baseline_m:.4f} m (squares of {rig.square_m:g} m), rectified zoom {rig.zoom:.2f}x "
           f"-> {args.out}")

@@ -45,6 +45,10 @@ def add_parser(sub) -> None:
                     help="find the objects by their blobs of change in both images, each at the shift "
                     "that lays the left blob on the right one, refined by the features on it "
                     "(silhouettes, the default), or by the features alone as the thesis does (features)")
+    dp.add_argument("--ply", type=output_path, default=None, metavar="OUT.ply",
+                    help="write the scene's kept matches as a PLY point cloud in metres (the rig's rectified "
+                    "left camera, or a pinhole camera of F and B centred on the image; X right, Y down, "
+                    "Z forward), grey from the scene's left image")
     dp.add_argument("--json", type=output_path, default=None, metavar="OUT", help="write the objects as JSON")
     dp.add_argument("--plot", type=output_path, default=None, metavar="OUT.png",
                     help="draw the scene's features by disparity with the ranked objects")
@@ -62,7 +66,7 @@ def files(args) -> Files:
     images = tuple((name.replace("_", "-"), getattr(args, name))
                    for name in ("bg_left", "bg_right", "scene_left", "scene_right"))
     return Files(inputs=images + given(("--params-file", args.params_file), ("--rig", args.rig)),
-                 outputs=given(("--json", args.json), ("--plot", args.plot)))
+                 outputs=given(("--json", args.json), ("--plot", args.plot), ("--ply", args.ply)))
 
 
 def run(args) -> int:
@@ -143,6 +147,10 @@ def run(args) -> int:
     if args.json is not None:
         atomic_write_text(args.json, json_text({**result.to_dict(),
                                                 "candidate_window": window_record(config, args.shift == "auto")}))
+    if args.ply is not None:
+        from .._files import atomic_write_bytes
+
+        atomic_write_bytes(args.ply, _ply(args, result, rig if args.rig is not None else None))
     if args.plot is not None:
         from matplotlib.figure import Figure
 
@@ -154,3 +162,25 @@ def run(args) -> int:
         ax.set_title(f"Method-{method}: {len(result.objects)} objects, near -> far")
         save_figure(fig, args.plot, dpi=120)
     return 0
+
+
+def _ply(args, result, rig) -> bytes:
+    """The scene's kept matches in metres as a PLY cloud: through `rig`, or the pinhole camera of
+    the result's focal length and baseline at the scene's image centre (``DepthResult.points``)."""
+    import numpy as np
+
+    from ..camera import StereoCamera
+    from ..io import load_image
+    from ..ply import ply_bytes
+
+    left = load_image(args.scene_left)
+    h, w = left.shape
+    camera = rig if rig is not None else StereoCamera.pinhole(w, h, focal_px=result.config.focal_px,
+                                                              baseline_m=result.config.baseline_m)
+    xyz = result.points(camera)
+    keep = np.all(np.isfinite(xyz), axis=1)
+    xy = np.rint(np.asarray(result.kept_xy, dtype=float).reshape(-1, 2)[keep]).astype(int)
+    grey = left[np.clip(xy[:, 1], 0, h - 1), np.clip(xy[:, 0], 0, w - 1)]
+    return ply_bytes(xyz[keep], np.clip(grey, 0, 255), comments=(
+        "ismb-lab depth: the scene's kept matches, metres in the rectified left camera's frame "
+        "(X right, Y down, Z forward)", f"focal length {camera.focal_px:.6g} px, baseline {camera.baseline_m:.6g} m"))

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import hashlib
+import math
 import sys
 from pathlib import Path
 
@@ -30,6 +32,9 @@ def add_parser(sub) -> None:
                    "matched as it is; stderr says which), refine the corners to sub-pixel, keep the "
                    "candidates on their rows, and give each match its point in metres (xyz_m, the rectified "
                    "left camera's frame: X right, Y down, Z forward); --shift is then auto unless given")
+    m.add_argument("--ply", type=output_path, default=None, metavar="OUT.ply",
+                   help="with --rig: write the matches' points in metres as a PLY point cloud (x y z, and the "
+                   "left image's grey as red green blue), which MeshLab, CloudCompare and Open3D open")
     m.add_argument("--json", type=output_path, default=None, metavar="OUT", help="write the result as JSON")
     m.add_argument("--plot", type=output_path, default=None, metavar="OUT.png",
                    help="draw the pair with features and match lines")
@@ -46,7 +51,7 @@ def files(args) -> Files:
     """The images, the params file and the rig read; the JSON and the plot written."""
     return Files(inputs=(("left", args.left), ("right", args.right))
                  + given(("--params-file", args.params_file), ("--rig", args.rig)),
-                 outputs=given(("--json", args.json), ("--plot", args.plot)))
+                 outputs=given(("--json", args.json), ("--plot", args.plot), ("--ply", args.ply)))
 
 
 def _prepared(args):
@@ -82,7 +87,7 @@ def _rig_pair(args):
     from ..camera import load_camera
     from ..io import load_pair
     from ..matching import check_window
-    from ..metric import for_camera
+    from ..metric import for_camera, row_tolerance
     from ..rectify import check_for_matching
 
     camera = load_camera(check_input(args.rig, what="--rig"))
@@ -90,25 +95,66 @@ def _rig_pair(args):
         args.shift = "auto"
     config = match_config(args)
     check_window(config, (camera.size[1], camera.size[0]))   # the rectified pair's size, before the work
-    left, right, how = for_camera(args.left, args.right, camera)
+    if camera.is_rectified:     # rectifying changes no pixel: say so, and spare the look at the rows
+        left, right = camera.photos(args.left, args.right, "ismb-lab match --rig")
+        how = ("the rig is a rectified camera's (one camera matrix, no distortion, no rotation): "
+               "matched as they are")
+    else:
+        left, right, how = for_camera(args.left, args.right, camera)
     pair = load_pair(left, right, min_shape=config.min_shape)
     print(f"--rig: {how}", file=sys.stderr)
+    print(f"--rig: candidates within {row_tolerance(camera, subpixel=True):g} px of their row: "
+          + (f"2 x the rig's RMS reprojection error ({camera.rms:.3f} px)" if math.isfinite(camera.rms) else
+             "the rig has no measured RMS error (rms_px null, a factory rig), so the band of a camera without "
+             "one"), file=sys.stderr)
     warning = "" if flat(pair) else check_for_matching(left, right, "ismb-lab match --rig")
     if warning:
         print(warning, file=sys.stderr)
-    return camera, pair, config
+    return camera, pair, config, how
+
+
+def rig_record(args, camera, how: str) -> dict:
+    """What the JSON says of the rig: its file (path and SHA-256), f, B, the RMS error and the
+    search band it gave, and how the pair was taken."""
+    from ..metric import row_tolerance
+
+    return {"path": str(args.rig), "sha256": hashlib.sha256(Path(args.rig).read_bytes()).hexdigest(),
+            "focal_px": camera.focal_px, "baseline_m": camera.baseline_m,
+            "rms_px": camera.rms if math.isfinite(camera.rms) else None,
+            "row_tolerance_px": row_tolerance(camera, subpixel=True), "pair": how}
+
+
+def ply_file(result, camera, pair, xyz) -> bytes:
+    """The PLY point cloud of the matches in front of the cameras, each grey as the left image's
+    pixel at its corner."""
+    import numpy as np
+
+    from ..ply import ply_bytes
+
+    keep = np.all(np.isfinite(xyz), axis=1)
+    xy = np.rint(result.left_match_xy[keep]).astype(int)
+    h, w = pair.left.shape
+    grey = pair.left[np.clip(xy[:, 1], 0, h - 1), np.clip(xy[:, 0], 0, w - 1)]
+    return ply_bytes(xyz[keep], np.clip(grey, 0, 255), comments=(
+        "ismb-lab match --rig: metres in the rectified left camera's frame (X right, Y down, Z forward)",
+        f"focal length {camera.focal_px:.6g} px, baseline {camera.baseline_m:.6g} m"))
 
 
 def run(args) -> int:
     from ..matching import match
 
+    from ._common import UsageError
+
+    if args.ply is not None and args.rig is None:
+        raise UsageError("--ply writes the matches' points in metres: give the rig with --rig RIG.json "
+                         "('ismb-lab calibrate', or 'ismb-lab rig' for a factory-calibrated camera)")
     recipe = resolve_recipe(args, DEFAULT_SOLVER)
     params = recipe.params
     camera = None
     if args.rig is not None:
         from ..metric import match_with_camera
 
-        camera, pair, config = _rig_pair(args)
+        camera, pair, config, how = _rig_pair(args)
         prepared, found, result = match_with_camera(pair, config, camera, **recipe.match_settings(),
                                                     **seed_setting(args))
         found = len(found.pairs)
@@ -130,11 +176,16 @@ def run(args) -> int:
         print(f"candidate window measured on the pair: shift {window['shift']:g} px, "
               f"{window['width']:g} x {window['height']:g} px")
     record = {**result.to_dict(), "candidate_window": window}
+    # "disparity" is the thesis' Table 5.3 column, the distance between the two corners;
+    # "disparity_x_px" is x_left - x_right, the one Z = f B / d takes
+    for item, d in zip(record["matches"], result.horizontal_disparity):
+        item["disparity_x_px"] = float(d)
     if camera is not None:
         import numpy as np
 
         from ..metric import match_points
 
+        record["rig"] = rig_record(args, camera, how)
         xyz = match_points(result, camera)
         for item, point in zip(record["matches"], xyz):
             item["xyz_m"] = [float(v) for v in point] if np.all(np.isfinite(point)) else None
@@ -144,6 +195,10 @@ def run(args) -> int:
                  "no match in front of the cameras"))
     if args.json is not None:
         atomic_write_text(args.json, json_text(record))
+    if args.ply is not None:
+        from .._files import atomic_write_bytes
+
+        atomic_write_bytes(args.ply, ply_file(result, camera, prepared.pair, xyz))
     if args.plot is not None:
         from matplotlib.figure import Figure
 
