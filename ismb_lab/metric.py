@@ -31,12 +31,12 @@ from dataclasses import replace
 import cv2
 import numpy as np
 
-from ._validation import ParameterError, ParameterTypeError, message
+from ._validation import ParameterError, ParameterTypeError, check_number, message
 from .camera import StereoCamera
 from .matching import MatchConfig, MatchResult, Prepared, auto_window, match, prepare
 from .methods import build_problem
 
-__all__ = ["IMPROVES", "fit_rows_px", "for_camera", "match_points", "rectify_for_camera", "match_with_camera", "mutual_best", "prepare_for_camera", "rig_config", "row_tolerance",
+__all__ = ["IMPROVES", "THESIS_SIZE", "photo_config", "fit_rows_px", "for_camera", "match_points", "rectify_for_camera", "match_with_camera", "mutual_best", "prepare_for_camera", "rig_config", "row_tolerance",
            "subpixel"]
 
 #: cv2.cornerSubPix stops when a step is under 0.001 px or after 40 steps.
@@ -77,6 +77,45 @@ def rig_config(camera: StereoCamera, config: MatchConfig, pair=None, subpixel: b
                                          None))
         config = auto_window(pair, config, rows_px=rows)
     return config
+
+
+#: The thesis' image, width x height: its 20-30 corners (``MatchConfig``'s defaults) are for
+#: the centre quarter of a 320 x 240 webcam frame.
+THESIS_SIZE = (320, 240)
+
+
+def photo_config(camera: StereoCamera, config: MatchConfig | None = None, *, scale: float = 1.0,
+                 most: int | None = None) -> MatchConfig:
+    """`config` (default :class:`~ismb_lab.matching.MatchConfig`'s) with its corner counts
+    scaled to `camera`'s photos: ``n_min`` and ``n_max`` times the photo's area over the
+    thesis' (:data:`THESIS_SIZE`), times `scale`; with `most`, ``n_max`` is at most that and
+    ``n_min`` keeps its share of it.
+
+    On OpenCV's 13 chessboard pairs (640 x 480: 80-120 corners), each held out of its rig's
+    calibration, the default ``match --rig`` keeps 25-63 board matches, 92-100% of them within
+    5% of the board's plane (``scripts/rig_defaults.py``); the thesis' 20-30 keep 6-10 on pairs
+    01, 05 and 12.
+
+    >>> c = photo_config(StereoCamera(size=(640, 480)))
+    >>> c.n_min, c.n_max
+    (80, 120)
+    >>> c = photo_config(StereoCamera(size=(4000, 3000)), most=500)
+    >>> c.n_min, c.n_max
+    (333, 500)
+    """
+    config = MatchConfig() if config is None else config
+    if not isinstance(config, MatchConfig):
+        raise ParameterTypeError(message("config", "photo_config", "a MatchConfig", config))
+    if not isinstance(camera, StereoCamera):
+        raise ParameterTypeError(message("camera", "photo_config", "a StereoCamera", camera))
+    scale = check_number(scale, "scale", "photo_config", low=0, low_open=True)
+    area = camera.size[0] * camera.size[1] / (THESIS_SIZE[0] * THESIS_SIZE[1]) * scale
+    n_min, n_max = config.n_min * area, config.n_max * area
+    if most is not None:
+        most = check_number(most, "most", "photo_config", low=1, integer=True)
+        if n_max > most:
+            n_min, n_max = n_min * most / n_max, most
+    return replace(config, n_min=max(1, round(n_min)), n_max=max(1, round(n_max)))
 
 
 def subpixel(image, xy, half: int) -> np.ndarray:

@@ -139,3 +139,25 @@ def test_the_row_spread_scales_with_the_image():
     assert row_spread_px((480, 640)) == 1.0 and row_spread_px((3000, 4000)) == 6.25
     assert fit_rows_px(StereoCamera(size=(4000, 3000), rms=0.4)) == 6.25
     assert fit_rows_px(StereoCamera(size=(640, 480), rms=np.float64(0.8))) == pytest.approx(1.6)
+
+
+def test_photo_config_scales_the_corner_counts_with_the_photo():
+    from ismb_lab.matching import MatchConfig
+    from ismb_lab.metric import photo_config
+
+    thesis = photo_config(StereoCamera(size=(320, 240)))
+    assert (thesis.n_min, thesis.n_max) == (MatchConfig().n_min, MatchConfig().n_max)
+    big = photo_config(StereoCamera(size=(640, 480)), MatchConfig(roi="full", shift="auto"))
+    assert (big.n_min, big.n_max, big.roi, big.shift) == (80, 120, "full", "auto")
+    capped = photo_config(StereoCamera(size=(4000, 3000)), most=300)
+    assert capped.n_max == 300 and capped.n_min == 200
+    with pytest.raises(ValueError, match="'scale' parameter of photo_config"):
+        photo_config(StereoCamera(), scale=0)
+
+
+@pytest.mark.slow   # calibrates 13 pairs, then matches one
+def test_the_default_settings_give_a_held_out_board_its_plane(full, opencv_data, load_script):
+    """Board 11, the closest of the 13 in scripts/rig_defaults.py's table (25 board matches, 92%)."""
+    row = load_script("rig_defaults").held_out(full, "11", opencv_data)
+    assert (row["n_min"], row["n_max"]) == (80, 120) and row["rectified_by_rig"]
+    assert row["board_matches"] >= 20 and row["share"] >= 0.90, row
