@@ -31,12 +31,12 @@ from dataclasses import replace
 import cv2
 import numpy as np
 
-from ._validation import ParameterError, ParameterTypeError, message
+from ._validation import ParameterError, ParameterTypeError, check_number, message
 from .camera import StereoCamera
 from .matching import MatchConfig, MatchResult, Prepared, auto_window, match, prepare
 from .methods import build_problem
 
-__all__ = ["for_camera", "match_points", "match_with_camera", "mutual_best", "prepare_for_camera", "rig_config", "row_tolerance",
+__all__ = ["IMPROVES", "THESIS_SIZE", "photo_config", "fit_rows_px", "for_camera", "match_points", "rectify_for_camera", "match_with_camera", "mutual_best", "prepare_for_camera", "rig_config", "row_tolerance",
            "subpixel"]
 
 #: cv2.cornerSubPix stops when a step is under 0.001 px or after 40 steps.
@@ -77,6 +77,45 @@ def rig_config(camera: StereoCamera, config: MatchConfig, pair=None, subpixel: b
                                          None))
         config = auto_window(pair, config, rows_px=rows)
     return config
+
+
+#: The thesis' image, width x height: its 20-30 corners (``MatchConfig``'s defaults) are for
+#: the centre quarter of a 320 x 240 webcam frame.
+THESIS_SIZE = (320, 240)
+
+
+def photo_config(camera: StereoCamera, config: MatchConfig | None = None, *, scale: float = 1.0,
+                 most: int | None = None) -> MatchConfig:
+    """`config` (default :class:`~ismb_lab.matching.MatchConfig`'s) with its corner counts
+    scaled to `camera`'s photos: ``n_min`` and ``n_max`` times the photo's area over the
+    thesis' (:data:`THESIS_SIZE`), times `scale`; with `most`, ``n_max`` is at most that and
+    ``n_min`` keeps its share of it.
+
+    On OpenCV's 13 chessboard pairs (640 x 480: 80-120 corners), each held out of its rig's
+    calibration, the default ``match --rig`` keeps 25-63 board matches, 92-100% of them within
+    5% of the board's plane (``scripts/rig_defaults.py``); the thesis' 20-30 keep 6-10 on pairs
+    01, 05 and 12.
+
+    >>> c = photo_config(StereoCamera(size=(640, 480)))
+    >>> c.n_min, c.n_max
+    (80, 120)
+    >>> c = photo_config(StereoCamera(size=(4000, 3000)), most=500)
+    >>> c.n_min, c.n_max
+    (333, 500)
+    """
+    config = MatchConfig() if config is None else config
+    if not isinstance(config, MatchConfig):
+        raise ParameterTypeError(message("config", "photo_config", "a MatchConfig", config))
+    if not isinstance(camera, StereoCamera):
+        raise ParameterTypeError(message("camera", "photo_config", "a StereoCamera", camera))
+    scale = check_number(scale, "scale", "photo_config", low=0, low_open=True)
+    area = camera.size[0] * camera.size[1] / (THESIS_SIZE[0] * THESIS_SIZE[1]) * scale
+    n_min, n_max = config.n_min * area, config.n_max * area
+    if most is not None:
+        most = check_number(most, "most", "photo_config", low=1, integer=True)
+        if n_max > most:
+            n_min, n_max = n_min * most / n_max, most
+    return replace(config, n_min=max(1, round(n_min)), n_max=max(1, round(n_max)))
 
 
 def subpixel(image, xy, half: int) -> np.ndarray:
@@ -200,23 +239,171 @@ def match_points(result: MatchResult, camera: StereoCamera) -> np.ndarray:
     return camera.points_from_disparity(left, left[:, 0] - right[:, 0])
 
 
+#: The rig's rectification improves a pair's rows when it lowers their median difference by
+#: more than this share; otherwise a pair whose rows agree is matched as it is given.
+IMPROVES = 0.25
+#: What each EXIF orientation does to the stored pixels.
+_TURNS = {2: "mirrors it", 3: "turns it 180°", 4: "flips it upside down", 5: "transposes it",
+          6: "turns it 90° clockwise", 7: "transposes it the other way", 8: "turns it 90° anticlockwise"}
+
+
+def fit_rows_px(camera: StereoCamera) -> float:
+    """Largest median row difference, in pixels, of the robust matches of a pair `camera` fits
+    once rectified: :func:`~ismb_lab.rectify.row_spread_px` of its size, or the sub-pixel
+    :func:`row_tolerance` if larger (a rig calibrated with a large RMS).
+
+    >>> fit_rows_px(StereoCamera(size=(640, 480))), fit_rows_px(StereoCamera(size=(640, 480), rms=0.8))
+    (1.0, 1.6)
+    """
+    from .rectify import row_spread_px
+
+    return max(row_spread_px(camera.size[::-1]), row_tolerance(camera, subpixel=True))
+
+
+def _misfit(matches, limit: float) -> str:
+    """Why a pair whose robust matches are `matches` is not one a rig fits (a few words), or ""
+    (also when fewer than 8 matches say nothing either way)."""
+    from .rectify import negative_share
+
+    if len(matches) < 8:
+        return ""
+    spread = float(np.median(np.abs(matches.left_xy[:, 1] - matches.right_xy[:, 1])))
+    if spread > limit:
+        return f"rows {spread:.1f} px apart at the median"
+    share, n = negative_share(matches, 2 * limit)
+    if n >= 8 and share > 0.5:
+        return f"{share:.0%} of {n} matches on their rows at a negative disparity"
+    return ""
+
+
+def _fits(left, right, camera: StereoCamera, limit: float) -> bool:
+    """Whether a pair fits `camera`, as given or rectified with it."""
+    from .rectify import robust_matches
+
+    if not _misfit(robust_matches(left, right), limit):
+        return True
+    rectified = camera.rectify(left, right)
+    return not _misfit(robust_matches(rectified.left, rectified.right), limit)
+
+
+def _photos(left, right, camera: StereoCamera, owner: str) -> tuple:
+    """``camera.photos``, with a photo that its EXIF tag turned to another size than the rig's
+    refused by naming the tag."""
+    from .rectify import load_photo, photo_orientation
+
+    for name, source in (("left", left), ("right", right)):
+        turn = photo_orientation(source)
+        if turn in (5, 6, 7, 8):
+            image = load_photo(source, name, owner)
+            if (image.shape[0], image.shape[1]) == tuple(camera.size) != (image.shape[1], image.shape[0]):
+                raise ParameterError(message(
+                    name, owner, f"a {camera.size[0]}x{camera.size[1]} photo, the size the rig was calibrated at: "
+                    "remove its EXIF orientation tag (save it again without EXIF), or calibrate with photos tagged "
+                    "the same way", _Shown(f"{image.shape[1]}x{image.shape[0]}: the EXIF orientation tag ({turn}) "
+                                           f"{_TURNS[turn]}, stored {camera.size[0]}x{camera.size[1]}")))
+    return camera.photos(left, right, owner)
+
+
+class _Shown(str):
+    """A value shown in a message as it is, without quotes."""
+
+    def __repr__(self) -> str:
+        return str(self)
+
+
+def _refusal(sources, camera: StereoCamera, problem: str, limit: float, owner: str) -> ParameterError:
+    """The one-line refusal of a pair `camera` does not fit (`problem`), naming the likely cause
+    and its fix: the files swapped, an EXIF orientation tag that does not match the pixels, or a
+    rig that is not this pair's (the cameras moved since its calibration, or another camera)."""
+    from .rectify import load_photo, photo_orientation
+
+    names = ("left", "right")
+    upright = [load_photo(source, name, owner) for name, source in zip(names, sources)]
+    if _fits(upright[1], upright[0], camera, limit):
+        return ParameterError(message("left", owner, "the left camera's photo, given first: swap the two files "
+                                      "(swapped, the rig fits them)", _Shown(f"the right camera's ({problem})")))
+    turns = dict(zip(names, (photo_orientation(source) for source in sources)))
+    tagged = [name for name in names if turns[name] != 1]
+    if tagged:
+        stored = [load_photo(source, name, owner, upright=False) for name, source in zip(names, sources)]
+        fits = stored[0].shape == stored[1].shape == tuple(camera.size[::-1]) and any(
+            _fits(a, b, camera, limit) for a, b in ((stored[0], stored[1]), (stored[1], stored[0])))
+        name = tagged[0]
+        return ParameterError(message(
+            name, owner, "a photo whose EXIF orientation tag matches its pixels"
+            + (" (with the tag ignored, the rig fits the pair)" if fits else "")
+            + ": remove the tag (save the photo again without EXIF)",
+            _Shown(f"a tag ({turns[name]}) that {_TURNS[turns[name]]}, and {problem}")))
+    return ParameterError(message(
+        "right", owner, f"a photo the rig fits (rows within {limit:.1f} px of the left one's once rectified): photos "
+        "neither turned nor cropped, the cameras not moved since calibrating; else calibrate again with boards "
+        "taken in this setup", _Shown(f"a pair with {problem}, as given and rectified")))
+
+
+def rectify_for_camera(left, right, camera: StereoCamera, owner: str = "rectify_for_camera"):
+    """`left` and `right` rectified with `camera` (:meth:`~ismb_lab.camera.StereoCamera.rectify`,
+    ``ismb-lab rectify --rig``), refused unless the result fits `camera` as :func:`for_camera`
+    asks: the rows of its robust matches agree and most disparities are positive.
+
+    Raises
+    ------
+    ParameterError
+        As :func:`for_camera`, and for a pair that is already rectified (use it as it is).
+    """
+    from .rectify import Correspondences, robust_matches
+
+    sources = (left, right)
+    left, right = _photos(left, right, camera, owner)
+    limit = fit_rows_px(camera)
+    rectified = camera.rectify(left, right)
+    problem = _misfit(Correspondences(rectified.left_xy, rectified.right_xy), limit)
+    if problem and not _misfit(robust_matches(left, right), limit):
+        raise ParameterError(message("left", owner, "a raw photo of the rig: this pair is already rectified, "
+                                     "use it as it is", _Shown(f"a rectified pair (rectified again: {problem})")))
+    if problem:
+        raise _refusal(sources, camera, problem, limit, owner)
+    return rectified
+
+
 def for_camera(left, right, camera: StereoCamera) -> tuple:
     """The pair to match with `camera`: ``(left, right, how)``.
 
-    Raw photos of `camera` are rectified with it; a pair that is already rectified (its
-    robust matches' median row difference is not larger than after rectifying it again) is
-    kept as it is.  ``how`` says which, with both figures.  Photos of another size than the
-    camera's are refused.
-    """
-    from .rectify import _dy_figures, robust_matches
+    Raw photos of `camera` are rectified with it.  A pair is taken as already rectified, and
+    kept as it is, only when its robust matches' rows agree as given (:func:`fit_rows_px`) and
+    rectifying it with `camera` would not improve them (lower their median row difference by
+    more than :data:`IMPROVES`).  ``how`` says which, with both figures.
 
-    left, right = camera.photos(left, right, "for_camera")
-    rectified = camera.rectify(left, right)
+    Then the pair must fit `camera`: its robust matches' rows agree (:func:`fit_rows_px`) and
+    most of those on their rows have a positive disparity.
+
+    Raises
+    ------
+    ParameterError
+        In one sentence that names the likely cause and its fix: photos of another size than
+        the camera's (an EXIF orientation tag that turns them is named), or a pair the camera
+        does not fit: the two files swapped, an EXIF orientation tag that does not match the
+        pixels, or photos the rig was not calibrated for (turned, cropped, the cameras moved).
+    """
+    from .rectify import Correspondences, robust_matches
+
+    owner = "for_camera"
+    sources = (left, right)
+    left, right = _photos(left, right, camera, owner)
+    limit = fit_rows_px(camera)
     given = robust_matches(left, right)
-    before = _dy_figures(given.left_xy, given.right_xy)["median_abs_dy_px"] if len(given) else math.inf
-    after = rectified.median_abs_dy_px if rectified.inliers else math.inf
-    if before < after:
-        return left, right, (f"already rectified (median row difference of robust matches {before:.2f} px; "
-                             f"{after:.2f} px if rectified again): matched as they are")
+    rectified = camera.rectify(left, right)
+    median = lambda m: float(np.median(np.abs(m.left_xy[:, 1] - m.right_xy[:, 1]))) if len(m) >= 8 else math.inf
+    again = Correspondences(rectified.left_xy, rectified.right_xy)
+    before, after = median(given), median(again)
+    as_given = before <= limit and not after < (1 - IMPROVES) * before
+    problem = _misfit(given if as_given else again, limit)
+    if not as_given and len(again) < 8 <= len(given):
+        problem = f"only {len(again)} of its {len(given)} robust matches remain once rectified with the rig"
+    if problem:
+        raise _refusal(sources, camera, problem, limit, owner)
+    figures = lambda v: f"{v:.2f} px" if math.isfinite(v) else "too few robust matches to tell"
+    if as_given:
+        return left, right, (f"already rectified: matched as given (median row difference of robust matches "
+                             f"{figures(before)} as given, {figures(after)} after the rig's rectification)")
     return rectified.left, rectified.right, (f"raw photos, rectified with the rig (median row difference of "
-                                             f"robust matches {before:.2f} px before, {after:.2f} px after)")
+                                             f"robust matches {figures(before)} before, {figures(after)} after)")

@@ -35,29 +35,86 @@ import numpy as np
 from ._validation import ParameterError, ParameterTypeError, check_number, message
 from .io import _is_path, _read, _to_grey, decode
 
-__all__ = ["ROW_SPREAD_PX", "WORKING_SIDE", "Correspondences", "Rectified", "apply_rectification", "check_for_matching",
-           "check_rectified", "epipole_warning", "load_photo",
-           "measured", "sideways_step", "rectify_pair", "robust_matches", "working_size"]
+__all__ = ["ROW_SPREAD", "WORKING_SIDE", "Correspondences", "Rectified", "apply_rectification", "check_for_matching",
+           "check_rectified", "epipole_warning", "load_photo", "measured", "negative_share", "photo_orientation",
+           "row_spread_px", "sideways_step", "rectify_pair", "robust_matches", "working_size"]
 
 #: Longest side, in pixels, that photos are scaled down to before anything else: Middlebury-
 #: sized pairs (Aloe, 1282 x 1110) stay whole, a 12-megapixel phone photo becomes 1600 x 1200.
 WORKING_SIDE = 1600
 #: Longest side of the copy that SIFT looks at (see :func:`robust_matches`).
 DETECT_SIDE = 1024
-#: Median row difference, in pixels, of a pair's robust matches above which
-#: :func:`check_for_matching` calls it unrectified (pairs from :func:`rectify_pair`: 0.35-0.56).
-ROW_SPREAD_PX = 1.0
+#: Median row difference of a pair's robust matches above which its rows do not agree (it is
+#: not rectified), as a share of the image's longer side: 1 px at 640 x 480, 6.25 px at
+#: 4000 x 3000 (SIFT's positions are only as fine as the image).  Rectified 640 x 480 pairs:
+#: 0.27-0.55 px (:func:`rectify_pair`, OpenCV's boards rectified with their rig).
+ROW_SPREAD = 1 / 640
 #: Fewest RANSAC inliers that make a pair worth rectifying.
 MIN_INLIERS = 20
 _RATIO = 0.75
 
 
-def load_photo(source, name: str = "photo", owner: str = "load_photo") -> np.ndarray:
-    """A photo as a grey float image in ``[0, 255]``, EXIF orientation applied.
+def row_spread_px(shape) -> float:
+    """The largest median row difference, in pixels, of the robust matches of a rectified pair
+    of `shape` ``(height, width)``: :data:`ROW_SPREAD` of its longer side.
+
+    >>> row_spread_px((480, 640)), row_spread_px((3000, 4000))
+    (1.0, 6.25)
+    """
+    return ROW_SPREAD * max(shape[:2])
+
+
+def negative_share(matches: "Correspondences", rows_px: float) -> tuple[float, int]:
+    """The share of `matches` on their rows (``|dy| <= rows_px``) whose disparity
+    ``x_left - x_right`` is negative, and how many are on their rows.  On a rectified pair a
+    point in front of both cameras has a positive disparity: most negative means the two
+    photos were given right first.
+
+    >>> m = Correspondences(np.array([[10.0, 5], [20, 5], [30, 9]]), np.array([[12.0, 5], [25, 5], [20, 1]]))
+    >>> negative_share(m, 1.0)
+    (1.0, 2)
+    """
+    if not len(matches):
+        return 0.0, 0
+    on_rows = np.abs(matches.left_xy[:, 1] - matches.right_xy[:, 1]) <= rows_px
+    d = (matches.left_xy[:, 0] - matches.right_xy[:, 0])[on_rows]
+    return (float(np.mean(d < 0)) if len(d) else 0.0), int(len(d))
+
+
+def photo_orientation(source) -> int:
+    """The EXIF orientation tag (1-8) of a photo given as a path or the bytes of a file; 1 for
+    an array or a file without the tag.
+
+    >>> photo_orientation(np.zeros((4, 4)))
+    1
+    """
+    from .io import exif_orientation
+
+    if isinstance(source, (bytes, bytearray, memoryview)):
+        return exif_orientation(bytes(source))
+    if _is_path(source):
+        try:
+            with open(source, "rb") as handle:
+                return exif_orientation(handle.read(1 << 17))   # the APP1 segment is at most 64 kB
+        except OSError:
+            return 1
+    return 1
+
+
+#: The EXIF orientation that undoes each one (turning 90 degrees one way undoes the other).
+_UNDO = {1: 1, 2: 2, 3: 3, 4: 4, 5: 5, 6: 8, 7: 7, 8: 6}
+
+
+def load_photo(source, name: str = "photo", owner: str = "load_photo", *, upright: bool = True) -> np.ndarray:
+    """A photo as a grey float image in ``[0, 255]``, EXIF orientation applied (with
+    ``upright=False``, as its pixels are stored, the tag ignored).
 
     `source` is a path, the bytes of an image file (an upload) or an array (grey, RGB or RGBA).
     """
-    return _photo(source, name, owner, None)[0]
+    from .io import orient
+
+    image = _photo(source, name, owner, None)[0]
+    return image if upright else orient(image, _UNDO[photo_orientation(source)])
 
 
 def _photo(source, name: str, owner: str, max_side: int | None) -> tuple[np.ndarray, float]:
@@ -330,6 +387,20 @@ def sideways_step(left_xy, right_xy, F, shape) -> float | None:
 
 
 def _refuse_swapped(left_xy, right_xy, F, shape, owner: str) -> None:
+    """Refuse a pair given right first.  A pair whose rows already agree (:func:`row_spread_px`)
+    says so by its disparities' sign (:func:`negative_share`); its F, a pure sideways step,
+    leaves ``cv2.recoverPose`` a guess between the two directions (OpenCV's board 03, rectified
+    and swapped: -0.86, "left first").  Any other pair says so by :func:`sideways_step`."""
+    limit = row_spread_px(shape)
+    matches = Correspondences(np.asarray(left_xy, float), np.asarray(right_xy, float))
+    if len(matches) and np.median(np.abs(matches.left_xy[:, 1] - matches.right_xy[:, 1])) <= limit:
+        share, n = negative_share(matches, 2 * limit)
+        if n >= 8 and share > 0.5:
+            raise ParameterError(message("left", owner, "the left camera's photo, given first: swap the two files",
+                                         f"the right camera's ({share:.0%} of {n} robust matches have a negative "
+                                         "disparity)"))
+        if n >= 8:
+            return
     step = sideways_step(left_xy, right_xy, F, shape)
     if step is not None and step > 0:
         raise ParameterError(message("left", owner, "the left camera's photo, given first: swap the two files",
@@ -341,10 +412,10 @@ def check_for_matching(left, right, owner: str = "check_for_matching") -> str:
     """Refuse a swapped pair and warn about an unrectified one, before it is matched.
 
     Measured on the robust matches of the pair as given (:func:`robust_matches`, no warp):
-    a pair whose rows differ by more than :data:`ROW_SPREAD_PX` at the median is not rectified,
+    a pair whose rows differ by more than :func:`row_spread_px` at the median is not rectified,
     and the returned one-line warning names ``ismb-lab rectify``; a rectified pair on whose
-    rows (``|dy| <= 2`` px, at least 8 matches) most disparities ``x_left - x_right`` are
-    negative was given right first, and is refused.  Returns "" when there is nothing to say
+    rows (``|dy|`` at most twice that, at least 8 matches) most disparities ``x_left - x_right``
+    are negative was given right first, and is refused (:func:`negative_share`).  Returns "" when there is nothing to say
     (also for a pair with fewer than 8 robust matches: it says nothing either way).
 
     `left` and `right` are grey images (arrays) of one size.
@@ -352,15 +423,15 @@ def check_for_matching(left, right, owner: str = "check_for_matching") -> str:
     matches = robust_matches(left, right)
     if len(matches) < 8:
         return ""
-    dy = np.abs(matches.left_xy[:, 1] - matches.right_xy[:, 1])
-    spread = float(np.median(dy))
-    if spread > ROW_SPREAD_PX:
+    limit = row_spread_px(np.shape(left))
+    spread = float(np.median(np.abs(matches.left_xy[:, 1] - matches.right_xy[:, 1])))
+    if spread > limit:
         return (f"warning: the pair is not rectified (the rows of its {len(matches)} robust matches differ by "
                 f"{spread:.1f} px at the median): make it so with 'ismb-lab rectify LEFT RIGHT --out DIR'")
-    d = (matches.left_xy[:, 0] - matches.right_xy[:, 0])[dy <= 2.0]
-    if len(d) >= 8 and np.mean(d < 0) > 0.5:
+    share, n = negative_share(matches, 2 * limit)
+    if n >= 8 and share > 0.5:
         raise ParameterError(message("left", owner, "the left camera's photo, given first: swap the two files",
-                                     f"the right camera's ({np.mean(d < 0):.0%} of {len(d)} robust matches "
+                                     f"the right camera's ({share:.0%} of {n} robust matches "
                                      "have a negative disparity)"))
     return ""
 
@@ -430,7 +501,8 @@ def rectify_pair(left, right, *, max_side: int = WORKING_SIDE) -> Rectified:
     ParameterError
         With one sentence: photos of different sizes, too few matches, the same photo twice,
         no common epipolar geometry, no parallax (the camera only turned), or the two photos
-        swapped (most disparities negative, see :func:`sideways_step`).
+        swapped (see :func:`sideways_step`; a pair whose rows already agree: most
+        disparities negative, :func:`negative_share`).
     """
     owner = "rectify_pair"
     max_side = check_number(max_side, "max_side", owner, low=64, integer=True)

@@ -87,20 +87,18 @@ def _rig_pair(args):
     from ..camera import load_camera
     from ..io import load_pair
     from ..matching import check_window
-    from ..metric import for_camera, row_tolerance
+    from ..metric import for_camera, photo_config, row_tolerance
     from ..rectify import check_for_matching
+    from ._guard import limit
 
     camera = load_camera(check_input(args.rig, what="--rig"))
     if args.shift is None:      # a photo's disparities are the pair's own, not the thesis' 20 px
         args.shift = "auto"
-    config = match_config(args)
+    # corners in proportion to the photo (the thesis' 20-30 are for 320 x 240), within --n-max's limit
+    config = match_config(args, photo_config(camera, most=args.n_max if args.n_max is not None else limit("n_max")))
     check_window(config, (camera.size[1], camera.size[0]))   # the rectified pair's size, before the work
-    if camera.is_rectified:     # rectifying changes no pixel: say so, and spare the look at the rows
-        left, right = camera.photos(args.left, args.right, "ismb-lab match --rig")
-        how = ("the rig is a rectified camera's (one camera matrix, no distortion, no rotation): "
-               "matched as they are")
-    else:
-        left, right, how = for_camera(args.left, args.right, camera)
+    # a rectified camera's rig changes no pixel, but its pair is still checked to fit (rows, order)
+    left, right, how = for_camera(args.left, args.right, camera)
     pair = load_pair(left, right, min_shape=config.min_shape)
     print(f"--rig: {how}", file=sys.stderr)
     print(f"--rig: candidates within {row_tolerance(camera, subpixel=True):g} px of their row: "

@@ -29,7 +29,8 @@ def add_parser(sub) -> None:
     r.add_argument("--out", dest="out_dir", type=Path, required=True, metavar="DIR",
                    help="folder for left.png, right.png and rectify.json (made if missing)")
     r.add_argument("--rig", type=Path, default=None, metavar="RIG.json",
-                   help="rectify with this calibrated rig instead of from matches")
+                   help="rectify with this calibrated rig instead of from matches (a pair the rig does not fit, "
+                   "swapped, turned or already rectified, is refused)")
     add_force_option(r)
     r.set_defaults(run=run, declare_files=files)
 
@@ -59,8 +60,9 @@ def run(args) -> int:
     targets = [folder / name for name in FILES]
     if args.rig is not None:
         from ..camera import load_camera
+        from ..metric import rectify_for_camera
 
-        result = load_camera(args.rig).rectify(args.left, args.right)
+        result = rectify_for_camera(args.left, args.right, load_camera(args.rig), "ismb-lab rectify --rig")
     else:
         result = rectify_pair(args.left, args.right)
     folder.mkdir(parents=True, exist_ok=True)
