@@ -65,6 +65,8 @@ COPIED = ("notebooks", "images", "manifests")
 LEFT_OUT = (".ipynb_checkpoints", "targets-*.json", "my_targets*.json", "params-*.json", ".targets-*.lock",
             "photos-*")
 HOMEWORK = "homework"
+#: The tag of a markdown cell the teacher presents at the board: its reading is the board's minutes.
+BOARD = "board"
 
 #: Reading speeds: words a minute of plain prose and of prose that holds formulas; code lines a minute.
 PLAIN_WPM, FORMULA_WPM, CODE_LPM = 130, 90, 15
@@ -79,8 +81,9 @@ WHY = {
     "question": "look up a table or change one argument, write two sentences",
     "widget": "one widget to try before the exercises: a few clicks or slider moves, read the status",
     "quiz": "five short questions on paper, a minute each",
-    "setup": "everyone logs in to the class's JupyterLab and opens 00; its first run compiles the network's "
-             "kernels on each new server (up to a minute, 00 says), with the whole class on one server at once",
+    "setup": "everyone logs in to the class's JupyterLab and opens 00, the whole class on one server at once",
+    "board": "the derivation in the cells tagged `board` (02: the Hopfield form of (3-15) and what the thesis' "
+             "literal weights change), at the board with the class following; their reading is not counted again",
 }
 
 #: A session's length, its teacher talk and its quiz, in minutes.
@@ -89,6 +92,10 @@ SESSION_MIN, TEACHER_MIN, QUIZ_MIN = 90, 15, 5
 LEAST_TEACHER_MIN = 10
 #: Minutes before the first notebook, by session: the logins and the first run (:data:`WHY`).
 SETUP_MIN = {"Session 1": 5}
+#: Minutes at the board, by session (:data:`WHY`).
+BOARD_MIN = {"Session 1": 10}
+#: The name of that step in the plan's session table.
+BOARD_STEP = "derivation at the board"
 #: The name of that step in the plan's session table.
 SETUP = "logins and first run"
 #: The notebooks of each session, by their two-digit prefix; the others are optional.
@@ -475,6 +482,8 @@ def minutes(path: Path, entry: dict) -> Minutes:
         if not on_path(cell):
             continue
         if cell["cell_type"] == "markdown":
+            if BOARD in _tags(cell):
+                continue
             part = markdown(_source(cell))
             for key in ("plain_words", "formula_words", "code_lines", "tables", "images"):
                 setattr(text, key, getattr(text, key) + getattr(part, key))
@@ -547,12 +556,14 @@ class Session:
     quiz_min: int
     total_min: int
     setup_min: int = 0
+    board_min: int = 0
 
 
 def sessions(rows: list[Minutes], teacher_min: int = TEACHER_MIN) -> dict:
     """``{"Session N": Session}`` of :data:`SESSIONS` from the notebooks' `rows`.
 
-    A session's total is `teacher_min`, its :data:`SETUP_MIN`, its notebooks' totals and :data:`QUIZ_MIN`.
+    A session's total is `teacher_min`, its :data:`SETUP_MIN` and :data:`BOARD_MIN`, its notebooks'
+    totals and :data:`QUIZ_MIN`.
     """
     by_prefix = {r.name[:2]: r for r in rows}
     found = {}
@@ -561,9 +572,9 @@ def sessions(rows: list[Minutes], teacher_min: int = TEACHER_MIN) -> dict:
         if missing:
             raise ValueError(f"sessions: no notebook {', '.join(missing)} for {name}")
         picked = tuple(by_prefix[p] for p in prefixes)
-        setup = SETUP_MIN.get(name, 0)
+        setup, board = SETUP_MIN.get(name, 0), BOARD_MIN.get(name, 0)
         found[name] = Session(name, picked, teacher_min, QUIZ_MIN,
-                              teacher_min + setup + QUIZ_MIN + sum(r.total_min for r in picked), setup)
+                              teacher_min + setup + board + QUIZ_MIN + sum(r.total_min for r in picked), setup, board)
     return found
 
 
@@ -624,6 +635,7 @@ def render(rows: list[Minutes], found: dict, record: dict, graded: str | None = 
         "|---|---:|---|",
         f"| teacher talk | {TEACHER_MIN} min a session | {TEACHER_TALK}; at least {LEAST_TEACHER_MIN} |",
         *(f"| {SETUP} | {minutes} min in {name} | {WHY['setup']} |" for name, minutes in SETUP_MIN.items()),
+        *(f"| {BOARD_STEP} | {minutes} min in {name} | {WHY['board']} |" for name, minutes in BOARD_MIN.items()),
         f"| plain prose | {PLAIN_WPM} words a minute | the words of markdown paragraphs, list items and headings "
         "without LaTeX math |",
         f"| prose with formulas | {FORMULA_WPM} words a minute | the words of a paragraph, list item or heading that "
@@ -650,16 +662,18 @@ def render(rows: list[Minutes], found: dict, record: dict, graded: str | None = 
                  "| tasks min | total min |",
                  "|---:|---|---:|---:|---:|---:|---|---:|---:|",
                  f"| 1 | teacher talk | | | | | {TEACHER_TALK} | | {s.teacher_min} |"]
-        if s.setup_min:
-            lines.append(f"| 2 | {SETUP} | | | | | {WHY['setup']} | | {s.setup_min} |")
-        first = 3 if s.setup_min else 2
+        first = 2
+        for minutes, step, why in ((s.setup_min, SETUP, WHY["setup"]), (s.board_min, BOARD_STEP, WHY["board"])):
+            if minutes:
+                lines.append(f"| {first} | {step} | | | | | {why} | | {minutes} |")
+                first += 1
         for n, r in enumerate(s.rows, first):
             lines.append(f"| {n} | `{r.name}` | {_minutes(r.reading_min)} | {_minutes(r.code_min)} | "
                          f"{r.figures_min} | {_minutes(r.run_min)} | {_tasks(r)} | {r.allowance_min} | "
                          f"{r.total_min} |")
         lines.append(f"| {len(s.rows) + first} | quiz | | | | | 5 questions, 1 min each | {s.quiz_min} | "
                      f"{s.quiz_min} |")
-        steps = [s.teacher_min] + ([s.setup_min] if s.setup_min else []) + [r.total_min for r in s.rows] \
+        steps = [s.teacher_min] + [m for m in (s.setup_min, s.board_min) if m] + [r.total_min for r in s.rows] \
             + [s.quiz_min]
         lines.append(f"| | **sum** | | | | | {' + '.join(map(str, steps))} = {s.total_min} | | **{s.total_min}** |")
         left = SESSION_MIN - s.total_min
@@ -942,13 +956,15 @@ def main(argv: list[str] | None = None) -> int:
         notebooks = [asdict(r) for r in rows]
         print(json.dumps({"notebooks": notebooks,
                           "sessions": {n: {"notebooks": [r.name for r in s.rows], "teacher_min": s.teacher_min,
-                                           "setup_min": s.setup_min, "quiz_min": s.quiz_min,
+                                           "setup_min": s.setup_min, "board_min": s.board_min,
+                                           "quiz_min": s.quiz_min,
                                            "total_min": s.total_min}
                                        for n, s in found.items()}} if found else notebooks, indent=1))
         return 0
     print(format_table(rows))
     for s in found.values():
         print(f"{s.name}: {s.teacher_min} teacher + " + (f"{s.setup_min} {SETUP} + " if s.setup_min else "")
+              + (f"{s.board_min} {BOARD_STEP} + " if s.board_min else "")
               + " + ".join(f"{r.total_min} ({r.name[:2]})" for r in s.rows)
               + f" + {s.quiz_min} quiz = {s.total_min} min of {SESSION_MIN}")
     return 0

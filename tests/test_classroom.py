@@ -165,37 +165,3 @@ def test_targets_merge_command_pools_a_class(tmp_path, capsys):
     assert [hashlib.sha256(f.read_bytes()).hexdigest() for f in files] == before
     assert main(["targets", "merge", str(files[0]), "--out", str(files[0])]) == 2
     assert "ismb-lab: error:" in capsys.readouterr().err
-
-
-@pytest.mark.slow
-def test_notebook_06_trains_on_five_saved_labels_scored_where_they_were_given(tmp_path):
-    """A student who saved five true pairs in notebook 04 opens 06: its first cell finds the
-    file, scores only the five labelled corners, and the GA can reach the five (with every match
-    of an unlabelled corner counted as an extra, the thesis' parameters scored below zero)."""
-    import json
-    import os
-    import subprocess
-    import sys
-
-    from ismb_lab.targets import TargetSet, load_targets, save_targets
-
-    key = load_targets(IMAGES / "synthetic" / "answer_key.json")
-    five = TargetSet(key.left_xy[:5], key.right_xy[:5], key.left_sha256, key.right_sha256)
-    (tmp_path / "notebooks").mkdir()
-    (tmp_path / "images").symlink_to(IMAGES)
-    save_targets(tmp_path / "notebooks" / "targets-ann-synthetic.json", five)
-    cell = json.loads((IMAGES.parent / "notebooks" / "06_genetic_algorithm.ipynb").read_text())["cells"][1]
-    source = "".join(line for line in cell["source"] if not line.startswith("%"))
-    script = source + (
-        "\nfrom ismb_lab.tuning import tune\n"
-        "last = list(tune(training, 'III', rng=0, generations=15))[-1]\n"
-        "whole = Case.from_files('../images/synthetic/left.png', '../images/synthetic/right.png', MY_TARGETS)\n"
-        "print('RESULT', evaluate(training, 'III', THESIS_PARAMS['III']), "
-        "evaluate([whole], 'III', THESIS_PARAMS['III']).fitness, last.best, len(mine.targets))\n")
-    out = subprocess.run([sys.executable, "-c", script], cwd=tmp_path / "notebooks", capture_output=True, text=True,
-                         timeout=300, env={**os.environ, "JUPYTERHUB_USER": "ann", "MPLBACKEND": "agg"})
-    assert out.returncode == 0, out.stderr[-2000:]
-    assert "trains on your 5 labelled pairs" in out.stdout
-    thesis, whole_fitness, best, targets = out.stdout.split("RESULT ")[1].split()
-    assert targets == "5" and thesis.endswith("/5") and "+0/" in thesis    # no extras: unlabelled corners unscored
-    assert int(whole_fitness) < 0 and float(best) == 5

@@ -89,8 +89,9 @@ def test_each_session_fits_90_minutes_with_at_least_10_of_teacher_talk(tool):
             total = math.ceil(round(reading + lines + (r.figures + r.tables) + run + tasks, 9))
             assert total == r.total_min, r.name
             notebooks += total
-        assert s.teacher_min == 15 and s.setup_min == (5 if s.name == "Session 1" else 0), s.name
-        assert s.total_min == 15 + s.setup_min + notebooks + 5, s.name
+        first = s.name == "Session 1"
+        assert (s.teacher_min, s.setup_min, s.board_min) == (15, 5 * first, 10 * first), s.name
+        assert s.total_min == 15 + s.setup_min + s.board_min + notebooks + 5, s.name
         assert s.total_min <= 90, (f"{s.name}: {s.total_min} min with {s.teacher_min} of teacher talk: "
                                    "move what does not fit to homework (the cell tag 'homework')")
     assert tool.fit_problems(found) == []
@@ -101,6 +102,7 @@ def test_the_plan_states_the_model_and_the_teacher_talk(tool):
     text = PLAN.read_text(encoding="utf-8")
     rates = re.search(r"<!-- minutes:rates -->\n(.*?)<!-- /minutes:rates -->", text, re.S).group(1)
     for stated in ("| teacher talk | 15 min a session |", "| logins and first run | 5 min in Session 1 |",
+                   "| derivation at the board | 10 min in Session 1 |",
                    "| plain prose | 130 words a minute |",
                    "| prose with formulas | 90 words a minute |", "| code | 15 lines a minute |",
                    "| figures and tables | 1 min each |", "| code exercise | 6 min each |",
@@ -115,7 +117,8 @@ def test_the_plan_states_the_model_and_the_teacher_talk(tool):
         assert [last(line) for line in block.splitlines() if "| logins and first run |" in line] == setup, session
     intro = text.split("## How the minutes are counted")[0]
     assert "15 minutes of teacher talk" in intro and "5 minutes before 00 for the logins and the first" in intro
-    assert (tool.TEACHER_MIN, tool.SETUP_MIN, tool.LEAST_TEACHER_MIN) == (15, {"Session 1": 5}, 10)
+    assert (tool.TEACHER_MIN, tool.SETUP_MIN, tool.BOARD_MIN, tool.LEAST_TEACHER_MIN) == \
+        (15, {"Session 1": 5}, {"Session 1": 10}, 10)
 
 
 # --- the checks can fail ---------------------------------------------------------------------
@@ -141,21 +144,17 @@ def small(tmp_path, tool):
 def test_a_session_over_90_minutes_is_caught(tool, small):
     """Each small notebook is 4.1 + 0.2 + 1 + 0.5 + 6 = 11.8 -> 12 min.
 
-    Session 1, four of them: 15 teacher + 5 logins + 48 + 5 quiz = 73; Session 2, three: 15 + 36 + 5 = 56.
+    Session 1, four of them: 15 teacher + 5 logins + 10 at the board + 48 + 5 quiz = 83;
+    Session 2, three: 15 + 36 + 5 = 56.
     """
     rows = tool.table(small, small / "run_times.json")
     assert [r.total_min for r in rows] == [12] * 7
     found = tool.sessions(rows)
-    assert found["Session 1"].total_min == 73 and found["Session 2"].total_min == 56
+    assert found["Session 1"].total_min == 83 and found["Session 2"].total_min == 56
     assert tool.fit_problems(found) == []
-    # 1,300 more words of plain prose in 01: 10 minutes more, and Session 1 is 83
+    # 1,300 more words of plain prose in 01: 10 minutes more, and Session 1 is 93: over
     path, nb = load(small, "01")
     nb["cells"].insert(1, md("word " * 1300))
-    save(path, nb)
-    assert tool.sessions(tool.table(small, small / "run_times.json"))["Session 1"].total_min == 83
-    # 900 words of formula prose (90 a minute) in 02: 10 minutes more, and Session 1 is 93: over
-    path, nb = load(small, "02")
-    nb["cells"].insert(1, md("$x$ " + "word " * 899))
     save(path, nb)
     found = tool.sessions(tool.table(small, small / "run_times.json"))
     assert found["Session 1"].total_min == 93
@@ -164,6 +163,11 @@ def test_a_session_over_90_minutes_is_caught(tool, small):
     nb["cells"][1]["metadata"]["tags"] = ["homework"]
     save(path, nb)
     assert tool.fit_problems(tool.sessions(tool.table(small, small / "run_times.json"))) == []
+    # 900 words of formula prose (90 a minute) in 02: 10 minutes more, over again
+    path, nb = load(small, "02")
+    nb["cells"].insert(1, md("$x$ " + "word " * 899))
+    save(path, nb)
+    assert tool.sessions(tool.table(small, small / "run_times.json"))["Session 1"].total_min == 93
 
 
 def test_too_little_teacher_talk_is_caught(tool, small):
@@ -427,3 +431,17 @@ def test_the_corrected_citations_point_where_the_thesis_says_it():
     assert section("Accurate rate 125/137") == "5.2.2"      # C/T: Fig. 5.10's accurate rate
     assert "fB" not in text.replace(" ", "") and "f·B" not in text   # Z = f·B/d is not written out
     assert "wrong partner" not in text and "extra" not in text.lower().replace("extract", "")
+
+
+def test_a_board_cell_is_read_at_the_board_not_twice(tool, copied):
+    """02's derivation is tagged ``board``: Session 1 gives it BOARD_MIN at the board, and the
+    notebook's reading leaves it out; without the tag its words count as reading again."""
+    record = tool.read_record(copied / "run_times.json")["notebooks"]
+    path, nb = load(copied, "02")
+    board = [c for c in nb["cells"] if tool.BOARD in c.get("metadata", {}).get("tags", [])]
+    assert len(board) == 1 and "## Thesis section and equations" in "".join(board[0]["source"])
+    before = tool.minutes(path, record[path.name])
+    board[0]["metadata"]["tags"].remove(tool.BOARD)
+    save(path, nb)
+    after = tool.minutes(path, record[path.name])
+    assert after.formula_words > before.formula_words and after.reading_min > before.reading_min + 3

@@ -66,8 +66,8 @@ def rig(tmp_path):
     (lambda d: d.update(square_m=-1), "'square_m'"),                         # 3.34 m baseline before
     (lambda d: d.update(square_m=1e308), "'square_m'"),
     (lambda d: d.update(board=[1, 6]), "'board'"),
-    (lambda d: d.update(board=[9.5, 6]), "complete rig file"),
-    (lambda d: d.update(rms_px=int("9" * 4000)), "complete rig file"),
+    (lambda d: d.update(board=[9.5, 6]), "'board'"),
+    (lambda d: d.update(rms_px=int("9" * 4000)), "'rms_px'"),
 ])
 def test_calibrate_from_a_broken_rig_says_why_in_one_line(rig, tmp_path, capsys, edit, words):
     data = json.loads(rig.read_text())

@@ -127,9 +127,10 @@ def printed(outputs) -> str:
     return "".join(o["text"] for o in outputs if o.get("output_type") == "stream" and o.get("name") == "stdout")
 
 
-def test_06_trains_on_the_labels_a_student_saved_in_04_and_05_keeps_the_shared_key(run_notebook):
-    """One thread through the class: 04's saved labels feed 06's GA, scored only at the labelled
-    corners, so its fitness can reach their number; 05 stays on the lab pair and its key."""
+def test_06_fits_the_labels_a_student_saved_in_04_and_05_keeps_the_shared_key(run_notebook):
+    """One thread through the class: 04's saved labels are 06's homework exercise 5, scored only
+    at the labelled corners (the GA reaches their number) and then tested on the whole key and
+    the eleven pairs; 05 and 06's in-class runner stay on the shared pairs and keys."""
     from pathlib import Path
 
     from ismb_lab.classroom import targets_path
@@ -147,9 +148,9 @@ def test_06_trains_on_the_labels_a_student_saved_in_04_and_05_keeps_the_shared_k
         mine.unlink()
         for lock in notebooks.glob(f".{mine.name}.lock"):
             lock.unlink()
-    assert f"The GA below trains on your 6 labelled pairs ({mine.name})" in six
-    fitted = re.search(r"the GA after \d+ generations: fitness (-?[\d.]+) of (\d+) on its training pairs", six)
-    assert fitted and fitted.group(2) == "6" and float(fitted.group(1)) == 6, six
+    fitted = re.search(rf"your (\d+) pairs \({re.escape(mine.name)}\): best fitness (-?[\d.]+) of (\d+)", six)
+    assert fitted and fitted.group(1) == fitted.group(3) == "6" and float(fitted.group(2)) == 6, six
+    assert len(re.findall(r"on the eleven pairs, update-order seed \d", six)) == 6, six
     assert "scored against the lab pair's answer key" in five and mine.name not in five
 
 
