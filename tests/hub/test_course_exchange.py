@@ -110,5 +110,10 @@ def test_a_class_hands_in_labels_and_the_teachers_second_collect_takes_the_lates
         assert len(first["pairs"]) == 6 and len(second["pairs"]) == 5
         assert sorted(len(p["labelled_by"]) for p in first["pairs"]) == [1, 1, 1, 2, 2, 3]
         assert sorted(len(p["labelled_by"]) for p in second["pairs"]) == [2, 2, 2, 2, 3]
+        # then tune and match on the pool, as the docs print the two commands
+        pair = "source/labels/images/synthetic/left.png source/labels/images/synthetic/right.png"
+        said = run(teacher, f"cd ~/course && ismb-lab tune {pair} class.json --out params-class.json"
+                            f" && ismb-lab match {pair} --params-file params-class.json")
+        assert set(json.loads((course / "params-class.json").read_text())["params"]) >= {"theta_c", "lambda_c"}, said
     finally:
         shutil.rmtree(keys, ignore_errors=True)
