@@ -94,12 +94,11 @@ def ply_bytes(points, colours=None, *, binary: bool = False, comments=()) -> byt
               *(f"comment {text}" for text in comments), f"element vertex {len(xyz)}", *_PROPERTIES, "end_header"]
     head = ("\n".join(header) + "\n").encode("ascii")
     if binary:
-        rows = np.empty(len(xyz), dtype=[("x", "<f4"), ("y", "<f4"), ("z", "<f4"),
-                                         ("red", "u1"), ("green", "u1"), ("blue", "u1")])
-        for n, name in enumerate("xyz"):
-            rows[name] = xyz[:, n]
-        for n, name in enumerate(("red", "green", "blue")):
-            rows[name] = rgb[:, n]
+        # one record per vertex, in the header's order: three little-endian float32, three uint8
+        rows = np.empty(len(xyz), dtype=np.dtype({"names": ["x", "y", "z", "r", "g", "b"],
+                                                  "formats": ["<f4"] * 3 + ["u1"] * 3}))
+        for n, name in enumerate("xyzrgb"):
+            rows[name] = (xyz if n < 3 else rgb)[:, n % 3]
         return head + rows.tobytes()
     # 9 significant digits give a 32-bit float back exactly
     lines = [" ".join([*(f"{float(v):.9g}" for v in p), *(str(int(c)) for c in c3)]) for p, c3 in zip(xyz, rgb)]

@@ -93,7 +93,7 @@ LEAST_TEACHER_MIN = 10
 #: Minutes before the first notebook, by session: the logins and the first run (:data:`WHY`).
 SETUP_MIN = {"Session 1": 5}
 #: Minutes at the board, by session (:data:`WHY`).
-BOARD_MIN = {"Session 1": 10}
+BOARD_MIN = {"Session 1": 15}
 #: The name of that step in the plan's session table.
 BOARD_STEP = "derivation at the board"
 #: The name of that step in the plan's session table.

@@ -46,11 +46,11 @@ def test_sessions_count_the_teacher_talk_the_logins_and_the_quiz(tool, capsys):
     totals = {row["name"]: row["total_min"] for row in found["notebooks"]}
     for name, s in found["sessions"].items():
         first = name == "Session 1"
-        assert (s["teacher_min"], s["setup_min"], s["board_min"], s["quiz_min"]) == (15, 5 * first, 10 * first, 5), name
+        assert (s["teacher_min"], s["setup_min"], s["board_min"], s["quiz_min"]) == (15, 5 * first, 15 * first, 5), name
         notebooks = sum(totals[n] for n in s["notebooks"])
         assert s["total_min"] == s["teacher_min"] + s["setup_min"] + s["board_min"] + s["quiz_min"] + notebooks, name
     assert tool.main(["--sessions"]) == 0
-    assert "Session 1: 15 teacher + 5 logins and first run + 10 derivation at the board + " in capsys.readouterr().out
+    assert "Session 1: 15 teacher + 5 logins and first run + 15 derivation at the board + " in capsys.readouterr().out
 
 
 def test_check_plan_exits_1_on_a_false_plan(tool, tmp_path, capsys):
