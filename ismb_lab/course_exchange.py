@@ -11,6 +11,11 @@
 * :class:`KeylessRelease`: a released assignment holds no ground truth of an image pair
   (``answer_key.json``, ``disparity.png``, ``scene.json``) that none of its notebooks reads
   (the labels assignment: the answer key is what the students label).
+* :class:`FeedbackWithoutTests`: the feedback a student fetches shows each test cell's
+  score and its error's last line, never the hidden tests.  nbgrader builds feedback from
+  the autograded notebook, where the hidden tests were put back to be run, and shows them
+  by design (jupyter/nbgrader#917); a student who has feedback could hand them to one who
+  has not submitted yet, or to next term's class.
 """
 
 from __future__ import annotations
@@ -22,10 +27,11 @@ import shutil
 from nbgrader.exchange.default.collect import ExchangeCollect
 from nbgrader.exchange.default.release_assignment import ExchangeReleaseAssignment
 from nbgrader.exchange.default.submit import ExchangeSubmit
+from nbgrader.preprocessors import ClearHiddenTests
 from nbgrader.utils import ignore_patterns
 from traitlets import Bool
 
-__all__ = ["GROUND_TRUTH", "KeylessRelease", "OwnerCollect", "PrivateSubmit"]
+__all__ = ["GROUND_TRUTH", "FeedbackWithoutTests", "KeylessRelease", "OwnerCollect", "PrivateSubmit"]
 
 #: An image pair's ground truth (ismb_lab.gallery.PAIR_FILES): the answer key, the disparity map
 #: it is computed from, and the scene's description.
@@ -125,3 +131,16 @@ class KeylessRelease(ExchangeReleaseAssignment):
         finally:
             self.coursedir.ignore = kept
         self.log.info("Left out %s: no notebook of %s reads them", ", ".join(unread), self.coursedir.assignment_id)
+
+
+class FeedbackWithoutTests(ClearHiddenTests):
+    """A preprocessor of nbgrader's feedback (``GenerateFeedback.preprocessors``): each hidden
+    test region is cleared again, and a failed test cell's traceback, whose lines quote the
+    test, is cut to its last line (``AssertionError: ...``)."""
+
+    def preprocess_cell(self, cell, resources, cell_index):
+        if cell.cell_type == "code" and self._remove_hidden_test_region(cell):
+            for output in cell.get("outputs", []):
+                if output.get("output_type") == "error":
+                    output["traceback"] = [f"{output.get('ename', 'Error')}: {output.get('evalue', '')}"]
+        return cell, resources

@@ -146,6 +146,27 @@ def test_autograde_gives_the_solutions_full_marks(course):
         assert errors == [], f"{name}: the solutions raise:\n{errors}"
 
 
+def test_feedback_shows_the_scores_but_never_the_hidden_tests(course):
+    """A student hands in 01-harris unsolved: autograde fails its test cell, and the feedback
+    says so (AssertionError) without the hidden test's lines, nbgrader's own default."""
+    name, student = "01-harris", "unsolved"
+    folder = course / "submitted" / student / name
+    shutil.copytree(course / "release" / name, folder)
+    nbgrader(course, "autograde", name, "--student", student, "--create")
+    test = next(c for c in notebook(course / "autograded", student, name).cells
+                if "### BEGIN HIDDEN TESTS" in c.source)
+    hidden = [line.strip() for line in test.source.split("### BEGIN HIDDEN TESTS")[1].split("### END")[0].splitlines()
+              if line.strip()]
+    assert hidden and any(o.get("output_type") == "error" for o in test.outputs)
+    nbgrader(course, "generate_feedback", name, "--student", student)
+    (html,) = (course / "feedback" / student / name).glob("*.html")
+    text = html.read_text(encoding="utf-8")
+    assert "AssertionError" in text and "HIDDEN TESTS" not in text
+    shown = [line for line in hidden if line.replace("&", "&amp;").replace("<", "&lt;").replace(">", "&gt;") in text
+             or line in text]
+    assert shown == [], shown
+
+
 # ------------------------------------------------ the released notebooks, as a student has them
 
 #: Programs whose lines and code spans in a notebook's text are commands to run.

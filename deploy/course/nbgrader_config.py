@@ -34,3 +34,11 @@ c.ExchangeFactory.release_assignment = "ismb_lab.course_exchange.KeylessRelease"
 c.ClearSolutions.code_stub = {"python": "# YOUR CODE HERE"}
 # The longest notebook (07) has cells of tens of seconds on a loaded 2-core server.
 c.Execute.timeout = 600
+# Feedback shows each test's score and its error's last line, never the hidden tests (nbgrader
+# shows them by design; a student could pass them on): ismb_lab/course_exchange.py.
+from nbconvert.preprocessors import CSSHTMLHeaderPreprocessor  # noqa: E402
+from nbgrader.preprocessors import GetGrades  # noqa: E402
+
+from ismb_lab.course_exchange import FeedbackWithoutTests  # noqa: E402
+
+c.GenerateFeedback.preprocessors = [FeedbackWithoutTests, GetGrades, CSSHTMLHeaderPreprocessor]
