@@ -81,7 +81,8 @@ WHY = {
     "question": "look up a table or change one argument, write two sentences",
     "widget": "one widget to try before the exercises: a few clicks or slider moves, read the status",
     "quiz": "five short questions on paper, a minute each",
-    "setup": "everyone logs in to the class's JupyterLab and opens 00, the whole class on one server at once",
+    "setup": "everyone logs in to the class's JupyterLab, the whole class on one server at once; whoever could "
+             "not run 00 before the session runs its first cells now",
     "board": "the derivation in the cells tagged `board` (02: the Hopfield form of (3-15) and what the thesis' "
              "literal weights change), at the board with the class following; their reading is not counted again",
 }
@@ -99,7 +100,9 @@ BOARD_STEP = "derivation at the board"
 #: The name of that step in the plan's session table.
 SETUP = "logins and first run"
 #: The notebooks of each session, by their two-digit prefix; the others are optional.
-SESSIONS = {"Session 1": ("00", "01", "02", "04"), "Session 2": ("05", "06", "07")}
+SESSIONS = {"Session 1": ("01", "02", "04"), "Session 2": ("05", "06", "07")}
+#: Notebooks each student runs before a session, on their own: their minutes are not the session's.
+BEFORE = {"Session 1": ("00",)}
 OPTIONAL = ("03", "08", "09")
 #: What the teacher talk of a session is for.
 TEACHER_TALK = "an opening, a few minutes to introduce each notebook, and the discussions (the questions below)"
@@ -679,7 +682,12 @@ def render(rows: list[Minutes], found: dict, record: dict, graded: str | None = 
         left = SESSION_MIN - s.total_min
         lines.append(f"| | **left of {SESSION_MIN}** | | | | | {SESSION_MIN} − {s.total_min} = {left} | "
                      f"| **{left}** |")
-        work = [f"{r.name[:2]} ex. {', '.join(map(str, r.homework))}" for r in s.rows if r.homework]
+        by_prefix = {r.name[:2]: r for r in rows}
+        before = [by_prefix[p] for p in BEFORE.get(name, ()) if p in by_prefix]
+        if before:
+            lines += ["", "**Before the session**, each student on their own, as soon as their login works: "
+                      + ", ".join(f"`{r.name}` ({r.total_min} min)" for r in before) + "."]
+        work = [f"{r.name[:2]} ex. {', '.join(map(str, r.homework))}" for r in before + list(s.rows) if r.homework]
         lines += ["", "**Homework** (cells tagged `homework`): " + ("; ".join(work) if work else "none") + "."]
         blocks[name] = "\n".join(lines)
     where = []
@@ -819,7 +827,7 @@ def order(names) -> list[str]:
     >>> order(["09_x.ipynb", "04_y.ipynb", "03_z.ipynb", "00_a.ipynb", "zz.ipynb"])
     ['00_a.ipynb', '04_y.ipynb', '03_z.ipynb', '09_x.ipynb', 'zz.ipynb']
     """
-    ranked = [p for prefixes in SESSIONS.values() for p in prefixes] + list(OPTIONAL)
+    ranked = [p for name, prefixes in SESSIONS.items() for p in BEFORE.get(name, ()) + prefixes] + list(OPTIONAL)
     return sorted(names, key=lambda n: (ranked.index(n[:2]) if n[:2] in ranked else len(ranked), n))
 
 
