@@ -337,7 +337,7 @@ class PointCloudView:
     ``ismb-cloud-colours``; the k3d plot ``ismb-cloud-plot``.
     """
 
-    def __init__(self, cloud: Cloud, height: int = 360):
+    def __init__(self, cloud: Cloud, height: int = 360, dense=None):
         import ipywidgets
         import k3d
 
@@ -358,7 +358,7 @@ class PointCloudView:
                                  name="cameras")
         self.axes = k3d.lines(np.zeros((2, 3), np.float32), np.array([[0, 1]], np.uint32), indices_type="segment",
                               shader="simple", color=0x808080, name="axes")
-        self.axis_texts = [k3d.text("", (0.0, 0.0, 0.0), color=0x404040, size=0.6, label_box=False, is_html=True,
+        self.axis_texts = [k3d.text("", (0.0, 0.0, 0.0), color=0x404040, size=0.8, label_box=False, is_html=True,
                                     visible=False)
                            for _ in range(3 * (MAX_TICKS + 1))]
         self.notes = [k3d.text("", (0.0, 0.0, 0.0), color=0x202020, size=0.7, label_box=False, is_html=True,
@@ -366,6 +366,9 @@ class PointCloudView:
                       for _ in range(MAX_NOTES)]
         for obj in (self.points, self.dense, self.cameras, self.axes, *self.axis_texts, *self.notes):
             self.plot += obj
+        # k3d draws a colour bar inside the canvas for the first object with a colour range unless
+        # told which object's to draw: the cameras' lines have none, so none is drawn
+        self.plot.colorbar_object_id = self.cameras.id
         self.plot.add_class("ismb-cloud-plot")
         self.caption = ipywidgets.HTML("")
         self.caption.add_class("ismb-cloud-caption")
@@ -375,8 +378,8 @@ class PointCloudView:
         self.widget.add_class("ismb-cloud")
         self._dense_points = np.zeros((0, 3))
         self._dense_wanted = False
-        self.update(cloud)
-        self.plot.camera = self._camera(cloud)
+        self.update(cloud, dense)
+        self.plot.camera = self._camera(*self._box)
 
     def update(self, cloud: Cloud, dense=None) -> None:
         """Show `cloud` in the same objects (the camera stays where the student turned it), and
@@ -430,11 +433,14 @@ class PointCloudView:
     def _draw_axes(self, cloud: Cloud, dense) -> None:
         vertices, _ = frustum_edges(cloud.centres, cloud.frustum)
         every = _shown(np.vstack([cloud.points, dense, vertices]))
-        lines, segments, texts = axes_frame(every.min(axis=0), every.max(axis=0))
+        self._box = (every.min(axis=0), every.max(axis=0))
+        lines, segments, texts = axes_frame(*self._box)
         with self.axes.hold_sync():
             self.axes.vertices, self.axes.indices = lines, segments
+        drawn = bool(len(cloud.points) or len(dense))    # no axes around the cameras alone
+        self.axes.visible = drawn
         for k, label in enumerate(self.axis_texts):
-            if k < len(texts):
+            if drawn and k < len(texts):
                 words, at, anchor = texts[k]
                 label.text, label.position, label.reference_point, label.visible = words, list(map(float, at)), anchor, True
             else:
@@ -446,11 +452,12 @@ class PointCloudView:
         return float(max(np.ptp(both, axis=0).max(), 1e-3))
 
     @staticmethod
-    def _camera(cloud: Cloud) -> list:
-        """Behind and above the cameras, looking at the cloud's middle: eye, target, up (plot axes)."""
-        both = np.vstack([cloud.points, cloud.centres])
-        target = _shown((both.min(axis=0) + both.max(axis=0)) / 2)[0]
-        eye = target + PointCloudView._span(cloud) * np.array([-0.25, -0.75, 0.4])
+    def _camera(lo, hi) -> list:
+        """Behind, left of and above the cameras, looking at the middle of the box `lo` - `hi` (plot
+        coordinates) from far enough to see all of it (k3d's field of view is 60°): eye, target, up."""
+        lo, hi = np.asarray(lo, dtype=float), np.asarray(hi, dtype=float)
+        target = (lo + hi) / 2
+        eye = target + 1.4 * float(max((hi - lo).max(), 1e-3)) * np.array([-0.65, -0.7, 0.4])
         return [*map(float, eye), *map(float, target), 0.0, 0.0, 1.0]
 
     def _repr_mimebundle_(self, **kwargs):

@@ -217,8 +217,9 @@ class RigCloud(Base):
         if self.model is not None and left is not None:
             self.loader.load(left, right, name)
         empty = self.model.empty_cloud() if self.model is not None else _cloud(StereoCamera(), np.zeros((0, 3)), [], "")
-        self.view = PointCloudView(self.model.cloud if self.model is not None and self.model.cloud is not None
-                                   else empty, height=height)
+        matched = self.model is not None and self.model.cloud is not None
+        self.view = PointCloudView(self.model.cloud if matched else empty, height=height,
+                                   dense=self.model.dense_xyz if matched else None)
         self.widget = with_class(ipywidgets.VBox([
             row([self.rig_field, self.rig_button]),
             row([self.loader.upload, self.loader.folder_field, self.loader.open_button]),

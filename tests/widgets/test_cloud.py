@@ -299,9 +299,10 @@ def test_a_pair_the_rig_does_not_fit_shows_one_line_and_no_cloud(rendered):
     assert "\n" not in status and "<br" not in status
     assert not view.points.visible and not view.dense.visible and widget.dense_toggle.disabled
     assert view.caption.value == "<small></small>"
+    assert not view.axes.visible and not any(t.visible for t in view.axis_texts)
     assert [id(o) for o in view.plot.objects] == objects       # the same objects, nothing new
     widget.load(scene.left, scene.right, "again")             # the right order shows it again
-    assert view.points.visible and view.dense.visible and not widget.dense_toggle.disabled
+    assert view.points.visible and view.dense.visible and not widget.dense_toggle.disabled and view.axes.visible
     assert len(view.points.positions) == len(widget.model.cloud.points)
 
 
@@ -334,7 +335,10 @@ def test_each_axis_is_titled_once_and_no_colour_bar_sits_in_the_canvas(rendered)
 
     scene = rendered(synthetic_scene, 0)
     view = RigCloud(scene.rig, scene.left, scene.right).view
-    assert not view.plot.grid_visible and view.plot.colorbar_object_id == -1
+    # k3d's grid (each title on two edges) is off, and its colour bar, drawn for the object
+    # colorbar_object_id names, is given one without colours: none is drawn in the canvas
+    assert not view.plot.grid_visible and view.plot.colorbar_object_id == view.cameras.id
+    assert view.cameras.attribute.size == 0 and len(view.cameras.color_range) == 0   # k3d draws a bar for [lo, hi]
     shown = [t.text for t in view.axis_texts if t.visible]
     assert [shown.count(title) for title in AXIS_TITLES] == [1, 1, 1]
     # the axes span what is drawn: the numbers of each axis lie within its points' range
