@@ -314,7 +314,7 @@ def colour_bar_html(lo: float, hi: float) -> str:
                       for t, r, g, b in _colours(9))
     return ("<div style='display:flex;align-items:center;gap:0.5em;font-size:small'>"
             f"<span>colour = Z: {lo:.2f} m</span>"
-            f"<div style='flex:1;height:0.8em;min-width:4em;background:linear-gradient(to right, {stops})'></div>"
+            f"<div style='flex:0 1 20em;height:0.8em;min-width:4em;background:linear-gradient(to right, {stops})'></div>"
             f"<span>{hi:.2f} m</span></div>")
 
 
@@ -456,8 +456,8 @@ class PointCloudView:
         """Behind, left of and above the cameras, looking at the middle of the box `lo` - `hi` (plot
         coordinates) from far enough to see all of it (k3d's field of view is 60°): eye, target, up."""
         lo, hi = np.asarray(lo, dtype=float), np.asarray(hi, dtype=float)
-        target = (lo + hi) / 2
-        eye = target + 1.4 * float(max((hi - lo).max(), 1e-3)) * np.array([-0.65, -0.7, 0.4])
+        target = lo + (hi - lo) * [0.5, 0.5, 0.4]      # a little low: the near, bottom corner is nearest the eye
+        eye = target + 1.5 * float(max((hi - lo).max(), 1e-3)) * np.array([-0.65, -0.7, 0.3])
         return [*map(float, eye), *map(float, target), 0.0, 0.0, 1.0]
 
     def _repr_mimebundle_(self, **kwargs):
