@@ -9,8 +9,9 @@ from .explorer import ExplorerModel, ParameterExplorer
 from .ga_runner import GAModel, GARunner
 from .labeler import LabelModel, TargetLabeler
 from .photos import PhotoLoader, PhotoModel
+from .rig_cloud import RigCloud, RigCloudModel
 from .stepper import HopfieldStepper, StepperModel
 
 __all__ = ["DepthDemo", "DepthModel", "ExplorerModel", "GAModel", "GARunner", "HopfieldStepper",
-           "LabelModel", "ParameterExplorer", "PhotoLoader", "PhotoModel", "PointCloudView", "StepperModel",
-           "TargetLabeler"]
+           "LabelModel", "ParameterExplorer", "PhotoLoader", "PhotoModel", "PointCloudView", "RigCloud",
+           "RigCloudModel", "StepperModel", "TargetLabeler"]

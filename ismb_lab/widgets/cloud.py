@@ -23,7 +23,8 @@ import numpy as np
 from .._validation import ParameterError, ParameterTypeError, message, readonly
 from ..camera import StereoCamera
 
-__all__ = ["Cloud", "MAX_NOTES", "PointCloudView", "board_cloud", "depth_cloud", "frustum_edges", "match_cloud"]
+__all__ = ["AXIS_TITLES", "Cloud", "MAX_NOTES", "MAX_TICKS", "PointCloudView", "axes_frame", "axis_ticks", "board_cloud",
+           "colour_bar_html", "depth_cloud", "frustum_edges", "match_cloud"]
 
 #: How many notes (e.g. ``#1 0.89 m`` beside an object) a view can show at once.
 MAX_NOTES = 6
@@ -228,70 +229,193 @@ def _shown(xyz) -> np.ndarray:
     return np.column_stack([xyz[:, 0], xyz[:, 2], -xyz[:, 1]]).astype(np.float32)
 
 
-def _colour_map() -> np.ndarray:
-    """matplotlib's plasma, reversed (near = yellow, as in the depth demo's disparity colours),
-    as k3d's flat ``[t, r, g, b, ...]``."""
+def _colours(n: int = 32) -> np.ndarray:
+    """matplotlib's plasma, reversed (near = yellow, as in the depth demo's disparity colours):
+    ``(n, 4)`` rows of ``t, r, g, b``."""
     from matplotlib import colormaps
 
-    t = np.linspace(0, 1, 32)
-    return np.column_stack([t, colormaps["plasma_r"](t)[:, :3]]).ravel().astype(np.float32)
+    t = np.linspace(0, 1, n)
+    return np.column_stack([t, colormaps["plasma_r"](t)[:, :3]])
+
+
+def _colour_map() -> np.ndarray:
+    """:func:`_colours` as k3d's flat ``[t, r, g, b, ...]``."""
+    return _colours().ravel().astype(np.float32)
+
+
+#: The axes' titles, in the plot's order (X right, Z forward, up).
+AXIS_TITLES = ("X (m)", "Z (m)", "-Y (m)")
+#: At most this many numbered ticks per axis.
+MAX_TICKS = 6
+
+
+def axis_ticks(lo: float, hi: float) -> np.ndarray:
+    """Round values from `lo` to `hi` to number an axis with (at most :data:`MAX_TICKS`).
+
+    >>> axis_ticks(0.0, 1.62).tolist()
+    [0.0, 0.5, 1.0, 1.5]
+    """
+    from matplotlib.ticker import MaxNLocator
+
+    values = MaxNLocator(nbins=4, steps=[1, 2, 2.5, 5, 10]).tick_values(lo, hi)
+    span = max(hi - lo, 1e-9)
+    values = values[(values >= lo - 1e-9 * span) & (values <= hi + 1e-9 * span)]
+    return np.round(values, 10)[:MAX_TICKS]
+
+
+def axes_frame(lo, hi) -> tuple[np.ndarray, np.ndarray, list]:
+    """Three axes along the edges of the box `lo` - `hi` (plot coordinates) that meet at its
+    near, left, bottom corner, with tick marks; each axis numbered and titled once.
+
+    Returns
+    -------
+    vertices : (V, 3) float32 ndarray
+    segments : (S, 2) uint32 ndarray
+    texts : list of (str, (x, y, z), reference_point)
+        The numbers and the three titles (:data:`AXIS_TITLES`), each where it is drawn.
+
+    Examples
+    --------
+    >>> v, s, texts = axes_frame([0, 0, 0], [1, 2, 1])
+    >>> [t for t, _, _ in texts if t.endswith("(m)")]
+    ['X (m)', 'Z (m)', '-Y (m)']
+    """
+    lo, hi = np.asarray(lo, dtype=float), np.asarray(hi, dtype=float)
+    span = float(max((hi - lo).max(), 1e-3))
+    tick = 0.02 * span
+    # where each axis' numbers sit, off the axis: X's and Z's below the floor, up's to the left
+    outward = {0: np.array([0.0, 0.0, -1.0]), 1: np.array([0.0, 0.0, -1.0]), 2: np.array([-1.0, 0.0, 0.0])}
+    vertices, segments, texts = [], [], []
+
+    def segment(a, b):
+        vertices.extend([a, b])
+        segments.append([len(vertices) - 2, len(vertices) - 1])
+
+    for axis in range(3):
+        end = lo.copy()
+        end[axis] = hi[axis]
+        segment(lo.copy(), end)
+        out = outward[axis]
+        for value in axis_ticks(lo[axis], hi[axis]):
+            at = lo.copy()
+            at[axis] = value
+            segment(at, at + tick * out)
+            texts.append((f"{value:g}", tuple(at + 3 * tick * out), "ct" if axis < 2 else "rc"))
+        title = end + 3 * tick * out + (tick * 3 * np.eye(3)[axis])
+        texts.append((AXIS_TITLES[axis], tuple(title), "lc" if axis != 2 else "cb"))
+    return (np.asarray(vertices, dtype=np.float32).reshape(-1, 3), np.asarray(segments, dtype=np.uint32).reshape(-1, 2),
+            texts)
+
+
+def colour_bar_html(lo: float, hi: float) -> str:
+    """The colour scale as a strip of HTML beside the 3-D view (outside its canvas, so it never
+    covers the axes): depth `lo` m (yellow) to `hi` m."""
+    stops = ", ".join(f"rgb({int(255 * r)},{int(255 * g)},{int(255 * b)}) {100 * t:.0f}%"
+                      for t, r, g, b in _colours(9))
+    return ("<div style='display:flex;align-items:center;gap:0.5em;font-size:small'>"
+            f"<span>colour = Z: {lo:.2f} m</span>"
+            f"<div style='flex:0 1 20em;height:0.8em;min-width:4em;background:linear-gradient(to right, {stops})'></div>"
+            f"<span>{hi:.2f} m</span></div>")
 
 
 class PointCloudView:
     """A rotatable 3-D view of a :class:`Cloud` (k3d, WebGL): drag to turn, wheel to zoom.
 
     Built once; :meth:`update` replaces the data of the same k3d objects.  ``.widget`` is
-    a box as wide as the output area, `height` px tall, with a caption line above.
+    a box as wide as the output area, `height` px tall, with a caption line and the colour
+    scale above.  Optionally a second set of points (a dense disparity's, e.g. SGBM's, in
+    metres) is drawn in the same colours, hidden until :meth:`show_dense`.
+
+    The axes are drawn by the view itself, not by k3d's grid: k3d numbers and titles each axis
+    on two edges of its box (every title twice), and its colour bar, drawn inside the canvas,
+    covered the numbers of the axis beside it.  Here each axis is numbered and titled once,
+    and the colour scale is a strip of HTML above the canvas.
 
     Notes
     -----
-    CSS classes: root ``ismb-cloud``; caption ``ismb-cloud-caption``; the k3d plot ``ismb-cloud-plot``.
+    CSS classes: root ``ismb-cloud``; caption ``ismb-cloud-caption``; colour scale
+    ``ismb-cloud-colours``; the k3d plot ``ismb-cloud-plot``.
     """
 
-    def __init__(self, cloud: Cloud, height: int = 360):
+    def __init__(self, cloud: Cloud, height: int = 360, dense=None):
         import ipywidgets
         import k3d
 
         if not isinstance(cloud, Cloud):
             raise ParameterTypeError(message("cloud", "PointCloudView", "a Cloud", cloud))
-        self.plot = k3d.plot(height=int(height), menu_visibility=False, axes_helper=0, grid_visible=True,
-                             camera_auto_fit=False, axes=[r"X\ \mathrm{(m)}", r"Z\ \mathrm{(m)}", r"-Y\ \mathrm{(m)}"])
+        self.plot = k3d.plot(height=int(height), menu_visibility=False, axes_helper=0, grid_visible=False,
+                             camera_auto_fit=False)
         # made with the first cloud's data: a k3d points object created empty never shows its
         # colour map in the browser, whatever data it gets later (k3d 3.2, Chromium)
-        self.points = k3d.points(_shown(cloud.points if len(cloud.points) else [[0, 0, 0]]),
-                                 attribute=cloud.colour.astype(np.float32) if len(cloud.points) else [0.0],
-                                 color_map=_colour_map(), color_range=[0.0, 1.0], shader="flat", name="matches")
+        seed = _shown(cloud.points if len(cloud.points) else [[0, 0, 0]])
+        colour = cloud.colour.astype(np.float32) if len(cloud.points) else np.zeros(1, np.float32)
+        self.points = k3d.points(seed, attribute=colour, color_map=_colour_map(), color_range=[0.0, 1.0],
+                                 shader="flat", name="matches")
+        self.dense = k3d.points(seed, attribute=colour, color_map=_colour_map(), color_range=[0.0, 1.0],
+                                shader="flat", name="dense", visible=False)
         vertices, segments = frustum_edges(cloud.centres, cloud.frustum)
         self.cameras = k3d.lines(vertices, segments, indices_type="segment", shader="simple", color=0x303030,
                                  name="cameras")
+        self.axes = k3d.lines(np.zeros((2, 3), np.float32), np.array([[0, 1]], np.uint32), indices_type="segment",
+                              shader="simple", color=0x808080, name="axes")
+        self.axis_texts = [k3d.text("", (0.0, 0.0, 0.0), color=0x404040, size=0.8, label_box=False, is_html=True,
+                                    visible=False)
+                           for _ in range(3 * (MAX_TICKS + 1))]
         self.notes = [k3d.text("", (0.0, 0.0, 0.0), color=0x202020, size=0.7, label_box=False, is_html=True,
                                visible=False)
                       for _ in range(MAX_NOTES)]
-        for obj in (self.points, self.cameras, *self.notes):
+        for obj in (self.points, self.dense, self.cameras, self.axes, *self.axis_texts, *self.notes):
             self.plot += obj
-        self.plot.colorbar_object_id = self.points.id
+        # k3d draws a colour bar inside the canvas for the first object with a colour range unless
+        # told which object's to draw: the cameras' lines have none, so none is drawn
+        self.plot.colorbar_object_id = self.cameras.id
         self.plot.add_class("ismb-cloud-plot")
         self.caption = ipywidgets.HTML("")
         self.caption.add_class("ismb-cloud-caption")
-        self.widget = ipywidgets.VBox([self.caption, self.plot], layout=ipywidgets.Layout(width="100%"))
+        self.colours = ipywidgets.HTML("", layout=ipywidgets.Layout(width="100%"))
+        self.colours.add_class("ismb-cloud-colours")
+        self.widget = ipywidgets.VBox([self.caption, self.colours, self.plot], layout=ipywidgets.Layout(width="100%"))
         self.widget.add_class("ismb-cloud")
-        self.update(cloud)
-        self.plot.camera = self._camera(cloud)
+        self._dense_points = np.zeros((0, 3))
+        self._dense_wanted = False
+        self.update(cloud, dense)
+        self.plot.camera = self._camera(*self._box)
 
-    def update(self, cloud: Cloud) -> None:
-        """Show `cloud` in the same objects (the camera stays where the student turned it)."""
+    def update(self, cloud: Cloud, dense=None) -> None:
+        """Show `cloud` in the same objects (the camera stays where the student turned it), and
+        `dense` (``(M, 3)`` metres, or None: none) as the second set of points.
+
+        One colour scale serves both: from the nearest to the farthest point of either.
+        """
         if not isinstance(cloud, Cloud):
             raise ParameterTypeError(message("cloud", "PointCloudView.update", "a Cloud", cloud))
+        dense = np.zeros((0, 3)) if dense is None else np.asarray(dense, dtype=float).reshape(-1, 3)
+        dense = dense[np.isfinite(dense).all(axis=1)]
         lo, hi = cloud.depth_range
+        if len(dense):
+            z = dense[:, 2]
+            lo, hi = (min(lo, float(z.min())), max(hi, float(z.max()))) if len(cloud.points) else \
+                (float(z.min()), float(z.max()))
+        colour_range = [lo, hi if hi > lo else lo + 1e-3]
+        size = 0.02 * self._span(cloud)
         with self.points.hold_sync():   # positions and colours of the same count arrive together
             if len(cloud.points):        # none: hide the last ones rather than send an empty object
                 self.points.positions = _shown(cloud.points)
                 self.points.attribute = cloud.colour.astype(np.float32)
-                self.points.color_range = [lo, hi if hi > lo else lo + 1e-3]
-                self.points.point_size = 0.02 * self._span(cloud)
+                self.points.point_size = size
+            self.points.color_range = colour_range
             self.points.visible = bool(len(cloud.points))
+        self._dense_points = dense
+        with self.dense.hold_sync():
+            if len(dense):
+                self.dense.positions = _shown(dense)
+                self.dense.attribute = dense[:, 2].astype(np.float32)
+                self.dense.point_size = 0.4 * size
+            self.dense.color_range = colour_range
+            self.dense.visible = bool(self._dense_wanted and len(dense))
         vertices, _ = frustum_edges(cloud.centres, cloud.frustum)
         self.cameras.vertices = _shown(vertices)
+        self._draw_axes(cloud, dense)
         for k, text in enumerate(self.notes):
             if k < len(cloud.notes):
                 words, xyz = cloud.notes[k]
@@ -299,6 +423,28 @@ class PointCloudView:
             else:
                 text.visible = False
         self.caption.value = f"<small>{html.escape(cloud.caption, quote=False)}</small>"
+        self.colours.value = colour_bar_html(*colour_range) if len(cloud.points) or len(dense) else ""
+
+    def show_dense(self, shown: bool) -> None:
+        """Show or hide the dense points (shown only when there are some)."""
+        self._dense_wanted = bool(shown)
+        self.dense.visible = bool(shown and len(self._dense_points))
+
+    def _draw_axes(self, cloud: Cloud, dense) -> None:
+        vertices, _ = frustum_edges(cloud.centres, cloud.frustum)
+        every = _shown(np.vstack([cloud.points, dense, vertices]))
+        self._box = (every.min(axis=0), every.max(axis=0))
+        lines, segments, texts = axes_frame(*self._box)
+        with self.axes.hold_sync():
+            self.axes.vertices, self.axes.indices = lines, segments
+        drawn = bool(len(cloud.points) or len(dense))    # no axes around the cameras alone
+        self.axes.visible = drawn
+        for k, label in enumerate(self.axis_texts):
+            if drawn and k < len(texts):
+                words, at, anchor = texts[k]
+                label.text, label.position, label.reference_point, label.visible = words, list(map(float, at)), anchor, True
+            else:
+                label.visible = False
 
     @staticmethod
     def _span(cloud: Cloud) -> float:
@@ -306,11 +452,12 @@ class PointCloudView:
         return float(max(np.ptp(both, axis=0).max(), 1e-3))
 
     @staticmethod
-    def _camera(cloud: Cloud) -> list:
-        """Behind and above the cameras, looking at the cloud's middle: eye, target, up (plot axes)."""
-        both = np.vstack([cloud.points, cloud.centres])
-        target = _shown((both.min(axis=0) + both.max(axis=0)) / 2)[0]
-        eye = target + PointCloudView._span(cloud) * np.array([-0.25, -0.75, 0.4])
+    def _camera(lo, hi) -> list:
+        """Behind, left of and above the cameras, looking at the middle of the box `lo` - `hi` (plot
+        coordinates) from far enough to see all of it (k3d's field of view is 60°): eye, target, up."""
+        lo, hi = np.asarray(lo, dtype=float), np.asarray(hi, dtype=float)
+        target = lo + (hi - lo) * [0.5, 0.5, 0.4]      # a little low: the near, bottom corner is nearest the eye
+        eye = target + 1.5 * float(max((hi - lo).max(), 1e-3)) * np.array([-0.65, -0.7, 0.3])
         return [*map(float, eye), *map(float, target), 0.0, 0.0, 1.0]
 
     def _repr_mimebundle_(self, **kwargs):

@@ -80,13 +80,68 @@ def test_toy_car_cloud_draws_with_webgl(open_notebook, offline, artifacts):
     assert offline == [], f"requests beyond 127.0.0.1: {offline[:5]}"
 
 
-def test_held_out_pair_cloud_draws_with_webgl(open_notebook, offline, opencv_data, artifacts):
+def coloured_share(locator) -> float:
+    """The share of a screenshot's pixels in colour (the points: grey axes, cameras and text aside)."""
+    import io
+
+    import matplotlib.image
+
+    rgb = matplotlib.image.imread(io.BytesIO(locator.screenshot()), format="png")[:, :, :3]
+    return float(((rgb.max(axis=2) - rgb.min(axis=2)) > 0.25).mean())
+
+
+def settled_share(page, locator, differs=None, timeout_s: float = 30.0) -> float:
+    """:func:`coloured_share` once two screenshots 0.5 s apart agree (k3d draws in frames), and
+    when `differs` is given, once it is no longer that value."""
+    last = None
+    for _ in range(int(timeout_s / 0.5)):
+        share = coloured_share(locator)
+        if share == last and (differs is None or abs(share - differs) > 1e-9):
+            return share
+        last = share
+        page.wait_for_timeout(500)
+    return last
+
+
+_SHOWN_TEXT = """(root, text) => [...root.querySelectorAll('*')].filter(n => n.childElementCount === 0
+  && n.textContent.trim() === text && n.getClientRects().length > 0
+  && getComputedStyle(n).visibility !== 'hidden').length"""
+
+
+def test_held_out_pair_cloud_draws_with_webgl(open_notebook, offline, opencv_data, artifacts, kernel_exec):
+    """09's rig-driven cloud (RigCloud on held-out pair 14): WebGL in the column, the network's
+    points drawn in colour, each axis titled once, the colour scale above the canvas; the toggle
+    adds SGBM's points; a swapped pair is refused in one line and leaves no point drawn."""
+    from playwright.sync_api import expect
+
     page = open_notebook("09_your_own_photos.ipynb", timeout=400_000)
-    root = page.locator(".ismb-cloud")
+    widget = page.locator(".ismb-rig-cloud")
+    assert widget.count() == 1
+    root = widget.locator(".ismb-cloud")
     assert root.count() == 1
     webgl_view(page, root, artifacts, "09")
     caption = root.locator(".ismb-cloud-caption").inner_text()
     assert "the network's" in caption and "matches (Method-III) in metres" in caption
+    status = widget.locator(".ismb-status")
+    expect(status).to_contain_text("pair 14: raw photos, rectified with the rig", timeout=30_000)
+    assert "SGBM agrees with the network at" in status.inner_text()
+    for title in ("X (m)", "Z (m)", "-Y (m)"):
+        assert root.evaluate(_SHOWN_TEXT, title) == 1, f"{title} is not drawn exactly once"
+    canvas = root.locator("canvas").first
+    scale = root.locator(".ismb-cloud-colours").bounding_box()
+    assert scale["height"] > 5 and scale["y"] + scale["height"] <= canvas.bounding_box()["y"] + 1
+    sparse = settled_share(page, canvas)
+    assert sparse > 0, "the network's points are not drawn"
+    widget.locator("button.ismb-dense").click()
+    dense = settled_share(page, canvas, differs=sparse)
+    canvas.screenshot(path=artifacts / "09_cloud_sgbm.png")
+    assert dense > 2 * sparse, f"SGBM's points did not appear: {sparse:.4f} -> {dense:.4f} of the pixels in colour"
+    kernel_exec(page, "cloud14.load(right14, left14, 'pair 14 swapped')")
+    expect(status).to_contain_text("pair 14 swapped refused:", timeout=60_000)
+    said = status.inner_text()
+    assert "swap the two files" in said and "\n" not in said.strip()
+    assert settled_share(page, canvas, differs=dense) == 0, "a refused pair left points drawn"
+    root.screenshot(path=artifacts / "09_cloud_refused.png")
     assert offline == [], f"requests beyond 127.0.0.1: {offline[:5]}"
 
 

@@ -253,9 +253,8 @@ LISTED["09"] = [
     ("(at the thesis' width,\n320 px)", "thesis", "240×320 pixels"),
     ("within 1.5 px of that place", "library", "datasets.ground_truth_pairs.__defaults__ == (1.5,)"),
     ("9 × 6 inner corners", "library", "camera.BOARD == (9, 6)"),
-    ("The corners are 150 to 200 per image", "code", "n_min=150, n_max=200"),
-    ("the thesis takes 20 to 30", "thesis", "the feature points is set as [20, 30]"),
-    ("in a 160 × 120 region", "arithmetic", "(320 // 2, 240 // 2) == (160, 120)  # the thesis' ROI, a quarter of 240×320"),
+    ("The thesis takes 20 to 30", "thesis", "the feature points is set as [20, 30]"),
+    ("in a\n160 × 120 region", "arithmetic", "(320 // 2, 240 // 2) == (160, 120)  # the thesis' ROI, a quarter of 240×320"),
     ("within 1.5 px of a corner", "library", "datasets.ground_truth_pairs.__defaults__ == (1.5,)"),
 ]
 

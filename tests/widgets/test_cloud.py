@@ -199,3 +199,189 @@ def test_the_networks_matches_of_a_held_out_pair_are_placed_by_the_rig(opencv_da
     (text, at), = cloud.notes
     assert text.startswith("board's corners (cv2)")
     assert at[2] == pytest.approx(board_depth(rig, raw_left, raw_right)["stereo"], rel=1e-3)
+
+
+# --- any rig's pair: RigCloud, its model, and SGBM beside the network ----------------------------
+
+def _upload(loader, named):
+    """Files given to the loader's upload control as a browser gives them: ``[(name, bytes), ...]``."""
+    import datetime
+
+    loader.upload.value = tuple({"name": name, "type": "image/png", "size": len(data), "content": memoryview(data),
+                                 "last_modified": datetime.datetime.now(datetime.timezone.utc)}
+                                for name, data in named)
+
+
+def _png(image) -> bytes:
+    import cv2
+
+    ok, data = cv2.imencode(".png", np.clip(np.rint(image), 0, 255).astype(np.uint8))
+    assert ok
+    return data.tobytes()
+
+
+def test_sgbm_agrees_with_the_truth_and_its_agreement_with_the_network_is_counted_right(rendered):
+    """On a rendered pair whose true disparity is known: SGBM, run in the window the network's
+    pair measured, is right at the network's matched points; and a match where both are within
+    0.5 px of the truth counts as agreeing, one where only one of them is right as not."""
+    from ismb_lab.dense import agreement, window_range
+    from ismb_lab.scenes import synthetic_scene
+    from ismb_lab.widgets.rig_cloud import RigCloudModel
+
+    scene = rendered(synthetic_scene, 0)
+    model = RigCloudModel(scene.rig)
+    model.load(scene.left, scene.right, "scene 0")
+    assert model.refused == "" and "already rectified" in model.how
+    kept = model.result
+    xy, d = kept.left_match_xy, kept.left_match_xy[:, 0] - kept.right_match_xy[:, 0]
+    assert len(d) >= 10
+    at = lambda image: image[np.rint(xy[:, 1]).astype(int), np.rint(xy[:, 0]).astype(int)]  # noqa: E731
+    truth, dense = at(scene.disparity), at(model.dense)
+    # the window holds the true disparities of the matched points, and SGBM searched it
+    lo, hi = window_range(model.prepared.config)
+    known = np.isfinite(truth)
+    assert known.sum() >= 0.9 * len(d) and ((truth[known] >= lo) & (truth[known] <= hi)).all()
+    both = known & np.isfinite(dense)
+    assert both.sum() >= 0.8 * len(d)
+    assert np.mean(np.abs(dense[both] - truth[both]) <= np.maximum(1.0, 0.05 * truth[both])) >= 0.9
+    # the agreement, as counted: each match on its own, against the truth
+    a = model.agreement
+    assert (a.matches, a.measured) == (len(d), int(np.isfinite(dense).sum()))
+    right = lambda values: np.isfinite(values) & known & (np.abs(values - truth) <= 0.5)  # noqa: E731
+    assert a.agree >= int((right(dense) & right(np.asarray(d))).sum()) > 0
+    far = np.isfinite(dense) & (np.abs(dense - d) > np.maximum(1.0, 0.05 * d))
+    assert a.agree == int(np.isfinite(dense).sum() - far.sum())
+    # the truth itself, as the "dense" map, agrees with every network match the truth says is right
+    truth_agrees = agreement(scene.disparity, xy, d)
+    assert truth_agrees.agree == int((known & (np.abs(truth - d) <= np.maximum(1.0, 0.05 * d))).sum())
+    assert str(a) in model.message and f"{a.agree} of {a.measured}" in model.message
+    # SGBM's points in metres through the same rig: back on their pixels, at Z = f B / d
+    from ismb_lab.dense import dense_points
+
+    xyz, pixels = dense_points(scene.rig, model.dense)
+    np.testing.assert_allclose(scene.rig.project_left(xyz), pixels, atol=1e-6)
+    np.testing.assert_allclose(xyz, model.dense_xyz)
+    assert 0 < len(xyz) <= 20_000
+
+
+def test_sgbm_finds_a_known_shift_within_its_range():
+    import cv2
+
+    from ismb_lab.dense import sgbm_disparity, sgbm_range
+
+    rng = np.random.default_rng(1)
+    texture = cv2.GaussianBlur(rng.uniform(0, 255, (120, 400)), (0, 0), 1.2) * 3 % 255
+    d = sgbm_disparity(texture[:, :-37], texture[:, 37:], 30, 45)
+    found = d[np.isfinite(d)]
+    assert len(found) > 0.5 * d.size and np.mean(np.abs(found - 37) <= 0.25) > 0.95
+    # searched outside the range, the shift is not found: the range is what SGBM looks at
+    assert not np.any(np.abs(sgbm_disparity(texture[:, :-37], texture[:, 37:], 0, 15) - 37) < 1)
+    assert sgbm_range(30, 45) == (30, 16) and sgbm_range(19.96, 163.92) == (19, 160)
+    with pytest.raises(ParameterError, match="'block' parameter of sgbm_disparity"):
+        sgbm_disparity(texture, texture, 0, 16, block=4)
+
+
+def test_a_pair_the_rig_does_not_fit_shows_one_line_and_no_cloud(rendered):
+    from ismb_lab.scenes import synthetic_scene
+    from ismb_lab.widgets.rig_cloud import RigCloud
+
+    scene = rendered(synthetic_scene, 0)
+    widget = RigCloud(scene.rig, scene.left, scene.right, name="scene 0")
+    view = widget.view
+    objects = [id(o) for o in view.plot.objects]
+    assert widget.errors == [] and view.points.visible and widget.model.cloud is not None
+    widget.dense_toggle.value = True
+    assert view.dense.visible
+    widget.load(scene.right, scene.left, "swapped")           # the two files swapped
+    assert widget.errors == [] and widget.model.cloud is None and widget.model.refused
+    status = widget.status.value
+    assert "swapped refused: The 'left' parameter of for_camera" in status and "swap the two files" in status
+    assert "\n" not in status and "<br" not in status
+    assert not view.points.visible and not view.dense.visible and widget.dense_toggle.disabled
+    assert view.caption.value == "<small></small>"
+    assert not view.axes.visible and not any(t.visible for t in view.axis_texts)
+    assert [id(o) for o in view.plot.objects] == objects       # the same objects, nothing new
+    widget.load(scene.left, scene.right, "again")             # the right order shows it again
+    assert view.points.visible and view.dense.visible and not widget.dense_toggle.disabled and view.axes.visible
+    assert len(view.points.positions) == len(widget.model.cloud.points)
+
+
+def test_the_toggle_shows_sgbm_points_in_the_same_colours(rendered):
+    from ismb_lab.scenes import synthetic_scene
+    from ismb_lab.widgets.rig_cloud import RigCloud
+
+    scene = rendered(synthetic_scene, 0)
+    widget = RigCloud(scene.rig, scene.left, scene.right)
+    view, model = widget.view, widget.model
+    assert not view.dense.visible                              # the network first
+    widget.dense_toggle.value = True
+    assert view.dense.visible and widget.errors == []
+    shown = view.dense.positions
+    np.testing.assert_allclose(shown, np.column_stack([model.dense_xyz[:, 0], model.dense_xyz[:, 2],
+                                                       -model.dense_xyz[:, 1]]), rtol=1e-6)
+    np.testing.assert_allclose(view.dense.attribute, model.dense_xyz[:, 2], rtol=1e-6)
+    # one colour scale: from the nearest to the farthest point of either set, in both objects
+    z = np.concatenate([model.cloud.points[:, 2], model.dense_xyz[:, 2]])
+    assert list(view.points.color_range) == list(view.dense.color_range) == pytest.approx([z.min(), z.max()])
+    assert f"{z.min():.2f} m" in view.colours.value and f"{z.max():.2f} m" in view.colours.value
+    widget.dense_toggle.value = False
+    assert not view.dense.visible
+
+
+def test_each_axis_is_titled_once_and_no_colour_bar_sits_in_the_canvas(rendered):
+    from ismb_lab.scenes import synthetic_scene
+    from ismb_lab.widgets.cloud import AXIS_TITLES
+    from ismb_lab.widgets.rig_cloud import RigCloud
+
+    scene = rendered(synthetic_scene, 0)
+    view = RigCloud(scene.rig, scene.left, scene.right).view
+    # k3d's grid (each title on two edges) is off, and its colour bar, drawn for the object
+    # colorbar_object_id names, is given one without colours: none is drawn in the canvas
+    assert not view.plot.grid_visible and view.plot.colorbar_object_id == view.cameras.id
+    assert view.cameras.attribute.size == 0 and len(view.cameras.color_range) == 0   # k3d draws a bar for [lo, hi]
+    shown = [t.text for t in view.axis_texts if t.visible]
+    assert [shown.count(title) for title in AXIS_TITLES] == [1, 1, 1]
+    # the axes span what is drawn: the numbers of each axis lie within its points' range
+    every = np.vstack([view.points.positions, view.dense.positions, view.cameras.vertices])
+    numbers, axis = {0: [], 1: [], 2: []}, 0
+    for text in shown:
+        if text in AXIS_TITLES:
+            axis += 1
+        else:
+            numbers[axis].append(float(text))
+    for k in range(3):
+        assert len(numbers[k]) >= 2
+        assert every[:, k].min() - 1e-6 <= min(numbers[k]) and max(numbers[k]) <= every[:, k].max() + 1e-6
+    assert view.widget.children.index(view.colours) < view.widget.children.index(view.plot)
+
+
+def test_an_upload_and_a_rig_file_reach_the_model(rendered, tmp_path):
+    """Photos uploaded through the loader (named, in either order) are matched with the rig as
+    given; a rig file typed in the field replaces the rig and the pair is matched again."""
+    from ismb_lab.scenes import synthetic_scene
+    from ismb_lab.widgets.rig_cloud import RigCloud
+
+    scene = rendered(synthetic_scene, 0)
+    widget = RigCloud()
+    assert widget.model is None and "Load rig" in widget.status.value
+    rig = tmp_path / "rig.json"
+    rig.write_text(scene.rig.to_json())
+    widget.rig_field.value = str(rig)
+    widget.rig_button.click()
+    assert widget.errors == [] and widget.model.camera.focal_px == scene.rig.focal_px
+    assert "rig rig.json" in widget.status.value
+    _upload(widget.loader, [("right.png", _png(scene.right)), ("left.png", _png(scene.left))])
+    assert widget.errors == [] and widget.loader.errors == []
+    assert widget.model.cloud is not None and "right.png" not in widget.status.value
+    assert widget.status.value.startswith("left: already rectified")
+    assert widget.view.points.visible and len(widget.view.points.positions) == len(widget.model.cloud.points)
+    before = widget.model.cloud.points
+    other = tmp_path / "wide.json"
+    other.write_text(StereoCamera.pinhole(width=320, height=240, focal_px=300.0, baseline_m=0.2).to_json())
+    widget.rig_field.value = str(other)
+    widget.rig_button.click()                                  # the same pair, twice the baseline
+    assert widget.errors == [] and widget.model.cloud is not None
+    np.testing.assert_allclose(np.median(widget.model.cloud.points[:, 2]), 2 * np.median(before[:, 2]), rtol=1e-9)
+    widget.rig_field.value = str(tmp_path / "missing.json")
+    widget.rig_button.click()
+    assert len(widget.errors) == 1 and "'source' parameter of load_camera" in widget.status.value
