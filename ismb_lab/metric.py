@@ -276,8 +276,9 @@ def _misfit(matches, limit: float) -> str:
     # their neighbours (OpenCV's board 05 with the rig it helped calibrate: 46% within 1 px, the
     # median 16 px), while a pair the rig does not fit has almost none on their rows (4% turned
     # by 3 degrees, 2% swapped; 74-91% on the other 12 boards).
-    if np.mean(dy <= limit) < FIT_SHARE:
-        return f"rows {float(np.median(dy)):.1f} px apart at the median, {np.mean(dy <= limit):.0%} within {limit:g} px"
+    within = float(np.mean(dy <= limit))
+    if within < FIT_SHARE:
+        return f"rows {float(np.median(dy)):.1f} px apart at the median, {within:.0%} within {limit:g} px"
     share, n = negative_share(matches, 2 * limit)
     if n >= 8 and share > 0.5:
         return f"{share:.0%} of {n} matches on their rows at a negative disparity"
