@@ -28,7 +28,7 @@ LEFT_COLOUR, RIGHT_COLOUR = OKABE_ITO["yellow"], OKABE_ITO["bluish green"]
 
 
 def verdicts(pairs, targets, unknown=()) -> list:
-    """Each matched pair's verdict, as :func:`ismb_lab.evaluation.score` counts it: ``"correct"``,
+    """Each matched pair's verdict, as :func:`ismb_lab.tuning.evaluation.score` counts it: ``"correct"``,
     ``"wrong partner"`` (its left feature has another target), ``"extra"`` (its left feature has
     no target) or ``None`` (its left feature's truth is unknown).
 
@@ -37,7 +37,7 @@ def verdicts(pairs, targets, unknown=()) -> list:
     >>> verdicts([[0, 0], [1, 2], [3, 3], [4, 4]], [[0, 0], [1, 1]], unknown=[4])
     ['correct', 'wrong partner', 'extra', None]
     """
-    from .evaluation import Scorer
+    from .tuning.evaluation import Scorer
 
     pairs = np.asarray(pairs, int).reshape(-1, 2)
     names = (None, "correct", "wrong partner", "extra")     # Scorer.neuron_codes' codes 0-3
@@ -147,7 +147,7 @@ def plot_depth(ax, left, result, *, cmap: str = "plasma") -> dict:
     ax : matplotlib.axes.Axes
     left : (H, W) ndarray
         The scene's left image.
-    result : ismb_lab.depth.DepthResult
+    result : ismb_lab.depth.objects.DepthResult
 
     Returns
     -------
@@ -191,7 +191,7 @@ def frustum_lines(camera, depth_m: float) -> np.ndarray:
 
     Examples
     --------
-    >>> from ismb_lab.camera import StereoCamera
+    >>> from ismb_lab.cameras.camera import StereoCamera
     >>> lines = frustum_lines(StereoCamera(), 3.0)
     >>> lines.shape, lines[0].round(3).tolist()
     ((16, 2, 3), [[0.0, 0.0, 0.0], [-1.6, -1.2, 3.0]])

@@ -9,10 +9,10 @@ import cv2
 import numpy as np
 import pytest
 
-from ismb_lab._validation import ParameterError
-from ismb_lab.datasets import CHESSBOARD_PAIRS, chessboard_pairs
-from ismb_lab.camera import MAX_ZOOM, BoardPair, load_camera
-from ismb_lab.rig import calibrate_rig, leave_one_out, outliers, recalibrate
+from ismb_lab._core.validation import ParameterError
+from ismb_lab.images.datasets import CHESSBOARD_PAIRS, chessboard_pairs
+from ismb_lab.cameras.camera import MAX_ZOOM, BoardPair, load_camera
+from ismb_lab.cameras.rig import calibrate_rig, leave_one_out, outliers, recalibrate
 
 
 def cli(*args):
@@ -160,7 +160,7 @@ def test_calibrate_from_refusals(runs, opencv_data):
 def test_calibration_runs_opencv_on_one_thread_and_restores_its_setting(monkeypatch):
     """OpenCV's calibration on several threads gives results that differ in the 6th digit from
     run to run under load; on one thread the same corners give the same rig."""
-    import ismb_lab.rig
+    import ismb_lab.cameras.rig
 
     seen, real = [], cv2.calibrateCamera
 
@@ -168,7 +168,7 @@ def test_calibration_runs_opencv_on_one_thread_and_restores_its_setting(monkeypa
         seen.append(cv2.getNumThreads())
         return real(*args, **kwargs)
 
-    monkeypatch.setattr(ismb_lab.rig.cv2, "calibrateCamera", calibrate_camera)
+    monkeypatch.setattr(ismb_lab.cameras.rig.cv2, "calibrateCamera", calibrate_camera)
     before = cv2.getNumThreads()
     cv2.setNumThreads(3)
     try:

@@ -9,11 +9,11 @@ import pytest
 
 import ismb_lab
 from ismb_lab import ParameterError
-from ismb_lab.camera import BASELINE_M, FOCAL_PX, StereoCamera
-from ismb_lab.depth import DepthConfig, depth_from_matches
-from ismb_lab.io import load_pair
-from ismb_lab.matching import MatchConfig, match, prepare
-from ismb_lab.metric import match_points, mutual_best, prepare_for_camera, row_tolerance, subpixel
+from ismb_lab.cameras.camera import BASELINE_M, FOCAL_PX, StereoCamera
+from ismb_lab.depth.objects import DepthConfig, depth_from_matches
+from ismb_lab.images.io import load_pair
+from ismb_lab.matching.pipeline import MatchConfig, match, prepare
+from ismb_lab.matching.metric import match_points, mutual_best, prepare_for_camera, row_tolerance, subpixel
 from ismb_lab.plotting import frustum_lines
 from ismb_lab.scenes import lab_scene, synthetic_scene, toy_car_scene
 

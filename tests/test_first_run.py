@@ -7,7 +7,7 @@ import sys
 
 import pytest
 
-from ismb_lab import _numba
+from ismb_lab._core import numba_cache as _numba
 
 
 def test_cold_is_true_until_numba_has_cached_the_kernel(tmp_path, monkeypatch):

@@ -24,9 +24,9 @@ POSIX = pytest.mark.skipif(not hasattr(os, "getuid"), reason="POSIX users")
 PROBE = """
 import json, os
 import numpy as np
-import ismb_lab.dynamics, ismb_lab.similarity
+import ismb_lab.network.dynamics, ismb_lab.network.similarity
 from numba.core import config
-ismb_lab.similarity._block_sum(np.arange(3.0), 0, 3)   # compiles, and writes its cache
+ismb_lab.network.similarity._block_sum(np.arange(3.0), 0, 3)   # compiles, and writes its cache
 print(json.dumps({"variable": os.environ.get("NUMBA_CACHE_DIR"), "config": config.CACHE_DIR}))
 """
 
@@ -110,7 +110,7 @@ fixtures = importlib.util.module_from_spec(spec)
 spec.loader.exec_module(fixtures)
 report = fixtures.warm_kernels()
 import ismb_lab
-from ismb_lab._numba import cold
+from ismb_lab._core.numba_cache import cold
 for info in pkgutil.walk_packages(ismb_lab.__path__, "ismb_lab."):
     if not info.name.endswith(".__main__"):
         importlib.import_module(info.name)

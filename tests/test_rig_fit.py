@@ -6,10 +6,10 @@ import numpy as np
 import pytest
 
 from ismb_lab import ParameterError
-from ismb_lab.camera import StereoCamera, load_camera
+from ismb_lab.cameras.camera import StereoCamera, load_camera
 from ismb_lab.cli import main
-from ismb_lab.datasets import CHESSBOARD_PAIRS
-from ismb_lab.rig import calibrate_rig, recalibrate
+from ismb_lab.images.datasets import CHESSBOARD_PAIRS
+from ismb_lab.cameras.rig import calibrate_rig, recalibrate
 
 
 @pytest.fixture(scope="module")
@@ -134,8 +134,8 @@ def test_rectify_with_the_rig_refuses_a_pair_it_does_not_fit(opencv_data, rigs, 
 
 
 def test_the_row_spread_scales_with_the_image():
-    from ismb_lab.metric import fit_rows_px
-    from ismb_lab.rectify import row_spread_px
+    from ismb_lab.matching.metric import fit_rows_px
+    from ismb_lab.images.rectify import row_spread_px
 
     assert row_spread_px((480, 640)) == 1.0 and row_spread_px((3000, 4000)) == 6.25
     assert fit_rows_px(StereoCamera(size=(4000, 3000), rms=0.4)) == 6.25
@@ -143,8 +143,8 @@ def test_the_row_spread_scales_with_the_image():
 
 
 def test_photo_config_scales_the_corner_counts_with_the_photo():
-    from ismb_lab.matching import MatchConfig
-    from ismb_lab.metric import photo_config
+    from ismb_lab.matching.pipeline import MatchConfig
+    from ismb_lab.matching.metric import photo_config
 
     thesis = photo_config(StereoCamera(size=(320, 240)))
     assert (thesis.n_min, thesis.n_max) == (MatchConfig().n_min, MatchConfig().n_max)
@@ -168,7 +168,7 @@ def test_every_board_fits_the_rig_it_helped_calibrate(full, opencv_data, tmp_pat
     """Half of board 05's robust matches are squares matched to their neighbours: a median row
     test refused it with the rig calibrated on all 13 boards (16 px).  The share on their rows
     does not, and still refuses the swapped pair."""
-    from ismb_lab.metric import for_camera
+    from ismb_lab.matching.metric import for_camera
 
     path = tmp_path / "rig.json"
     path.write_text(full.to_json())

@@ -8,7 +8,7 @@ import pytest
 from scipy.ndimage import binary_dilation, map_coordinates
 
 from ismb_lab import ParameterError, ParameterTypeError
-from ismb_lab.camera import StereoCamera
+from ismb_lab.cameras.camera import StereoCamera
 from ismb_lab.scenes import (ROI, Box, Plane, Scene, Texture, cast, random_texture, render,
                              synthetic_scene, true_matches)
 

@@ -26,15 +26,15 @@ import os
 import sys
 
 from .. import __version__
-from .._files import OutputError
+from .._core.files import OutputError
 from ._guard import LIMITS, Interrupts, interrupted_line, preflight
 
 __all__ = ["COMMANDS", "UsageError", "build_parser", "main"]
 
 def _epilog() -> str:
-    from .._files import MAX_JSON_BYTES
-    from ..io import MAX_PIXELS, MOST_PIXELS, PIXELS_VARIABLE
-    from ..targets import MAX_BYTES, MAX_PAIRS
+    from .._core.files import MAX_JSON_BYTES
+    from ..images.io import MAX_PIXELS, MOST_PIXELS, PIXELS_VARIABLE
+    from ..labels.targets import MAX_BYTES, MAX_PAIRS
     from ._guard import MOST
 
     return (f"limits (each set by its environment variable, a whole number from 1 to {MOST}; a value typed "
@@ -221,10 +221,10 @@ def _announce_compiling() -> None:
     """One line on a terminal's stderr before numba compiles the network's kernels (the first run
     for this user, or after an upgrade): that run is silent for up to a minute otherwise.
     Not said when stderr is a file or a pipe, where a script reads what the command reports."""
-    from .._kernel import _solve
-    from .._numba import cold
+    from ..network.kernel import run_network
+    from .._core.numba_cache import cold
 
-    if sys.stderr.isatty() and cold(_solve):
+    if sys.stderr.isatty() and cold(run_network):
         print("ismb-lab: compiling the network's kernels, once for this installation and user "
               "(up to a minute); later runs start at once", file=sys.stderr, flush=True)
 

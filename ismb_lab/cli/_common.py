@@ -12,14 +12,14 @@ import sys
 from dataclasses import replace
 from pathlib import Path
 
-from .._files import check_input
-from .._validation import ParameterError, ParameterTypeError
-from ..genetic import GAConfig
-from ..hopfield import RULES
-from ..dynamics import STOP_RULES
-from ..matching import MatchConfig, match
-from ..methods import DEFAULT_METHOD, all_genes, get_method, method_names
-from ..solvers import SOLVERS, NetworkSolver
+from .._core.files import check_input
+from .._core.validation import ParameterError, ParameterTypeError
+from ..tuning.genetic import GAConfig
+from ..network.hopfield import RULES
+from ..network.dynamics import STOP_RULES
+from ..matching.pipeline import MatchConfig, match
+from ..network.methods import DEFAULT_METHOD, all_genes, get_method, method_names
+from ..network.solvers import SOLVERS, NetworkSolver
 from ._guard import UsageError, interrupted
 
 __all__ = ["ParameterError", "ParameterTypeError", "Parser", "UsageError", "add_ga_options", "given",
@@ -118,12 +118,12 @@ def window_record(config: MatchConfig, auto: bool) -> dict:
 
 
 def seed(text: str) -> int:
-    """An argparse type: a seed from 0 to :data:`ismb_lab._validation.MAX_SEED` (2**63 - 1).
+    """An argparse type: a seed from 0 to :data:`ismb_lab._core.validation.MAX_SEED` (2**63 - 1).
 
     >>> seed("7")
     7
     """
-    from .._validation import MAX_SEED
+    from .._core.validation import MAX_SEED
 
     text = text.strip()
     value = int(text) if text.isascii() and text.isdigit() and len(text) <= len(str(MAX_SEED)) else -1
@@ -182,7 +182,7 @@ def resolve_recipe(args, solver: str, defaults=None):
     changes in the file's recipe, and a version-1 file whose solver this command did not
     use before, are said once each on stderr.
     """
-    from ..recipe import Recipe, load_recipe
+    from ..matching.recipe import Recipe, load_recipe
 
     loaded = None
     if args.params_file is not None:
@@ -218,7 +218,7 @@ def resolve_recipe(args, solver: str, defaults=None):
 def configured_solver(args, base):
     """`base`, or the solver --solver names (with `base`'s options if it is the same one), with
     --stop-rule and --rule."""
-    from ..solvers import get_solver
+    from ..network.solvers import get_solver
 
     chosen = base if args.solver is None or args.solver == base.name else args.solver
     settings = {"stop_rule": getattr(args, "stop_rule", None), "rule": getattr(args, "rule", None)}
@@ -234,7 +234,7 @@ def configured_solver(args, base):
 
 def with_settings(solver, args):
     """`solver` (a name or a Solver) with the ``--solver-option`` values given; a bad one is a usage error."""
-    from ..solvers import get_solver
+    from ..network.solvers import get_solver
 
     try:
         return get_solver(solver, "ismb-lab", "--solver-option", **solver_settings(args))
@@ -304,7 +304,7 @@ def progress_bar(total: int, desc: str, unit: str = "gen"):
 class BestSoFar:
     """A GA progress callback's companion: keeps the latest record, to save it when interrupted.
 
-    `recipe` (:class:`ismb_lab.recipe.Recipe`) is what the fit runs for; the file written holds it
+    `recipe` (:class:`ismb_lab.matching.recipe.Recipe`) is what the fit runs for; the file written holds it
     with the best parameters so far.
     """
 
@@ -317,8 +317,8 @@ class BestSoFar:
     def save(self, path) -> int:
         """Write the recipe with the best parameters so far to `path` (if given and a generation
         finished); 130."""
-        from ..recipe import save_recipe
-        from ..tuning import to_params
+        from ..matching.recipe import save_recipe
+        from ..tuning.fitness import to_params
 
         if self.record is None:
             raise KeyboardInterrupt

@@ -5,9 +5,9 @@
   :func:`deferred_signals` (the write of what an interrupted command keeps) a signal
   is only recorded, so that a second one cannot cut that write short.
 * :func:`preflight`: the limits, the inputs (regular files only) and the outputs
-  (:func:`ismb_lab._files.check_output`) are checked before any long work starts.
+  (:func:`ismb_lab._core.files.check_output`) are checked before any long work starts.
 * :func:`json_text` and :func:`save_figure`: every JSON and plot output is
-  written atomically through :func:`ismb_lab._files.atomic_write_bytes`.
+  written atomically through :func:`ismb_lab._core.files.atomic_write_bytes`.
 
 Limits (each raised, or lowered, by an environment variable; ``ismb-lab --help`` lists them):
 
@@ -23,15 +23,15 @@ ISMB_LAB_MAX_JOBS          64         ``--jobs`` of evaluate, worker processes
 =========================  =========  =============================================
 
 Each variable is a whole number from 1 to :data:`MOST` (ISMB_LAB_MAX_PIXELS: to
-:data:`ismb_lab.io.MOST_PIXELS`).  A limit bounds what a command would use, typed or
+:data:`ismb_lab.images.io.MOST_PIXELS`).  A limit bounds what a command would use, typed or
 not: a value typed above it is refused in one line, and an option left out whose
 default is above it (``ISMB_LAB_MAX_GENERATIONS=5`` against tune's 500 generations) is
 lowered to the limit, with a note on stderr.  So a teacher can lower a limit for a
 class, and a plain ``ismb-lab tune`` still runs, within it.
 
-A targets file holds at most :data:`ismb_lab.targets.MAX_PAIRS` pairs in
-:data:`ismb_lab.targets.MAX_BYTES` bytes, and a params, rig or manifest file at most
-:data:`ismb_lab._files.MAX_JSON_BYTES` bytes (fixed, not variables).  Each command declares
+A targets file holds at most :data:`ismb_lab.labels.targets.MAX_PAIRS` pairs in
+:data:`ismb_lab.labels.targets.MAX_BYTES` bytes, and a params, rig or manifest file at most
+:data:`ismb_lab._core.files.MAX_JSON_BYTES` bytes (fixed, not variables).  Each command declares
 the defaults of its limited options (``limit_defaults``) and the files it reads and writes
 (``declare_files``, a :class:`Files`), so this module knows no command by name.
 """
@@ -47,7 +47,7 @@ import threading
 from pathlib import Path
 from typing import NamedTuple
 
-from .._files import atomic_write_bytes, check_input, check_output
+from .._core.files import atomic_write_bytes, check_input, check_output
 
 __all__ = ["LIMITS", "MOST", "Interrupts", "UsageError", "deferred_signals", "interrupted", "interrupted_line",
            "is_interruption", "json_text", "limit", "preflight", "save_figure"]
@@ -93,8 +93,8 @@ def limit(name: str) -> int:
 def _short(text) -> str:
     """`text` (or a number) cut to 40 characters, for a one-line message."""
     if isinstance(text, int):
-        from .._validation import _shown_int
-        return _shown_int(text)
+        from .._core.validation import shown_int
+        return shown_int(text)
     return text if len(text) <= 40 else text[:37] + "..."
 
 
@@ -308,7 +308,7 @@ def preflight(args, usage_error) -> None:
     the module's description).  The files are those the command declares (:class:`Files`):
     every input a regular file, and no output an input, a file any input names, a built-in
     file read, or another output, whatever link or spelling leads there.  Raises `usage_error`
-    (or :class:`ismb_lab._files.OutputError`) with a one-line message.
+    (or :class:`ismb_lab._core.files.OutputError`) with a one-line message.
     """
     _bound(args, usage_error)
     declared = files_of(args)
@@ -341,7 +341,7 @@ def output_path(text: str) -> Path:
     """
     import argparse
 
-    from .._files import OutputError, refuse_folder_name
+    from .._core.files import OutputError, refuse_folder_name
 
     try:
         refuse_folder_name(text, "")

@@ -12,7 +12,7 @@ __all__ = ["add_parser", "files", "report", "run"]
 
 
 def add_parser(sub) -> None:
-    from ..rig import BOARD, MAX_ZOOM, OUTLIER_PX, OUTLIER_RATIO, SQUARE_M
+    from ..cameras.rig import BOARD, MAX_ZOOM, OUTLIER_PX, OUTLIER_RATIO, SQUARE_M
 
     c = sub.add_parser("calibrate", help="calibrate a fixed rig from chessboard pairs",
                        description="Find the chessboard in each pair, calibrate both cameras and the "
@@ -50,12 +50,12 @@ def files(args) -> Files:
 
 def report(rig, held=()) -> str:
     """The table of the rig's pairs, their errors and the outliers' marks; with `held`
-    (:func:`ismb_lab.rig.leave_one_out`), each pair's errors when held out, and their summary."""
+    (:func:`ismb_lab.cameras.rig.leave_one_out`), each pair's errors when held out, and their summary."""
     import math
 
     import numpy as np
 
-    from ..rig import OUTLIER_PX, OUTLIER_RATIO, outliers
+    from ..cameras.rig import OUTLIER_PX, OUTLIER_RATIO, outliers
 
     marked = set(outliers(rig.pairs))
     width = max([len("left")] + [len(p.left) for p in rig.pairs])
@@ -84,7 +84,7 @@ def report(rig, held=()) -> str:
 
 
 def _board(text: str):
-    from ..camera import MAX_BOARD_SIDE
+    from ..cameras.camera import MAX_BOARD_SIDE
     from ._common import UsageError
 
     parts = [p.strip() for p in text.lower().split("x")]
@@ -97,8 +97,8 @@ def _board(text: str):
 
 
 def _from_rig(args):
-    from ..camera import load_camera
-    from ..rig import recalibrate
+    from ..cameras.camera import load_camera
+    from ..cameras.rig import recalibrate
     from ._common import UsageError
 
     if args.pairs:
@@ -109,9 +109,9 @@ def _from_rig(args):
 
 
 def run(args) -> int:
-    from .._files import atomic_write_text
-    from ..camera import MAX_SQUARE_M, MIN_SQUARE_M
-    from ..rig import BOARD, SQUARE_M, calibrate_rig
+    from .._core.files import atomic_write_text
+    from ..cameras.camera import MAX_SQUARE_M, MIN_SQUARE_M
+    from ..cameras.rig import BOARD, SQUARE_M, calibrate_rig
     from ._common import UsageError, progress_bar
 
     if args.drop and args.source is None:
@@ -130,7 +130,7 @@ def run(args) -> int:
                  for n in range(0, len(args.pairs), 2)]
         with progress_bar(len(pairs), "chessboards", unit="pair") as bar:
             rig = calibrate_rig(pairs, board, square_m, progress=lambda _: bar.update(1))
-    from ..rig import MIN_PAIRS, leave_one_out
+    from ..cameras.rig import MIN_PAIRS, leave_one_out
 
     held = leave_one_out(rig) if len(rig.pairs) > MIN_PAIRS else ()
     atomic_write_text(args.out, rig.to_json())

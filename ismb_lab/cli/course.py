@@ -8,7 +8,7 @@ __all__ = ["add_parser", "run"]
 
 
 def add_parser(sub) -> None:
-    from ..course import ASSIGNMENTS
+    from ..teaching.course import ASSIGNMENTS
 
     c = sub.add_parser("course", help="the nbgrader course (deploy/course/README.md)",
                        description="The nbgrader course of deploy/course/.")
@@ -28,7 +28,7 @@ def add_parser(sub) -> None:
 
 
 def run(args) -> int:
-    from ..course import ASSIGNMENTS, make_source
+    from ..teaching.course import ASSIGNMENTS, make_source
 
     names = sorted(ASSIGNMENTS) if args.assignment == "all" else [args.assignment]
     for name in names:

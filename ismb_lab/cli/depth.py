@@ -5,10 +5,10 @@ from __future__ import annotations
 import math
 from pathlib import Path
 
-from .._files import atomic_write_text
-from .._validation import ParameterError
-from ..depth import GROUPINGS, DepthConfig
-from ..depth_demo import DEPTH_MATCH_CONFIG, DEPTH_METHOD, DEPTH_PARAMS, DEPTH_SOLVER
+from .._core.files import atomic_write_text
+from .._core.validation import ParameterError
+from ..depth.objects import GROUPINGS, DepthConfig
+from ..depth.pipeline import DEPTH_MATCH_CONFIG, DEPTH_METHOD, DEPTH_PARAMS, DEPTH_SOLVER
 from ._common import (UsageError, add_matching_options, add_solver_option, given, match_config, resolve_recipe,
                       seed_setting, window_record)
 from ._guard import Files, add_force_option, json_text, output_path, save_figure
@@ -70,17 +70,17 @@ def files(args) -> Files:
 
 
 def run(args) -> int:
-    from ..depth_demo import relative_depth
+    from ..depth.pipeline import relative_depth
 
     calibration = {}
     if args.rig is not None:
-        from .._files import check_input
-        from ..camera import load_camera
+        from .._core.files import check_input
+        from ..cameras.camera import load_camera
 
         if args.focal_px is not None or args.baseline_m is not None:
             raise UsageError("--rig gives the focal length and the baseline: leave out --focal-px and --baseline-m")
         rig = load_camera(check_input(args.rig, what="--rig"))
-        from ..io import load_image
+        from ..images.io import load_image
 
         shape = load_image(args.bg_left).shape
         if (shape[1], shape[0]) != tuple(rig.size):
@@ -102,12 +102,12 @@ def run(args) -> int:
     method = recipe.method.name
     config = match_config(args, DEPTH_MATCH_CONFIG)
     if config.shift == "auto":
-        from ..io import load_pair
-        from ..matching import auto_window
+        from ..images.io import load_pair
+        from ..matching.pipeline import auto_window
 
         background = load_pair(args.bg_left, args.bg_right)
         if args.rig is not None:
-            from ..metric import rig_config
+            from ..matching.metric import rig_config
 
             try:
                 config = rig_config(rig, config, background)
@@ -148,13 +148,13 @@ def run(args) -> int:
         atomic_write_text(args.json, json_text({**result.to_dict(),
                                                 "candidate_window": window_record(config, args.shift == "auto")}))
     if args.ply is not None:
-        from .._files import atomic_write_bytes
+        from .._core.files import atomic_write_bytes
 
         atomic_write_bytes(args.ply, _ply(args, result, rig if args.rig is not None else None))
     if args.plot is not None:
         from matplotlib.figure import Figure
 
-        from ..io import load_pair
+        from ..images.io import load_pair
         from ..plotting import plot_depth
         fig = Figure(figsize=(6, 4.5), layout="constrained")
         ax = fig.subplots()
@@ -169,9 +169,9 @@ def _ply(args, result, rig) -> bytes:
     the result's focal length and baseline at the scene's image centre (``DepthResult.points``)."""
     import numpy as np
 
-    from ..camera import StereoCamera
-    from ..io import load_image
-    from ..ply import ply_bytes
+    from ..cameras.camera import StereoCamera
+    from ..images.io import load_image
+    from ..matching.ply import ply_bytes
 
     left = load_image(args.scene_left)
     h, w = left.shape

@@ -6,9 +6,9 @@ import os
 import sys
 from pathlib import Path
 
-from .._files import atomic_write_text
-from ..protocol import format_protocol, load_manifest, protocol
-from ..solvers import DEFAULT_SOLVER, SOLVERS
+from .._core.files import atomic_write_text
+from ..tuning.protocol import format_protocol, load_manifest, protocol
+from ..network.solvers import DEFAULT_SOLVER, SOLVERS
 from ._common import (DEFAULT_METHOD, BestSoFar, UsageError, add_ga_options, add_method_option, given, seed,
                       add_one_to_one_option, add_solver_option, default_of, ga_config, progress_bar, said_changes)
 from ._guard import (LIMITS, Files, add_force_option, deferred_signals, interrupted, interrupted_line,
@@ -67,7 +67,7 @@ def add_parser(sub) -> None:
 
 def limit_defaults() -> dict:
     """The defaults of evaluate's limited options: the protocol's, which evaluate falls back to."""
-    from ..genetic import GAConfig
+    from ..tuning.genetic import GAConfig
 
     ga = GAConfig()
     return {"population": ga.population, "generations": ga.generations, "seeds": DEFAULTS["seeds"],
@@ -77,7 +77,7 @@ def limit_defaults() -> dict:
 def files(args) -> Files:
     """The manifest and the recipe read, with every file the manifest names or its built-in
     sources read; the report written."""
-    from ..protocol import manifest_files
+    from ..tuning.protocol import manifest_files
 
     return Files(inputs=(("manifest", args.manifest),) + given(("--recipe", args.recipe)),
                  reads=tuple(manifest_files(args.manifest)), outputs=given(("--json", args.json)))
@@ -121,9 +121,9 @@ def given_recipe(args):
     """The method, solver, fit seeds and one-to-one of --recipe (if any), replaced by the options given."""
     from dataclasses import replace
 
-    from .._files import check_input
-    from ..recipe import Recipe, load_recipe
-    from ..solvers import get_solver
+    from .._core.files import check_input
+    from ..matching.recipe import Recipe, load_recipe
+    from ..network.solvers import get_solver
 
     if args.recipe is None:
         base = Recipe(args.method or DEFAULT_METHOD, fit_seeds=DEFAULTS["fit_seeds"])

@@ -7,10 +7,10 @@ import math
 import sys
 from pathlib import Path
 
-from .._files import atomic_write_text
-from .._validation import ParameterError
-from ..matching import MatchConfig
-from ..solvers import DEFAULT_SOLVER
+from .._core.files import atomic_write_text
+from .._core.validation import ParameterError
+from ..matching.pipeline import MatchConfig
+from ..network.solvers import DEFAULT_SOLVER
 from ._common import (add_matching_options, add_solver_option, add_solver_settings, given, match_config,
                       resolve_recipe, seed_setting, window_record)
 from ._guard import Files, add_force_option, json_text, output_path, save_figure
@@ -56,9 +56,9 @@ def files(args) -> Files:
 
 def _prepared(args):
     """The prepared pair, after refusing a swapped one and warning about an unrectified one."""
-    from ..io import load_pair
-    from ..matching import check_window, prepare
-    from ..rectify import check_for_matching
+    from ..images.io import load_pair
+    from ..matching.pipeline import check_window, prepare
+    from ..images.rectify import check_for_matching
     from ._common import UsageError
 
     config = match_config(args)
@@ -83,12 +83,12 @@ def flat(pair) -> bool:
 
 def _rig_pair(args):
     """The rig, the pair rectified with it (unless it already is) and the match settings."""
-    from .._files import check_input
-    from ..camera import load_camera
-    from ..io import load_pair
-    from ..matching import check_window
-    from ..metric import for_camera, photo_config, row_tolerance
-    from ..rectify import check_for_matching
+    from .._core.files import check_input
+    from ..cameras.camera import load_camera
+    from ..images.io import load_pair
+    from ..matching.pipeline import check_window
+    from ..matching.metric import for_camera, photo_config, row_tolerance
+    from ..images.rectify import check_for_matching
     from ._guard import limit
 
     camera = load_camera(check_input(args.rig, what="--rig"))
@@ -114,7 +114,7 @@ def _rig_pair(args):
 def rig_record(args, camera, how: str) -> dict:
     """What the JSON says of the rig: its file (path and SHA-256), f, B, the RMS error and the
     search band it gave, and how the pair was taken."""
-    from ..metric import row_tolerance
+    from ..matching.metric import row_tolerance
 
     return {"path": str(args.rig), "sha256": hashlib.sha256(Path(args.rig).read_bytes()).hexdigest(),
             "focal_px": camera.focal_px, "baseline_m": camera.baseline_m,
@@ -127,7 +127,7 @@ def ply_file(result, camera, pair, xyz) -> bytes:
     pixel at its corner."""
     import numpy as np
 
-    from ..ply import ply_bytes
+    from ..matching.ply import ply_bytes
 
     keep = np.all(np.isfinite(xyz), axis=1)
     xy = np.rint(result.left_match_xy[keep]).astype(int)
@@ -139,7 +139,7 @@ def ply_file(result, camera, pair, xyz) -> bytes:
 
 
 def run(args) -> int:
-    from ..matching import match
+    from ..matching.pipeline import match
 
     from ._common import UsageError
 
@@ -150,7 +150,7 @@ def run(args) -> int:
     params = recipe.params
     camera = None
     if args.rig is not None:
-        from ..metric import match_with_camera
+        from ..matching.metric import match_with_camera
 
         camera, pair, config, how = _rig_pair(args)
         prepared, found, result = match_with_camera(pair, config, camera, **recipe.match_settings(),
@@ -181,7 +181,7 @@ def run(args) -> int:
     if camera is not None:
         import numpy as np
 
-        from ..metric import match_points
+        from ..matching.metric import match_points
 
         record["rig"] = rig_record(args, camera, how)
         xyz = match_points(result, camera)
@@ -194,7 +194,7 @@ def run(args) -> int:
     if args.json is not None:
         atomic_write_text(args.json, json_text(record))
     if args.ply is not None:
-        from .._files import atomic_write_bytes
+        from .._core.files import atomic_write_bytes
 
         atomic_write_bytes(args.ply, ply_file(result, camera, prepared.pair, xyz))
     if args.plot is not None:

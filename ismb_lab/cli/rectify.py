@@ -6,7 +6,7 @@ import os
 import sys
 from pathlib import Path
 
-from .._files import atomic_write_bytes, atomic_write_text
+from .._core.files import atomic_write_bytes, atomic_write_text
 from ._guard import Files, add_force_option, json_text
 
 __all__ = ["add_parser", "run"]
@@ -15,7 +15,7 @@ FILES = ("left.png", "right.png", "rectify.json")
 
 
 def add_parser(sub) -> None:
-    from ..rectify import WORKING_SIDE
+    from ..images.rectify import WORKING_SIDE
 
     r = sub.add_parser("rectify", help="rectify a stereo pair (hand-held photos, or a calibrated rig's)",
                        description="Find robust matches (SIFT, ratio test, mutual), estimate the "
@@ -53,14 +53,14 @@ def files(args) -> Files:
 
 
 def run(args) -> int:
-    from ..io import png_bytes
-    from ..rectify import rectify_pair
+    from ..images.io import png_bytes
+    from ..images.rectify import rectify_pair
 
     folder = Path(args.out_dir)
     targets = [folder / name for name in FILES]
     if args.rig is not None:
-        from ..camera import load_camera
-        from ..metric import rectify_for_camera
+        from ..cameras.camera import load_camera
+        from ..matching.metric import rectify_for_camera
 
         result = rectify_for_camera(args.left, args.right, load_camera(args.rig), "ismb-lab rectify --rig")
     else:

@@ -29,8 +29,8 @@ def files(args):
 def check_outputs(out: Path) -> None:
     """Before rendering: every file render writes is new or a regular, writable file, and every
     folder on the way below `out` is a real folder (no link, device, FIFO or read-only file)."""
-    from .._files import OutputError, check_replace
-    from ..gallery import gallery_files
+    from .._core.files import OutputError, check_replace
+    from ..scenes.gallery import gallery_files
 
     checked = set()
     for path in gallery_files(out):
@@ -47,7 +47,7 @@ def check_outputs(out: Path) -> None:
 
 
 def run(args) -> int:
-    from ..gallery import render_gallery
+    from ..scenes.gallery import render_gallery
 
     check_outputs(Path(args.out))
     for path in render_gallery(args.out):

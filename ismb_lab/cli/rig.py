@@ -41,7 +41,7 @@ def _centre(text: str) -> tuple:
 
 
 def add_parser(sub) -> None:
-    from ..camera import MAX_BASELINE_M, UNITS
+    from ..cameras.camera import MAX_BASELINE_M, UNITS
 
     r = sub.add_parser("rig", help="write a rig file from a factory calibration (no chessboard)",
                        description="Write the rig file that 'calibrate' writes, for a camera calibrated at the "
@@ -75,7 +75,7 @@ def files(args) -> Files:
 
 
 def _factory(args):
-    from ..camera import MAX_BASELINE_M, StereoCamera
+    from ..cameras.camera import MAX_BASELINE_M, StereoCamera
     from ._common import UsageError
 
     missing = [f"--{name}" for name, value in (("focal-px", args.focal_px), ("baseline-m", args.baseline_m),
@@ -100,7 +100,7 @@ def _factory(args):
 
 
 def _opencv(args):
-    from ..camera import StereoCamera
+    from ..cameras.camera import StereoCamera
     from ._common import UsageError
 
     given = [f"--{name}" for name, value in (("focal-px", args.focal_px), ("baseline-m", args.baseline_m),
@@ -111,8 +111,8 @@ def _opencv(args):
 
 
 def run(args) -> int:
-    from .._files import atomic_write_text
-    from ..metric import row_tolerance
+    from .._core.files import atomic_write_text
+    from ..matching.metric import row_tolerance
 
     rig = _opencv(args) if args.opencv else _factory(args)
     warnings = rig.warnings()

@@ -57,9 +57,9 @@ def files(args) -> Files:
 
 
 def _inputs(args) -> tuple[list, object]:
-    """The input files, and what :func:`~ismb_lab.classroom.pool` takes (a list or, for a
+    """The input files, and what :func:`~ismb_lab.labels.classroom.pool` takes (a list or, for a
     collected folder, ``{student: files}``)."""
-    from ..classroom import collected
+    from ..labels.classroom import collected
 
     folders = [p for p in args.files if p.is_dir()]
     if not folders:
@@ -74,8 +74,8 @@ def _inputs(args) -> tuple[list, object]:
 
 
 def run(args) -> int:
-    from ..classroom import pool
-    from ..targets import load_targets, save_targets
+    from ..labels.classroom import pool
+    from ..labels.targets import load_targets, save_targets
 
     if args.min_votes < 1:
         raise UsageError(f"--min-votes must be 1 or more, not {args.min_votes}")

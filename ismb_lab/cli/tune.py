@@ -6,12 +6,12 @@ import sys
 from dataclasses import replace
 from pathlib import Path
 
-from ..genetic import GAConfig
-from ..matching import MatchConfig
-from ..protocol import Case
-from ..recipe import Recipe, save_recipe
-from ..solvers import DEFAULT_SOLVER
-from .. import tuning
+from ..tuning.genetic import GAConfig
+from ..matching.pipeline import MatchConfig
+from ..tuning.protocol import Case
+from ..matching.recipe import Recipe, save_recipe
+from ..network.solvers import DEFAULT_SOLVER
+from ..tuning import fitness as tuning
 from ._common import (DEFAULT_METHOD, UsageError, add_feature_options, seed, add_ga_options, add_method_option,
                       add_solver_option, add_solver_settings, default_of, ga_config, match_config, progress_bar,
                       with_settings)
@@ -20,7 +20,7 @@ from ._guard import (Files, add_force_option, deferred_signals, interrupted, int
 
 __all__ = ["add_parser", "run", "why_negative"]
 
-#: The GA seed and the fitness's update-order seeds that :func:`ismb_lab.tuning.tune` uses by default.
+#: The GA seed and the fitness's update-order seeds that :func:`ismb_lab.tuning.fitness.tune` uses by default.
 GA_SEED, FIT_SEEDS = default_of(tuning.tune, "rng"), default_of(tuning.tune, "seeds")
 
 

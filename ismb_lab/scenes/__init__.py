@@ -1,6 +1,6 @@
 """Synthetic stereo scenes with exact ground truth, by ray casting.
 
-A tiny deterministic renderer for testing the matcher: a stereo :class:`~ismb_lab.camera.StereoCamera`, a
+A tiny deterministic renderer for testing the matcher: a stereo :class:`~ismb_lab.cameras.camera.StereoCamera`, a
 list of textured primitives (:class:`Plane`, :class:`Box`), and :func:`render`,
 which ray-casts both views and returns a :class:`Scene` holding the grey
 images, the depth and disparity maps of the left view, the occlusion mask and
@@ -14,7 +14,7 @@ The left camera sits at the origin looking along ``+z``; ``x`` points right and
 ``y`` *down*, as in images.  The right camera sits at ``(baseline_m, 0, 0)``,
 parallel to the left one, possibly rolled about its optical axis and with its
 image shifted down (an unrectified webcam pair).  Points follow
-:mod:`ismb_lab.coords`: ``(x, y)`` = (column, row), pixel centres at integers,
+:mod:`ismb_lab.images.coords`: ``(x, y)`` = (column, row), pixel centres at integers,
 horizontal disparity ``x_left - x_right``.  For the parallel rig a point at depth
 ``Z`` has disparity ``focal_px * baseline_m / Z`` exactly.
 
@@ -28,7 +28,7 @@ Anything with these three methods can be rendered (see :class:`Primitive`)::
 
 Shading is Lambertian with one distant light plus ambient light, identical in
 both views, so a surface point has the same radiance in both cameras.
-The package follows the data: :mod:`~ismb_lab.scenes.geometry` (rays; the rig is :class:`~ismb_lab.camera.StereoCamera`),
+The package follows the data: :mod:`~ismb_lab.scenes.geometry` (rays; the rig is :class:`~ismb_lab.cameras.camera.StereoCamera`),
 :mod:`~ismb_lab.scenes.textures`, :mod:`~ismb_lab.scenes.primitives`,
 :mod:`~ismb_lab.scenes.render` (the two views and their ground truth) and
 :mod:`~ismb_lab.scenes.library` (the named scenes) and

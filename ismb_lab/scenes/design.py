@@ -25,8 +25,8 @@ from dataclasses import dataclass, fields
 
 import numpy as np
 
-from .._validation import ParameterTypeError, message
-from ..camera import StereoCamera
+from .._core.validation import ParameterTypeError, message
+from ..cameras.camera import StereoCamera
 from .primitives import Box, Cylinder, Group, Plane
 from .textures import Texture, random_texture
 

@@ -9,9 +9,9 @@ A family is a registered :class:`Family`: a name, a one-line description and a
 :class:`~ismb_lab.scenes.design.Look`, the few choices in which its layouts differ from the
 common design of :func:`~ismb_lab.scenes.design.draw_objects`.  :func:`register_family` adds
 one, :func:`families` lists them in registration order, and :func:`object_layout`, the
-protocol (:func:`ismb_lab.protocol.family_cases`) and ``scripts/matching_families.py`` and
+protocol (:func:`ismb_lab.tuning.protocol.family_cases`) and ``scripts/matching_families.py`` and
 ``scripts/depth_layouts.py`` draw whatever is registered.  The library registers four, which
-exercise the §5.2.3 depth demo (:func:`ismb_lab.depth_demo.relative_depth`) where it is weak:
+exercise the §5.2.3 depth demo (:func:`ismb_lab.depth.pipeline.relative_depth`) where it is weak:
 
 ``"contrast"``
     Objects of varied size, some with low-contrast textures in front of a
@@ -40,7 +40,7 @@ above (:data:`FAMILIES`) keep the stream they had before families were registere
 for bit (``tests/test_family_digests.py``).  A Generator passed instead of a seed is used as
 it is, for every family.
 
-Geometry of every layout (the default :meth:`~ismb_lab.camera.StereoCamera.pinhole`: 320 x 240
+Geometry of every layout (the default :meth:`~ismb_lab.cameras.camera.StereoCamera.pinhole`: 320 x 240
 images, ``f B = 30`` px m, so ``d = 30 / Z``):
 
 * the wall has disparity 5 to 9 px (3.3 to 6 m);
@@ -80,9 +80,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .._validation import ParameterError, ParameterTypeError, check_choice, check_number, check_rng, message
+from .._core.validation import ParameterError, ParameterTypeError, check_choice, check_number, check_rng, message
 from .design import HIGH, LAYOUT_ROI, LOW, MIN_GAP_PX, Design, Look, ObjectTruth, Placement, draw_objects
-from ..camera import StereoCamera
+from ..cameras.camera import StereoCamera
 from .primitives import cast
 from .render import Scene, render
 

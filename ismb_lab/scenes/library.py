@@ -13,8 +13,8 @@ from dataclasses import replace
 
 import numpy as np
 
-from .._validation import ParameterTypeError, check_number, check_rng, message
-from ..camera import StereoCamera
+from .._core.validation import ParameterTypeError, check_number, check_rng, message
+from ..cameras.camera import StereoCamera
 from .geometry import ROI
 from .primitives import _FACE_UV, Box, Group, Plane
 from .render import Scene, render
@@ -129,7 +129,7 @@ def synthetic_scene(seed=0, *, vertical_offset_px: float = 0.0, roll_deg: float 
         depend on the other arguments, so the same seed with another roll,
         offset or noise level shows the same scene.
     vertical_offset_px, roll_deg : float
-        Passed to :meth:`~ismb_lab.camera.StereoCamera.pinhole` (an unrectified pair).
+        Passed to :meth:`~ismb_lab.cameras.camera.StereoCamera.pinhole` (an unrectified pair).
     noise_std : float
         Camera noise in grey levels, see :func:`render`.
 
@@ -269,7 +269,7 @@ def lab_scene(seed=0, *, noise_std: float = 1.0, vertical_offset_px: float = 0.0
     noise_std : float
         Camera noise in grey levels.
     vertical_offset_px, roll_deg : float
-        Passed to :meth:`~ismb_lab.camera.StereoCamera.pinhole`; the layout does not depend on them.
+        Passed to :meth:`~ismb_lab.cameras.camera.StereoCamera.pinhole`; the layout does not depend on them.
     supersample : int
         Rays per pixel side, see :func:`render` (1 renders 4 times faster).
 

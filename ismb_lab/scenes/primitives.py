@@ -11,7 +11,7 @@ from typing import Protocol, runtime_checkable
 
 import numpy as np
 
-from .._validation import ParameterError, ParameterTypeError, check_number, message
+from .._core.validation import ParameterError, ParameterTypeError, check_number, message
 from .geometry import EPS, _rays, _vector
 from .textures import Texture
 

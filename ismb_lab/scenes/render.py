@@ -6,8 +6,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .._validation import ParameterError, ParameterTypeError, check_number, check_points, check_rng, message
-from ..camera import StereoCamera
+from .._core.validation import ParameterError, ParameterTypeError, check_number, check_points, check_rng, message
+from ..cameras.camera import StereoCamera
 from .geometry import _vector
 from .primitives import _check_primitives, cast
 

@@ -6,7 +6,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from .._validation import ParameterError, check_number, check_points, check_rng, message
+from .._core.validation import ParameterError, check_number, check_points, check_rng, message
 from .geometry import _vector
 
 __all__ = ["random_texture", "Texture"]

@@ -20,7 +20,7 @@ import matplotlib
 import numpy as np
 from matplotlib.figure import Figure
 
-from .._validation import ParameterError, ParameterTypeError, message
+from .._core.validation import ParameterError, ParameterTypeError, message
 
 COLUMN_PX = 580
 """Widest figure, in CSS pixels: JupyterLab's notebook column at 1024 x 768, with the file browser
@@ -325,7 +325,7 @@ def number_labels(ax, xy, colour, size: float = 7.0, start: int = 1):
 def draw_pair(ax, model) -> dict:
     """The pair view: the image pair side by side, numbered features and the current matches.
 
-    `model` has ``prepared`` (:class:`~ismb_lab.matching.Prepared`) and ``pairs``
+    `model` has ``prepared`` (:class:`~ismb_lab.matching.pipeline.Prepared`) and ``pairs``
     (the matches as ``(i, k)``); :func:`update_pair` redraws the matches in place.
     """
     from ..plotting import GAP, LEFT_COLOUR, RIGHT_COLOUR, plot_matches

@@ -3,9 +3,9 @@
 :class:`Cloud` is the model (plain numbers: points in the rectified left camera's frame,
 the two camera centres, the depth each point is coloured by, short notes);
 :func:`depth_cloud` makes one from a depth demo, :func:`match_cloud` from the network's
-matches of a pair rectified with a calibrated :class:`~ismb_lab.camera.StereoCamera`, and
+matches of a pair rectified with a calibrated :class:`~ismb_lab.cameras.camera.StereoCamera`, and
 :func:`board_cloud` from a chessboard's corners in such a pair.  Every point comes from
-:meth:`~ismb_lab.camera.StereoCamera.points_from_disparity`.  :class:`PointCloudView` is the view: k3d objects (WebGL in the browser, the
+:meth:`~ismb_lab.cameras.camera.StereoCamera.points_from_disparity`.  :class:`PointCloudView` is the view: k3d objects (WebGL in the browser, the
 JavaScript shipped inside the k3d wheel and sent by the kernel, nothing fetched from a
 CDN) created once and updated in place by :meth:`PointCloudView.update`.
 
@@ -20,8 +20,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from .._validation import ParameterError, ParameterTypeError, message, readonly
-from ..camera import StereoCamera
+from .._core.validation import ParameterError, ParameterTypeError, message, readonly
+from ..cameras.camera import StereoCamera
 
 __all__ = ["AXIS_TITLES", "Cloud", "MAX_NOTES", "MAX_TICKS", "PointCloudView", "axes_frame", "axis_ticks", "board_cloud",
            "colour_bar_html", "depth_cloud", "frustum_edges", "match_cloud"]
@@ -142,7 +142,7 @@ def depth_cloud(model) -> Cloud:
     """The depth demo's matched points in 3-D: the background pair's matches (the box, the wall)
     and the scene's matches kept after background removal, with each object's rank and depth.
 
-    Metres come from the demo's calibration: a :meth:`~ismb_lab.camera.StereoCamera.pinhole`
+    Metres come from the demo's calibration: a :meth:`~ismb_lab.cameras.camera.StereoCamera.pinhole`
     camera of the scene's size with ``model.config.focal_px`` and ``baseline_m`` (its principal
     point is the image centre, as the rendered rig's), so for photos of one's own they are only
     as right as those defaults.
@@ -165,7 +165,7 @@ def depth_cloud(model) -> Cloud:
 def _board(camera: StereoCamera, rectified, owner: str) -> tuple:
     """The board's corners in both rectified views (cv2), their disparities and a note at their
     centre with their median depth."""
-    from ..rig import find_board
+    from ..cameras.rig import find_board
 
     left, right = find_board(rectified.left, camera.board), find_board(rectified.right, camera.board)
     if left is None or right is None:
@@ -179,7 +179,7 @@ def _board(camera: StereoCamera, rectified, owner: str) -> tuple:
 
 def board_cloud(camera: StereoCamera, rectified) -> Cloud:
     """A chessboard's corners, found in both views of a pair rectified with `camera`, in metres
-    (:meth:`~ismb_lab.camera.StereoCamera.points_from_disparity`)."""
+    (:meth:`~ismb_lab.cameras.camera.StereoCamera.points_from_disparity`)."""
     if not isinstance(camera, StereoCamera):
         raise ParameterTypeError(message("camera", "board_cloud", "a StereoCamera", camera))
     left, d, note = _board(camera, rectified, "board_cloud")
@@ -191,28 +191,28 @@ def board_cloud(camera: StereoCamera, rectified) -> Cloud:
 
 def match_cloud(result, camera: StereoCamera, board=None) -> Cloud:
     """The network's matches of a pair rectified with `camera`, in metres
-    (:func:`ismb_lab.metric.match_points`), as ``ismb-lab match --rig`` gives them.
+    (:func:`ismb_lab.matching.metric.match_points`), as ``ismb-lab match --rig`` gives them.
 
     Parameters
     ----------
-    result : ismb_lab.matching.MatchResult
-        The matches (e.g. after :func:`ismb_lab.metric.mutual_best`).
+    result : ismb_lab.matching.pipeline.MatchResult
+        The matches (e.g. after :func:`ismb_lab.matching.metric.mutual_best`).
     camera : StereoCamera
         The camera that rectified the pair.
-    board : ismb_lab.rectify.Rectified, optional
+    board : ismb_lab.images.rectify.Rectified, optional
         The rectified pair, when it shows the calibration board: a note at the board's centre
         gives its corners' median depth (found by cv2, not by the network), for comparison.
 
     Examples
     --------
-    >>> from ismb_lab.matching import match
+    >>> from ismb_lab.matching.pipeline import match
     >>> from ismb_lab.scenes import synthetic_scene
     >>> s = synthetic_scene(0)
     >>> cloud = match_cloud(match(s.left, s.right), StereoCamera())
     >>> len(cloud.points) > 0, bool((cloud.points[:, 2] > 0).all()), cloud.centres[1].tolist()
     (True, True, [0.1, 0.0, 0.0])
     """
-    from ..metric import match_points
+    from ..matching.metric import match_points
 
     if not isinstance(camera, StereoCamera):
         raise ParameterTypeError(message("camera", "match_cloud", "a StereoCamera", camera))

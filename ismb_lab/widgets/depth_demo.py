@@ -1,6 +1,6 @@
 """Which toy car is nearer: the thesis' depth demonstration as a widget (§5.2.3, Figs. 5.11-5.14).
 
-:class:`DepthModel` runs :func:`ismb_lab.depth_demo.relative_depth` on a background pair
+:class:`DepthModel` runs :func:`ismb_lab.depth.pipeline.relative_depth` on a background pair
 and a scene pair and words its ranking; :class:`DepthDemo` adds the background's
 matches and disparities (Fig. 5.12), the scene's new features coloured by
 disparity with the background's removed (Fig. 5.14), and controls for the seed,
@@ -15,13 +15,13 @@ from dataclasses import fields, replace
 
 import numpy as np
 
-from .._validation import ParameterTypeError, check_number, message
-from ..depth import DepthConfig, DepthObject, DepthResult
-from ..depth_demo import DEPTH_MATCH_CONFIG, DEPTH_SOLVER, depth_pairs, load_stereo, pair_silhouettes, relative_depth
-from ..methods import DEFAULT_METHOD, get_method, method_names
-from ..params import Params
+from .._core.validation import ParameterTypeError, check_number, message
+from ..depth.objects import DepthConfig, DepthObject, DepthResult
+from ..depth.pipeline import DEPTH_MATCH_CONFIG, DEPTH_SOLVER, depth_pairs, load_stereo, pair_silhouettes, relative_depth
+from ..network.methods import DEFAULT_METHOD, get_method, method_names
+from ..network.params import Params
 from ..plotting import OKABE_ITO, outlines
-from ..recipe import recipe_of
+from ..matching.recipe import recipe_of
 from ._common import Base, Pane, button, grey_rgb, pair_files, path_labels, row, with_class
 from .cloud import PointCloudView, depth_cloud
 
@@ -47,7 +47,7 @@ class DepthModel:
     Parameters
     ----------
     background, scene : pair folder, (left, right) or object with ``.left`` and ``.right``
-        The two stereo pairs of the same view (:func:`ismb_lab.depth_demo.load_stereo`).
+        The two stereo pairs of the same view (:func:`ismb_lab.depth.pipeline.load_stereo`).
     method : {"I", "II", "III", "NM"}
     params : Params, optional
         None: the thesis' values of whichever method is chosen.
@@ -59,9 +59,9 @@ class DepthModel:
     background_name : str
         What the scene's objects are compared with: the background's nearest object.
     recipe : Recipe or path, optional
-        A recipe (:class:`ismb_lab.recipe.Recipe`, or the params file ``ismb-lab tune``
+        A recipe (:class:`ismb_lab.matching.recipe.Recipe`, or the params file ``ismb-lab tune``
         writes), used as it is: its method, parameters, solver and one-to-one replace
-        `method` and `params` and the demo's solver (:data:`~ismb_lab.depth_demo.DEPTH_SOLVER`).
+        `method` and `params` and the demo's solver (:data:`~ismb_lab.depth.pipeline.DEPTH_SOLVER`).
 
     Examples
     --------
@@ -234,7 +234,7 @@ def support_text(obj: DepthObject) -> str:
     Examples
     --------
     >>> import numpy as np
-    >>> from ismb_lab.depth import DepthObject, metric_depth
+    >>> from ismb_lab.depth.objects import DepthObject, metric_depth
     >>> support_text(DepthObject(1, (0.0, 0.0), 22.0, 0.0, metric_depth(22.0), np.zeros((0, 2)), 0,
     ...                          silhouette_disparity=22.0, silhouette_score=0.98))
     'outline only: 22 px, overlap 0.98'

@@ -12,15 +12,15 @@ from dataclasses import replace
 
 import numpy as np
 
-from .._validation import ParameterTypeError, check_number, message
-from ..evaluation import Score, score, unlabelled
-from ..matching import MatchConfig, MatchResult, Prepared, match, prepare
-from ..methods import DEFAULT_METHOD, all_genes, get_method, method_names
+from .._core.validation import ParameterTypeError, check_number, message
+from ..tuning.evaluation import Score, score, unlabelled
+from ..matching.pipeline import MatchConfig, MatchResult, Prepared, match, prepare
+from ..network.methods import DEFAULT_METHOD, all_genes, get_method, method_names
 from ..plotting import OKABE_ITO
-from ..params import THETA_C, Params
-from ..similarity import transfer
-from ..solvers import DEFAULT_SOLVER, SOLVERS, get_solver
-from ..targets import TargetSet, load_targets, snap
+from ..network.params import THETA_C, Params
+from ..network.similarity import transfer
+from ..network.solvers import DEFAULT_SOLVER, SOLVERS, get_solver
+from ..labels.targets import TargetSet, load_targets, snap
 from ._common import Base, Pane, draw_pair, pair_figsize, pair_files, update_pair, with_class
 
 __all__ = ["draw_transfer", "ExplorerModel", "ParameterExplorer", "similarity_theta", "update_transfer"]
@@ -39,14 +39,14 @@ class ExplorerModel:
     seed : int
         Update-order seed.
     targets : (t, 2) int array_like, optional
-        Target ``(i, k)`` feature pairs (see :func:`ismb_lab.targets.snap`).
+        Target ``(i, k)`` feature pairs (see :func:`ismb_lab.labels.targets.snap`).
     solver : str
     unknown : int array_like
-        Left features whose matches are not scored (see :func:`ismb_lab.evaluation.unlabelled`).
+        Left features whose matches are not scored (see :func:`ismb_lab.tuning.evaluation.unlabelled`).
 
     Examples
     --------
-    >>> from ismb_lab.matching import prepare
+    >>> from ismb_lab.matching.pipeline import prepare
     >>> from ismb_lab.scenes import synthetic_scene
     >>> scene = synthetic_scene(0)
     >>> model = ExplorerModel(prepare(scene.left, scene.right), targets=[[0, 0]])
@@ -216,7 +216,7 @@ class ParameterExplorer(Base):
     solver : str
     partial : bool
         The targets label only some corners (a person's labels): matches of the other left
-        corners are not scored (see :meth:`ismb_lab.protocol.Case.from_files`).
+        corners are not scored (see :meth:`ismb_lab.tuning.protocol.Case.from_files`).
 
     Notes
     -----

@@ -26,16 +26,16 @@ from typing import Callable
 
 import numpy as np
 
-from .._validation import ParameterError, ParameterTypeError, check_number, message
-from ..genetic import GAConfig, Generation
-from ..matching import MatchConfig
-from ..methods import DEFAULT_METHOD, get_method
+from .._core.validation import ParameterError, ParameterTypeError, check_number, message
+from ..tuning.genetic import GAConfig, Generation
+from ..matching.pipeline import MatchConfig
+from ..network.methods import DEFAULT_METHOD, get_method
 from ..plotting import OKABE_ITO
-from ..params import Params
-from ..protocol import Case
-from ..recipe import Recipe, save_recipe
-from ..solvers import DEFAULT_SOLVER, SOLVERS, get_solver
-from ..tuning import to_params, tune
+from ..network.params import Params
+from ..tuning.protocol import Case
+from ..matching.recipe import Recipe, save_recipe
+from ..network.solvers import DEFAULT_SOLVER, SOLVERS, get_solver
+from ..tuning.fitness import to_params, tune
 from ._common import Base, Pane, button, pair_files, row, with_class
 
 __all__ = ["as_cases", "case_from_folder", "chromosome_html", "draw_fitness", "GAModel", "GARunner",
@@ -43,7 +43,7 @@ __all__ = ["as_cases", "case_from_folder", "chromosome_html", "draw_fitness", "G
 
 
 def case_from_folder(folder, config: MatchConfig | None = None) -> Case:
-    """A training :class:`~ismb_lab.protocol.Case` from ``left.png``, ``right.png`` and ``answer_key.json``."""
+    """A training :class:`~ismb_lab.tuning.protocol.Case` from ``left.png``, ``right.png`` and ``answer_key.json``."""
     left, right, key = pair_files(folder, "case_from_folder")
     if not key.is_file():
         raise ParameterError(f"The 'folder' parameter of case_from_folder must be a folder with an "
@@ -75,9 +75,9 @@ class GAModel:
     ----------
     cases : list of Case
     method : str
-        A name in :func:`ismb_lab.methods.method_names`.
+        A name in :func:`ismb_lab.network.methods.method_names`.
     population, generations : int, optional
-        GA size (default: :class:`~ismb_lab.genetic.GAConfig`'s, the thesis' 30 and 500).
+        GA size (default: :class:`~ismb_lab.tuning.genetic.GAConfig`'s, the thesis' 30 and 500).
     seed : int
         Seed of the GA (and of every network run's update order, as in ``tune``).
     save_to : str or os.PathLike, optional
@@ -85,11 +85,11 @@ class GAModel:
         best fitness improves, so that a kernel that is shut down, culled or killed
         mid-run leaves the best parameters so far on disk.
     solver : str
-        How each chromosome's network is solved (a name in :data:`ismb_lab.solvers.SOLVERS`).
+        How each chromosome's network is solved (a name in :data:`ismb_lab.network.solvers.SOLVERS`).
 
     Examples
     --------
-    >>> from ismb_lab.matching import prepare
+    >>> from ismb_lab.matching.pipeline import prepare
     >>> from ismb_lab.scenes import synthetic_scene, true_matches
     >>> scene = synthetic_scene(0)
     >>> p = prepare(scene.left, scene.right)
@@ -136,7 +136,7 @@ class GAModel:
 
     @property
     def best_params(self) -> Params | None:
-        """The best chromosome so far as :class:`~ismb_lab.methods.Params` (None before generation 0)."""
+        """The best chromosome so far as :class:`~ismb_lab.network.methods.Params` (None before generation 0)."""
         return None if not self.history else to_params(self.method, self.history[-1].best_chromosome)
 
     def start(self) -> bool:
@@ -272,7 +272,7 @@ class GARunner(Base):
     cases_or_folder : Case, folder, or a list of them
         Training pairs; a folder gives ``left.png``, ``right.png`` and ``answer_key.json``.
     method, population, generations, seed, solver
-        As in :func:`ismb_lab.tuning.tune` (seed: GA and update order).
+        As in :func:`ismb_lab.tuning.fitness.tune` (seed: GA and update order).
     config : MatchConfig, optional
         Corner settings for folders.
     save_to : str or os.PathLike, optional

@@ -9,7 +9,7 @@ Coordinates
 default: the left image occupies ``0 <= x <= W - 1`` and the right image
 ``W + GAP <= x <= 2 W + GAP - 1`` (see :data:`ismb_lab.plotting.GAP`).  With
 ``side="left"`` or ``side="right"`` it takes image coordinates instead (the
-package's convention, :mod:`ismb_lab.coords`).
+package's convention, :mod:`ismb_lab.images.coords`).
 """
 
 from __future__ import annotations
@@ -20,13 +20,13 @@ from pathlib import Path
 
 import numpy as np
 
-from .._validation import ParameterError, ParameterTypeError, check_choice, check_number, message
-from ..evaluation import Score, score, unlabelled
-from ..matching import MatchConfig, Prepared, match, prepare
-from ..methods import DEFAULT_METHOD
+from .._core.validation import ParameterError, ParameterTypeError, check_choice, check_number, message
+from ..tuning.evaluation import Score, score, unlabelled
+from ..matching.pipeline import MatchConfig, Prepared, match, prepare
+from ..network.methods import DEFAULT_METHOD
 from ..plotting import GAP, LEFT_COLOUR, OKABE_ITO, RIGHT_COLOUR, VERDICT_COLOURS, plot_matches
-from ..classroom import save_merging, targets_path, voila_without_hub
-from ..targets import TargetSet, load_targets, snap, targets_from_matches
+from ..labels.classroom import save_merging, targets_path, voila_without_hub
+from ..labels.targets import TargetSet, load_targets, snap, targets_from_matches
 from ._common import Base, Pane, button, column_figsize, grey_rgb, number_labels, pair_files, with_class
 
 __all__ = ["COLUMNS", "KEY_AFTER", "Comparison", "draw_labels", "LabelModel", "pairs_html", "SavedScore", "TargetLabeler",
@@ -89,11 +89,11 @@ class LabelModel:
     Parameters
     ----------
     prepared : Prepared
-        The pair and its features (:func:`ismb_lab.matching.prepare`).
+        The pair and its features (:func:`ismb_lab.matching.pipeline.prepare`).
     path : str or os.PathLike, optional
         Where :meth:`save` and :meth:`load` go by default.  A save merges with what
         another process saved there since this model last read the file
-        (:func:`ismb_lab.classroom.save_merging`), so two labellers on one file lose
+        (:func:`ismb_lab.labels.classroom.save_merging`), so two labellers on one file lose
         nothing; the file's other keys and per-pair notes are kept.
     answer_key : TargetSet, optional
         Ground truth for :meth:`compare`.
@@ -108,7 +108,7 @@ class LabelModel:
 
     Examples
     --------
-    >>> from ismb_lab.matching import prepare
+    >>> from ismb_lab.matching.pipeline import prepare
     >>> from ismb_lab.scenes import synthetic_scene
     >>> scene = synthetic_scene(0)
     >>> model = LabelModel(prepare(scene.left, scene.right))
@@ -176,7 +176,7 @@ class LabelModel:
         return out
 
     def targets(self) -> TargetSet:
-        """The labels as a :class:`~ismb_lab.targets.TargetSet` bound to the two images."""
+        """The labels as a :class:`~ismb_lab.labels.targets.TargetSet` bound to the two images."""
         pair = self.prepared.pair
         return targets_from_matches(self.pairs, self.left_xy, self.right_xy,
                                     left_sha256=pair.left_sha256, right_sha256=pair.right_sha256,
@@ -482,7 +482,7 @@ class TargetLabeler(Base):
         The targets file of Save and Load.  By default each student gets their own,
         ``targets-<user>-<pair>.json`` in the working folder (the notebook's: inside the
         assignment that nbgrader fetched, so that ``nbgrader submit`` hands it in; see
-        :func:`ismb_lab.classroom.targets_path`), shown above the buttons.  Under Voilà
+        :func:`ismb_lab.labels.classroom.targets_path`), shown above the buttons.  Under Voilà
         without a hub every visitor shares one login, so the labeller asks for a name
         (box ``ismb-name``) before it saves, and never merges into a file that page did
         not load.

@@ -1,8 +1,8 @@
 """A class's own stereo photos: upload, check, rectify, pick a ROI, then label, explore or match.
 
 :class:`PhotoModel` is the plain-Python model: two photos in, the rectification check
-(:func:`ismb_lab.rectify.check_rectified`) and, on request, the rectified pair
-(:func:`ismb_lab.rectify.rectify_pair`); :meth:`PhotoModel.save` writes the pair the
+(:func:`ismb_lab.images.rectify.check_rectified`) and, on request, the rectified pair
+(:func:`ismb_lab.images.rectify.rectify_pair`); :meth:`PhotoModel.save` writes the pair the
 student works on to a folder of their own (``photos-<user>-<name>/left.png``, ``right.png``
 and ``rectify.json``), so that labels saved against its images can be used again later;
 another pair uploaded under the same name gets a folder of its own (``...-2``).
@@ -22,12 +22,12 @@ from typing import Callable
 
 import numpy as np
 
-from .._files import atomic_write_text
-from .._validation import ParameterError, ParameterTypeError, message
-from ..classroom import user_name
+from .._core.files import atomic_write_text
+from .._core.validation import ParameterError, ParameterTypeError, message
+from ..labels.classroom import user_name
 from ..plotting import OKABE_ITO
-from ..io import save_pair
-from ..rectify import Rectified, _inputs, apply_rectification, check_rectified, rectify_pair
+from ..images.io import save_pair
+from ..images.rectify import Rectified, apply_rectification, check_rectified, pair_inputs, rectify_pair
 from ._common import Base, Pane, button, grey_rgb, row, with_class
 
 __all__ = ["PhotoLoader", "PhotoModel"]
@@ -43,7 +43,7 @@ class PhotoModel:
     folder : str or os.PathLike
         Where :meth:`save` makes the pair's folder (default: the working folder).
     user : str, optional
-        Whose folder (default :func:`ismb_lab.classroom.user_name`).
+        Whose folder (default :func:`ismb_lab.labels.classroom.user_name`).
     role : str
         Added to the folder's name (e.g. ``"background"``), so two pairs of one upload name
         do not share a folder.
@@ -81,7 +81,7 @@ class PhotoModel:
 
     def set_photos(self, left, right, name: str = "photos") -> str:
         """Load two photos (paths, file bytes or arrays) and check them; nothing is kept on failure."""
-        left, right, _ = _inputs(left, right, "PhotoModel.set_photos", 1600)
+        left, right, _ = pair_inputs(left, right, "PhotoModel.set_photos", 1600)
         check = check_rectified(left, right)
         self.left, self.right, self.check, self.rectified, self.roi, self.saved = left, right, check, None, None, None
         self.name = re.sub(r"[^A-Za-z0-9._-]+", "-", str(name)).strip("-.") or "photos"

@@ -1,13 +1,13 @@
 """Any rig's pair in 3-D: the network's matches in metres, with OpenCV's SGBM beside them.
 
 :class:`RigCloudModel` is the plain-Python model: a rig (a file of ``ismb-lab calibrate`` or
-``ismb-lab rig``, :func:`ismb_lab.camera.load_camera`) and a pair (paths, file bytes or
-arrays) taken the way ``ismb-lab match --rig`` takes them: :func:`ismb_lab.metric.for_camera`
+``ismb-lab rig``, :func:`ismb_lab.cameras.camera.load_camera`) and a pair (paths, file bytes or
+arrays) taken the way ``ismb-lab match --rig`` takes them: :func:`ismb_lab.matching.metric.for_camera`
 (a pair the rig does not fit is refused, in one line), then
-:func:`ismb_lab.metric.match_with_camera` with the corner counts of
-:func:`ismb_lab.metric.photo_config`, the whole photo (``roi="full"``) and the window measured
+:func:`ismb_lab.matching.metric.match_with_camera` with the corner counts of
+:func:`ismb_lab.matching.metric.photo_config`, the whole photo (``roi="full"``) and the window measured
 on the pair (``shift="auto"``).  Beside the network's matches it computes SGBM's dense
-disparity of the same rectified pair (:mod:`ismb_lab.dense`), its agreement with the network
+disparity of the same rectified pair (:mod:`ismb_lab.matching.dense`), its agreement with the network
 at the matched points, and a subsample of it in metres.
 
 :class:`RigCloud` is the widget: the rig file's path, the upload of
@@ -24,10 +24,10 @@ from pathlib import Path
 
 import numpy as np
 
-from .._validation import ParameterError, ParameterTypeError, message
-from ..camera import StereoCamera, load_camera
-from ..dense import MAX_DENSE, agreement, dense_points, sgbm_disparity, window_range
-from ..methods import DEFAULT_METHOD
+from .._core.validation import ParameterError, ParameterTypeError, message
+from ..cameras.camera import StereoCamera, load_camera
+from ..matching.dense import MAX_DENSE, agreement, dense_points, sgbm_disparity, window_range
+from ..network.methods import DEFAULT_METHOD
 from ._common import Base, button, row, with_class
 from .cloud import Cloud, PointCloudView, _cloud, match_cloud
 
@@ -53,7 +53,7 @@ class RigCloudModel:
         The rig, or its file (path or JSON text) as ``ismb-lab calibrate`` or ``ismb-lab rig``
         write it.
     method : str
-        The energy (the thesis' parameters of :class:`~ismb_lab.recipe.Recipe`, its solver).
+        The energy (the thesis' parameters of :class:`~ismb_lab.matching.recipe.Recipe`, its solver).
     seed : int
         The network's update order.
     board : bool
@@ -70,7 +70,7 @@ class RigCloudModel:
         SGBM's disparity of the rectified pair (NaN: none).
     dense_xyz : (M, 3) ndarray
         Its subsample in metres.
-    agreement : ismb_lab.dense.Agreement or None
+    agreement : ismb_lab.matching.dense.Agreement or None
     refused : str
         The one-line refusal of a pair the rig does not fit ("" when it fits).
     message : str
@@ -87,7 +87,7 @@ class RigCloudModel:
     """
 
     def __init__(self, rig, *, method: str = DEFAULT_METHOD, seed: int = 0, board: bool = False, most: int = MAX_DENSE):
-        from ..recipe import Recipe
+        from ..matching.recipe import Recipe
 
         self.settings = Recipe(method=method).match_settings()
         self.seed, self.board, self.most = seed, bool(board), most
@@ -95,7 +95,7 @@ class RigCloudModel:
 
     def set_rig(self, rig) -> str:
         """Use `rig` from now on (a pair matched before is forgotten)."""
-        from ..metric import photo_config
+        from ..matching.metric import photo_config
 
         self.camera, self.rig_name = _camera(rig, "RigCloudModel")
         # the corners in proportion to the photo, the whole photo, the window measured on the pair:
@@ -119,11 +119,11 @@ class RigCloudModel:
     def load(self, left, right, name: str = "pair") -> str:
         """Match `left` and `right` (paths, file bytes or arrays) with the rig; returns the status line.
 
-        A pair the rig does not fit (:func:`ismb_lab.metric.for_camera`'s refusal: swapped,
+        A pair the rig does not fit (:func:`ismb_lab.matching.metric.for_camera`'s refusal: swapped,
         turned, tagged, another camera's) leaves no cloud; its one line is :attr:`refused`.
         """
-        from ..io import load_pair
-        from ..metric import for_camera, match_with_camera
+        from ..images.io import load_pair
+        from ..matching.metric import for_camera, match_with_camera
 
         self._clear()
         try:

@@ -1,6 +1,6 @@
 """Step the Hopfield network one update attempt at a time (thesis §3.3, Fig. 5.6).
 
-:class:`StepperModel` consumes :func:`ismb_lab.dynamics.iter_updates`, the same
+:class:`StepperModel` consumes :func:`ismb_lab.network.dynamics.iter_updates`, the same
 generator the core runs, so the widget shows exactly what the network does;
 :class:`HopfieldStepper` adds the neuron grid, the matches on the image pair and
 the energy curve.
@@ -10,14 +10,14 @@ from __future__ import annotations
 
 import numpy as np
 
-from .._validation import ParameterTypeError, check_choice, check_number, message
-from ..hopfield import RULES, energy
-from ..dynamics import STOP_RULES, Update, iter_updates
-from ..matching import MatchConfig, Prepared, prepare
+from .._core.validation import ParameterTypeError, check_choice, check_number, message
+from ..network.hopfield import RULES, energy
+from ..network.dynamics import STOP_RULES, Update, iter_updates
+from ..matching.pipeline import MatchConfig, Prepared, prepare
 from ..plotting import OKABE_ITO
-from ..methods import DEFAULT_METHOD, get_method
-from ..params import Params
-from ..solvers import to_matches
+from ..network.methods import DEFAULT_METHOD, get_method
+from ..network.params import Params
+from ..network.solvers import to_matches
 from ._common import Base, Pane, button, draw_pair, pair_figsize, pair_files, path_labels, row, update_pair, with_class
 
 __all__ = ["draw_energy", "draw_grid", "HopfieldStepper", "StepperModel", "update_energy", "update_grid"]
@@ -33,14 +33,14 @@ class StepperModel:
     params : Params, optional
         The thesis' values for the method by default.
     seed : int
-        Seed of the random visiting order (as in :func:`ismb_lab.dynamics.run`).
+        Seed of the random visiting order (as in :func:`ismb_lab.network.dynamics.run`).
     rule : {"exact", "thesis"}
         ``"thesis"`` is the literal (3-17)/(3-20) rule, whose energy can rise.
     stop_rule : {"sweep", "stall"}
 
     Examples
     --------
-    >>> from ismb_lab.matching import prepare
+    >>> from ismb_lab.matching.pipeline import prepare
     >>> from ismb_lab.scenes import synthetic_scene
     >>> scene = synthetic_scene(0)
     >>> model = StepperModel(prepare(scene.left, scene.right))

@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 from matplotlib.backend_bases import MouseEvent
 
-from ismb_lab.io import image_sha256
+from ismb_lab.images.io import image_sha256
 from ismb_lab.widgets import ParameterExplorer, PhotoLoader, TargetLabeler
 
 

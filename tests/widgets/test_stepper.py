@@ -1,9 +1,9 @@
 import numpy as np
 import pytest
 
-from ismb_lab.dynamics import iter_updates, run
-from ismb_lab.matching import match
-from ismb_lab.methods import THESIS_PARAMS, get_method
+from ismb_lab.network.dynamics import iter_updates, run
+from ismb_lab.matching.pipeline import match
+from ismb_lab.network.methods import THESIS_PARAMS, get_method
 from ismb_lab.widgets.stepper import HopfieldStepper, StepperModel
 
 

@@ -1,0 +1,430 @@
+"""Objects by their outlines: the blobs where a scene pair differs from its background pair.
+
+The depth demo (:mod:`ismb_lab.depth.pipeline`) has a background pair and a scene pair of the
+same view.  Where the scene differs from the background is where the objects are, in the
+left image and in the right one.  :func:`silhouettes` gives each left blob of change the
+shift that lays it best on the right image's change (its *silhouette disparity*), and
+:func:`ismb_lab.depth.objects.depth_from_matches` makes each well-fitting blob one object, at the
+disparity its agreeing features give.  The outline does not depend on texture, so it
+holds where the features are ambiguous (stripes, tiles) or missing (a plain object).
+This goes beyond the thesis, which groups the features alone; ``docs/depth.md`` describes
+the method step by step.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from scipy.ndimage import gaussian_filter
+
+from ._outline_fit import _ascend, _best_shift, _cut, _join, _placed_dice
+from .._core.validation import ParameterError, ParameterTypeError, check_number, message, readonly
+from ..images.features import resolve_roi
+from ..images.io import StereoPair
+
+__all__ = ["CHANGE_SIGMA", "CHANGE_THRESHOLD", "OutlineConfig", "Silhouettes", "changed_in_roi", "silhouettes"]
+
+#: Grey levels (0-255) by which the smoothed difference of a scene image from its background
+#: must exceed to count as a change (camera noise stays below it): the one threshold of the
+#: corners' boxes (:func:`ismb_lab.depth.pipeline.changed_roi`) and of the outlines.
+CHANGE_THRESHOLD = 8.0
+
+#: Standard deviation (px) of the Gaussian that smooths that difference first.
+CHANGE_SIGMA = 1.0
+
+
+@dataclass(frozen=True)
+class OutlineConfig:
+    """How :func:`silhouettes` finds the blobs of change and their shifts (``DepthConfig.outline``).
+
+    Attributes
+    ----------
+    threshold_low : float
+        Hysteresis: a pixel whose smoothed difference exceeds this (0 to :data:`CHANGE_THRESHOLD`),
+        and twice the image's median smoothed difference (noisy cameras), is changed too when it
+        connects to one above :data:`CHANGE_THRESHOLD`.  The blobs are made with and without it, and
+        each region keeps those that fit better.
+    min_pixels : int
+        Smaller blobs are camera noise.
+    pad_px : int
+        Columns on each side of a blob's box that its overlap counts as well.
+    merge_gap_px : int
+        Largest gap between the boxes of two blobs that may be one object.
+    merge_disparity_px : float
+        Blobs whose shifts differ by this or less (and whose boxes are `merge_gap_px` apart or less)
+        are one object cut where it looks like the wall ...
+    link_score : float
+        ... unless their shifts differ and both fit with a Dice of this or more.
+    max_fraction : float
+        A blob covering more of the ROI than this is a change of the light or of the view: its
+        score is 0.
+    split_score : float
+        Least Dice of each part of a blob cut in two (each part at least ``2 * pad_px`` wide); also
+        the fit under which two neighbouring pieces count as weak.
+    split_step_px : float
+        Least difference of the two parts' shifts.
+    split_far_px, split_far_score : float
+        A blob that one shift lays with a Dice of `split_far_score` or more is cut as well when two
+        shifts `split_far_px` or more apart, both parts moved at once, lay it better.
+    split_far_poor_px : float
+        ... and one that one shift lays with a Dice from `split_score` up to `split_far_score`, when
+        two shifts this far apart or more lay both parts at once with `split_far_score` or more.
+
+    Examples
+    --------
+    >>> OutlineConfig(pad_px=6).pad_px
+    6
+    >>> OutlineConfig(threshold_low=9)
+    Traceback (most recent call last):
+    ...
+    ismb_lab.ParameterError: The 'threshold_low' parameter of OutlineConfig must be a finite number >= 0 and <= 8.0. Got 9.0 instead.
+    """
+
+    threshold_low: float = 5.0
+    min_pixels: int = 20
+    pad_px: int = 8
+    merge_gap_px: int = 10
+    merge_disparity_px: float = 1.0
+    link_score: float = 0.9
+    max_fraction: float = 0.5
+    split_score: float = 0.9
+    split_step_px: float = 3.0
+    split_far_px: float = 5.0
+    split_far_score: float = 0.94
+    split_far_poor_px: float = 8.0
+
+    def __post_init__(self):
+        own = "OutlineConfig"
+        checks = {"threshold_low": dict(low=0, high=CHANGE_THRESHOLD), "min_pixels": dict(low=1, integer=True),
+                  "pad_px": dict(low=0, integer=True), "merge_gap_px": dict(low=0, integer=True),
+                  "merge_disparity_px": dict(low=0), "link_score": dict(low=0, high=1),
+                  "max_fraction": dict(low=0, high=1, low_open=True), "split_score": dict(low=0, high=1),
+                  "split_step_px": dict(low=0), "split_far_px": dict(low=0), "split_far_score": dict(low=0, high=1),
+                  "split_far_poor_px": dict(low=0)}
+        for name, rule in checks.items():
+            object.__setattr__(self, name, check_number(getattr(self, name), name, own, **rule))
+
+
+@dataclass(frozen=True, eq=False)
+class Silhouettes:
+    """Blobs of change of a scene's left image, each with the shift that lays it on the right image's.
+
+    Made by :func:`silhouettes`; read by :func:`ismb_lab.depth.objects.depth_from_matches`.
+
+    Attributes
+    ----------
+    labels : (H, W) int ndarray
+        0 where the left image did not change, ``k`` on blob ``k`` (1..n) (read-only).
+    disparity : (n,) ndarray
+        Blob ``k``'s silhouette disparity at index ``k - 1``: the whole-pixel shift
+        ``x_left - x_right`` with the largest Dice overlap.
+    score : (n,) ndarray
+        That overlap, 0-1; 0 for a blob that covers more than :attr:`OutlineConfig.max_fraction`
+        of the ROI, which is a change of the light or of the view rather than an object.
+    centroid_xy : (n, 2) ndarray
+        Mean left-image ``(x, y)`` of each blob's pixels.
+    right : (H, W) bool ndarray or None
+        The right image's changed pixels (read-only), which :meth:`cut_dice` lays the blobs on;
+        None when not known.
+    pad_px : int
+        Columns on each side that an overlap counts as well (:attr:`OutlineConfig.pad_px`).
+    shifts : tuple of int
+        The shifts tried.
+    """
+
+    labels: np.ndarray
+    disparity: np.ndarray
+    score: np.ndarray
+    centroid_xy: np.ndarray
+    right: np.ndarray | None = None
+    pad_px: int = 0
+    shifts: tuple = ()
+
+    def __post_init__(self):
+        labels = np.array(self.labels)
+        if labels.ndim != 2 or not np.issubdtype(labels.dtype, np.integer):
+            raise ParameterError(message("labels", "Silhouettes", "a 2-D integer array",
+                                         f"{labels.dtype} array of shape {labels.shape}"))
+        n = int(labels.max(initial=0))
+        for name, shape in (("disparity", (n,)), ("score", (n,)), ("centroid_xy", (n, 2))):
+            value = np.array(getattr(self, name), dtype=float).reshape(-1, *shape[1:]) if n else \
+                np.zeros(shape)
+            if value.shape != shape:
+                raise ParameterError(message(name, "Silhouettes", f"shape {shape}, one per blob of labels",
+                                             f"shape {value.shape}"))
+            object.__setattr__(self, name, readonly(value))
+        labels.flags.writeable = False
+        object.__setattr__(self, "labels", labels)
+        if self.right is not None:
+            right = np.array(self.right, dtype=bool)
+            if right.shape != labels.shape:
+                raise ParameterError(message("right", "Silhouettes", f"a mask of the labels' shape {labels.shape}",
+                                             f"shape {right.shape}"))
+            right.flags.writeable = False
+            object.__setattr__(self, "right", right)
+        object.__setattr__(self, "shifts", tuple(int(d) for d in self.shifts))
+
+    def __len__(self) -> int:
+        return len(self.disparity)
+
+    def cut_dice(self, k: int, column: int, shifts) -> float:
+        """How well blob `k` (1..n), cut at left-image `column` into a left and a right part moved
+        at once by ``shifts = (left, right)``, lies on the right image's change: one Dice over the
+        parts' rows and the columns they cover (padded by :attr:`pad_px`), the moved parts and the
+        right image's change each with holes narrower than ``pad_px + 1`` columns closed; nan
+        without :attr:`right`.
+
+        Equal shifts give the whole blob at that shift.  Where an object's texture looks like the
+        wall behind it, its blob has holes, and the wall behind differs between the two views:
+        closed, the holes do not tell shifts apart.
+
+        Examples
+        --------
+        >>> import numpy as np
+        >>> labels = np.zeros((20, 60), dtype=np.int32); labels[5:15, 30:50] = 1
+        >>> right = np.zeros((20, 60), dtype=bool)
+        >>> right[5:15, 20:30] = right[5:15, 36:46] = True      # left half 10 px, right half 4 px
+        >>> s = Silhouettes(labels, [4.0], [0.5], [[39.5, 9.5]], right, 2, range(0, 15))
+        >>> s.cut_dice(1, 40, (10, 4)), round(s.cut_dice(1, 40, (10, 10)), 3)
+        (1.0, 0.7)
+        """
+        if self.right is None:
+            return float("nan")
+        parts, right, line = self._cut_parts(k, column)
+        return float(_placed_dice(parts, shifts, right, self.pad_px, line))
+
+    def cut_shifts(self, k: int, column: int, start) -> tuple:
+        """The shifts ``(left, right)`` that lay the two parts of :meth:`cut_dice` best, both moved at
+        once: coordinate ascent over :attr:`shifts` from `start`, each part in turn, until neither
+        moves (at most three rounds).
+
+        Examples
+        --------
+        >>> import numpy as np
+        >>> labels = np.zeros((20, 60), dtype=np.int32); labels[5:15, 30:50] = 1
+        >>> right = np.zeros((20, 60), dtype=bool)
+        >>> right[5:15, 20:30] = right[5:15, 36:46] = True
+        >>> Silhouettes(labels, [4.0], [0.5], [[39.5, 9.5]], right, 2, range(0, 15)).cut_shifts(1, 40, (7, 7))
+        (10, 4)
+        """
+        if self.right is None:
+            raise ParameterError(message("right", "Silhouettes.cut_shifts", "the right image's changed pixels",
+                                         None))
+        parts, right, line = self._cut_parts(k, column)
+        return tuple(int(v) for v in _ascend(parts, start, right, self.shifts, self.pad_px, line)[1])
+
+    def _cut_parts(self, k: int, column: int):
+        """Blob `k` cut at `column` (left part, right part), the right image's change with holes
+        narrower than ``pad_px + 1`` columns closed, and the line that closes them."""
+        from scipy.ndimage import binary_closing
+
+        line = np.ones((1, self.pad_px + 1), dtype=bool)
+        if "_closed" not in self.__dict__:      # the same for every cut: closed once
+            object.__setattr__(self, "_closed", self.right | binary_closing(self.right, line))
+        mask = self.labels == k
+        left = mask.copy()
+        left[:, column:] = False
+        return [left, mask & ~left], self._closed, line
+
+
+def changed_in_roi(background, scene, roi, threshold, sigma, margin, own: str, name: str, low=None):
+    """The pixels of `roi` whose smoothed difference exceeds `threshold`, the ROI and the margin.
+
+    The one test of "changed" behind :func:`silhouettes` and
+    :func:`ismb_lab.depth.pipeline.changed_roi` / :func:`~ismb_lab.depth.pipeline.changed_regions`:
+    the absolute difference of two grey images, Gaussian-smoothed with `sigma`, above
+    `threshold` grey levels.  With `low` (a hysteresis threshold, named `threshold_low` to the
+    caller), pixels above `low` that connect to one above `threshold` count as well; `low` is
+    raised to twice the image's median smoothed difference (the noise floor, since most of the
+    image is unchanged), and at most to `threshold`.  Bad values are named as parameters of
+    `own`; `name` is the parameter that holds `scene`.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> background = np.zeros((6, 8))
+    >>> scene = background.copy(); scene[2:4, 3:5] = 50.0
+    >>> changed, roi, margin = changed_in_roi(background, scene, "full", 8.0, 0.0, 0, "demo", "scene")
+    >>> int(changed.sum()), roi
+    (4, (0, 0, 8, 6))
+    """
+    bg = np.asarray(background, dtype=float)
+    sc = np.asarray(scene, dtype=float)
+    if bg.ndim != 2 or bg.shape != sc.shape:
+        raise ParameterError(message(name, own, "a grey image of the background's shape "
+                                     f"{bg.shape}", f"shape {sc.shape}"))
+    threshold = check_number(threshold, "threshold", own, low=0)
+    sigma = check_number(sigma, "sigma", own, low=0)
+    margin = check_number(margin, "margin", own, low=0, integer=True)
+    x, y, w, h = resolve_roi(roi, bg.shape)
+    diff = np.abs(sc - bg)
+    if sigma:
+        diff = gaussian_filter(diff, sigma)
+    if low is None:
+        return diff[y:y + h, x:x + w] > threshold, (x, y, w, h), margin
+    from skimage.filters import apply_hysteresis_threshold
+
+    low = check_number(low, "threshold_low", own, low=0, high=threshold)
+    low = min(max(low, 2 * float(np.median(diff))), threshold)
+    return apply_hysteresis_threshold(diff, low, threshold)[y:y + h, x:x + w], (x, y, w, h), margin
+
+
+def silhouettes(background, scene, roi="center", *, shifts=range(0, 41),
+                config: OutlineConfig | None = None) -> Silhouettes:
+    """Blobs of change of the scene's left image, each with the shift that lays it on the right's.
+
+    Where the scene pair differs from the background pair is where the objects are, in both
+    images: the pixels :func:`changed_in_roi` counts as changed (whole image; the blobs of the left
+    one that reach into `roi`).  The blobs are made twice, by the threshold alone and with
+    hysteresis (:attr:`OutlineConfig.threshold_low`), and each region keeps the blobs that fit
+    better (:func:`_by_region`).  A blob's silhouette disparity is the shift ``d`` in `shifts`
+    with the largest Dice overlap between the blob and the right image's changed pixels ``d``
+    pixels left, counted over the blob's columns padded by ``pad_px`` and only where both images
+    see it.  The outline does not depend on texture, so a striped object whose stripes match one
+    period off still has its true shift; the features then give it to a fraction of a pixel
+    (:func:`ismb_lab.depth.objects.depth_from_matches`).
+
+    In each partition (:func:`_partition`) blobs that are one object cut where it looks like the
+    wall are linked, neighbours are joined while one shift lays their union at least as well as
+    their own shifts lay both at once, and a blob that two shifts lay better than one is cut into
+    two objects that touch in the image.
+
+    Parameters
+    ----------
+    background, scene : StereoPair
+        The two pairs of one view (images of one size).
+    roi : str or (x, y, w, h)
+        Where the objects may be, as :attr:`ismb_lab.matching.pipeline.MatchConfig.roi`.
+    shifts : iterable of int
+        Disparities to try (:func:`ismb_lab.depth.pipeline.pair_silhouettes`: the candidate window's).
+    config : OutlineConfig, optional
+
+    Returns
+    -------
+    Silhouettes
+        Blobs numbered left to right by centroid.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from ismb_lab.images.io import load_pair
+    >>> rng = np.random.default_rng(0)
+    >>> wall = rng.uniform(0, 120, (240, 320))
+    >>> left, right = wall.copy(), wall.copy()
+    >>> left[100:140, 150:190] = right[100:140, 128:168] = 255.0     # an object 22 px nearer
+    >>> s = silhouettes(load_pair(wall, wall), load_pair(left, right))
+    >>> s.disparity.tolist(), s.score.round(2).tolist(), s.centroid_xy.round().tolist()
+    ([22.0], [1.0], [[170.0, 120.0]])
+    """
+    own = "silhouettes"
+    for name, value in (("background", background), ("scene", scene)):
+        if not isinstance(value, StereoPair):
+            raise ParameterTypeError(message(name, own, "a StereoPair", value))
+    if background.shape != scene.shape:
+        raise ParameterError(message("scene", own, "images of the background's size",
+                                     f"images of shape {scene.shape}"))
+    config = OutlineConfig() if config is None else config
+    if not isinstance(config, OutlineConfig):
+        raise ParameterTypeError(message("config", own, "None or an OutlineConfig", config))
+    try:
+        shifts = [int(d) for d in shifts]
+    except (TypeError, ValueError):
+        raise ParameterTypeError(message("shifts", own, "an iterable of whole pixels", shifts)) from None
+    if not shifts:
+        raise ParameterError(message("shifts", own, "at least one shift", shifts))
+    h, w = scene.shape
+    box = resolve_roi(roi, scene.shape)
+    partitions = []
+    for low in (None, config.threshold_low):
+        changed = [changed_in_roi(b, c, (0, 0, w, h), CHANGE_THRESHOLD, CHANGE_SIGMA, 0, own, "scene", low)[0]
+                   for b, c in ((background.left, scene.left), (background.right, scene.right))]
+        partitions.append(_partition(*changed, box, shifts, config))
+    return _by_region(*partitions)
+
+
+def _partition(left, right, box, shifts, config: OutlineConfig) -> Silhouettes:
+    """:func:`silhouettes` of the changed pixels `left` and `right` (full-image masks): the blobs of
+    `left` that reach into `box`, linked, joined and cut."""
+    from scipy.ndimage import find_objects, label
+    from scipy.sparse.csgraph import connected_components
+
+    x, y, w, h = box
+    pad = config.pad_px
+    blobs, n = label(left, structure=np.ones((3, 3)))
+    sizes = np.bincount(blobs.ravel(), minlength=n + 1)
+    inside = np.zeros(n + 1, dtype=bool)
+    inside[np.unique(blobs[y:y + h, x:x + w])] = True
+    keep = (sizes >= config.min_pixels) & inside
+    keep[0] = False
+    blobs = np.where(keep[blobs], blobs, 0)
+
+    def measure(mask):
+        rows, cols = find_objects(mask.astype(int))[0]
+        return (*_best_shift(mask, rows, cols, right, shifts, pad), (rows, cols))
+
+    def whole_view(mask):
+        return np.count_nonzero(mask[y:y + h, x:x + w]) > config.max_fraction * w * h
+
+    ks = np.flatnonzero(keep)
+    found = [measure(blobs == k) for k in ks]
+    link = np.eye(len(ks), dtype=bool)
+    for a, (fa, da, (ra, ca)) in enumerate(found):
+        for b, (fb, db, (rb, cb)) in enumerate(found):
+            gap = max(ra.start - rb.stop, rb.start - ra.stop, ca.start - cb.stop, cb.start - ca.stop, 0)
+            near = abs(da - db) <= config.merge_disparity_px and gap <= config.merge_gap_px
+            if near and da != db:
+                near = min(fa, fb) < config.link_score     # two pieces that both fit well are two objects
+            link[a, b] |= near
+    group = connected_components(link, directed=False)[1] if len(ks) else np.zeros(0, dtype=int)
+    masks = [np.isin(blobs, ks[group == g]) for g in np.unique(group)]
+    masks = _join(masks, measure, config.merge_gap_px, right, pad, config.split_score)
+    todo, masks = [(m, True) for m in masks], []
+    while todo:
+        part, far = todo.pop()
+        two = None if whole_view(part) else _cut(part, right, shifts, config, far)
+        if two is None:
+            masks.append(part)
+        else:
+            todo += [(p, False) for p in two]      # the test of two shifts far apart: once per blob
+    fits = [measure(m) for m in masks]
+    return _numbered(masks, [0.0 if whole_view(m) else f[0] for m, f in zip(masks, fits)],
+                     [f[1] for f in fits], [np.argwhere(m).mean(axis=0)[::-1] for m in masks], right, pad, shifts)
+
+
+def _numbered(masks, score, disparity, centroids, right, pad, shifts) -> Silhouettes:
+    """Blobs `masks` with their fits and centroids, numbered left to right by centroid."""
+    labels = np.zeros(right.shape, dtype=np.int32)
+    order = np.argsort([c[0] for c in centroids], kind="stable")
+    for k, j in enumerate(order, 1):
+        labels[masks[j]] = k
+    return Silhouettes(labels, [disparity[j] for j in order], [score[j] for j in order],
+                       np.array([centroids[j] for j in order]).reshape(-1, 2), right, pad, shifts)
+
+
+def _by_region(plain: Silhouettes, grown: Silhouettes) -> Silhouettes:
+    """The blobs of `plain` or of `grown` (the same with hysteresis), region by region.
+
+    A region is a set of blobs of the two that overlap, directly or through others.  Each region
+    keeps the blobs of the one whose blobs fit better on average (mean Dice; a tie keeps `plain`'s);
+    a region that only `grown` has (an object too faint for the threshold alone) keeps `grown`'s.
+    Each blob keeps its own Dice, shift and centroid.  The right image's change is `plain`'s, which
+    the depth stage's cuts of a blob (:meth:`Silhouettes.cut_dice`) lay blobs on.
+    """
+    from scipy.sparse.csgraph import connected_components
+
+    n = len(plain)
+    link = np.eye(n + len(grown), dtype=bool)
+    both = (plain.labels > 0) & (grown.labels > 0)
+    for a, b in set(zip(plain.labels[both].tolist(), grown.labels[both].tolist())):
+        link[a - 1, n + b - 1] = link[n + b - 1, a - 1] = True
+    group = connected_components(link, directed=False)[1]
+    kept = []
+    for g in np.unique(group):
+        mine = np.flatnonzero(group[:n] == g)
+        theirs = np.flatnonzero(group[n:] == g)
+        grow = len(theirs) and (not len(mine) or grown.score[theirs].mean() > plain.score[mine].mean())
+        kept += [(grown, k) for k in theirs] if grow else [(plain, k) for k in mine]
+    return _numbered([s.labels == k + 1 for s, k in kept], [s.score[k] for s, k in kept],
+                     [s.disparity[k] for s, k in kept], [s.centroid_xy[k] for s, k in kept], plain.right,
+                     plain.pad_px, plain.shifts)

@@ -1,0 +1,248 @@
+"""Real stereo photographs from installed packages, read at run time; nothing is downloaded.
+
+* :func:`motorcycle`: Middlebury 2014 Motorcycle, which scikit-image ships 4x down-sampled
+  (``skimage.data.stereo_motorcycle``), scaled to the thesis' width (about 320 px) and cut
+  into thesis-sized ROIs, each an evaluation pair that no one labelled by hand: its targets
+  come from the ground-truth disparity (:func:`ground_truth_pairs`).
+* OpenCV's sample data, from Debian's ``opencv-doc`` package
+  (``apt-get install opencv-doc``; :func:`opencv_samples` finds it):
+  :func:`aloe`, Middlebury 2006 Aloe, a rectified pair with ground truth (Scharstein and
+  Pal, CVPR 2007); :func:`books`, two hand-held photographs of books that are *not*
+  rectified; :func:`chessboard_pairs`, 13 pairs of a fixed two-camera rig with a 9 x 6
+  chessboard, the classic stereo-calibration set.
+"""
+
+from __future__ import annotations
+
+import os
+from dataclasses import dataclass
+from pathlib import Path
+
+import cv2
+import numpy as np
+
+from .._core.validation import ParameterError, check_number, message
+
+__all__ = ["CHESSBOARD_PAIRS", "MOTORCYCLE_ROIS", "OPENCV_DATA", "OPENCV_DATA_VARIABLE", "SampleDataMissing",
+           "aloe", "aloe_files", "books", "chessboard_pairs", "ground_truth_pairs", "GroundTruthPair", "motorcycle",
+           "motorcycle_files", "opencv_samples"]
+
+#: Where Debian's ``opencv-doc`` installs OpenCV's sample data.
+OPENCV_DATA = Path("/usr/share/doc/opencv-doc/examples/data")
+#: Environment variable naming another folder that holds the same files.
+OPENCV_DATA_VARIABLE = "ISMB_LAB_OPENCV_DATA"
+#: The chessboard rig's pairs: ``left01.jpg``/``right01.jpg`` ... 14 (there is no 10).
+CHESSBOARD_PAIRS = tuple(f"{n:02d}" for n in range(1, 15) if n != 10)
+
+#: Four non-overlapping 160 x 108 ROIs (x, y, w, h) of the 320 x 216 pair.
+MOTORCYCLE_ROIS = ((0, 0, 160, 108), (160, 0, 160, 108), (0, 108, 160, 108), (160, 108, 160, 108))
+
+
+@dataclass(frozen=True, eq=False)
+class GroundTruthPair:
+    """A rectified grey pair and the horizontal disparity of its left view.
+
+    Attributes
+    ----------
+    left, right : (H, W) float ndarray
+        Grey images in ``[0, 255]``.
+    disparity : (H, W) float ndarray
+        ``x_left - x_right`` for each left pixel; NaN where it is unknown.
+    name : str
+    """
+
+    left: np.ndarray
+    right: np.ndarray
+    disparity: np.ndarray
+    name: str
+
+
+def motorcycle(width: int = 320) -> GroundTruthPair:
+    """The Middlebury 2014 Motorcycle pair, grey, scaled to `width` pixels.
+
+    Images are scaled with area averaging.  The disparity is scaled the same way,
+    averaging only known pixels; a low-resolution pixel is unknown when less than
+    half of its footprint was known.  (Requiring the whole footprint leaves half
+    of all Harris corners unknown, since corners sit on depth edges.)
+
+    Parameters
+    ----------
+    width : int
+        Output width in pixels, at most the bundled 741.
+
+    Returns
+    -------
+    pair : GroundTruthPair
+
+    Examples
+    --------
+    >>> pair = motorcycle()
+    >>> pair.left.shape, bool(np.nanmax(pair.disparity) < 30)
+    ((216, 320), True)
+    """
+    width = check_number(width, "width", "motorcycle", low=16, high=741, integer=True)
+    try:
+        from skimage.data import stereo_motorcycle
+    except ImportError:  # pragma: no cover - scikit-image is in the test extra
+        raise ImportError("motorcycle() needs scikit-image: pip install scikit-image") from None
+    left, right, disparity = stereo_motorcycle()
+    grey = lambda rgb: cv2.cvtColor(rgb, cv2.COLOR_RGB2GRAY)
+    return _scaled(grey(left), grey(right), disparity, width, f"motorcycle@{width}")
+
+
+def _scaled(left, right, disparity, width: int, name: str) -> GroundTruthPair:
+    """A grey pair and its disparity map scaled to `width` (area averaging; see :func:`motorcycle`)."""
+    scale = width / left.shape[1]
+    size = (width, int(round(left.shape[0] * scale)))
+    # float32 area averages can land a hair above 255: clip to the package's grey range
+    grey = lambda g: np.clip(cv2.resize(np.asarray(g, np.float32), size, interpolation=cv2.INTER_AREA)
+                             .astype(float), 0.0, 255.0)
+    known = np.isfinite(disparity)
+    total = cv2.resize(np.where(known, disparity, 0).astype(np.float32), size, interpolation=cv2.INTER_AREA)
+    share = cv2.resize(known.astype(np.float32), size, interpolation=cv2.INTER_AREA)
+    small = np.full(share.shape, np.nan)
+    known_enough = share >= 0.5
+    small[known_enough] = total[known_enough] / share[known_enough] * scale
+    return GroundTruthPair(grey(left), grey(right), small, name)
+
+
+def motorcycle_files() -> tuple:
+    """The files :func:`motorcycle` reads: scikit-image's copies of the pair and its disparity."""
+    import skimage.data
+
+    folder = Path(skimage.data.__file__).parent
+    return tuple(folder / name for name in ("motorcycle_left.png", "motorcycle_right.png", "motorcycle_disp.npz"))
+
+
+def aloe_files(folder=None) -> tuple:
+    """The files :func:`aloe` reads (`folder`: see :func:`opencv_samples`)."""
+    root = opencv_samples(folder)
+    return tuple(root / name for name in ("aloeL.jpg", "aloeR.jpg", "aloeGT.png"))
+
+
+class SampleDataMissing(FileNotFoundError):
+    """OpenCV's sample data is not installed (or not in the folder given)."""
+
+
+def opencv_samples(folder=None) -> Path:
+    """The folder of OpenCV's sample data.
+
+    Parameters
+    ----------
+    folder : str or os.PathLike, optional
+        Another folder with the same files; else the environment variable
+        ``ISMB_LAB_OPENCV_DATA``; else :data:`OPENCV_DATA`.
+
+    Raises
+    ------
+    SampleDataMissing
+        When the folder has no ``aloeL.jpg``, with how to install the data.
+    """
+    chosen = folder if folder is not None else os.environ.get(OPENCV_DATA_VARIABLE) or OPENCV_DATA
+    path = Path(chosen)
+    if not (path / "aloeL.jpg").is_file():
+        raise SampleDataMissing(
+            f"OpenCV's sample photos are not in {str(path)!r}: install them with "
+            f"'sudo apt-get install opencv-doc', or name a folder holding aloeL.jpg, left.jpg and "
+            f"left01.jpg in the environment variable {OPENCV_DATA_VARIABLE} (or the 'folder' argument).")
+    return path
+
+
+def _sample(name: str, folder, flags=cv2.IMREAD_GRAYSCALE) -> np.ndarray:
+    path = opencv_samples(folder) / name
+    with open(path, "rb") as handle:   # bytes: any file name works
+        image = cv2.imdecode(np.frombuffer(handle.read(), np.uint8), flags)
+    if image is None:
+        raise SampleDataMissing(f"{str(path)!r} is missing or is not an image OpenCV can read")
+    return image
+
+
+def aloe(width: int | None = None, *, folder=None) -> GroundTruthPair:
+    """Middlebury 2006 Aloe, grey, with its ground-truth disparity (0 in the file: unknown).
+
+    Parameters
+    ----------
+    width : int, optional
+        Scale to this many pixels wide, as :func:`motorcycle` does (disparities scale
+        with it); the full 1282 x 1110 by default.
+    folder : optional
+        See :func:`opencv_samples`.
+
+    Examples
+    --------
+    >>> pair = aloe(320)                                  # doctest: +SKIP
+    >>> pair.left.shape                                   # doctest: +SKIP
+    (277, 320)
+    """
+    left = _sample("aloeL.jpg", folder, cv2.IMREAD_COLOR)
+    right = _sample("aloeR.jpg", folder, cv2.IMREAD_COLOR)
+    truth = _sample("aloeGT.png", folder).astype(float)
+    truth[truth == 0] = np.nan
+    full = left.shape[1]
+    width = full if width is None else check_number(width, "width", "aloe", low=16, high=full, integer=True)
+    grey = lambda bgr: cv2.cvtColor(bgr, cv2.COLOR_BGR2GRAY)
+    if width == full:
+        return GroundTruthPair(grey(left).astype(float), grey(right).astype(float), truth, "aloe")
+    return _scaled(grey(left), grey(right), truth, width, f"aloe@{width}")
+
+
+def books(*, folder=None) -> tuple[np.ndarray, np.ndarray]:
+    """Two hand-held photographs of books on a floor (612 x 459, grey): not rectified."""
+    return (_sample("left.jpg", folder).astype(float), _sample("right.jpg", folder).astype(float))
+
+
+def chessboard_pairs(*, folder=None) -> list[tuple[str, np.ndarray, np.ndarray]]:
+    """The 13 ``(name, left, right)`` grey 640 x 480 pairs of OpenCV's calibration rig."""
+    return [(n, _sample(f"left{n}.jpg", folder).astype(float), _sample(f"right{n}.jpg", folder).astype(float))
+            for n in CHESSBOARD_PAIRS]
+
+
+def ground_truth_pairs(disparity: np.ndarray, left_xy, right_xy, tol: float = 1.5):
+    """Target pairs from a ground-truth disparity map.
+
+    A left corner's partner is the right corner within `tol` pixels of
+    ``(x - d(x, y), y)``.  Corners where ``d`` is unknown are *unknown*: neither
+    a target nor an error when matched.
+
+    Parameters
+    ----------
+    disparity : (H, W) ndarray
+        Left-view horizontal disparity, NaN where unknown.
+    left_xy, right_xy : (N, 2) array_like
+        Corner points ``(x, y)``.
+    tol : float
+        Snap distance in pixels.
+
+    Returns
+    -------
+    pairs : (m, 2) int ndarray
+        ``(i, k)`` feature indices of the targets.
+    unknown : (u,) int ndarray
+        Left corners whose ground truth is unknown.
+
+    Examples
+    --------
+    >>> d = np.full((10, 20), 5.0); d[:, :3] = np.nan
+    >>> pairs, unknown = ground_truth_pairs(d, [[10, 4], [2, 4], [15, 4]], [[5, 4], [10.5, 4]])
+    >>> pairs.tolist(), unknown.tolist()
+    ([[0, 0], [2, 1]], [1])
+    """
+    tol = check_number(tol, "tol", "ground_truth_pairs", low=0)
+    lxy = np.asarray(left_xy, float).reshape(-1, 2)
+    rxy = np.asarray(right_xy, float).reshape(-1, 2)
+    if lxy.size and (np.any(lxy < 0) or np.any(lxy[:, 0] > disparity.shape[1] - 1)
+                     or np.any(lxy[:, 1] > disparity.shape[0] - 1)):
+        raise ParameterError(message("left_xy", "ground_truth_pairs",
+                                     f"points inside the {disparity.shape[1]}x{disparity.shape[0]} map",
+                                     "points outside it"))
+    d = disparity[np.rint(lxy[:, 1]).astype(int), np.rint(lxy[:, 0]).astype(int)]
+    unknown = np.flatnonzero(~np.isfinite(d))
+    pairs = []
+    if len(rxy):
+        expected = np.stack([lxy[:, 0] - d, lxy[:, 1]], axis=1)
+        dist = np.hypot(*(expected[:, None, :] - rxy[None, :, :]).transpose(2, 0, 1))
+        for i in np.flatnonzero(np.isfinite(d)):
+            k = int(np.argmin(dist[i]))
+            if dist[i, k] <= tol:
+                pairs.append((i, k))
+    return np.array(pairs, dtype=np.int64).reshape(-1, 2), unknown

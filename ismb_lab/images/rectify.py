@@ -1,0 +1,589 @@
+"""Check and fix a hand-held stereo pair: robust matches, F with RANSAC, uncalibrated rectification.
+
+The network's candidate window (§3.3) assumes a *rectified* pair: a point and its partner on
+the same row.  Two phone photos taken a few centimetres apart are not: the camera turned and
+tilted between them.  This module measures how far a pair is from rectified and warps it so
+that it is:
+
+1. robust correspondences: SIFT keypoints (``cv2.SIFT_create``), matched both ways with
+   Lowe's ratio test and kept when each is the other's best (mutual);
+2. the fundamental matrix from them with RANSAC (OpenCV's MAGSAC variant), 1 px threshold;
+3. Hartley's uncalibrated rectification (``cv2.stereoRectifyUncalibrated``) of the inliers,
+   both images warped with the two homographies, then moved together so that the left
+   image's content starts at the top left and the right one horizontally so that 98% of the
+   disparities are positive, as the window of :class:`~ismb_lab.matching.pipeline.MatchConfig` expects.
+
+The figures that say how well it worked, ``median_abs_dy_px`` and ``p90_abs_dy_px``, are
+measured on the inliers *after* rectification.  A pair whose inliers are already on the
+same rows (median ``|dy|`` at most 0.5 px, 90th percentile at most 1.5 px) is left exactly
+as it is (``method="already rectified"``).
+
+Photos are scaled down, both by the same factor, so that the longer side is at most
+:data:`WORKING_SIDE` pixels: the network works with a few hundred corners, and a 12-megapixel
+phone photo gains nothing but time and memory.  File inputs honour the EXIF orientation
+(OpenCV's ``IMREAD_COLOR`` applies it), and colour or alpha is converted to grey.
+"""
+
+from __future__ import annotations
+
+import json
+from dataclasses import dataclass, field
+
+import cv2
+import numpy as np
+
+from .._core.validation import ParameterError, ParameterTypeError, check_number, message
+from .io import _is_path, _read, _to_grey, decode
+
+__all__ = ["ROW_SPREAD", "WORKING_SIDE", "Correspondences", "Rectified", "apply_rectification", "check_for_matching",
+           "check_rectified", "epipole_warning", "load_photo", "measured", "negative_share", "photo_orientation",
+           "row_spread_px", "sideways_step", "rectify_pair", "robust_matches", "working_size"]
+
+#: Longest side, in pixels, that photos are scaled down to before anything else: Middlebury-
+#: sized pairs (Aloe, 1282 x 1110) stay whole, a 12-megapixel phone photo becomes 1600 x 1200.
+WORKING_SIDE = 1600
+#: Longest side of the copy that SIFT looks at (see :func:`robust_matches`).
+DETECT_SIDE = 1024
+#: Median row difference of a pair's robust matches above which its rows do not agree (it is
+#: not rectified), as a share of the image's longer side: 1 px at 640 x 480, 6.25 px at
+#: 4000 x 3000 (SIFT's positions are only as fine as the image).  Rectified 640 x 480 pairs:
+#: 0.27-0.55 px (:func:`rectify_pair`, OpenCV's boards rectified with their rig).
+ROW_SPREAD = 1 / 640
+#: Fewest RANSAC inliers that make a pair worth rectifying.
+MIN_INLIERS = 20
+_RATIO = 0.75
+
+
+def row_spread_px(shape) -> float:
+    """The largest median row difference, in pixels, of the robust matches of a rectified pair
+    of `shape` ``(height, width)``: :data:`ROW_SPREAD` of its longer side.
+
+    >>> row_spread_px((480, 640)), row_spread_px((3000, 4000))
+    (1.0, 6.25)
+    """
+    return ROW_SPREAD * max(shape[:2])
+
+
+def negative_share(matches: "Correspondences", rows_px: float) -> tuple[float, int]:
+    """The share of `matches` on their rows (``|dy| <= rows_px``) whose disparity
+    ``x_left - x_right`` is negative, and how many are on their rows.  On a rectified pair a
+    point in front of both cameras has a positive disparity: most negative means the two
+    photos were given right first.
+
+    >>> m = Correspondences(np.array([[10.0, 5], [20, 5], [30, 9]]), np.array([[12.0, 5], [25, 5], [20, 1]]))
+    >>> negative_share(m, 1.0)
+    (1.0, 2)
+    """
+    if not len(matches):
+        return 0.0, 0
+    on_rows = np.abs(matches.left_xy[:, 1] - matches.right_xy[:, 1]) <= rows_px
+    d = (matches.left_xy[:, 0] - matches.right_xy[:, 0])[on_rows]
+    return (float(np.mean(d < 0)) if len(d) else 0.0), int(len(d))
+
+
+def photo_orientation(source) -> int:
+    """The EXIF orientation tag (1-8) of a photo given as a path or the bytes of a file; 1 for
+    an array or a file without the tag.
+
+    >>> photo_orientation(np.zeros((4, 4)))
+    1
+    """
+    from .io import exif_orientation
+
+    if isinstance(source, (bytes, bytearray, memoryview)):
+        return exif_orientation(bytes(source))
+    if _is_path(source):
+        try:
+            with open(source, "rb") as handle:
+                return exif_orientation(handle.read(1 << 17))   # the APP1 segment is at most 64 kB
+        except OSError:
+            return 1
+    return 1
+
+
+#: The EXIF orientation that undoes each one (turning 90 degrees one way undoes the other).
+_UNDO = {1: 1, 2: 2, 3: 3, 4: 4, 5: 5, 6: 8, 7: 7, 8: 6}
+
+
+def load_photo(source, name: str = "photo", owner: str = "load_photo", *, upright: bool = True) -> np.ndarray:
+    """A photo as a grey float image in ``[0, 255]``, EXIF orientation applied (with
+    ``upright=False``, as its pixels are stored, the tag ignored).
+
+    `source` is a path, the bytes of an image file (an upload) or an array (grey, RGB or RGBA).
+    """
+    from .io import orient
+
+    image = _photo(source, name, owner, None)[0]
+    return image if upright else orient(image, _UNDO[photo_orientation(source)])
+
+
+def _photo(source, name: str, owner: str, max_side: int | None) -> tuple[np.ndarray, float]:
+    """:func:`load_photo`, scaled down to `max_side` (area averaging) before it becomes float64
+    (a 12-megapixel colour photo as float64 takes 288 MB); also the factor used."""
+    if isinstance(source, np.ndarray):
+        grey = _to_grey(source, name, owner, bgr=False)
+        factor = 1.0 if max_side is None else working_size(grey.shape, max_side)
+        return _scale(grey, factor), factor
+    if isinstance(source, (bytes, bytearray, memoryview)):
+        rule = "the bytes of an image file OpenCV can decode"
+        error = lambda why: ParameterError(message(name, owner, rule, f"{len(source)} bytes: {why}"))  # noqa: E731
+        image = decode(bytes(source), cv2.IMREAD_COLOR, error)   # the size limit, from the header
+    elif _is_path(source):
+        image = _read(str(source), name, owner)   # size limits, readable regular file, decodable
+        if image.dtype == np.uint8:               # again with IMREAD_COLOR, which applies EXIF
+            image = _read(str(source), name, owner, cv2.IMREAD_COLOR)
+    else:
+        raise ParameterTypeError(message(name, owner, "a path, the bytes of an image file or an array", source))
+    if image.dtype == np.uint8 and image.ndim == 3:
+        image = cv2.cvtColor(image, cv2.COLOR_BGRA2GRAY if image.shape[2] == 4 else cv2.COLOR_BGR2GRAY)
+    factor = 1.0 if max_side is None else working_size(image.shape, max_side)
+    if image.dtype == np.uint8 and factor < 1.0:
+        size = (max(1, round(image.shape[1] * factor)), max(1, round(image.shape[0] * factor)))
+        small = cv2.resize(image.astype(np.float32), size, interpolation=cv2.INTER_AREA)
+        return np.clip(small.astype(float), 0.0, 255.0), factor
+    grey = _to_grey(image, name, owner, bgr=True)
+    return _scale(grey, factor), factor
+
+
+def working_size(shape, max_side: int = WORKING_SIDE) -> float:
+    """The factor (at most 1) that brings an image of `shape` within `max_side` pixels."""
+    return min(1.0, max_side / max(shape[:2]))
+
+
+def _scale(image: np.ndarray, factor: float) -> np.ndarray:
+    if factor >= 1.0:
+        return image
+    size = (max(1, round(image.shape[1] * factor)), max(1, round(image.shape[0] * factor)))
+    return cv2.resize(image.astype(np.float32), size, interpolation=cv2.INTER_AREA).astype(float)
+
+
+@dataclass(frozen=True, eq=False)
+class Correspondences:
+    """Matched points ``(x, y)`` of a left and a right image, row ``n`` with row ``n``."""
+
+    left_xy: np.ndarray
+    right_xy: np.ndarray
+
+    def __len__(self) -> int:
+        return len(self.left_xy)
+
+
+def robust_matches(left, right, *, max_features: int = 4000, rows_px: float | None = None) -> Correspondences:
+    """SIFT keypoints matched both ways, kept when they pass the ratio test and are mutual.
+
+    With `rows_px`, the pair is taken as rectified by a calibrated camera: a keypoint's
+    candidates are only the other image's keypoints within `rows_px` of its row and at a
+    positive disparity (in front of the cameras), and the ratio test and the mutual check are
+    made among those.  On a repetitive texture, the ratio test then compares a keypoint's
+    partner with the other keypoints of its own row, not with the whole pattern.
+
+    Examples
+    --------
+    >>> rng = np.random.default_rng(0)
+    >>> img = cv2.GaussianBlur(rng.uniform(0, 255, (200, 240)), (0, 0), 2) * 3 % 255
+    >>> m = robust_matches(img[:, 10:], img[:, :-10])
+    >>> len(m) > 20, bool(np.allclose(m.left_xy[:, 0] - m.right_xy[:, 0], -10, atol=1))
+    (True, True)
+    """
+    max_features = check_number(max_features, "max_features", "robust_matches", low=8, integer=True)
+    if rows_px is not None:
+        rows_px = check_number(rows_px, "rows_px", "robust_matches", low=0, low_open=True)
+    sift = cv2.SIFT_create(nfeatures=max_features)
+    # SIFT doubles its input first: above DETECT_SIDE px it would hold several hundred MB of
+    # pyramid, so it looks at a copy of that size and the points are scaled back.
+    factor = working_size(np.shape(left), DETECT_SIDE)
+    as_u8 = lambda g: np.clip(np.rint(_scale(np.asarray(g, dtype=float), factor)), 0, 255).astype(np.uint8)
+    kl, dl = sift.detectAndCompute(as_u8(left), None)
+    kr, dr = sift.detectAndCompute(as_u8(right), None)
+    empty = Correspondences(np.zeros((0, 2)), np.zeros((0, 2)))
+    if dl is None or dr is None or len(kl) < 2 or len(kr) < 2:
+        return empty
+    matcher = cv2.BFMatcher(cv2.NORM_L2)
+
+    def passing(query, train):
+        return {m[0].queryIdx: m[0].trainIdx for m in matcher.knnMatch(query, train, k=2)
+                if len(m) == 2 and m[0].distance < _RATIO * m[1].distance}
+
+    if rows_px is None:
+        forward, backward = passing(dl, dr), passing(dr, dl)
+    else:
+        forward, backward = _row_passing(kl, dl, kr, dr, rows_px * factor)
+    kept = sorted((q, t) for q, t in forward.items() if backward.get(t) == q)
+    if not kept:
+        return empty
+    back = lambda points: (np.array(points, dtype=float) + 0.5) / factor - 0.5   # pixel centres
+    lxy, rxy = back([kl[q].pt for q, _ in kept]), back([kr[t].pt for _, t in kept])
+    # SIFT gives one point a keypoint per dominant orientation: keep each matched pair once
+    _, first = np.unique(np.round(np.hstack([lxy, rxy]), 3), axis=0, return_index=True)
+    first = np.sort(first)
+    return Correspondences(lxy[first], rxy[first])
+
+
+def _row_passing(kl, dl, kr, dr, rows_px: float) -> tuple:
+    """The ratio test both ways among the keypoints of one row band at positive disparities."""
+    pl, pr = np.array([k.pt for k in kl]), np.array([k.pt for k in kr])
+    dl, dr = np.asarray(dl, np.float32), np.asarray(dr, np.float32)
+    dist = np.sqrt(np.maximum((dl ** 2).sum(1)[:, None] + (dr ** 2).sum(1)[None, :] - 2 * dl @ dr.T, 0))
+    band = (np.abs(pl[:, None, 1] - pr[None, :, 1]) <= rows_px) & (pl[:, None, 0] > pr[None, :, 0])
+    dist = np.where(band, dist, np.inf)
+
+    def passing(table):
+        if table.shape[1] < 2:
+            return {}
+        two = np.partition(table, 1, axis=1)[:, :2]
+        best = np.argmin(table, axis=1)
+        ok = np.isfinite(two[:, 0]) & (two[:, 0] < _RATIO * two[:, 1])
+        return {int(q): int(best[q]) for q in np.flatnonzero(ok)}
+
+    return passing(dist), passing(dist.T)
+
+
+def _dy_figures(left_xy, right_xy) -> dict:
+    """Row differences, and the disparity range of the matches within 2 px of their row
+    (2nd to 98th percentile: a few wrong matches remain on any pair)."""
+    dy = np.abs(left_xy[:, 1] - right_xy[:, 1])
+    d = (left_xy[:, 0] - right_xy[:, 0])[dy <= 2.0]
+    span = [float(np.percentile(d, 2)), float(np.percentile(d, 98))] if len(d) else [0.0, 0.0]
+    return {"median_abs_dy_px": float(np.median(dy)), "p90_abs_dy_px": float(np.percentile(dy, 90)),
+            "disparity_range_px": span}
+
+
+@dataclass(frozen=True, eq=False)
+class Rectified:
+    """A rectified pair and how it was made.
+
+    Attributes
+    ----------
+    left, right : (H, W) float ndarray
+        The rectified grey images, at the working size.
+    left_h, right_h : (3, 3) ndarray
+        Homographies from the (scaled) input images to these; the identity for a rig, whose
+        undistorting maps are not homographies (:meth:`ismb_lab.cameras.camera.StereoCamera.maps`).
+    method : str
+        ``"already rectified"``, ``"uncalibrated"`` or ``"rig"``.
+    inliers : int
+        How many correspondences the figures were measured on, which `measured_on` names:
+        ``"RANSAC inliers"`` (consistent with the fundamental matrix) for :func:`rectify_pair`,
+        ``"robust matches (no RANSAC)"`` for a pair rectified another way (:func:`measured`:
+        a rig, a background's homographies), where wrong matches count too.
+    median_abs_dy_px, p90_abs_dy_px : float
+        Row differences of those correspondences after rectification.
+    disparity_range_px : [float, float]
+        Their 2nd and 98th percentile of ``x_left - x_right``, after rectification.
+    scale : float
+        The factor the inputs were scaled by first (1: not scaled).
+    left_xy, right_xy : (n, 2) ndarray
+        The inliers, after rectification (for epipolar-line plots).
+    measured_on : str
+        What `inliers` counts (see there).
+    warnings : tuple of str
+        One line each, e.g. an unstable framing (:func:`epipole_warning`).
+    """
+
+    left: np.ndarray
+    right: np.ndarray
+    left_h: np.ndarray
+    right_h: np.ndarray
+    method: str
+    inliers: int
+    median_abs_dy_px: float
+    p90_abs_dy_px: float
+    disparity_range_px: list
+    scale: float
+    left_xy: np.ndarray = field(repr=False, default=None)
+    right_xy: np.ndarray = field(repr=False, default=None)
+    measured_on: str = "RANSAC inliers"
+    warnings: tuple = ()
+
+    @property
+    def size(self) -> list:
+        return [int(self.left.shape[1]), int(self.left.shape[0])]
+
+    def to_dict(self) -> dict:
+        """What ``ismb-lab rectify`` writes to ``rectify.json``."""
+        return {"method": self.method, "inliers": self.inliers, "measured_on": self.measured_on,
+                "warnings": list(self.warnings), "median_abs_dy_px": self.median_abs_dy_px,
+                "p90_abs_dy_px": self.p90_abs_dy_px, "disparity_range_px": list(self.disparity_range_px),
+                "size": self.size, "scale": self.scale, "working_side": WORKING_SIDE,
+                "left_homography": self.left_h.tolist(), "right_homography": self.right_h.tolist()}
+
+    def to_json(self) -> str:
+        return json.dumps(self.to_dict(), indent=2)
+
+
+def pair_inputs(left, right, owner: str, max_side: int):
+    """Both photos grey, of one size, scaled by one factor so the longer side is <= `max_side`."""
+    (left, factor), (right, other) = (_photo(left, "left", owner, max_side),
+                                      _photo(right, "right", owner, max_side))
+    if left.shape != right.shape or factor != other:
+        raise ParameterError(message("right", owner, "a photo of the left one's size (take both with one "
+                                     "camera and the same settings)",
+                                     f"{right.shape[1]}x{right.shape[0]} beside {left.shape[1]}x{left.shape[0]}"
+                                     + (" after scaling" if factor < 1 else "")))
+    return left, right, factor
+
+
+def _refuse_same(matches: Correspondences, owner: str) -> None:
+    if len(matches) and np.percentile(np.hypot(*(matches.left_xy - matches.right_xy).T), 90) < 0.5:
+        raise ParameterError(message("right", owner, "a photo taken after moving the camera a few centimetres "
+                                     "sideways", f"the left photo again (90% of {len(matches)} matches moved < 0.5 px)"))
+
+
+def _fundamental(matches: Correspondences, owner: str):
+    n = len(matches)
+    if n < MIN_INLIERS:
+        raise ParameterError(message("right", owner, "a second, sharp view of the left photo's textured scene "
+                                     f"(at least {MIN_INLIERS} robust matches)", f"{n} robust matches"))
+    method = getattr(cv2, "USAC_MAGSAC", cv2.FM_RANSAC)
+    F, mask = cv2.findFundamentalMat(matches.left_xy, matches.right_xy, method, 1.0, 0.999, 10000)
+    inliers = np.zeros(n, bool) if mask is None else mask.ravel().astype(bool)
+    if F is None or F.shape != (3, 3) or inliers.sum() < MIN_INLIERS:
+        raise ParameterError(message("right", owner, f"a view of the left photo's scene (at least {MIN_INLIERS} "
+                                     "matches agreeing on one epipolar geometry)",
+                                     f"{int(inliers.sum())} of {n} matches agreeing"))
+    # Parallax: with a baseline, points at different depths move differently, and no single
+    # homography carries the left points onto the right ones (the books pair: 37% within 1 px;
+    # a turned camera: 99%).
+    homography, fits = cv2.findHomography(matches.left_xy[inliers], matches.right_xy[inliers], cv2.RANSAC, 1.0)
+    if homography is not None and fits.mean() >= 0.9:
+        raise ParameterError(message("right", owner, "a view from a camera moved sideways, with parallax",
+                                     f"no parallax: one homography fits {fits.mean():.0%} of the matches (the "
+                                     "camera only turned, or the scene is flat)"))
+    return F, inliers
+
+
+def sideways_step(left_xy, right_xy, F, shape) -> float | None:
+    """Which way the camera moved between the left and the right photo: the x component of the
+    unit translation, negative for a right photo taken to the right; None when the pair does not
+    say.
+
+    The rule for a swapped pair.  Disparities ``x_left - x_right`` are positive when the right
+    photo is taken to the right of the left one, but a hand-held pair adds the camera's turn and
+    often a step forward, which shift every disparity alike (the books pair's raw disparities
+    are all negative in the right order).  So the motion is found from `F` instead, with an
+    assumed focal length of one image width (``cv2.recoverPose``), and its sideways part is
+    returned: > 0 means most disparities of the robust matches, the turn and the step forward
+    taken out, are negative.  A motion that fewer than 80% of the matches put in front of both
+    cameras (an assumed focal length far off), or that is mostly forward (``|x| < 0.2``),
+    decides nothing: None.
+
+    Examples
+    --------
+    >>> xy = np.random.default_rng(0).uniform(0, 400, (40, 2))
+    >>> depth = np.random.default_rng(1).uniform(1, 2, 40)
+    >>> shifted = xy - np.c_[40 / depth, np.zeros(40)]     # a right view: near points move more
+    >>> F = np.array([[0, 0, 0], [0, 0, -1], [0, 1, 0]], float)
+    >>> round(sideways_step(xy, shifted, F, (400, 400)), 3), round(sideways_step(shifted, xy, F, (400, 400)), 3)
+    (-1.0, 1.0)
+    """
+    h, w = shape
+    K = np.array([[w, 0, w / 2], [0, w, h / 2], [0, 0, 1]], float)
+    left_xy, right_xy = np.asarray(left_xy, float), np.asarray(right_xy, float)
+    if len(left_xy) < 5:
+        return None
+    good, _, t, _ = cv2.recoverPose(K.T @ F @ K, left_xy, right_xy, K)
+    step = float(t.ravel()[0])
+    return step if good >= 0.8 * len(left_xy) and abs(step) >= 0.2 else None
+
+
+def _refuse_swapped(left_xy, right_xy, F, shape, owner: str) -> None:
+    """Refuse a pair given right first.  A pair whose rows already agree (:func:`row_spread_px`)
+    says so by its disparities' sign (:func:`negative_share`); its F, a pure sideways step,
+    leaves ``cv2.recoverPose`` a guess between the two directions (OpenCV's board 03, rectified
+    and swapped: -0.86, "left first").  Any other pair says so by :func:`sideways_step`."""
+    limit = row_spread_px(shape)
+    matches = Correspondences(np.asarray(left_xy, float), np.asarray(right_xy, float))
+    if len(matches) and np.median(np.abs(matches.left_xy[:, 1] - matches.right_xy[:, 1])) <= limit:
+        share, n = negative_share(matches, 2 * limit)
+        if n >= 8 and share > 0.5:
+            raise ParameterError(message("left", owner, "the left camera's photo, given first: swap the two files",
+                                         f"the right camera's ({share:.0%} of {n} robust matches have a negative "
+                                         "disparity)"))
+        if n >= 8:
+            return
+    step = sideways_step(left_xy, right_xy, F, shape)
+    if step is not None and step > 0:
+        raise ParameterError(message("left", owner, "the left camera's photo, given first: swap the two files",
+                                     f"the right camera's (its {len(left_xy)} robust matches put it to the "
+                                     "right)"))
+
+
+def check_for_matching(left, right, owner: str = "check_for_matching") -> str:
+    """Refuse a swapped pair and warn about an unrectified one, before it is matched.
+
+    Measured on the robust matches of the pair as given (:func:`robust_matches`, no warp):
+    a pair whose rows differ by more than :func:`row_spread_px` at the median is not rectified,
+    and the returned one-line warning names ``ismb-lab rectify``; a rectified pair on whose
+    rows (``|dy|`` at most twice that, at least 8 matches) most disparities ``x_left - x_right``
+    are negative was given right first, and is refused (:func:`negative_share`).  Returns "" when there is nothing to say
+    (also for a pair with fewer than 8 robust matches: it says nothing either way).
+
+    `left` and `right` are grey images (arrays) of one size.
+    """
+    matches = robust_matches(left, right)
+    if len(matches) < 8:
+        return ""
+    limit = row_spread_px(np.shape(left))
+    spread = float(np.median(np.abs(matches.left_xy[:, 1] - matches.right_xy[:, 1])))
+    if spread > limit:
+        return (f"warning: the pair is not rectified (the rows of its {len(matches)} robust matches differ by "
+                f"{spread:.1f} px at the median): make it so with 'ismb-lab rectify LEFT RIGHT --out DIR'")
+    share, n = negative_share(matches, 2 * limit)
+    if n >= 8 and share > 0.5:
+        raise ParameterError(message("left", owner, "the left camera's photo, given first: swap the two files",
+                                     f"the right camera's ({share:.0%} of {n} robust matches "
+                                     "have a negative disparity)"))
+    return ""
+
+
+def epipole_warning(F, shape) -> str:
+    """A one-line warning when an epipole lies within one image diagonal of its image, else "".
+
+    Uncalibrated rectification sends both epipoles to infinity; the nearer an epipole is to
+    the image (the camera stepped forward rather than sideways), the more the homographies
+    stretch it, and the more the framing changes with every small error in `F`.
+
+    >>> F = np.array([[0, 0, 0], [0, 0, -1], [0, 1, 0]], float)   # sideways: epipoles at infinity
+    >>> epipole_warning(F, (480, 640))
+    ''
+    """
+    h, w = shape
+    diagonal = float(np.hypot(w, h))
+    for side, matrix in (("left", F), ("right", F.T)):
+        e = np.linalg.svd(matrix)[2][-1]                      # matrix @ e = 0
+        if abs(e[2]) < 1e-12 * np.abs(e[:2]).max():
+            continue
+        x, y = e[:2] / e[2]
+        away = float(np.hypot(max(0.0, -x, x - w), max(0.0, -y, y - h)))
+        if away < diagonal:
+            return (f"warning: the {side} epipole lies {away:.0f} px from the image (within its {diagonal:.0f} px "
+                    "diagonal): the camera moved forward more than sideways, so the rectified framing is "
+                    "unstable; take the right photo after a sideways step")
+    return ""
+
+
+def _transform(h, xy) -> np.ndarray:
+    return cv2.perspectiveTransform(np.asarray(xy, float).reshape(-1, 1, 2), h).reshape(-1, 2)
+
+
+def _place(h_left, h_right, left_xy, right_xy, shape):
+    """Move both homographies so the left content starts at (0, 0) and 98% of disparities are > 0."""
+    h, w = shape
+    corners = np.array([[0, 0], [w, 0], [w, h], [0, h]], float)
+    box = _transform(h_left, corners)
+    start = box.min(axis=0)
+    shift = np.array([[1, 0, -start[0]], [0, 1, -start[1]], [0, 0, 1]], float)
+    h_left, h_right = shift @ h_left, shift @ h_right
+    d = _transform(h_left, left_xy)[:, 0] - _transform(h_right, right_xy)[:, 0]
+    dx = 1.0 - np.percentile(d, 2)        # the 2nd percentile of the disparities at 1 px
+    h_right = np.array([[1, 0, -dx], [0, 1, 0], [0, 0, 1]], float) @ h_right
+    size = np.ceil(_transform(h_left, corners).max(axis=0)).astype(int)
+    return h_left, h_right, (int(min(size[0], 2 * w)), int(min(size[1], 2 * h)))
+
+
+def rectify_pair(left, right, *, max_side: int = WORKING_SIDE) -> Rectified:
+    """Rectify a hand-held stereo pair (see the module's description).
+
+    Parameters
+    ----------
+    left, right : path, bytes or ndarray
+        The photos, the left camera's first.  They must be of one size.
+    max_side : int
+        Scale both down so that the longer side is at most this (default :data:`WORKING_SIDE`);
+        the rectified images, which the warp can make larger, are kept within it too.
+
+    Returns
+    -------
+    Rectified
+
+    Raises
+    ------
+    ParameterError
+        With one sentence: photos of different sizes, too few matches, the same photo twice,
+        no common epipolar geometry, no parallax (the camera only turned), or the two photos
+        swapped (see :func:`sideways_step`; a pair whose rows already agree: most
+        disparities negative, :func:`negative_share`).
+    """
+    owner = "rectify_pair"
+    max_side = check_number(max_side, "max_side", owner, low=64, integer=True)
+    left, right, factor = pair_inputs(left, right, owner, max_side)
+    matches = robust_matches(left, right)
+    _refuse_same(matches, owner)
+    F, inliers = _fundamental(matches, owner)
+    lxy, rxy = matches.left_xy[inliers], matches.right_xy[inliers]
+    _refuse_swapped(lxy, rxy, F, left.shape, owner)
+    figures = _dy_figures(lxy, rxy)
+    if figures["median_abs_dy_px"] <= 0.5 and figures["p90_abs_dy_px"] <= 1.5:
+        eye = np.eye(3)
+        return Rectified(left, right, eye, eye, "already rectified", int(inliers.sum()),
+                         figures["median_abs_dy_px"], figures["p90_abs_dy_px"], figures["disparity_range_px"],
+                         factor, lxy, rxy)
+    h, w = left.shape
+    ok, h_left, h_right = cv2.stereoRectifyUncalibrated(lxy, rxy, F, (w, h))
+    if not ok:
+        raise ParameterError(message("right", owner, "a view OpenCV's uncalibrated rectification accepts",
+                                     f"a pair it refused ({len(lxy)} inliers)"))
+    h_left, h_right, size = _place(h_left, h_right, lxy, rxy, (h, w))
+    shrink = working_size(size[::-1], max_side)
+    if shrink < 1.0:       # the warp can enlarge the image: the output, too, stays within max_side
+        scale = np.diag([shrink, shrink, 1.0])
+        h_left, h_right, size = _place(scale @ h_left, scale @ h_right, lxy, rxy, (h, w))
+        size = (min(size[0], max_side), min(size[1], max_side))
+    warp = lambda image, hom: cv2.warpPerspective(image.astype(np.float32), hom, size, flags=cv2.INTER_LINEAR,
+                                                  borderMode=cv2.BORDER_CONSTANT, borderValue=0).astype(float)
+    lxy_r, rxy_r = _transform(h_left, lxy), _transform(h_right, rxy)
+    figures = _dy_figures(lxy_r, rxy_r)
+    warning = epipole_warning(F, (h, w))
+    return Rectified(np.clip(warp(left, h_left), 0, 255), np.clip(warp(right, h_right), 0, 255), h_left,
+                     h_right, "uncalibrated", int(inliers.sum()), figures["median_abs_dy_px"],
+                     figures["p90_abs_dy_px"], figures["disparity_range_px"], factor, lxy_r, rxy_r,
+                     warnings=(warning,) if warning else ())
+
+
+def apply_rectification(left, right, left_h, right_h, size) -> Rectified:
+    """Warp a pair with a rectification found on another pair of the same two camera positions
+    (the depth demo's background); its figures are measured on new robust matches.
+
+    ``size`` is the output ``(width, height)``; the method is ``"the background's"``.
+    """
+    size = (int(size[0]), int(size[1]))
+    warp = lambda image, h: np.clip(cv2.warpPerspective(np.asarray(image, np.float32), np.asarray(h, float), size)
+                                    .astype(float), 0, 255)
+    return measured(warp(left, left_h), warp(right, right_h), left_h, right_h, "the background's")
+
+
+def measured(left, right, left_h, right_h, method: str) -> Rectified:
+    """A pair rectified some other way, with its figures measured on new robust matches."""
+    matches = robust_matches(left, right)
+    figures = (_dy_figures(matches.left_xy, matches.right_xy) if len(matches) else
+               {"median_abs_dy_px": float("nan"), "p90_abs_dy_px": float("nan"), "disparity_range_px": [0.0, 0.0]})
+    return Rectified(left, right, np.asarray(left_h, float), np.asarray(right_h, float), method, len(matches),
+                     figures["median_abs_dy_px"], figures["p90_abs_dy_px"], figures["disparity_range_px"], 1.0,
+                     matches.left_xy, matches.right_xy, "robust matches (no RANSAC)")
+
+
+def check_rectified(left, right, *, max_side: int = WORKING_SIDE) -> dict:
+    """How far a pair is from rectified, without warping it.
+
+    Returns the figures of :class:`Rectified` for the RANSAC inliers as they are, with
+    ``"matches"``, ``"inliers"``, ``"rectified"`` (the test :func:`rectify_pair` uses to leave
+    a pair alone), ``"problem"`` (why the pair cannot be rectified, or "") and the inlier
+    points ``"left_xy"``/``"right_xy"`` for drawing epipolar lines.
+    """
+    owner = "check_rectified"
+    left, right, _ = pair_inputs(left, right, owner, max_side)
+    matches = robust_matches(left, right)
+    out = {"matches": len(matches), "inliers": 0, "rectified": False, "problem": "",
+           "median_abs_dy_px": None, "p90_abs_dy_px": None, "disparity_range_px": None,
+           "left_xy": np.zeros((0, 2)), "right_xy": np.zeros((0, 2))}
+    try:
+        _refuse_same(matches, owner)
+        F, inliers = _fundamental(matches, owner)
+        lxy, rxy = matches.left_xy[inliers], matches.right_xy[inliers]
+        _refuse_swapped(lxy, rxy, F, left.shape, owner)
+    except ParameterError as exc:
+        return {**out, "problem": str(exc)}
+    figures = _dy_figures(lxy, rxy)
+    rectified = figures["median_abs_dy_px"] <= 0.5 and figures["p90_abs_dy_px"] <= 1.5
+    return {**out, **figures, "inliers": int(inliers.sum()), "rectified": bool(rectified),
+            "left_xy": lxy, "right_xy": rxy}

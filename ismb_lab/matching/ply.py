@@ -1,0 +1,105 @@
+"""Point clouds as PLY files, the format MeshLab, CloudCompare and Open3D open.
+
+A PLY file is a text header followed by the data.  This module writes one element, ``vertex``,
+with the properties ``x y z`` (32-bit floats, the coordinates) and ``red green blue`` (8-bit
+unsigned integers, the colour), in ASCII or in binary little-endian::
+
+    ply
+    format ascii 1.0
+    comment ...
+    element vertex 2
+    property float x
+    property float y
+    property float z
+    property uchar red
+    property uchar green
+    property uchar blue
+    end_header
+    0.1 -0.05 1.2 128 128 128
+    ...
+
+``ismb-lab match --rig ... --ply OUT.ply`` writes its matches this way: metres in the rectified
+left camera's frame (X right, Y down, Z forward), each coloured by the left image's grey level.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from .._core.validation import ParameterError, ParameterTypeError, check_points, message
+
+__all__ = ["ply_bytes"]
+
+_PROPERTIES = ("property float x", "property float y", "property float z",
+               "property uchar red", "property uchar green", "property uchar blue")
+
+
+def ply_bytes(points, colours=None, *, binary: bool = False, comments=()) -> bytes:
+    """The PLY file of `points` with their `colours`.
+
+    Parameters
+    ----------
+    points : (N, 3) array_like
+        Finite ``(x, y, z)`` coordinates; they are written as 32-bit floats.
+    colours : (N, 3) or (N,) array_like, optional
+        Each point's ``(red, green, blue)``, or its grey level, from 0 to 255 (rounded); default
+        mid-grey.
+    binary : bool
+        Binary little-endian instead of ASCII text.
+    comments : sequence of str
+        Header comments, one line each (printable ASCII).
+
+    Returns
+    -------
+    bytes
+
+    Examples
+    --------
+    >>> print(ply_bytes([[0.5, -0.25, 2.0]], [200], comments=["metres"]).decode())
+    ply
+    format ascii 1.0
+    comment metres
+    element vertex 1
+    property float x
+    property float y
+    property float z
+    property uchar red
+    property uchar green
+    property uchar blue
+    end_header
+    0.5 -0.25 2 200 200 200
+    <BLANKLINE>
+    >>> len(ply_bytes([[0.5, -0.25, 2.0]], binary=True).split(b"end_header\\n")[1])
+    15
+    """
+    own = "ply_bytes"
+    xyz = check_points(points, "points", own, dims=3).astype("<f4")
+    if colours is None:
+        colours = np.full(len(xyz), 128)
+    try:
+        rgb = np.asarray(colours, dtype=float)
+    except (TypeError, ValueError, OverflowError):
+        raise ParameterTypeError(message("colours", own, "numbers from 0 to 255", colours)) from None
+    if rgb.ndim == 1:
+        rgb = np.repeat(rgb[:, None], 3, axis=1)
+    if rgb.shape != (len(xyz), 3) or not np.all(np.isfinite(rgb)) or rgb.min(initial=0) < 0 \
+            or rgb.max(initial=0) > 255:
+        raise ParameterError(message("colours", own, f"{len(xyz)} grey levels or (red, green, blue) rows of "
+                                     "numbers from 0 to 255, one per point", f"an array of shape {rgb.shape}"))
+    rgb = np.rint(rgb).astype(np.uint8)
+    for text in comments:
+        if not isinstance(text, str) or not text.isascii() or not text.isprintable():
+            raise ParameterError(message("comments", own, "lines of printable ASCII text", text))
+    header = ["ply", f"format {'binary_little_endian' if binary else 'ascii'} 1.0",
+              *(f"comment {text}" for text in comments), f"element vertex {len(xyz)}", *_PROPERTIES, "end_header"]
+    head = ("\n".join(header) + "\n").encode("ascii")
+    if binary:
+        # one record per vertex, in the header's order: three little-endian float32, three uint8
+        rows = np.empty(len(xyz), dtype=np.dtype({"names": ["x", "y", "z", "r", "g", "b"],
+                                                  "formats": ["<f4"] * 3 + ["u1"] * 3}))
+        for n, name in enumerate("xyzrgb"):
+            rows[name] = (xyz if n < 3 else rgb)[:, n % 3]
+        return head + rows.tobytes()
+    # 9 significant digits give a 32-bit float back exactly
+    lines = [" ".join([*(f"{float(v):.9g}" for v in p), *(str(int(c)) for c in c3)]) for p, c3 in zip(xyz, rgb)]
+    return head + "".join(line + "\n" for line in lines).encode("ascii")

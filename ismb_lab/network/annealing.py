@@ -1,0 +1,376 @@
+"""Mean-field annealing: the analog Hopfield network on the same energy (thesis future work 1).
+
+The discrete network flips one neuron at a time and stops at the first state no
+single flip improves.  The analog network keeps a *probability* ``v_a`` in
+``[0, 1]`` per neuron and sets it to the mean-field value at temperature ``T``::
+
+    v_a = 1 / (1 + exp(-u_a / T)),    u_a = sum_b W_ab v_b + I_a
+
+with the exact weights of :func:`ismb_lab.network.hopfield.hopfield_form`.  At high ``T``
+every ``v`` sits near 1/2 and the energy landscape is smooth; cooling slowly
+lets the ``v`` commit one after another, usually into a deeper minimum than a
+greedy descent from "all on".  At each temperature the neurons are updated
+asynchronously in a random order, for `sweeps` sweeps.  The energy reported on
+the way is ``const - 1/2 v'Wv - I'v``, which equals :func:`ismb_lab.network.hopfield.energy`
+for 0/1 states.
+
+At the end ``v`` is rounded at 1/2 and handed to the discrete network
+(:func:`ismb_lab.network.dynamics.run` from that state), so the answer is an exact fixed
+point like the discrete network's.
+
+With ``settle > 0`` the schedule stops early, after the first temperature whose sweeps
+moved no ``v`` across 1/2 and left every ``v`` within `settle` of 0 or 1: the state has
+settled, and the colder temperatures left would only push each ``v`` further the same way
+(they can still flip a neuron, which the discrete polish then sees from its old side).
+``settle=0`` (the default) runs every temperature.
+
+>>> from ismb_lab.network.hopfield import Network
+>>> net = Network.from_arrays(2, 2, rows=[0, 0, 1, 1], cols=[0, 1, 0, 1],
+...                           similarity=[0.5, -0.5, -0.5, 0.5],
+...                           pair_a=[0, 1], pair_b=[3, 2], pair_c=[0.9, -0.9])
+>>> result = anneal(net, rng=0)
+>>> result.state.tolist(), round(result.energy, 2)
+([1, 0, 0, 1], -2.8)
+"""
+
+from __future__ import annotations
+
+import weakref
+from dataclasses import dataclass
+from typing import Iterator
+
+import numba
+import numpy as np
+
+from .._core.validation import ParameterError, ParameterTypeError, check_number, check_rng, message
+from .hopfield import Network, Topology, energy, hopfield_form
+from .dynamics import run
+
+__all__ = ["MAX_SWEEPS", "anneal", "AnnealResult", "AnnealStep", "iter_annealing"]
+
+#: Most sweeps a schedule may run in all (its temperatures times `sweeps`), checked before it
+#: starts: the default schedule runs 88 (44 temperatures of 2 sweeps), one of ``cooling=0.9999``
+#: about 92,000.
+MAX_SWEEPS = 100_000
+
+
+@dataclass(frozen=True)
+class AnnealStep:
+    """One temperature of the schedule, after its sweeps.
+
+    Attributes
+    ----------
+    index : int
+    temperature : float
+    change : float
+        Largest ``|dv|`` of the last sweep.
+    energy : float
+        ``const - 1/2 v'Wv - I'v`` of the analog state.
+    committed : float
+        Share of neurons with ``v`` below 0.05 or above 0.95.
+    """
+
+    index: int
+    temperature: float
+    change: float
+    energy: float
+    committed: float
+
+
+@dataclass(frozen=True, eq=False)
+class AnnealResult:
+    """Outcome of :func:`anneal`.
+
+    Attributes
+    ----------
+    state : (n,) uint8 ndarray
+        The discrete fixed point reached from the rounded analog state.
+    energy : float
+        Its energy (:func:`ismb_lab.network.hopfield.energy`).
+    rounded : (n,) uint8 ndarray
+        ``v > 1/2`` at the end of the schedule, before the discrete polish.
+    analog : (n,) float ndarray
+        The final ``v``.
+    steps : int
+        Temperatures visited.
+    """
+
+    state: np.ndarray
+    energy: float
+    rounded: np.ndarray
+    analog: np.ndarray
+    steps: int
+
+
+@numba.njit(cache=True)
+def _logistic(x):
+    """``1 / (1 + exp(-x))`` without overflow: ``exp`` of a negative number only."""
+    if x >= 0:
+        return 1.0 / (1.0 + np.exp(-x))
+    z = np.exp(x)
+    return z / (1.0 + z)
+
+
+@numba.njit(cache=True)
+def _sweeps(W, u, v, orders, T):
+    """Asynchronous mean-field updates at temperature `T`, one sweep per row of `orders`;
+    `v` and the net inputs `u` are updated in place.  Returns the largest ``|dv|``.
+
+    ``exp`` is the C library's, as :func:`math.exp` is: a plain Python loop with
+    ``math.exp`` gives the same numbers bit for bit (tested)."""
+    change = 0.0
+    for s in range(orders.shape[0]):
+        for a in orders[s]:
+            new = _logistic(u[a] / T)
+            d = new - v[a]
+            if d != 0.0:
+                v[a] = new
+                for b in range(u.shape[0]):   # W is symmetric: row a is column a
+                    u[b] += W[a, b] * d
+                change = max(change, abs(d))
+    return change
+
+
+def iter_annealing(net: Network, *, rng=0, t_start: float = 2.0, t_end: float = 0.02,
+                   cooling: float = 0.9, sweeps: int = 2, settle: float = 0.0,
+                   state: list | None = None) -> Iterator[AnnealStep]:
+    """Cool the analog network, yielding an :class:`AnnealStep` per temperature.
+
+    Parameters
+    ----------
+    net : Network
+    rng : int or numpy.random.Generator
+        Seeds the start (``v = 1/2`` plus noise of 0.01) and the visiting orders.
+    t_start, t_end : float
+        First and last temperature, ``t_start > t_end > 0``; in units of the
+        weights (``S`` and ``C`` lie in [-1, 1], so 2 is "hot").
+    cooling : float
+        Factor in (0, 1) between consecutive temperatures.
+    sweeps : int
+        Asynchronous sweeps per temperature; the schedule runs at most :data:`MAX_SWEEPS`
+        sweeps in all (temperatures times `sweeps`), or is refused before it starts.
+    settle : float
+        In [0, 1/2): stop after the first temperature that moved no ``v`` across 1/2 and
+        left every ``v`` within `settle` of 0 or 1; 0 runs the whole schedule.
+    state : list, optional
+        If given, a one-element list that receives the analog state array
+        (updated in place as the schedule runs), for callers that want ``v``.
+
+    Yields
+    ------
+    step : AnnealStep
+
+    Examples
+    --------
+    >>> net = Network.from_arrays(1, 2, rows=[0, 0], cols=[0, 1], similarity=[0.8, -0.8],
+    ...                           pair_a=[], pair_b=[], pair_c=[], match_bias=0.0)
+    >>> steps = list(iter_annealing(net, rng=0))
+    >>> steps[0].temperature, round(steps[-1].temperature, 3), steps[-1].committed
+    (2.0, 0.021, 1.0)
+    """
+    t_start, t_end, cooling, sweeps = check_schedule(net, "iter_annealing", t_start, t_end, cooling, sweeps)
+    settle = check_settle(settle, "iter_annealing")
+    rng = check_rng(rng, "rng", "iter_annealing")
+    return _anneal(net, rng, t_start, t_end, cooling, sweeps, settle, state)
+
+
+def check_settle(settle, owner) -> float:
+    """`settle`, a number in [0, 1/2), checked as `owner`'s."""
+    settle = check_number(settle, "settle", owner, low=0)
+    if settle >= 0.5:
+        raise ParameterError(message("settle", owner, "a number in [0, 0.5)", settle))
+    return settle
+
+
+def check_schedule(net, owner, t_start, t_end, cooling, sweeps):
+    """The schedule's arguments, checked as `owner`'s."""
+    if not isinstance(net, Network):
+        raise ParameterTypeError(message("net", owner, "a Network", type(net).__name__))
+    return check_schedule_options(owner, t_start, t_end, cooling, sweeps)
+
+
+def check_schedule_options(owner, t_start, t_end, cooling, sweeps):
+    """The schedule's options, checked as `owner`'s (a solver's, before any network exists):
+    the schedule they make runs at most :data:`MAX_SWEEPS` sweeps in all."""
+    t_end = check_number(t_end, "t_end", owner, low=0, low_open=True)
+    t_start = check_number(t_start, "t_start", owner, low=t_end)
+    cooling = check_number(cooling, "cooling", owner, low=0, low_open=True)
+    if cooling >= 1:
+        raise ParameterError(message("cooling", owner, "a number in (0, 1)", cooling))
+    sweeps = check_number(sweeps, "sweeps", owner, low=1, high=MAX_SWEEPS, integer=True)
+    if _temperatures(t_start, t_end, cooling, MAX_SWEEPS // sweeps) is None:
+        raise ParameterError(message("cooling", owner, f"a factor that cools from t_start {t_start:g} to t_end "
+                                     f"{t_end:g} in at most {MAX_SWEEPS // sweeps} temperatures of {sweeps} sweeps "
+                                     f"({MAX_SWEEPS} sweeps in all)", cooling))
+    return t_start, t_end, cooling, sweeps
+
+
+def _temperatures(t_start: float, t_end: float, cooling: float, most: int) -> list | None:
+    """The schedule's temperatures, or None as soon as there are more than `most`."""
+    temperatures = []
+    T = t_start
+    while T >= t_end * (1 - 1e-12):
+        if len(temperatures) == most:
+            return None
+        temperatures.append(T)
+        T *= cooling
+    return temperatures
+
+
+def _anneal(net, rng, t_start, t_end, cooling, sweeps, settle, holder):
+    W, I = hopfield_form(net)
+    n = net.n_neurons
+    v = 0.5 + 0.01 * rng.uniform(-1, 1, n)
+    if holder is not None:
+        holder[:] = [v]
+    u = W @ v + I
+    T, index = t_start, 0
+    while T >= t_end * (1 - 1e-12):
+        orders = np.array([rng.permutation(n) for _ in range(sweeps)], dtype=np.int64).reshape(sweeps, n)
+        before = v > 0.5
+        change = _sweeps(W, u, v, orders, T)
+        e = net.constant - 0.5 * v @ W @ v - I @ v
+        committed = float(np.mean((v < 0.05) | (v > 0.95))) if n else 1.0
+        yield AnnealStep(index, float(T), float(change), float(e), committed)
+        if settle > 0 and np.array_equal(before, v > 0.5) and np.all((v < settle) | (v > 1 - settle)):
+            return
+        index += 1
+        T *= cooling
+
+
+def anneal(net: Network, *, rng=0, t_start: float = 2.0, t_end: float = 0.02, cooling: float = 0.9,
+           sweeps: int = 2, settle: float = 0.0) -> AnnealResult:
+    """Run the schedule of :func:`iter_annealing` to the end, round ``v`` at 1/2 and settle with
+    the discrete network.
+
+    Parameters are those of :func:`iter_annealing`.  The schedule runs in one compiled call
+    on each neuron's list of neighbours (:func:`_neighbours`) instead of the dense rows of
+    ``W``: the same updates in the same order, drawn from the same generator, so the same
+    ``v`` bit for bit, without the per-temperature records.
+
+    Returns
+    -------
+    result : AnnealResult
+
+    Examples
+    --------
+    >>> net = Network.from_arrays(2, 1, rows=[0, 1], cols=[0, 0], similarity=[0.9, 0.2],
+    ...                           pair_a=[], pair_b=[], pair_c=[], match_bias=0.0)
+    >>> anneal(net, rng=3).state.tolist()     # the better of two rivals for one column
+    [1, 0]
+    """
+    rng = check_rng(rng, "rng", "anneal")
+    t_start, t_end, cooling, sweeps = check_schedule(net, "anneal", t_start, t_end, cooling, sweeps)
+    settle = check_settle(settle, "anneal")
+    temperatures = _temperatures(t_start, t_end, cooling, MAX_SWEEPS // sweeps)
+    v = 0.5 + 0.01 * rng.uniform(-1, 1, net.n_neurons)
+    ptr, idx, pair = _neighbours(net.topology)
+    W, w = _dense_and_listed(ptr, idx, pair, net.pair_c, 2.0 * net.uniqueness)
+    u = W @ v + (net.match_bias + net.similarity)   # hopfield_form's W and I: the same sum
+    steps = _schedule(rng, ptr, idx, w, u, v, np.array(temperatures, dtype=float), sweeps, settle)
+    rounded = (v > 0.5).astype(np.uint8)
+    polish = run(net, rng=rng, state=rounded)
+    return AnnealResult(polish.state, energy(net, polish.state), rounded, v, steps)
+
+
+#: Each topology's neighbour lists, kept while the topology lives (a GA anneals many
+#: networks of one topology).
+_NEIGHBOURS: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
+
+
+def _neighbours(top: Topology) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Where :func:`ismb_lab.network.hopfield.hopfield_form`'s ``W`` may be non-zero off its diagonal, by row.
+
+    Neuron ``a``'s neighbours are ``idx[ptr[a]:ptr[a + 1]]``; ``pair`` gives, for each, the
+    interacting pair whose ``C`` the entry holds, or -1 for a neuron on the same row or
+    column.  A pair listed twice holds its last ``C``, as in the dense matrix.
+    """
+    found = _NEIGHBOURS.get(top)
+    if found is None:
+        lay = top.layout
+        found = _neighbour_lists(top.rows, top.cols, lay.nb_ptr, lay.nb_idx, lay.nb_pair, lay.row_ptr,
+                                 lay.row_idx, lay.col_ptr, lay.col_idx)
+        _NEIGHBOURS[top] = found
+    return found
+
+
+@numba.njit(cache=True)
+def _neighbour_lists(rows, cols, nb_ptr, nb_idx, nb_pair, row_ptr, row_idx, col_ptr, col_idx):
+    """The lists of :func:`_neighbours`, from a topology's layout."""
+    n = rows.shape[0]
+    ptr = np.zeros(n + 1, dtype=np.int64)
+    for a in range(n):
+        count = row_ptr[rows[a] + 1] - row_ptr[rows[a]] + col_ptr[cols[a] + 1] - col_ptr[cols[a]] - 2
+        for e in range(nb_ptr[a], nb_ptr[a + 1]):
+            count += e + 1 == nb_ptr[a + 1] or nb_idx[e + 1] != nb_idx[e]   # a repeated pair once
+        ptr[a + 1] = ptr[a] + count
+    idx = np.empty(ptr[n], dtype=np.int64)
+    pair = np.empty(ptr[n], dtype=np.int64)
+    for a in range(n):
+        j = ptr[a]
+        for e in range(row_ptr[rows[a]], row_ptr[rows[a] + 1]):
+            if row_idx[e] != a:
+                idx[j], pair[j] = row_idx[e], -1
+                j += 1
+        for e in range(col_ptr[cols[a]], col_ptr[cols[a] + 1]):
+            if col_idx[e] != a:
+                idx[j], pair[j] = col_idx[e], -1
+                j += 1
+        for e in range(nb_ptr[a], nb_ptr[a + 1]):
+            if e + 1 == nb_ptr[a + 1] or nb_idx[e + 1] != nb_idx[e]:   # the last of a repeated pair
+                idx[j], pair[j] = nb_idx[e], nb_pair[e]
+                j += 1
+    return ptr, idx, pair
+
+
+@numba.njit(cache=True)
+def _dense_and_listed(ptr, idx, pair, pair_c, two_kappa):
+    """``W`` of :func:`ismb_lab.network.hopfield.hopfield_form` (rule "exact"), value for value, and
+    its entries in the order of `idx`."""
+    n = ptr.shape[0] - 1
+    W = np.zeros((n, n))
+    w = np.empty(idx.shape[0])
+    for a in range(n):
+        for e in range(ptr[a], ptr[a + 1]):
+            # hopfield_form's arithmetic: (C + C') doubled, less 2 kappa on a shared row or column
+            x = 2.0 * (pair_c[pair[e]] + 0.0) - 0.0 if pair[e] >= 0 else 2.0 * 0.0 - two_kappa
+            W[a, idx[e]] = x
+            w[e] = x
+    return W, w
+
+
+@numba.njit(cache=True)
+def _schedule(rng, ptr, idx, w, u, v, temperatures, sweeps, settle):
+    """:func:`_sweeps` at every temperature, on neighbour lists, each visiting order drawn
+    from `rng` as :func:`_anneal` draws it (``rng.permutation(n)`` per sweep); `v` and `u`
+    are updated in place.  With ``settle > 0`` it stops where :func:`_anneal` stops.
+    Returns the temperatures run.
+
+    A weight of zero that the dense row would add is skipped: it could only change the
+    sign of a zero ``u``, which gives the same ``v``."""
+    n = v.shape[0]
+    before = np.empty(n, dtype=np.bool_)
+    for t in range(temperatures.shape[0]):
+        T = temperatures[t]
+        if settle > 0:
+            before[:] = v > 0.5
+        for _ in range(sweeps):
+            for a in rng.permutation(n):
+                new = _logistic(u[a] / T)
+                d = new - v[a]
+                if d != 0.0:
+                    v[a] = new
+                    for e in range(ptr[a], ptr[a + 1]):
+                        u[idx[e]] += w[e] * d
+        if settle > 0 and _settled(before, v, settle):
+            return t + 1
+    return temperatures.shape[0]
+
+
+@numba.njit(cache=True)
+def _settled(before, v, settle):
+    """No ``v`` crossed 1/2 since `before` and every ``v`` lies within `settle` of 0 or 1."""
+    for a in range(v.shape[0]):
+        if before[a] != (v[a] > 0.5) or settle <= v[a] <= 1 - settle:
+            return False
+    return True

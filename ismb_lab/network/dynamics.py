@@ -1,0 +1,395 @@
+"""How the network runs: asynchronous updates in a random order, to a fixed point (§3.3, (3-20)).
+
+Update order
+------------
+Attempts visit neurons in a random order drawn from a seed (:func:`visiting_order`):
+a SplitMix64 stream of 64-bit numbers, turned into a Fisher-Yates shuffle of the
+neurons at the start of every sweep.  The compiled kernel draws the same stream
+inside its loop, so a run allocates nothing per attempt and no Python object
+per sweep; both kernels visit the neurons in the same order.  Two stop rules:
+
+* ``"sweep"`` (default): a full random-order sweep over all neurons changes
+  nothing.  That is an exact fixed point.
+* ``"stall"``: ``patience`` (200 in the thesis) consecutive attempts, drawn with
+  replacement, change nothing.  With many neurons it can stop short of a fixed point.
+
+Both give up after ``max_sweeps * n`` attempts (stop rule ``"max_attempts"``).
+
+Two kernels make the same decisions: the readable "textbook" one of
+:func:`iter_updates`, which re-sums (3-20) at every attempt and yields an
+:class:`Update` record each time, and the compiled one of :func:`run`, which sums
+the inputs afresh in the first sweep and keeps them current after each flip from
+then on.  Their weights are the integers of :mod:`ismb_lab.network.hopfield`, so they agree
+bit for bit.
+"""
+
+from __future__ import annotations
+
+import numbers
+from dataclasses import dataclass, field
+from functools import cached_property
+from typing import Iterator, NamedTuple
+
+import numpy as np
+
+from .kernel import _GOLDEN, _MIX1, _MIX2, _below, _next, _shuffle, run_network  # noqa: F401 (tested here)
+from .._core.validation import MAX_SEED, ParameterTypeError, check_choice, check_number, check_rng, message
+from .hopfield import RULES, SCALE, Network, _check_state, _Weights, _weights, _energy_of, energy
+
+__all__ = ["KERNELS", "STOP_RULES", "iter_updates", "run", "RunResult", "Update", "visiting_order"]
+
+STOP_RULES = ("sweep", "stall")
+KERNELS = ("numba", "textbook")
+
+_MASK64 = (1 << 64) - 1
+
+
+class _Stream:
+    """SplitMix64 (Steele, Lea and Flood, 2014) with bounded draws, in plain Python.
+
+    :func:`_next` and :func:`_below` are the same steps compiled; the two agree
+    on every draw (``tests/test_hopfield.py``).
+    """
+
+    def __init__(self, seed: int):
+        self.state = seed & _MASK64
+
+    def next(self) -> int:
+        self.state = (self.state + _GOLDEN) & _MASK64
+        z = self.state
+        z = ((z ^ (z >> 30)) * _MIX1) & _MASK64
+        z = ((z ^ (z >> 27)) * _MIX2) & _MASK64
+        return z ^ (z >> 31)
+
+    def below(self, bound: int) -> int:
+        """Uniform in ``range(bound)``: the low bits of a draw, rejected when too large."""
+        mask = (1 << (bound - 1).bit_length()) - 1
+        while True:
+            x = self.next() & mask
+            if x < bound:
+                return x
+
+
+def visiting_order(seed: int, n: int, stop_rule: str) -> Iterator[np.ndarray]:
+    """Endless sweeps of neuron indices to attempt, one array of `n` per sweep.
+
+    ``"sweep"``: the previous sweep's order shuffled again (Fisher-Yates, from the
+    last position down), starting from ``0, 1, ..., n - 1``.
+    ``"stall"``: `n` indices drawn uniformly with replacement.
+    The compiled kernel of :func:`run` draws exactly these orders.
+
+    Examples
+    --------
+    >>> sweeps = visiting_order(0, 5, "sweep")
+    >>> sorted(next(sweeps).tolist())
+    [0, 1, 2, 3, 4]
+    """
+    stream = _Stream(seed)
+    order = list(range(n))
+    while True:
+        if stop_rule == "sweep":
+            for t in range(n - 1, 0, -1):
+                j = stream.below(t + 1)
+                order[t], order[j] = order[j], order[t]
+            yield np.array(order, dtype=np.int64)
+        else:
+            yield np.array([stream.below(n) for _ in range(n)], dtype=np.int64)
+
+
+def _seed_of(rng, owner: str) -> int:
+    """The stream's seed: the integer itself, or one draw from a Generator."""
+    if type(rng) is int and 0 <= rng <= MAX_SEED:   # the common case, before the slower general test
+        return rng
+    if isinstance(rng, numbers.Integral) and not isinstance(rng, bool) and 0 <= rng <= MAX_SEED:
+        return int(rng)
+    if isinstance(rng, np.random.Generator):
+        return int(rng.integers(0, 2**63, dtype=np.int64))
+    check_rng(rng, "rng", owner)  # raises the standard error
+    raise AssertionError("unreachable")
+
+
+@dataclass(frozen=True)
+class Update:
+    """One asynchronous update attempt (one step of (3-19)).
+
+    Attributes
+    ----------
+    attempt : int
+        0-based attempt number.
+    neuron : int
+        Index of the attempted candidate neuron; ``i`` and ``k`` are its left
+        and right features.
+    u : float
+        Its net input under the rule in use ((3-20) for ``"thesis"``).
+    old, new : int
+        Output before and after the attempt.
+    energy : float
+        Energy (3-15) after the attempt.
+    stop : str or None
+        Set on the last attempt of a run: ``"sweep"``, ``"stall"`` or ``"max_attempts"``.
+    """
+
+    attempt: int
+    neuron: int
+    i: int
+    k: int
+    u: float
+    old: int
+    new: int
+    energy: float
+    stop: str | None = None
+
+    @property
+    def changed(self) -> bool:
+        return self.old != self.new
+
+
+class _Lists(NamedTuple):
+    """What the textbook kernel reads of :class:`_Weights`, as Python lists and ints."""
+
+    nb_ptr: list
+    nb_idx: list
+    nb_w: list
+    row_ptr: list
+    row_idx: list
+    col_ptr: list
+    col_idx: list
+    rows: list
+    cols: list
+    row_w: int
+    col_w: int
+    self_w: list
+    bias: list
+
+
+def _as_lists(w: _Weights) -> _Lists:
+    return _Lists(*(x.tolist() if isinstance(x, np.ndarray) else int(x)
+                    for x in (getattr(w, name) for name in _Lists._fields)))
+
+
+def _net_input_textbook(a: int, y: list, w: _Lists) -> int:
+    """(3-19)/(3-20): u_ik = sum_j sum_l W_ikjl y_jl + I_ik, term by term (fixed point)."""
+    u = w.bias[a]
+    for p in range(w.nb_ptr[a], w.nb_ptr[a + 1]):  # neighbours j of i, and their l != k
+        u += w.nb_w[p] * y[w.nb_idx[p]]
+    i, k = w.rows[a], w.cols[a]
+    for p in range(w.row_ptr[i], w.row_ptr[i + 1]):  # j == i: uniqueness of the left point
+        b = w.row_idx[p]
+        if b != a:
+            u += w.row_w * y[b]
+    for p in range(w.col_ptr[k], w.col_ptr[k + 1]):  # l == k: uniqueness of the right point
+        b = w.col_idx[p]
+        if b != a:
+            u += w.col_w * y[b]
+    return u + w.self_w[a] * y[a]
+
+
+def _check_run_args(net, rng, state, stop_rule, rule, patience, max_sweeps, owner, all_on=False):
+    """``(seed, initial state)``; with `all_on` the state is None when it is every neuron on."""
+    if not isinstance(net, Network):
+        raise ParameterTypeError(message("net", owner, "a Network", type(net).__name__))
+    # the common case (a GA makes thousands of runs) is checked in a few hundred nanoseconds
+    if not (stop_rule in STOP_RULES and rule in RULES and type(patience) is int and patience >= 1
+            and type(max_sweeps) is int and max_sweeps >= 1):
+        check_choice(stop_rule, "stop_rule", owner, STOP_RULES)
+        check_choice(rule, "rule", owner, RULES)
+        check_number(patience, "patience", owner, low=1, integer=True)
+        check_number(max_sweeps, "max_sweeps", owner, low=1, integer=True)
+    if state is None:
+        y0 = None if all_on else net.initial_state()
+    else:
+        y0 = _check_state(net, state, owner)
+    return _seed_of(rng, owner), y0
+
+
+def iter_updates(net: Network, *, rng=0, state=None, stop_rule: str = "sweep",
+                 rule: str = "exact", patience: int = 200,
+                 max_sweeps: int = 500) -> Iterator[Update]:
+    """Run the network one attempt at a time, yielding an :class:`Update` per attempt.
+
+    This is the readable "textbook" kernel: it re-evaluates (3-20) term by term
+    at each attempt and applies (3-19).  Widgets, notebooks and tests consume it;
+    :func:`run` with ``kernel="numba"`` gives the same result much faster.
+
+    Parameters
+    ----------
+    net : Network
+    rng : int or numpy.random.Generator
+        Seed of the random visiting order (:func:`visiting_order`); a Generator
+        gives one seed per run, drawn from it.
+    state : (n,) array_like of {0, 1}, optional
+        Initial outputs; all candidates on by default (§3.3).
+    stop_rule : {"sweep", "stall"}
+        See the module docstring.
+    rule : {"exact", "thesis"}
+        ``"exact"`` is the sound Hopfield form; ``"thesis"`` is (3-17)/(3-20) literally.
+    patience : int
+        Unchanged attempts in a row that stop the ``"stall"`` rule (200 in the thesis).
+    max_sweeps : int
+        Give up after ``max_sweeps * n`` attempts.
+
+    Yields
+    ------
+    update : Update
+        The last one has ``stop`` set.  Nothing is yielded for an empty network.
+
+    Examples
+    --------
+    >>> net = Network.from_arrays(1, 2, rows=[0, 0], cols=[0, 1], similarity=[0.5, -0.5],
+    ...               pair_a=[], pair_b=[], pair_c=[])
+    >>> steps = list(iter_updates(net, rng=0))
+    >>> [(s.neuron, s.u, s.old, s.new) for s in steps if s.changed]
+    [(1, -0.5, 1, 0)]
+    >>> steps[-1].stop, steps[-1].energy
+    ('sweep', 0.5)
+    """
+    seed, y0 = _check_run_args(net, rng, state, stop_rule, rule, patience, max_sweeps, "iter_updates")
+    return _updates(net, visiting_order(seed, net.n_neurons, stop_rule), y0, stop_rule, rule, patience,
+                    max_sweeps)
+
+
+def _updates(net, blocks, y0, stop_rule, rule, patience, max_sweeps):
+    n = net.n_neurons
+    if n == 0:
+        return
+    w = _as_lists(_weights(net, rule))
+    exact = w if rule == "exact" else _as_lists(_weights(net, "exact"))
+    y = [int(v) for v in y0]
+    e0 = energy(net, y0)
+    drop = 0  # exact sum of u * dy so far, in units of 2**-40
+    attempt = changed_in_sweep = unchanged = 0
+    for block in blocks:
+        for a in block.tolist():
+            u = _net_input_textbook(a, y, w)
+            old = y[a]
+            new = 1 if u > 0 else 0 if u < 0 else old
+            if new != old:
+                drop += (u if w is exact else _net_input_textbook(a, y, exact)) * (new - old)
+                y[a] = new
+                changed_in_sweep += 1
+                unchanged = 0
+            else:
+                unchanged += 1
+            attempt += 1
+            stop = None
+            if stop_rule == "sweep" and attempt % n == 0:
+                if changed_in_sweep == 0:
+                    stop = "sweep"
+                changed_in_sweep = 0
+            elif stop_rule == "stall" and unchanged >= patience:
+                stop = "stall"
+            if stop is None and attempt >= max_sweeps * n:
+                stop = "max_attempts"
+            yield Update(attempt - 1, a, int(net.rows[a]), int(net.cols[a]), u / SCALE,
+                         old, new, e0 - drop / SCALE, stop)
+            if stop is not None:
+                return
+
+
+@dataclass(frozen=True, eq=False)
+class RunResult:
+    """Outcome of one network run.
+
+    Attributes
+    ----------
+    state : (n,) uint8 ndarray
+        Final outputs of the candidate neurons.
+    stop_rule : str
+        What stopped the run: ``"sweep"``, ``"stall"`` or ``"max_attempts"``.
+    attempts, flips : int
+        Update attempts made and outputs changed.
+    net : Network
+        The network that ran.
+    energy : float
+        Energy (3-15) of the final state, from :func:`energy`.  It is computed when first
+        read: the thousands of runs of a GA never read it, and at 200 x 200 corners it
+        costs a sixth of a run.
+    """
+
+    state: np.ndarray
+    stop_rule: str
+    attempts: int
+    flips: int
+    net: Network = field(repr=False)
+
+    @cached_property
+    def energy(self) -> float:
+        return _energy_of(self.net, self.state)
+
+    @classmethod
+    def _of(cls, state, stop_rule, attempts, flips, net) -> "RunResult":
+        """The same record without the frozen ``__init__``'s five ``object.__setattr__``
+        calls (0.6 us, a tenth of a 20 x 20 run)."""
+        r = object.__new__(cls)
+        d = r.__dict__
+        d["state"], d["stop_rule"], d["attempts"], d["flips"], d["net"] = state, stop_rule, attempts, flips, net
+        return r
+
+    @property
+    def converged(self) -> bool:
+        """Whether a stop rule fired (rather than the attempt limit)."""
+        return self.stop_rule != "max_attempts"
+
+
+_STOP_NAMES = {1: "sweep", 2: "stall", 3: "max_attempts"}
+
+
+_NO_STATE = np.zeros(0, dtype=np.uint8)
+
+
+def run(net: Network, *, rng=0, state=None, stop_rule: str = "sweep", rule: str = "exact",
+        patience: int = 200, max_sweeps: int = 500, kernel: str = "numba") -> RunResult:
+    """Run the network to a stop and return the final state.
+
+    Parameters are those of :func:`iter_updates`, plus:
+
+    kernel : {"numba", "textbook"}
+        ``"numba"`` keeps every net input current incrementally in compiled
+        code; ``"textbook"`` consumes :func:`iter_updates`.  For the same
+        arguments both return bit-identical results.
+
+    Returns
+    -------
+    result : RunResult
+
+    Examples
+    --------
+    >>> net = Network.from_arrays(2, 2, rows=[0, 0, 1, 1], cols=[0, 1, 0, 1],
+    ...                           similarity=[0.5, -0.5, -0.5, 0.5],
+    ...                           pair_a=[0, 1], pair_b=[3, 2], pair_c=[0.9, -0.9])
+    >>> r = run(net, rng=1)
+    >>> r.state, r.stop_rule, round(r.energy, 2)
+    (array([1, 0, 0, 1], dtype=uint8), 'sweep', -2.8)
+    >>> np.array_equal(run(net, rng=1, kernel="textbook").state, r.state)
+    True
+    """
+    # the common call of a GA's thousands of runs, checked and run in about a microsecond
+    if (kernel == "numba" and state is None and type(net) is Network and type(rng) is int
+            and 0 <= rng <= MAX_SEED and stop_rule in STOP_RULES and rule in RULES
+            and type(patience) is int and patience >= 1 and type(max_sweeps) is int and max_sweeps >= 1):
+        w = net._weights.get(rule) or _weights(net, rule)
+        n = w.self_w.shape[0]
+        if n:
+            y, code, attempts, flips = run_network(rng, stop_rule == "sweep", patience, max_sweeps * n,
+                                              _NO_STATE, True, *w.run_args)
+            return RunResult._of(y, _STOP_NAMES[code], attempts, flips, net)
+    if kernel not in KERNELS:
+        check_choice(kernel, "kernel", "run", KERNELS)
+    if not isinstance(net, Network):
+        raise ParameterTypeError(message("net", "run", "a Network", type(net).__name__))
+    n = net.n_neurons
+    seed, y0 = _check_run_args(net, rng, state, stop_rule, rule, patience, max_sweeps, "run",
+                               all_on=kernel == "numba" and n > 0)
+    if n == 0:
+        return RunResult(y0, stop_rule, 0, 0, net)
+    if kernel == "textbook":
+        y, flips, last = y0.copy(), 0, None
+        for last in _updates(net, visiting_order(seed, n, stop_rule), y0, stop_rule, rule, patience,
+                             max_sweeps):
+            y[last.neuron] = last.new
+            flips += last.changed
+        return RunResult(y, last.stop, last.attempt + 1, flips, net)
+    state, code, attempts, flips = run_network(seed, stop_rule == "sweep", patience, max_sweeps * n,
+                                          _NO_STATE if y0 is None else y0, y0 is None,
+                                          *_weights(net, rule).run_args)
+    return RunResult._of(state, _STOP_NAMES[code], attempts, flips, net)

@@ -1,0 +1,206 @@
+"""Scoring matches against target pairs: C/E/T as in the thesis' Fig. 5.10.
+
+* **C**: matched pairs identical to a target;
+* **E**: matched pairs that are not targets, split into *wrong partner* (the
+  left feature has a target, but with another right feature) and *extra* (the
+  left feature has no target at all);
+* **T**: the number of targets.
+
+The thesis prints ``C/E/T``; with E split it reads ``14/2+0/16`` (C / wrong +
+extra / T).  Matches of left features whose truth is unknown (no ground truth
+there) are not counted either way.
+
+The train/test protocol that uses these scores is in :mod:`ismb_lab.tuning.protocol`.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numba
+import numpy as np
+
+from .._core.validation import ParameterError, message
+
+__all__ = ["Score", "Scorer", "score", "unlabelled"]
+
+
+@dataclass(frozen=True)
+class Score:
+    """C/E/T counts of one or more pairs (scores add with ``+``).
+
+    Examples
+    --------
+    >>> s = Score(correct=14, wrong_partner=2, extra=0, targets=16)
+    >>> str(s), round(s.precision, 3), s.recall
+    ('14/2+0/16', 0.875, 0.875)
+    >>> str(s + Score(16, 0, 1, 16))
+    '30/2+1/32'
+    """
+
+    correct: int
+    wrong_partner: int
+    extra: int
+    targets: int
+
+    @property
+    def errors(self) -> int:
+        return self.wrong_partner + self.extra
+
+    @property
+    def recall(self) -> float:
+        """C / T (the thesis' "accurate rate")."""
+        return self.correct / self.targets if self.targets else float("nan")
+
+    @property
+    def precision(self) -> float:
+        """C / (C + E)."""
+        matched = self.correct + self.errors
+        return self.correct / matched if matched else float("nan")
+
+    @property
+    def fitness(self) -> int:
+        """The GA's fitness (4-1): n_c - n_e."""
+        return self.correct - self.errors
+
+    def __add__(self, other: "Score") -> "Score":
+        return Score(self.correct + other.correct, self.wrong_partner + other.wrong_partner,
+                     self.extra + other.extra, self.targets + other.targets)
+
+    def __str__(self) -> str:
+        return f"{self.correct}/{self.wrong_partner}+{self.extra}/{self.targets}"
+
+
+class Scorer:
+    """:func:`score` against fixed targets, their look-ups built once.
+
+    A GA scores every chromosome's matches against the same targets; this keeps
+    the sets that :func:`score` would build on each call.
+
+    Parameters
+    ----------
+    targets : (t, 2) int array_like
+        Target ``(i, k)`` feature indices.
+    unknown : int array_like
+        Left features whose truth is unknown.
+
+    Examples
+    --------
+    >>> scorer = Scorer([[0, 0], [1, 1], [2, 2]], unknown=[4])
+    >>> str(scorer([[0, 0], [1, 2], [3, 3], [4, 4]])), str(scorer([[2, 2]]))
+    ('1/1+1/3', '1/0+0/3')
+    """
+
+    def __init__(self, targets, unknown=()):
+        targets = np.asarray(targets, dtype=np.int64).reshape(-1, 2)
+        self._wanted = frozenset(map(tuple, targets.tolist()))
+        self._has_target = frozenset(targets[:, 0].tolist())
+        self._skip = frozenset(np.asarray(unknown, dtype=np.int64).ravel().tolist())
+
+    def __call__(self, pairs) -> Score:
+        """The :class:`Score` of matched ``(i, k)`` pairs, an ``(m, 2)`` int array_like."""
+        wanted, has_target, skip = self._wanted, self._has_target, self._skip
+        correct = wrong = extra = 0
+        for i, k in np.asarray(pairs, dtype=np.int64).reshape(-1, 2).tolist():
+            if (i, k) in wanted:
+                correct += 1
+            elif i in has_target:
+                wrong += 1
+            elif i not in skip:
+                extra += 1
+        return Score(correct, wrong, extra, len(wanted))
+
+    @property
+    def targets(self) -> int:
+        """T: the number of distinct targets."""
+        return len(self._wanted)
+
+    def neuron_codes(self, rows, cols) -> np.ndarray:
+        """What a match of each candidate neuron ``(rows[a], cols[a])`` would count as.
+
+        For a GA that scores thousands of states of the same neurons: code the
+        neurons once, then :meth:`count` the matched ones.
+
+        Returns
+        -------
+        codes : (n,) uint8 ndarray
+            1 correct, 2 wrong partner, 3 extra, 0 not counted (unknown truth).
+
+        Examples
+        --------
+        >>> scorer = Scorer([[0, 0], [1, 1], [2, 2]], unknown=[4])
+        >>> codes = scorer.neuron_codes(rows=[0, 1, 3, 4], cols=[0, 2, 3, 4])
+        >>> codes.tolist(), str(scorer.count(codes, [0, 1, 2, 3]))
+        ([1, 2, 3, 0], '1/1+1/3')
+        """
+        wanted, has_target, skip = self._wanted, self._has_target, self._skip
+        rows = np.asarray(rows, dtype=np.int64).ravel().tolist()
+        cols = np.asarray(cols, dtype=np.int64).ravel().tolist()
+        return np.array([1 if (i, k) in wanted else 2 if i in has_target else 0 if i in skip else 3
+                         for i, k in zip(rows, cols)], dtype=np.uint8)
+
+    def count(self, codes: np.ndarray, matched) -> Score:
+        """The :class:`Score` of the matched neurons (indices into `codes`, each at most once),
+        the same as calling the scorer on their ``(i, k)`` pairs."""
+        codes, matched = np.asarray(codes, dtype=np.uint8), np.asarray(matched, dtype=np.int64).ravel()
+        correct, wrong, extra = _tally(codes, matched)
+        if correct < 0:
+            raise ParameterError(message("matched", "Scorer.count", f"indices in [0, {len(codes)})",
+                                         matched))
+        return Score(correct, wrong, extra, len(self._wanted))
+
+
+@numba.njit(cache=True)
+def _tally(codes, matched):
+    correct = wrong = extra = 0
+    for a in matched:
+        if a < 0 or a >= codes.shape[0]:
+            return -1, 0, 0
+        code = codes[a]
+        if code == 1:
+            correct += 1
+        elif code == 2:
+            wrong += 1
+        elif code == 3:
+            extra += 1
+    return correct, wrong, extra
+
+
+def unlabelled(targets, n_left: int) -> np.ndarray:
+    """The left features ``0 .. n_left - 1`` that no target starts from.
+
+    A person who labels some corners says nothing about the others: passed to :func:`score`
+    as `unknown`, their matches are not counted.  The thesis' fitness (4-1) counts every
+    match that is not a target as an error, because its targets are all the true pairs.
+
+    Examples
+    --------
+    >>> unlabelled([[0, 3], [2, 1]], 4).tolist()
+    [1, 3]
+    """
+    first = np.asarray(targets, dtype=np.int64).reshape(-1, 2)[:, 0]
+    return np.setdiff1d(np.arange(int(n_left), dtype=np.int64), first)
+
+
+def score(pairs, targets, unknown=()) -> Score:
+    """Compare matched feature pairs with target feature pairs.
+
+    Parameters
+    ----------
+    pairs : (m, 2) int array_like
+        Matched ``(i, k)`` feature indices.
+    targets : (t, 2) int array_like
+        Target ``(i, k)`` feature indices (snapped from coordinates).
+    unknown : int array_like
+        Left features whose truth is unknown; their matches are not counted.
+
+    Returns
+    -------
+    score : Score
+
+    Examples
+    --------
+    >>> str(score([[0, 0], [1, 2], [3, 3], [4, 4]], [[0, 0], [1, 1], [2, 2]], unknown=[4]))
+    '1/1+1/3'
+    """
+    return Scorer(targets, unknown)(pairs)
