@@ -14,7 +14,7 @@ import time
 from pathlib import Path
 
 from ismb_lab.tuning.evaluation import Score
-from ismb_lab.tuning.protocol import Case, Spread, format_protocol, load_manifest, protocol
+from ismb_lab.tuning.cases import Case, Spread, format_protocol, load_manifest, protocol
 from ismb_lab.scenes import synthetic_scene
 
 ROOT = Path(__file__).resolve().parents[1]

@@ -23,7 +23,7 @@ from pathlib import Path
 
 from ismb_lab.depth.pipeline import DEPTH_MATCH_CONFIG
 from ismb_lab.network.methods import save_params
-from ismb_lab.tuning.protocol import Case
+from ismb_lab.tuning.cases import Case
 from ismb_lab.tuning.fitness import evaluate, to_params, tune
 
 LAB = Path(__file__).resolve().parents[1] / "images" / "lab"

@@ -37,7 +37,7 @@ import numpy as np
 
 from ismb_lab.tuning.evaluation import score
 from ismb_lab.images.io import save_image
-from ismb_lab.tuning.protocol import family_cases, protocol
+from ismb_lab.tuning.cases import family_cases, protocol
 from ismb_lab.scenes import families
 from ismb_lab.network.solvers import DEFAULT_SOLVER, get_solver
 from ismb_lab.labels.targets import save_targets, targets_from_matches
@@ -63,7 +63,7 @@ def solver_of(text: str):
 
 def family_sets(start: int, count: int) -> dict:
     """Every registered family's cases, the `n`-th family of :func:`~ismb_lab.scenes.families`
-    drawn from seed ``start + 100 n`` on (:func:`~ismb_lab.tuning.protocol.family_cases`)."""
+    drawn from seed ``start + 100 n`` on (:func:`~ismb_lab.tuning.cases.family_cases`)."""
     return {f: family_cases(f, start + 100 * n, count) for n, f in enumerate(families())}
 
 

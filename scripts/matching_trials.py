@@ -33,7 +33,7 @@ from scipy.optimize import linear_sum_assignment
 from ismb_lab.tuning.evaluation import score
 from ismb_lab.network.hopfield import hopfield_form
 from ismb_lab.network.methods import MethodNM3, get_method, method_names, register_method
-from ismb_lab.tuning.protocol import family_cases, protocol
+from ismb_lab.tuning.cases import family_cases, protocol
 from ismb_lab.scenes import FAMILIES
 from ismb_lab.network.solvers import matched_neurons, one_match_per_corner, solve
 

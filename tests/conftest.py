@@ -51,7 +51,7 @@ def warm_kernels() -> dict:
     from ismb_lab.matching.pipeline import MatchConfig, prepare, warm_up
     from ismb_lab.network.methods import get_method, method_names
     from ismb_lab.network.params import Params
-    from ismb_lab.tuning.protocol import Case
+    from ismb_lab.tuning.cases import Case
     from ismb_lab.network.solvers import get_solver, solver_names
     from ismb_lab.tuning.fitness import Fitness, evaluate, gene_bounds
 

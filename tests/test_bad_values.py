@@ -134,7 +134,7 @@ def test_a_bound_of_400_digits_is_shown_by_its_size():
 
 
 def test_family_cases_refuses_an_empty_split_and_bad_counts():
-    from ismb_lab.tuning.protocol import family_cases
+    from ismb_lab.tuning.cases import family_cases
 
     with pytest.raises(ValueError, match=r"'count'.*family_cases.*>= 1.*Got 0"):
         family_cases("cameras", 2300, 0)

@@ -150,7 +150,7 @@ def test_tune_writes_what_match_reads(pair, targets, tmp_path, capsys):
 
 
 def test_tune_scores_each_chromosome_over_fit_seeds_as_the_library_does(pair, targets, tmp_path):
-    from ismb_lab.tuning.protocol import Case
+    from ismb_lab.tuning.cases import Case
     from ismb_lab.tuning.fitness import to_params, tune
 
     out = tmp_path / "p.json"

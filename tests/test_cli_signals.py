@@ -18,7 +18,7 @@ import pytest
 
 import ismb_lab._core.files
 import ismb_lab.cli.evaluate  # noqa: F401  (imported before any test wraps a function of tuning,
-import ismb_lab.cli.tune  # noqa: F401     which ismb_lab.tuning.protocol binds by name at its import)
+import ismb_lab.cli.tune  # noqa: F401     which ismb_lab.tuning.cases binds by name at its import)
 import ismb_lab.tuning.fitness
 from ismb_lab.cli import main
 

@@ -12,7 +12,7 @@ import pytest
 
 from ismb_lab.labels.classroom import collected, pool, save_merging
 from ismb_lab.cli import main
-from ismb_lab.tuning.protocol import Case
+from ismb_lab.tuning.cases import Case
 from ismb_lab.labels.targets import TargetSet, load_targets, save_targets
 
 IMAGES = Path(__file__).resolve().parents[1] / "images"

@@ -6,7 +6,7 @@ import pytest
 from ismb_lab import ParameterError
 from ismb_lab.images.datasets import MOTORCYCLE_ROIS, ground_truth_pairs, motorcycle
 from ismb_lab.matching.pipeline import MatchConfig, prepare
-from ismb_lab.tuning.protocol import load_manifest
+from ismb_lab.tuning.cases import load_manifest
 
 MANIFEST = __import__("pathlib").Path(__file__).parents[1] / "manifests" / "middlebury.json"
 

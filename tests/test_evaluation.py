@@ -9,7 +9,7 @@ import pytest
 from ismb_lab.tuning.evaluation import Score, Scorer, score
 from ismb_lab.matching.pipeline import Prepared
 from ismb_lab.network.methods import Params, build_problem
-from ismb_lab.tuning.protocol import Case, format_protocol, protocol
+from ismb_lab.tuning.cases import Case, format_protocol, protocol
 from ismb_lab import ParameterError
 from ismb_lab.scenes import synthetic_scene
 from ismb_lab.tuning.fitness import Fitness, evaluate, to_chromosome

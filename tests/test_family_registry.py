@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 from ismb_lab import ParameterError, ParameterTypeError
-from ismb_lab.tuning.protocol import family_cases
+from ismb_lab.tuning.cases import family_cases
 from ismb_lab.scenes import (FAMILIES, Family, Look, families, get_family, object_layout, register_family,
                              unregister_family)
 

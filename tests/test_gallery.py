@@ -10,7 +10,7 @@ from ismb_lab.cli import main
 from ismb_lab.scenes.gallery import decode_disparity
 from ismb_lab.images.io import load_pair
 from ismb_lab.matching.pipeline import prepare
-from ismb_lab.tuning.protocol import load_manifest
+from ismb_lab.tuning.cases import load_manifest
 from ismb_lab.scenes import REALISTIC_COUNT, synthetic_scene, toy_car_scene, true_matches
 from ismb_lab.labels.targets import load_targets, snap
 

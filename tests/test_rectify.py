@@ -183,7 +183,7 @@ def test_opencv_data_constant_names_the_debian_folder():
 def test_aloe_manifest_gives_ground_truth_cases(data, tmp_path):
     from pathlib import Path
 
-    from ismb_lab.tuning.protocol import load_manifest
+    from ismb_lab.tuning.cases import load_manifest
 
     cases = load_manifest(Path(__file__).resolve().parents[1] / "manifests" / "aloe.json")
     assert [c.name for c in cases][0] == "aloe top-left" and len(cases) == 4

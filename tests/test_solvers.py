@@ -114,7 +114,7 @@ def test_one_to_one_in_match_the_cli_and_evaluate(rendered):
 
     from ismb_lab.matching.pipeline import match, prepare
     from ismb_lab.network.params import Params
-    from ismb_lab.tuning.protocol import Case
+    from ismb_lab.tuning.cases import Case
     from ismb_lab.scenes import synthetic_scene
     from ismb_lab.network.solvers import matched_neurons, one_match_per_corner, to_matches
     from ismb_lab.tuning.fitness import evaluate
@@ -216,7 +216,7 @@ def all_off():
 
 
 def test_a_solver_defined_once_shows_up_in_the_cli_and_in_the_protocol(all_off, capsys):
-    from ismb_lab.tuning.protocol import format_protocol, protocol
+    from ismb_lab.tuning.cases import format_protocol, protocol
 
     for command in ("match", "tune", "evaluate", "depth"):
         with pytest.raises(SystemExit):
@@ -235,7 +235,7 @@ def test_a_solver_defined_once_shows_up_in_the_cli_and_in_the_protocol(all_off, 
 def _hand_cases():
     from ismb_lab.matching.pipeline import Prepared
     from ismb_lab.network.methods import build_problem
-    from ismb_lab.tuning.protocol import Case
+    from ismb_lab.tuning.cases import Case
 
     cases = []
     for offset in (0, 30, 60):

@@ -221,7 +221,7 @@ def test_a_worker_is_born_with_ctrl_c_blocked():
     workers are started with SIGINT blocked, and keep it so; the parent gets it back."""
     import signal
 
-    from ismb_lab.tuning.protocol import _starting_workers, _workers
+    from ismb_lab.tuning.cases import _starting_workers, _workers
 
     before = signal.pthread_sigmask(signal.SIG_BLOCK, [])
     with _workers(2) as pool:
@@ -359,18 +359,18 @@ def test_a_flat_pair_is_known_at_once(tmp_path, capsys, monkeypatch):
 
 
 def test_a_one_pair_manifest_is_refused_not_reported_as_nan(work, capsys, monkeypatch):
-    import ismb_lab.tuning.protocol
+    import ismb_lab.tuning.cases
 
     one_line(["evaluate", work / "M1.json", "--generations", "1", "--jobs", "1"], capsys, "at least two pairs")
-    monkeypatch.setattr(ismb_lab.tuning.protocol, "tune", lambda *a, **k: pytest.fail("fitted before the refusal"))
-    cases = ismb_lab.tuning.protocol.load_manifest(work / "M1.json")
+    monkeypatch.setattr(ismb_lab.tuning.cases, "tune", lambda *a, **k: pytest.fail("fitted before the refusal"))
+    cases = ismb_lab.tuning.cases.load_manifest(work / "M1.json")
     with pytest.raises(ParameterError, match="at least two pairs"):
-        ismb_lab.tuning.protocol.protocol(cases)
+        ismb_lab.tuning.cases.protocol(cases)
 
 
 def test_a_held_out_total_without_targets_says_so_instead_of_nan():
     from ismb_lab.tuning.evaluation import Score
-    from ismb_lab.tuning.protocol import _figures
+    from ismb_lab.tuning.cases import _figures
 
     assert _figures(Score(0, 0, 0, 0)).endswith("C/T - (no targets)   precision - (no matches)")
     assert "nan" not in _figures(Score(0, 0, 0, 0))

@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 import ismb_lab.matching.pipeline
-import ismb_lab.tuning.protocol
+import ismb_lab.tuning.cases
 from ismb_lab import ParameterError
 from ismb_lab.cli import main
 
@@ -34,7 +34,7 @@ def no_work(monkeypatch):
         raise AssertionError("the work started before the refusal")
 
     monkeypatch.setattr(ismb_lab.matching.pipeline, "prepare", work)
-    monkeypatch.setattr(ismb_lab.tuning.protocol, "prepare", work)
+    monkeypatch.setattr(ismb_lab.tuning.cases, "prepare", work)
 
 
 def refused(argv, capsys, match: str):
@@ -109,8 +109,8 @@ def test_a_default_jobs_above_the_limit_is_lowered_with_a_note(monkeypatch, caps
 
 def test_the_protocol_starts_no_more_workers_than_pairs(monkeypatch):
     """``jobs=1000000`` started an interpreter per task (2.76 GB): the pool is no larger than the pairs."""
-    import ismb_lab.tuning.protocol as protocol
-    from ismb_lab.tuning.protocol import Case
+    import ismb_lab.tuning.cases as protocol
+    from ismb_lab.tuning.cases import Case
 
     asked = []
 

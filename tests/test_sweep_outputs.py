@@ -114,7 +114,7 @@ def test_evaluate_refuses_a_json_over_a_file_its_built_in_source_reads(work, cap
 
 
 def test_a_manifest_declares_the_files_of_its_built_in_sources():
-    from ismb_lab.tuning.protocol import SOURCES, source_files
+    from ismb_lab.tuning.cases import SOURCES, source_files
 
     assert set(SOURCES) == {"middlebury-motorcycle", "middlebury-aloe"}
     names = [p.name for p in source_files("middlebury-motorcycle")]

@@ -6,7 +6,7 @@ import pytest
 from ismb_lab import ParameterError
 from ismb_lab.matching.pipeline import match, prepare
 from ismb_lab.network.methods import Params
-from ismb_lab.tuning.protocol import Case, format_protocol, protocol
+from ismb_lab.tuning.cases import Case, format_protocol, protocol
 from ismb_lab.scenes import synthetic_scene, true_matches
 from ismb_lab.tuning.fitness import Fitness, evaluate, gene_bounds, to_chromosome, to_params, tune
 
@@ -175,7 +175,7 @@ def test_a_persons_few_labels_are_scored_only_at_the_corners_they_label(tmp_path
     import cv2
 
     from ismb_lab.matching.pipeline import match, prepare
-    from ismb_lab.tuning.protocol import Case
+    from ismb_lab.tuning.cases import Case
     from ismb_lab.scenes import synthetic_scene, true_matches
     from ismb_lab.labels.targets import save_targets, targets_from_matches
     from ismb_lab.widgets.explorer import ParameterExplorer

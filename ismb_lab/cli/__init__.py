@@ -213,10 +213,6 @@ def main(argv=None) -> int:
     return code
 
 
-#: The commands that run the network, and so compile its kernels on their first run.
-_COMPILING = frozenset({"match", "tune", "evaluate", "depth"})
-
-
 def _announce_compiling() -> None:
     """One line on a terminal's stderr before numba compiles the network's kernels (the first run
     for this user, or after an upgrade): that run is silent for up to a minute otherwise.
@@ -245,7 +241,7 @@ def _main(argv, interrupts) -> int:
             args = build_parser().parse_args(argv)
             preflight(args, UsageError)
             running = True
-            if args.command in _COMPILING:
+            if getattr(args, "compiles", False):   # a command that runs the network says so
                 _announce_compiling()
             code = args.run(args)
             if code == 130 and interrupts.signum is not None:

@@ -53,7 +53,7 @@ def add_parser(sub) -> None:
     dp.add_argument("--plot", type=output_path, default=None, metavar="OUT.png",
                     help="draw the scene's features by disparity with the ranked objects")
     add_force_option(dp)
-    dp.set_defaults(run=run, declare_files=files, limit_defaults=limit_defaults)
+    dp.set_defaults(run=run, declare_files=files, limit_defaults=limit_defaults, compiles=True)
 
 
 def limit_defaults() -> dict:

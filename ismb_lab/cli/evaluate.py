@@ -7,7 +7,7 @@ import sys
 from pathlib import Path
 
 from .._core.files import atomic_write_text
-from ..tuning.protocol import format_protocol, load_manifest, protocol
+from ..tuning.cases import format_protocol, load_manifest, protocol
 from ..network.solvers import DEFAULT_SOLVER, SOLVERS
 from ._common import (DEFAULT_METHOD, BestSoFar, UsageError, add_ga_options, add_method_option, given, seed,
                       add_one_to_one_option, add_solver_option, default_of, ga_config, progress_bar, said_changes)
@@ -62,7 +62,7 @@ def add_parser(sub) -> None:
                    "parameters so far, marked \"interrupted\": true (with --jobs above 1, of the last "
                    "fit that finished), or nothing, as the one line on stderr says")
     add_force_option(e)
-    e.set_defaults(run=run, declare_files=files, limit_defaults=limit_defaults)
+    e.set_defaults(run=run, declare_files=files, limit_defaults=limit_defaults, compiles=True)
 
 
 def limit_defaults() -> dict:
@@ -77,7 +77,7 @@ def limit_defaults() -> dict:
 def files(args) -> Files:
     """The manifest and the recipe read, with every file the manifest names or its built-in
     sources read; the report written."""
-    from ..tuning.protocol import manifest_files
+    from ..tuning.cases import manifest_files
 
     return Files(inputs=(("manifest", args.manifest),) + given(("--recipe", args.recipe)),
                  reads=tuple(manifest_files(args.manifest)), outputs=given(("--json", args.json)))

@@ -39,7 +39,7 @@ def add_parser(sub) -> None:
     m.add_argument("--plot", type=output_path, default=None, metavar="OUT.png",
                    help="draw the pair with features and match lines")
     add_force_option(m)
-    m.set_defaults(run=run, declare_files=files, limit_defaults=limit_defaults)
+    m.set_defaults(run=run, declare_files=files, limit_defaults=limit_defaults, compiles=True)
 
 
 def limit_defaults() -> dict:

@@ -8,7 +8,7 @@ from pathlib import Path
 
 from ..tuning.genetic import GAConfig
 from ..matching.pipeline import MatchConfig
-from ..tuning.protocol import Case
+from ..tuning.cases import Case
 from ..matching.recipe import Recipe, save_recipe
 from ..network.solvers import DEFAULT_SOLVER
 from ..tuning import fitness as tuning
@@ -50,7 +50,7 @@ def add_parser(sub) -> None:
     add_force_option(t)
     t.add_argument("--no-hash-check", action="store_true",
                    help="accept targets labelled on images with other bytes (e.g. re-encoded)")
-    t.set_defaults(run=run, declare_files=files, limit_defaults=limit_defaults)
+    t.set_defaults(run=run, declare_files=files, limit_defaults=limit_defaults, compiles=True)
 
 
 def limit_defaults() -> dict:

@@ -39,7 +39,7 @@ target
     A match a person (or a ground truth) says is right, stored by coordinates with
     the images' hashes (:mod:`ismb_lab.labels.targets`) and snapped to features for scoring.
 case
-    An image pair with its targets, the unit the GA trains on (:class:`ismb_lab.tuning.protocol.Case`).
+    An image pair with its targets, the unit the GA trains on (:class:`ismb_lab.tuning.cases.Case`).
 solver
     A way to find the network's final state (:data:`ismb_lab.network.solvers.SOLVERS`).
 """

@@ -9,7 +9,7 @@ A family is a registered :class:`Family`: a name, a one-line description and a
 :class:`~ismb_lab.scenes.design.Look`, the few choices in which its layouts differ from the
 common design of :func:`~ismb_lab.scenes.design.draw_objects`.  :func:`register_family` adds
 one, :func:`families` lists them in registration order, and :func:`object_layout`, the
-protocol (:func:`ismb_lab.tuning.protocol.family_cases`) and ``scripts/matching_families.py`` and
+protocol (:func:`ismb_lab.tuning.cases.family_cases`) and ``scripts/matching_families.py`` and
 ``scripts/depth_layouts.py`` draw whatever is registered.  The library registers four, which
 exercise the §5.2.3 depth demo (:func:`ismb_lab.depth.pipeline.relative_depth`) where it is weak:
 

@@ -33,7 +33,7 @@ def compile_kernels() -> dict:
     from ..network.solvers import solver_names
     from ..scenes import synthetic_scene
     from ..tuning import fitness as tuning
-    from ..tuning.protocol import Case
+    from ..tuning.cases import Case
 
     start = time.perf_counter()
     warm_up(solver_names())

@@ -5,7 +5,7 @@ from .evaluation import Score, Scorer, score, unlabelled
 from .genetic import (Bounds, GAConfig, Generation, arithmetic_crossover, batch, elite, evolve, initial_population,
     next_generation, random_mutation, tournament)
 from .fitness import Fitness, evaluate, gene_bounds, to_chromosome, to_params, tune
-from .protocol import (SOURCES, Case, PairReport, PeerReport, ProtocolReport, SolverReport, Spread, family_cases,
+from .cases import (SOURCES, Case, PairReport, PeerReport, ProtocolReport, SolverReport, Spread, family_cases,
     format_protocol, load_manifest, protocol)
 
 __all__ = ["Bounds", "Case", "Fitness", "GAConfig", "Generation", "PairReport", "PeerReport", "ProtocolReport",

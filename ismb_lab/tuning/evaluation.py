@@ -10,7 +10,7 @@ The thesis prints ``C/E/T``; with E split it reads ``14/2+0/16`` (C / wrong +
 extra / T).  Matches of left features whose truth is unknown (no ground truth
 there) are not counted either way.
 
-The train/test protocol that uses these scores is in :mod:`ismb_lab.tuning.protocol`.
+The train/test protocol that uses these scores is in :mod:`ismb_lab.tuning.cases`.
 """
 
 from __future__ import annotations

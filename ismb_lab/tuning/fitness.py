@@ -7,7 +7,7 @@ fitness.  A chromosome holds a method's genes in its own order
 order), within the genes' bounds.  Its fitness (4-1) is ``n_c - n_e`` summed over
 every training pair.
 
-A training pair is a :class:`ismb_lab.tuning.protocol.Case`, or anything else with a
+A training pair is a :class:`ismb_lab.tuning.cases.Case`, or anything else with a
 ``prepared`` pair (:func:`ismb_lab.matching.pipeline.prepare`), ``targets`` and ``unknown``.
 """
 

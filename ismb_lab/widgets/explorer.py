@@ -216,7 +216,7 @@ class ParameterExplorer(Base):
     solver : str
     partial : bool
         The targets label only some corners (a person's labels): matches of the other left
-        corners are not scored (see :meth:`ismb_lab.tuning.protocol.Case.from_files`).
+        corners are not scored (see :meth:`ismb_lab.tuning.cases.Case.from_files`).
 
     Notes
     -----

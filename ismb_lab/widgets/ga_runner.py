@@ -32,7 +32,7 @@ from ..matching.pipeline import MatchConfig
 from ..network.methods import DEFAULT_METHOD, get_method
 from ..plotting import OKABE_ITO
 from ..network.params import Params
-from ..tuning.protocol import Case
+from ..tuning.cases import Case
 from ..matching.recipe import Recipe, save_recipe
 from ..network.solvers import DEFAULT_SOLVER, SOLVERS, get_solver
 from ..tuning.fitness import to_params, tune
@@ -43,7 +43,7 @@ __all__ = ["as_cases", "case_from_folder", "chromosome_html", "draw_fitness", "G
 
 
 def case_from_folder(folder, config: MatchConfig | None = None) -> Case:
-    """A training :class:`~ismb_lab.tuning.protocol.Case` from ``left.png``, ``right.png`` and ``answer_key.json``."""
+    """A training :class:`~ismb_lab.tuning.cases.Case` from ``left.png``, ``right.png`` and ``answer_key.json``."""
     left, right, key = pair_files(folder, "case_from_folder")
     if not key.is_file():
         raise ParameterError(f"The 'folder' parameter of case_from_folder must be a folder with an "

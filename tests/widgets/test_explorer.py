@@ -84,7 +84,7 @@ def test_set_params_rematches_once(explorer, monkeypatch):
 
 
 def test_ga_apply_reaches_the_explorer(explorer, prepared, truth):
-    from ismb_lab.tuning.protocol import Case
+    from ismb_lab.tuning.cases import Case
     from ismb_lab.widgets.ga_runner import GARunner
 
     runner = GARunner(Case(prepared, truth), population=4, generations=2)

@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from ismb_lab.network.methods import Params
-from ismb_lab.tuning.protocol import Case
+from ismb_lab.tuning.cases import Case
 from ismb_lab.tuning.fitness import to_params, tune
 from ismb_lab.widgets.ga_runner import GAModel, GARunner
 
@@ -165,7 +165,7 @@ def test_the_best_parameters_so_far_are_on_disk_during_the_run(case, tmp_path):
 
 KILLED = """
 import sys, time
-from ismb_lab.tuning.protocol import Case
+from ismb_lab.tuning.cases import Case
 from ismb_lab.scenes import synthetic_scene
 from ismb_lab.widgets.ga_runner import GAModel
 
