@@ -1,13 +1,4 @@
-"""The course around the notebooks: exercise checks, the nbgrader course, and the class hub's start.
+"""The course around the notebooks: exercise checks, the nbgrader course, its exchange and the class
+hub's servers.  Nothing is imported here: the hub and nbgrader load single modules of it, not the
+network or OpenCV.
 """
-
-from .exercises import (check_depth_range, check_disparity, check_energy_derivation, check_error_kinds, check_fitness,
-    check_harris_response, check_hopfield_form, check_transfer, Feedback, random_network)
-from .course import (ASSIGNMENTS, Assignment, CODE_STUB, course_images, make_source, repository, student_notebook)
-from .exchange import GROUND_TRUTH, FeedbackWithoutTests, KeylessRelease, OwnerCollect, PrivateSubmit
-
-__all__ = ["ASSIGNMENTS", "Assignment", "CODE_STUB", "Feedback", "FeedbackWithoutTests", "GROUND_TRUTH",
-           "KeylessRelease", "OwnerCollect", "PrivateSubmit", "check_depth_range", "check_disparity",
-           "check_energy_derivation", "check_error_kinds", "check_fitness", "check_harris_response",
-           "check_hopfield_form", "check_transfer", "course_images", "make_source", "random_network",
-           "repository", "student_notebook"]
