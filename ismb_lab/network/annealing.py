@@ -28,8 +28,8 @@ from typing import Iterator
 import numba
 import numpy as np
 
-from .._core.validation import ParameterError, ParameterTypeError, check_number, check_rng, message
-from .hopfield import Network, Topology, energy, hopfield_form
+from .._core.validation import ParameterError, check_number, check_rng, message
+from .hopfield import Network, Topology, check_net, energy, hopfield_form
 from .dynamics import run
 
 __all__ = ["MAX_SWEEPS", "anneal", "AnnealResult", "AnnealStep", "iter_annealing"]
@@ -139,8 +139,7 @@ def check_settle(settle, owner) -> float:
 
 def check_schedule(net, owner, t_start, t_end, cooling, sweeps):
     """The schedule's arguments, checked as `owner`'s."""
-    if not isinstance(net, Network):
-        raise ParameterTypeError(message("net", owner, "a Network", type(net).__name__))
+    check_net(net, owner)
     return check_schedule_options(owner, t_start, t_end, cooling, sweeps)
 
 

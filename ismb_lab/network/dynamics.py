@@ -22,8 +22,8 @@ from typing import Iterator
 import numpy as np
 
 from .kernel import _GOLDEN, _MIX1, _MIX2, _below, _next, _shuffle, run_network  # noqa: F401 (tested here)
-from .._core.validation import MAX_SEED, ParameterTypeError, check_choice, check_number, check_rng, message
-from .hopfield import RULES, SCALE, Network, _check_state, _Weights, _weights, _energy_of, energy
+from .._core.validation import MAX_SEED, check_choice, check_number, check_rng
+from .hopfield import RULES, SCALE, Network, check_net, _check_state, _Weights, _weights, _energy_of, energy
 
 __all__ = ["KERNELS", "STOP_RULES", "iter_updates", "run", "RunResult", "Update", "visiting_order"]
 
@@ -145,8 +145,7 @@ def _net_input_textbook(a: int, y: list, w: _Lists) -> int:
 
 def _check_run_args(net, rng, state, stop_rule, rule, patience, max_sweeps, owner, all_on=False):
     """``(seed, initial state)``; with `all_on` the state is None when it is every neuron on."""
-    if not isinstance(net, Network):
-        raise ParameterTypeError(message("net", owner, "a Network", type(net).__name__))
+    check_net(net, owner)
     # the common case (a GA makes thousands of runs) is checked in a few hundred nanoseconds
     if not (stop_rule in STOP_RULES and rule in RULES and type(patience) is int and patience >= 1
             and type(max_sweeps) is int and max_sweeps >= 1):
@@ -304,8 +303,7 @@ def run(net: Network, *, rng=0, state=None, stop_rule: str = "sweep", rule: str 
             return RunResult._of(y, _STOP_NAMES[code], attempts, flips, net)
     if kernel not in KERNELS:
         check_choice(kernel, "kernel", "run", KERNELS)
-    if not isinstance(net, Network):
-        raise ParameterTypeError(message("net", "run", "a Network", type(net).__name__))
+    check_net(net, "run")
     n = net.n_neurons
     seed, y0 = _check_run_args(net, rng, state, stop_rule, rule, patience, max_sweeps, "run",
                                all_on=kernel == "numba" and n > 0)

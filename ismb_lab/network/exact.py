@@ -24,8 +24,8 @@ from dataclasses import dataclass
 import numba
 import numpy as np
 
-from .._core.validation import ParameterError, ParameterTypeError, check_number, message
-from .hopfield import SCALE, Network, energy, hopfield_form
+from .._core.validation import ParameterError, check_number, message
+from .hopfield import SCALE, Network, check_net, energy, hopfield_form
 
 __all__ = ["MAX_EXHAUSTIVE", "MAX_TIME_LIMIT", "exhaustive_minimum", "milp_minimum", "Minimum"]
 
@@ -45,12 +45,6 @@ class Minimum:
     energy: float
     n_minima: int
     method: str
-
-
-def _check_net(net, owner: str) -> Network:
-    if not isinstance(net, Network):
-        raise ParameterTypeError(message("net", owner, "a Network", type(net).__name__))
-    return net
 
 
 def _integer_form(net: Network) -> tuple[np.ndarray, np.ndarray]:
@@ -96,7 +90,7 @@ def exhaustive_minimum(net: Network) -> Minimum:
     >>> m.state.tolist(), m.energy, m.n_minima
     ([1, 0], 0.5, 2)
     """
-    net = _check_net(net, "exhaustive_minimum")
+    net = check_net(net, "exhaustive_minimum")
     n = net.n_neurons
     if n > MAX_EXHAUSTIVE:
         raise ParameterError(message("net", "exhaustive_minimum", f"at most {MAX_EXHAUSTIVE} candidate "
@@ -123,7 +117,7 @@ def milp_minimum(net: Network, *, time_limit: float = 60.0) -> Minimum:
     from scipy.optimize import Bounds, LinearConstraint, milp
     from scipy.sparse import coo_matrix
 
-    net = _check_net(net, "milp_minimum")
+    net = check_net(net, "milp_minimum")
     limit = check_number(time_limit, "time_limit", "milp_minimum", low=0, low_open=True, high=MAX_TIME_LIMIT)
     n = net.n_neurons
     if n == 0:

@@ -22,9 +22,9 @@ net input is an exact sum in any order and both kernels make bit-identical decis
 
 from __future__ import annotations
 
+from collections import namedtuple
 from dataclasses import dataclass
 from functools import cached_property
-from typing import NamedTuple
 
 import numba
 import numpy as np
@@ -50,16 +50,10 @@ def _csr(n: int, src: np.ndarray, dst: np.ndarray):
     return indptr, dst[order].astype(np.int64), order
 
 
-class _Layout(NamedTuple):
-    """Adjacency of a topology in compressed-row form, read by both kernels."""
-
-    nb_ptr: np.ndarray   # neighbours of neuron a: nb_idx[nb_ptr[a]:nb_ptr[a + 1]]
-    nb_idx: np.ndarray
-    nb_pair: np.ndarray  # the pair index of each neighbour entry
-    row_ptr: np.ndarray  # neurons of left feature i: row_idx[row_ptr[i]:row_ptr[i + 1]]
-    row_idx: np.ndarray
-    col_ptr: np.ndarray  # neurons of right feature k
-    col_idx: np.ndarray
+# A topology's adjacency in compressed rows, read by both kernels: the neighbours of neuron a
+# are nb_idx[nb_ptr[a]:nb_ptr[a + 1]] (nb_pair: their pairs), the neurons of left feature i
+# row_idx[row_ptr[i]:row_ptr[i + 1]], and those of right feature k likewise in col_idx.
+_Layout = namedtuple("_Layout", "nb_ptr nb_idx nb_pair row_ptr row_idx col_ptr col_idx")
 
 
 @dataclass(frozen=True, eq=False)
@@ -270,7 +264,8 @@ class Network:
 PACKED = ("nb_ptr", "row_ptr", "col_ptr", "neurons", "col_idx")
 
 
-class _Weights(NamedTuple):
+class _Weights(namedtuple("_Weights", "nb_ptr row_ptr row_idx col_ptr col_idx rows cols row_w col_w self_w bias "
+                                      "values run_args")):
     """Fixed-point weights of one rule, in the layout the kernels read.
 
     ``values`` is one buffer, ``entries | self_w | bias | pos_end | row_w | col_w``.  An entry
@@ -278,22 +273,11 @@ class _Weights(NamedTuple):
     in those bits (one word read per neighbour); a weight is at most ``2**41``, so it fits
     the 43 bits left.  Neuron ``a``'s entries are ``entries[nb_ptr[a]:nb_ptr[a + 1]]``, its
     positive weights first (up to ``pos_end[a]``), so the compiled run can stop summing once
-    the input is negative.
+    the input is negative.  ``run_args`` are the compiled run's last arguments,
+    ``(Topology.packed, values)``.
     """
 
-    nb_ptr: np.ndarray
-    row_ptr: np.ndarray
-    row_idx: np.ndarray
-    col_ptr: np.ndarray
-    col_idx: np.ndarray
-    rows: np.ndarray
-    cols: np.ndarray
-    row_w: np.int64
-    col_w: np.int64
-    self_w: np.ndarray
-    bias: np.ndarray
-    values: np.ndarray
-    run_args: tuple  # the compiled run's last arguments: (Topology.packed, values)
+    __slots__ = ()
 
     @property
     def nb_idx(self) -> np.ndarray:
@@ -466,7 +450,14 @@ def _energy(n_left, n_right, rows, cols, similarity, pair_a, pair_b, pair_c, y, 
     return compatibility + uniqueness - similar
 
 
+def check_net(net, owner: str) -> Network:
+    if not isinstance(net, Network):
+        raise ParameterTypeError(message("net", owner, "a Network", type(net).__name__))
+    return net
+
+
 def _check_state(net: Network, state, owner: str) -> np.ndarray:
+
     y = np.asarray(state)
     if y.shape != (net.n_neurons,) or not np.all((y == 0) | (y == 1)):
         raise ParameterError(message("state", owner, f"a 0/1 array of shape ({net.n_neurons},)",
