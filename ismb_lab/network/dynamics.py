@@ -97,9 +97,9 @@ def _seed_of(rng, owner: str) -> int:
 class Update:
     """One asynchronous update attempt (one step of (3-19)).
 
-    ``neuron`` is the attempted candidate, ``i`` and ``k`` its features, ``u`` its net input
-    under the rule in use, ``energy`` the energy (3-15) after the attempt; ``stop`` is set
-    on the last attempt of a run.
+    ``attempt`` counts from 0; ``neuron`` is the attempted candidate, ``i`` and ``k`` its
+    features, ``u`` its net input under the rule in use, ``old`` and ``new`` its output before
+    and after, ``energy`` (3-15) that after the attempt; ``stop`` is set on a run's last attempt.
     """
 
     attempt: int

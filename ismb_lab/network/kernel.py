@@ -113,9 +113,8 @@ def _prefetch(typingctx, array, index):
     return types.void(array, index), codegen
 
 
-# The compiled run takes the topology's integers in one buffer (Topology.packed) and the
-# network's in another (_Weights.values): a call into compiled code unboxes each array
-# argument separately, about 0.1 us apiece, which on a 20 x 20 ROI cost as much as the run.
+# The run takes the topology's integers in one buffer (Topology.packed) and the network's in
+# another (_Weights.values): a compiled call unboxes each array argument, about 0.1 us apiece.
 _NB_PTR, _ROW_PTR, _COL_PTR, _NEURONS, _COL_IDX = range(len(PACKED))
 _INDEX = (1 << NB_SHIFT) - 1   # an entry's low bits: the neighbour's index
 _AHEAD = 4
@@ -189,9 +188,8 @@ def _pull_sweep(order, y, on_in_row, on_in_col, nb_ptr, entries, pos_end, neuron
         i, k = neurons[a + a], neurons[a + a + _U64(1)]
         ua = bias[a] + self_w[a] * ya + row_w * (on_in_row[i] - ya) + col_w * (on_in_col[k] - ya)
         # the weights after pos_end[a] can only lower ua: once they are being read and ua is
-        # negative, its sign is known.  Blocks of eight from the segment's start, whatever
-        # their signs: a loop of its own for the positive weights had cost a mispredicted
-        # exit per attempt.
+        # negative, its sign is known.  Blocks of eight, whatever their signs, avoid a
+        # mispredicted loop exit per attempt.
         p, mid, end = nb_ptr[a], pos_end[a], nb_ptr[a + _U64(1)]
         while p + _U64(8) <= end and (p < mid or ua >= 0):
             for q in range(p, p + _U64(8)):
@@ -251,9 +249,8 @@ def _push_sweep(order, y, u, nb_ptr, entries, neurons, row_ptr, col_ptr, col_idx
         a = order[s]
         attempts += 1
         # a flip of y_a by d adds W_ab d to every u_b of a neighbour, and row_w d or col_w d
-        # to every other neuron of its row and column (the row's neurons are consecutive);
-        # its own u_a changes only by its self term.  Each sign has its own loops of plain
-        # additions or subtractions.  Integers: no rounding.
+        # to every other neuron of its row and column (consecutive in a row); its own u_a
+        # changes only by its self term.
         i, k = neurons[a + a], neurons[a + a + _U64(1)]
         if y[a]:
             y[a] = 0
@@ -297,8 +294,8 @@ def run_network(seed, sweep_rule, patience, max_attempts, y0, all_on, packed, va
     the sums); later sweeps flip few neurons, so they push.  The stop tests are those of
     :func:`_updates`, in its order; after a sweep of few flips, a run that has settled
     counts the last sweep's attempts without drawing its order."""
-    # indices read as unsigned: numba then skips the test for a negative (from-the-end)
-    # index, which in the loops over neighbours had cost a quarter of a run
+    # indices read as unsigned: numba then skips the test for a negative (from-the-end) index
+
     nb_ptr = _segment(packed, _NB_PTR).view(np.uint64)
     row_ptr, col_ptr = _segment(packed, _ROW_PTR).view(np.uint64), _segment(packed, _COL_PTR).view(np.uint64)
     col_idx = _segment(packed, _COL_IDX).view(np.uint64)

@@ -340,7 +340,7 @@ _METHODS: dict[str, Method] = {}
 
 
 def register_method(method: Method) -> Method:
-    """Add a method to the registry (new name, distinct :class:`Gene` s, :class:`Params` defaults).
+    """Add a method to the registry (a new name, distinct genes, Params defaults).
 
     Returns `method`.
 

@@ -98,8 +98,7 @@ class Solver:
     def configured(self, owner: str = "Solver.configured", **options) -> "Solver":
         """A copy with some options changed; an option this solver does not have is an error.
 
-        >>> NETWORK_SOLVER = SOLVERS["network"]
-        >>> NETWORK_SOLVER.configured(stop_rule="stall").stop_rule
+        >>> SOLVERS["network"].configured(stop_rule="stall").stop_rule
         'stall'
         >>> SOLVERS["anneal"].configured(stop_rule="stall")
         Traceback (most recent call last):
