@@ -264,8 +264,8 @@ class Network:
 PACKED = ("nb_ptr", "row_ptr", "col_ptr", "neurons", "col_idx")
 
 
-class _Weights(namedtuple("_Weights", "nb_ptr row_ptr row_idx col_ptr col_idx rows cols row_w col_w self_w bias "
-                                      "values run_args")):
+class _Weights(namedtuple("_Weights", "nb_ptr row_ptr row_idx col_ptr col_idx rows cols row_w col_w "
+                                      "self_w bias values run_args")):
     """Fixed-point weights of one rule, in the layout the kernels read.
 
     ``values`` is one buffer, ``entries | self_w | bias | pos_end | row_w | col_w``.  An entry

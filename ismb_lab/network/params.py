@@ -1,10 +1,10 @@
 """The energy's parameters and the genes a GA searches (thesis (3-10), (3-13), ch. 4).
 
 Gene bounds: ``theta_c`` in [0, 60] px (correct neighbour pairs have ``X`` of a few pixels,
-wrong ones tens; the thesis found 7.45 to 41.57); ``theta_s`` in [0, 60] grey levels (``M``
-about 5 for true matches, 45 for false ones); ``lambda_c``, ``lambda_s`` in [0.05, 10]
-(almost flat to a step one pixel wide); ``match_bias`` in [-2, 2] (``h = 1/2 + beta / 4``
-from 0 through "at most one" to "exactly one").
+wrong ones tens; the thesis found 7.45 to 41.57); ``theta_s`` in [0, 60] grey levels (on the
+synthetic scenes ``M`` is about 5 for true matches, 45 for false ones); ``lambda_c`` and
+``lambda_s`` in [0.05, 10] (almost flat to a step one pixel wide); ``match_bias`` in [-2, 2]
+(``h = 1/2 + beta / 4`` from 0 through "at most one" to "exactly one").
 
 Outside a GA, :class:`Params` takes thetas in [0, :data:`MAX_THETA`], lambdas in
 (0, :data:`MAX_LAMBDA`] and ``|match_bias|`` up to :data:`MAX_BIAS`: beyond them the
