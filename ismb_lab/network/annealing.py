@@ -1,28 +1,14 @@
 """Mean-field annealing: the analog Hopfield network on the same energy (thesis future work 1).
 
-The discrete network flips one neuron at a time and stops at the first state no
-single flip improves.  The analog network keeps a *probability* ``v_a`` in
-``[0, 1]`` per neuron and sets it to the mean-field value at temperature ``T``::
+Each neuron holds a probability ``v_a`` in ``[0, 1]`` set asynchronously to its mean-field
+value at temperature ``T``::
 
     v_a = 1 / (1 + exp(-u_a / T)),    u_a = sum_b W_ab v_b + I_a
 
-with the exact weights of :func:`ismb_lab.network.hopfield.hopfield_form`.  At high ``T``
-every ``v`` sits near 1/2 and the energy landscape is smooth; cooling slowly
-lets the ``v`` commit one after another, usually into a deeper minimum than a
-greedy descent from "all on".  At each temperature the neurons are updated
-asynchronously in a random order, for `sweeps` sweeps.  The energy reported on
-the way is ``const - 1/2 v'Wv - I'v``, which equals :func:`ismb_lab.network.hopfield.energy`
-for 0/1 states.
-
-At the end ``v`` is rounded at 1/2 and handed to the discrete network
-(:func:`ismb_lab.network.dynamics.run` from that state), so the answer is an exact fixed
-point like the discrete network's.
-
-With ``settle > 0`` the schedule stops early, after the first temperature whose sweeps
-moved no ``v`` across 1/2 and left every ``v`` within `settle` of 0 or 1: the state has
-settled, and the colder temperatures left would only push each ``v`` further the same way
-(they can still flip a neuron, which the discrete polish then sees from its old side).
-``settle=0`` (the default) runs every temperature.
+with the exact weights of :func:`~ismb_lab.network.hopfield.hopfield_form`.  Cooling slowly
+lets the ``v`` commit one after another, usually into a deeper minimum than a greedy descent
+from "all on".  At the end ``v`` is rounded at 1/2 and polished by the discrete network, so
+the answer is an exact fixed point.
 
 >>> from ismb_lab.network.hopfield import Network
 >>> net = Network.from_arrays(2, 2, rows=[0, 0, 1, 1], cols=[0, 1, 0, 1],
@@ -42,15 +28,13 @@ from typing import Iterator
 import numba
 import numpy as np
 
-from .._core.validation import ParameterError, ParameterTypeError, check_number, check_rng, message
-from .hopfield import Network, Topology, energy, hopfield_form
+from .._core.validation import ParameterError, check_number, check_rng, message
+from .hopfield import Network, Topology, check_net, energy, hopfield_form
 from .dynamics import run
 
 __all__ = ["MAX_SWEEPS", "anneal", "AnnealResult", "AnnealStep", "iter_annealing"]
 
-#: Most sweeps a schedule may run in all (its temperatures times `sweeps`), checked before it
-#: starts: the default schedule runs 88 (44 temperatures of 2 sweeps), one of ``cooling=0.9999``
-#: about 92,000.
+#: Most sweeps a schedule may run in all (its temperatures times `sweeps`); the default runs 88.
 MAX_SWEEPS = 100_000
 
 
@@ -58,16 +42,9 @@ MAX_SWEEPS = 100_000
 class AnnealStep:
     """One temperature of the schedule, after its sweeps.
 
-    Attributes
-    ----------
-    index : int
-    temperature : float
-    change : float
-        Largest ``|dv|`` of the last sweep.
-    energy : float
-        ``const - 1/2 v'Wv - I'v`` of the analog state.
-    committed : float
-        Share of neurons with ``v`` below 0.05 or above 0.95.
+    ``change`` is the largest ``|dv|`` of the last sweep, ``energy`` is
+    ``const - 1/2 v'Wv - I'v`` of the analog state, and ``committed`` the share of neurons
+    with ``v`` below 0.05 or above 0.95.
     """
 
     index: int
@@ -79,21 +56,9 @@ class AnnealStep:
 
 @dataclass(frozen=True, eq=False)
 class AnnealResult:
-    """Outcome of :func:`anneal`.
-
-    Attributes
-    ----------
-    state : (n,) uint8 ndarray
-        The discrete fixed point reached from the rounded analog state.
-    energy : float
-        Its energy (:func:`ismb_lab.network.hopfield.energy`).
-    rounded : (n,) uint8 ndarray
-        ``v > 1/2`` at the end of the schedule, before the discrete polish.
-    analog : (n,) float ndarray
-        The final ``v``.
-    steps : int
-        Temperatures visited.
-    """
+    """Outcome of :func:`anneal`: the discrete fixed point ``state`` and its ``energy``, the
+    ``rounded`` analog state ``v > 1/2`` before the polish, the final ``analog`` ``v``, and
+    the temperatures visited (``steps``)."""
 
     state: np.ndarray
     energy: float
@@ -114,10 +79,8 @@ def _logistic(x):
 @numba.njit(cache=True)
 def _sweeps(W, u, v, orders, T):
     """Asynchronous mean-field updates at temperature `T`, one sweep per row of `orders`;
-    `v` and the net inputs `u` are updated in place.  Returns the largest ``|dv|``.
-
-    ``exp`` is the C library's, as :func:`math.exp` is: a plain Python loop with
-    ``math.exp`` gives the same numbers bit for bit (tested)."""
+    `v` and `u` change in place.  Returns the largest ``|dv|``.  ``exp`` is the C library's,
+    as :func:`math.exp` is."""
     change = 0.0
     for s in range(orders.shape[0]):
         for a in orders[s]:
@@ -138,27 +101,19 @@ def iter_annealing(net: Network, *, rng=0, t_start: float = 2.0, t_end: float = 
 
     Parameters
     ----------
-    net : Network
     rng : int or numpy.random.Generator
         Seeds the start (``v = 1/2`` plus noise of 0.01) and the visiting orders.
     t_start, t_end : float
-        First and last temperature, ``t_start > t_end > 0``; in units of the
-        weights (``S`` and ``C`` lie in [-1, 1], so 2 is "hot").
+        First and last temperature, ``t_start > t_end > 0``, in units of the weights (2 is "hot").
     cooling : float
         Factor in (0, 1) between consecutive temperatures.
     sweeps : int
-        Asynchronous sweeps per temperature; the schedule runs at most :data:`MAX_SWEEPS`
-        sweeps in all (temperatures times `sweeps`), or is refused before it starts.
+        Sweeps per temperature; at most :data:`MAX_SWEEPS` sweeps in all.
     settle : float
         In [0, 1/2): stop after the first temperature that moved no ``v`` across 1/2 and
         left every ``v`` within `settle` of 0 or 1; 0 runs the whole schedule.
     state : list, optional
-        If given, a one-element list that receives the analog state array
-        (updated in place as the schedule runs), for callers that want ``v``.
-
-    Yields
-    ------
-    step : AnnealStep
+        A one-element list that receives the analog state array (updated in place).
 
     Examples
     --------
@@ -184,14 +139,12 @@ def check_settle(settle, owner) -> float:
 
 def check_schedule(net, owner, t_start, t_end, cooling, sweeps):
     """The schedule's arguments, checked as `owner`'s."""
-    if not isinstance(net, Network):
-        raise ParameterTypeError(message("net", owner, "a Network", type(net).__name__))
+    check_net(net, owner)
     return check_schedule_options(owner, t_start, t_end, cooling, sweeps)
 
 
 def check_schedule_options(owner, t_start, t_end, cooling, sweeps):
-    """The schedule's options, checked as `owner`'s (a solver's, before any network exists):
-    the schedule they make runs at most :data:`MAX_SWEEPS` sweeps in all."""
+    """The schedule's options, checked as `owner`'s (a solver's, before any network exists)."""
     t_end = check_number(t_end, "t_end", owner, low=0, low_open=True)
     t_start = check_number(t_start, "t_start", owner, low=t_end)
     cooling = check_number(cooling, "cooling", owner, low=0, low_open=True)
@@ -241,16 +194,10 @@ def _anneal(net, rng, t_start, t_end, cooling, sweeps, settle, holder):
 def anneal(net: Network, *, rng=0, t_start: float = 2.0, t_end: float = 0.02, cooling: float = 0.9,
            sweeps: int = 2, settle: float = 0.0) -> AnnealResult:
     """Run the schedule of :func:`iter_annealing` to the end, round ``v`` at 1/2 and settle with
-    the discrete network.
+    the discrete network; an :class:`AnnealResult`.
 
-    Parameters are those of :func:`iter_annealing`.  The schedule runs in one compiled call
-    on each neuron's list of neighbours (:func:`_neighbours`) instead of the dense rows of
-    ``W``: the same updates in the same order, drawn from the same generator, so the same
-    ``v`` bit for bit, without the per-temperature records.
-
-    Returns
-    -------
-    result : AnnealResult
+    The schedule runs in one compiled call on neighbour lists instead of the dense rows of
+    ``W``: the same updates in the same order from the same generator, so the same ``v``.
 
     Examples
     --------
@@ -279,11 +226,9 @@ _NEIGHBOURS: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
 
 
 def _neighbours(top: Topology) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Where :func:`ismb_lab.network.hopfield.hopfield_form`'s ``W`` may be non-zero off its diagonal, by row.
-
-    Neuron ``a``'s neighbours are ``idx[ptr[a]:ptr[a + 1]]``; ``pair`` gives, for each, the
-    interacting pair whose ``C`` the entry holds, or -1 for a neuron on the same row or
-    column.  A pair listed twice holds its last ``C``, as in the dense matrix.
+    """Where :func:`~ismb_lab.network.hopfield.hopfield_form`'s ``W`` may be non-zero off its
+    diagonal: neuron ``a``'s neighbours ``idx[ptr[a]:ptr[a + 1]]`` and, for each, its pair
+    (whose ``C`` the entry holds; the last of a repeated pair), or -1 on a shared row or column.
     """
     found = _NEIGHBOURS.get(top)
     if found is None:
@@ -341,13 +286,11 @@ def _dense_and_listed(ptr, idx, pair, pair_c, two_kappa):
 
 @numba.njit(cache=True)
 def _schedule(rng, ptr, idx, w, u, v, temperatures, sweeps, settle):
-    """:func:`_sweeps` at every temperature, on neighbour lists, each visiting order drawn
-    from `rng` as :func:`_anneal` draws it (``rng.permutation(n)`` per sweep); `v` and `u`
-    are updated in place.  With ``settle > 0`` it stops where :func:`_anneal` stops.
-    Returns the temperatures run.
+    """:func:`_sweeps` at every temperature on neighbour lists, each order drawn from `rng` as
+    :func:`_anneal` draws it; `v` and `u` change in place.  Returns the temperatures run.
 
-    A weight of zero that the dense row would add is skipped: it could only change the
-    sign of a zero ``u``, which gives the same ``v``."""
+    A zero weight the dense row would add is skipped: it could only change the sign of a
+    zero ``u``, which gives the same ``v``."""
     n = v.shape[0]
     before = np.empty(n, dtype=np.bool_)
     for t in range(temperatures.shape[0]):

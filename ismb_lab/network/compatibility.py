@@ -1,15 +1,14 @@
 """Pairwise compatibility of two candidate matches (thesis 3-12, 3-13).
 
-Two neurons ``a = (i, k)`` and ``b = (j, l)`` interact only when their left
-points ``i`` and ``j`` are neighbours and ``k != l``.  For such a pair:
+Neurons ``a = (i, k)`` and ``b = (j, l)`` interact only when ``i`` and ``j`` are neighbours
+and ``k != l``.  For such a pair:
 
 * ``dd = |d_ik - d_jl|``: smoothness, the difference of the two (Euclidean) disparities;
 * ``dD = | ||p_i - p_j|| - ||q_k - q_l|| |``: geometry, the change of the point distance;
 * ``dY = |(y_k - y_i) - (y_l - y_j)|``: the difference of the vertical disparities.
 
-Method-II uses ``X = dd + dD`` and Method-III ``X = dd + dD + dY``; ``C = transfer(X)``.
-``C`` is symmetric and zero when ``i == j`` or ``k == l``, so only unordered
-neighbour pairs are stored, as a sparse list ``(a, b)`` with ``a < b``.
+Method-II uses ``X = dd + dD``, Method-III ``X = dd + dD + dY``; ``C = transfer(X)`` is
+symmetric, so only pairs ``a < b`` are stored.
 """
 
 from __future__ import annotations
@@ -28,25 +27,10 @@ __all__ = ["left_neighbours", "neuron_pairs", "NeuronPairs"]
 
 
 def left_neighbours(left_xy, *, radius: float = 20.0, shape: str = "box") -> np.ndarray:
-    """Unordered pairs of neighbouring left features.
+    """Unordered pairs ``(i, j)``, ``i < j``, of neighbouring left features, in lexicographic order.
 
-    The thesis gives two rules: "distance < 20 px" in (3-12), and "a 40 x 40
-    region centred on feature i" in §3.3, the procedure it actually runs.  Both
-    are offered; ``"box"`` (``|dx| < radius`` and ``|dy| < radius``) is the default.
-
-    Parameters
-    ----------
-    left_xy : (N, 2) array_like
-        Left feature points ``(x, y)``.
-    radius : float
-        Half side of the box, or radius of the disc, in pixels.
-    shape : {"box", "disc"}
-        Neighbourhood rule.
-
-    Returns
-    -------
-    pairs : (P, 2) int ndarray
-        Rows ``(i, j)`` with ``i < j``, in lexicographic order.
+    The thesis gives "distance < 20 px" (3-12, ``shape="disc"``) and "a 40 x 40 region
+    centred on feature i" (§3.3, the procedure it runs; ``"box"``, the default).
 
     Examples
     --------
@@ -74,15 +58,7 @@ def left_neighbours(left_xy, *, radius: float = 20.0, shape: str = "box") -> np.
 
 @dataclass(frozen=True)
 class NeuronPairs:
-    """Interacting neuron pairs and their geometric differences.
-
-    Attributes
-    ----------
-    a, b : (P,) int ndarray
-        Neuron indices, ``a < b``.
-    dd, dD, dY : (P,) float ndarray
-        Smoothness, geometry and vertical-disparity differences (pixels).
-    """
+    """Interacting neuron pairs ``a < b`` and their differences ``dd``, ``dD``, ``dY`` (pixels)."""
 
     a: np.ndarray
     b: np.ndarray
@@ -95,29 +71,13 @@ class NeuronPairs:
 
 
 def neuron_pairs(left_xy, right_xy, rows, cols, neighbours) -> NeuronPairs:
-    """All pairs of candidate neurons whose left points are neighbours.
+    """All pairs of candidate neurons (`rows` sorted, `cols`) whose left points are `neighbours`.
 
-    Parameters
-    ----------
-    left_xy : (N_l, 2) array_like
-    right_xy : (N_r, 2) array_like
-        Feature points ``(x, y)``.
-    rows, cols : (n,) int array_like
-        Left and right feature of each candidate neuron, sorted by ``rows``.
-    neighbours : (P, 2) int array_like
-        Left neighbour pairs ``(i, j)``, ``i < j``, from :func:`left_neighbours`.
-
-    Returns
-    -------
-    pairs : NeuronPairs
-        Every ``(a, b)`` with ``rows[a], rows[b]`` a neighbour pair and
-        ``cols[a] != cols[b]``, with ``dd``, ``dD`` and ``dY``.
+    Every ``(a, b)`` with ``(rows[a], rows[b])`` a neighbour pair and ``cols[a] != cols[b]``.
 
     Examples
     --------
-    >>> left = [[100, 50], [110, 50]]
-    >>> right = [[80, 51], [90, 51]]
-    >>> p = neuron_pairs(left, right, [0, 0, 1, 1], [0, 1, 0, 1], [[0, 1]])
+    >>> p = neuron_pairs([[100, 50], [110, 50]], [[80, 51], [90, 51]], [0, 0, 1, 1], [0, 1, 0, 1], [[0, 1]])
     >>> p.a, p.b
     (array([0, 1]), array([3, 2]))
     >>> p.dd.round(2)   # the crossed pair (1, 2) breaks smoothness
@@ -140,10 +100,8 @@ def neuron_pairs(left_xy, right_xy, rows, cols, neighbours) -> NeuronPairs:
 
 @numba.njit(cache=True)
 def _pairs(nb, starts, cols, p, q, disparity):
-    """The pairs and their differences in one pass, the order and arithmetic of the NumPy
-    expressions they replace (``math.hypot`` compiles to the C library's, as ``np.hypot`` is):
-    at 1,000 corners the arrays of those expressions took 53 ms, this 15 ms (10.8 ms
-    of it the 848,000 hypot calls)."""
+    """The pairs and their differences in one pass, with the order and arithmetic of the NumPy
+    expressions they replace (``math.hypot`` compiles to the C library's, as ``np.hypot`` is)."""
     size = 0
     for t in range(nb.shape[0]):
         for u in range(starts[nb[t, 0]], starts[nb[t, 0] + 1]):

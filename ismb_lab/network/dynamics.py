@@ -1,26 +1,14 @@
 """How the network runs: asynchronous updates in a random order, to a fixed point (§3.3, (3-20)).
 
-Update order
-------------
-Attempts visit neurons in a random order drawn from a seed (:func:`visiting_order`):
-a SplitMix64 stream of 64-bit numbers, turned into a Fisher-Yates shuffle of the
-neurons at the start of every sweep.  The compiled kernel draws the same stream
-inside its loop, so a run allocates nothing per attempt and no Python object
-per sweep; both kernels visit the neurons in the same order.  Two stop rules:
+Attempts visit neurons in an order drawn from a seed (:func:`visiting_order`, a SplitMix64
+stream).  Stop rules: ``"sweep"`` (default), a full random-order sweep changes nothing, an
+exact fixed point; ``"stall"``, ``patience`` (200 in the thesis) consecutive attempts drawn
+with replacement change nothing.  Both give up after ``max_sweeps * n`` attempts
+(``"max_attempts"``).
 
-* ``"sweep"`` (default): a full random-order sweep over all neurons changes
-  nothing.  That is an exact fixed point.
-* ``"stall"``: ``patience`` (200 in the thesis) consecutive attempts, drawn with
-  replacement, change nothing.  With many neurons it can stop short of a fixed point.
-
-Both give up after ``max_sweeps * n`` attempts (stop rule ``"max_attempts"``).
-
-Two kernels make the same decisions: the readable "textbook" one of
-:func:`iter_updates`, which re-sums (3-20) at every attempt and yields an
-:class:`Update` record each time, and the compiled one of :func:`run`, which sums
-the inputs afresh in the first sweep and keeps them current after each flip from
-then on.  Their weights are the integers of :mod:`ismb_lab.network.hopfield`, so they agree
-bit for bit.
+Two kernels make the same decisions on the integer weights of :mod:`ismb_lab.network.hopfield`:
+the readable "textbook" one of :func:`iter_updates`, which re-sums (3-20) at every attempt,
+and the compiled one of :func:`run` (:mod:`ismb_lab.network.kernel`).
 """
 
 from __future__ import annotations
@@ -28,13 +16,14 @@ from __future__ import annotations
 import numbers
 from dataclasses import dataclass, field
 from functools import cached_property
-from typing import Iterator, NamedTuple
+from collections import namedtuple
+from typing import Iterator
 
 import numpy as np
 
 from .kernel import _GOLDEN, _MIX1, _MIX2, _below, _next, _shuffle, run_network  # noqa: F401 (tested here)
-from .._core.validation import MAX_SEED, ParameterTypeError, check_choice, check_number, check_rng, message
-from .hopfield import RULES, SCALE, Network, _check_state, _Weights, _weights, _energy_of, energy
+from .._core.validation import MAX_SEED, check_choice, check_number, check_rng
+from .hopfield import RULES, SCALE, Network, check_net, _check_state, _Weights, _weights, _energy_of, energy
 
 __all__ = ["KERNELS", "STOP_RULES", "iter_updates", "run", "RunResult", "Update", "visiting_order"]
 
@@ -47,8 +36,7 @@ _MASK64 = (1 << 64) - 1
 class _Stream:
     """SplitMix64 (Steele, Lea and Flood, 2014) with bounded draws, in plain Python.
 
-    :func:`_next` and :func:`_below` are the same steps compiled; the two agree
-    on every draw (``tests/test_hopfield.py``).
+    The compiled :func:`_next` and :func:`_below` agree with it on every draw.
     """
 
     def __init__(self, seed: int):
@@ -73,15 +61,12 @@ class _Stream:
 def visiting_order(seed: int, n: int, stop_rule: str) -> Iterator[np.ndarray]:
     """Endless sweeps of neuron indices to attempt, one array of `n` per sweep.
 
-    ``"sweep"``: the previous sweep's order shuffled again (Fisher-Yates, from the
-    last position down), starting from ``0, 1, ..., n - 1``.
-    ``"stall"``: `n` indices drawn uniformly with replacement.
-    The compiled kernel of :func:`run` draws exactly these orders.
+    ``"sweep"``: the previous order shuffled again (Fisher-Yates, from the last position
+    down), starting from ``0, 1, ..., n - 1``; ``"stall"``: `n` indices drawn with replacement.
 
     Examples
     --------
-    >>> sweeps = visiting_order(0, 5, "sweep")
-    >>> sorted(next(sweeps).tolist())
+    >>> sorted(next(visiting_order(0, 5, "sweep")).tolist())
     [0, 1, 2, 3, 4]
     """
     stream = _Stream(seed)
@@ -112,21 +97,9 @@ def _seed_of(rng, owner: str) -> int:
 class Update:
     """One asynchronous update attempt (one step of (3-19)).
 
-    Attributes
-    ----------
-    attempt : int
-        0-based attempt number.
-    neuron : int
-        Index of the attempted candidate neuron; ``i`` and ``k`` are its left
-        and right features.
-    u : float
-        Its net input under the rule in use ((3-20) for ``"thesis"``).
-    old, new : int
-        Output before and after the attempt.
-    energy : float
-        Energy (3-15) after the attempt.
-    stop : str or None
-        Set on the last attempt of a run: ``"sweep"``, ``"stall"`` or ``"max_attempts"``.
+    ``attempt`` counts from 0; ``neuron`` is the attempted candidate, ``i`` and ``k`` its
+    features, ``u`` its net input under the rule in use, ``old`` and ``new`` its output before
+    and after, ``energy`` (3-15) that after the attempt; ``stop`` is set on a run's last attempt.
     """
 
     attempt: int
@@ -144,22 +117,8 @@ class Update:
         return self.old != self.new
 
 
-class _Lists(NamedTuple):
-    """What the textbook kernel reads of :class:`_Weights`, as Python lists and ints."""
-
-    nb_ptr: list
-    nb_idx: list
-    nb_w: list
-    row_ptr: list
-    row_idx: list
-    col_ptr: list
-    col_idx: list
-    rows: list
-    cols: list
-    row_w: int
-    col_w: int
-    self_w: list
-    bias: list
+_Lists = namedtuple("_Lists", "nb_ptr nb_idx nb_w row_ptr row_idx col_ptr col_idx rows cols row_w col_w "
+                    "self_w bias")   # what the textbook kernel reads of _Weights, as Python lists and ints
 
 
 def _as_lists(w: _Weights) -> _Lists:
@@ -186,8 +145,7 @@ def _net_input_textbook(a: int, y: list, w: _Lists) -> int:
 
 def _check_run_args(net, rng, state, stop_rule, rule, patience, max_sweeps, owner, all_on=False):
     """``(seed, initial state)``; with `all_on` the state is None when it is every neuron on."""
-    if not isinstance(net, Network):
-        raise ParameterTypeError(message("net", owner, "a Network", type(net).__name__))
+    check_net(net, owner)
     # the common case (a GA makes thousands of runs) is checked in a few hundred nanoseconds
     if not (stop_rule in STOP_RULES and rule in RULES and type(patience) is int and patience >= 1
             and type(max_sweeps) is int and max_sweeps >= 1):
@@ -205,33 +163,26 @@ def _check_run_args(net, rng, state, stop_rule, rule, patience, max_sweeps, owne
 def iter_updates(net: Network, *, rng=0, state=None, stop_rule: str = "sweep",
                  rule: str = "exact", patience: int = 200,
                  max_sweeps: int = 500) -> Iterator[Update]:
-    """Run the network one attempt at a time, yielding an :class:`Update` per attempt.
-
-    This is the readable "textbook" kernel: it re-evaluates (3-20) term by term
-    at each attempt and applies (3-19).  Widgets, notebooks and tests consume it;
-    :func:`run` with ``kernel="numba"`` gives the same result much faster.
+    """Run the network one attempt at a time (the textbook kernel), yielding an :class:`Update` each.
 
     Parameters
     ----------
-    net : Network
     rng : int or numpy.random.Generator
-        Seed of the random visiting order (:func:`visiting_order`); a Generator
-        gives one seed per run, drawn from it.
+        Seed of the visiting order (:func:`visiting_order`); a Generator gives one seed per run.
     state : (n,) array_like of {0, 1}, optional
         Initial outputs; all candidates on by default (§3.3).
     stop_rule : {"sweep", "stall"}
-        See the module docstring.
     rule : {"exact", "thesis"}
-        ``"exact"`` is the sound Hopfield form; ``"thesis"`` is (3-17)/(3-20) literally.
+        The sound Hopfield form, or (3-17)/(3-20) literally.
     patience : int
-        Unchanged attempts in a row that stop the ``"stall"`` rule (200 in the thesis).
+        Unchanged attempts in a row that stop the ``"stall"`` rule.
     max_sweeps : int
         Give up after ``max_sweeps * n`` attempts.
 
     Yields
     ------
     update : Update
-        The last one has ``stop`` set.  Nothing is yielded for an empty network.
+        The last one has ``stop`` set; nothing for an empty network.
 
     Examples
     --------
@@ -290,20 +241,8 @@ def _updates(net, blocks, y0, stop_rule, rule, patience, max_sweeps):
 class RunResult:
     """Outcome of one network run.
 
-    Attributes
-    ----------
-    state : (n,) uint8 ndarray
-        Final outputs of the candidate neurons.
-    stop_rule : str
-        What stopped the run: ``"sweep"``, ``"stall"`` or ``"max_attempts"``.
-    attempts, flips : int
-        Update attempts made and outputs changed.
-    net : Network
-        The network that ran.
-    energy : float
-        Energy (3-15) of the final state, from :func:`energy`.  It is computed when first
-        read: the thousands of runs of a GA never read it, and at 200 x 200 corners it
-        costs a sixth of a run.
+    ``stop_rule`` is what stopped it (``"sweep"``, ``"stall"`` or ``"max_attempts"``);
+    ``energy`` (3-15) of the final state is computed when first read, as a GA never reads it.
     """
 
     state: np.ndarray
@@ -318,8 +257,7 @@ class RunResult:
 
     @classmethod
     def _of(cls, state, stop_rule, attempts, flips, net) -> "RunResult":
-        """The same record without the frozen ``__init__``'s five ``object.__setattr__``
-        calls (0.6 us, a tenth of a 20 x 20 run)."""
+        """The same record without the frozen ``__init__``'s ``object.__setattr__`` calls."""
         r = object.__new__(cls)
         d = r.__dict__
         d["state"], d["stop_rule"], d["attempts"], d["flips"], d["net"] = state, stop_rule, attempts, flips, net
@@ -332,25 +270,15 @@ class RunResult:
 
 
 _STOP_NAMES = {1: "sweep", 2: "stall", 3: "max_attempts"}
-
-
 _NO_STATE = np.zeros(0, dtype=np.uint8)
 
 
 def run(net: Network, *, rng=0, state=None, stop_rule: str = "sweep", rule: str = "exact",
         patience: int = 200, max_sweeps: int = 500, kernel: str = "numba") -> RunResult:
-    """Run the network to a stop and return the final state.
+    """Run the network to a stop and return a :class:`RunResult`.
 
-    Parameters are those of :func:`iter_updates`, plus:
-
-    kernel : {"numba", "textbook"}
-        ``"numba"`` keeps every net input current incrementally in compiled
-        code; ``"textbook"`` consumes :func:`iter_updates`.  For the same
-        arguments both return bit-identical results.
-
-    Returns
-    -------
-    result : RunResult
+    Parameters are those of :func:`iter_updates`, and `kernel`: ``"numba"`` (compiled) or
+    ``"textbook"`` (:func:`iter_updates`), bit-identical for the same arguments.
 
     Examples
     --------
@@ -375,8 +303,7 @@ def run(net: Network, *, rng=0, state=None, stop_rule: str = "sweep", rule: str 
             return RunResult._of(y, _STOP_NAMES[code], attempts, flips, net)
     if kernel not in KERNELS:
         check_choice(kernel, "kernel", "run", KERNELS)
-    if not isinstance(net, Network):
-        raise ParameterTypeError(message("net", "run", "a Network", type(net).__name__))
+    check_net(net, "run")
     n = net.n_neurons
     seed, y0 = _check_run_args(net, rng, state, stop_rule, rule, patience, max_sweeps, "run",
                                all_on=kernel == "numba" and n > 0)

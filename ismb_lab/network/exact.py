@@ -1,23 +1,10 @@
-"""The exact global minimum of a network's energy, for small problems.
+"""The exact global minimum of a network's energy ``const - 1/2 y'Wy - I'y``, for small problems.
 
-The discrete network stops at a *fixed point*: no single flip lowers the energy.
-Whether that is the *global* minimum, and whether the global minimum is the
-right matching at all, are two different questions; on small problems both can
-be answered exactly.
-
-* :func:`exhaustive_minimum` visits all ``2**n`` states in Gray-code order, so
-  consecutive states differ in one neuron and each step costs one update of the
-  net inputs (``dE = -u dy`` again).  Weights are the kernels' fixed-point
-  integers, so ties between states are exact.  Up to :data:`MAX_EXHAUSTIVE`
-  neurons (``2**26`` states, about a second).
-* :func:`milp_minimum` solves the same problem as a mixed-integer linear
-  programme (``scipy.optimize.milp``): each interacting or competing pair ``a, b``
-  gets a variable ``z_ab = y_a y_b``, linearised by ``z <= y_a, z <= y_b`` where
-  the pair rewards (``W_ab > 0``) and ``z >= y_a + y_b - 1`` where it costs.  It
-  scales further, but only to the solver's tolerance.
-
-Both minimise ``E = const - 1/2 y'Wy - I'y`` of :func:`ismb_lab.network.hopfield.hopfield_form`
-(the exact rule), which equals :func:`ismb_lab.network.hopfield.energy`.
+:func:`exhaustive_minimum` visits all ``2**n`` states in Gray-code order (one flip, one
+update of the net inputs per state) on the kernels' fixed-point integers, so ties are exact.
+:func:`milp_minimum` solves a mixed-integer programme with ``z_ab = y_a y_b`` linearised
+(``z <= y_a, z <= y_b`` where ``W_ab > 0``, ``z >= y_a + y_b - 1`` where it costs): it
+scales further, to the solver's tolerance.
 
 >>> from ismb_lab.network.hopfield import Network
 >>> net = Network.from_arrays(2, 2, rows=[0, 0, 1, 1], cols=[0, 1, 0, 1],
@@ -37,8 +24,8 @@ from dataclasses import dataclass
 import numba
 import numpy as np
 
-from .._core.validation import ParameterError, ParameterTypeError, check_number, message
-from .hopfield import SCALE, Network, energy, hopfield_form
+from .._core.validation import ParameterError, check_number, message
+from .hopfield import SCALE, Network, check_net, energy, hopfield_form
 
 __all__ = ["MAX_EXHAUSTIVE", "MAX_TIME_LIMIT", "exhaustive_minimum", "milp_minimum", "Minimum"]
 
@@ -50,31 +37,14 @@ MAX_TIME_LIMIT = 3600.0
 
 @dataclass(frozen=True, eq=False)
 class Minimum:
-    """A global minimum of the energy.
-
-    Attributes
-    ----------
-    state : (n,) uint8 ndarray
-        A minimising state (the first one met, for the exhaustive search).
-    energy : float
-        Its energy, from :func:`ismb_lab.network.hopfield.energy`.
-    n_minima : int
-        How many states share the minimum exactly (exhaustive search), or 1 (MILP:
-        unknown, it reports one).
-    method : str
-        ``"exhaustive"`` or ``"milp"``.
-    """
+    """A global minimum of the energy: a minimising ``state`` (the first met, exhaustively),
+    its ``energy``, how many states tie exactly (``n_minima``; 1 for the MILP, which reports
+    one) and the ``method``, ``"exhaustive"`` or ``"milp"``."""
 
     state: np.ndarray
     energy: float
     n_minima: int
     method: str
-
-
-def _check_net(net, owner: str) -> Network:
-    if not isinstance(net, Network):
-        raise ParameterTypeError(message("net", owner, "a Network", type(net).__name__))
-    return net
 
 
 def _integer_form(net: Network) -> tuple[np.ndarray, np.ndarray]:
@@ -110,17 +80,7 @@ def _gray_search(W, I):
 
 
 def exhaustive_minimum(net: Network) -> Minimum:
-    """Search all ``2**n`` states for the lowest energy.
-
-    Parameters
-    ----------
-    net : Network
-        At most :data:`MAX_EXHAUSTIVE` candidate neurons.
-
-    Returns
-    -------
-    minimum : Minimum
-        ``n_minima`` counts the states that tie exactly (in the kernels' fixed point).
+    """Search all ``2**n`` states (``n`` at most :data:`MAX_EXHAUSTIVE`) for the lowest energy.
 
     Examples
     --------
@@ -130,7 +90,7 @@ def exhaustive_minimum(net: Network) -> Minimum:
     >>> m.state.tolist(), m.energy, m.n_minima
     ([1, 0], 0.5, 2)
     """
-    net = _check_net(net, "exhaustive_minimum")
+    net = check_net(net, "exhaustive_minimum")
     n = net.n_neurons
     if n > MAX_EXHAUSTIVE:
         raise ParameterError(message("net", "exhaustive_minimum", f"at most {MAX_EXHAUSTIVE} candidate "
@@ -144,16 +104,8 @@ def exhaustive_minimum(net: Network) -> Minimum:
 def milp_minimum(net: Network, *, time_limit: float = 60.0) -> Minimum:
     """The minimum energy as a mixed-integer linear programme (``scipy.optimize.milp``).
 
-    Parameters
-    ----------
-    net : Network
-    time_limit : float
-        Seconds the solver may take, at most :data:`MAX_TIME_LIMIT`; a ``ParameterError``
-        says when it gave up without proving optimality.
-
-    Returns
-    -------
-    minimum : Minimum
+    A ``ParameterError`` says when the solver gave up within `time_limit` seconds (at most
+    :data:`MAX_TIME_LIMIT`) without proving optimality.
 
     Examples
     --------
@@ -165,7 +117,7 @@ def milp_minimum(net: Network, *, time_limit: float = 60.0) -> Minimum:
     from scipy.optimize import Bounds, LinearConstraint, milp
     from scipy.sparse import coo_matrix
 
-    net = _check_net(net, "milp_minimum")
+    net = check_net(net, "milp_minimum")
     limit = check_number(time_limit, "time_limit", "milp_minimum", low=0, low_open=True, high=MAX_TIME_LIMIT)
     n = net.n_neurons
     if n == 0:

@@ -1,76 +1,30 @@
 """The 2-D discrete Hopfield network of the thesis (§3.2, §3.3): its neurons, weights and energy.
 
-How it runs, one asynchronous update after another, is :mod:`ismb_lab.network.dynamics`.
-
-Neuron ``a = (i, k)`` says "left feature i matches right feature k".  Only
-*candidate* neurons (see :func:`ismb_lab.network.similarity.candidate_mask`) exist here;
-all other neurons of the ``N_l x N_r`` grid are fixed at 0 and drop out.  The
-energy is (3-15)::
+Neuron ``a = (i, k)`` says "left feature i matches right feature k"; only candidate neurons
+exist.  The energy (3-15), with a uniqueness strength ``kappa`` and a match bias ``beta``
+(the thesis: 1 and 2), is::
 
     E = - sum_{ik} sum_{jl} C_ikjl y_ik y_jl
-        + sum_i (1 - sum_k y_ik)^2 + sum_k (1 - sum_i y_ik)^2 - sum_ik S_ik y_ik
-
-Exact Hopfield form
--------------------
-Expanding with ``y^2 = y`` gives ``E = N_l + N_r - 1/2 y'Wy - I'y`` with
-
-* ``W_ab = 2 C_ab`` for neighbouring pairs (the double sum counts each pair twice),
-* ``W_ab = -2`` when ``a`` and ``b`` share a left or a right feature,
-* ``W_aa = 0`` (no self-connection), and ``I_a = 2 + S_a``.
-
-With ``u_a = sum_b W_ab y_b + I_a`` an asynchronous flip changes the energy by
-exactly ``dE = -u_a dy_a <= 0``.  This is ``rule="exact"``, the default.
-
-The thesis' literal rule
-------------------------
-(3-16)/(3-17) use ``W = C - delta_ij - delta_kl``: the quadratic part halved, and
-(3-20) sums over *all* ``(j, l)``, the neuron itself included, which adds a
-self-weight ``C_ikik - 2`` (about -1).  Then ``u`` is not the energy gradient,
-flips can raise ``E`` and the network can oscillate forever.  It is kept as
-``rule="thesis"`` so a class can watch it fail.
-
-Exact arithmetic
-----------------
-Weights and biases are rounded once to multiples of ``2**-40`` (about 1e-12) and
-held as 64-bit integers.  Every net input is then an exact integer sum, whatever
-the order of summation, so the readable kernel (which re-sums (3-20) at every
-attempt) and the fast kernel (which updates ``u`` incrementally after each flip)
-make bit-identical decisions.
-
-Beyond the thesis: a feature may stay unmatched
------------------------------------------------
-``(1 - r)^2`` with ``r = sum_k y_ik`` is smallest at *exactly one* match, so every
-corner without a partner (occluded, or simply not detected in the other image)
-is pushed to take a wrong one.  A network carries two more numbers, a
-uniqueness strength ``kappa`` and a match bias ``beta`` (the thesis: 1 and 2),
-and its energy is::
-
-    E = - sum C y y + kappa sum_i (h - r_i)^2 + kappa sum_k (h - c_k)^2 - sum S y,
+        + kappa sum_i (h - sum_k y_ik)^2 + kappa sum_k (h - sum_i y_ik)^2 - sum_ik S_ik y_ik,
     h = 1/2 + beta / (4 kappa)
 
-``h`` is the preferred number of matches per feature.  For binary ``y``,
-``r^2 = r + 2 * (pairs of matches in the row)``, so
-``kappa (h - r)^2 = kappa h^2 + kappa (1 - 2h) r + 2 kappa * pairs``.  Adding the
-row and column terms gives the exact Hopfield form
+``h`` is the preferred number of matches per feature: 1 in the thesis, 1/2 ("at most one")
+for ``beta = 0``.  With ``y^2 = y`` its exact Hopfield form is ``E = kappa h^2 (N_l + N_r)
+- 1/2 y'Wy - I'y`` with ``W_ab = 2 C_ab`` between neighbours, ``-2 kappa`` on a shared row
+or column, ``W_aa = 0`` and ``I_a = S_a + beta``; every asynchronous flip then changes the
+energy by exactly ``-u_a dy_a`` (``rule="exact"``).  ``rule="thesis"`` takes (3-16)/(3-17)
+and (3-20) literally, ``W = C - kappa (delta_ij + delta_kl)`` with a self-weight
+``C_ikik - 2 kappa``: flips can raise ``E`` and the network can oscillate.
 
-* ``W_ab = 2 C_ab`` for neighbouring pairs, ``W_ab = -2 kappa`` on a shared
-  row or column, ``W_aa = 0``;
-* ``I_a = S_a + 2 kappa (2h - 1) = S_a + beta``;
-* ``E = kappa h^2 (N_l + N_r) - 1/2 y'Wy - I'y``,
-
-and still ``dE = -u dy`` for every asynchronous flip: ``u_a`` is exactly
-``E(y_a = 0) - E(y_a = 1)`` with all other outputs fixed, because ``W`` is
-symmetric with a zero diagonal.  With ``h = 1/2`` (``beta = 0``) no match and one
-match cost the same, ``kappa / 4``, two matches ``9 kappa / 4``: the term only
-says *at most one*, and ``S`` and ``C`` decide whether a match is worth it.
-The thesis' energy is ``kappa = 1, beta = 2`` (``h = 1``), bit for bit.
+Weights and biases are rounded once to multiples of ``2**-40`` and held as int64, so every
+net input is an exact sum in any order and both kernels make bit-identical decisions.
 """
 
 from __future__ import annotations
 
+from collections import namedtuple
 from dataclasses import dataclass
 from functools import cached_property
-from typing import NamedTuple
 
 import numba
 import numpy as np
@@ -96,33 +50,20 @@ def _csr(n: int, src: np.ndarray, dst: np.ndarray):
     return indptr, dst[order].astype(np.int64), order
 
 
-class _Layout(NamedTuple):
-    """Adjacency of a topology in compressed-row form, read by both kernels."""
-
-    nb_ptr: np.ndarray   # neighbours of neuron a: nb_idx[nb_ptr[a]:nb_ptr[a + 1]]
-    nb_idx: np.ndarray
-    nb_pair: np.ndarray  # the pair index of each neighbour entry
-    row_ptr: np.ndarray  # neurons of left feature i: row_idx[row_ptr[i]:row_ptr[i + 1]]
-    row_idx: np.ndarray
-    col_ptr: np.ndarray  # neurons of right feature k
-    col_idx: np.ndarray
+# A topology's adjacency in compressed rows, read by both kernels: the neighbours of neuron a
+# are nb_idx[nb_ptr[a]:nb_ptr[a + 1]] (nb_pair: their pairs), the neurons of left feature i
+# row_idx[row_ptr[i]:row_ptr[i + 1]], and those of right feature k likewise in col_idx.
+_Layout = namedtuple("_Layout", "nb_ptr nb_idx nb_pair row_ptr row_idx col_ptr col_idx")
 
 
 @dataclass(frozen=True, eq=False)
 class Topology:
-    """Which neurons exist and which pairs of them interact.
-
-    A topology depends on the features and the candidate window only, not on
-    the energy parameters, so all networks a GA builds for one image pair share
-    one topology: it is validated and laid out once.
+    """Which neurons exist and which pairs of them interact (shared by all networks of a pair).
 
     Parameters
     ----------
-    n_left, n_right : int
-        Number of left and right features ``N_l`` and ``N_r``.
     rows, cols : (n,) int array_like
-        Left feature ``i`` and right feature ``k`` of each candidate neuron,
-        sorted by ``(i, k)``.
+        Left and right feature of each candidate neuron, sorted by ``(i, k)``.
     pair_a, pair_b : (P,) int array_like
         Interacting neuron pairs, ``pair_a < pair_b``, on different rows and columns.
 
@@ -191,10 +132,9 @@ class Topology:
 
     @cached_property
     def packed(self) -> np.ndarray:
-        """What the compiled run reads of the layout, in one int64 buffer: segment j is
-        ``packed[packed[j]:packed[j + 1]]``, in the order of :data:`PACKED`.  One array
-        crosses into compiled code faster than five.  The neighbour indices travel with the
-        weights, in :class:`_Weights` ``values``."""
+        """The layout the compiled run reads, in one int64 buffer (one array crosses into
+        compiled code faster than five): segment j is ``packed[packed[j]:packed[j + 1]]``,
+        in the order of :data:`PACKED`."""
         lay = self.layout
         neurons = np.stack([self.rows, self.cols], axis=1).astype(np.uint32).reshape(-1)
         parts = (lay.nb_ptr, lay.row_ptr, lay.col_ptr, neurons.view(np.int64), lay.col_idx)
@@ -204,7 +144,7 @@ class Topology:
     @cached_property
     def crowding(self) -> tuple[int, int]:
         """The most neurons sharing a neuron's row or column (itself included), and the most
-        neighbours of one neuron: what bounds a net input (:func:`_check_fits`)."""
+        neighbours of one neuron: what bounds a net input."""
         lay = self.layout
         if self.n_neurons == 0:
             return 0, 0
@@ -218,20 +158,16 @@ class Network:
 
     Parameters
     ----------
-    topology : Topology
-        The candidate neurons and their interacting pairs.
     similarity : (n,) float array_like
-        ``S_ik`` of each neuron, in ``[-1, 1]`` (zero for Method-I).
+        ``S_ik`` of each neuron, in ``[-1, 1]``.
     pair_c : (P,) float array_like
         Compatibility ``C_ab`` in ``[-1, 1]`` of each interacting pair.
     self_c : (n,) float array_like, optional
-        ``C_ikik`` (a neuron's compatibility with itself, ``X = 0`` for the
-        geometric terms).  Only the thesis' literal rule uses it.
+        ``C_ikik``; only the thesis' literal rule uses it.
     uniqueness : float
-        ``kappa > 0``, the weight of the uniqueness terms (1 in (3-15)).
+        ``kappa > 0`` (1 in (3-15)).
     match_bias : float
-        ``beta``, the bias every neuron gets on top of ``S`` (2 in (3-15), which
-        asks for exactly one match per feature; see the module docstring).
+        ``beta`` (2 in (3-15): exactly one match per feature).
 
     Examples
     --------
@@ -274,8 +210,7 @@ class Network:
     @classmethod
     def _trusted(cls, topology: Topology, similarity, pair_c, self_c, uniqueness: float = 1.0,
                  match_bias: float = 2.0) -> "Network":
-        """Skip validation: for float arrays of the right lengths that are finite by
-        construction (transfer functions of validated parameters), and validated scalars."""
+        """Skip validation: for arrays finite by construction and validated scalars."""
         net = object.__new__(cls)
         for name, value in (("topology", topology), ("similarity", similarity),
                             ("pair_c", pair_c), ("self_c", self_c), ("uniqueness", float(uniqueness)),
@@ -329,34 +264,20 @@ class Network:
 PACKED = ("nb_ptr", "row_ptr", "col_ptr", "neurons", "col_idx")
 
 
-class _Weights(NamedTuple):
+class _Weights(namedtuple("_Weights", "nb_ptr row_ptr row_idx col_ptr col_idx rows cols row_w col_w "
+                                      "self_w bias values run_args")):
     """Fixed-point weights of one rule, in the layout the kernels read.
 
-    ``self_w`` and ``bias`` are views of ``values``, one buffer laid out as
-    ``entries | self_w | bias | pos_end | row_w | col_w``.  Entry ``p`` holds a neighbour
-    weight shifted left by :data:`NB_SHIFT` bits and the neighbour's index in those low
-    bits: a flip's updates read one word per neighbour instead of two (the 173,826 updates
-    of a 200 x 200 run, replayed alone: 84 instead of 104 us).  A weight is at most
-    ``2 * SCALE = 2**41`` in size (C lies in [-1, 1]), so it fits the 43 bits left with its
-    sign.  Neuron ``a``'s entries are ``entries[nb_ptr[a]:nb_ptr[a + 1]]``, its positive
-    weights first, up to ``pos_end[a]``, then the others: the compiled run's first sweep
-    sums the positive ones, and stops summing the others once the input is negative
-    (:func:`ismb_lab.network.kernel.run_network`).  ``nb_idx`` and ``nb_w`` list them in that order.
+    ``values`` is one buffer, ``entries | self_w | bias | pos_end | row_w | col_w``.  An entry
+    holds a neighbour weight shifted left by :data:`NB_SHIFT` bits and the neighbour's index
+    in those bits (one word read per neighbour); a weight is at most ``2**41``, so it fits
+    the 43 bits left.  Neuron ``a``'s entries are ``entries[nb_ptr[a]:nb_ptr[a + 1]]``, its
+    positive weights first (up to ``pos_end[a]``), so the compiled run can stop summing once
+    the input is negative.  ``run_args`` are the compiled run's last arguments,
+    ``(Topology.packed, values)``.
     """
 
-    nb_ptr: np.ndarray
-    row_ptr: np.ndarray
-    row_idx: np.ndarray
-    col_ptr: np.ndarray
-    col_idx: np.ndarray
-    rows: np.ndarray
-    cols: np.ndarray
-    row_w: np.int64
-    col_w: np.int64
-    self_w: np.ndarray
-    bias: np.ndarray
-    values: np.ndarray
-    run_args: tuple  # the compiled run's last arguments: (Topology.packed, values)
+    __slots__ = ()
 
     @property
     def nb_idx(self) -> np.ndarray:
@@ -380,11 +301,9 @@ MAX_INPUT = 2.0 ** 62 / SCALE
 
 
 def _check_fits(net: Network, lay) -> None:
-    """Refuse a network whose net inputs could overflow the int64 sums (exact descent would break).
+    """Refuse a network whose net inputs could overflow the int64 sums.
 
-    S and C lie in [-1, 1]; the match bias and the uniqueness strength are the unbounded
-    parts, so a bound on |u| over every neuron is |beta| + 1 + 2 kappa (row + column size)
-    + 2 (neighbours) + 2 kappa.
+    ``|u| <= |beta| + 1 + 2 kappa (row + column size) + 2 (neighbours) + 2 kappa``.
     """
     n = net.n_neurons
     if n == 0:
@@ -454,24 +373,11 @@ def _quantised(pair_c, nb_ptr, nb_pair, nb_idx, similarity, self_c, exact, scale
 
 
 def hopfield_form(net: Network, rule: str = "exact") -> tuple[np.ndarray, np.ndarray]:
-    """Dense weights ``W`` and biases ``I`` with ``E = const - 1/2 y'Wy - I'y``.
+    """Dense weights ``W`` and biases ``I`` with ``E = const - 1/2 y'Wy - I'y``, for small networks.
 
-    For teaching and checking on small networks; the kernels use a sparse layout.
-
-    Parameters
-    ----------
-    net : Network
-    rule : {"exact", "thesis"}
-        ``"exact"``: ``W = 2C``, ``-2 kappa`` on a shared row or column, zero diagonal.
-        ``"thesis"``: (3-17) literally, ``W = C - kappa (delta_ij + delta_kl)``
-        including the diagonal ``C_ikik - 2 kappa``.  Both have ``I = beta + S``
-        (``kappa = 1`` and ``beta = 2`` in the thesis); the constant is
-        :attr:`Network.constant`.
-
-    Returns
-    -------
-    W : (n, n) ndarray
-    I : (n,) ndarray
+    ``rule="exact"``: ``W = 2C``, ``-2 kappa`` on a shared row or column, zero diagonal;
+    ``"thesis"``: (3-17) literally, with the diagonal ``C_ikik - 2 kappa``.  Both have
+    ``I = beta + S``; the constant is :attr:`Network.constant`.
 
     Examples
     --------
@@ -500,22 +406,7 @@ def hopfield_form(net: Network, rule: str = "exact") -> tuple[np.ndarray, np.nda
 
 
 def energy(net: Network, state) -> float:
-    """The thesis energy (3-15), computed from its definition.
-
-    It reads ``C`` and ``S`` directly and never the Hopfield weights, so it can
-    check them.  A network with its own ``uniqueness`` and ``match_bias`` has
-    the uniqueness terms ``kappa (h - r)^2`` of the module docstring instead of
-    ``(1 - r)^2``.
-
-    Parameters
-    ----------
-    net : Network
-    state : (n,) array_like of {0, 1}
-        Outputs of the candidate neurons; all other neurons are 0.
-
-    Returns
-    -------
-    E : float
+    """The energy (3-15) of a 0/1 `state`, from ``C`` and ``S`` directly (never the weights).
 
     Examples
     --------
@@ -559,7 +450,14 @@ def _energy(n_left, n_right, rows, cols, similarity, pair_a, pair_b, pair_c, y, 
     return compatibility + uniqueness - similar
 
 
+def check_net(net, owner: str) -> Network:
+    if not isinstance(net, Network):
+        raise ParameterTypeError(message("net", owner, "a Network", type(net).__name__))
+    return net
+
+
 def _check_state(net: Network, state, owner: str) -> np.ndarray:
+
     y = np.asarray(state)
     if y.shape != (net.n_neurons,) or not np.all((y == 0) | (y == 1)):
         raise ParameterError(message("state", owner, f"a 0/1 array of shape ({net.n_neurons},)",

@@ -1,11 +1,8 @@
 """The compiled network run of :func:`ismb_lab.network.dynamics.run`, and a GA's batch of them.
 
-:func:`run_network` is one run in one call: the visiting order drawn from a SplitMix64 stream
-as :func:`ismb_lab.network.dynamics.visiting_order` draws it, every net input exact in 64-bit
-integers.  :func:`fitness_runs` builds and runs the networks of many parameter sets of
-one problem and tallies their matches, for :class:`ismb_lab.tuning.fitness.Fitness`.  The
-textbook kernel of :mod:`ismb_lab.network.dynamics` makes the same decisions; the tests hold the
-two to it.
+It draws the visiting order from the SplitMix64 stream of
+:func:`ismb_lab.network.dynamics.visiting_order` and makes the same exact integer decisions
+as the textbook kernel there; the tests hold the two to bit-identical agreement.
 """
 
 from __future__ import annotations
@@ -62,9 +59,8 @@ def _below(state, bound):
 
 @numba.njit(cache=True)
 def _draw(drawn, state):
-    """Fill `drawn` with the stream's next ``len(drawn)`` numbers after `state` (after them
-    its state is ``state + len(drawn) * golden``).  Each number depends on its place only,
-    so the loop is vectorised."""
+    """Fill `drawn` with the stream's next ``len(drawn)`` numbers after `state`.  Each number
+    depends on its place only, so the loop vectorises."""
     for k in range(drawn.shape[0]):
         z = _U64(state + _U64(k + 1) * _GOLDEN_U)
         z = _U64((z ^ (z >> _U64(30))) * _MIX1_U)
@@ -76,12 +72,10 @@ def _draw(drawn, state):
 def _shuffle(order, state, drawn):
     """Shuffle `order` in place as :func:`visiting_order`'s sweep does, and return the new state.
 
-    The same draws as ``_below(state, t + 1)`` for ``t = n - 1, ..., 1``, without a branch
-    on the draw: a rejected number leaves ``t`` where it is (its swap is with itself).  The
-    mask changes only when ``t`` falls to the next power of two, so the inner loop keeps it
-    fixed and carries only ``t`` from one draw to the next.  The numbers are drawn
-    ``len(drawn)`` at a time into the scratch array `drawn` (:func:`_draw`); the state
-    returned is that after the last number used, as if drawn one by one.
+    The same draws as ``_below(state, t + 1)`` for ``t = n - 1, ..., 1``, without a branch on
+    the draw: a rejected number swaps ``t`` with itself and leaves it where it is.  The
+    numbers come ``len(drawn)`` at a time (:func:`_draw`); the state returned is that after
+    the last number used.
     """
     state, one = _U64(state), _U64(1)
     t = _U64(max(order.shape[0] - 1, 0))   # unsigned: no test for a negative index
@@ -106,8 +100,8 @@ def _shuffle(order, state, drawn):
 
 @numba.extending.intrinsic
 def _prefetch(typingctx, array, index):
-    """Ask the processor to fetch ``array[index]`` into its caches, and go on (LLVM's
-    ``prefetch``, for reading, kept in every cache level).  Nothing is read or changed."""
+    """Ask the processor to fetch ``array[index]`` into its caches (LLVM's ``prefetch``);
+    nothing is read or changed."""
     def codegen(context, builder, signature, args):
         data = context.make_array(signature.args[0])(context, builder, args[0]).data
         byte = ir.IntType(8).as_pointer()
@@ -119,11 +113,8 @@ def _prefetch(typingctx, array, index):
     return types.void(array, index), codegen
 
 
-
-
-# The compiled run takes the topology's integers in one buffer (Topology.packed) and the
-# network's in another (_Weights.values): a call into compiled code unboxes each array
-# argument separately, about 0.1 us apiece, which on a 20 x 20 ROI cost as much as the run.
+# The run takes the topology's integers in one buffer (Topology.packed) and the network's in
+# another (_Weights.values): a compiled call unboxes each array argument, about 0.1 us apiece.
 _NB_PTR, _ROW_PTR, _COL_PTR, _NEURONS, _COL_IDX = range(len(PACKED))
 _INDEX = (1 << NB_SHIFT) - 1   # an entry's low bits: the neighbour's index
 _AHEAD = 4
@@ -146,8 +137,7 @@ def _split(packed, values):
 @numba.njit(cache=True)
 def _inputs_of(y, u, nb_ptr, entries, self_w, bias, neurons, on_in_row, on_in_col, row_w, col_w):
     """Fill ``u`` with every net input: ``bias_a + self_w_a y_a + sum_b W_ab y_b`` and the
-    uniqueness terms, pushing the weights of the neurons on (after a first sweep from
-    every neuron on, a few percent are left)."""
+    uniqueness terms, pushing the weights of the neurons on."""
     for a in range(y.shape[0]):
         ya = np.int64(y[a])
         u[a] = (bias[a] + self_w[a] * ya + row_w * (on_in_row[neurons[2 * a]] - ya)
@@ -171,8 +161,7 @@ def _settled(y, u):
 
 @numba.njit(cache=True)
 def _unstable_from(order, t, lim, u, y):
-    """The first place in ``order[t:lim]`` of a neuron that would flip (``u_a`` nonzero and
-    of the other sign than ``y_a``), or `lim`."""
+    """The first place in ``order[t:lim]`` of a neuron that would flip, or `lim`."""
     p, end = _U64(t), _U64(lim)
     while p < end:
         a = order[p]
@@ -186,10 +175,8 @@ def _unstable_from(order, t, lim, u, y):
 @numba.njit(cache=True)
 def _pull_sweep(order, y, on_in_row, on_in_col, nb_ptr, entries, pos_end, neurons, self_w, bias, row_w, col_w,
                 sweep_rule, patience, max_attempts, attempts, unchanged, from_on):
-    """One sweep of :func:`run_network` that sums each attempt's input afresh; changes `y` and
-    the counts.  With `from_on` every neuron is known to be on when attempted (the first
-    sweep from every neuron on, each neuron once).  Returns ``(flips, attempts, unchanged,
-    stop code or 0)``."""
+    """One sweep of :func:`run_network` that sums each attempt's input afresh; with `from_on`
+    every neuron is on when attempted.  Returns ``(flips, attempts, unchanged, stop code or 0)``."""
     n = order.shape[0]
     changed = code = 0
     for t in range(n):
@@ -201,9 +188,8 @@ def _pull_sweep(order, y, on_in_row, on_in_col, nb_ptr, entries, pos_end, neuron
         i, k = neurons[a + a], neurons[a + a + _U64(1)]
         ua = bias[a] + self_w[a] * ya + row_w * (on_in_row[i] - ya) + col_w * (on_in_col[k] - ya)
         # the weights after pos_end[a] can only lower ua: once they are being read and ua is
-        # negative, its sign is known.  Blocks of eight from the segment's start, whatever
-        # their signs: a loop of its own for the positive weights had cost a mispredicted
-        # exit per attempt.
+        # negative, its sign is known.  Blocks of eight, whatever their signs, avoid a
+        # mispredicted loop exit per attempt.
         p, mid, end = nb_ptr[a], pos_end[a], nb_ptr[a + _U64(1)]
         while p + _U64(8) <= end and (p < mid or ua >= 0):
             for q in range(p, p + _U64(8)):
@@ -240,11 +226,9 @@ def _pull_sweep(order, y, on_in_row, on_in_col, nb_ptr, entries, pos_end, neuron
 @numba.njit(cache=True)
 def _push_sweep(order, y, u, nb_ptr, entries, neurons, row_ptr, col_ptr, col_idx, self_w, row_w, col_w,
                 sweep_rule, patience, max_attempts, attempts, unchanged):
-    """One sweep of :func:`run_network` that keeps every ``u`` current: each flip adds its
-    weights to its neighbours' inputs.  The attempts between two flips only look for the
-    next neuron to flip (:func:`_unstable_from`), and are counted together; under the stall
-    rule the search stops where the patience or the attempt limit would end the run.
-    Returns ``(flips, attempts, unchanged, stop code or 0)``."""
+    """One sweep of :func:`run_network` that keeps every ``u`` current, each flip adding its
+    weights to its neighbours' inputs; the attempts between two flips only look for the
+    next neuron to flip.  Returns ``(flips, attempts, unchanged, stop code or 0)``."""
     n = order.shape[0]
     changed = code = 0
     t = 0
@@ -265,9 +249,8 @@ def _push_sweep(order, y, u, nb_ptr, entries, neurons, row_ptr, col_ptr, col_idx
         a = order[s]
         attempts += 1
         # a flip of y_a by d adds W_ab d to every u_b of a neighbour, and row_w d or col_w d
-        # to every other neuron of its row and column (the row's neurons are consecutive);
-        # its own u_a changes only by its self term.  Each sign has its own loops of plain
-        # additions or subtractions.  Integers: no rounding.
+        # to every other neuron of its row and column (consecutive in a row); its own u_a
+        # changes only by its self term.
         i, k = neurons[a + a], neurons[a + a + _U64(1)]
         if y[a]:
             y[a] = 0
@@ -300,37 +283,19 @@ def _push_sweep(order, y, u, nb_ptr, entries, neurons, row_ptr, col_ptr, col_idx
 
 @numba.njit(cache=True)
 def run_network(seed, sweep_rule, patience, max_attempts, y0, all_on, packed, values):
-    """The whole run in one call: the visiting order drawn from `seed` as
-    :func:`visiting_order` draws it, and every net input computed exactly.
-    `packed` is :attr:`Topology.packed`, `values` the :class:`_Weights` buffer; with
-    `all_on` the run starts from every neuron on (and `y0` is not read).
-    Returns ``(state, stop code of _STOP_NAMES, attempts, flips)``.
+    """The whole run in one call, from `seed` (:func:`visiting_order`'s stream), every net
+    input exact.  `packed` is :attr:`Topology.packed`, `values` the :class:`_Weights` buffer;
+    with `all_on` the run starts from every neuron on (`y0` unread).  Returns ``(state, stop
+    code of _STOP_NAMES, attempts, flips)``.
 
-    A net input is ``u_a = c_a + row_w (R_i - y_a) + col_w (K_k - y_a)``: ``c_a`` sums the
-    bias, the neighbours and the thesis rule's self term ``self_w_a y_a``; ``R_i`` and
-    ``K_k`` count the neurons on in the row and column of ``a``.  The same integers as
-    (3-20) summed term by term, so the same decisions.
+    ``u_a = c_a + row_w (R_i - y_a) + col_w (K_k - y_a)``, with ``R_i`` and ``K_k`` the
+    neurons on in the row and column of ``a``: the same integers as (3-20) term by term.
+    The first sweep pulls (most neurons flip in it, and pushing each flip cost more than
+    the sums); later sweeps flip few neurons, so they push.  The stop tests are those of
+    :func:`_updates`, in its order; after a sweep of few flips, a run that has settled
+    counts the last sweep's attempts without drawing its order."""
+    # indices read as unsigned: numba then skips the test for a negative (from-the-end) index
 
-    The first sweep pulls (:func:`_pull_sweep`): each attempt sums its neuron's neighbours
-    afresh and reads the two counts, and a flip changes only ``y`` and the counts.  From
-    every neuron on, nine in ten neurons flip in that sweep, and pushing each flip to its
-    neighbours had cost more than the sums.  A sum stops early: a neuron's positive weights
-    come first in its entries (:class:`ismb_lab.network.hopfield._Weights`), and once they are
-    summed and the input is negative, the others can only lower it, so the decision is
-    known.  The input itself is not kept in that sweep.  Later sweeps flip a few neurons
-    each, so they keep every ``u`` current instead (:func:`_push_sweep`; :func:`_inputs_of`
-    fills it once): a flip adds its weights to its neighbours and the uniqueness weight to
-    its row and column, and an attempt reads one number.  Each sweep is a function of its
-    own: in one loop with the run's other variables, the compiled sweeps had kept their
-    counters on the stack.
-
-    The stop tests are those of :func:`_updates`, in its order: with the sweep rule the
-    attempt limit is a whole number of sweeps, so both are tested at the end of a sweep,
-    the sweep rule first.  A sweep with no neuron to flip at its start flips none, in any
-    order, and stops the run under the sweep rule: after a sweep of few flips the run looks
-    for one (:func:`_settled`) and, if so, counts its attempts without drawing its order."""
-    # indices read as unsigned: numba then skips the test for a negative (from-the-end)
-    # index, which in the loops over neighbours had cost a quarter of a run
     nb_ptr = _segment(packed, _NB_PTR).view(np.uint64)
     row_ptr, col_ptr = _segment(packed, _ROW_PTR).view(np.uint64), _segment(packed, _COL_PTR).view(np.uint64)
     col_idx = _segment(packed, _COL_IDX).view(np.uint64)
@@ -394,12 +359,10 @@ def run_network(seed, sweep_rule, patience, max_attempts, y0, all_on, packed, va
     return y, code, attempts, flips
 
 
-
-
 @numba.njit(cache=True)
 def _least_dy(on, owner, n_owner, dy):
     """Of the neurons `on` (ascending), the one of least ``dy`` of each owner (ties: the
-    lower index), ascending: :meth:`ismb_lab.network.methods.MethodI.postprocess`'s step."""
+    lower index), ascending: Method-I's post-processing step."""
     best = np.full(n_owner, -1, dtype=np.int64)
     for a in on:
         o = owner[a]
@@ -416,9 +379,8 @@ def fitness_runs(packed, nb_ptr, nb_pair, nb_idx, pair_c, similarity, self_c, ma
                   self_penalty, unique, seeds, sweep_rule, patience, max_attempts, codes, least_dy, rows, cols,
                   n_left, n_right, dy):
     """``sum over seeds of (correct - wrong - extra)`` for each row of `pair_c`, `similarity`,
-    `self_c` and `match_bias`: the network :func:`ismb_lab.network.hopfield._weights` builds from
-    them, run from every neuron on by :func:`run_network` with each seed, its matched neurons
-    (with `least_dy`, Method-I's post-processing) tallied by their `codes` as
+    `self_c` and `match_bias`: each network run from every neuron on, its matches (after
+    Method-I's step with `least_dy`) tallied by `codes` as
     :func:`ismb_lab.tuning.evaluation._tally` does."""
     m = pair_c.shape[0]
     totals = np.zeros(m, dtype=np.int64)

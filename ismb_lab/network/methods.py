@@ -1,39 +1,18 @@
-"""Methods I, II and III as energy recipes (thesis §3.3, §5.2).
+"""Methods I, II, III and beyond as energy recipes (thesis §3.3, §5.2).
 
-A method turns the ingredients of one image pair (a :class:`Problem`) and its
-parameters into a :class:`~ismb_lab.network.hopfield.Network`, and may post-process the
-network's final state.
+A method turns a :class:`Problem` and its :class:`Params` into a
+:class:`~ismb_lab.network.hopfield.Network`, and may post-process the final state.
 
-* **Method-II**: a separate similarity ``S = transfer(M, theta_s, lambda_s)`` and
-  ``X = dd + dD``.
-* **Method-III** (ISMB, the thesis' method): Method-II plus the vertical-disparity
-  term, ``X = dd + dD + dY``.
-* **Method-I** (Achour & Mahiddine 2002) is a *reconstruction*: their paper is not
-  at hand, and the thesis says only that the similarity ``M`` is folded into the
-  pairwise term, that there is no separate ``S``, that vertical disparity is used
-  only afterwards to remove multiple matches, and that it has two parameters
-  ``(theta_c, lambda_c)``.  Here ``X = dd + dD + (M_ik + M_jl) / 2``, ``S = 0``, and
-  the post-processing keeps, for every feature matched more than once, the match
-  with the smallest vertical disparity.
-* **Method-NM** (beyond the thesis): Method-III's ``S`` and ``C`` with a
-  uniqueness term that lets a feature stay unmatched.  The thesis'
-  ``(1 - sum y)^2`` asks for *exactly one* match per feature, so corners without
-  a partner take wrong ones; Method-NM's fifth gene, the match bias ``beta``,
-  moves the preferred count to ``h = 1/2 + beta / 4`` (``beta = 2`` is
-  Method-III, ``beta = 0`` says "at most one").  The derivation is in
-  :mod:`ismb_lab.network.hopfield`.
-* **Method-NM4**: Method-NM with the match bias fixed at 0 ("at most one match
-  per feature") and Method-III's four genes.  Trained on one small pair, the
-  fifth gene mostly fits that pair's own count of unmatched corners; without
-  it the GA has one thing less to overfit.
+* **Method-I** (Achour & Mahiddine 2002) is a reconstruction from the thesis' description:
+  ``X = dd + dD + (M_ik + M_jl) / 2``, ``S = 0``, two parameters, and vertical disparity
+  only afterwards, to remove multiple matches.
+* **Method-II**: ``S = transfer(M, theta_s, lambda_s)`` and ``X = dd + dD``.
+* **Method-III** (ISMB): Method-II plus the vertical-disparity term, ``X = dd + dD + dY``.
+* **Method-NM**, **NM4**, **NM3** (beyond the thesis): Method-III with a uniqueness term
+  that lets a feature stay unmatched (:mod:`ismb_lab.network.hopfield`).
 
-Each method describes itself: its name, the thesis section it comes from, its
-genes (:class:`Gene`, with the GA's search bounds), its default parameters and
-a one-line description.  :func:`register_method` adds a method, and the command
-line, :func:`ismb_lab.tuning.fitness.tune` and the widgets list whatever is registered.
-
-The parameters, and the genes the GA searches with their bounds, are in
-:mod:`ismb_lab.network.params`.
+:func:`register_method` adds a method; the command line, the GA and the widgets list
+whatever is registered.
 """
 
 from __future__ import annotations
@@ -60,24 +39,16 @@ __all__ = ["BATCHED", "all_genes", "Method", "MethodI", "MethodII", "MethodIII",
 
 @dataclass(frozen=True, eq=False)
 class Problem:
-    """The parameter-free ingredients of one image pair's energy.
-
-    Everything that does not depend on ``theta``/``lambda`` is computed once
-    here, so a GA can build thousands of networks cheaply.
+    """The parameter-free ingredients of one image pair's energy, computed once for a GA.
 
     Attributes
     ----------
-    left_xy : (N_l, 2) ndarray
-    right_xy : (N_r, 2) ndarray
-        Feature points ``(x, y)``.
     dissimilarity : (N_l, N_r) ndarray
         ``M_ik`` (3-8).
     rows, cols : (n,) int ndarray
         Candidate neurons ``(i, k)``, sorted.
     pairs : NeuronPairs
         Interacting neuron pairs with their ``dd``, ``dD``, ``dY``.
-    topology : Topology
-        The same neurons and pairs, laid out for the network.
     """
 
     left_xy: np.ndarray
@@ -120,20 +91,9 @@ def build_problem(left_xy, right_xy, dissimilarity, *, shift: float = 20.0,
                   radius: float = 20.0, neighbourhood: str = "box") -> Problem:
     """Candidate neurons and their interacting pairs for one image pair.
 
-    Parameters
-    ----------
-    left_xy, right_xy : (N, 2) array_like
-        Feature points.
-    dissimilarity : (N_l, N_r) array_like
-        ``M_ik`` from :func:`ismb_lab.network.similarity.mean_abs_difference`.
-    shift, window_height, window_width : float
-        The candidate window (§3.3), see :func:`ismb_lab.network.similarity.candidate_mask`.
-    radius, neighbourhood
-        Which left features are neighbours, see :func:`ismb_lab.network.compatibility.left_neighbours`.
-
-    Returns
-    -------
-    problem : Problem
+    `dissimilarity` is ``M_ik`` (:func:`~ismb_lab.network.similarity.mean_abs_difference`);
+    the window options are :func:`~ismb_lab.network.similarity.candidate_mask`'s, and
+    `radius` and `neighbourhood` those of :func:`~ismb_lab.network.compatibility.left_neighbours`.
 
     Examples
     --------
@@ -157,10 +117,7 @@ def build_problem(left_xy, right_xy, dissimilarity, *, shift: float = 20.0,
 
 
 class Method:
-    """An energy recipe: how ``S`` and ``X`` are formed, and any post-processing.
-
-    Use :func:`get_method` to obtain one by name.
-    """
+    """An energy recipe: how ``S`` and ``X`` are formed, and any post-processing (see :func:`get_method`)."""
 
     name: str = ""
     section: str = ""
@@ -207,13 +164,10 @@ class Method:
         return kept
 
     def _columns(self, problem: Problem, table: dict, thesis: bool):
-        """For a GA's batch of parameter sets: ``(S, C, self_C, match_bias)`` of the networks
-        :meth:`network` builds from each row of `table` (an ``(m,)`` float array per
-        :class:`Params` field), as ``(m, n)``, ``(m, P)``, ``(m, n)`` and ``(m,)`` arrays;
-        ``self_C`` only for the thesis rule, else None.  The transfer functions take the
-        parameters as columns: the same operations on the same numbers, element by element.
-        Only the built-in methods have it (:data:`BATCHED`); a subclass that changes how
-        the network is built is scored one parameter set at a time."""
+        """``(S, C, self_C, match_bias)`` of the networks :meth:`network` builds from each row
+        of `table` (an ``(m,)`` array per :class:`Params` field), for a GA's batch; ``self_C``
+        only for the thesis rule.  The same operations on the same numbers, element by
+        element.  Only the built-in methods (:data:`BATCHED`) use it."""
         pair_x, self_x = self._measures(problem)
         theta_c, lambda_c = table["theta_c"][:, None], table["lambda_c"][:, None]
         c = transfer(pair_x, theta_c, lambda_c)
@@ -227,10 +181,7 @@ class Method:
         return np.full(len(table["theta_c"]), 2.0)   # Network's default, which network() keeps
 
     def postprocess(self, problem: Problem, on: np.ndarray) -> np.ndarray:
-        """Which of the neurons that are on (indices `on`) stay matches; all (`on` itself), by default.
-
-        :func:`ismb_lab.network.solvers.to_matches` calls it.
-        """
+        """Which of the neurons that are on (indices `on`) stay matches; `on` itself by default."""
         return on
 
     def __repr__(self) -> str:
@@ -238,13 +189,10 @@ class Method:
 
 
 class MethodI(Method):
-    """Method-I, reconstructed from the thesis' description of Achour & Mahiddine (2002).
+    """Method-I: ``X = dd + dD + (M_ik + M_jl) / 2``, ``S = 0``, two parameters.
 
-    ``X = dd + dD + (M_ik + M_jl) / 2``: the similarity acts only through
-    neighbouring pairs; ``S = 0``; two parameters ``(theta_c, lambda_c)``.
-    Afterwards, a feature matched more than once keeps only its match with the
-    smallest absolute vertical disparity ``|y_k - y_i|`` (left features first,
-    then right features; ties go to the lower index).
+    Afterwards a feature matched more than once keeps only its match of least ``|y_k - y_i|``
+    (left features first, then right; ties go to the lower index).
     """
 
     name, section, genes = "I", "§3.3, §5.2.1 (Achour & Mahiddine 2002)", (THETA_C, LAMBDA_C)
@@ -300,17 +248,10 @@ class MethodIII(Method):
 
 
 class MethodNM(MethodIII):
-    """Method-NM: Method-III's ``S`` and ``C`` with a no-match-aware uniqueness term.
+    """Method-NM: Method-III's ``S`` and ``C`` with ``(h - r)^2``, ``h = 1/2 + beta / 4``, for ``(1 - r)^2``.
 
-    The energy is (3-15) with ``(1 - r)^2`` replaced by ``(h - r)^2``, where
-    ``h = 1/2 + beta / 4`` and ``beta`` is the fifth gene ``params.match_bias``.
-    Its exact Hopfield form has ``W = 2C`` between neighbours, ``W = -2`` on a
-    shared row or column, no self-weight, and ``I = S + beta`` (Method-III:
-    ``I = S + 2``), so every asynchronous flip changes the energy by exactly
-    ``-u dy`` (:mod:`ismb_lab.network.hopfield`).  With ``beta = 2`` it is Method-III;
-    with ``beta`` near 0 an isolated neuron turns on only when ``S + beta > 0``,
-    i.e. when its windows look alike, and a neuron with support from compatible
-    neighbours when ``S + beta + 2 sum C y > 0``: no match is an answer.
+    ``beta`` is the fifth gene ``params.match_bias``: 2 is Method-III, near 0 no match is an
+    answer (:mod:`ismb_lab.network.hopfield`).
 
     Examples
     --------
@@ -341,16 +282,13 @@ class MethodNM(MethodIII):
 
 
 class MethodNM4(MethodNM):
-    """Method-NM with ``beta = 0`` fixed: "at most one match" and four genes.
+    """Method-NM with ``beta = 0`` fixed ("at most one match") and Method-III's four genes.
 
-    ``h = 1/2``: no match and one match cost the same, two cost more, so a
-    neuron stays on only when ``S`` and the compatible neighbours pay for it.
-    The genes are Method-III's; a ``match_bias`` in `params` is ignored.
+    One gene less for the GA to overfit a pair's count of unmatched corners with.
 
     Examples
     --------
-    >>> p = build_problem([[100, 50], [110, 50]], [[80, 51], [90, 51]], [[2.0, 40.0], [40.0, 60.0]])
-    >>> net = get_method("NM4").network(p, Params())
+    >>> net = get_method("NM4").network(build_problem([[100, 50]], [[80, 51]], [[2.0]]), Params())
     >>> float(net.match_bias), get_method("NM4").gene_names
     (0.0, ('theta_c', 'theta_s', 'lambda_c', 'lambda_s'))
     """
@@ -371,14 +309,9 @@ class MethodNM4(MethodNM):
 
 
 class MethodNM3(MethodNM4):
-    """Method-NM4 with ``theta_s`` set from each image pair: three genes.
+    """Method-NM4 with ``theta_s`` the pair's :attr:`Problem.no_match_cut`: three genes.
 
-    ``theta_s`` is the pair's no-match cut, half the median of ``M`` over all
-    feature pairs (:attr:`Problem.no_match_cut`, the cut the peer matchers use):
-    the dissimilarity of a typical wrong match in this pair's own contrast.  A
-    camera's gain or a scene's texture moves ``M``, and the cut moves with it;
-    the GA fits ``theta_c``, ``lambda_c`` and ``lambda_s``, and a ``theta_s`` in
-    `params` is not used.
+    The cut moves with a camera's gain or a scene's texture; a ``theta_s`` in `params` is unused.
 
     Examples
     --------
@@ -407,10 +340,9 @@ _METHODS: dict[str, Method] = {}
 
 
 def register_method(method: Method) -> Method:
-    """Add a method to the registry that the command line, the GA and the widgets read.
+    """Add a method to the registry (a new name, distinct genes, Params defaults).
 
-    Its name must be new, its genes distinct fields of :class:`Params` and its
-    defaults a :class:`Params`.  Returns `method`, so it can decorate an instance.
+    Returns `method`.
 
     Examples
     --------
@@ -489,9 +421,7 @@ class _Defaults(Mapping):
         return "THESIS_PARAMS(" + ", ".join(f"{k}={v!r}" for k, v in self.items()) + ")"
 
 
-#: The parameters the thesis' GA found (§5.2.1 for Method-I, §5.2.2 for II and III), read
-#: from each method's ``defaults``.  Method-I's theta_s and lambda_s are unused
-#: placeholders; Method-NM's entry is a neutral start for its GA rather than a fitted result.
+#: Each method's ``defaults``: the thesis' GA results (§5.2.1, §5.2.2) for I, II and III.
 THESIS_PARAMS = _Defaults()
 
 for _method in (MethodI(), MethodII(), MethodIII(), MethodNM(), MethodNM4(), MethodNM3()):
@@ -500,11 +430,13 @@ for _method in (MethodI(), MethodII(), MethodIII(), MethodNM(), MethodNM4(), Met
 #: The methods whose networks :meth:`Method._columns` builds for a batch of parameter sets.
 BATCHED = (MethodI, MethodII, MethodIII, MethodNM, MethodNM4, MethodNM3)
 
-#: The method used wherever none is named: the thesis' own, Method-III.  The one place
-#: the default is declared; every function and command refers to this name.
+#: The method used wherever none is named: the thesis' own.
 DEFAULT_METHOD = MethodIII.name
+
+
 def get_method(name) -> Method:
-    """Look a method up by name: ``"I"``, ``"II"``, ``"III"``, ``"NM"``, ``"NM4"`` or ``"NM3"`` (a ``Method`` passes through).
+    """Look a method up by name (a ``Method`` passes through).
+
 
     Examples
     --------
@@ -522,8 +454,7 @@ def get_method(name) -> Method:
 
 
 def save_params(path, method, params: Params, **extra) -> Path:
-    """Write ``{"method": ..., "params": {...}, **extra}`` atomically: the params file that
-    ``ismb-lab tune`` writes and ``ismb-lab match --params-file`` reads.
+    """Write ``{"method": ..., "params": {...}, **extra}`` atomically (the file of ``ismb-lab tune``).
 
     Examples
     --------
@@ -544,10 +475,8 @@ def save_params(path, method, params: Params, **extra) -> Path:
 def params_of(data: dict, path, method: str | None = None,
               owner: str = "params_of") -> tuple[str | None, Params]:
     """The method (None if `data` names none) and the parameters of a params file's object
-    `data`, read from `path`.  Values it leaves out take the defaults of its method, else of
-    `method`, else of :data:`DEFAULT_METHOD`; unknown names and values out of range are errors
-    that name the file.  The whole recipe of a params file is read by
-    :func:`ismb_lab.matching.recipe.load_recipe`."""
+    `data`, read from `path`.  Missing values take the defaults of its method, else of
+    `method`, else of :data:`DEFAULT_METHOD`; errors name the file."""
     named = data.get("method")
     if named is not None:
         named = get_method(named).name if isinstance(named, str) and named in _METHODS else None

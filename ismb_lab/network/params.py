@@ -1,34 +1,13 @@
 """The energy's parameters and the genes a GA searches (thesis (3-10), (3-13), ch. 4).
 
-:class:`Params` holds the tolerances ``theta`` and steepnesses ``lambda`` of the
-transfer functions S (3-10) and C (3-13), and Method-NM's match bias.  A
-:class:`Gene` is one of them as the GA sees it: a name, search bounds, what it
-means and its symbol.  Each method lists its genes (:mod:`ismb_lab.network.methods`).
+Gene bounds: ``theta_c`` in [0, 60] px (correct neighbour pairs have ``X`` of a few pixels,
+wrong ones tens; the thesis found 7.45 to 41.57); ``theta_s`` in [0, 60] grey levels (on the
+synthetic scenes ``M`` is about 5 for true matches, 45 for false ones); ``lambda_c`` and
+``lambda_s`` in [0.05, 10] (almost flat to a step one pixel wide); ``match_bias`` in [-2, 2]
+(``h = 1/2 + beta / 4`` from 0 through "at most one" to "exactly one").
 
-Gene bounds
------------
-* ``theta_c`` in [0, 60] px: ``X`` is a sum of pixel differences.  Correct pairs of
-  neighbours have ``X`` of a few pixels and wrong ones tens (on the synthetic
-  scenes: median 0 against 22); 60 px already calls almost everything
-  compatible.  The thesis' values, 7.45 to 41.57, lie inside.
-* ``theta_s`` in [0, 60] grey levels: ``M`` of true matches is about 5, of false
-  ones about 45 on the synthetic scenes.
-* ``lambda_c``, ``lambda_s`` in [0.05, 10]: from an almost flat transfer function to
-  a step one pixel wide (the thesis found 1.16 to 8.89).
-* ``match_bias`` (Method-NM's fifth gene) in [-2, 2]: the preferred number of
-  matches per feature ``h = 1/2 + beta / 4`` runs from 0 (a match must pay 2 from
-  ``S`` and ``C``) through 1/2 ("at most one", ``beta = 0``) to 1 (exactly one: the
-  thesis).  ``S`` is in [-1, 1] and one compatible neighbour adds up to 2, so a
-  wider range only repeats the ends.
-
-Parameter range
----------------
-Outside a GA's search the parameters take any value in a range that still means something,
-checked when a :class:`Params` is made: ``theta_c`` and ``theta_s`` in [0, :data:`MAX_THETA`]
-(``M`` is at most 510 grey levels, and a tolerance of 1000 px calls every pair
-compatible), ``lambda_c`` and ``lambda_s`` in (0, :data:`MAX_LAMBDA`] (at 1000 the transfer
-function is a step 0.002 wide), and ``match_bias`` in [-:data:`MAX_BIAS`, :data:`MAX_BIAS`]
-(50 times the GA's range, which already spans "no match" to "exactly one").  Beyond them the
+Outside a GA, :class:`Params` takes thetas in [0, :data:`MAX_THETA`], lambdas in
+(0, :data:`MAX_LAMBDA`] and ``|match_bias|`` up to :data:`MAX_BIAS`: beyond them the
 arithmetic overflows and the matches are garbage.
 """
 
@@ -41,7 +20,7 @@ from .._core.validation import ParameterError, ParameterTypeError, check_choice,
 __all__ = ["LAMBDA_C", "LAMBDA_S", "MATCH_BIAS", "MAX_BIAS", "MAX_LAMBDA", "MAX_THETA", "THETA_C", "THETA_S", "Gene",
            "Params"]
 
-#: Largest tolerance ``theta_c`` or ``theta_s`` (see "Parameter range").
+#: Largest tolerance ``theta_c`` or ``theta_s``.
 MAX_THETA = 1000.0
 #: Largest steepness ``lambda_c`` or ``lambda_s``.
 MAX_LAMBDA = 1000.0
@@ -51,13 +30,11 @@ MAX_BIAS = 100.0
 
 @dataclass(frozen=True, repr=False)
 class Params:
-    """The parameters of the energy: tolerances ``theta``, steepnesses ``lambda``
-    and, for Method-NM only, a match bias.
+    """The parameters of the energy: tolerances ``theta``, steepnesses ``lambda`` and, for
+    Method-NM only, a match bias.
 
-    The defaults are the thesis' Method-III values ``[17.97, 24.02, 6.37, 2.2]``
-    (§5.2.2), found by its GA on its own images.  Method-I reads only
-    ``theta_c`` and ``lambda_c``.  ``match_bias`` (``beta``) is optional: it is None unless set, and then left out of ``repr`` and
-    :meth:`to_dict`, so the four-parameter methods see exactly the thesis' record.
+    The defaults are the thesis' Method-III values (§5.2.2).  ``match_bias`` is None unless
+    set, and then left out of ``repr`` and :meth:`to_dict`.
 
     Examples
     --------
@@ -115,18 +92,8 @@ class Params:
 
 @dataclass(frozen=True)
 class Gene:
-    """One parameter a method's GA searches, with its search bounds.
-
-    Attributes
-    ----------
-    name : str
-        A field of :class:`Params`.
-    low, high : float
-        The GA's search box (see "Gene bounds" in this module's docstring).
-    meaning : str
-        What the gene does, for help texts.
-    symbol : str
-        Its symbol in the thesis, for slider labels.
+    """One parameter a method's GA searches: a :class:`Params` field, its search bounds, what
+    it means (for help texts) and its thesis symbol (for slider labels).
 
     Examples
     --------

@@ -1,9 +1,7 @@
 """Similarity of feature points and the candidate window (thesis 3-8 ... 3-10, §3.3).
 
-``M[i, k]`` is the mean absolute difference of the zero-mean grey windows around
-left feature ``i`` and right feature ``k`` (3-8, 3-9); the transfer function
-(3-10) maps it to ``S[i, k]`` in ``[-1, 1]``.  The same transfer function maps the
-compatibility measure ``X`` to ``C`` (3-13).
+``M[i, k]`` is the mean absolute difference of zero-mean grey windows (3-8, 3-9); the
+transfer function (3-10) maps it to ``S`` in ``[-1, 1]``, and the compatibility ``X`` to ``C`` (3-13).
 """
 
 from __future__ import annotations
@@ -26,24 +24,10 @@ MAX_CANDIDATE_PAIRS = 10**8
 
 
 def transfer(x, theta: float, lam: float) -> np.ndarray:
-    """The thesis' transfer function ``2 / (1 + exp(lam * (x - theta))) - 1``.
+    """The thesis' transfer function ``2 / (1 + exp(lam * (x - theta))) - 1`` (3-10, 3-13).
 
-    Used for similarity (3-10) and compatibility (3-13).  It is evaluated as the
-    identical ``-tanh(lam * (x - theta) / 2)``, which never overflows.
-
-    Parameters
-    ----------
-    x : array_like
-        Dissimilarity values (``M`` or ``X``); small means good.
-    theta : float
-        Tolerance: the value of `x` where the output crosses zero.
-    lam : float
-        Steepness: above 1 the output switches abruptly around `theta` (Fig. 3.3).
-
-    Returns
-    -------
-    out : ndarray
-        Values in ``[-1, 1]``: near 1 for ``x << theta``, near -1 for ``x >> theta``.
+    Evaluated as the identical ``-tanh(lam * (x - theta) / 2)``, which never overflows.
+    `theta` is the value of `x` where the output crosses zero, `lam` the steepness (Fig. 3.3).
 
     Examples
     --------
@@ -75,28 +59,16 @@ def _finite(value, name: str):
 
 
 def patches(image: np.ndarray, xy, size: int) -> np.ndarray:
-    """Zero-mean square grey windows centred on points (3-9).
+    """Zero-mean square grey windows ``V = I - mean(I)`` centred on points (3-9).
 
-    Parameters
-    ----------
-    image : (H, W) ndarray
-        Grey image.
-    xy : (N, 2) array_like
-        Points ``(x, y)``; they are rounded to the nearest pixel.
-    size : int
-        Odd window side length.  Windows that cross the border are completed by
-        mirroring the image (OpenCV's ``BORDER_REFLECT_101``), so `size` is at most
-        ``2 min(H, W) - 1``; and the windows hold at most :data:`MAX_WINDOW_VALUES` values.
-
-    Returns
-    -------
-    windows : (N, size, size) ndarray
-        ``V = I - mean(I)`` over each window.
+    Points ``(x, y)`` are rounded to the nearest pixel.  The odd `size` is at most
+    ``2 min(H, W) - 1``, as windows that cross the border are completed by mirroring
+    (``BORDER_REFLECT_101``); the ``(N, size, size)`` result holds at most
+    :data:`MAX_WINDOW_VALUES` values.
 
     Examples
     --------
-    >>> img = np.arange(25.0).reshape(5, 5)
-    >>> patches(img, [[2, 2]], 3)[0]
+    >>> patches(np.arange(25.0).reshape(5, 5), [[2, 2]], 3)[0]
     array([[-6., -5., -4.],
            [-1.,  0.,  1.],
            [ 4.,  5.,  6.]])
@@ -128,35 +100,15 @@ def patches(image: np.ndarray, xy, size: int) -> np.ndarray:
 
 def mean_abs_difference(left: np.ndarray, right: np.ndarray, left_xy, right_xy,
                         size: int = 11) -> np.ndarray:
-    """The dissimilarity ``M[i, k]`` of every left/right feature pair (3-8).
+    """The dissimilarity ``M[i, k]`` of every left/right feature pair (3-8), in grey levels.
 
-    Parameters
-    ----------
-    left, right : (H, W) ndarray
-        The grey image pair.
-    left_xy : (N_l, 2) array_like
-    right_xy : (N_r, 2) array_like
-        Feature points ``(x, y)``.
-    size : int
-        Odd side of the square window (the thesis does not state it).
-
-    Returns
-    -------
-    M : (N_l, N_r) ndarray
-        Mean absolute difference of the zero-mean windows, in grey levels.
-
-    Notes
-    -----
-    ``M`` is, bit for bit, ``np.abs(lp[:, None] - rp[None]).mean(axis=2)`` of the
-    flattened windows ``lp`` and ``rp``.  That expression holds an
-    ``N_l x N_r x size²`` array: 968 MB for 1,000 corners per image.  The compiled
-    loop here needs one window's worth of memory and repeats NumPy's pairwise
-    summation, so the two agree exactly (``tests/test_methods.py`` checks it).
+    `size` is the odd window side (the thesis does not state it).  ``M`` equals, bit for
+    bit, ``np.abs(lp[:, None] - rp[None]).mean(axis=2)`` of the flattened windows, without
+    that ``N_l x N_r x size²`` array: the compiled loop repeats NumPy's pairwise summation.
 
     Examples
     --------
-    >>> rng = np.random.default_rng(0)
-    >>> img = rng.uniform(0, 255, (40, 40))
+    >>> img = np.random.default_rng(0).uniform(0, 255, (40, 40))
     >>> M = mean_abs_difference(img, img + 30, [[10, 10], [20, 25]], [[10, 10], [20, 25]], 7)
     >>> np.diag(M)            # a constant brightness offset does not matter
     array([0., 0.])
@@ -194,10 +146,9 @@ def _block_sum(a, lo, n):
 
 @numba.njit(cache=True)
 def _pairwise_sum(a, n):
-    """NumPy's pairwise summation of ``a[:n]``: blocks of at most 128 terms, and above that
-    the sum of two halves (the first a multiple of 8 long), so that a compiled mean equals
-    ``ndarray.mean`` exactly.  The recursion runs on an explicit stack (numba's cache does
-    not keep recursive functions)."""
+    """NumPy's pairwise summation of ``a[:n]``: blocks of at most 128 terms, above that the
+    sum of two halves (the first a multiple of 8 long).  On an explicit stack, as numba's
+    cache does not keep recursive functions."""
     if n <= 128:
         return _block_sum(a, 0, n)
     lo = np.empty(64, dtype=np.int64)
@@ -247,14 +198,10 @@ def _mean_abs_difference(lp, rp):
 
 @numba.njit(cache=True)
 def _mean_abs_difference_small(lp, rp):
-    """``M`` for windows of at most 128 pixels, summed as :func:`_block_sum` sums: eight
-    partial sums, one per pixel index modulo 8, then the rest.
+    """``M`` for windows of at most 128 pixels, with :func:`_block_sum`'s additions per pair.
 
-    Each left window is compared with every right window at once, pixel by pixel: the
-    right windows are stored pixel-major, so the innermost loop runs over right windows
-    in a row of memory and compiles to vector instructions.  Per pair the additions are
-    the same, in the same order (``0.0 + v`` is ``v`` for the first term).  One pair at a
-    time, with its eight sums in registers, had taken 82 ms at 1,000 x 1,000 corners.
+    Right windows are stored pixel-major, so the innermost loop runs over right windows in
+    a row of memory and vectorises.
     """
     n_left, d = lp.shape
     n_right = rp.shape[0]
@@ -287,21 +234,9 @@ def _mean_abs_difference_small(lp, rp):
 def no_match_cut(dissimilarity) -> float:
     """Half the median of ``M`` over all feature pairs: the dissimilarity a match must beat.
 
-    Nearly all feature pairs are unrelated, so the median of ``M`` is the
-    dissimilarity of a typical wrong match in this image pair's own contrast; a
-    match must be clearly better than that.  On the synthetic scenes it is 19-21
-    grey levels (true matches 3-11), near the thesis' ``theta_s = 24``.  The peer
-    matchers' no-match cost, and Method-NM3's ``theta_s``.
-
-    Parameters
-    ----------
-    dissimilarity : (N_l, N_r) array_like
-        ``M`` of every feature pair (:func:`mean_abs_difference`).
-
-    Returns
-    -------
-    cut : float
-        Positive; 1.0 when there are no feature pairs.
+    Nearly all pairs are unrelated, so the median is a typical wrong match in this pair's
+    own contrast.  The peer matchers' no-match cost, and Method-NM3's ``theta_s``; 1.0
+    when there are no pairs.
 
     Examples
     --------
@@ -317,24 +252,8 @@ def candidate_mask(left_xy, right_xy, *, shift: float = 20.0, height: float = 30
     """Which right features are candidates for each left feature (§3.3).
 
     Right feature ``k`` is a candidate of left feature ``i`` when it lies in the
-    ``height x width`` window centred at ``(x_i - shift, y_i)``, borders included:
-    ``|x_k - (x_i - shift)| <= width / 2`` and ``|y_k - y_i| <= height / 2``.
-    The thesis uses a 30 x 40 window and ``shift = 20`` px for its webcams.
-
-    Parameters
-    ----------
-    left_xy : (N_l, 2) array_like
-    right_xy : (N_r, 2) array_like
-    shift : float
-        Expected horizontal disparity, in pixels.
-    height, width : float
-        Window size in pixels.
-
-    Returns
-    -------
-    mask : (N_l, N_r) bool ndarray
-        ``True`` where the neuron ``y_ik`` is a candidate (it starts at 1).  At most
-        :data:`MAX_CANDIDATE_PAIRS` entries: more points are refused before any work.
+    ``height x width`` window centred at ``(x_i - shift, y_i)``, borders included (the
+    thesis: 30 x 40 px, ``shift = 20``).  At most :data:`MAX_CANDIDATE_PAIRS` pairs.
 
     Examples
     --------

@@ -1,30 +1,12 @@
 """How a network's final state is found, and how a final state becomes matches.
 
-Four solvers minimise the same energy (3-15), each a frozen dataclass of its own
-options:
-
-* :class:`NetworkSolver` (``"network"``): the thesis' discrete Hopfield network
-  (:func:`ismb_lab.network.dynamics.run`), asynchronous flips from "all candidates on" to a
-  fixed point, with its stop rule, update rule and kernel.
-* :class:`AnnealSolver` (``"anneal"``): mean-field annealing
-  (:func:`ismb_lab.network.annealing.anneal`) with its cooling schedule (``settle`` > 0 stops it
-  once the state has settled), the analog network of the thesis' future work, polished by
-  the discrete network.
-* :class:`ExactSolver` (``"exact"``): the global minimum as a mixed-integer programme
-  (:func:`ismb_lab.network.exact.milp_minimum`).  It ignores the seed, and refuses a problem it
-  cannot solve within its time limit.
-* :class:`AssignSolver` (``"assign"``, beyond the thesis): the discrete network started
-  not from "all on" but from the one-to-one assignment of largest total similarity
-  ``S`` (only pairs with ``S > 0``, :func:`similarity_assignment`); the compatibility
-  and uniqueness terms then add and remove matches by exact descent.  The peers'
-  Hungarian assignment (:func:`ismb_lab.matching.peers.hungarian`) is the same idea on ``M``
-  with a no-match cost.
-
-:data:`SOLVERS` is the one registry of them (each with its default options), which
-the command line, the library and the widgets read; :func:`register_solver` adds
-one.  A name is resolved once, at the boundary, by :func:`get_solver`; after that a
-solver travels as the object.  :func:`to_matches` is the one way from a final state
-to matched ``(i, k)`` feature pairs, including a method's post-processing.
+Four solvers minimise the same energy (3-15), each a frozen dataclass of its own options:
+``"network"``, the thesis' discrete network from "all on"; ``"anneal"``, mean-field
+annealing polished by the discrete network; ``"exact"``, the global minimum as a
+mixed-integer programme (it ignores the seed); and ``"assign"`` (beyond the thesis), the
+discrete network started from the assignment of largest total similarity.
+:data:`SOLVERS` is their registry; :func:`to_matches` is the one way from a final state to
+matched ``(i, k)`` feature pairs.
 
 >>> from ismb_lab.network.hopfield import Network
 >>> net = Network.from_arrays(1, 2, rows=[0, 0], cols=[0, 1], similarity=[0.5, -0.7],
@@ -60,28 +42,11 @@ NETWORK, ANNEAL, EXACT, ASSIGN = "network", "anneal", "exact", "assign"
 
 @dataclass(frozen=True, eq=False)
 class Solution:
-    """A solver's final state.
+    """A solver's final state, before any post-processing.
 
-    Attributes
-    ----------
-    state : (n,) uint8 ndarray
-        Outputs of the candidate neurons, before any post-processing.
-    stop_rule : str
-        What stopped the discrete network: ``"sweep"``, ``"stall"`` or
-        ``"max_attempts"`` (annealing: its polishing run's ``"sweep"``); ``"minimum"``
-        for a solver that proves its state a global minimum.
-    attempts : int
-        Update attempts of the discrete network (annealing: 0, its polishing run's are
-        not counted; exact: 0).
-    net : Network
-        The network solved.
-    converged : bool
-        False only when the network hit its attempt limit.
-    solver : str
-        The name of the solver that found the state.
-    energy : float
-        Energy (3-15) of `state` (:func:`ismb_lab.network.hopfield.energy`), computed when first
-        read: a GA solves thousands of networks and reads none.
+    ``stop_rule`` is what stopped the discrete network (``"sweep"``, ``"stall"`` or
+    ``"max_attempts"``), or ``"minimum"`` for a proven global minimum; ``attempts`` are the
+    discrete network's (0 for annealing and exact); ``energy`` (3-15) is computed when first read.
     """
 
     state: np.ndarray
@@ -109,10 +74,9 @@ class Solution:
 class Solver:
     """One way to minimise the energy, configured: the base of every solver.
 
-    A subclass sets the class attributes `name`, `description` and `seeded` (whether
-    the seed matters), declares its options as dataclass fields with defaults, checks
-    them in ``__post_init__`` and implements :meth:`solve`.  :func:`register_solver`
-    makes it known by name.
+    A subclass sets `name`, `description` and `seeded` (whether the seed matters), declares
+    its options as dataclass fields with defaults, checks them in ``__post_init__`` and
+    implements :meth:`solve`.
     """
 
     name: ClassVar[str] = ""
@@ -134,8 +98,7 @@ class Solver:
     def configured(self, owner: str = "Solver.configured", **options) -> "Solver":
         """A copy with some options changed; an option this solver does not have is an error.
 
-        >>> NETWORK_SOLVER = SOLVERS["network"]
-        >>> NETWORK_SOLVER.configured(stop_rule="stall").stop_rule
+        >>> SOLVERS["network"].configured(stop_rule="stall").stop_rule
         'stall'
         >>> SOLVERS["anneal"].configured(stop_rule="stall")
         Traceback (most recent call last):
@@ -173,8 +136,7 @@ class NetworkSolver(Solver):
 
 @dataclass(frozen=True)
 class AnnealSolver(Solver):
-    """Mean-field annealing with its schedule (:func:`ismb_lab.network.annealing.anneal`, whose
-    arguments the fields are; ``settle=0`` runs every temperature)."""
+    """Mean-field annealing (:func:`ismb_lab.network.annealing.anneal`, whose arguments the fields are)."""
 
     name: ClassVar[str] = ANNEAL
     description: ClassVar[str] = "mean-field annealing, then the discrete network from the rounded state"
@@ -213,11 +175,7 @@ class ExactSolver(Solver):
 
 
 def similarity_assignment(net: Network) -> np.ndarray:
-    """The state of the one-to-one assignment of largest total similarity.
-
-    Among candidate neurons with ``S > 0``, at most one per left and per right
-    feature, chosen to maximise the sum of ``S`` (:func:`scipy.optimize.linear_sum_assignment`);
-    the others are off.  It ignores the compatibility terms.
+    """The state of the one-to-one assignment of largest total ``S``, among neurons with ``S > 0``.
 
     Examples
     --------
@@ -262,8 +220,7 @@ DEFAULT_SOLVER = NETWORK
 
 
 def register_solver(solver: Solver) -> Solver:
-    """Add a solver, with the options it has, to the registry that the command line, the
-    protocol, the GA and the widgets read.  Returns `solver`.
+    """Add a solver to the registry that the command line, the GA and the widgets read.
 
     Examples
     --------
@@ -309,10 +266,8 @@ def solver_names() -> tuple[str, ...]:
 
 
 def get_solver(solver, owner: str = "get_solver", parameter: str = "solver", **options) -> Solver:
-    """Resolve a solver once: a name (with its default options) or a :class:`Solver` object,
-    with some `options` changed, checked as `owner`'s argument `parameter`.
-
-    Options given as None keep the solver's own.
+    """Resolve a solver once: a name or a :class:`Solver`, with some `options` changed (None
+    keeps the solver's own), checked as `owner`'s argument `parameter`.
 
     >>> get_solver("annealing")
     Traceback (most recent call last):
@@ -329,25 +284,9 @@ def get_solver(solver, owner: str = "get_solver", parameter: str = "solver", **o
 
 
 def solve(net: Network, solver=DEFAULT_SOLVER, *, seed: int = 0, owner: str = "solve", **options) -> Solution:
-    """Minimise `net`'s energy with one of :data:`SOLVERS`.
-
-    Parameters
-    ----------
-    net : Network
-    solver : str or Solver
-        A name in :data:`SOLVERS`, or a configured solver.
-    seed : int
-        Update-order (and annealing) seed; the exact solver ignores it.
-    owner : str
-        The function named in error messages.
-    **options
-        The solver's own options (e.g. ``stop_rule``, ``rule`` and ``kernel`` of the
-        ``"network"`` and ``"assign"`` solvers, ``cooling`` of ``"anneal"``).
-
-    Returns
-    -------
-    Solution
-    """
+    """Minimise `net`'s energy with a solver of :data:`SOLVERS` (a name or a configured
+    :class:`Solver`) and its `options`; `seed` is the update-order (and annealing) seed, and
+    `owner` the function named in error messages."""
     chosen = solver if isinstance(solver, Solver) and not options else get_solver(solver, owner, **options)
     if not isinstance(net, Network):
         raise ParameterTypeError(message("net", owner, "a Network", net))
@@ -355,7 +294,6 @@ def solve(net: Network, solver=DEFAULT_SOLVER, *, seed: int = 0, owner: str = "s
     if not (type(seed) is int and seed >= 0):
         check_number(seed, "seed", owner, low=0, integer=True)
     return chosen.solve(net, seed)
-
 
 
 class Matches(NamedTuple):
@@ -366,11 +304,8 @@ class Matches(NamedTuple):
 
 
 def matched_neurons(neurons, state, method=None) -> np.ndarray:
-    """Indices of the neurons that are matches in a final state, sorted: those that are on,
-    less any that `method`'s :meth:`~ismb_lab.network.methods.Method.postprocess` drops.
-
-    :func:`to_matches` turns them into feature pairs; a GA that only counts them stops here.
-    The arguments are :func:`to_matches`'.
+    """Indices of the neurons that are matches in a final state, sorted: those on, less any
+    that `method`'s :meth:`~ismb_lab.network.methods.Method.postprocess` drops.
 
     Examples
     --------
@@ -387,26 +322,11 @@ def matched_neurons(neurons, state, method=None) -> np.ndarray:
 def one_match_per_corner(problem, on, key=None) -> np.ndarray:
     """Of the matched neurons `on`, at most one per left and per right corner: the most similar.
 
-    The neurons are taken by increasing ``M`` (or `key`; ties by index), and one is kept
-    when neither of its corners has a kept match yet.  The "at most one" term of Methods NM,
-    NM4 and NM3 makes a second match costly, but where two wrong matches support each
-    other a solver can leave both on; this step removes them after solving.  It is a
-    decoding option for testing (``match(..., one_to_one=True)``,
-    ``ismb-lab match --one-to-one``); the GA's fitness does not apply it.
-
-    Parameters
-    ----------
-    problem : Problem
-        Anything with ``rows``, ``cols`` and ``neuron_dissimilarity``.
-    on : (m,) int array_like
-        Indices of the matched neurons (:func:`matched_neurons`).
-    key : (m,) float array_like, optional
-        The order in which they are taken, smallest first (default: their ``M``).
-
-    Returns
-    -------
-    kept : (m',) int ndarray
-        Sorted.
+    Neurons are taken by increasing ``M`` (or `key`; ties by index), and kept when neither
+    corner has a kept match yet: where two wrong matches support each other a solver can
+    leave both on.  A decoding option (``match(..., one_to_one=True)``); the GA's fitness
+    does not apply it.  `problem` is anything with ``rows``, ``cols`` and
+    ``neuron_dissimilarity``.
 
     Examples
     --------
@@ -437,23 +357,11 @@ def one_match_per_corner(problem, on, key=None) -> np.ndarray:
 
 
 def to_matches(neurons, state, method=None) -> Matches:
-    """The matched ``(i, k)`` feature pairs of a final state: the one place this is done.
+    """The matched ``(i, k)`` feature pairs of a final state, sorted by neuron, and the
+    post-processed state: the one place this is done.
 
-    Parameters
-    ----------
-    neurons : Problem, Network or Topology
-        Anything with the candidate neurons' ``rows`` and ``cols``.
-    state : (n,) array_like of 0/1
-        Outputs of the candidate neurons.
-    method : Method, optional
-        Its :meth:`~ismb_lab.network.methods.Method.postprocess` decides which of the
-        neurons that are on stay matches (Method-I drops multiple matches).
-
-    Returns
-    -------
-    Matches
-        ``pairs`` (m, 2) int ndarray sorted by neuron, and the post-processed
-        ``state`` (uint8).
+    `neurons` is anything with ``rows`` and ``cols`` (a Problem, Network or Topology);
+    `method`'s :meth:`~ismb_lab.network.methods.Method.postprocess` decides which neurons stay.
 
     Examples
     --------
