@@ -190,12 +190,8 @@ def test_drop_takes_a_path_as_typed_or_the_bare_name(rig):
 
 
 def test_leave_one_out_holds_each_pair_out_and_scores_it_under_the_others(rig):
-    import time
-
-    start = time.perf_counter()
     held = leave_one_out(rig)
-    seconds = time.perf_counter() - start
-    assert len(held) == 13 and seconds < 30                        # 0.7 s measured for the 13 pairs
+    assert len(held) == 13
     px = np.array([h.reprojection_px for h in held])
     assert np.isfinite(px).all() and int(np.argmax(px)) == CHESSBOARD_PAIRS.index("02")
     # held out, a board fits worse than inside the fit, pair by pair (0.19 to 1.25 px against 0.17 to 1.22)
