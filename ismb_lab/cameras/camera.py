@@ -263,8 +263,8 @@ class StereoCamera:
             read, file_size = _read_opencv(path, own)
             for name, value in read.items():
                 if name in found:
-                    raise ParameterError(message("paths", own, f"files that give {OPENCV_NAMES[name][0]} once",
-                                                 f"it again in {str(path)!r}"))
+                    raise ParameterError(message("paths", own, f"files that give {OPENCV_NAMES[name][0]} "
+                                                 "once", f"it again in {str(path)!r}"))
                 found[name] = value
             if file_size is not None:
                 if given_size is not None and file_size != given_size:

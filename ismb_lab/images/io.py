@@ -40,7 +40,8 @@ PIXELS_VARIABLE = "ISMB_LAB_MAX_PIXELS"
 
 
 def max_pixels() -> int:
-    """The pixel limit in force: ``ISMB_LAB_MAX_PIXELS`` (1 to :data:`MOST_PIXELS`) if set, else :data:`MAX_PIXELS`.
+    """The pixel limit in force: ``ISMB_LAB_MAX_PIXELS`` (1 to :data:`MOST_PIXELS`) if set, else
+    :data:`MAX_PIXELS`.
 
     >>> max_pixels() >= 1
     True

@@ -359,9 +359,9 @@ def _refuse_by_sign(matches: Correspondences, limit: float, owner: str) -> int:
     """Refuse a pair most of whose matches on their rows have a negative disparity; how many are."""
     share, n = negative_share(matches, 2 * limit)
     if n >= 8 and share > 0.5:
-        raise ParameterError(message("left", owner, "the left camera's photo, given first: swap the two files",
-                                     f"the right camera's ({share:.0%} of {n} robust matches have a negative "
-                                     "disparity)"))
+        raise ParameterError(message("left", owner, "the left camera's photo, given first: swap the two "
+                                     "files", f"the right camera's ({share:.0%} of {n} robust matches have a "
+                                     "negative disparity)"))
     return n
 
 
