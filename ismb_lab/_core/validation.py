@@ -69,8 +69,6 @@ def check_number(value, name: str, owner: str, *, low=None, high=None,
     """`value` as a finite ``float`` (or ``int`` when `integer`; never ``bool``) within the
     inclusive bounds `low` and `high` (`low_open`: strict), else raise naming `name` of `owner`.
 
-    Examples
-    --------
     >>> check_number(3, "n_min", "detect_corners", low=1, integer=True)
     3
     >>> check_number(float("nan"), "theta_c", "Params")

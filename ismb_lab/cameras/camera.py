@@ -103,27 +103,11 @@ def _intrinsics(focal_px: float, cx: float, cy: float) -> np.ndarray:
 class StereoCamera:
     """Two cameras, their rectification and the calibration they came from.
 
-    Attributes
-    ----------
-    size : (int, int)
-        Image width and height.
-    k_left, d_left, k_right, d_right : ndarray
-        Camera matrices and distortion coefficients (None: :data:`FOCAL_PX` at the image
-        centre, no distortion).
-    rotation, translation : ndarray
-        The right camera's pose relative to the left one, metres (None: :data:`BASELINE_M`
-        to the right).
-    rms : float
-        Reprojection error of the stereo calibration, in pixels (NaN if not calibrated).
-    board, square_m
-        The calibration board: inner corners (columns, rows) and square size in metres.
-    used, skipped : tuple of str
-        Names of the calibration pairs used, and of those where the board was not found.
-    pairs : tuple of BoardPair
-        The used pairs' corners, poses and errors.
+    ``k_*`` and ``d_*`` are the camera matrices and distortions (None: :data:`FOCAL_PX` at the
+    image centre, none); ``rotation`` and ``translation`` the right camera's pose (None:
+    :data:`BASELINE_M` to the right); ``rms`` the calibration's reprojection error in pixels
+    (NaN: none measured); ``used``, ``skipped`` and ``pairs`` the calibration's pairs.
 
-    Examples
-    --------
     >>> camera = StereoCamera()
     >>> camera.focal_px, camera.baseline_m, camera.size
     (300.0, 0.1, (320, 240))
@@ -177,8 +161,6 @@ class StereoCamera:
         `vertical_offset_px`; a positive `roll_deg` turns the right camera's ``x`` axis towards
         its ``y`` axis (the scene turns counter-clockwise on screen).
 
-        Examples
-        --------
         >>> cam = StereoCamera.pinhole()
         >>> float(cam.disparity_at(1.8)), float(cam.disparity_at(1.0))
         (16.666666666666668, 30.0)
@@ -215,8 +197,6 @@ class StereoCamera:
         so the search band is 1 px up and down (:func:`ismb_lab.matching.metric.row_tolerance`):
         a guessed smaller RMS would narrow the band and widen the auto disparity window.
 
-        Examples
-        --------
         >>> cam = StereoCamera.from_factory(520.8, 0.0836, (640, 480), centre=(350.6, 243.1))
         >>> cam.focal_px, cam.baseline_m, cam.rectified_centre.tolist(), cam.is_rectified
         (520.8, 0.0836, [350.6, 243.1], True)

@@ -45,8 +45,6 @@ def motorcycle(width: int = 320) -> GroundTruthPair:
     than half its footprint was known (the whole would leave half the corners, on depth edges,
     unknown).
 
-    Examples
-    --------
     >>> pair = motorcycle()
     >>> pair.left.shape, bool(np.nanmax(pair.disparity) < 30)
     ((216, 320), True)
@@ -123,8 +121,6 @@ def aloe(width: int | None = None, *, folder=None) -> GroundTruthPair:
     `width` scales it as :func:`motorcycle` does (default: the full 1282 x 1110); `folder`: see
     :func:`opencv_samples`.
 
-    Examples
-    --------
     >>> pair = aloe(320)                                  # doctest: +SKIP
     >>> pair.left.shape                                   # doctest: +SKIP
     (277, 320)
@@ -158,8 +154,6 @@ def ground_truth_pairs(disparity: np.ndarray, left_xy, right_xy, tol: float = 1.
     A left corner's partner is the right corner within `tol` pixels of ``(x - d(x, y), y)``;
     where ``d`` is unknown (NaN), the corner is neither a target nor an error when matched.
 
-    Examples
-    --------
     >>> d = np.full((10, 20), 5.0); d[:, :3] = np.nan
     >>> pairs, unknown = ground_truth_pairs(d, [[10, 4], [2, 4], [15, 4]], [[5, 4], [10.5, 4]])
     >>> pairs.tolist(), unknown.tolist()

@@ -55,8 +55,6 @@ def image_gradients(image) -> tuple[np.ndarray, np.ndarray]:
     ``x`` grows along columns, ``y`` down the rows.  Dividing by 8 makes a ramp rising by 1 per
     pixel give exactly 1.  Borders are mirrored without repeating the edge pixel (``'mirror'``).
 
-    Examples
-    --------
     >>> Ix, Iy = image_gradients(np.tile(np.arange(4.0), (3, 1)))   # I = x
     >>> Ix[1]
     array([0., 1., 1., 0.])
@@ -73,8 +71,6 @@ def structure_tensor(image, sigma: float = 1.0) -> tuple[np.ndarray, np.ndarray,
     """The Harris matrix ``M = [[Axx, Axy], [Axy, Ayy]]`` at every pixel: the products of the
     gradients averaged over a Gaussian window of `sigma` pixels (``'mirror'`` borders).
 
-    Examples
-    --------
     >>> Axx, Axy, Ayy = structure_tensor(np.tile(np.arange(9.0), (9, 1)))
     >>> float(Axx[4, 4]), float(Axy[4, 4]), float(Ayy[4, 4])
     (1.0, 0.0, 0.0)
@@ -87,8 +83,6 @@ def structure_tensor(image, sigma: float = 1.0) -> tuple[np.ndarray, np.ndarray,
 def harris_from_tensor(Axx, Axy, Ayy, k: float = 0.04) -> np.ndarray:
     """Harris response ``det(M) - k tr(M)^2`` of a structure tensor (the thesis: k from 0.04 to 0.06).
 
-    Examples
-    --------
     >>> float(harris_from_tensor(1.0, 0.0, 1.0))    # corner: two strong directions
     0.84
     >>> float(harris_from_tensor(1.0, 0.0, 0.0))    # edge: one direction
@@ -102,8 +96,6 @@ def harris_from_tensor(Axx, Axy, Ayy, k: float = 0.04) -> np.ndarray:
 def harris_response(image, sigma: float = 1.0, k: float = 0.04) -> np.ndarray:
     """Harris response ``R`` of every pixel (see :func:`structure_tensor`, :func:`harris_from_tensor`).
 
-    Examples
-    --------
     >>> img = np.zeros((20, 20)); img[10:, 10:] = 100.0     # one bright quadrant
     >>> R = harris_response(img)
     >>> bool(R[10, 10] > 0), bool(R[15, 10] < 0), bool(R[2, 2] == 0)
@@ -120,8 +112,6 @@ def resolve_roi(roi, shape) -> tuple[int, int, int, int]:
     `roi` is ``"center"`` (the centre quarter, a ``W//2 x H//2`` box at ``(W//4, H//4)``, as in
     the thesis' tables), ``"full"``, ``(x, y, w, h)`` or ``"X,Y,W,H"``.
 
-    Examples
-    --------
     >>> resolve_roi("center", (240, 320))
     (80, 60, 160, 120)
     >>> resolve_roi("10, 20, 30, 40", (240, 320))
@@ -182,23 +172,10 @@ def _roi_box(roi, rule: str, owner: str = "resolve_roi"):
 
 @dataclass(frozen=True, eq=False)
 class Corners:
-    """Harris corners of one image.
-
-    Attributes
-    ----------
-    xy : (N, 2) ndarray of float64
-        Corners ``(x, y)`` in full-image coordinates, sorted row-major.
-    response : (N,) ndarray of float64
-        Harris response ``R`` at each point.
-    threshold : float
-        The final threshold ``T`` (NaN when there was no candidate and none was given).
-    iterations : int
-        How many times ``T`` was relaxed.
-    roi : (int, int, int, int)
-        The ``(x, y, w, h)`` box searched.
-    message : str
-        Empty when at least ``n_min`` corners were found, otherwise why not.
-    """
+    """Harris corners of one image: ``xy`` in full-image coordinates, sorted row-major, with
+    their ``response``; the final ``threshold`` T (NaN when there was no candidate and none was
+    given), how many ``iterations`` relaxed it, the ``roi`` box searched, and a ``message``
+    saying why fewer than ``n_min`` were found (empty otherwise)."""
 
     xy: np.ndarray
     response: np.ndarray

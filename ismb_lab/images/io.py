@@ -234,8 +234,6 @@ def load_image(source, name: str = "image") -> np.ndarray:
     Colour becomes BT.601 luma in float32 (no rounding); alpha is dropped.  `name` names
     `source` in error messages.
 
-    Examples
-    --------
     >>> load_image(np.array([[0, 65535]], dtype=np.uint16))
     array([[  0., 255.]])
     >>> load_image(np.full((1, 1, 3), [255, 0, 0], dtype=np.uint8)).round(3)   # pure red
@@ -248,8 +246,6 @@ def image_sha256(source) -> str:
     """SHA-256 hex digest of an image file's bytes (as ``sha256sum``), or of an array: of
     ``b"ismb_lab-array-v1\\n"``, then ``f"{dtype.str} {shape}\\n"`` in ASCII, then its C-order bytes.
 
-    Examples
-    --------
     >>> a = np.zeros((2, 3), dtype=np.uint8)
     >>> image_sha256(a) == image_sha256(a.copy())
     True
@@ -297,8 +293,6 @@ class StereoPair:
 def load_pair(left, right, *, min_shape=(1, 1)) -> StereoPair:
     """Load a stereo pair with :func:`load_image`; `min_shape` is the smallest ``(height, width)``.
 
-    Examples
-    --------
     >>> pair = load_pair(np.zeros((4, 6)), np.ones((4, 6)))
     >>> pair.shape, pair.left_path
     ((4, 6), None)

@@ -147,8 +147,6 @@ def robust_matches(left, right, *, max_features: int = 4000, rows_px: float | No
     keypoints within `rows_px` of its row at a positive disparity: on a repetitive texture the
     ratio test then compares against the keypoint's own row, not the whole pattern.
 
-    Examples
-    --------
     >>> rng = np.random.default_rng(0)
     >>> img = cv2.GaussianBlur(rng.uniform(0, 255, (200, 240)), (0, 0), 2) * 3 % 255
     >>> m = robust_matches(img[:, 10:], img[:, :-10])
@@ -218,28 +216,12 @@ def _dy_figures(left_xy, right_xy) -> dict:
 
 @dataclass(frozen=True, eq=False)
 class Rectified:
-    """A rectified pair and how it was made.
+    """A rectified pair at the working size, and how it was made.
 
-    Attributes
-    ----------
-    left, right : (H, W) float ndarray
-        The rectified grey images, at the working size.
-    left_h, right_h : (3, 3) ndarray
-        Homographies from the (scaled) inputs to these; the identity for a rig.
-    method : str
-        ``"already rectified"``, ``"uncalibrated"``, ``"rig"`` or ``"the background's"``.
-    inliers : int
-        How many correspondences the figures were measured on (`measured_on` says which).
-    median_abs_dy_px, p90_abs_dy_px : float
-        Their row differences after rectification.
-    disparity_range_px : [float, float]
-        Their 2nd and 98th percentile of ``x_left - x_right``, after rectification.
-    scale : float
-        The factor the inputs were scaled by first.
-    left_xy, right_xy : (n, 2) ndarray
-        The correspondences, after rectification.
-    warnings : tuple of str
-        One line each (:func:`epipole_warning`).
+    ``left_h``, ``right_h`` are the homographies from the scaled inputs (the identity for a rig);
+    ``inliers`` counts the correspondences (``left_xy``, ``right_xy``, after rectification) that
+    the row differences and the 2nd to 98th percentile of ``x_left - x_right`` were measured on,
+    and ``measured_on`` says which; ``scale`` is the factor the inputs were scaled by first.
     """
 
     left: np.ndarray
@@ -321,8 +303,6 @@ def sideways_step(left_xy, right_xy, F, shape) -> float | None:
     that under 80% of the matches put in front of both cameras, or mostly forward
     (``|x| < 0.2``), decides nothing.
 
-    Examples
-    --------
     >>> xy = np.random.default_rng(0).uniform(0, 400, (40, 2))
     >>> depth = np.random.default_rng(1).uniform(1, 2, 40)
     >>> shifted = xy - np.c_[40 / depth, np.zeros(40)]     # a right view: near points move more
