@@ -110,9 +110,7 @@ def _photo(source, name: str, owner: str, max_side: int | None) -> tuple[np.ndar
         image = cv2.cvtColor(image, cv2.COLOR_BGRA2GRAY if image.shape[2] == 4 else cv2.COLOR_BGR2GRAY)
     factor = 1.0 if max_side is None else working_size(image.shape, max_side)
     if image.dtype == np.uint8 and factor < 1.0:
-        size = (max(1, round(image.shape[1] * factor)), max(1, round(image.shape[0] * factor)))
-        small = cv2.resize(image.astype(np.float32), size, interpolation=cv2.INTER_AREA)
-        return np.clip(small.astype(float), 0.0, 255.0), factor
+        return np.clip(_scale(image, factor), 0.0, 255.0), factor
     grey = _to_grey(image, name, owner, bgr=True)
     return _scale(grey, factor), factor
 
@@ -416,17 +414,12 @@ def rectify_pair(left, right, *, max_side: int = WORKING_SIDE) -> Rectified:
     owner = "rectify_pair"
     max_side = check_number(max_side, "max_side", owner, low=64, integer=True)
     left, right, factor = pair_inputs(left, right, owner, max_side)
-    matches = robust_matches(left, right)
-    _refuse_same(matches, owner)
-    F, inliers = _fundamental(matches, owner)
-    lxy, rxy = matches.left_xy[inliers], matches.right_xy[inliers]
-    _refuse_swapped(lxy, rxy, F, left.shape, owner)
+    F, n, lxy, rxy = _inliers(robust_matches(left, right), left.shape, owner)
     figures = _dy_figures(lxy, rxy)
-    if figures["median_abs_dy_px"] <= 0.5 and figures["p90_abs_dy_px"] <= 1.5:
+    if _aligned(figures):
         eye = np.eye(3)
-        return Rectified(left, right, eye, eye, "already rectified", int(inliers.sum()),
-                         figures["median_abs_dy_px"], figures["p90_abs_dy_px"], figures["disparity_range_px"],
-                         factor, lxy, rxy)
+        return Rectified(left, right, eye, eye, "already rectified", n, **figures, scale=factor, left_xy=lxy,
+                         right_xy=rxy)
     h, w = left.shape
     ok, h_left, h_right = cv2.stereoRectifyUncalibrated(lxy, rxy, F, (w, h))
     if not ok:
@@ -440,13 +433,25 @@ def rectify_pair(left, right, *, max_side: int = WORKING_SIDE) -> Rectified:
         size = (min(size[0], max_side), min(size[1], max_side))
     warp = lambda image, hom: cv2.warpPerspective(image.astype(np.float32), hom, size, flags=cv2.INTER_LINEAR,
                                                   borderMode=cv2.BORDER_CONSTANT, borderValue=0).astype(float)
-    lxy_r, rxy_r = _transform(h_left, lxy), _transform(h_right, rxy)
-    figures = _dy_figures(lxy_r, rxy_r)
+    lxy, rxy = _transform(h_left, lxy), _transform(h_right, rxy)
     warning = epipole_warning(F, (h, w))
     return Rectified(np.clip(warp(left, h_left), 0, 255), np.clip(warp(right, h_right), 0, 255), h_left,
-                     h_right, "uncalibrated", int(inliers.sum()), figures["median_abs_dy_px"],
-                     figures["p90_abs_dy_px"], figures["disparity_range_px"], factor, lxy_r, rxy_r,
-                     warnings=(warning,) if warning else ())
+                     h_right, "uncalibrated", n, **_dy_figures(lxy, rxy), scale=factor, left_xy=lxy,
+                     right_xy=rxy, warnings=(warning,) if warning else ())
+
+
+def _inliers(matches: Correspondences, shape, owner: str) -> tuple:
+    """F, the number of RANSAC inliers and their points; the same photo twice or a swapped pair refused."""
+    _refuse_same(matches, owner)
+    F, inliers = _fundamental(matches, owner)
+    lxy, rxy = matches.left_xy[inliers], matches.right_xy[inliers]
+    _refuse_swapped(lxy, rxy, F, shape, owner)
+    return F, int(inliers.sum()), lxy, rxy
+
+
+def _aligned(figures: dict) -> bool:
+    """Whether the rows already agree: the test that leaves a pair as it is."""
+    return figures["median_abs_dy_px"] <= 0.5 and figures["p90_abs_dy_px"] <= 1.5
 
 
 def apply_rectification(left, right, left_h, right_h, size) -> Rectified:
@@ -464,8 +469,8 @@ def measured(left, right, left_h, right_h, method: str) -> Rectified:
     figures = (_dy_figures(matches.left_xy, matches.right_xy) if len(matches) else
                {"median_abs_dy_px": float("nan"), "p90_abs_dy_px": float("nan"), "disparity_range_px": [0.0, 0.0]})
     return Rectified(left, right, np.asarray(left_h, float), np.asarray(right_h, float), method, len(matches),
-                     figures["median_abs_dy_px"], figures["p90_abs_dy_px"], figures["disparity_range_px"], 1.0,
-                     matches.left_xy, matches.right_xy, "robust matches (no RANSAC)")
+                     **figures, scale=1.0, left_xy=matches.left_xy, right_xy=matches.right_xy,
+                     measured_on="robust matches (no RANSAC)")
 
 
 def check_rectified(left, right, *, max_side: int = WORKING_SIDE) -> dict:
@@ -479,13 +484,8 @@ def check_rectified(left, right, *, max_side: int = WORKING_SIDE) -> dict:
            "median_abs_dy_px": None, "p90_abs_dy_px": None, "disparity_range_px": None,
            "left_xy": np.zeros((0, 2)), "right_xy": np.zeros((0, 2))}
     try:
-        _refuse_same(matches, owner)
-        F, inliers = _fundamental(matches, owner)
-        lxy, rxy = matches.left_xy[inliers], matches.right_xy[inliers]
-        _refuse_swapped(lxy, rxy, F, left.shape, owner)
+        _, n, lxy, rxy = _inliers(matches, left.shape, owner)
     except ParameterError as exc:
         return {**out, "problem": str(exc)}
     figures = _dy_figures(lxy, rxy)
-    rectified = figures["median_abs_dy_px"] <= 0.5 and figures["p90_abs_dy_px"] <= 1.5
-    return {**out, **figures, "inliers": int(inliers.sum()), "rectified": bool(rectified),
-            "left_xy": lxy, "right_xy": rxy}
+    return {**out, **figures, "inliers": n, "rectified": _aligned(figures), "left_xy": lxy, "right_xy": rxy}
