@@ -529,14 +529,18 @@ _RMS_RULE = ("a finite number > 0 (the calibration's RMS reprojection error in p
              "band), or NaN when none was measured")
 
 
+def _two_ints(value, name: str, owner: str, rule: str, low: int, high: int) -> tuple:
+    """`value` as a tuple of two whole numbers from `low` to `high`."""
+    if (not isinstance(value, (tuple, list)) or len(value) != 2
+            or not all(isinstance(v, (int, np.integer)) and not isinstance(v, bool) for v in value)):
+        raise ParameterTypeError(message(name, owner, rule, value))
+    if not all(low <= v <= high for v in value):
+        raise ParameterError(message(name, owner, rule, tuple(value)))
+    return tuple(int(v) for v in value)
+
+
 def _check_size(size, owner: str) -> tuple:
-    rule = f"(width, height), whole numbers from 1 to {1 << 16}"
-    if (not isinstance(size, (tuple, list)) or len(size) != 2
-            or not all(isinstance(v, (int, np.integer)) and not isinstance(v, bool) for v in size)):
-        raise ParameterTypeError(message("size", owner, rule, size))
-    if not all(1 <= v <= 1 << 16 for v in size):
-        raise ParameterError(message("size", owner, rule, tuple(size)))
-    return tuple(int(v) for v in size)
+    return _two_ints(size, "size", owner, f"(width, height), whole numbers from 1 to {1 << 16}", 1, 1 << 16)
 
 
 def _opencv_values(node) -> np.ndarray | None:
@@ -631,13 +635,8 @@ def check_board(board, square_m, owner: str) -> tuple:
     ismb_lab.ParameterError: The 'square_m' parameter of the rig file must be a finite number >= 1e-05 and <= 10.0. Got -1.0 instead.
     """
     rule = f"two whole numbers from 2 to {MAX_BOARD_SIDE} (inner corners per row, per column)"
-    if (not isinstance(board, (tuple, list)) or len(board) != 2
-            or not all(isinstance(v, (int, np.integer)) and not isinstance(v, bool) for v in board)):
-        raise ParameterTypeError(message("board", owner, rule, board))
-    if not all(2 <= v <= MAX_BOARD_SIDE for v in board):
-        raise ParameterError(message("board", owner, rule, tuple(board)))
-    square_m = check_number(square_m, "square_m", owner, low=MIN_SQUARE_M, high=MAX_SQUARE_M)
-    return tuple(int(v) for v in board), square_m
+    board = _two_ints(board, "board", owner, rule, 2, MAX_BOARD_SIDE)
+    return board, check_number(square_m, "square_m", owner, low=MIN_SQUARE_M, high=MAX_SQUARE_M)
 
 
 def _check(camera: StereoCamera, owner: str) -> None:
