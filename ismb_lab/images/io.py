@@ -310,8 +310,8 @@ def load_pair(left, right, *, min_shape=(1, 1)) -> StereoPair:
         raise ParameterError(message("min_shape", owner, rule, min_shape))
     min_h, min_w = (check_number(v, "min_shape", owner, low=1, integer=True) for v in min_shape)
 
-    images = {side: _load(src, side, owner) for side, src in (("left", left), ("right", right))}
-    (h, w), (rh, rw) = images["left"].shape, images["right"].shape
+    grey = _load(left, "left", owner), _load(right, "right", owner)
+    (h, w), (rh, rw) = grey[0].shape, grey[1].shape
     if h < min_h or w < min_w:
         raise ParameterError(message(
             "left", owner, f"an image of at least {min_w}x{min_h} pixels (width x height) "
@@ -320,10 +320,8 @@ def load_pair(left, right, *, min_shape=(1, 1)) -> StereoPair:
         raise ParameterError(message(
             "right", owner, f"an image of the same size as 'left', {w}x{h} pixels "
             "(width x height)", f"an image of {rw}x{rh} pixels"))
-    path = {side: os.fspath(src) if _is_path(src) else None
-            for side, src in (("left", left), ("right", right))}
-    return StereoPair(images["left"], images["right"], image_sha256(left), image_sha256(right),
-                      path["left"], path["right"])
+    path = lambda src: os.fspath(src) if _is_path(src) else None
+    return StereoPair(*grey, image_sha256(left), image_sha256(right), path(left), path(right))
 
 
 def png_bytes(image) -> bytes:
