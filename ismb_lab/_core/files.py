@@ -1,22 +1,9 @@
 """Safe file outputs and inputs.
 
-Writes are atomic: a reader sees the old file or the new one, never half of one.
-Outputs never destroy anything:
-
-* a symbolic link is never replaced: the write goes through it, to the file it
-  names (atomically, beside that file), and the link stays as it was;
-* an existing file that is not a regular file (a device such as ``/dev/null``, a
-  FIFO, a socket) is never replaced by a rename: :func:`check_output` refuses it,
-  and with ``force=True`` the data is written *into* it, as ``cat > path`` would;
-* a folder is always refused, and so is an output that is one of the inputs;
-* a read-only file is refused unless ``force=True``.
-
-A command that rewrites a whole tree of its own files (``ismb-lab render``) checks each
-with :func:`check_replace` instead: there a link, a device, a FIFO or a read-only file is
-always refused, since nobody named it.
-
-After the rename the folder is flushed to disk too (``fsync``), so the new name
-survives a power cut.
+Writes are atomic (a reader sees the old file or the new one, and the folder is fsynced) and
+destroy nothing: a symbolic link is written through and stays; a device or FIFO is refused,
+or with ``force=True`` written into; a folder, an input or (without ``force``) a read-only file
+is refused.  :func:`check_replace` is the stricter check for a tree a command rewrites whole.
 """
 
 from __future__ import annotations
@@ -29,9 +16,8 @@ from pathlib import Path
 __all__ = ["MAX_JSON_BYTES", "OutputError", "atomic_write_bytes", "atomic_write_text", "check_input", "private_folder",
            "check_output", "check_replace", "read_json", "refuse_folder_name"]
 
-#: Most bytes of a params, rig or manifest JSON file, checked before it is parsed: the largest
-#: written by the package (a rig of 13 pairs with every corner) is about 110 KB, and parsing
-#: holds some ten times a file's size in memory.
+#: Most bytes of a params, rig or manifest JSON file, checked before it is parsed (the package's
+#: largest, a rig of 13 pairs, is about 110 KB; parsing holds some ten times a file's size).
 MAX_JSON_BYTES = 4 << 20
 
 
@@ -72,14 +58,9 @@ def _kind(mode: int) -> str:
 
 
 def atomic_write_bytes(path, data: bytes) -> Path:
-    """Write `data` to a temporary file beside `path`, flush it to disk, then rename.
+    """Write `data` to a temporary file beside `path`, flush it to disk, then rename (a link is
+    written through; a device or FIFO is written into; a folder raises ``IsADirectoryError``).
 
-    A symbolic link is written through (the file it names is replaced, the link
-    stays); an existing device or FIFO is written into, never replaced; a folder
-    raises ``IsADirectoryError``.
-
-    Examples
-    --------
     >>> import tempfile, pathlib
     >>> target = pathlib.Path(tempfile.mkdtemp()) / "out.txt"
     >>> atomic_write_bytes(target, b"hello").read_bytes()
@@ -127,23 +108,11 @@ def _same(a: Path, b: Path) -> bool:
 
 
 def read_json(path, *, most_bytes: int = MAX_JSON_BYTES):
-    """The JSON value of the file at `path`, read in at most `most_bytes` bytes.
+    """The JSON value of the file at `path`, refused unparsed above `most_bytes` bytes.
 
-    Whatever the file holds, the work is bounded before it starts: at most
-    ``most_bytes + 1`` bytes are read, and a file above the limit is refused unparsed.
+    Raises FileNotFoundError, OSError (unreadable), or ValueError saying why it is not JSON
+    within the limits.
 
-    Raises
-    ------
-    FileNotFoundError
-        The file does not exist.
-    OSError
-        It cannot be read (a folder, no permission).
-    ValueError
-        With a few words on why: larger than `most_bytes`, not UTF-8, not JSON, nested too
-        deeply, or holding an integer too long to convert (more than Python's 4300 digits).
-
-    Examples
-    --------
     >>> import tempfile, pathlib
     >>> path = pathlib.Path(tempfile.mkdtemp()) / "a.json"
     >>> _ = path.write_text('{"n": 1}')
@@ -185,13 +154,9 @@ def read_json(path, *, most_bytes: int = MAX_JSON_BYTES):
 
 
 def check_input(path, *, what: str = "input") -> Path:
-    """Refuse an input that exists but is not a regular file, before anything opens it.
+    """Refuse an input that exists but is not a regular file (a FIFO blocks, ``/dev/zero`` never
+    ends) before anything opens it; a missing file is left to the reader.
 
-    A FIFO would block the reader and ``/dev/zero`` never ends, so both are refused
-    here; a missing file is left to the reader, which names it.
-
-    Examples
-    --------
     >>> check_input("/dev/zero", what="--params-file")
     Traceback (most recent call last):
     ...
@@ -210,8 +175,8 @@ def check_input(path, *, what: str = "input") -> Path:
 
 
 def refuse_folder_name(text, what: str = "output") -> None:
-    """Refuse an output name written as a folder's: ending in ``/`` (or ``/.``, ``/..``, or
-    being ``.`` or ``..``).  ``Path("out.json/")`` is ``out.json``: the check needs the text.
+    """Refuse an output name written as a folder's (ending in ``/``, ``/.`` or ``/..``): it needs
+    the text, as ``Path("out.json/")`` is ``out.json``.
 
     >>> refuse_folder_name("out.json/", "--json")
     Traceback (most recent call last):
@@ -230,29 +195,10 @@ def refuse_folder_name(text, what: str = "output") -> None:
 def check_output(path, *, inputs=(), force: bool = False, what: str = "output") -> Path:
     """Check, before any work, that `path` may be written by :func:`atomic_write_bytes`.
 
-    Parameters
-    ----------
-    path : str or os.PathLike
-        The output file the user named.
-    inputs : iterable of path
-        Files the same run reads; the output may never be one of them (not even
-        with `force`), whatever the link or spelling that leads there.
-    force : bool
-        Allow replacing a read-only file, and writing into an existing device or FIFO.
-    what : str
-        How the message names the path, e.g. ``"--json"``.
+    It may never be one of `inputs`, whatever the link or spelling, not even with `force`;
+    `force` allows replacing a read-only file and writing into a device or FIFO.  `what` names
+    the path in the :class:`OutputError`'s one line, e.g. ``"--json"``.
 
-    Returns
-    -------
-    path : Path
-
-    Raises
-    ------
-    OutputError
-        With a one-line reason naming `path` as the user gave it.
-
-    Examples
-    --------
     >>> import tempfile, pathlib
     >>> folder = pathlib.Path(tempfile.mkdtemp())
     >>> check_output(folder / "p.json").name
@@ -310,13 +256,9 @@ def check_output(path, *, inputs=(), force: bool = False, what: str = "output") 
 def check_replace(path, *, what: str = "output") -> Path:
     """Check that `path` is new, or a regular, writable file that a rename may replace.
 
-    Stricter than :func:`check_output`: a symbolic link is refused (never written
-    through), and so are a device, a FIFO, a socket, a folder and a read-only file, with
-    no ``force``.  For a tree of files that a command rewrites as a whole, where the user
-    named the folder, not the files.  A file whose folder does not exist yet passes.
+    Stricter than :func:`check_output` (no link, device, FIFO or read-only file, no ``force``),
+    for a tree a command rewrites whole.  A file whose folder does not exist yet passes.
 
-    Examples
-    --------
     >>> import tempfile, pathlib
     >>> folder = pathlib.Path(tempfile.mkdtemp())
     >>> (folder / "link.png").symlink_to(folder / "elsewhere.png")
@@ -345,10 +287,8 @@ def check_replace(path, *, what: str = "output") -> Path:
 
 
 def private_folder(name: str, temp: str | None = None) -> str:
-    """``<temp>/<name>-<uid>``, made with mode 0700, if it is a folder (not a link) of this
-    account's that no one else may read or write; else a new private folder there (someone
-    else took the name: never use theirs).  Raises OSError if `temp` (default: the system's)
-    cannot be written.
+    """``<temp>/<name>-<uid>`` (mode 0700) if it is this account's private folder, else a new
+    private folder in `temp` (never someone else's).
 
     >>> import tempfile
     >>> folder = private_folder("ismb-doc", tempfile.mkdtemp())

@@ -1,26 +1,8 @@
 """The size of an image file, read from its header before anything decodes it.
 
-OpenCV decodes a whole image before its size can be refused: a Radiance ``.hdr`` of
-12000 x 12000 pixels, a few kilobytes on disk, takes 3.46 GB.  So a file is decoded
-only in a format whose size is read here first, from the same bytes OpenCV chooses
-its decoder by (each decoder's signature; no two overlap):
-
-=================  ============================  ==========================================
-format             signature                     size read by
-=================  ============================  ==========================================
-PNG                ``\\x89PNG\\r\\n\\x1a\\n``          the IHDR chunk
-JPEG               ``\\xff\\xd8\\xff``                 Pillow (the SOF segment), JPEG only
-BMP                ``BM``                        Pillow (the info header), BMP only
-TIFF               ``II*\\0``, ``MM\\0*``, BigTIFF   Pillow (the first directory), TIFF only
-WebP               ``RIFF....WEBP``              Pillow (the VP8/VP8L/VP8X header), WebP only
-Sun raster         ``\\x59\\xa6\\x6a\\x95``            Pillow, Sun raster only
-PBM, PGM, PPM      ``P1`` to ``P6``              the text header, as OpenCV reads it
-PFM                ``PF``, ``Pf``                the text header, as OpenCV reads it
-Radiance HDR       ``#?RGBE``, ``#?RADIANCE``    the header lines, as OpenCV reads them
-=================  ============================  ==========================================
-
-Every other format OpenCV may read (GIF, JPEG 2000, PAM, AVIF, OpenEXR, ...) is refused:
-its size is not read here, so it is never decoded.
+OpenCV decodes a whole image before its size can be refused (a 12000 x 12000 Radiance ``.hdr``
+of a few kilobytes takes 3.46 GB), so only the formats of :data:`FORMATS`, whose size is read
+here from the signature OpenCV picks its decoder by, are ever decoded.
 """
 
 from __future__ import annotations
@@ -31,7 +13,7 @@ import warnings
 
 __all__ = ["FORMATS", "HeaderError", "image_size"]
 
-#: The formats read, by name, in the order of the table above.
+#: The formats whose size is read.
 FORMATS = ("PNG", "JPEG", "BMP", "TIFF", "WebP", "Sun raster", "PBM/PGM/PPM", "PFM", "Radiance HDR")
 
 _REFUSED = ((b"GIF8", "GIF"), (b"\x00\x00\x00\x0cjP  ", "JPEG 2000"), (b"\xffO\xffQ", "JPEG 2000"),
@@ -121,13 +103,6 @@ def _hdr(data: bytes):
 def image_size(data: bytes) -> tuple[str, int, int]:
     """``(format, width, height)`` of an image file's bytes, from its header alone.
 
-    Raises
-    ------
-    HeaderError
-        An empty file, a format not in :data:`FORMATS`, or a header that cannot be read.
-
-    Examples
-    --------
     >>> image_size(b"#?RADIANCE\\nFORMAT=32-bit_rle_rgbe\\n\\n-Y 12000 +X 9000\\n")
     ('Radiance HDR', 9000, 12000)
     >>> image_size(b"GIF89a...")

@@ -1,14 +1,8 @@
 """Where numba keeps the compiled kernels: its own places, else a private folder of this user.
 
-Every kernel of the package is compiled with ``cache=True``.  numba keeps the cache
-beside the source (``ismb_lab/__pycache__``), else in the user's cache folder
-(``~/.cache/numba``); when it can write to neither (a package installed read-only
-and a HOME that is not writable) it refuses to define a cached kernel, and
-``import ismb_lab.network.dynamics`` fails.  :func:`configure`, run when :mod:`ismb_lab` is
-imported, then sets ``NUMBA_CACHE_DIR`` to ``<temp folder>/ismb_lab-numba-<uid>``,
-made with mode 0700 and used only while it is this user's folder that no one else
-can write to (a cache is code that numba loads); otherwise to a new private folder.
-A ``NUMBA_CACHE_DIR`` that is already set always wins.
+When numba can write neither beside the source nor to the user's cache folder, it refuses to
+define a ``cache=True`` kernel; :func:`configure`, run at ``import ismb_lab``, then sets
+``NUMBA_CACHE_DIR`` to a private folder (a cache is code numba loads).  A set one always wins.
 """
 
 from __future__ import annotations
@@ -39,8 +33,7 @@ def writable(folder) -> bool:
 
 
 def fallback_folder(temp: str | None = None) -> str:
-    """``<temp>/ismb_lab-numba-<uid>`` (made 0700) if it is private to this user, else a new
-    private folder there.  Raises OSError if `temp` (default: the system's) cannot be written."""
+    """``<temp>/ismb_lab-numba-<uid>`` if private to this user, else a new private folder there."""
     from .files import private_folder
 
     path = private_folder("ismb_lab-numba", temp)

@@ -1,26 +1,10 @@
 """The class hub's compiled kernels: compiled once by the teacher, loaded by every student.
 
-numba caches a ``cache=True`` kernel only in a folder it can write to: a cache that root
-compiled into the class venv, or any other folder students can read but not write, is
-skipped, and every student compiles the kernels again at the start of the lesson.  So:
-
-* the teacher's step, ``python -m ismb_lab.teaching.hub_start stage``, runs
-  :func:`ismb_lab.teaching.kernels.compile_kernels`
-  in a new interpreter with ``NUMBA_CACHE_DIR`` set to ``COURSE/numba``
-  (:func:`compile_into`); the folder ends up root's and read-only (folders 755, files 644);
-* the hub names that folder in :data:`VARIABLE` for every server, and the course's
-  ``/etc/profile.d`` file for every login shell;
-* when :mod:`ismb_lab` is imported, :func:`seed` copies the compiled kernels of this
-  installation from there into the cache that numba uses for this user (their own, which
-  numba writes itself), unless theirs is as new.
-
-The student's own process makes the copy, into a folder of theirs: no one ever loads a
-cache that another student can write.  The shared folder is used only if it, every folder
-above it and every file copied belong to root or to this user and no one else may write
-to them (a cache is code that numba loads).  numba keys the index of a cached kernel on
-its source file (the folder's path and the file's contents) and on the CPU, so the
-teacher's copy fits every student of the same installation on the same machine; for any
-other source it is not used, and numba compiles as before.
+numba skips a cache folder it cannot write to, so the teacher's read-only ``COURSE/numba``
+(:func:`ismb_lab.teaching.kernels.compile_into`, named by :data:`VARIABLE`) is copied by
+:func:`seed`, at ``import ismb_lab``, into this user's own cache, in their own process.  It is used
+only if it, every folder above it and every file copied belong to root or to this user and no
+one else may write to them (a cache is code that numba loads).
 """
 
 from __future__ import annotations
@@ -40,9 +24,8 @@ KERNEL_SOURCES = ("network/kernel.py", "tuning/evaluation.py")
 
 
 def trusted(path) -> bool:
-    """Whether `path` (a file or folder) and every folder above it belong to root or to this
-    user, and no one else may write to them (a folder with the sticky bit, such as /tmp, may
-    be world-writable above it).  Symbolic links are resolved first.
+    """Whether `path` (links resolved) and every folder above it belong to root or this user and
+    no one else may write to them (a sticky folder such as /tmp above it may).
 
     >>> trusted("/")
     True
@@ -78,10 +61,8 @@ def shared_folder(root, source: str = KERNEL_SOURCES[0]) -> str:
 
 
 def own_cache_folder(source: str = KERNEL_SOURCES[0]) -> str | None:
-    """The folder numba caches the kernels beside `source` (one of :data:`KERNEL_SOURCES`) in for
-    this process: ``NUMBA_CACHE_DIR``'s or the user's own cache folder (``~/.cache/numba``).  None
-    when numba would cache beside the source instead (the user can write into the installation)
-    or nowhere."""
+    """The folder numba caches the kernels beside `source` in for this process, if it is
+    ``NUMBA_CACHE_DIR``'s or the user's own cache folder; else None."""
     from numba.core import caching
 
     def named(name):       # numba 0.68 dropped the leading underscore of these names
@@ -109,8 +90,7 @@ def _units(folder: str) -> dict:
 
 
 def _copy(source: str, target: str) -> None:
-    """Copy a file (contents, modification time) into place in one rename: numba never
-    reads half of it."""
+    """Copy a file (contents, modification time) into place in one rename."""
     fd, temporary = tempfile.mkstemp(prefix=".ismb-seed-", dir=os.path.dirname(target))
     try:
         with os.fdopen(fd, "wb") as out, open(source, "rb") as src:
@@ -149,13 +129,11 @@ def _seed_folder(source: str, target: str | None) -> int:
 
 
 def seed(environ=None) -> int | None:
-    """Copy the teacher's compiled kernels (the folder :data:`VARIABLE` names) into this
-    user's own numba cache; returns the number of kernels copied, or None when there is no
-    shared folder to use (not set, not found, or not trusted: see :func:`trusted`).
+    """Copy the teacher's compiled kernels into this user's own numba cache; the number copied,
+    or None when there is no trusted shared folder.
 
-    A kernel is copied, its data files first and its index last, when this user has no
-    index for it or an older one than the teacher's; one the user's numba wrote since (a
-    newer index) is kept.  Never raises: without the copy numba compiles, as it always did.
+    A kernel is copied, data files first and index last, unless this user's index is as new.
+    Never raises: without the copy numba compiles.
     """
     environ = os.environ if environ is None else environ
     root = environ.get(VARIABLE, "")
@@ -174,8 +152,8 @@ def seed(environ=None) -> int | None:
 
 
 def cold(kernel) -> bool:
-    """Whether numba holds no cached machine code of `kernel` (a ``cache=True`` dispatcher) yet,
-    so that its first call will compile.  False when numba's cache cannot be inspected.
+    """Whether the first call of `kernel` (a ``cache=True`` dispatcher) will compile; False when
+    numba's cache cannot be inspected.
 
     >>> import numba
     >>> cold(numba.njit(lambda x: x))      # no cache at all: nothing to announce

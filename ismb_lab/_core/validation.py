@@ -1,10 +1,6 @@
-"""Input checks shared by the whole package.
-
-Every check raises with one message format, modelled on scikit-learn's::
+"""Input checks shared by the whole package, each raising with one message format::
 
     The 'theta_c' parameter of Params must be a finite number >= 0. Got -1.0 instead.
-
-so that the parameter, the rule and the received value are always named.
 """
 
 from __future__ import annotations
@@ -37,8 +33,7 @@ class ParameterTypeError(TypeError):
     __module__ = "ismb_lab"
 
 
-#: The largest seed: an update-order stream's state is a 64-bit integer, and seeds are
-#: taken as non-negative int64 (numpy's Generator takes any of them too).
+#: The largest seed: seeds are non-negative int64 (an update-order stream's state is 64-bit).
 MAX_SEED = 2**63 - 1
 
 
@@ -71,26 +66,9 @@ def message(name: str, owner: str, rule: str, value) -> str:
 
 def check_number(value, name: str, owner: str, *, low=None, high=None,
                  low_open: bool = False, integer: bool = False) -> float | int:
-    """Check that `value` is a finite real (or integral) number within bounds.
+    """`value` as a finite ``float`` (or ``int`` when `integer`; never ``bool``) within the
+    inclusive bounds `low` and `high` (`low_open`: strict), else raise naming `name` of `owner`.
 
-    Parameters
-    ----------
-    value : object
-        The value received.
-    name, owner : str
-        The parameter's name and the function or class it belongs to.
-    low, high : float, optional
-        Inclusive bounds; `low_open` makes the lower bound strict.
-    integer : bool
-        Require an integral value (``bool`` is never accepted).
-
-    Returns
-    -------
-    number : float or int
-        The value as a Python ``float`` (or ``int`` when `integer`).
-
-    Examples
-    --------
     >>> check_number(3, "n_min", "detect_corners", low=1, integer=True)
     3
     >>> check_number(float("nan"), "theta_c", "Params")
@@ -131,8 +109,6 @@ def check_number(value, name: str, owner: str, *, low=None, high=None,
 def check_choice(value, name: str, owner: str, choices, rule: str | None = None) -> str:
     """Check that `value` is one of the strings in `choices` (`rule` words the message).
 
-    Examples
-    --------
     >>> check_choice("sweep", "stop_rule", "run", ("sweep", "stall"))
     'sweep'
     >>> check_choice("fast", "stop_rule", "run", ("sweep", "stall"))
@@ -148,11 +124,9 @@ def check_choice(value, name: str, owner: str, choices, rule: str | None = None)
 
 
 def check_points(points, name: str, owner: str, dims: int = 2) -> np.ndarray:
-    """Check an ``(N, 2)`` array of finite ``(x, y)`` points (``dims=3``: ``(N, 3)``
-    ``(X, Y, Z)`` points) and return it as float.
+    """Check an ``(N, 2)`` array of finite ``(x, y)`` points (``dims=3``: ``(X, Y, Z)``) and
+    return it as float.
 
-    Examples
-    --------
     >>> check_points([[1, 2], [3, 4]], "left_xy", "match").shape
     (2, 2)
     >>> check_points([], "points3d", "project", dims=3).shape
@@ -176,13 +150,8 @@ def check_points(points, name: str, owner: str, dims: int = 2) -> np.ndarray:
 
 
 def check_rng(rng, name: str = "rng", owner: str = "function") -> np.random.Generator:
-    """Return a numpy Generator from a Generator or an integer seed.
+    """A numpy Generator from a Generator or an integer seed (the package's only way to randomness).
 
-    There is no global seeding anywhere in the package: randomness enters only
-    through this argument.
-
-    Examples
-    --------
     >>> int(check_rng(0).integers(10)) == int(check_rng(0).integers(10))
     True
     """
@@ -199,8 +168,6 @@ def check_rng(rng, name: str = "rng", owner: str = "function") -> np.random.Gene
 def readonly(values) -> np.ndarray:
     """A float copy of `values` that cannot be written to (for frozen records).
 
-    Examples
-    --------
     >>> readonly([1, 2]).flags.writeable
     False
     """

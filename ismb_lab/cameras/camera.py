@@ -1,28 +1,8 @@
-"""One stereo camera model: two cameras, their rectification, and metres from disparities.
+"""A stereo camera model: two cameras, their rectification, and metres from disparities.
 
-A :class:`StereoCamera` holds what a pair of cameras is: each camera's matrix ``K`` and
-distortion coefficients, the right camera's pose relative to the left one (OpenCV's
-convention: a point ``X`` of the left camera's frame is ``R X + T`` in the right one's), and
-the image size.  Two kinds are made with it:
-
-* the rendered scenes' ideal rig (:meth:`StereoCamera.pinhole`, the defaults below): two
-  distortion-free cameras side by side, the right one optionally rolled about its optical
-  axis and with its image shifted down;
-* a calibrated rig (:func:`ismb_lab.cameras.rig.calibrate_rig`, or :func:`load_camera` from
-  ``ismb-lab calibrate``'s JSON), which also keeps the calibration's record: its RMS error,
-  the board and each pair's corners (:class:`BoardPair`);
-* a factory calibration: a rectified camera's focal length, principal point and baseline
-  (:meth:`StereoCamera.from_factory`, ``ismb-lab rig``), or the two cameras' matrices,
-  distortions and pose from an OpenCV ``FileStorage`` file (:meth:`StereoCamera.from_opencv`).
-
-The rectification (``cv2.stereoRectify``) turns both cameras to a common orientation so that
-a point's two images are on one row.  Cameras with distortion are rectified with
-``alpha=0`` (the views cropped to valid pixels, OpenCV's choice); distortion-free cameras keep
-the left camera's matrix, so the rendered scenes' rectified focal length is their cameras'.
-The rectified pair gives ``focal_px``, ``baseline_m`` and, for a match at left ``(x, y)``
-with disparity ``d``, the point ``Z = f B / d``, ``X = (x - cx) Z / f``, ``Y = (y - cy) Z / f``
-in metres in the rectified left camera's frame (X right, Y down, Z forward):
-:meth:`StereoCamera.points_from_disparity`.
+The right camera's pose follows OpenCV: a point ``X`` of the left camera's frame is ``R X + T``
+in the right one's.  A match at rectified left ``(x, y)`` with disparity ``d`` is the point
+``Z = f B / d``, ``X = (x - cx) Z / f``, ``Y = (y - cy) Z / f`` (metres; X right, Y down, Z forward).
 """
 
 from __future__ import annotations
@@ -43,22 +23,16 @@ __all__ = ["BASELINE_M", "BOARD", "FOCAL_PX", "MAX_BASELINE_M", "MAX_BOARD_SIDE"
            "MIN_SQUARE_M", "SQUARE_M", "FORMAT", "HEIGHT", "OPENCV_NAMES", "UNITS", "WIDTH", "BoardPair",
            "StereoCamera", "check_board", "load_camera"]
 
-#: The rendered scenes' camera, mimicking the thesis' webcams: 320 x 240 images, 10 cm apart.
-#: A focal length of 300 px gives a horizontal field of view of about 56 degrees
-#: (``2 atan(160 / 300)``), like a webcam; a point at 1.8 m (the deepest background) then has
-#: a disparity of 16.7 px and one at 1 m of 30 px, bracketing the thesis' expected shift of 20 px.
+#: The rendered scenes' camera, like the thesis' webcams: 320 x 240 images, 10 cm apart; 300 px
+#: gives a field of view of about 56 degrees, and 16.7 to 30 px of disparity from 1.8 m to 1 m.
 WIDTH, HEIGHT = 320, 240
 FOCAL_PX = 300.0
 BASELINE_M = 0.10
 #: Inner corners of OpenCV's sample board (columns, rows).
 BOARD = (9, 6)
-#: Square size assumed for OpenCV's sample board, in metres.  The sample does not state it
-#: (its calibration program takes the size as an argument and defaults to 1 unit); 25 mm is
-#: a common printed board and gives a baseline of a few centimetres, as the rig's two small
-#: cameras suggest.  Every metric result scales with it.
+#: Square size assumed for OpenCV's sample board, in metres (the sample does not state it).
 SQUARE_M = 0.025
-#: The range of a board's square side, in metres (10 micrometres to 10 m), and of its inner
-#: corners per row or column: OpenCV calibrates such boards; a size beyond them is a typing slip.
+#: The range of a board's square side (metres) and of its inner corners per row or column.
 MIN_SQUARE_M, MAX_SQUARE_M = 1e-5, 10.0
 MAX_BOARD_SIDE = 100
 #: Format of the rig files (v1 files, without the pairs, still load).
@@ -66,14 +40,11 @@ FORMAT = "ismb_lab-rig-v2"
 _FORMATS = ("ismb_lab-rig-v1", FORMAT)
 #: Above this rectified zoom (rectified focal length over the cameras' own), the rig warns.
 MAX_ZOOM = 1.3
-#: The longest baseline a factory calibration may give, in metres: a longer one is a baseline
-#: typed in millimetres (``from_opencv``'s `units`), not a stereo camera.
+#: The longest baseline a factory calibration may give, in metres (a longer one was typed in mm).
 MAX_BASELINE_M = 10.0
 #: The units a factory file's translation may be in, as metres per unit.
 UNITS = {"m": 1.0, "cm": 0.01, "mm": 0.001}
-#: The names an OpenCV ``FileStorage`` file may give each matrix (the first is the usual one;
-#: ``M1`` ... are OpenCV's stereo_calib sample's, ``cameraMatrix1`` ... ``cv2.stereoCalibrate``'s
-#: own argument names).
+#: The names an OpenCV ``FileStorage`` file may give each matrix (the first is the usual one).
 OPENCV_NAMES = {"k_left": ("K1", "M1", "cameraMatrix1"), "d_left": ("D1", "distCoeffs1"),
                 "k_right": ("K2", "M2", "cameraMatrix2"), "d_right": ("D2", "distCoeffs2"),
                 "rotation": ("R",), "translation": ("T",)}
@@ -90,9 +61,8 @@ def _unit(vectors: np.ndarray) -> np.ndarray:
 
 @dataclass(frozen=True, eq=False)
 class BoardPair:
-    """One calibration pair: its photos' names, the board's corners found in each, the
-    board's pose in the left camera (``rvec``, ``tvec`` as ``cv2.Rodrigues`` vectors, metres)
-    and the pair's RMS reprojection error over both views, in pixels."""
+    """One calibration pair: photo names, board corners in each, the board's pose in the left
+    camera (Rodrigues ``rvec``, ``tvec`` in metres) and the pair's RMS reprojection error (px)."""
 
     left: str
     right: str
@@ -131,29 +101,13 @@ def _intrinsics(focal_px: float, cx: float, cy: float) -> np.ndarray:
 
 @dataclass(frozen=True, eq=False)
 class StereoCamera:
-    """Two cameras, their rectification and the calibration they came from (see the module).
+    """Two cameras, their rectification and the calibration they came from.
 
-    Attributes
-    ----------
-    size : (int, int)
-        Image width and height.
-    k_left, d_left, k_right, d_right : ndarray
-        Camera matrices and distortion coefficients (None: the default pinhole camera,
-        :data:`FOCAL_PX` at the image centre, no distortion).
-    rotation, translation : ndarray
-        The right camera's pose relative to the left one, metres (None: side by side,
-        :data:`BASELINE_M` apart).
-    rms : float
-        Reprojection error of the stereo calibration, in pixels (NaN if not calibrated).
-    board, square_m
-        The calibration board: inner corners (columns, rows) and square size in metres.
-    used, skipped : tuple of str
-        Names of the calibration pairs used, and of those where the board was not found.
-    pairs : tuple of BoardPair
-        The used pairs' corners, poses and errors (empty for a v1 file or a pinhole rig).
+    ``k_*`` and ``d_*`` are the camera matrices and distortions (None: :data:`FOCAL_PX` at the
+    image centre, none); ``rotation`` and ``translation`` the right camera's pose (None:
+    :data:`BASELINE_M` to the right); ``rms`` the calibration's reprojection error in pixels
+    (NaN: none measured); ``used``, ``skipped`` and ``pairs`` the calibration's pairs.
 
-    Examples
-    --------
     >>> camera = StereoCamera()
     >>> camera.focal_px, camera.baseline_m, camera.size
     (300.0, 0.1, (320, 240))
@@ -175,8 +129,7 @@ class StereoCamera:
     used: tuple = ()
     skipped: tuple = ()
     pairs: tuple = ()
-    # The right camera's centre in the left camera's frame, kept as given by `pinhole` so
-    # that the rendered scenes' rays are computed exactly as they always were.
+    # The right camera's centre as `pinhole` was given it: the rendered scenes' rays are pinned bit for bit.
     _origin: np.ndarray = field(default=None, repr=False)
     _rect: dict = field(default_factory=dict, repr=False)
 
@@ -204,24 +157,10 @@ class StereoCamera:
                 roll_deg: float = 0.0) -> StereoCamera:
         """Two distortion-free cameras side by side, as the rendered scenes use.
 
-        Parameters
-        ----------
-        width, height : int
-            Image size in pixels.  The principal point is the image centre
-            ``((width - 1) / 2, (height - 1) / 2)``.
-        focal_px : float
-            Focal length in pixels (> 0), the same for both cameras.
-        baseline_m : float
-            Distance between the optical centres in metres (> 0).
-        vertical_offset_px : float
-            The right image is shifted *down* by this many pixels.
-        roll_deg : float
-            Rotation of the right camera about its optical axis, in degrees.  A positive
-            roll turns the camera's ``x`` axis towards its ``y`` axis, so the scene appears
-            rotated counter-clockwise on screen in the right image.
+        The principal point is the image centre.  The right image is shifted *down* by
+        `vertical_offset_px`; a positive `roll_deg` turns the right camera's ``x`` axis towards
+        its ``y`` axis (the scene turns counter-clockwise on screen).
 
-        Examples
-        --------
         >>> cam = StereoCamera.pinhole()
         >>> float(cam.disparity_at(1.8)), float(cam.disparity_at(1.0))
         (16.666666666666668, 30.0)
@@ -253,47 +192,11 @@ class StereoCamera:
     def from_factory(cls, focal_px: float, baseline_m: float, size, centre=None) -> StereoCamera:
         """A rectified stereo camera from its factory calibration (OAK-D, RealSense, ZED, ...).
 
-        Such a camera delivers rectified pairs and ships the rectified focal length, principal
-        point and baseline.  The rig is two distortion-free cameras with that matrix, side by
-        side: rectifying changes no pixel (:attr:`is_rectified`), and ``Z = f B / d``.
+        Two distortion-free cameras with the rectified matrix, side by side: rectifying changes
+        no pixel.  `centre` is the principal point (default: the image centre).  ``rms`` is NaN,
+        so the search band is 1 px up and down (:func:`ismb_lab.matching.metric.row_tolerance`):
+        a guessed smaller RMS would narrow the band and widen the auto disparity window.
 
-        Parameters
-        ----------
-        focal_px : float
-            Rectified focal length in pixels (> 0).
-        baseline_m : float
-            Distance between the two cameras' centres in metres (> 0, at most
-            :data:`MAX_BASELINE_M`).
-        size : (int, int)
-            Width and height of the rectified images.
-        centre : (float, float), optional
-            Principal point ``(cx, cy)`` of the rectified views, inside the image (default: the
-            image centre ``((width - 1) / 2, (height - 1) / 2)``).
-
-        Returns
-        -------
-        StereoCamera
-            With no measured reprojection error: ``rms`` is NaN (``"rms_px": null`` in its
-            file), and no board.
-
-        Notes
-        -----
-        **The search band.**  A rig's candidates are kept within
-        :func:`ismb_lab.matching.metric.row_tolerance` pixels of their row: ``2 rms`` for a calibrated
-        rig.  A factory rig has no RMS to go by, and none is guessed: the band is then the one
-        the function gives a camera without one, 1 px up and down (a window 2 px tall), for
-        sub-pixel and whole-pixel corners alike.  That is about what a good chessboard
-        calibration gives (``2 rms`` is 0.90 px on OpenCV's 13 sample pairs, at 0.448 px), and
-        the tolerance the rest of the package holds a rectified pair to (its median row
-        difference under 1 px).  A guessed, smaller RMS narrows the band without saying so, and
-        a narrower band *widens* the window: the disparity range ``shift='auto'`` measures on
-        row-only SIFT matches keeps fewer true matches and more stray ones.  On OpenCV's pairs
-        01, 02, 09 and 14 rectified by the 13-pair rig, the window is 109, 198, 134 and 164 px
-        wide with the 1 px band, and 253, 275, 153 and 178 px with a guessed RMS of 0.25 px.
-        ``ismb-lab match --rig`` says on stderr which band it used and why.
-
-        Examples
-        --------
         >>> cam = StereoCamera.from_factory(520.8, 0.0836, (640, 480), centre=(350.6, 243.1))
         >>> cam.focal_px, cam.baseline_m, cam.rectified_centre.tolist(), cam.is_rectified
         (520.8, 0.0836, [350.6, 243.1], True)
@@ -323,30 +226,12 @@ class StereoCamera:
 
     @classmethod
     def from_opencv(cls, *paths, size=None, units: str = "m") -> StereoCamera:
-        """A rig from an OpenCV ``FileStorage`` file (YAML, XML or JSON) of a stereo calibration.
+        """A rig from OpenCV ``FileStorage`` files (YAML, XML or JSON) of a stereo calibration.
 
-        The file holds the two cameras' matrices ``K1``, ``K2`` (or ``M1``, ``M2``, or
-        ``cameraMatrix1``, ``cameraMatrix2``), their distortions ``D1``, ``D2`` (or
-        ``distCoeffs1``, ``distCoeffs2``) and the right camera's pose ``R`` (a 3x3 matrix or a
-        Rodrigues vector) and ``T``, as ``cv2.stereoCalibrate`` returns them
-        (:data:`OPENCV_NAMES`).  They may be split over several files (OpenCV's stereo_calib
-        sample writes ``intrinsics.yml`` and ``extrinsics.yml``); a name given twice is refused.
-
-        Parameters
-        ----------
-        *paths : str or Path
-            The files, read in turn (each at most :data:`ismb_lab._core.files.MAX_JSON_BYTES` bytes).
-        size : (int, int), optional
-            Image width and height.  Default: the file's ``image_width`` and ``image_height``
-            (or ``imageSize``); one of them is needed, and they must agree.
-        units : {"m", "cm", "mm"}
-            The unit of ``T`` (:data:`UNITS`): the calibration board's, often millimetres.
-
-        Returns
-        -------
-        StereoCamera
-            Raw photos are rectified with it like a calibrated rig's; it has no measured RMS,
-            so its search band is 1 px (see :meth:`from_factory`).
+        The matrices (:data:`OPENCV_NAMES`; ``R`` a matrix or a Rodrigues vector) may be split
+        over several files, each given once.  `size` defaults to the files' ``image_width`` and
+        ``image_height`` (or ``imageSize``); `units` is the unit of ``T`` (:data:`UNITS`).
+        The rig has no measured RMS, so its search band is 1 px (see :meth:`from_factory`).
         """
         own = "StereoCamera.from_opencv"
         if not paths:
@@ -358,15 +243,15 @@ class StereoCamera:
             read, file_size = _read_opencv(path, own)
             for name, value in read.items():
                 if name in found:
-                    raise ParameterError(message("paths", own, f"files that give {_opencv_shown(name)} once",
-                                                 f"it again in {str(path)!r}"))
+                    raise ParameterError(message("paths", own, f"files that give {OPENCV_NAMES[name][0]} "
+                                                 "once", f"it again in {str(path)!r}"))
                 found[name] = value
             if file_size is not None:
                 if given_size is not None and file_size != given_size:
                     raise ParameterError(message("paths", own, "files of one image size",
                                                  f"{given_size} and {file_size}"))
                 given_size = file_size
-        missing = [_opencv_shown(name) for name in OPENCV_NAMES if name not in found]
+        missing = [OPENCV_NAMES[name][0] for name in OPENCV_NAMES if name not in found]
         if missing:
             raise ParameterError(message("paths", own, "files that give K1, D1, K2, D2, R and T",
                                          f"no {', '.join(missing)} in {', '.join(map(str, paths))}"))
@@ -396,8 +281,6 @@ class StereoCamera:
                 text = text.replace(f"'{name}' parameter of StereoCamera",
                                     f"'{OPENCV_NAMES[name][0]}' matrix of {', '.join(map(str, paths))}")
             raise ParameterError(text) from None
-
-    # ------------------------------------------------------------------ the two cameras
 
     @property
     def width(self) -> int:
@@ -430,20 +313,14 @@ class StereoCamera:
         return -(self.rotation.T @ self.translation.reshape(3)) + 0.0   # + 0.0: no -0.0
 
     @property
-    def right_rotation(self) -> np.ndarray:
-        """Rotation matrix from right-camera to left-camera coordinates."""
-        return self.rotation.T
-
-    @property
     def distorted(self) -> bool:
         """Whether either camera has lens distortion."""
         return bool(np.any(self.d_left) or np.any(self.d_right))
 
     @property
     def is_rectified(self) -> bool:
-        """Whether the two cameras already are a rectified pair (a factory-rectified camera, the
-        rendered scenes' rig): the same matrix, no distortion, no rotation, the right camera
-        straight to the right.  Rectifying such a pair changes no pixel.
+        """Whether the cameras already are a rectified pair: one matrix, no distortion, no
+        rotation, the right camera straight to the right.
 
         >>> StereoCamera().is_rectified, StereoCamera.pinhole(roll_deg=1).is_rectified
         (True, False)
@@ -453,8 +330,7 @@ class StereoCamera:
                     and np.array_equal(self.rotation, np.eye(3)) and t[0] < 0 and t[1] == 0 and t[2] == 0)
 
     def _pixels(self, cam: np.ndarray, k: np.ndarray) -> np.ndarray:
-        # The left camera's principal point plus the right one's offset from it: the order
-        # of the additions the rendered scenes (pinned bit for bit) were made with.
+        # this order of additions is the one the rendered scenes are pinned bit for bit with
         with np.errstate(divide="ignore", invalid="ignore"):
             xy = self.centre + k[0, 0] * cam[:, :2] / cam[:, 2:3]
         xy += k[:2, 2] - self.k_left[:2, 2]
@@ -462,22 +338,16 @@ class StereoCamera:
         return xy
 
     def project_left(self, points3d) -> np.ndarray:
-        """Left-image ``(x, y)`` of 3-D points (pinhole, no distortion); NaN rows for points
-        not in front of the camera.
+        """Left-image ``(x, y)`` of 3-D points (no distortion); NaN rows behind the camera.
 
-        Examples
-        --------
         >>> StereoCamera().project_left([[0.1, -0.05, 1.0]])
         array([[189.5, 104.5]])
         """
         return self._pixels(check_points(points3d, "points3d", "StereoCamera.project_left", dims=3), self.k_left)
 
     def project_right(self, points3d) -> np.ndarray:
-        """Right-image ``(x, y)`` of 3-D points of the left camera's frame (pinhole, no
-        distortion); NaN rows for points not in front of the camera.
+        """Right-image ``(x, y)`` of left-frame 3-D points (no distortion); NaN rows behind it.
 
-        Examples
-        --------
         >>> StereoCamera.pinhole(vertical_offset_px=2).project_right([[0.1, -0.05, 1.0]])
         array([[159.5, 106.5]])
         """
@@ -493,8 +363,6 @@ class StereoCamera:
     def rays_left(self, xy) -> tuple[np.ndarray, np.ndarray]:
         """Rays through left-image points: ``(origins, unit directions)``, both ``(N, 3)``.
 
-        Examples
-        --------
         >>> StereoCamera().rays_left([[159.5, 119.5]])
         (array([[0., 0., 0.]]), array([[0., 0., 1.]]))
         """
@@ -505,18 +373,14 @@ class StereoCamera:
     def rays_right(self, xy) -> tuple[np.ndarray, np.ndarray]:
         """Rays through right-image points, in the left camera's frame.
 
-        Examples
-        --------
         >>> StereoCamera().rays_right([[159.5, 119.5]])
         (array([[0.1, 0. , 0. ]]), array([[0., 0., 1.]]))
         """
         xy = check_points(xy, "xy", "StereoCamera.rays_right") - (self.k_right[:2, 2] - self.k_left[:2, 2])
         d = self._dirs(xy, self.k_right)
         if not np.array_equal(self.rotation, np.eye(3)):
-            d = _rotate(d, self.right_rotation)
+            d = _rotate(d, self.rotation.T)
         return np.broadcast_to(self.right_origin, d.shape).copy(), _unit(d)
-
-    # ------------------------------------------------------------------ the rectified pair
 
     def _rectification(self) -> dict:
         if not self._rect:
@@ -556,31 +420,15 @@ class StereoCamera:
     def disparity_at(self, depth) -> np.ndarray:
         """Disparity ``focal_px * baseline_m / depth`` of the rectified pair, in pixels.
 
-        Examples
-        --------
         >>> StereoCamera().disparity_at([1.0, 1.5])
         array([30., 20.])
         """
         return self.focal_px * self.baseline_m / np.asarray(depth, dtype=float)
 
     def points_from_disparity(self, xy_left, disparity) -> np.ndarray:
-        """3-D points of rectified-left pixels and their disparities.
+        """3-D points ``(X, Y, Z)`` in metres of rectified-left pixels and their disparities
+        (``x_left - x_right``); NaN rows where the disparity is not > 0.
 
-        Parameters
-        ----------
-        xy_left : (N, 2) array_like
-            Points ``(x, y)`` of the rectified left view.
-        disparity : (N,) array_like
-            Their disparities ``x_left - x_right``, in pixels (> 0 for a point in front).
-
-        Returns
-        -------
-        (N, 3) ndarray
-            ``(X, Y, Z)`` in metres, in the rectified left camera's frame (X right, Y down,
-            Z forward); NaN rows where the disparity is not > 0.
-
-        Examples
-        --------
         >>> StereoCamera().points_from_disparity([[10.0, 20.0]], [0.0])
         array([[nan, nan, nan]])
         """
@@ -595,26 +443,10 @@ class StereoCamera:
             z = np.where(d > 0, f * self.baseline_m / d, np.nan)
         return np.stack([(xy[:, 0] - cx) * z / f, (xy[:, 1] - cy) * z / f, z], axis=1)
 
-    def disparity_range(self, near_m: float, far_m: float) -> tuple:
-        """The disparities, in pixels, of points from `near_m` to `far_m` in front of the
-        rectified pair: ``(f B / far_m, f B / near_m)``.
-
-        Examples
-        --------
-        >>> StereoCamera().disparity_range(1.0, 2.0)
-        (15.0, 30.0)
-        """
-        own = "StereoCamera.disparity_range"
-        near = check_number(near_m, "near_m", own, low=0, low_open=True)
-        far = check_number(far_m, "far_m", own, low=near, low_open=True)
-        fb = self.focal_px * self.baseline_m
-        return (fb / far, fb / near)
-
     @property
     def zoom(self) -> float:
-        """How much the rectified views are enlarged: their focal length over the smaller of the
-        cameras' own.  Near 1 for a good rig (0.97 on OpenCV's sample); a poorly constrained
-        distortion makes the crop to valid pixels zoom in (1.9 with its pairs 03, 05, 14 alone)."""
+        """The rectified focal length over the smaller of the cameras' own (near 1 for a good rig;
+        a poorly constrained distortion makes the crop to valid pixels zoom in)."""
         return self.focal_px / min(float(self.k_left[0, 0]), float(self.k_right[0, 0]))
 
     def rectify_points(self, xy, side: str = "left") -> np.ndarray:
@@ -657,8 +489,7 @@ class StereoCamera:
                 make(self.k_right, self.d_right, rect["r2"], rect["p2"]))
 
     def photos(self, left, right, owner: str = "StereoCamera.photos") -> tuple:
-        """A pair of this camera loaded grey (:func:`ismb_lab.images.rectify.load_photo`); a photo of
-        another size than the camera's is refused."""
+        """A pair of this camera's size loaded grey (:func:`ismb_lab.images.rectify.load_photo`)."""
         from ..images.rectify import load_photo
 
         left, right = load_photo(left, "left", owner), load_photo(right, "right", owner)
@@ -669,13 +500,7 @@ class StereoCamera:
         return left, right
 
     def rectify(self, left, right):
-        """Rectify a pair of this camera exactly (no matching needed; the figures are
-        measured on robust matches afterwards).  A pair of another size is refused.
-
-        Returns
-        -------
-        ismb_lab.images.rectify.Rectified
-        """
+        """The pair rectified exactly, as a :class:`ismb_lab.images.rectify.Rectified`."""
         from ..images.rectify import measured
 
         left, right = self.photos(left, right, "StereoCamera.rectify")
@@ -684,8 +509,7 @@ class StereoCamera:
         return measured(warp(left, lx, ly), warp(right, rx, ry), np.eye(3), np.eye(3), "rig")
 
     def to_dict(self) -> dict:
-        """The rig file's record (format :data:`FORMAT`): ``rms_px`` is None when no error was
-        measured, and ``board`` and ``square_m`` are None for a rig calibrated from no board."""
+        """The rig file's record (:data:`FORMAT`); None for an unmeasured RMS or an unused board."""
         boarded = bool(self.used)
         return {"format": FORMAT, "size": list(self.size), "rms_px": self.rms if math.isfinite(self.rms) else None,
                 "focal_px": self.focal_px, "baseline_m": self.baseline_m, "zoom": self.zoom,
@@ -705,23 +529,22 @@ _RMS_RULE = ("a finite number > 0 (the calibration's RMS reprojection error in p
              "band), or NaN when none was measured")
 
 
+def _two_ints(value, name: str, owner: str, rule: str, low: int, high: int) -> tuple:
+    """`value` as a tuple of two whole numbers from `low` to `high`."""
+    if (not isinstance(value, (tuple, list)) or len(value) != 2
+            or not all(isinstance(v, (int, np.integer)) and not isinstance(v, bool) for v in value)):
+        raise ParameterTypeError(message(name, owner, rule, value))
+    if not all(low <= v <= high for v in value):
+        raise ParameterError(message(name, owner, rule, tuple(value)))
+    return tuple(int(v) for v in value)
+
+
 def _check_size(size, owner: str) -> tuple:
-    """`size` as ``(width, height)``: two whole numbers from 1 to 65536."""
-    rule = f"(width, height), whole numbers from 1 to {1 << 16}"
-    if (not isinstance(size, (tuple, list)) or len(size) != 2
-            or not all(isinstance(v, (int, np.integer)) and not isinstance(v, bool) for v in size)):
-        raise ParameterTypeError(message("size", owner, rule, size))
-    if not all(1 <= v <= 1 << 16 for v in size):
-        raise ParameterError(message("size", owner, rule, tuple(size)))
-    return tuple(int(v) for v in size)
-
-
-def _opencv_shown(name: str) -> str:
-    return OPENCV_NAMES[name][0]
+    return _two_ints(size, "size", owner, f"(width, height), whole numbers from 1 to {1 << 16}", 1, 1 << 16)
 
 
 def _opencv_values(node) -> np.ndarray | None:
-    """A FileStorage node's numbers (a matrix, or a sequence of numbers), or None."""
+    """A FileStorage node's numbers (a matrix or a sequence), or None."""
     if node.isSeq():
         items = [node.at(i) for i in range(node.size())]
         if not all(item.isReal() or item.isInt() for item in items):
@@ -802,9 +625,7 @@ def _check_intrinsics(k, d, name: str, owner: str) -> None:
 
 
 def check_board(board, square_m, owner: str) -> tuple:
-    """`board` (inner corners per row and per column) and `square_m` (metres), checked as
-    `owner`'s: whole numbers from 2 to :data:`MAX_BOARD_SIDE`, and a side from
-    :data:`MIN_SQUARE_M` to :data:`MAX_SQUARE_M`.  Returns them as ``(tuple, float)``.
+    """`board` (inner corners per row, per column) and `square_m` (metres), checked as `owner`'s.
 
     >>> check_board([9, 6], 0.025, "calibrate_rig")
     ((9, 6), 0.025)
@@ -814,18 +635,12 @@ def check_board(board, square_m, owner: str) -> tuple:
     ismb_lab.ParameterError: The 'square_m' parameter of the rig file must be a finite number >= 1e-05 and <= 10.0. Got -1.0 instead.
     """
     rule = f"two whole numbers from 2 to {MAX_BOARD_SIDE} (inner corners per row, per column)"
-    if (not isinstance(board, (tuple, list)) or len(board) != 2
-            or not all(isinstance(v, (int, np.integer)) and not isinstance(v, bool) for v in board)):
-        raise ParameterTypeError(message("board", owner, rule, board))
-    if not all(2 <= v <= MAX_BOARD_SIDE for v in board):
-        raise ParameterError(message("board", owner, rule, tuple(board)))
-    square_m = check_number(square_m, "square_m", owner, low=MIN_SQUARE_M, high=MAX_SQUARE_M)
-    return tuple(int(v) for v in board), square_m
+    board = _two_ints(board, "board", owner, rule, 2, MAX_BOARD_SIDE)
+    return board, check_number(square_m, "square_m", owner, low=MIN_SQUARE_M, high=MAX_SQUARE_M)
 
 
 def _check(camera: StereoCamera, owner: str) -> None:
-    """Refuse a camera that cannot rectify: it would give black images or a crash, not an error;
-    and an RMS error that would set no search band (0, or infinite)."""
+    """Refuse a camera that cannot rectify (black images or a crash), or an RMS that sets no band."""
     rms = camera.rms
     if isinstance(rms, bool) or not isinstance(rms, numbers.Real):
         raise ParameterTypeError(message("rms", owner, _RMS_RULE, rms))
@@ -854,14 +669,14 @@ def _check(camera: StereoCamera, owner: str) -> None:
                                      f"focal length {camera.focal_px} px, baseline {camera.baseline_m} m"))
 
 
-#: The fields of a rig file that every rig has (``used``, ``skipped`` and ``pairs`` may be left
-#: out; ``focal_px``, ``baseline_m``, ``zoom`` and ``cropped`` are derived, and checked if given).
+#: The fields every rig file has (the derived ``focal_px``, ``baseline_m``, ``zoom``, ``cropped`` are
+#: checked if given).
 REQUIRED = ("format", "size", "rms_px", "board", "square_m", "k_left", "d_left", "k_right", "d_right",
             "rotation", "translation")
 
 
 class _Fields:
-    """The checks of one rig file's fields, each error naming the field, the rule and the value."""
+    """The checks of one rig file's fields."""
 
     def __init__(self, data: dict, owner: str):
         self.data, self.owner = data, owner
@@ -885,12 +700,8 @@ class _Fields:
         if not plain(value):
             raise self.fail(name, rule, value, ParameterTypeError)
         try:
-            array = np.asarray(value, dtype=float)
+            array = np.asarray(value, dtype=float).reshape(shape)
         except (OverflowError, ValueError):   # an integer of hundreds of digits, ragged lists
-            raise self.fail(name, rule, value) from None
-        try:
-            array = array.reshape(shape)
-        except ValueError:
             raise self.fail(name, rule, value) from None
         if array.ndim != len(shape) or any(s != -1 and a != s for a, s in zip(array.shape, shape)) \
                 or not np.isfinite(array).all():
@@ -917,7 +728,7 @@ def _number(fields: _Fields, name: str, value, **bounds) -> float:
 
 
 def _from_record(data, owner: str) -> StereoCamera:
-    """The camera of a rig file's parsed JSON; each bad field is named (see :func:`load_camera`)."""
+    """The camera of a rig file's parsed JSON."""
     fields = _Fields(data, owner)
     size = fields.get("size", "(width, height)")
     size = _check_size(size, owner)
@@ -999,16 +810,10 @@ def _pair(fields: _Fields, n: int, record) -> BoardPair:
 def load_camera(source) -> StereoCamera:
     """A rig from its file (``ismb-lab calibrate``'s or ``ismb-lab rig``'s JSON; a path or the text).
 
-    Every field is checked by name: a field that is missing, of the wrong type or out of its
-    range raises a ParameterError (or ParameterTypeError) naming it, its rule and the value.
-    ``rms_px`` is the calibration's RMS reprojection error, > 0, or null when none was measured
-    (a factory rig: its search band is then 1 px, see :meth:`StereoCamera.from_factory`);
-    ``board`` and ``square_m`` are null only for a rig that no board calibrated.  The derived
-    ``focal_px`` and ``baseline_m`` must agree with the cameras' (an edited value would not be
-    used).
+    Each field is checked by name.  ``rms_px`` is null when none was measured; ``board`` and
+    ``square_m`` are null only for a rig that no board calibrated; the derived ``focal_px`` and
+    ``baseline_m`` must agree with the cameras'.
 
-    Examples
-    --------
     >>> cam = load_camera(StereoCamera.from_factory(500.0, 0.06, (640, 480)).to_json())
     >>> cam.focal_px, cam.baseline_m, cam.is_rectified
     (500.0, 0.06, True)

@@ -1,24 +1,9 @@
 """Chessboard calibration of a fixed two-camera rig: intrinsics, baseline and rectification maps.
 
-A rig whose cameras do not move relative to each other is calibrated once from a few pairs
-of a printed chessboard: OpenCV finds the inner corners (``cv2.findChessboardCorners``,
-refined with ``cv2.cornerSubPix``), calibrates each camera (``cv2.calibrateCamera``), then
-the pair (``cv2.stereoCalibrate`` with those intrinsics fixed), and ``cv2.stereoRectify``
-turns the result into the two rectifying maps, the rectified focal length ``f`` (pixels)
-and the baseline ``B`` (metres).  Then depth is ``Z = f B / d`` for a disparity ``d``
-(:func:`ismb_lab.depth.objects.metric_depth`).
-
-The board's square size sets the scale of everything metric: ``B`` and ``Z`` are
-proportional to it, and nothing else depends on it.
-
-The rig keeps each pair's detected corners, its reprojection error and the board's pose
-(format ``ismb_lab-rig-v2``; v1 files, without them, still load), so a pair can be dropped
-and the rig recalibrated without finding the boards again (:func:`recalibrate`).  A pair is
-marked as an outlier when its error exceeds both three times the median of the pairs and
-0.5 px (:func:`outliers`).  On OpenCV's sample, pair 02 is at 1.22 px, 4.5 times the median
-(0.27 px), and is marked; once it is dropped, the worst pair is 2.1 times the median
-(0.515 against 0.246 px): twice the median would mark it, three times does not.  The 0.5 px
-floor keeps a rig whose pairs are all good from marking any.
+Corners by ``cv2.findChessboardCorners`` (refined with ``cv2.cornerSubPix``), each camera by
+``cv2.calibrateCamera``, then the pair by ``cv2.stereoCalibrate`` with those intrinsics fixed.
+The board's square size sets the scale of everything metric.  The rig keeps each pair's corners,
+so a pair can be dropped without finding the boards again (:func:`recalibrate`).
 """
 
 from __future__ import annotations
@@ -40,7 +25,9 @@ __all__ = ["BOARD", "MAX_ZOOM", "SQUARE_M", "HeldOut", "board_depth", "board_poi
 #: Fewest pairs in which the board is found in both views for a calibration.
 MIN_PAIRS = 3
 _CRITERIA = (cv2.TERM_CRITERIA_EPS + cv2.TERM_CRITERIA_MAX_ITER, 100, 1e-6)
-#: A pair is an outlier above both this many times the pairs' median error and `OUTLIER_PX`.
+#: A pair is an outlier above both this many times the pairs' median error and `OUTLIER_PX`: on
+#: OpenCV's sample, pair 02 (4.5 times the median) is; the worst pair once it is dropped (2.1) is
+#: not; the floor keeps a rig of good pairs from marking any.
 OUTLIER_RATIO = 3.0
 OUTLIER_PX = 0.5
 
@@ -86,30 +73,9 @@ def outliers(pairs) -> tuple:
 
 
 def calibrate_rig(pairs, board=BOARD, square_m: float = SQUARE_M, progress=None) -> StereoCamera:
-    """Calibrate a rig from chessboard pairs.
-
-    Parameters
-    ----------
-    pairs : sequence of (name, left, right)
-        Images as paths, bytes or grey arrays, all of one size.
-    board : (int, int)
-        Inner corners per row and per column.
-    square_m : float
-        Side of one square, in metres.
-    progress : callable, optional
-        Called once per pair (for a progress bar).
-
-    Returns
-    -------
-    StereoCamera
-        Pairs where the board is not found in both views are skipped and named in
-        ``StereoCamera.skipped``.
-
-    Raises
-    ------
-    ParameterError
-        Fewer than 3 usable pairs, images of different sizes, or a board or square size
-        out of range (:func:`~ismb_lab.cameras.camera.check_board`).
+    """Calibrate a rig from ``(name, left, right)`` chessboard pairs (paths, bytes or grey arrays,
+    all of one size); `progress` is called once per pair.  Pairs where the board is not found in
+    both views are named in ``skipped``; fewer than 3 usable pairs raise a ParameterError.
     """
     owner = "calibrate_rig"
     board, square_m = check_board(board, square_m, owner)
@@ -140,9 +106,7 @@ def _photo_name(photo, default: str) -> str:
 
 @contextmanager
 def _one_thread():
-    """OpenCV on one thread for the duration: its calibration sums the views' terms in an
-    order that depends on thread scheduling (15 calls of ``calibrateCamera`` on the same 13
-    views, 4 threads, 3 busy cores: 8 different results; 1 thread: 1)."""
+    """OpenCV on one thread for the duration: with more, its calibration's sums depend on scheduling."""
     before = cv2.getNumThreads()
     cv2.setNumThreads(1)
     try:
@@ -184,16 +148,8 @@ def _calibrate(pairs, used, skipped, size, board, square_m, owner) -> StereoCame
 
 
 def recalibrate(rig: StereoCamera, drop=()) -> StereoCamera:
-    """`rig` calibrated again from its own corners without the pairs named in `drop` (a
-    pair is named by its left or its right photo, or by its name in ``rig.used``; a photo's
-    path, ``boards/left02.jpg``, names it by its file name).
-
-    Raises
-    ------
-    ParameterError
-        A rig without corners (read from a v1 file), a name that is no pair of the rig, or
-        fewer than 3 pairs left.
-    """
+    """`rig` calibrated again from its own corners without the pairs in `drop`, each named by its
+    left or right photo (a path names it by its file name) or by its name in ``rig.used``."""
     owner = "recalibrate"
     if not rig.pairs:
         raise ParameterError(message("rig", owner, "a rig that keeps its pairs' corners (format "
@@ -207,7 +163,11 @@ def recalibrate(rig: StereoCamera, drop=()) -> StereoCamera:
     if unknown:
         raise ParameterError(message("drop", owner, "photos of the rig's pairs ("
                                      + ", ".join(p.left for p in rig.pairs) + ")", ", ".join(unknown)))
-    kept = [(p, u) for p, u in zip(rig.pairs, rig.used) if not set(drop) & {*p.names, u}]
+    return _refit(rig, [(p, u) for p, u in zip(rig.pairs, rig.used) if not set(drop) & {*p.names, u}], owner)
+
+
+def _refit(rig: StereoCamera, kept, owner: str) -> StereoCamera:
+    """`rig` calibrated again from the ``(pair, name)`` items of `kept`."""
     return _calibrate([p for p, _ in kept], tuple(u for _, u in kept), rig.skipped, tuple(rig.size),
                       tuple(rig.board), rig.square_m, owner)
 
@@ -243,29 +203,12 @@ def _held_out(rig: StereoCamera, pair: BoardPair) -> HeldOut:
 def leave_one_out(rig: StereoCamera, progress=None) -> tuple:
     """Each pair of `rig` held out in turn: its board under the rig calibrated from the others.
 
-    The fit's RMS error falls with every pair dropped, whether the pair was bad or not; a
-    held-out board's error does not, so it tells when dropping stops helping.  For each pair,
-    the rig is calibrated from its other pairs' corners (:func:`recalibrate`), and the pair's
-    board is seen through it two ways:
-
-    * ``reprojection_px``: the board's pose from its left view alone (``cv2.solvePnP``),
-      carried to the right camera by the rig's ``R`` and ``T``; the RMS reprojection error of
-      its corners over both views, in pixels;
-    * ``depth_error``: each corner's depth ``Z = f B / d`` from its two rectified views against
-      its depth in that pose (in the rectified frame), ``|Z_stereo - Z_pose| / Z_pose``; the
-      median over the corners.
-
-    Parameters
-    ----------
-    rig : StereoCamera
-        A rig that keeps its pairs' corners (format ``ismb_lab-rig-v2``), of at least 4 pairs.
-    progress : callable, optional
-        Called once per pair.
-
-    Returns
-    -------
-    tuple of HeldOut
-        One per pair of ``rig.pairs``, in order; NaN where the others do not calibrate.
+    The fit's RMS falls with every pair dropped, bad or not; a held-out board's error does not,
+    so it tells when dropping stops helping.  ``reprojection_px``: the board's pose from its left
+    view (``cv2.solvePnP``) carried to the right camera by ``R``, ``T``; the RMS error of its
+    corners over both views.  ``depth_error``: the median over the corners of
+    ``|Z_stereo - Z_pose| / Z_pose`` in the rectified frame.  NaN where the others do not
+    calibrate.  `rig` keeps the corners of at least 4 pairs.
     """
     owner = "leave_one_out"
     if len(rig.pairs) <= MIN_PAIRS:
@@ -275,9 +218,7 @@ def leave_one_out(rig: StereoCamera, progress=None) -> tuple:
     for n, pair in enumerate(rig.pairs):
         others = [(p, u) for m, (p, u) in enumerate(zip(rig.pairs, rig.used)) if m != n]
         try:
-            without = _calibrate([p for p, _ in others], tuple(u for _, u in others), rig.skipped, tuple(rig.size),
-                                 tuple(rig.board), rig.square_m, owner)
-            found.append(_held_out(without, pair))
+            found.append(_held_out(_refit(rig, others, owner), pair))
         except (ParameterError, cv2.error):
             found.append(HeldOut(float("nan"), float("nan")))
         if progress is not None:
@@ -286,14 +227,9 @@ def leave_one_out(rig: StereoCamera, progress=None) -> tuple:
 
 
 def board_depth(rig: StereoCamera, left, right) -> dict:
-    """The board's depth in a pair of `rig`, two ways, in the left rectified camera's frame.
-
-    ``"stereo"``: the board's corners found in both rectified views, ``Z = f B / d`` of each,
-    the median.  ``"pnp"``: the board's pose from ``cv2.solvePnP`` on the left view alone,
-    its corners' depths rotated into the rectified frame, the median.  The two use the rig
-    differently (disparity and baseline against the board's known size), so their
-    agreement checks the calibration.
-    """
+    """The board's median depth in a pair of `rig`, in the rectified left frame, two ways whose
+    agreement checks the calibration: ``"stereo"`` (``Z = f B / d`` of the rectified corners)
+    and ``"pnp"`` (the pose from the left view and the board's known size)."""
     owner = "board_depth"
     rectified = rig.rectify(left, right)
     corners = find_board(rectified.left, rig.board), find_board(rectified.right, rig.board)

@@ -54,8 +54,6 @@ __all__ = ["euclidean_disparity", "horizontal_disparity", "vertical_disparity"]
 def horizontal_disparity(left_xy, right_xy) -> np.ndarray:
     """Horizontal disparity ``x_left - x_right`` of matched points.
 
-    Examples
-    --------
     >>> horizontal_disparity([[99, 99]], [[88, 100]])
     array([11.])
     """
@@ -65,8 +63,6 @@ def horizontal_disparity(left_xy, right_xy) -> np.ndarray:
 def vertical_disparity(left_xy, right_xy) -> np.ndarray:
     """Vertical disparity ``y_right - y_left`` of matched points.
 
-    Examples
-    --------
     >>> vertical_disparity([[99, 99]], [[88, 100]])
     array([1.])
     """
@@ -76,8 +72,6 @@ def vertical_disparity(left_xy, right_xy) -> np.ndarray:
 def euclidean_disparity(left_xy, right_xy) -> np.ndarray:
     """Euclidean disparity ``||p - q||``, as in the thesis' tables.
 
-    Examples
-    --------
     >>> euclidean_disparity([[99, 99]], [[88, 100]]).round(2)   # Table 5.1, pair 1
     array([11.05])
     """

@@ -1,15 +1,5 @@
-"""Real stereo photographs from installed packages, read at run time; nothing is downloaded.
-
-* :func:`motorcycle`: Middlebury 2014 Motorcycle, which scikit-image ships 4x down-sampled
-  (``skimage.data.stereo_motorcycle``), scaled to the thesis' width (about 320 px) and cut
-  into thesis-sized ROIs, each an evaluation pair that no one labelled by hand: its targets
-  come from the ground-truth disparity (:func:`ground_truth_pairs`).
-* OpenCV's sample data, from Debian's ``opencv-doc`` package
-  (``apt-get install opencv-doc``; :func:`opencv_samples` finds it):
-  :func:`aloe`, Middlebury 2006 Aloe, a rectified pair with ground truth (Scharstein and
-  Pal, CVPR 2007); :func:`books`, two hand-held photographs of books that are *not*
-  rectified; :func:`chessboard_pairs`, 13 pairs of a fixed two-camera rig with a 9 x 6
-  chessboard, the classic stereo-calibration set.
+"""Real stereo photographs from installed packages (scikit-image, Debian's ``opencv-doc``); nothing
+is downloaded.
 """
 
 from __future__ import annotations
@@ -40,16 +30,7 @@ MOTORCYCLE_ROIS = ((0, 0, 160, 108), (160, 0, 160, 108), (0, 108, 160, 108), (16
 
 @dataclass(frozen=True, eq=False)
 class GroundTruthPair:
-    """A rectified grey pair and the horizontal disparity of its left view.
-
-    Attributes
-    ----------
-    left, right : (H, W) float ndarray
-        Grey images in ``[0, 255]``.
-    disparity : (H, W) float ndarray
-        ``x_left - x_right`` for each left pixel; NaN where it is unknown.
-    name : str
-    """
+    """A rectified grey pair in ``[0, 255]`` and its left view's ``x_left - x_right`` (NaN: unknown)."""
 
     left: np.ndarray
     right: np.ndarray
@@ -58,24 +39,12 @@ class GroundTruthPair:
 
 
 def motorcycle(width: int = 320) -> GroundTruthPair:
-    """The Middlebury 2014 Motorcycle pair, grey, scaled to `width` pixels.
+    """The Middlebury 2014 Motorcycle pair (scikit-image's copy), grey, scaled to `width` pixels.
 
-    Images are scaled with area averaging.  The disparity is scaled the same way,
-    averaging only known pixels; a low-resolution pixel is unknown when less than
-    half of its footprint was known.  (Requiring the whole footprint leaves half
-    of all Harris corners unknown, since corners sit on depth edges.)
+    Area averaging; a scaled disparity averages known pixels only, and is unknown where less
+    than half its footprint was known (the whole would leave half the corners, on depth edges,
+    unknown).
 
-    Parameters
-    ----------
-    width : int
-        Output width in pixels, at most the bundled 741.
-
-    Returns
-    -------
-    pair : GroundTruthPair
-
-    Examples
-    --------
     >>> pair = motorcycle()
     >>> pair.left.shape, bool(np.nanmax(pair.disparity) < 30)
     ((216, 320), True)
@@ -125,19 +94,8 @@ class SampleDataMissing(FileNotFoundError):
 
 
 def opencv_samples(folder=None) -> Path:
-    """The folder of OpenCV's sample data.
-
-    Parameters
-    ----------
-    folder : str or os.PathLike, optional
-        Another folder with the same files; else the environment variable
-        ``ISMB_LAB_OPENCV_DATA``; else :data:`OPENCV_DATA`.
-
-    Raises
-    ------
-    SampleDataMissing
-        When the folder has no ``aloeL.jpg``, with how to install the data.
-    """
+    """The folder of OpenCV's sample data: `folder`, else ``ISMB_LAB_OPENCV_DATA``, else
+    :data:`OPENCV_DATA`; :class:`SampleDataMissing` says how to install it."""
     chosen = folder if folder is not None else os.environ.get(OPENCV_DATA_VARIABLE) or OPENCV_DATA
     path = Path(chosen)
     if not (path / "aloeL.jpg").is_file():
@@ -160,16 +118,9 @@ def _sample(name: str, folder, flags=cv2.IMREAD_GRAYSCALE) -> np.ndarray:
 def aloe(width: int | None = None, *, folder=None) -> GroundTruthPair:
     """Middlebury 2006 Aloe, grey, with its ground-truth disparity (0 in the file: unknown).
 
-    Parameters
-    ----------
-    width : int, optional
-        Scale to this many pixels wide, as :func:`motorcycle` does (disparities scale
-        with it); the full 1282 x 1110 by default.
-    folder : optional
-        See :func:`opencv_samples`.
+    `width` scales it as :func:`motorcycle` does (default: the full 1282 x 1110); `folder`: see
+    :func:`opencv_samples`.
 
-    Examples
-    --------
     >>> pair = aloe(320)                                  # doctest: +SKIP
     >>> pair.left.shape                                   # doctest: +SKIP
     (277, 320)
@@ -198,30 +149,11 @@ def chessboard_pairs(*, folder=None) -> list[tuple[str, np.ndarray, np.ndarray]]
 
 
 def ground_truth_pairs(disparity: np.ndarray, left_xy, right_xy, tol: float = 1.5):
-    """Target pairs from a ground-truth disparity map.
+    """Target pairs ``(i, k)`` from a ground-truth disparity map, and the unknown left corners.
 
-    A left corner's partner is the right corner within `tol` pixels of
-    ``(x - d(x, y), y)``.  Corners where ``d`` is unknown are *unknown*: neither
-    a target nor an error when matched.
+    A left corner's partner is the right corner within `tol` pixels of ``(x - d(x, y), y)``;
+    where ``d`` is unknown (NaN), the corner is neither a target nor an error when matched.
 
-    Parameters
-    ----------
-    disparity : (H, W) ndarray
-        Left-view horizontal disparity, NaN where unknown.
-    left_xy, right_xy : (N, 2) array_like
-        Corner points ``(x, y)``.
-    tol : float
-        Snap distance in pixels.
-
-    Returns
-    -------
-    pairs : (m, 2) int ndarray
-        ``(i, k)`` feature indices of the targets.
-    unknown : (u,) int ndarray
-        Left corners whose ground truth is unknown.
-
-    Examples
-    --------
     >>> d = np.full((10, 20), 5.0); d[:, :3] = np.nan
     >>> pairs, unknown = ground_truth_pairs(d, [[10, 4], [2, 4], [15, 4]], [[5, 4], [10.5, 4]])
     >>> pairs.tolist(), unknown.tolist()

@@ -1,10 +1,8 @@
 """Harris corners (thesis chapter 2).
 
-The Harris matrix ``M`` is the structure tensor of the image gradients averaged
-over a Gaussian window; its response ``R = det(M) - k tr(M)^2`` is positive at
-corners, negative on straight edges and zero in flat regions.
-:func:`detect_corners` keeps the local maxima of ``R`` inside a region of
-interest and relaxes the threshold ``T`` until there are enough of them.
+``M`` is the structure tensor of the image gradients averaged over a Gaussian window; its
+response ``R = det(M) - k tr(M)^2`` is positive at corners, negative on straight edges and zero
+in flat regions.
 """
 
 from __future__ import annotations
@@ -22,8 +20,7 @@ __all__ = ["MAX_SIGMA", "Corners", "check_roi", "detect_corners", "harris_from_t
            "resolve_roi", "structure_tensor"]
 
 
-#: Largest Gaussian window (sigma, pixels) of the structure tensor: its cost grows with sigma
-#: (a kernel of 8 sigma + 1 taps a pass), and a window this wide already blurs every corner away.
+#: Largest Gaussian window (sigma, pixels) of the structure tensor: a wider one blurs every corner away.
 MAX_SIGMA = 50.0
 
 
@@ -53,23 +50,11 @@ def _check_k(k, owner: str) -> float:
 
 
 def image_gradients(image) -> tuple[np.ndarray, np.ndarray]:
-    """Image derivatives by the 3x3 Sobel operator, divided by 8.
+    """Image derivatives ``(dI/dx, dI/dy)`` by the 3x3 Sobel operator, divided by 8.
 
-    Parameters
-    ----------
-    image : (H, W) array_like
-        Grey image.
+    ``x`` grows along columns, ``y`` down the rows.  Dividing by 8 makes a ramp rising by 1 per
+    pixel give exactly 1.  Borders are mirrored without repeating the edge pixel (``'mirror'``).
 
-    Returns
-    -------
-    Ix, Iy : (H, W) ndarray of float64
-        ``dI/dx`` (``x`` grows to the right, along columns) and ``dI/dy`` (``y``
-        grows downward, along rows).  The division by 8 makes a ramp that rises
-        by 1 per pixel give exactly 1.  Borders are mirrored without repeating
-        the edge pixel (scipy's ``'mirror'``, OpenCV's ``BORDER_REFLECT_101``).
-
-    Examples
-    --------
     >>> Ix, Iy = image_gradients(np.tile(np.arange(4.0), (3, 1)))   # I = x
     >>> Ix[1]
     array([0., 1., 1., 0.])
@@ -83,24 +68,9 @@ def image_gradients(image) -> tuple[np.ndarray, np.ndarray]:
 
 
 def structure_tensor(image, sigma: float = 1.0) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """The Harris matrix ``M``: gradient products averaged over a Gaussian window.
+    """The Harris matrix ``M = [[Axx, Axy], [Axy, Ayy]]`` at every pixel: the products of the
+    gradients averaged over a Gaussian window of `sigma` pixels (``'mirror'`` borders).
 
-    Parameters
-    ----------
-    image : (H, W) array_like
-        Grey image.
-    sigma : float
-        Standard deviation of the Gaussian window, in pixels.
-
-    Returns
-    -------
-    Axx, Axy, Ayy : (H, W) ndarray of float64
-        The entries of ``M = [[Axx, Axy], [Axy, Ayy]]`` at every pixel: the
-        Gaussian-weighted means (``scipy.ndimage.gaussian_filter``, ``'mirror'``
-        borders) of ``Ix * Ix``, ``Ix * Iy`` and ``Iy * Iy``.
-
-    Examples
-    --------
     >>> Axx, Axy, Ayy = structure_tensor(np.tile(np.arange(9.0), (9, 1)))
     >>> float(Axx[4, 4]), float(Axy[4, 4]), float(Ayy[4, 4])
     (1.0, 0.0, 0.0)
@@ -111,21 +81,8 @@ def structure_tensor(image, sigma: float = 1.0) -> tuple[np.ndarray, np.ndarray,
 
 
 def harris_from_tensor(Axx, Axy, Ayy, k: float = 0.04) -> np.ndarray:
-    """Harris response ``det(M) - k tr(M)^2`` of a structure tensor.
+    """Harris response ``det(M) - k tr(M)^2`` of a structure tensor (the thesis: k from 0.04 to 0.06).
 
-    Parameters
-    ----------
-    Axx, Axy, Ayy : (H, W) array_like
-        Entries of ``M``, e.g. from :func:`structure_tensor`.
-    k : float
-        Harris' sensitivity; the thesis uses values between 0.04 and 0.06.
-
-    Returns
-    -------
-    R : (H, W) ndarray of float64
-
-    Examples
-    --------
     >>> float(harris_from_tensor(1.0, 0.0, 1.0))    # corner: two strong directions
     0.84
     >>> float(harris_from_tensor(1.0, 0.0, 0.0))    # edge: one direction
@@ -137,24 +94,8 @@ def harris_from_tensor(Axx, Axy, Ayy, k: float = 0.04) -> np.ndarray:
 
 
 def harris_response(image, sigma: float = 1.0, k: float = 0.04) -> np.ndarray:
-    """Harris response ``R`` of every pixel (thesis chapter 2).
+    """Harris response ``R`` of every pixel (see :func:`structure_tensor`, :func:`harris_from_tensor`).
 
-    Parameters
-    ----------
-    image : (H, W) array_like
-        Grey image.
-    sigma : float
-        Gaussian window of :func:`structure_tensor`.
-    k : float
-        See :func:`harris_from_tensor`.
-
-    Returns
-    -------
-    R : (H, W) ndarray of float64
-        Positive at corners, negative on straight edges, zero where the image is flat.
-
-    Examples
-    --------
     >>> img = np.zeros((20, 20)); img[10:, 10:] = 100.0     # one bright quadrant
     >>> R = harris_response(img)
     >>> bool(R[10, 10] > 0), bool(R[15, 10] < 0), bool(R[2, 2] == 0)
@@ -166,33 +107,11 @@ def harris_response(image, sigma: float = 1.0, k: float = 0.04) -> np.ndarray:
 
 
 def resolve_roi(roi, shape) -> tuple[int, int, int, int]:
-    """The region of interest as an ``(x, y, w, h)`` box inside an image.
+    """The region of interest as an ``(x, y, w, h)`` box inside an image of `shape` ``(H, W)``.
 
-    Parameters
-    ----------
-    roi : str or sequence of 4 ints
-        ``"center"``: the centre quarter, a ``W//2 x H//2`` box (at least one
-        pixel) starting at ``(W//4, H//4)`` (for 320x240: columns 80..239 and
-        rows 60..179, as in the thesis' tables); ``"full"``: the whole image;
-        ``(x, y, w, h)``; or the string ``"X,Y,W,H"`` (as typed on the command line).
-    shape : (int, int)
-        ``(height, width)`` of the image.
+    `roi` is ``"center"`` (the centre quarter, a ``W//2 x H//2`` box at ``(W//4, H//4)``, as in
+    the thesis' tables), ``"full"``, ``(x, y, w, h)`` or ``"X,Y,W,H"``.
 
-    Returns
-    -------
-    box : (int, int, int, int)
-        ``(x, y, w, h)``: columns ``x .. x + w - 1`` and rows ``y .. y + h - 1``.
-
-    Raises
-    ------
-    ValueError
-        An unknown string, not four parts, parts that are not integers, an empty
-        box, or a box that does not lie inside the image.
-    TypeError
-        `roi` is neither a string nor a sequence.
-
-    Examples
-    --------
     >>> resolve_roi("center", (240, 320))
     (80, 60, 160, 120)
     >>> resolve_roi("10, 20, 30, 40", (240, 320))
@@ -217,9 +136,7 @@ def resolve_roi(roi, shape) -> tuple[int, int, int, int]:
 
 
 def check_roi(roi, owner: str):
-    """Check the form of `roi` (see :func:`resolve_roi`) before any image is read: a box
-    must have ``x, y >= 0`` and ``w, h >= 1``; whether it lies inside the image waits for the
-    image.  Returns `roi`.
+    """`roi`, its form checked before any image is read (see :func:`resolve_roi`).
 
     >>> check_roi("10,20,30,40", "MatchConfig")
     '10,20,30,40'
@@ -255,25 +172,10 @@ def _roi_box(roi, rule: str, owner: str = "resolve_roi"):
 
 @dataclass(frozen=True, eq=False)
 class Corners:
-    """Harris corners of one image.
-
-    Attributes
-    ----------
-    xy : (N, 2) ndarray of float64
-        Corner points ``(x, y)`` in full-image coordinates, sorted row-major
-        (by ``y``, then ``x``); feature ``i`` is ``xy[i]``.
-    response : (N,) ndarray of float64
-        Harris response ``R`` at each point.
-    threshold : float
-        The final threshold ``T`` (NaN when there was no candidate and no
-        threshold was given).
-    iterations : int
-        How many times ``T`` was relaxed.
-    roi : (int, int, int, int)
-        The ``(x, y, w, h)`` box searched.
-    message : str
-        Empty when at least ``n_min`` corners were found, otherwise why not.
-    """
+    """Harris corners of one image: ``xy`` in full-image coordinates, sorted row-major, with
+    their ``response``; the final ``threshold`` T (NaN when there was no candidate and none was
+    given), how many ``iterations`` relaxed it, the ``roi`` box searched, and a ``message``
+    saying why fewer than ``n_min`` were found (empty otherwise)."""
 
     xy: np.ndarray
     response: np.ndarray
@@ -287,13 +189,8 @@ class Corners:
 
 
 def _local_maxima(R, box, border: int, min_distance: int):
-    """Positive local maxima of ``R`` in `box`, strongest first, ties thinned out.
-
-    Returns rows, columns and responses ordered by ``(-R, y, x)``.  Walking that
-    order, a maximum is dropped when an earlier kept one lies within
-    `min_distance` (Chebyshev); such a neighbour always has the same ``R`` (a
-    plateau or a tie), so of tied maxima the first in row-major order survives.
-    """
+    """Rows, columns and values of the positive local maxima of ``R`` in `box`, by ``(-R, y, x)``;
+    of tied maxima within `min_distance` (Chebyshev) the first in row-major order survives."""
     size = 2 * min_distance + 1
     peak = (R == ndi.maximum_filter(R, size=size, mode="nearest")) & (R > 0)
     x, y, w, h = box
@@ -316,11 +213,7 @@ def _local_maxima(R, box, border: int, min_distance: int):
 
 
 def _relaxations(start: float, target: float, relax: float) -> int:
-    """Fewest ``m >= 0`` with ``start * relax**m <= target``.
-
-    Solved with logarithms, not by looping: with `relax` close to 1 and a huge
-    `start` the loop could take billions of steps.
-    """
+    """Fewest ``m >= 0`` with ``start * relax**m <= target`` (by logarithms: a loop could take billions)."""
     if start <= target:
         return 0
     m = max(1, math.ceil((math.log(target) - math.log(start)) / math.log(relax)))
@@ -337,43 +230,26 @@ def detect_corners(image, *, roi="center", n_min: int = 20, n_max: int = 30,
                    min_distance: int = 3, relax: float = 0.8) -> Corners:
     """Harris corners inside a region of interest (thesis chapter 2, steps 1-3).
 
-    1. Compute ``R`` (:func:`harris_response`).  Candidates are the positive
-       local maxima of ``R`` (over a ``2 min_distance + 1`` square) inside `roi`
-       and at least ``ceil(3 sigma) + 1`` pixels from the image edge (the
-       window's 3-sigma core plus the Sobel pixel stays inside the image).  Ties
-       are thinned so that no two candidates lie within `min_distance` of each
-       other (Chebyshev distance); the first in row-major order is kept.
-    2. Keep the candidates with ``R >= T``.  While fewer than `n_min` are kept
-       and some candidate is still below ``T``, relax ``T <- relax * T``.
-    3. Keep the strongest `n_max` (equal responses: row-major order first).
+    1. Candidates are the positive local maxima of ``R`` (over a ``2 min_distance + 1`` square)
+       inside `roi` and at least ``ceil(3 sigma) + 1`` pixels from the image edge.
+    2. Keep those with ``R >= T``; while fewer than `n_min` are kept and some candidate is
+       still below ``T``, relax ``T <- relax * T``.
+    3. Keep the strongest `n_max` (ties: row-major order first).
 
     Parameters
     ----------
-    image : (H, W) array_like
-        Grey image (finite float or unsigned integer values).
-    roi : str or (int, int, int, int)
-        See :func:`resolve_roi`; the default is the thesis' centre quarter.
     n_min, n_max : int
         Fewest corners wanted and most corners kept (the thesis uses 20 and 30).
     threshold : float or None
-        Initial ``T`` in units of ``R``.  The thesis starts from a fixed ``T``,
-        but ``R`` scales with the fourth power of the contrast, so no single
-        value suits every image; None starts at the strongest candidate, which
-        lets the relaxation alone decide.
-    sigma : float
-        Gaussian window of the structure tensor, ``0 < sigma <= MAX_SIGMA``.
-    k : float
-        Harris' ``k``, ``0 < k < 0.25`` (the thesis: 0.04 to 0.06).
-    min_distance : int
-        Radius of the local-maximum test, in pixels.
-    relax : float
-        Factor ``0 < relax < 1`` applied to ``T`` per relaxation.
+        Initial ``T``.  ``R`` scales with the fourth power of the contrast, so no fixed value
+        suits every image; None starts at the strongest candidate.
+    sigma, k
+        See :func:`structure_tensor` and :func:`harris_from_tensor`.
 
     Returns
     -------
-    corners : Corners
-        Sorted row-major.  Fewer than `n_min` corners (possibly none, never an
-        error) come with an explanation in ``corners.message``.
+    Corners
+        Sorted row-major; fewer than `n_min` (never an error) come with ``message`` saying why.
 
     Examples
     --------
@@ -415,7 +291,6 @@ def detect_corners(image, *, roi="center", n_min: int = 20, n_max: int = 30,
         values = ()
 
     if len(values) == 0:
-        x, y, w, h = box
         inner = image[y:y + h, x:x + w]
         why = ("the image is flat inside the ROI" if inner.min() == inner.max() else
                f"R has no positive local maximum inside the ROI, at least {border} pixels "

@@ -31,10 +31,8 @@ def _path_error(name: str, owner: str, why: str, path: str) -> ParameterError:
                       f"({why}). Got {path!r} instead.")
 
 
-#: Default most pixels of one image (a file or an array); the environment variable ISMB_LAB_MAX_PIXELS
-#: raises (or lowers) it.  The pipeline keeps several float64 copies of each image
-#: (grey, the Harris products, the response): ``ismb-lab match`` on a 4000x3000 pair
-#: peaked at 1.18 GB resident, about 90 bytes a pixel, so 25 million pixels is about 2.3 GB.
+#: Default most pixels of one image; ISMB_LAB_MAX_PIXELS changes it.  The pipeline keeps several
+#: float64 copies of each image: about 90 bytes a pixel, so 25 million pixels is about 2.3 GB.
 MAX_PIXELS = 25_000_000
 #: The most that ISMB_LAB_MAX_PIXELS may allow: OpenCV's own default limit (2**30 pixels).
 MOST_PIXELS = 1 << 30
@@ -42,9 +40,8 @@ PIXELS_VARIABLE = "ISMB_LAB_MAX_PIXELS"
 
 
 def max_pixels() -> int:
-    """The pixel limit in force: ``ISMB_LAB_MAX_PIXELS`` if set, else :data:`MAX_PIXELS`.
-
-    The variable must be a whole number from 1 to :data:`MOST_PIXELS`.
+    """The pixel limit in force: ``ISMB_LAB_MAX_PIXELS`` (1 to :data:`MOST_PIXELS`) if set, else
+    :data:`MAX_PIXELS`.
 
     >>> max_pixels() >= 1
     True
@@ -69,8 +66,6 @@ def _too_large(error, what: str, limit: int) -> ParameterError:
 def exif_orientation(data: bytes) -> int:
     """The EXIF Orientation tag (1-8) of a JPEG file's bytes; 1 (upright) when there is none.
 
-    Examples
-    --------
     >>> exif_orientation(b"not a JPEG")
     1
     """
@@ -119,13 +114,8 @@ def orient(image: np.ndarray, orientation: int) -> np.ndarray:
 
 
 def _imdecode(data: bytes, flags: int):
-    """``cv2.imdecode``, and what it and its codecs (libpng, libjpeg) printed on stderr meanwhile.
-
-    The codecs print their complaints straight to file descriptor 2, before the caller can say
-    what went wrong in its own words; so fd 2 points to a temporary file during the call.  What
-    a decoded image's codec printed (a warning) is passed on to stderr as before; what a failed
-    one printed is returned, for the caller's one-line message.
-    """
+    """``cv2.imdecode``, and what its codecs printed to fd 2 meanwhile: passed on for a decoded
+    image (a warning), returned for a failed one (for the caller's one-line message)."""
     buffer = np.frombuffer(data, dtype=np.uint8)
     try:
         saved = os.dup(2)
@@ -150,12 +140,10 @@ def _imdecode(data: bytes, flags: int):
 
 
 def decode(data: bytes, flags: int, error) -> np.ndarray:
-    """Decode an image file's bytes with ``cv2.imdecode``, only once its header shows a size
-    within :func:`max_pixels` (see :mod:`ismb_lab._core.header` for the formats read).  A JPEG is
-    turned upright by its EXIF orientation with every flag, ``IMREAD_UNCHANGED`` included (which
-    OpenCV leaves as stored): every command sees a photo as ``rectify`` and viewers do.
+    """Decode an image file's bytes once its header shows a size within :func:`max_pixels`.
 
-    `error(why)` makes the exception raised, e.g. one that names the file.
+    A JPEG is turned upright by its EXIF orientation with every flag, ``IMREAD_UNCHANGED``
+    included.  `error(why)` makes the exception raised.
     """
     from .._core.header import HeaderError, image_size
 
@@ -218,7 +206,7 @@ def _to_grey(image, name: str, owner: str, *, bgr: bool) -> np.ndarray:
     if not (grey.ndim == 2 or colour) or grey.size == 0:
         raise ParameterError(message(name, owner, rule, f"an array of shape {image.shape}"))
     if colour:
-        # cvtColor has no float64 path; float32 keeps the fractions that uint8 would round.
+        # cvtColor has no float64 path; float32 keeps the fractions
         code = cv2.COLOR_BGR2GRAY if bgr else cv2.COLOR_RGB2GRAY
         grey = cv2.cvtColor(np.ascontiguousarray(grey[:, :, :3], dtype=np.float32), code)
         grey = np.clip(grey.astype(np.float64), 0.0, 255.0)
@@ -238,39 +226,14 @@ def _load(source, name: str, owner: str) -> np.ndarray:
 
 
 def load_image(source, name: str = "image") -> np.ndarray:
-    """Load an image file or array as grey ``float64`` values in ``[0, 255]``.
+    """Load an image file or array as C-contiguous grey ``float64`` values in ``[0, 255]``.
 
-    Parameters
-    ----------
-    source : str, os.PathLike or array_like
-        An image file (read unchanged: 8 or 16 bit, grey, BGR or BGRA) in a format
-        whose size is read from its header before decoding (PNG, JPEG, BMP, TIFF,
-        WebP, Sun raster, PBM/PGM/PPM, PFM, Radiance HDR: see :mod:`ismb_lab._core.header`),
-        or an array: ``(H, W)`` grey, or ``(H, W, 3)`` RGB / ``(H, W, 4)`` RGBA.
-        ``uint8`` values are used as they are, ``uint16`` values are scaled by
-        ``255 / 65535``, float values must already be finite and in ``[0, 255]``.
-    name : str
-        The name used for `source` in error messages.
+    A file is read unchanged (8 or 16 bit, grey, BGR or BGRA) in a format whose size is read
+    from its header (:mod:`ismb_lab._core.header`); an array is ``(H, W)`` grey or ``(H, W, 3|4)``
+    RGB(A).  ``uint16`` is scaled by ``255 / 65535``; floats must be finite and in ``[0, 255]``.
+    Colour becomes BT.601 luma in float32 (no rounding); alpha is dropped.  `name` names
+    `source` in error messages.
 
-    Returns
-    -------
-    image : (H, W) ndarray of float64
-        C-contiguous grey values in ``[0, 255]``.  Colour is converted with
-        ``cv2.cvtColor`` (ITU-R BT.601 luma ``0.299 R + 0.587 G + 0.114 B``), in
-        float32 so that no rounding to integers happens; alpha is dropped.
-
-    Raises
-    ------
-    ValueError
-        A missing, empty or undecodable file, one in another format, a file or an array over
-        the pixel limit (:func:`max_pixels`, read from the file's header or the array's shape,
-        before any copy), a bad shape, or float values that are not finite or lie outside
-        ``[0, 255]``.
-    TypeError
-        Any dtype other than ``uint8``, ``uint16`` or floating point (``bool`` included).
-
-    Examples
-    --------
     >>> load_image(np.array([[0, 65535]], dtype=np.uint16))
     array([[  0., 255.]])
     >>> load_image(np.full((1, 1, 3), [255, 0, 0], dtype=np.uint8)).round(3)   # pure red
@@ -280,24 +243,9 @@ def load_image(source, name: str = "image") -> np.ndarray:
 
 
 def image_sha256(source) -> str:
-    """SHA-256 fingerprint of an image file or array.
+    """SHA-256 hex digest of an image file's bytes (as ``sha256sum``), or of an array: of
+    ``b"ismb_lab-array-v1\\n"``, then ``f"{dtype.str} {shape}\\n"`` in ASCII, then its C-order bytes.
 
-    Parameters
-    ----------
-    source : str, os.PathLike or array_like
-        For a path: the hex digest of the file's bytes, so it equals
-        ``sha256sum FILE``.  For an array (which never came from a file): the
-        digest of ``b"ismb_lab-array-v1\\n"``, then ``f"{dtype.str} {shape}\\n"``
-        encoded as ASCII (e.g. ``"|u1 (240, 320)\\n"``), then the array's bytes in
-        C order, exactly as given (no conversion to grey or float).
-
-    Returns
-    -------
-    digest : str
-        64 hexadecimal characters.
-
-    Examples
-    --------
     >>> a = np.zeros((2, 3), dtype=np.uint8)
     >>> image_sha256(a) == image_sha256(a.copy())
     True
@@ -326,17 +274,8 @@ def image_sha256(source) -> str:
 
 @dataclass(frozen=True, eq=False)
 class StereoPair:
-    """A left and a right grey image of equal size, with their fingerprints.
-
-    Attributes
-    ----------
-    left, right : (H, W) ndarray of float64
-        Grey values in ``[0, 255]``.
-    left_sha256, right_sha256 : str
-        :func:`image_sha256` of each source (of the file, or of the array as given).
-    left_path, right_path : str or None
-        The file each image was read from, None for arrays.
-    """
+    """A left and a right grey image of equal size, with their :func:`image_sha256` and paths
+    (None for arrays)."""
 
     left: np.ndarray
     right: np.ndarray
@@ -352,27 +291,8 @@ class StereoPair:
 
 
 def load_pair(left, right, *, min_shape=(1, 1)) -> StereoPair:
-    """Load a stereo pair with :func:`load_image` and check the two sizes.
+    """Load a stereo pair with :func:`load_image`; `min_shape` is the smallest ``(height, width)``.
 
-    Parameters
-    ----------
-    left, right : str, os.PathLike or array_like
-        The images; see :func:`load_image`.
-    min_shape : (int, int)
-        Smallest allowed ``(height, width)``, e.g. what the matching windows need.
-
-    Returns
-    -------
-    pair : StereoPair
-
-    Raises
-    ------
-    ValueError
-        An unreadable image (named 'left' or 'right'), a left image smaller than
-        `min_shape` (named 'left'), or a right image of another size (named 'right').
-
-    Examples
-    --------
     >>> pair = load_pair(np.zeros((4, 6)), np.ones((4, 6)))
     >>> pair.shape, pair.left_path
     ((4, 6), None)
@@ -390,8 +310,8 @@ def load_pair(left, right, *, min_shape=(1, 1)) -> StereoPair:
         raise ParameterError(message("min_shape", owner, rule, min_shape))
     min_h, min_w = (check_number(v, "min_shape", owner, low=1, integer=True) for v in min_shape)
 
-    images = {side: _load(src, side, owner) for side, src in (("left", left), ("right", right))}
-    (h, w), (rh, rw) = images["left"].shape, images["right"].shape
+    grey = _load(left, "left", owner), _load(right, "right", owner)
+    (h, w), (rh, rw) = grey[0].shape, grey[1].shape
     if h < min_h or w < min_w:
         raise ParameterError(message(
             "left", owner, f"an image of at least {min_w}x{min_h} pixels (width x height) "
@@ -400,17 +320,13 @@ def load_pair(left, right, *, min_shape=(1, 1)) -> StereoPair:
         raise ParameterError(message(
             "right", owner, f"an image of the same size as 'left', {w}x{h} pixels "
             "(width x height)", f"an image of {rw}x{rh} pixels"))
-    path = {side: os.fspath(src) if _is_path(src) else None
-            for side, src in (("left", left), ("right", right))}
-    return StereoPair(images["left"], images["right"], image_sha256(left), image_sha256(right),
-                      path["left"], path["right"])
+    path = lambda src: os.fspath(src) if _is_path(src) else None
+    return StereoPair(*grey, image_sha256(left), image_sha256(right), path(left), path(right))
 
 
 def png_bytes(image) -> bytes:
     """A grey image as 8-bit PNG bytes: rounded to whole grey levels and clipped to 0-255.
 
-    Examples
-    --------
     >>> import cv2, numpy as np
     >>> data = png_bytes(np.full((2, 2), 300.4))
     >>> data[1:4], cv2.imdecode(np.frombuffer(data, np.uint8), cv2.IMREAD_UNCHANGED).tolist()
@@ -432,11 +348,8 @@ def png_bytes(image) -> bytes:
 
 
 def save_image(path, image):
-    """Write a grey image as an 8-bit PNG at `path`, atomically (a crash leaves the old file or
-    the new one, never half of one); returns the path.
+    """Write a grey image as an 8-bit PNG at `path`, atomically; returns the path.
 
-    Examples
-    --------
     >>> import tempfile, pathlib, numpy as np
     >>> path = save_image(pathlib.Path(tempfile.mkdtemp()) / "grey.png", np.full((3, 4), 127.6))
     >>> load_image(path).shape, float(load_image(path)[0, 0])
@@ -450,13 +363,9 @@ def save_image(path, image):
 def save_pair(left, right, parent, name: str):
     """Write a pair as ``left.png`` and ``right.png`` into ``parent/name``, never over another pair.
 
-    A folder ``name`` that holds other images is left as it is (labels may rest on them):
-    the pair goes to ``name-2``, ``name-3``, ... instead, the first that is new or holds
-    these very images (the same pair saved again reuses its folder).  A file or a link of
-    that name is skipped.  Each image is written atomically.  Returns the folder.
+    A folder holding other images (labels may rest on them), a file or a link is skipped for
+    ``name-2``, ``name-3``, ...; the same pair saved again reuses its folder.  Returns the folder.
 
-    Examples
-    --------
     >>> import tempfile, pathlib, numpy as np
     >>> parent = pathlib.Path(tempfile.mkdtemp())
     >>> a, b = np.zeros((4, 4)), np.full((4, 4), 9.0)

@@ -1,27 +1,10 @@
 """Check and fix a hand-held stereo pair: robust matches, F with RANSAC, uncalibrated rectification.
 
-The network's candidate window (§3.3) assumes a *rectified* pair: a point and its partner on
-the same row.  Two phone photos taken a few centimetres apart are not: the camera turned and
-tilted between them.  This module measures how far a pair is from rectified and warps it so
-that it is:
-
-1. robust correspondences: SIFT keypoints (``cv2.SIFT_create``), matched both ways with
-   Lowe's ratio test and kept when each is the other's best (mutual);
-2. the fundamental matrix from them with RANSAC (OpenCV's MAGSAC variant), 1 px threshold;
-3. Hartley's uncalibrated rectification (``cv2.stereoRectifyUncalibrated``) of the inliers,
-   both images warped with the two homographies, then moved together so that the left
-   image's content starts at the top left and the right one horizontally so that 98% of the
-   disparities are positive, as the window of :class:`~ismb_lab.matching.pipeline.MatchConfig` expects.
-
-The figures that say how well it worked, ``median_abs_dy_px`` and ``p90_abs_dy_px``, are
-measured on the inliers *after* rectification.  A pair whose inliers are already on the
-same rows (median ``|dy|`` at most 0.5 px, 90th percentile at most 1.5 px) is left exactly
-as it is (``method="already rectified"``).
-
-Photos are scaled down, both by the same factor, so that the longer side is at most
-:data:`WORKING_SIDE` pixels: the network works with a few hundred corners, and a 12-megapixel
-phone photo gains nothing but time and memory.  File inputs honour the EXIF orientation
-(OpenCV's ``IMREAD_COLOR`` applies it), and colour or alpha is converted to grey.
+The network's candidate window (thesis 3.3) assumes a point and its partner on one row.
+:func:`rectify_pair` finds mutual SIFT matches (Lowe's ratio test), F by RANSAC (MAGSAC, 1 px),
+warps both photos by Hartley's homographies (``cv2.stereoRectifyUncalibrated``), and shifts
+them so that the left content starts at the top left and 98% of the disparities are positive.
+Photos are first scaled to at most :data:`WORKING_SIDE` pixels, EXIF orientation applied.
 """
 
 from __future__ import annotations
@@ -39,15 +22,12 @@ __all__ = ["ROW_SPREAD", "WORKING_SIDE", "Correspondences", "Rectified", "apply_
            "check_rectified", "epipole_warning", "load_photo", "measured", "negative_share", "photo_orientation",
            "row_spread_px", "sideways_step", "rectify_pair", "robust_matches", "working_size"]
 
-#: Longest side, in pixels, that photos are scaled down to before anything else: Middlebury-
-#: sized pairs (Aloe, 1282 x 1110) stay whole, a 12-megapixel phone photo becomes 1600 x 1200.
+#: Longest side, in pixels, that photos are scaled down to (Middlebury's Aloe stays whole).
 WORKING_SIDE = 1600
 #: Longest side of the copy that SIFT looks at (see :func:`robust_matches`).
 DETECT_SIDE = 1024
-#: Median row difference of a pair's robust matches above which its rows do not agree (it is
-#: not rectified), as a share of the image's longer side: 1 px at 640 x 480, 6.25 px at
-#: 4000 x 3000 (SIFT's positions are only as fine as the image).  Rectified 640 x 480 pairs:
-#: 0.27-0.55 px (:func:`rectify_pair`, OpenCV's boards rectified with their rig).
+#: Median row difference of the robust matches above which a pair is not rectified, as a share
+#: of the image's longer side (SIFT's positions are only as fine as the image).
 ROW_SPREAD = 1 / 640
 #: Fewest RANSAC inliers that make a pair worth rectifying.
 MIN_INLIERS = 20
@@ -55,8 +35,7 @@ _RATIO = 0.75
 
 
 def row_spread_px(shape) -> float:
-    """The largest median row difference, in pixels, of the robust matches of a rectified pair
-    of `shape` ``(height, width)``: :data:`ROW_SPREAD` of its longer side.
+    """The largest median row difference (px) of a rectified pair of `shape`'s robust matches.
 
     >>> row_spread_px((480, 640)), row_spread_px((3000, 4000))
     (1.0, 6.25)
@@ -65,10 +44,8 @@ def row_spread_px(shape) -> float:
 
 
 def negative_share(matches: "Correspondences", rows_px: float) -> tuple[float, int]:
-    """The share of `matches` on their rows (``|dy| <= rows_px``) whose disparity
-    ``x_left - x_right`` is negative, and how many are on their rows.  On a rectified pair a
-    point in front of both cameras has a positive disparity: most negative means the two
-    photos were given right first.
+    """The share of `matches` on their rows (``|dy| <= rows_px``) with a negative disparity (most
+    negative: the photos were given right first), and how many are on their rows.
 
     >>> m = Correspondences(np.array([[10.0, 5], [20, 5], [30, 9]]), np.array([[12.0, 5], [25, 5], [20, 1]]))
     >>> negative_share(m, 1.0)
@@ -82,8 +59,7 @@ def negative_share(matches: "Correspondences", rows_px: float) -> tuple[float, i
 
 
 def photo_orientation(source) -> int:
-    """The EXIF orientation tag (1-8) of a photo given as a path or the bytes of a file; 1 for
-    an array or a file without the tag.
+    """The EXIF orientation tag (1-8) of a photo's path or file bytes; 1 for an array or no tag.
 
     >>> photo_orientation(np.zeros((4, 4)))
     1
@@ -106,11 +82,8 @@ _UNDO = {1: 1, 2: 2, 3: 3, 4: 4, 5: 5, 6: 8, 7: 7, 8: 6}
 
 
 def load_photo(source, name: str = "photo", owner: str = "load_photo", *, upright: bool = True) -> np.ndarray:
-    """A photo as a grey float image in ``[0, 255]``, EXIF orientation applied (with
-    ``upright=False``, as its pixels are stored, the tag ignored).
-
-    `source` is a path, the bytes of an image file (an upload) or an array (grey, RGB or RGBA).
-    """
+    """A photo (path, file bytes or grey/RGB/RGBA array) as a grey float image in ``[0, 255]``,
+    EXIF orientation applied unless `upright` is False."""
     from .io import orient
 
     image = _photo(source, name, owner, None)[0]
@@ -118,8 +91,7 @@ def load_photo(source, name: str = "photo", owner: str = "load_photo", *, uprigh
 
 
 def _photo(source, name: str, owner: str, max_side: int | None) -> tuple[np.ndarray, float]:
-    """:func:`load_photo`, scaled down to `max_side` (area averaging) before it becomes float64
-    (a 12-megapixel colour photo as float64 takes 288 MB); also the factor used."""
+    """:func:`load_photo` scaled down to `max_side` before it becomes float64, and the factor."""
     if isinstance(source, np.ndarray):
         grey = _to_grey(source, name, owner, bgr=False)
         factor = 1.0 if max_side is None else working_size(grey.shape, max_side)
@@ -138,9 +110,7 @@ def _photo(source, name: str, owner: str, max_side: int | None) -> tuple[np.ndar
         image = cv2.cvtColor(image, cv2.COLOR_BGRA2GRAY if image.shape[2] == 4 else cv2.COLOR_BGR2GRAY)
     factor = 1.0 if max_side is None else working_size(image.shape, max_side)
     if image.dtype == np.uint8 and factor < 1.0:
-        size = (max(1, round(image.shape[1] * factor)), max(1, round(image.shape[0] * factor)))
-        small = cv2.resize(image.astype(np.float32), size, interpolation=cv2.INTER_AREA)
-        return np.clip(small.astype(float), 0.0, 255.0), factor
+        return np.clip(_scale(image, factor), 0.0, 255.0), factor
     grey = _to_grey(image, name, owner, bgr=True)
     return _scale(grey, factor), factor
 
@@ -171,14 +141,10 @@ class Correspondences:
 def robust_matches(left, right, *, max_features: int = 4000, rows_px: float | None = None) -> Correspondences:
     """SIFT keypoints matched both ways, kept when they pass the ratio test and are mutual.
 
-    With `rows_px`, the pair is taken as rectified by a calibrated camera: a keypoint's
-    candidates are only the other image's keypoints within `rows_px` of its row and at a
-    positive disparity (in front of the cameras), and the ratio test and the mutual check are
-    made among those.  On a repetitive texture, the ratio test then compares a keypoint's
-    partner with the other keypoints of its own row, not with the whole pattern.
+    With `rows_px` (a pair rectified by a calibrated rig), a keypoint's candidates are only the
+    keypoints within `rows_px` of its row at a positive disparity: on a repetitive texture the
+    ratio test then compares against the keypoint's own row, not the whole pattern.
 
-    Examples
-    --------
     >>> rng = np.random.default_rng(0)
     >>> img = cv2.GaussianBlur(rng.uniform(0, 255, (200, 240)), (0, 0), 2) * 3 % 255
     >>> m = robust_matches(img[:, 10:], img[:, :-10])
@@ -189,8 +155,7 @@ def robust_matches(left, right, *, max_features: int = 4000, rows_px: float | No
     if rows_px is not None:
         rows_px = check_number(rows_px, "rows_px", "robust_matches", low=0, low_open=True)
     sift = cv2.SIFT_create(nfeatures=max_features)
-    # SIFT doubles its input first: above DETECT_SIDE px it would hold several hundred MB of
-    # pyramid, so it looks at a copy of that size and the points are scaled back.
+    # SIFT doubles its input first: a larger image would hold several hundred MB of pyramid
     factor = working_size(np.shape(left), DETECT_SIDE)
     as_u8 = lambda g: np.clip(np.rint(_scale(np.asarray(g, dtype=float), factor)), 0, 255).astype(np.uint8)
     kl, dl = sift.detectAndCompute(as_u8(left), None)
@@ -239,8 +204,7 @@ def _row_passing(kl, dl, kr, dr, rows_px: float) -> tuple:
 
 
 def _dy_figures(left_xy, right_xy) -> dict:
-    """Row differences, and the disparity range of the matches within 2 px of their row
-    (2nd to 98th percentile: a few wrong matches remain on any pair)."""
+    """Row differences, and the 2nd to 98th percentile of the disparities within 2 px of their row."""
     dy = np.abs(left_xy[:, 1] - right_xy[:, 1])
     d = (left_xy[:, 0] - right_xy[:, 0])[dy <= 2.0]
     span = [float(np.percentile(d, 2)), float(np.percentile(d, 98))] if len(d) else [0.0, 0.0]
@@ -250,34 +214,12 @@ def _dy_figures(left_xy, right_xy) -> dict:
 
 @dataclass(frozen=True, eq=False)
 class Rectified:
-    """A rectified pair and how it was made.
+    """A rectified pair at the working size, and how it was made.
 
-    Attributes
-    ----------
-    left, right : (H, W) float ndarray
-        The rectified grey images, at the working size.
-    left_h, right_h : (3, 3) ndarray
-        Homographies from the (scaled) input images to these; the identity for a rig, whose
-        undistorting maps are not homographies (:meth:`ismb_lab.cameras.camera.StereoCamera.maps`).
-    method : str
-        ``"already rectified"``, ``"uncalibrated"`` or ``"rig"``.
-    inliers : int
-        How many correspondences the figures were measured on, which `measured_on` names:
-        ``"RANSAC inliers"`` (consistent with the fundamental matrix) for :func:`rectify_pair`,
-        ``"robust matches (no RANSAC)"`` for a pair rectified another way (:func:`measured`:
-        a rig, a background's homographies), where wrong matches count too.
-    median_abs_dy_px, p90_abs_dy_px : float
-        Row differences of those correspondences after rectification.
-    disparity_range_px : [float, float]
-        Their 2nd and 98th percentile of ``x_left - x_right``, after rectification.
-    scale : float
-        The factor the inputs were scaled by first (1: not scaled).
-    left_xy, right_xy : (n, 2) ndarray
-        The inliers, after rectification (for epipolar-line plots).
-    measured_on : str
-        What `inliers` counts (see there).
-    warnings : tuple of str
-        One line each, e.g. an unstable framing (:func:`epipole_warning`).
+    ``left_h``, ``right_h`` are the homographies from the scaled inputs (the identity for a rig);
+    ``inliers`` counts the correspondences (``left_xy``, ``right_xy``, after rectification) that
+    the row differences and the 2nd to 98th percentile of ``x_left - x_right`` were measured on,
+    and ``measured_on`` says which; ``scale`` is the factor the inputs were scaled by first.
     """
 
     left: np.ndarray
@@ -341,9 +283,7 @@ def _fundamental(matches: Correspondences, owner: str):
         raise ParameterError(message("right", owner, f"a view of the left photo's scene (at least {MIN_INLIERS} "
                                      "matches agreeing on one epipolar geometry)",
                                      f"{int(inliers.sum())} of {n} matches agreeing"))
-    # Parallax: with a baseline, points at different depths move differently, and no single
-    # homography carries the left points onto the right ones (the books pair: 37% within 1 px;
-    # a turned camera: 99%).
+    # with a baseline, points at different depths move differently: no one homography fits them
     homography, fits = cv2.findHomography(matches.left_xy[inliers], matches.right_xy[inliers], cv2.RANSAC, 1.0)
     if homography is not None and fits.mean() >= 0.9:
         raise ParameterError(message("right", owner, "a view from a camera moved sideways, with parallax",
@@ -353,22 +293,14 @@ def _fundamental(matches: Correspondences, owner: str):
 
 
 def sideways_step(left_xy, right_xy, F, shape) -> float | None:
-    """Which way the camera moved between the left and the right photo: the x component of the
-    unit translation, negative for a right photo taken to the right; None when the pair does not
-    say.
+    """The x component of the camera's unit translation from the left photo to the right one
+    (negative: taken to the right), or None when the pair does not say.
 
-    The rule for a swapped pair.  Disparities ``x_left - x_right`` are positive when the right
-    photo is taken to the right of the left one, but a hand-held pair adds the camera's turn and
-    often a step forward, which shift every disparity alike (the books pair's raw disparities
-    are all negative in the right order).  So the motion is found from `F` instead, with an
-    assumed focal length of one image width (``cv2.recoverPose``), and its sideways part is
-    returned: > 0 means most disparities of the robust matches, the turn and the step forward
-    taken out, are negative.  A motion that fewer than 80% of the matches put in front of both
-    cameras (an assumed focal length far off), or that is mostly forward (``|x| < 0.2``),
-    decides nothing: None.
+    A hand-held pair's turn and step forward shift every disparity alike, so the motion is
+    found from `F` (``cv2.recoverPose``, an assumed focal length of one image width).  A motion
+    that under 80% of the matches put in front of both cameras, or mostly forward
+    (``|x| < 0.2``), decides nothing.
 
-    Examples
-    --------
     >>> xy = np.random.default_rng(0).uniform(0, 400, (40, 2))
     >>> depth = np.random.default_rng(1).uniform(1, 2, 40)
     >>> shifted = xy - np.c_[40 / depth, np.zeros(40)]     # a right view: near points move more
@@ -387,19 +319,12 @@ def sideways_step(left_xy, right_xy, F, shape) -> float | None:
 
 
 def _refuse_swapped(left_xy, right_xy, F, shape, owner: str) -> None:
-    """Refuse a pair given right first.  A pair whose rows already agree (:func:`row_spread_px`)
-    says so by its disparities' sign (:func:`negative_share`); its F, a pure sideways step,
-    leaves ``cv2.recoverPose`` a guess between the two directions (OpenCV's board 03, rectified
-    and swapped: -0.86, "left first").  Any other pair says so by :func:`sideways_step`."""
+    """Refuse a pair given right first: by its disparities' sign if its rows already agree (a
+    pure sideways F leaves ``cv2.recoverPose`` guessing), else by :func:`sideways_step`."""
     limit = row_spread_px(shape)
     matches = Correspondences(np.asarray(left_xy, float), np.asarray(right_xy, float))
     if len(matches) and np.median(np.abs(matches.left_xy[:, 1] - matches.right_xy[:, 1])) <= limit:
-        share, n = negative_share(matches, 2 * limit)
-        if n >= 8 and share > 0.5:
-            raise ParameterError(message("left", owner, "the left camera's photo, given first: swap the two files",
-                                         f"the right camera's ({share:.0%} of {n} robust matches have a negative "
-                                         "disparity)"))
-        if n >= 8:
+        if _refuse_by_sign(matches, limit, owner) >= 8:
             return
     step = sideways_step(left_xy, right_xy, F, shape)
     if step is not None and step > 0:
@@ -408,17 +333,20 @@ def _refuse_swapped(left_xy, right_xy, F, shape, owner: str) -> None:
                                      "right)"))
 
 
+def _refuse_by_sign(matches: Correspondences, limit: float, owner: str) -> int:
+    """Refuse a pair most of whose matches on their rows have a negative disparity; how many are."""
+    share, n = negative_share(matches, 2 * limit)
+    if n >= 8 and share > 0.5:
+        raise ParameterError(message("left", owner, "the left camera's photo, given first: swap the two "
+                                     "files", f"the right camera's ({share:.0%} of {n} robust matches have a "
+                                     "negative disparity)"))
+    return n
+
+
 def check_for_matching(left, right, owner: str = "check_for_matching") -> str:
-    """Refuse a swapped pair and warn about an unrectified one, before it is matched.
+    """Refuse a swapped pair, and return a one-line warning for an unrectified one ("" if none).
 
-    Measured on the robust matches of the pair as given (:func:`robust_matches`, no warp):
-    a pair whose rows differ by more than :func:`row_spread_px` at the median is not rectified,
-    and the returned one-line warning names ``ismb-lab rectify``; a rectified pair on whose
-    rows (``|dy|`` at most twice that, at least 8 matches) most disparities ``x_left - x_right``
-    are negative was given right first, and is refused (:func:`negative_share`).  Returns "" when there is nothing to say
-    (also for a pair with fewer than 8 robust matches: it says nothing either way).
-
-    `left` and `right` are grey images (arrays) of one size.
+    Measured on the robust matches of the grey pair as given; fewer than 8 say nothing.
     """
     matches = robust_matches(left, right)
     if len(matches) < 8:
@@ -428,20 +356,15 @@ def check_for_matching(left, right, owner: str = "check_for_matching") -> str:
     if spread > limit:
         return (f"warning: the pair is not rectified (the rows of its {len(matches)} robust matches differ by "
                 f"{spread:.1f} px at the median): make it so with 'ismb-lab rectify LEFT RIGHT --out DIR'")
-    share, n = negative_share(matches, 2 * limit)
-    if n >= 8 and share > 0.5:
-        raise ParameterError(message("left", owner, "the left camera's photo, given first: swap the two files",
-                                     f"the right camera's ({share:.0%} of {n} robust matches "
-                                     "have a negative disparity)"))
+    _refuse_by_sign(matches, limit, owner)
     return ""
 
 
 def epipole_warning(F, shape) -> str:
     """A one-line warning when an epipole lies within one image diagonal of its image, else "".
 
-    Uncalibrated rectification sends both epipoles to infinity; the nearer an epipole is to
-    the image (the camera stepped forward rather than sideways), the more the homographies
-    stretch it, and the more the framing changes with every small error in `F`.
+    Rectification sends the epipoles to infinity: the nearer one is, the more the framing changes
+    with every small error in `F`.
 
     >>> F = np.array([[0, 0, 0], [0, 0, -1], [0, 1, 0]], float)   # sideways: epipoles at infinity
     >>> epipole_warning(F, (480, 640))
@@ -482,42 +405,21 @@ def _place(h_left, h_right, left_xy, right_xy, shape):
 
 
 def rectify_pair(left, right, *, max_side: int = WORKING_SIDE) -> Rectified:
-    """Rectify a hand-held stereo pair (see the module's description).
+    """Rectify a hand-held stereo pair (left camera's first, one size; see the module).
 
-    Parameters
-    ----------
-    left, right : path, bytes or ndarray
-        The photos, the left camera's first.  They must be of one size.
-    max_side : int
-        Scale both down so that the longer side is at most this (default :data:`WORKING_SIDE`);
-        the rectified images, which the warp can make larger, are kept within it too.
-
-    Returns
-    -------
-    Rectified
-
-    Raises
-    ------
-    ParameterError
-        With one sentence: photos of different sizes, too few matches, the same photo twice,
-        no common epipolar geometry, no parallax (the camera only turned), or the two photos
-        swapped (see :func:`sideways_step`; a pair whose rows already agree: most
-        disparities negative, :func:`negative_share`).
+    Both are scaled so the longer side, also of the warped output, is at most `max_side`.  A pair
+    whose inliers already agree (median ``|dy|`` <= 0.5 px, 90th percentile <= 1.5 px) is left
+    as it is.  A ParameterError says in one sentence why a pair cannot be rectified.
     """
     owner = "rectify_pair"
     max_side = check_number(max_side, "max_side", owner, low=64, integer=True)
     left, right, factor = pair_inputs(left, right, owner, max_side)
-    matches = robust_matches(left, right)
-    _refuse_same(matches, owner)
-    F, inliers = _fundamental(matches, owner)
-    lxy, rxy = matches.left_xy[inliers], matches.right_xy[inliers]
-    _refuse_swapped(lxy, rxy, F, left.shape, owner)
+    F, n, lxy, rxy = _inliers(robust_matches(left, right), left.shape, owner)
     figures = _dy_figures(lxy, rxy)
-    if figures["median_abs_dy_px"] <= 0.5 and figures["p90_abs_dy_px"] <= 1.5:
+    if _aligned(figures):
         eye = np.eye(3)
-        return Rectified(left, right, eye, eye, "already rectified", int(inliers.sum()),
-                         figures["median_abs_dy_px"], figures["p90_abs_dy_px"], figures["disparity_range_px"],
-                         factor, lxy, rxy)
+        return Rectified(left, right, eye, eye, "already rectified", n, **figures, scale=factor, left_xy=lxy,
+                         right_xy=rxy)
     h, w = left.shape
     ok, h_left, h_right = cv2.stereoRectifyUncalibrated(lxy, rxy, F, (w, h))
     if not ok:
@@ -531,21 +433,30 @@ def rectify_pair(left, right, *, max_side: int = WORKING_SIDE) -> Rectified:
         size = (min(size[0], max_side), min(size[1], max_side))
     warp = lambda image, hom: cv2.warpPerspective(image.astype(np.float32), hom, size, flags=cv2.INTER_LINEAR,
                                                   borderMode=cv2.BORDER_CONSTANT, borderValue=0).astype(float)
-    lxy_r, rxy_r = _transform(h_left, lxy), _transform(h_right, rxy)
-    figures = _dy_figures(lxy_r, rxy_r)
+    lxy, rxy = _transform(h_left, lxy), _transform(h_right, rxy)
     warning = epipole_warning(F, (h, w))
     return Rectified(np.clip(warp(left, h_left), 0, 255), np.clip(warp(right, h_right), 0, 255), h_left,
-                     h_right, "uncalibrated", int(inliers.sum()), figures["median_abs_dy_px"],
-                     figures["p90_abs_dy_px"], figures["disparity_range_px"], factor, lxy_r, rxy_r,
-                     warnings=(warning,) if warning else ())
+                     h_right, "uncalibrated", n, **_dy_figures(lxy, rxy), scale=factor, left_xy=lxy,
+                     right_xy=rxy, warnings=(warning,) if warning else ())
+
+
+def _inliers(matches: Correspondences, shape, owner: str) -> tuple:
+    """F, the number of RANSAC inliers and their points; the same photo twice or a swapped pair refused."""
+    _refuse_same(matches, owner)
+    F, inliers = _fundamental(matches, owner)
+    lxy, rxy = matches.left_xy[inliers], matches.right_xy[inliers]
+    _refuse_swapped(lxy, rxy, F, shape, owner)
+    return F, int(inliers.sum()), lxy, rxy
+
+
+def _aligned(figures: dict) -> bool:
+    """Whether the rows already agree: the test that leaves a pair as it is."""
+    return figures["median_abs_dy_px"] <= 0.5 and figures["p90_abs_dy_px"] <= 1.5
 
 
 def apply_rectification(left, right, left_h, right_h, size) -> Rectified:
-    """Warp a pair with a rectification found on another pair of the same two camera positions
-    (the depth demo's background); its figures are measured on new robust matches.
-
-    ``size`` is the output ``(width, height)``; the method is ``"the background's"``.
-    """
+    """Warp a pair to `size` ``(width, height)`` by homographies found on another pair of the same
+    camera positions (the depth demo's background), measured on new robust matches."""
     size = (int(size[0]), int(size[1]))
     warp = lambda image, h: np.clip(cv2.warpPerspective(np.asarray(image, np.float32), np.asarray(h, float), size)
                                     .astype(float), 0, 255)
@@ -558,18 +469,14 @@ def measured(left, right, left_h, right_h, method: str) -> Rectified:
     figures = (_dy_figures(matches.left_xy, matches.right_xy) if len(matches) else
                {"median_abs_dy_px": float("nan"), "p90_abs_dy_px": float("nan"), "disparity_range_px": [0.0, 0.0]})
     return Rectified(left, right, np.asarray(left_h, float), np.asarray(right_h, float), method, len(matches),
-                     figures["median_abs_dy_px"], figures["p90_abs_dy_px"], figures["disparity_range_px"], 1.0,
-                     matches.left_xy, matches.right_xy, "robust matches (no RANSAC)")
+                     **figures, scale=1.0, left_xy=matches.left_xy, right_xy=matches.right_xy,
+                     measured_on="robust matches (no RANSAC)")
 
 
 def check_rectified(left, right, *, max_side: int = WORKING_SIDE) -> dict:
-    """How far a pair is from rectified, without warping it.
-
-    Returns the figures of :class:`Rectified` for the RANSAC inliers as they are, with
-    ``"matches"``, ``"inliers"``, ``"rectified"`` (the test :func:`rectify_pair` uses to leave
-    a pair alone), ``"problem"`` (why the pair cannot be rectified, or "") and the inlier
-    points ``"left_xy"``/``"right_xy"`` for drawing epipolar lines.
-    """
+    """How far a pair is from rectified, without warping it: :class:`Rectified`'s figures for the
+    inliers as they are, with ``matches``, ``inliers``, ``rectified`` (:func:`rectify_pair`'s test),
+    ``problem`` (why it cannot be rectified, or "") and the inliers ``left_xy``, ``right_xy``."""
     owner = "check_rectified"
     left, right, _ = pair_inputs(left, right, owner, max_side)
     matches = robust_matches(left, right)
@@ -577,13 +484,8 @@ def check_rectified(left, right, *, max_side: int = WORKING_SIDE) -> dict:
            "median_abs_dy_px": None, "p90_abs_dy_px": None, "disparity_range_px": None,
            "left_xy": np.zeros((0, 2)), "right_xy": np.zeros((0, 2))}
     try:
-        _refuse_same(matches, owner)
-        F, inliers = _fundamental(matches, owner)
-        lxy, rxy = matches.left_xy[inliers], matches.right_xy[inliers]
-        _refuse_swapped(lxy, rxy, F, left.shape, owner)
+        _, n, lxy, rxy = _inliers(matches, left.shape, owner)
     except ParameterError as exc:
         return {**out, "problem": str(exc)}
     figures = _dy_figures(lxy, rxy)
-    rectified = figures["median_abs_dy_px"] <= 0.5 and figures["p90_abs_dy_px"] <= 1.5
-    return {**out, **figures, "inliers": int(inliers.sum()), "rectified": bool(rectified),
-            "left_xy": lxy, "right_xy": rxy}
+    return {**out, **figures, "inliers": n, "rectified": _aligned(figures), "left_xy": lxy, "right_xy": rxy}
