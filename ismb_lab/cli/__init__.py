@@ -1,23 +1,9 @@
-"""The ``ismb-lab`` command line.
+"""The ``ismb-lab`` command line (docs/cli.md).
 
-Every error the user can cause prints one line on stderr and exits with code 2.
-Each command is a module of this package with ``add_parser(subparsers)``, which
-registers its options and its ``run(args) -> exit code``.
-
-Before a command's work starts, :func:`ismb_lab.cli._guard.preflight` checks its
-limits, its inputs (regular files only) and its outputs (never an input, a folder,
-a device, a FIFO or a read-only file unless ``--force``; symbolic links are written
-through, never replaced).  SIGINT, SIGTERM and SIGHUP stop the work alike; the exit
-code is 128 + the signal's number (130 for Ctrl-C).
-
-A closed stdout or stderr (``ismb-lab match ... | head``, ``2>&-``) is not an error: what is
-printed after the reader left is dropped, the command's files are still written, and
-the exit code is the command's own (0 when it succeeded).  A stdout that refuses what is
-written (``> /dev/full``) is an error: one line on stderr, and exit code 2.  A character that
-the terminal's encoding cannot show is printed as a backslash escape.
-
-The command modules are imported when the parser is built, not when this package
-is, so that a signal during start-up already finds the handlers of :func:`main`.
+Each command is a module here with ``add_parser(subparsers)``, which registers its options and its
+``run(args) -> exit code``.  A user's error is one line on stderr and exit code 2; a signal exits
+with 128 + its number.  The command modules are imported when the parser is built, not when this
+package is, so that a signal during start-up already finds the handlers of :func:`main`.
 """
 
 from __future__ import annotations
@@ -84,11 +70,9 @@ def _interrupted(interrupts, running: bool) -> int:
 
 
 class _ReaderMayLeave:
-    """A stand-in for sys.stdout or sys.stderr that never fails the command: what is printed
-    once the reader of its pipe has gone (a BrokenPipeError) is dropped; a write the device
-    refuses (``> /dev/full``) is dropped too, and kept in `failed` for :func:`main` to report;
-    a character the stream's encoding cannot write (``PYTHONIOENCODING=ascii``) is written
-    as a backslash escape."""
+    """sys.stdout or sys.stderr that never fails the command: a write after the pipe's reader left
+    is dropped, one the device refuses (``> /dev/full``) is dropped and kept in `failed`, and a
+    character the encoding cannot write is written as a backslash escape."""
 
     def __init__(self, stream):
         self._stream = stream
@@ -101,23 +85,19 @@ class _ReaderMayLeave:
             except UnicodeEncodeError:
                 encoding = getattr(self._stream, "encoding", None) or "ascii"
                 return self._stream.write(text.encode(encoding, "backslashreplace").decode(encoding))
-        except BrokenPipeError:
-            self._to_devnull()
         except OSError as exc:
-            self.failed = self.failed or exc
-            self._to_devnull()
+            self._lost(exc)
         return len(text)
 
     def flush(self):
         try:
             self._stream.flush()
-        except BrokenPipeError:
-            self._to_devnull()
         except OSError as exc:
-            self.failed = self.failed or exc
-            self._to_devnull()
+            self._lost(exc)
 
-    def _to_devnull(self):
+    def _lost(self, exc):
+        if not isinstance(exc, BrokenPipeError):
+            self.failed = self.failed or exc
         # What is still buffered, and the interpreter's own flush at exit, go to /dev/null.
         try:
             fd = self._stream.fileno()
@@ -138,10 +118,8 @@ class _ReaderMayLeave:
 
 
 def _open_standard_fds() -> None:
-    """Open /dev/null on each of the file descriptors 0, 1 and 2 that is closed (``2>&-``).
-
-    Else the next file opened gets that number, and whatever a C library writes to
-    "stderr" lands in it."""
+    """Open /dev/null on each closed one of the file descriptors 0, 1 and 2 (``2>&-``): else the
+    next file opened gets that number, and what a C library writes to "stderr" lands in it."""
     for fd in (0, 1, 2):
         try:
             os.fstat(fd)
@@ -168,15 +146,12 @@ class _closed_pipes_tolerated:
             setattr(sys, name, _ReaderMayLeave(stream))
         return self
 
-    def failed(self, name: str):
-        """The OSError that made writes to sys.`name` fail, if one did."""
-        stream = getattr(sys, name)
-        return stream.failed if isinstance(stream, _ReaderMayLeave) else None
-
     def __exit__(self, *exc):
         for name in self.NAMES:
             getattr(sys, name).flush()
-        self.errors = {name: self.failed(name) for name in self.NAMES}
+        streams = {name: getattr(sys, name) for name in self.NAMES}
+        self.errors = {name: stream.failed if isinstance(stream, _ReaderMayLeave) else None
+                       for name, stream in streams.items()}
         for name, stream in self._old.items():
             setattr(sys, name, stream)
         for stream in self._opened:
@@ -187,10 +162,9 @@ class _closed_pipes_tolerated:
 def main(argv=None) -> int:
     """Entry point of ``ismb-lab``; returns the exit code.
 
-    Run as the program (`argv` None), an interrupted run ends with ``os._exit`` once
-    its output is flushed: a KeyboardInterrupt that passed through a C extension can
-    leave CPython's "unhandled Ctrl-C" flag set, and the interpreter would then kill
-    itself with SIGINT at exit instead of returning 130.
+    Run as the program (`argv` None), an interrupted run ends with ``os._exit``: a KeyboardInterrupt
+    that passed through a C extension can leave CPython's "unhandled Ctrl-C" flag set, and the
+    interpreter would then kill itself with SIGINT at exit instead of returning 130.
     """
     interrupts = Interrupts()
     if argv is None:
@@ -214,9 +188,8 @@ def main(argv=None) -> int:
 
 
 def _announce_compiling() -> None:
-    """One line on a terminal's stderr before numba compiles the network's kernels (the first run
-    for this user, or after an upgrade): that run is silent for up to a minute otherwise.
-    Not said when stderr is a file or a pipe, where a script reads what the command reports."""
+    """One line on a terminal's stderr before numba compiles the network's kernels (silent for up
+    to a minute otherwise); not on a file or a pipe, where a script reads what the command reports."""
     from ..network.kernel import run_network
     from .._core.numba_cache import cold
 

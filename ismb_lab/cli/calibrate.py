@@ -1,12 +1,12 @@
-"""``ismb-lab calibrate``: calibrate a fixed two-camera rig from chessboard pairs, or again
-from a rig's own corners without some of its pairs (``--from RIG.json --drop left02.jpg``)."""
+"""``ismb-lab calibrate``: a fixed two-camera rig from chessboard pairs, or from a rig's own corners
+without some of its pairs (``--from RIG.json --drop left02.jpg``)."""
 
 from __future__ import annotations
 
 import sys
 from pathlib import Path
 
-from ._guard import Files, add_force_option, output_path
+from ._guard import Files, _short, add_force_option, output_path
 
 __all__ = ["add_parser", "files", "report", "run"]
 
@@ -49,8 +49,8 @@ def files(args) -> Files:
 
 
 def report(rig, held=()) -> str:
-    """The table of the rig's pairs, their errors and the outliers' marks; with `held`
-    (:func:`ismb_lab.cameras.rig.leave_one_out`), each pair's errors when held out, and their summary."""
+    """The table of the rig's pairs, their errors and outliers; with `held` (``leave_one_out``), each
+    pair's errors when held out, and their summary."""
     import math
 
     import numpy as np
@@ -90,9 +90,8 @@ def _board(text: str):
     parts = [p.strip() for p in text.lower().split("x")]
     if len(parts) != 2 or not all(p.isascii() and p.isdigit() and len(p) <= 4 and 2 <= int(p) <= MAX_BOARD_SIDE
                                   for p in parts):
-        shown = text if len(text) <= 40 else text[:37] + "..."
         raise UsageError(f"--board must be COLSxROWS of inner corners, each from 2 to {MAX_BOARD_SIDE}, e.g. 9x6; "
-                         f"got {shown!r}")
+                         f"got {_short(text)!r}")
     return tuple(int(p) for p in parts)
 
 

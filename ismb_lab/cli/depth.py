@@ -9,8 +9,8 @@ from .._core.files import atomic_write_text
 from .._core.validation import ParameterError
 from ..depth.objects import GROUPINGS, DepthConfig
 from ..depth.pipeline import DEPTH_MATCH_CONFIG, DEPTH_METHOD, DEPTH_PARAMS, DEPTH_SOLVER
-from ._common import (UsageError, add_matching_options, add_solver_option, given, match_config, resolve_recipe,
-                      seed_setting, window_record)
+from ._common import (UsageError, add_matching_options, add_solver_option, given, match_config, ply_cloud,
+                      resolve_recipe, seed_setting, window_record)
 from ._guard import Files, add_force_option, json_text, output_path, save_figure
 
 __all__ = ["add_parser", "run"]
@@ -165,22 +165,14 @@ def run(args) -> int:
 
 
 def _ply(args, result, rig) -> bytes:
-    """The scene's kept matches in metres as a PLY cloud: through `rig`, or the pinhole camera of
-    the result's focal length and baseline at the scene's image centre (``DepthResult.points``)."""
-    import numpy as np
-
+    """The scene's kept matches as a PLY cloud: through `rig`, or the pinhole camera of the
+    result's focal length and baseline at the scene's image centre."""
     from ..cameras.camera import StereoCamera
     from ..images.io import load_image
-    from ..matching.ply import ply_bytes
 
     left = load_image(args.scene_left)
     h, w = left.shape
     camera = rig if rig is not None else StereoCamera.pinhole(w, h, focal_px=result.config.focal_px,
                                                               baseline_m=result.config.baseline_m)
-    xyz = result.points(camera)
-    keep = np.all(np.isfinite(xyz), axis=1)
-    xy = np.rint(np.asarray(result.kept_xy, dtype=float).reshape(-1, 2)[keep]).astype(int)
-    grey = left[np.clip(xy[:, 1], 0, h - 1), np.clip(xy[:, 0], 0, w - 1)]
-    return ply_bytes(xyz[keep], np.clip(grey, 0, 255), comments=(
-        "ismb-lab depth: the scene's kept matches, metres in the rectified left camera's frame "
-        "(X right, Y down, Z forward)", f"focal length {camera.focal_px:.6g} px, baseline {camera.baseline_m:.6g} m"))
+    return ply_cloud(result.points(camera), result.kept_xy, left, camera,
+                     "ismb-lab depth: the scene's kept matches, ")
