@@ -103,20 +103,16 @@ class Interrupts:
         self.signum = None
         self.deferring = False
         self._old = {}
-        self._old_hook = None
-        self._old_excepthook = None
 
     def _unraisable(self, report):
-        # A KeyboardInterrupt raised inside a __del__ or a callback cannot propagate: Python
-        # prints "Exception ignored ... Traceback" and goes on.  Once a signal came, such
-        # reports are its echoes; the work stops at the next check of interrupted().
+        # A KeyboardInterrupt raised inside a __del__ or a callback cannot propagate: once a
+        # signal came, "Exception ignored ..." reports are its echoes.
         if self.signum is None:
             self._old_hook(report)
 
     def _excepthook(self, kind, value, trace):
-        # C code that calls PyErr_Print (numpy's import_array in an extension's init, for one)
-        # prints a KeyboardInterrupt raised inside an import it started, with no header, and
-        # goes on with an ImportError; after a signal that print is an echo as well.
+        # C code that calls PyErr_Print (numpy's import_array) prints a KeyboardInterrupt raised
+        # inside an import it started; after a signal that print is an echo as well.
         if self.signum is None or not issubclass(kind, KeyboardInterrupt):
             self._old_excepthook(kind, value, trace)
 
@@ -221,17 +217,8 @@ def save_figure(fig, path, **kwargs) -> Path:
 
 
 class Files(NamedTuple):
-    """What a command reads and writes: its ``files(args)``, the parser's default ``declare_files``.
-
-    Attributes
-    ----------
-    inputs : tuple of (str, path)
-        The files it opens, each with how the messages name it (``"--rig"``).
-    reads : tuple of path
-        Further files it reads: named inside an input (a manifest's pairs) or built in.
-    outputs : tuple of (str, path)
-        The files it writes, each with its option.
-    """
+    """What a command's ``files(args)`` (the parser's default ``declare_files``) declares: the
+    `inputs` and `outputs` as (option, path), and the further files it `reads` (a manifest's pairs)."""
 
     inputs: tuple = ()
     reads: tuple = ()
@@ -239,7 +226,7 @@ class Files(NamedTuple):
 
 
 def files_of(args) -> Files:
-    """The files that `args`' command declares (none for a command that declares nothing)."""
+    """The files that `args`' command declares."""
     declared = getattr(args, "declare_files", None)
     return Files() if declared is None else declared(args)
 
