@@ -265,19 +265,20 @@ def given(*named) -> tuple:
     return tuple((what, path) for what, path in named if path is not None)
 
 
-def ply_cloud(xyz, xy, image, camera, what: str) -> bytes:
-    """The PLY cloud of the points `xyz` in front of the cameras, each grey as `image` at its `xy`."""
+def write_ply(path, xyz, xy, image, camera, what: str) -> None:
+    """Write the PLY cloud of the points `xyz` in front of the cameras, each grey as `image` at its `xy`."""
     import numpy as np
 
+    from .._core.files import atomic_write_bytes
     from ..matching.ply import ply_bytes
 
     keep = np.all(np.isfinite(xyz), axis=1)
     xy = np.rint(np.asarray(xy, dtype=float).reshape(-1, 2)[keep]).astype(int)
     h, w = image.shape
     grey = image[np.clip(xy[:, 1], 0, h - 1), np.clip(xy[:, 0], 0, w - 1)]
-    return ply_bytes(xyz[keep], np.clip(grey, 0, 255), comments=(
+    atomic_write_bytes(path, ply_bytes(xyz[keep], np.clip(grey, 0, 255), comments=(
         f"{what}metres in the rectified left camera's frame (X right, Y down, Z forward)",
-        f"focal length {camera.focal_px:.6g} px, baseline {camera.baseline_m:.6g} m"))
+        f"focal length {camera.focal_px:.6g} px, baseline {camera.baseline_m:.6g} m")))
 
 
 def seed_setting(args) -> dict:

@@ -19,7 +19,7 @@ from typing import NamedTuple
 from .._core.files import atomic_write_bytes, check_input, check_output
 
 __all__ = ["LIMITS", "MOST", "Interrupts", "UsageError", "deferred_signals", "interrupted", "interrupted_line",
-           "is_interruption", "json_text", "limit", "preflight", "save_figure"]
+           "is_interruption", "json_text", "limit", "preflight", "save_plot"]
 
 class UsageError(Exception):
     """A mistake in the command line or its files, reported in one line."""
@@ -207,12 +207,19 @@ def json_text(data) -> str:
     return json.dumps(_plain(data), indent=2, allow_nan=False) + "\n"
 
 
-def save_figure(fig, path, **kwargs) -> Path:
-    """Render `fig` in the format of `path`'s suffix (png without one) and write it atomically."""
+def save_plot(path, size, draw, title: str) -> Path:
+    """A figure of `size` inches drawn by ``draw(ax)`` and titled, written atomically in the format
+    of `path`'s suffix (png without one)."""
     import io
 
+    from matplotlib.figure import Figure
+
+    fig = Figure(figsize=size, layout="constrained")
+    ax = fig.subplots()
+    draw(ax)
+    ax.set_title(title)
     buffer = io.BytesIO()
-    fig.savefig(buffer, format=Path(path).suffix[1:].lower() or "png", **kwargs)
+    fig.savefig(buffer, format=Path(path).suffix[1:].lower() or "png", dpi=120)
     return atomic_write_bytes(path, buffer.getvalue())
 
 

@@ -9,9 +9,9 @@ from .._core.files import atomic_write_text
 from .._core.validation import ParameterError
 from ..depth.objects import GROUPINGS, DepthConfig
 from ..depth.pipeline import DEPTH_MATCH_CONFIG, DEPTH_METHOD, DEPTH_PARAMS, DEPTH_SOLVER
-from ._common import (UsageError, add_matching_options, add_solver_option, given, match_config, ply_cloud,
-                      resolve_recipe, seed_setting, window_record)
-from ._guard import Files, add_force_option, json_text, output_path, save_figure
+from ._common import (UsageError, add_matching_options, add_solver_option, given, match_config, resolve_recipe,
+                      seed_setting, window_record, write_ply)
+from ._guard import Files, add_force_option, json_text, output_path, save_plot
 
 __all__ = ["add_parser", "run"]
 
@@ -148,24 +148,19 @@ def run(args) -> int:
         atomic_write_text(args.json, json_text({**result.to_dict(),
                                                 "candidate_window": window_record(config, args.shift == "auto")}))
     if args.ply is not None:
-        from .._core.files import atomic_write_bytes
-
-        atomic_write_bytes(args.ply, _ply(args, result, rig if args.rig is not None else None))
+        _ply(args, result, rig if args.rig is not None else None)
     if args.plot is not None:
-        from matplotlib.figure import Figure
-
         from ..images.io import load_pair
         from ..plotting import plot_depth
-        fig = Figure(figsize=(6, 4.5), layout="constrained")
-        ax = fig.subplots()
-        plot_depth(ax, load_pair(args.scene_left, args.scene_right).left, result)
-        ax.set_title(f"Method-{method}: {len(result.objects)} objects, near -> far")
-        save_figure(fig, args.plot, dpi=120)
+
+        left = load_pair(args.scene_left, args.scene_right).left
+        save_plot(args.plot, (6, 4.5), lambda ax: plot_depth(ax, left, result),
+                  f"Method-{method}: {len(result.objects)} objects, near -> far")
     return 0
 
 
-def _ply(args, result, rig) -> bytes:
-    """The scene's kept matches as a PLY cloud: through `rig`, or the pinhole camera of the
+def _ply(args, result, rig) -> None:
+    """Write the scene's kept matches as a PLY cloud: through `rig`, or the pinhole camera of the
     result's focal length and baseline at the scene's image centre."""
     from ..cameras.camera import StereoCamera
     from ..images.io import load_image
@@ -174,5 +169,5 @@ def _ply(args, result, rig) -> bytes:
     h, w = left.shape
     camera = rig if rig is not None else StereoCamera.pinhole(w, h, focal_px=result.config.focal_px,
                                                               baseline_m=result.config.baseline_m)
-    return ply_cloud(result.points(camera), result.kept_xy, left, camera,
-                     "ismb-lab depth: the scene's kept matches, ")
+    write_ply(args.ply, result.points(camera), result.kept_xy, left, camera,
+              "ismb-lab depth: the scene's kept matches, ")

@@ -75,8 +75,7 @@ def limit_defaults() -> dict:
 
 
 def files(args) -> Files:
-    """The manifest and the recipe read, with every file the manifest names or its built-in
-    sources read; the report written."""
+    """The manifest and the recipe read, with every file the manifest names; the report written."""
     from ..tuning.cases import manifest_files
 
     return Files(inputs=(("manifest", args.manifest),) + given(("--recipe", args.recipe)),
@@ -104,8 +103,8 @@ def run(args) -> int:
 
 
 def _stopped(best, path, unit: str, reported) -> int:
-    """After a signal: say that the report is out, or write the best parameters so far to
-    `path`, or say that nothing was written."""
+    """After a signal: say that the report is out, or write the best parameters so far, or say
+    that nothing was written."""
     where = f" to {path}" if path is not None else ""
     if reported:
         print(interrupted_line(f"the report is complete{' and written' + where if where else ''}"),

@@ -12,8 +12,8 @@ from .._core.validation import ParameterError
 from ..matching.pipeline import MatchConfig
 from ..network.solvers import DEFAULT_SOLVER
 from ._common import (add_matching_options, add_solver_option, add_solver_settings, given, match_config,
-                      ply_cloud, resolve_recipe, seed_setting, window_record)
-from ._guard import Files, add_force_option, json_text, output_path, save_figure
+                      resolve_recipe, seed_setting, window_record, write_ply)
+from ._guard import Files, add_force_option, json_text, output_path, save_plot
 
 __all__ = ["add_parser", "run"]
 
@@ -177,19 +177,13 @@ def run(args) -> int:
                  "no match in front of the cameras"))
     if args.json is not None:
         atomic_write_text(args.json, json_text(record))
+    pair = prepared.pair
     if args.ply is not None:
-        from .._core.files import atomic_write_bytes
-
-        atomic_write_bytes(args.ply, ply_cloud(xyz, result.left_match_xy, prepared.pair.left, camera,
-                                               "ismb-lab match --rig: "))
+        write_ply(args.ply, xyz, result.left_match_xy, pair.left, camera, "ismb-lab match --rig: ")
     if args.plot is not None:
-        from matplotlib.figure import Figure
-
         from ..plotting import plot_matches
-        pair = prepared.pair
-        fig = Figure(figsize=(10, 4), layout="constrained")
-        ax = fig.subplots()
-        plot_matches(ax, pair.left, pair.right, result.left_xy, result.right_xy, result.pairs)
-        ax.set_title(f"Method-{result.method}: {len(result.pairs)} matches")
-        save_figure(fig, args.plot, dpi=120)
+
+        save_plot(args.plot, (10, 4), lambda ax: plot_matches(ax, pair.left, pair.right, result.left_xy,
+                                                              result.right_xy, result.pairs),
+                  f"Method-{result.method}: {len(result.pairs)} matches")
     return 0

@@ -36,8 +36,8 @@ def add_parser(sub) -> None:
 
 
 def files(args) -> Files:
-    """The photos and the rig read; the three files written into the --out folder (checked
-    when it exists: a new one is made after the work, so a refused pair leaves nothing behind)."""
+    """The photos and the rig read; the files written into --out, if it exists (a new one is made
+    after the work, so a refused pair leaves nothing behind)."""
     from ._common import UsageError, given
 
     folder = Path(args.out_dir)

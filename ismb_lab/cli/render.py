@@ -28,7 +28,7 @@ def files(args):
 
 def check_outputs(out: Path) -> None:
     """Before rendering: every file render writes is new or a regular, writable file, and every
-    folder on the way below `out` is a real folder (no link, device, FIFO or read-only file)."""
+    folder below `out` on the way is a real folder, not a link."""
     from .._core.files import OutputError, check_replace
     from ..scenes.gallery import gallery_files
 
