@@ -13,9 +13,9 @@ import sys
 
 from .. import __version__
 from .._core.files import OutputError
-from ._guard import LIMITS, Interrupts, interrupted_line, preflight
+from ._guard import LIMITS, Interrupts, UsageError, interrupted_line, preflight
 
-__all__ = ["COMMANDS", "UsageError", "build_parser", "main"]
+__all__ = ["UsageError", "build_parser", "main"]
 
 def _epilog() -> str:
     from .._core.files import MAX_JSON_BYTES
@@ -34,15 +34,6 @@ def _epilog() -> str:
 def _commands():
     from . import calibrate, course, depth, evaluate, match, rectify, render, rig, targets, tune
     return (match, tune, evaluate, depth, rectify, calibrate, rig, render, targets, course)
-
-
-def __getattr__(name):
-    if name == "COMMANDS":   #: The commands, in the order ``--help`` lists them.
-        return _commands()
-    if name == "UsageError":
-        from ._common import UsageError
-        return UsageError
-    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
 
 
 def build_parser():
@@ -208,7 +199,7 @@ def _main(argv, interrupts) -> int:
     usage_errors, args, running = (OutputError, OSError), None, False
     with interrupts:
         try:
-            from ._common import ParameterError, ParameterTypeError, UsageError
+            from ._common import ParameterError, ParameterTypeError
 
             usage_errors += (UsageError, ParameterError, ParameterTypeError)
             args = build_parser().parse_args(argv)

@@ -13,7 +13,7 @@ from ..matching.pipeline import MatchConfig
 from ..network.solvers import DEFAULT_SOLVER
 from ._common import (add_matching_options, add_solver_option, add_solver_settings, given, match_config,
                       resolve_recipe, seed_setting, window_record, write_ply)
-from ._guard import Files, add_force_option, json_text, output_path, save_plot
+from ._guard import Files, UsageError, add_force_option, json_text, limit, output_path, save_plot
 
 __all__ = ["add_parser", "run"]
 
@@ -58,7 +58,6 @@ def _prepared(args):
     """The prepared pair, after refusing a swapped one and warning about an unrectified one."""
     from ..images.io import load_pair
     from ..matching.pipeline import check_window, prepare
-    from ._common import UsageError
 
     config = match_config(args)
     pair = load_pair(args.left, args.right, min_shape=config.min_shape)
@@ -91,7 +90,6 @@ def _rig_pair(args):
     from ..images.io import load_pair
     from ..matching.pipeline import check_window
     from ..matching.metric import for_camera, photo_config, row_tolerance
-    from ._guard import limit
 
     camera = load_camera(check_input(args.rig, what="--rig"))
     if args.shift is None:      # a photo's disparities are the pair's own, not the thesis' 20 px
@@ -124,8 +122,6 @@ def rig_record(args, camera, how: str) -> dict:
 
 def run(args) -> int:
     from ..matching.pipeline import match
-
-    from ._common import UsageError
 
     if args.ply is not None and args.rig is None:
         raise UsageError("--ply writes the matches' points in metres: give the rig with --rig RIG.json "

@@ -4,6 +4,8 @@ from __future__ import annotations
 
 from pathlib import Path
 
+from ._guard import Files, UsageError
+
 __all__ = ["add_parser", "run"]
 
 
@@ -17,9 +19,6 @@ def add_parser(sub) -> None:
 
 def files(args):
     """Render reads nothing; its --out is a folder, whose files :func:`check_outputs` checks."""
-    from ._common import UsageError
-    from ._guard import Files
-
     out = Path(args.out)
     if out.exists() and not out.is_dir():
         raise UsageError(f"--out {str(out)!r} is not a folder")

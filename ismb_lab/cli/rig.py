@@ -8,7 +8,7 @@ import math
 import sys
 from pathlib import Path
 
-from ._guard import Files, _short, add_force_option, output_path
+from ._guard import Files, UsageError, _short, add_force_option, output_path
 
 __all__ = ["add_parser", "files", "run"]
 
@@ -69,7 +69,6 @@ def files(args) -> Files:
 
 def _factory(args):
     from ..cameras.camera import MAX_BASELINE_M, StereoCamera
-    from ._common import UsageError
 
     missing = [f"--{name}" for name, value in (("focal-px", args.focal_px), ("baseline-m", args.baseline_m),
                                                ("size", args.size)) if value is None]
@@ -94,7 +93,6 @@ def _factory(args):
 
 def _opencv(args):
     from ..cameras.camera import StereoCamera
-    from ._common import UsageError
 
     given = [f"--{name}" for name, value in (("focal-px", args.focal_px), ("baseline-m", args.baseline_m),
                                              ("centre", args.centre)) if value is not None]
