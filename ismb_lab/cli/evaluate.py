@@ -8,6 +8,7 @@ from pathlib import Path
 
 from .._core.files import atomic_write_text
 from ..tuning.cases import format_protocol, load_manifest, protocol
+from ..tuning.genetic import GAConfig
 from ..network.solvers import DEFAULT_SOLVER, SOLVERS
 from ._common import (DEFAULT_METHOD, BestSoFar, UsageError, add_ga_options, add_method_option, given, seed,
                       add_one_to_one_option, add_solver_option, default_of, ga_config, progress_bar, said_changes)
@@ -67,8 +68,6 @@ def add_parser(sub) -> None:
 
 def limit_defaults() -> dict:
     """The defaults of evaluate's limited options: the protocol's, which evaluate falls back to."""
-    from ..tuning.genetic import GAConfig
-
     ga = GAConfig()
     return {"population": ga.population, "generations": ga.generations, "seeds": DEFAULTS["seeds"],
             "fit_seeds": DEFAULTS["fit_seeds"], "jobs": available_cores()}

@@ -63,6 +63,12 @@ def _close(a, b, atol: float = 1e-9) -> bool:
     return bool(np.allclose(a, b, rtol=1e-9, atol=atol))
 
 
+def _slip(slips, same, otherwise: str) -> Feedback:
+    """The text of the first of `slips` ((answer, text) pairs) whose answer is `same` as the student's,
+    else `otherwise`."""
+    return Feedback(False, next((text for answer, text in slips if same(answer)), otherwise))
+
+
 def check_energy_derivation(W, I, net: Network) -> Feedback:
     """Check the weights `W` (n, n) and biases `I` (n,) a student derived from the energy (3-15).
 
@@ -245,12 +251,10 @@ def check_harris_response(R, image, sigma: float = 1.0, k: float = 0.04) -> Feed
          "The structure tensor is not windowed: average Ix^2, Ix Iy and Iy^2 with a Gaussian "
          f"of sigma = {sigma:g} before forming det and trace."),
     )
-    for candidate, text in slips:
-        if _close(R, candidate, atol):
-            return Feedback(False, text)
     worst = np.unravel_index(np.argmax(np.abs(R - expected)), R.shape)
-    return Feedback(False, f"R is off; the largest difference is at (x, y) = ({worst[1]}, {worst[0]}), "
-                           f"where yours is {R[worst]:.6g}. Hint: compute M there by hand.")
+    return _slip(slips, lambda answer: _close(R, answer, atol),
+                 f"R is off; the largest difference is at (x, y) = ({worst[1]}, {worst[0]}), "
+                 f"where yours is {R[worst]:.6g}. Hint: compute M there by hand.")
 
 
 def check_transfer(values, x, theta: float, lam: float) -> Feedback:
@@ -284,12 +288,10 @@ def check_transfer(values, x, theta: float, lam: float) -> Feedback:
         (transfer(x, theta, 2.0 * lam), "lambda is doubled: the exponent is lam (x - theta)."),
         (transfer(x, theta, 0.5 * lam), "lambda is halved: the exponent is lam (x - theta)."),
     )
-    for candidate, text in slips:
-        if _close(values, candidate, 1e-7):
-            return Feedback(False, text)
     worst = int(np.argmax(np.abs(values - expected).ravel()))
-    return Feedback(False, f"The values are off; the largest difference is at x = {x.ravel()[worst]:g}, "
-                           f"where yours is {values.ravel()[worst]:.6g}. Hint: evaluate (3-10) there by hand.")
+    return _slip(slips, lambda answer: _close(values, answer, 1e-7),
+                 f"The values are off; the largest difference is at x = {x.ravel()[worst]:g}, "
+                 f"where yours is {values.ravel()[worst]:.6g}. Hint: evaluate (3-10) there by hand.")
 
 
 def check_disparity(values, left_xy, right_xy) -> Feedback:
@@ -323,12 +325,9 @@ def check_disparity(values, left_xy, right_xy) -> Feedback:
         (np.abs(dy), "That is the vertical disparity alone. Hint: the tables' column is a distance "
                      "between the two points; which components does it use?"),
     )
-    for candidate, text in slips:
-        if near(values, candidate):
-            return Feedback(False, text)
     worst = int(np.argmax(np.abs(values - expected)))
-    return Feedback(False, f"Row {worst + 1} is off (yours: {values[worst]:g}). Hint: recompute it from "
-                           f"its x_left, y_left, x_right and y_right.")
+    return _slip(slips, lambda answer: near(values, answer), f"Row {worst + 1} is off (yours: "
+                 f"{values[worst]:g}). Hint: recompute it from its x_left, y_left, x_right and y_right.")
 
 
 def check_error_kinds(wrong, extra, pairs, targets) -> Feedback:
@@ -420,8 +419,5 @@ def check_fitness(value, pairs, targets, unknown=()) -> Feedback:
                                               "what does a missed target do to n_c?"),
         (s.recall, "That is a rate (n_c / T). Hint: the fitness (4-1) is a count."),
     )
-    for candidate, text in slips:
-        if value == candidate:
-            return Feedback(False, text)
-    return Feedback(False, f"The fitness is off (yours: {value:g}). Hint: count n_c (matches that are "
-                           f"targets) and n_e (all the other matches) again.")
+    return _slip(slips, lambda answer: value == answer, f"The fitness is off (yours: {value:g}). Hint: "
+                 "count n_c (matches that are targets) and n_e (all the other matches) again.")
