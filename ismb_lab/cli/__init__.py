@@ -49,11 +49,6 @@ def build_parser():
     return parser
 
 
-def _cli_words(text: str) -> str:
-    # The library's advice names its own keyword; on the command line the flag does that job.
-    return text.replace("or pass check_hash=False", "or give --no-hash-check to 'ismb-lab tune'")
-
-
 def _interrupted(interrupts, running: bool) -> int:
     # Before its command runs, nothing has been written; once it runs, the command says what it kept.
     print(interrupted_line("" if running else "nothing was saved"), file=sys.stderr)
@@ -189,12 +184,6 @@ def _announce_compiling() -> None:
               "(up to a minute); later runs start at once", file=sys.stderr, flush=True)
 
 
-def _opencv_error(exc) -> bool:
-    """Whether `exc` is a ``cv2.error`` (named, so that importing the CLI imports no OpenCV)."""
-    kind = type(exc)
-    return kind.__module__ == "cv2" and kind.__name__ == "error"
-
-
 def _main(argv, interrupts) -> int:
     usage_errors, args, running = (OutputError, OSError), None, False
     with interrupts:
@@ -219,7 +208,9 @@ def _main(argv, interrupts) -> int:
             if interrupts.signum is not None:
                 return _interrupted(interrupts, running)
             if isinstance(exc, usage_errors):
-                print(f"ismb-lab: error: {_cli_words(str(exc))}", file=sys.stderr)
+                # The library's advice names its own keyword; on the command line the flag does that job.
+                said = str(exc).replace("or pass check_hash=False", "or give --no-hash-check to 'ismb-lab tune'")
+                print(f"ismb-lab: error: {said}", file=sys.stderr)
             elif isinstance(exc, RecursionError):
                 files = [f"{name} {str(getattr(args, name))!r}" for name in ("targets", "manifest")
                          if getattr(args, name, None) is not None]
@@ -228,7 +219,9 @@ def _main(argv, interrupts) -> int:
             elif isinstance(exc, MemoryError):
                 print("ismb-lab: error: out of memory: the input is too large for this machine "
                       "(see the limits in 'ismb-lab --help')", file=sys.stderr)
-            elif _opencv_error(exc):   # OpenCV refuses what no check here foresaw: still the input's fault
+            elif (type(exc).__module__, type(exc).__name__) == ("cv2", "error"):
+                # OpenCV refuses what no check here foresaw: still the input's fault (cv2.error is
+                # named, so that importing the CLI imports no OpenCV)
                 said = " ".join(str(exc).split())
                 print(f"ismb-lab: error: OpenCV cannot work with this input: "
                       f"{said if len(said) <= 300 else said[:297] + '...'}", file=sys.stderr)
