@@ -1,13 +1,10 @@
 """A student's server on the class hub: the course copy, made by the student, and limits.
 
-``python -m ismb_lab.teaching.hub_start stage REPOSITORY COURSE`` (the teacher, once, with the class
-venv's python) makes the course folder: the student versions of the notebooks, images and manifests,
-the compiled kernels, the students' and teachers' Jupyter config folders and the login shells'
-``profile.sh``, readable by everyone.  The hub (``deploy/jupyterhub_config.py``) starts every
-student's server with ``... serve``, which runs as the student, copies the course into
-``~/ismb_lab`` (mode 700) unless it is there, and becomes ``jupyterhub-singleuser``: root never
-writes in a home.  Root gives each student a memory and a CPU cgroup (v1) where the machine has
-them, and ``RLIMIT_DATA``; not ``RLIMIT_AS``, which also counts what numba's LLVM reserves unused.
+``stage`` (the teacher, once) makes the course folder, readable by everyone; ``serve`` (the hub's
+start command) copies it into the student's ``~/ismb_lab`` as the student, so root never writes in a
+home.  Root gives each student a memory and a CPU cgroup (v1) where the machine has them, and
+``RLIMIT_DATA``: not ``RLIMIT_AS``, which also counts what numba's LLVM reserves unused.
+deploy/README.md has the steps.
 """
 
 from __future__ import annotations
