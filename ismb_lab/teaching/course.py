@@ -136,10 +136,8 @@ def student_notebook(nb):
     HERE``, hidden tests removed.  Needs nbgrader (``[course]``)."""
     from nbgrader.preprocessors import ClearHiddenTests, ClearSolutions
 
-    resources = {}
-    nb, resources = ClearSolutions(code_stub={"python": CODE_STUB}).preprocess(nb, resources)
-    nb, resources = ClearHiddenTests().preprocess(nb, resources)
-    return nb
+    nb, resources = ClearSolutions(code_stub={"python": CODE_STUB}).preprocess(nb, {})
+    return ClearHiddenTests().preprocess(nb, resources)[0]
 
 
 def _existing(repo: Path, paths: list) -> list:
