@@ -10,8 +10,8 @@ from .._core.validation import ParameterError
 from ..depth.objects import GROUPINGS, DepthConfig
 from ..depth.pipeline import DEPTH_MATCH_CONFIG, DEPTH_METHOD, DEPTH_PARAMS, DEPTH_SOLVER
 from ._common import (UsageError, add_matching_options, add_solver_option, given, match_config, resolve_recipe,
-                      seed_setting, window_record)
-from ._guard import Files, add_force_option, json_text, output_path, save_figure
+                      seed_setting, window_record, write_ply)
+from ._guard import Files, add_force_option, json_text, output_path, save_plot
 
 __all__ = ["add_parser", "run"]
 
@@ -148,39 +148,26 @@ def run(args) -> int:
         atomic_write_text(args.json, json_text({**result.to_dict(),
                                                 "candidate_window": window_record(config, args.shift == "auto")}))
     if args.ply is not None:
-        from .._core.files import atomic_write_bytes
-
-        atomic_write_bytes(args.ply, _ply(args, result, rig if args.rig is not None else None))
+        _ply(args, result, rig if args.rig is not None else None)
     if args.plot is not None:
-        from matplotlib.figure import Figure
-
         from ..images.io import load_pair
         from ..plotting import plot_depth
-        fig = Figure(figsize=(6, 4.5), layout="constrained")
-        ax = fig.subplots()
-        plot_depth(ax, load_pair(args.scene_left, args.scene_right).left, result)
-        ax.set_title(f"Method-{method}: {len(result.objects)} objects, near -> far")
-        save_figure(fig, args.plot, dpi=120)
+
+        left = load_pair(args.scene_left, args.scene_right).left
+        save_plot(args.plot, (6, 4.5), lambda ax: plot_depth(ax, left, result),
+                  f"Method-{method}: {len(result.objects)} objects, near -> far")
     return 0
 
 
-def _ply(args, result, rig) -> bytes:
-    """The scene's kept matches in metres as a PLY cloud: through `rig`, or the pinhole camera of
-    the result's focal length and baseline at the scene's image centre (``DepthResult.points``)."""
-    import numpy as np
-
+def _ply(args, result, rig) -> None:
+    """Write the scene's kept matches as a PLY cloud: through `rig`, or the pinhole camera of the
+    result's focal length and baseline at the scene's image centre."""
     from ..cameras.camera import StereoCamera
     from ..images.io import load_image
-    from ..matching.ply import ply_bytes
 
     left = load_image(args.scene_left)
     h, w = left.shape
     camera = rig if rig is not None else StereoCamera.pinhole(w, h, focal_px=result.config.focal_px,
                                                               baseline_m=result.config.baseline_m)
-    xyz = result.points(camera)
-    keep = np.all(np.isfinite(xyz), axis=1)
-    xy = np.rint(np.asarray(result.kept_xy, dtype=float).reshape(-1, 2)[keep]).astype(int)
-    grey = left[np.clip(xy[:, 1], 0, h - 1), np.clip(xy[:, 0], 0, w - 1)]
-    return ply_bytes(xyz[keep], np.clip(grey, 0, 255), comments=(
-        "ismb-lab depth: the scene's kept matches, metres in the rectified left camera's frame "
-        "(X right, Y down, Z forward)", f"focal length {camera.focal_px:.6g} px, baseline {camera.baseline_m:.6g} m"))
+    write_ply(args.ply, result.points(camera), result.kept_xy, left, camera,
+              "ismb-lab depth: the scene's kept matches, ")

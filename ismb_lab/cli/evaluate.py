@@ -8,6 +8,7 @@ from pathlib import Path
 
 from .._core.files import atomic_write_text
 from ..tuning.cases import format_protocol, load_manifest, protocol
+from ..tuning.genetic import GAConfig
 from ..network.solvers import DEFAULT_SOLVER, SOLVERS
 from ._common import (DEFAULT_METHOD, BestSoFar, UsageError, add_ga_options, add_method_option, given, seed,
                       add_one_to_one_option, add_solver_option, default_of, ga_config, progress_bar, said_changes)
@@ -67,16 +68,13 @@ def add_parser(sub) -> None:
 
 def limit_defaults() -> dict:
     """The defaults of evaluate's limited options: the protocol's, which evaluate falls back to."""
-    from ..tuning.genetic import GAConfig
-
     ga = GAConfig()
     return {"population": ga.population, "generations": ga.generations, "seeds": DEFAULTS["seeds"],
             "fit_seeds": DEFAULTS["fit_seeds"], "jobs": available_cores()}
 
 
 def files(args) -> Files:
-    """The manifest and the recipe read, with every file the manifest names or its built-in
-    sources read; the report written."""
+    """The manifest and the recipe read, with every file the manifest names; the report written."""
     from ..tuning.cases import manifest_files
 
     return Files(inputs=(("manifest", args.manifest),) + given(("--recipe", args.recipe)),
@@ -104,8 +102,8 @@ def run(args) -> int:
 
 
 def _stopped(best, path, unit: str, reported) -> int:
-    """After a signal: say that the report is out, or write the best parameters so far to
-    `path`, or say that nothing was written."""
+    """After a signal: say that the report is out, or write the best parameters so far, or say
+    that nothing was written."""
     where = f" to {path}" if path is not None else ""
     if reported:
         print(interrupted_line(f"the report is complete{' and written' + where if where else ''}"),

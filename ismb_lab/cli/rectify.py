@@ -7,7 +7,8 @@ import sys
 from pathlib import Path
 
 from .._core.files import atomic_write_bytes, atomic_write_text
-from ._guard import Files, add_force_option, json_text
+from ._common import given
+from ._guard import Files, UsageError, add_force_option, json_text
 
 __all__ = ["add_parser", "run"]
 
@@ -36,10 +37,8 @@ def add_parser(sub) -> None:
 
 
 def files(args) -> Files:
-    """The photos and the rig read; the three files written into the --out folder (checked
-    when it exists: a new one is made after the work, so a refused pair leaves nothing behind)."""
-    from ._common import UsageError, given
-
+    """The photos and the rig read; the files written into --out, if it exists (a new one is made
+    after the work, so a refused pair leaves nothing behind)."""
     folder = Path(args.out_dir)
     if folder.exists() and not folder.is_dir():
         raise UsageError(f"--out {str(folder)!r} is not a folder")

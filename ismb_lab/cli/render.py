@@ -4,6 +4,8 @@ from __future__ import annotations
 
 from pathlib import Path
 
+from ._guard import Files, UsageError
+
 __all__ = ["add_parser", "run"]
 
 
@@ -17,9 +19,6 @@ def add_parser(sub) -> None:
 
 def files(args):
     """Render reads nothing; its --out is a folder, whose files :func:`check_outputs` checks."""
-    from ._common import UsageError
-    from ._guard import Files
-
     out = Path(args.out)
     if out.exists() and not out.is_dir():
         raise UsageError(f"--out {str(out)!r} is not a folder")
@@ -28,7 +27,7 @@ def files(args):
 
 def check_outputs(out: Path) -> None:
     """Before rendering: every file render writes is new or a regular, writable file, and every
-    folder on the way below `out` is a real folder (no link, device, FIFO or read-only file)."""
+    folder below `out` on the way is a real folder, not a link."""
     from .._core.files import OutputError, check_replace
     from ..scenes.gallery import gallery_files
 

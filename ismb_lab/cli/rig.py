@@ -1,11 +1,5 @@
-"""``ismb-lab rig``: a rig file from a factory calibration, for a camera that needs no chessboard.
-
-A rectified stereo camera (OAK-D, RealSense, ZED) ships its rectified focal length, principal
-point and baseline: ``--focal-px --baseline-m --size [--centre]`` (:meth:`StereoCamera.from_factory`).
-A calibration that OpenCV wrote (``cv2.FileStorage``: K, D, R and T of the two cameras) is read with
-``--from-opencv`` (:meth:`StereoCamera.from_opencv`).  Either way the file is the one ``calibrate``
-writes and ``match --rig``, ``depth --rig`` and ``rectify --rig`` read.
-"""
+"""``ismb-lab rig``: a rig file from a factory calibration (``StereoCamera.from_factory``) or from
+one OpenCV wrote (``StereoCamera.from_opencv``), for a camera that needs no chessboard."""
 
 from __future__ import annotations
 
@@ -14,7 +8,7 @@ import math
 import sys
 from pathlib import Path
 
-from ._guard import Files, add_force_option, output_path
+from ._guard import Files, UsageError, _short, add_force_option, output_path
 
 __all__ = ["add_parser", "files", "run"]
 
@@ -23,8 +17,8 @@ def _size(text: str) -> tuple:
     parts = text.lower().split("x")
     if len(parts) != 2 or not all(p.strip().isascii() and p.strip().isdigit() and len(p.strip()) <= 5
                                   and 1 <= int(p) <= 1 << 16 for p in parts):
-        shown = text if len(text) <= 40 else text[:37] + "..."
-        raise argparse.ArgumentTypeError(f"WxH in pixels, each from 1 to {1 << 16}, e.g. 640x480; not {shown!r}")
+        raise argparse.ArgumentTypeError(f"WxH in pixels, each from 1 to {1 << 16}, e.g. 640x480; "
+                                         f"not {_short(text)!r}")
     return tuple(int(p) for p in parts)
 
 
@@ -35,8 +29,7 @@ def _centre(text: str) -> tuple:
     except ValueError:
         values = ()
     if len(values) != 2 or not all(math.isfinite(v) for v in values):
-        shown = text if len(text) <= 40 else text[:37] + "..."
-        raise argparse.ArgumentTypeError(f"CX,CY in pixels, e.g. 319.5,239.5; not {shown!r}")
+        raise argparse.ArgumentTypeError(f"CX,CY in pixels, e.g. 319.5,239.5; not {_short(text)!r}")
     return values
 
 
@@ -76,7 +69,6 @@ def files(args) -> Files:
 
 def _factory(args):
     from ..cameras.camera import MAX_BASELINE_M, StereoCamera
-    from ._common import UsageError
 
     missing = [f"--{name}" for name, value in (("focal-px", args.focal_px), ("baseline-m", args.baseline_m),
                                                ("size", args.size)) if value is None]
@@ -101,7 +93,6 @@ def _factory(args):
 
 def _opencv(args):
     from ..cameras.camera import StereoCamera
-    from ._common import UsageError
 
     given = [f"--{name}" for name, value in (("focal-px", args.focal_px), ("baseline-m", args.baseline_m),
                                              ("centre", args.centre)) if value is not None]

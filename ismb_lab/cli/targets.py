@@ -57,8 +57,7 @@ def files(args) -> Files:
 
 
 def _inputs(args) -> tuple[list, object]:
-    """The input files, and what :func:`~ismb_lab.labels.classroom.pool` takes (a list or, for a
-    collected folder, ``{student: files}``)."""
+    """The input files, and what ``pool`` takes (a list or, for a collected folder, ``{student: files}``)."""
     from ..labels.classroom import collected
 
     folders = [p for p in args.files if p.is_dir()]

@@ -20,7 +20,7 @@ from ._guard import (Files, add_force_option, deferred_signals, interrupted, int
 
 __all__ = ["add_parser", "run", "why_negative"]
 
-#: The GA seed and the fitness's update-order seeds that :func:`ismb_lab.tuning.fitness.tune` uses by default.
+#: The defaults of :func:`ismb_lab.tuning.fitness.tune`.
 GA_SEED, FIT_SEEDS = default_of(tuning.tune, "rng"), default_of(tuning.tune, "seeds")
 
 
@@ -77,8 +77,7 @@ class _Fit:
         self.targets, self.last, self.written = 0, None, False
 
     def write(self, interrupted: bool) -> Recipe:
-        """Write the recipe with the last generation's best parameters (a signal meanwhile waits);
-        return it."""
+        """Write and return the recipe with the last generation's best parameters."""
         recipe = replace(self.recipe, params=tuning.to_params(self.recipe.method, self.last.best_chromosome))
         with deferred_signals():
             save_recipe(self.out, recipe, fitness=self.last.best, generations=self.last.index, seed=self.seed,
@@ -114,13 +113,8 @@ def _keep(fit: _Fit) -> str:
 
 
 def why_negative(fitness, score, corners: int, labelled: int) -> str | None:
-    """The line that explains a negative `fitness` (the GA's best) from the `score` of one run
-    (its C/E/T), with `labelled` of the `corners` left corners in a target pair; None when
-    neither is negative.
-
-    A match on a left corner that no target pair covers counts as an extra, so a method
-    that matches many corners of a sparsely labelled pair scores below zero.
-    """
+    """The line that explains a negative `fitness` (the GA's best) or `score` (the C/E/T of one run),
+    with `labelled` of the `corners` left corners in a target pair; None when neither is negative."""
     if fitness >= 0 and score.fitness >= 0:
         return None
     c, w, e = score.correct, score.wrong_partner, score.extra

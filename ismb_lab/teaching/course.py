@@ -1,30 +1,10 @@
 """The nbgrader course: which notebooks make which assignment, and their generated source.
 
-nbgrader hands assignments out from ``<course>/source/<assignment>/``.  That folder is
-generated here from the repository's notebooks, which carry the nbgrader cell
-metadata, and images; it is never a hand-edited copy:
-
-    ismb-lab course source ~/course           # writes ~/course/source/labels/
-    cd ~/course && nbgrader generate_assignment labels && nbgrader release_assignment labels
-
-The exercise assignments (``00-start``, ``01-harris``, ...) are one notebook each.  Their
-code exercises keep a runnable first try outside ``### BEGIN SOLUTION`` ...
-``### END SOLUTION``, so the student version (the solution replaced by a comment, the
-hidden tests removed) still runs on Restart & Run All and prints the check's hint.
-:func:`student_notebook` makes that version with nbgrader's own preprocessors, for the
-hub's copy of the notebooks.  A notebook's ``../images/`` and ``../manifests/`` become
-``images/`` and ``manifests/`` inside the assignment, which holds copies of them: in its code
-and in the commands its text prints (``ismb-lab match ../images/...``), so that a command
-works as printed in the notebook's own folder, the repository's ``notebooks/`` or the
-assignment's.
-
-An assignment folder holds its notebooks and, under ``images/``, the image pairs they
-open, so the fetched assignment (``~/labels/`` on a student's server) finds them
-without the repository: :func:`course_images` looks beside the notebook first.  The
-labeller saves ``targets-<user>-<pair>.json`` in the notebook's folder, so
-``nbgrader submit`` hands it in and ``nbgrader collect`` gathers it into
-``submitted/<student>/labels/``, which ``ismb-lab targets merge`` reads.
-deploy/course/README.md has the teacher's steps.
+``<course>/source/<assignment>/`` is generated here from the repository's notebooks (which carry
+the nbgrader cell metadata) and images, never hand-edited; deploy/course/README.md has the
+teacher's steps.  A notebook's ``../images/`` and ``../manifests/`` become the assignment's own
+``images/`` and ``manifests/``, in its code and in the commands its text prints, so that they work
+in the notebook's own folder, the repository's ``notebooks/`` or the assignment's.
 """
 
 from __future__ import annotations
@@ -59,8 +39,7 @@ class Assignment:
                                                  "not empty)", value))
 
 
-#: The course's assignments, by nbgrader assignment id: the labels, and one per notebook
-#: with checked exercises.
+#: The course's assignments by nbgrader id: the labels, and one per notebook with checked exercises.
 ASSIGNMENTS = {
     "labels": Assignment(("04_label_targets.ipynb",), ("synthetic",)),
     "00-start": Assignment(("00_start_here.ipynb",)),
@@ -73,8 +52,7 @@ ASSIGNMENTS = {
     "08-peers": Assignment(("08_real_data_and_peers.ipynb",)),
 }
 
-#: What replaces a code solution in the student version (``ClearSolutions.code_stub`` of
-#: deploy/course/nbgrader_config.py): a comment, so the cell's first try still runs.
+#: What replaces a code solution in the student version: a comment, so the cell's first try still runs.
 CODE_STUB = "# YOUR CODE HERE"
 #: The folders of the repository a notebook reaches with ``../``, copied into an assignment.
 _SHARED = ("images", "manifests")
@@ -101,8 +79,7 @@ def course_images(name: str, folder=".") -> Path:
 
 
 def repository() -> Path:
-    """The repository this package runs from (its ``notebooks/`` beside the package), else the
-    current folder."""
+    """The repository this package runs from (with ``notebooks/``), else the current folder."""
     here = Path(__file__).resolve().parents[1]
     return here if (here / "notebooks").is_dir() else Path.cwd()
 
@@ -137,8 +114,8 @@ def _references(nb: dict) -> dict:
 
 
 def _local_paths(nb: dict) -> bool:
-    """Make the ``../images/`` and ``../manifests/`` paths of the code cells (quoted) and of the
-    markdown cells (the commands they print) the assignment's own; True if anything changed."""
+    """Make the ``../images/`` and ``../manifests/`` paths of the cells the assignment's own;
+    True if anything changed."""
     changed = False
     for cell in nb["cells"]:
         source = "".join(cell["source"])
@@ -154,23 +131,27 @@ def _local_paths(nb: dict) -> bool:
 
 
 def student_notebook(nb):
-    """The student version of notebook `nb` (an nbformat NotebookNode, changed in place and
-    returned): solutions replaced by :data:`CODE_STUB` or ``YOUR ANSWER HERE``, hidden tests
-    removed, as ``nbgrader generate_assignment`` writes it.  Needs nbgrader (``[course]``).
-    """
+    """The student version of notebook `nb` (an nbformat NotebookNode, changed in place), as
+    ``nbgrader generate_assignment`` writes it: solutions replaced by :data:`CODE_STUB` or ``YOUR ANSWER
+    HERE``, hidden tests removed.  Needs nbgrader (``[course]``)."""
     from nbgrader.preprocessors import ClearHiddenTests, ClearSolutions
 
-    resources = {}
-    nb, resources = ClearSolutions(code_stub={"python": CODE_STUB}).preprocess(nb, resources)
-    nb, resources = ClearHiddenTests().preprocess(nb, resources)
-    return nb
+    nb, resources = ClearSolutions(code_stub={"python": CODE_STUB}).preprocess(nb, {})
+    return ClearHiddenTests().preprocess(nb, resources)[0]
+
+
+def _existing(repo: Path, paths: list) -> list:
+    missing = [str(p) for p in paths if not p.exists()]
+    if missing:
+        raise ParameterError(message("repo", "make_source", "the repository (its notebooks/ and images/)",
+                                     f"{str(repo)!r}, without {missing[0]}"))
+    return paths
 
 
 def make_source(course, assignment: str = "labels", repo=None) -> Path:
-    """Write ``<course>/source/<assignment>/`` from the repository, replacing an older one.
+    """Write ``<course>/source/<assignment>/`` from the repository, replacing an older one; returns it.
 
-    The folder is built beside its final place and renamed into it, so nbgrader never
-    sees half of it.  Returns its path.
+    The folder is built beside its final place and renamed into it, so nbgrader never sees half of it.
 
     >>> import tempfile
     >>> folder = make_source(tempfile.mkdtemp())
@@ -184,21 +165,13 @@ def make_source(course, assignment: str = "labels", repo=None) -> Path:
         raise ParameterError(message("assignment", "make_source", f"one of {sorted(ASSIGNMENTS)}", assignment))
     repo = repository() if repo is None else Path(repo)
     spec = ASSIGNMENTS[assignment]
-    notebooks = [repo / "notebooks" / n for n in spec.notebooks]
-    missing = [str(p) for p in notebooks if not p.exists()]
-    if missing:
-        raise ParameterError(message("repo", "make_source", "the repository (its notebooks/ and images/)",
-                                     f"{str(repo)!r}, without {missing[0]}"))
+    notebooks = _existing(repo, [repo / "notebooks" / n for n in spec.notebooks])
     loaded = [_check_notebook(p, every_cell=assignment == "labels") for p in notebooks]
     shared = {"images": set(spec.images), "manifests": set()}
     for nb in loaded:
         for part, names in _references(nb).items():
             shared[part] |= names
-    copies = [repo / part / name for part in _SHARED for name in sorted(shared[part])]
-    missing = [str(p) for p in copies if not p.exists()]
-    if missing:
-        raise ParameterError(message("repo", "make_source", "the repository (its notebooks/ and images/)",
-                                     f"{str(repo)!r}, without {missing[0]}"))
+    copies = _existing(repo, [repo / part / name for part in _SHARED for name in sorted(shared[part])])
     parent = Path(course) / "source"
     parent.mkdir(parents=True, exist_ok=True)
     build = Path(tempfile.mkdtemp(prefix=f".{assignment}-", dir=parent))

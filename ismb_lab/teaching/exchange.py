@@ -1,21 +1,11 @@
 """nbgrader's exchange, made private between students (deploy/course/nbgrader_config.py).
 
-* :class:`PrivateSubmit`: a submission's files are 0640 and its folders 2770, with the
-  group of the exchange's ``inbound/`` (set-group-id: the teacher's group).  nbgrader's
-  own submit leaves them 0644 in a 0777 folder, hidden only by an unguessable name.
-* :class:`OwnerCollect`: a submission counts for the account that owns it in the
-  exchange, never for the name it claims (``nbgrader submit --student=someone``); the
-  folder ``submitted/<student>/`` is therefore who handed the work in.  Every collect takes
-  each student's latest submission, replacing an older one collected before (nbgrader's
-  ``--update``, on by default here).
-* :class:`KeylessRelease`: a released assignment holds no ground truth of an image pair
-  (``answer_key.json``, ``disparity.png``, ``scene.json``) that none of its notebooks reads
-  (the labels assignment: the answer key is what the students label).
-* :class:`FeedbackWithoutTests`: the feedback a student fetches shows each test cell's
-  score and its error's last line, never the hidden tests.  nbgrader builds feedback from
-  the autograded notebook, where the hidden tests were put back to be run, and shows them
-  by design (jupyter/nbgrader#917); a student who has feedback could hand them to one who
-  has not submitted yet, or to next term's class.
+* :class:`PrivateSubmit`: a submission is readable by its owner and the teacher's group only.
+* :class:`OwnerCollect`: a submission counts for the account that owns it, never for the name it
+  claims (``nbgrader submit --student=someone``); every collect takes the latest one.
+* :class:`KeylessRelease`: a released assignment holds no ground truth that none of its notebooks reads.
+* :class:`FeedbackWithoutTests`: feedback never shows the hidden tests, which nbgrader's does by
+  design (jupyter/nbgrader#917).
 """
 
 from __future__ import annotations
@@ -57,11 +47,9 @@ class PrivateSubmit(ExchangeSubmit):
     def do_copy(self, src, dest, log=None):
         """Copy into a submission folder made here, inside ``inbound/``.
 
-        nbgrader's copy ends by giving the submission folder the mode of the student's
-        folder, which drops the set-group-id bit it had from ``inbound/`` (a student is not
-        in the teacher's group); ``timestamp.txt`` and ``submission_secret.txt``, written
-        next, would then have the student's group and, private, be unreadable to the
-        teacher.  Made here, the folder keeps the bit; subfolders are nbgrader's copies.
+        nbgrader's copy ends by giving the submission folder the mode of the student's folder, which drops
+        the set-group-id bit it had from ``inbound/``; ``timestamp.txt`` and ``submission_secret.txt`` would
+        then have the student's group and be unreadable to the teacher.  Subfolders are nbgrader's copies.
         """
         if os.path.dirname(os.path.abspath(dest)) != os.path.abspath(self.inbound_path):
             return super().do_copy(src, dest, log)     # the student's own cache copy
@@ -116,9 +104,8 @@ def _unread(folder: str) -> list:
 
 
 class KeylessRelease(ExchangeReleaseAssignment):
-    """nbgrader's release, leaving out an image pair's ground truth (answer key, disparity map,
-    scene description) that no notebook of the assignment reads: the labels assignment asks
-    the students for what the answer key holds."""
+    """nbgrader's release, leaving out an image pair's ground truth that no notebook of the
+    assignment reads (the labels assignment asks the students for what the answer key holds)."""
 
     def do_copy(self, src, dest, log=None):
         unread = _unread(src) if os.path.abspath(dest) == os.path.abspath(self.dest_path) else []
@@ -135,8 +122,8 @@ class KeylessRelease(ExchangeReleaseAssignment):
 
 class FeedbackWithoutTests(ClearHiddenTests):
     """A preprocessor of nbgrader's feedback (``GenerateFeedback.preprocessors``): each hidden
-    test region is cleared again, and a failed test cell's traceback, whose lines quote the
-    test, is cut to its last line (``AssertionError: ...``)."""
+    test region is cleared again, and a failed test cell's traceback, which quotes the test, is cut to
+    its last line."""
 
     def preprocess_cell(self, cell, resources, cell_index):
         if cell.cell_type == "code" and self._remove_hidden_test_region(cell):

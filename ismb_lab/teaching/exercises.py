@@ -1,9 +1,8 @@
 """Automatic checks for the notebook exercises.
 
-Each check compares a student's answer with the package's own computation and
-returns a :class:`Feedback`: ``"correct"``, or a sentence that names the term
-that is off.  The checks recognise the usual slips (a halved quadratic part, a
-missing constant, a flipped sign) and say which one it is.
+Each check compares a student's answer with the package's own computation and returns a
+:class:`Feedback`: ``"correct"``, or a sentence that names the slip it recognised (a halved
+quadratic part, a missing constant, a flipped sign) or the term that is off.
 """
 
 from __future__ import annotations
@@ -27,16 +26,8 @@ __all__ = ["check_depth_range", "check_disparity", "check_energy_derivation", "c
 
 @dataclass(frozen=True)
 class Feedback:
-    """The verdict of one exercise check.
+    """The verdict of one exercise check: `text` is ``"correct"``, or what is off and a hint.
 
-    Attributes
-    ----------
-    correct : bool
-    text : str
-        ``"correct"``, or what is off and how to fix it.
-
-    Examples
-    --------
     >>> print(Feedback(True, "correct"))
     correct
     """
@@ -72,28 +63,19 @@ def _close(a, b, atol: float = 1e-9) -> bool:
     return bool(np.allclose(a, b, rtol=1e-9, atol=atol))
 
 
+def _slip(slips, same, otherwise: str) -> Feedback:
+    """The text of the first of `slips` ((answer, text) pairs) whose answer is `same` as the student's,
+    else `otherwise`."""
+    return Feedback(False, next((text for answer, text in slips if same(answer)), otherwise))
+
+
 def check_energy_derivation(W, I, net: Network) -> Feedback:
-    """Check the weights and biases a student derived from the energy (3-15).
+    """Check the weights `W` (n, n) and biases `I` (n,) a student derived from the energy (3-15).
 
-    Compares them with the package's own derivation (``rule="exact"``) term by term: the
-    diagonal, neurons of the same left or right feature, neighbouring neurons, neurons that
-    do not interact, and the bias, and names the terms that are off.
+    They are compared with the package's own derivation (``rule="exact"``) term by term: the
+    diagonal, neurons of the same left or right feature, neighbouring neurons, neurons that do not
+    interact, and the bias.
 
-    Parameters
-    ----------
-    W : (n, n) array_like
-        The student's weights over the candidate neurons of `net`.
-    I : (n,) array_like
-        The student's biases.
-    net : Network
-
-    Returns
-    -------
-    feedback : Feedback
-        ``"correct"`` or the terms that are off.
-
-    Examples
-    --------
     >>> net = Network.from_arrays(2, 2, rows=[0, 0, 1, 1], cols=[0, 1, 0, 1],
     ...                           similarity=[0.5, -0.5, -0.5, 0.5],
     ...                           pair_a=[0, 1], pair_b=[3, 2], pair_c=[0.9, -0.9])
@@ -155,21 +137,9 @@ def check_energy_derivation(W, I, net: Network) -> Feedback:
 
 
 def random_network(rng) -> Network:
-    """A small random network, for checking a derivation on more than one example.
+    """A small random network (2 to 5 features a side, at least two candidates), for checking a
+    derivation on more than one example; every value drawn in [-1, 1].
 
-    2 to 5 features a side, random candidates (at least two), similarities, neighbouring
-    pairs, compatibilities and self-compatibilities, all in [-1, 1].
-
-    Parameters
-    ----------
-    rng : int or numpy.random.Generator
-
-    Returns
-    -------
-    net : Network
-
-    Examples
-    --------
     >>> net = random_network(0)
     >>> 2 <= net.n_neurons <= 25, bool(np.all(np.abs(net.similarity) <= 1))
     (True, True)
@@ -213,29 +183,13 @@ def _form_problems(W, I, net: Network, gen: np.random.Generator) -> list[str]:
 
 
 def check_hopfield_form(form, *, rng, n_networks: int = 3) -> Feedback:
-    """Check a student's function that writes the energy (3-15) of any network in Hopfield form.
+    """Check a student's ``form(net) -> (W, I)``, the energy (3-15) of any network in Hopfield form.
 
-    ``form(net)`` must return ``(W, I)`` for a :class:`~ismb_lab.network.hopfield.Network`.  It is
-    called on `n_networks` random networks drawn from `rng` (:func:`random_network`), and on
-    each the check asks what the derivation must give, with the energy computed from (3-15)
-    directly: W symmetric with a zero diagonal, ``E(y) = E(0) - 1/2 y'Wy - I'y`` for every
-    one-neuron state and for random states, and ``dE = -u dy`` for every single flip of random
-    states, ``u = W y + I``.  Then :func:`check_energy_derivation` names a term that is off.
+    It is called on `n_networks` random networks drawn from `rng` (:func:`random_network`); on each,
+    W must be symmetric with a zero diagonal, ``E(y) = E(0) - 1/2 y'Wy - I'y`` must hold for
+    one-neuron and random states, and ``dE = -u dy`` (``u = W y + I``) for single flips, with E
+    computed from (3-15) directly.  Then :func:`check_energy_derivation` names a term that is off.
 
-    Parameters
-    ----------
-    form : callable
-        ``form(net) -> (W, I)``.
-    rng : int or numpy.random.Generator
-        Where the networks come from.
-    n_networks : int
-
-    Returns
-    -------
-    feedback : Feedback
-
-    Examples
-    --------
     >>> print(check_hopfield_form(lambda net: (np.zeros((net.n_neurons,) * 2), np.zeros(net.n_neurons)), rng=0))
     On a random network of 12 neurons: E(y) from (3-15) differs from E(0) - 1/2 y'Wy - I'y for some states y; ...
     """
@@ -262,26 +216,11 @@ def check_hopfield_form(form, *, rng, n_networks: int = 3) -> Feedback:
 
 
 def check_harris_response(R, image, sigma: float = 1.0, k: float = 0.04) -> Feedback:
-    """Check a Harris response computed by a student (2-1 ... 2-8).
+    """Check a Harris response `R` (H, W) a student computed from `image` (2-1 ... 2-8).
 
-    Compares it with :func:`ismb_lab.images.features.harris_response` (Sobel gradients divided
-    by 8, a Gaussian window of standard deviation `sigma`) and recognises the usual slips.
+    Compared with :func:`ismb_lab.images.features.harris_response` (Sobel gradients divided by 8, a
+    Gaussian window of standard deviation `sigma`, Harris' constant `k`).
 
-    Parameters
-    ----------
-    R : (H, W) array_like
-        The student's response.
-    image : (H, W) array_like
-        The grey image it was computed from.
-    sigma, k : float
-        The Gaussian window and Harris' constant used.
-
-    Returns
-    -------
-    feedback : Feedback
-
-    Examples
-    --------
     >>> img = np.zeros((20, 20)); img[10:, 10:] = 100.0
     >>> print(check_harris_response(harris_response(img, 1.5, 0.05), img, 1.5, 0.05))
     correct
@@ -312,35 +251,16 @@ def check_harris_response(R, image, sigma: float = 1.0, k: float = 0.04) -> Feed
          "The structure tensor is not windowed: average Ix^2, Ix Iy and Iy^2 with a Gaussian "
          f"of sigma = {sigma:g} before forming det and trace."),
     )
-    for candidate, text in slips:
-        if _close(R, candidate, atol):
-            return Feedback(False, text)
     worst = np.unravel_index(np.argmax(np.abs(R - expected)), R.shape)
-    return Feedback(False, f"R is off; the largest difference is at (x, y) = ({worst[1]}, {worst[0]}), "
-                           f"where yours is {R[worst]:.6g}. Hint: compute M there by hand.")
+    return _slip(slips, lambda answer: _close(R, answer, atol),
+                 f"R is off; the largest difference is at (x, y) = ({worst[1]}, {worst[0]}), "
+                 f"where yours is {R[worst]:.6g}. Hint: compute M there by hand.")
 
 
 def check_transfer(values, x, theta: float, lam: float) -> Feedback:
-    """Check a student's transfer function (3-10, 3-13) evaluated at `x`.
+    """Check a student's transfer function (3-10, 3-13): its `values` at `x` (``M_ik`` for S, ``X``
+    for C), with tolerance `theta` and steepness `lam`.
 
-    Compares it with :func:`ismb_lab.network.similarity.transfer` and recognises the usual slips
-    (sign, range, a parameter left out).
-
-    Parameters
-    ----------
-    values : array_like
-        The student's outputs at `x`.
-    x : array_like
-        The inputs (``M_ik`` for S, ``X`` for C).
-    theta, lam : float
-        The tolerance and the steepness used.
-
-    Returns
-    -------
-    feedback : Feedback
-
-    Examples
-    --------
     >>> x = np.linspace(0, 40, 9)
     >>> print(check_transfer(transfer(x, 20, 2.0), x, 20, 2.0))
     correct
@@ -368,33 +288,16 @@ def check_transfer(values, x, theta: float, lam: float) -> Feedback:
         (transfer(x, theta, 2.0 * lam), "lambda is doubled: the exponent is lam (x - theta)."),
         (transfer(x, theta, 0.5 * lam), "lambda is halved: the exponent is lam (x - theta)."),
     )
-    for candidate, text in slips:
-        if _close(values, candidate, 1e-7):
-            return Feedback(False, text)
     worst = int(np.argmax(np.abs(values - expected).ravel()))
-    return Feedback(False, f"The values are off; the largest difference is at x = {x.ravel()[worst]:g}, "
-                           f"where yours is {values.ravel()[worst]:.6g}. Hint: evaluate (3-10) there by hand.")
+    return _slip(slips, lambda answer: _close(values, answer, 1e-7),
+                 f"The values are off; the largest difference is at x = {x.ravel()[worst]:g}, "
+                 f"where yours is {values.ravel()[worst]:.6g}. Hint: evaluate (3-10) there by hand.")
 
 
 def check_disparity(values, left_xy, right_xy) -> Feedback:
-    """Check a student's "disparity" column of the thesis' tables for matched points.
+    """Check a student's "disparity" column of the thesis' tables for the matched points
+    `left_xy`, `right_xy` ((m, 2), x then y); compared to 0.01.
 
-    Compares it with :func:`ismb_lab.images.coords.euclidean_disparity` and recognises the
-    usual slips (one component, a missing root, the grid distance).
-
-    Parameters
-    ----------
-    values : (m,) array_like
-        The student's disparities, rounded as they like (compared to 0.01).
-    left_xy, right_xy : (m, 2) array_like
-        The matched points ``(x, y)``; a table's ``x_left, y_left`` and ``x_right, y_right``.
-
-    Returns
-    -------
-    feedback : Feedback
-
-    Examples
-    --------
     >>> left, right = [[99, 99], [120, 155]], [[88, 100], [98, 158]]   # Tables 5.1 and 5.4
     >>> print(check_disparity([11.05, 22.20], left, right))
     correct
@@ -422,34 +325,17 @@ def check_disparity(values, left_xy, right_xy) -> Feedback:
         (np.abs(dy), "That is the vertical disparity alone. Hint: the tables' column is a distance "
                      "between the two points; which components does it use?"),
     )
-    for candidate, text in slips:
-        if near(values, candidate):
-            return Feedback(False, text)
     worst = int(np.argmax(np.abs(values - expected)))
-    return Feedback(False, f"Row {worst + 1} is off (yours: {values[worst]:g}). Hint: recompute it from "
-                           f"its x_left, y_left, x_right and y_right.")
+    return _slip(slips, lambda answer: near(values, answer), f"Row {worst + 1} is off (yours: "
+                 f"{values[worst]:g}). Hint: recompute it from its x_left, y_left, x_right and y_right.")
 
 
 def check_error_kinds(wrong, extra, pairs, targets) -> Feedback:
-    """Check a student's count of the two kinds of error of matched pairs against target pairs.
+    """Check a student's count of the two kinds of error of matched `pairs` against `targets`.
 
-    A *wrong partner* is a match of a left feature that has a target, to another right
-    feature; an *extra* is a match of a left feature that has no target (the split of
-    :func:`ismb_lab.tuning.evaluation.score`).  The usual slips are recognised.
+    A *wrong partner* is a match of a left feature that has a target, to another right feature; an
+    *extra* is a match of a left feature that has no target (:func:`ismb_lab.tuning.evaluation.score`).
 
-    Parameters
-    ----------
-    wrong, extra : int
-        The student's counts.
-    pairs, targets : (m, 2) int array_like
-        Matched and target ``(i, k)`` feature pairs.
-
-    Returns
-    -------
-    feedback : Feedback
-
-    Examples
-    --------
     >>> pairs, targets = [[0, 0], [0, 1], [2, 2], [3, 0]], [[0, 0], [1, 1], [2, 3]]
     >>> print(check_error_kinds(2, 1, pairs, targets))
     correct
@@ -485,26 +371,9 @@ def check_error_kinds(wrong, extra, pairs, targets) -> Feedback:
 
 
 def check_depth_range(near, far, disparity, *, focal_px: float, baseline_m: float, error_px: float) -> Feedback:
-    """Check a student's depth range of a disparity with an error bar.
+    """Check a student's depth range ``(near, far)`` in metres of a `disparity` (px) with an error
+    bar of `error_px`, without naming the formula.
 
-    Compares ``(near, far)`` with :func:`ismb_lab.depth.objects.metric_depth` of `disparity` and
-    recognises the usual slips, without naming the formula.
-
-    Parameters
-    ----------
-    near, far : float
-        The student's near and far ends, in metres.
-    disparity : float
-        The disparity d, pixels (> 0).
-    focal_px, baseline_m, error_px : float
-        f, B and the error bar q of the disparity.
-
-    Returns
-    -------
-    feedback : Feedback
-
-    Examples
-    --------
     >>> print(check_depth_range(0.9, 1.2, 30.0, focal_px=300, baseline_m=0.1, error_px=0.5))
     Your range [0.900, 1.200] m is off; the depth itself is 1.000 m. Hint: work out Z at each end of the disparity's error bar.
     """
@@ -526,26 +395,9 @@ def check_depth_range(near, far, disparity, *, focal_px: float, baseline_m: floa
 
 
 def check_fitness(value, pairs, targets, unknown=()) -> Feedback:
-    """Check a student's GA fitness (4-1) of matched pairs against target pairs.
+    """Check a student's GA fitness (4-1) of matched `pairs` against `targets`; matches of the left
+    features in `unknown` do not count.
 
-    Compares it with the fitness of :func:`ismb_lab.tuning.evaluation.score` (matches of left
-    features in `unknown` do not count) and recognises the usual slips.
-
-    Parameters
-    ----------
-    value : float
-        The student's fitness.
-    pairs, targets : (m, 2) int array_like
-        Matched and target ``(i, k)`` feature pairs.
-    unknown : int array_like
-        Left features whose truth is unknown.
-
-    Returns
-    -------
-    feedback : Feedback
-
-    Examples
-    --------
     >>> pairs, targets = [[0, 0], [1, 2], [3, 3]], [[0, 0], [1, 1], [2, 2]]
     >>> print(check_fitness(-1, pairs, targets))
     correct
@@ -567,8 +419,5 @@ def check_fitness(value, pairs, targets, unknown=()) -> Feedback:
                                               "what does a missed target do to n_c?"),
         (s.recall, "That is a rate (n_c / T). Hint: the fitness (4-1) is a count."),
     )
-    for candidate, text in slips:
-        if value == candidate:
-            return Feedback(False, text)
-    return Feedback(False, f"The fitness is off (yours: {value:g}). Hint: count n_c (matches that are "
-                           f"targets) and n_e (all the other matches) again.")
+    return _slip(slips, lambda answer: value == answer, f"The fitness is off (yours: {value:g}). Hint: "
+                 "count n_c (matches that are targets) and n_e (all the other matches) again.")

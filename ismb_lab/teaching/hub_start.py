@@ -1,38 +1,10 @@
 """A student's server on the class hub: the course copy, made by the student, and limits.
 
-The hub (``deploy/jupyterhub_config.py``) starts every student's server as that student
-with ``python -m ismb_lab.teaching.hub_start serve``. That command, running with the student's
-own rights, copies the course folder into ``~/ismb_lab`` (mode 700) if it is not there
-yet, then becomes ``jupyterhub-singleuser``. Root never writes in a home, so a symbolic
-link the student swaps in mid-copy leads only where the student could write anyway.
-
-The teacher prepares the course folder once with ``python -m ismb_lab.teaching.hub_start stage
-REPOSITORY COURSE``, run with the class venv's python:
-
-* the notebooks (their student versions: exercise solutions and hidden tests cleared as
-  ``nbgrader generate_assignment`` clears them), images and manifests, without the solutions
-  folder, labels or lock files;
-* ``COURSE/numba``: the kernels, compiled once for the venv's copy of the package
-  (:mod:`ismb_lab._core.numba_share`), which every student's process loads instead of compiling;
-* ``COURSE/config``, the students' Jupyter config folder (the hub puts it on their
-  ``JUPYTER_CONFIG_PATH``): the course's ``nbgrader_config.py`` (its course id and
-  exchange, from ``deploy/course/``), a page config that hides nbgrader's teacher tools and
-  a server config that does not load the Formgrader's server extension;
-* ``COURSE/teacher-config``, the teachers' (hub admins') folder: the same nbgrader config
-  with the teacher's course folder as ``CourseDirectory.root`` (``ISMB_COURSE_ROOT``,
-  default ``~/course``), and nbgrader's tools all on;
-* ``COURSE/lab-settings/overrides.json``: JupyterLab asks no one about news;
-* ``COURSE/profile.sh``, installed by root as ``/etc/profile.d/ismb-lab.sh``: every login
-  shell (JupyterLab's terminals, ``su -``, ssh) finds the venv's commands, the course's
-  nbgrader config and the compiled kernels.
-
-All of it readable by everyone and writable by no one but its owner (root).
-
-Memory: :func:`make_cgroups` (run by the hub, as root) gives each student a memory and
-a CPU cgroup (cgroup v1) where the machine has them; :func:`enter` (run in the new
-process before it drops root) moves it there and sets ``RLIMIT_DATA``, which every
-process the server starts, kernels included, inherits. ``RLIMIT_AS`` is not used: it
-also counts address space that numba's LLVM reserves without using, and stops it.
+``stage`` (the teacher, once) makes the course folder, readable by everyone; ``serve`` (the hub's
+start command) copies it into the student's ``~/ismb_lab`` as the student, so root never writes in a
+home.  Root gives each student a memory and a CPU cgroup (v1) where the machine has them, and
+``RLIMIT_DATA``: not ``RLIMIT_AS``, which also counts what numba's LLVM reserves unused.
+deploy/README.md has the steps.
 """
 
 from __future__ import annotations
@@ -101,9 +73,9 @@ def _copy_parts(source: Path, target: Path) -> list[str]:
 
 
 def stage(repository, course, kernels: bool = True) -> list[str]:
-    """The teacher's step: copy the course parts of `repository` into a new folder `course`
-    that every account can read (folders 755, files 644), with the Jupyter config folders,
-    the login shells' profile and (with `kernels`) the compiled kernels; returns what was made.
+    """The teacher's step: copy the course parts of `repository` into a new folder `course` that
+    every account can read (folders 755, files 644), with the Jupyter config folders, the login
+    shells' profile and (with `kernels`) the compiled kernels; returns what was made.
 
     `course` must not exist yet, so that nothing staged earlier is mixed in.
     """
@@ -144,8 +116,7 @@ def stage(repository, course, kernels: bool = True) -> list[str]:
 
 
 def _student_versions(folder: Path) -> None:
-    """Replace each notebook of `folder` that holds exercise solutions or hidden tests by its
-    student version (:func:`ismb_lab.teaching.course.student_notebook`)."""
+    """Replace each notebook of `folder` with exercise solutions or hidden tests by its student version."""
     for path in sorted(folder.glob("*.ipynb")):
         text = path.read_text(encoding="utf-8")
         if "### BEGIN SOLUTION" in text or "### BEGIN HIDDEN TESTS" in text:
@@ -195,10 +166,11 @@ def _stage_config(course_config: Path, course: Path) -> None:
 
 
 def profile(course) -> str:
-    """``/etc/profile.d/ismb-lab.sh`` for a course staged in `course` by this interpreter's
-    venv: login shells (Debian's ``/etc/profile`` resets PATH) find the venv's commands
-    (after the system's for root, so root's ``python3`` and ``pip`` stay Debian's), the
-    course's nbgrader config and the compiled kernels; values a server set are kept."""
+    """``/etc/profile.d/ismb-lab.sh`` for a course staged in `course` by this interpreter's venv.
+
+    Login shells (Debian's ``/etc/profile`` resets PATH) find the venv's commands (after the system's
+    for root), the course's nbgrader config and the compiled kernels; values a server set are kept.
+    """
     course, bin_ = Path(course).resolve(), Path(sys.prefix).resolve() / "bin"
     quoted = shlex.quote(str(bin_))
     return f"""# ismb_lab's class hub: written by `python -m ismb_lab.teaching.hub_start stage`, installed as
@@ -234,8 +206,8 @@ def copy_course(course, home, name: str = COPY) -> str:
     """Copy the course folder into ``home/name`` (mode 700) unless something is there already;
     returns one line saying what happened.
 
-    Run it as the student: the copy is built in a private temporary folder in `home` and
-    renamed into place, and a folder already there is kept (only made private).
+    Run it as the student: the copy is built in a private temporary folder in `home` and renamed into
+    place, and a folder already there is kept (only made private).
     """
     course, target = Path(course), Path(home) / name
     if os.path.lexists(target):
@@ -274,9 +246,9 @@ def _make_cgroup(folder: Path, control: str) -> None:
 
 
 def make_cgroups(user: str, limit: int, root=CGROUP_ROOT) -> list[Path]:
-    """As root: the student's memory cgroup limited to `limit` bytes (swap included where the
-    kernel counts it) and their CPU cgroup with the default share; returns the folders made,
-    or ``[]`` where the machine has no writable cgroup v1 memory controller."""
+    """As root: the student's memory cgroup limited to `limit` bytes (swap included where counted)
+    and their CPU cgroup with the default share; returns the folders made, or ``[]`` where the machine
+    has no writable cgroup v1 memory controller."""
     memory, cpu = cgroup_dirs(user, root)
     try:
         _make_cgroup(memory, "memory.limit_in_bytes")
@@ -300,7 +272,7 @@ def make_cgroups(user: str, limit: int, root=CGROUP_ROOT) -> list[Path]:
 
 def enter(cgroups, limit: int) -> None:
     """In the new server process, before it drops root: join `cgroups` and set ``RLIMIT_DATA``
-    (soft and hard, so the student cannot raise it) to `limit` bytes."""
+    (soft and hard) to `limit` bytes."""
     for folder in cgroups:
         _write(Path(folder) / "cgroup.procs", os.getpid())
     resource.setrlimit(resource.RLIMIT_DATA, (limit, limit))
@@ -320,18 +292,16 @@ def remove_cgroups(cgroups) -> list[Path]:
 
 
 def runtime_folder(temp: str | None = None) -> str:
-    """A folder of this account's alone with a short path for Jupyter's runtime files:
-    ``<temp>/ismb-lab-rt-<uid>`` (made 0700) if it is a private folder of this account's, else
-    a new private one there.  The kernels' Unix sockets live in it, and a socket's path holds
-    at most 107 bytes (``~/.local/share/jupyter/runtime/kernel-<36 characters>-ipc-4`` leaves
-    28 for the home folder)."""
+    """A private folder with a short path for Jupyter's runtime files: ``<temp>/ismb-lab-rt-<uid>``.
+
+    The kernels' Unix sockets live in it, and a socket's path holds at most 107 bytes.
+    """
     return private_folder("ismb-lab-rt", temp)
 
 
 def serve(args, course) -> None:
-    """The single-user server's start command: new files private (umask 077), the course
-    copied as this account, Jupyter's runtime files in :func:`runtime_folder`, then
-    ``jupyterhub-singleuser`` with `args` in this process."""
+    """The single-user server's start command: umask 077, the course copied as this account,
+    Jupyter's runtime files in :func:`runtime_folder`, then ``jupyterhub-singleuser`` with `args`."""
     os.umask(0o077)
     home = pwd.getpwuid(os.getuid()).pw_dir
     try:

@@ -1,9 +1,5 @@
-"""The kernels the lessons run, compiled once by the teacher for the class hub.
-
-:func:`compile_into` compiles them into a folder in a new interpreter; the hub's servers then
-load them from there (:mod:`ismb_lab._core.numba_share` copies them into each student's own
-cache).
-"""
+"""The kernels the lessons run, compiled once by the teacher for the class hub, whose servers
+load them (:mod:`ismb_lab._core.numba_share`)."""
 
 from __future__ import annotations
 
@@ -17,12 +13,7 @@ __all__ = ["cached_kernels", "compile_into", "compile_kernels"]
 
 def compile_kernels() -> dict:
     """Compile (or load) every kernel the lessons run, in this process's numba cache; returns
-    ``{"seconds": ..., "kernels": n, "cold": [kernels with no compiled version in the cache]}``.
-
-    The runs: a first match with every solver (:func:`ismb_lab.matching.pipeline.warm_up`), the
-    genetic algorithm's batched fitness, a scored evaluation, the step-by-step annealing and
-    the exhaustive search.
-    """
+    ``{"seconds": ..., "kernels": n, "cold": [kernels with no compiled version in the cache]}``."""
     import time
 
     import numpy as np
@@ -70,14 +61,10 @@ def cached_kernels() -> dict:
 
 def compile_into(folder, python=None, isolated: bool = True, timeout: float = 1800) -> dict:
     """Run :func:`compile_kernels` in a new interpreter (`python`, by default this one) whose
-    numba cache is `folder`; returns its report plus ``"source"``, the package folder the
-    kernels were compiled for (students load them only if their servers import that one).
+    numba cache is `folder`; returns its report plus ``"source"``, the package folder compiled for.
 
-    `isolated` (``python -I``): the package is the one installed in that interpreter, as the
-    hub's servers import it, whatever the current folder or ``PYTHONPATH`` (a repository's
-    copy would be a different source for numba).  An existing cache (the folder
-    :data:`~ismb_lab._core.numba_share.VARIABLE` names, such as an earlier course's) is seeded in first, so kernels whose
-    source has not changed are not compiled again.  Raises OSError if the interpreter fails.
+    `isolated` (``python -I``): the package is the one installed in that interpreter, as the hub's
+    servers import it, whatever the current folder or ``PYTHONPATH``.  Raises OSError if it fails.
     """
     import json
     import subprocess
