@@ -27,7 +27,7 @@ def no_work(monkeypatch):
     for module in pkgutil.iter_modules(commands.__path__):
         if module.name != "__main__":
             importlib.import_module(f"ismb_lab.cli.{module.name}")
-    for name in ("depth_demo", "metric"):
+    for name in ("depth.pipeline", "matching.metric"):
         importlib.import_module(f"ismb_lab.{name}")
 
     def work(*args, **kwargs):
