@@ -69,14 +69,11 @@ def targets_path(pair: str, folder=".", user: str | None = None, *, also=SIBLING
     return next((p for p in (Path(folder) / f / name for f in folders) if p.is_file()), here)
 
 
-def _key(left, right) -> tuple:
-    return tuple(np.round(np.concatenate([left, right]), 6).tolist())
-
-
 def _keys(targets: TargetSet | None) -> dict:
     if targets is None:
         return {}
-    return {_key(p, q): (p, q, e) for p, q, e in zip(targets.left_xy, targets.right_xy, targets.extras)}
+    return {tuple(np.round(np.concatenate([p, q]), 6).tolist()): (p, q, e)
+            for p, q, e in zip(targets.left_xy, targets.right_xy, targets.extras)}
 
 
 @contextlib.contextmanager
