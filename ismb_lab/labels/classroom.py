@@ -161,23 +161,14 @@ def save_merging(path, ours: TargetSet, base: TargetSet | None = None) -> Merged
 class Pool:
     """A class's targets pooled by :func:`pool`.
 
-    Attributes
-    ----------
-    targets : TargetSet
-        Pairs with a strict majority of the votes at their left point and at their right point,
-        and ``min_votes``; extras ``labelled_by``, ``of`` (votes at the left point), and
-        ``votes`` and ``identical`` where files handed in alike voted once.
-    disagreements : list of dict
-        Left points given several partners (key ``left_xy``), then right points (``right_xy``).
-    students : dict of str to dict
-        ``pairs``; ``in_key`` and ``key_share`` with an answer key; ``files``, ``many_to_one``
-        (pairs giving a corner two partners, no vote) and ``identical`` where they apply.
-    dropped : list of dict
-        Every pair handed in but not pooled: ``votes``, ``labelled_by``, ``voters`` (one file's
-        students joined by ``+``), ``reasons`` (``"left"``, ``"right"``, ``"min_votes"``,
-        ``"two_partners"``, see ``no_vote_from``), ``left_rivals``, ``right_rivals``.
-    identical : list of dict
-        Files of different students holding the same pairs (``students``, ``files``, ``pairs``).
+    `targets` holds the pairs with a strict majority of the votes at their left point and at
+    their right point, and at least `min_votes` (extras ``labelled_by``, ``of``, and ``votes`` and
+    ``identical`` where alike files voted once).  `disagreements` lists the left points given
+    several partners, then the right points; `students` each student's ``pairs`` (``in_key``,
+    ``key_share``, ``files``, ``many_to_one``, ``identical`` where they apply); `dropped` every
+    pair handed in but not pooled, with its votes, voters, rivals and ``reasons`` (``"left"``,
+    ``"right"``, ``"min_votes"``, ``"two_partners"``); `identical` the files of different students
+    that hold the same pairs.
     """
 
     targets: TargetSet

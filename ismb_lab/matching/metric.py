@@ -335,17 +335,16 @@ def rectify_for_camera(left, right, camera: StereoCamera, owner: str = "rectify_
 
 
 def for_camera(left, right, camera: StereoCamera) -> tuple:
-    """The pair to match with `camera`: ``(left, right, how)``.
-
-    A pair is kept as given when its robust matches' rows agree (:func:`fit_rows_px`) and
-    rectifying would not lower their median difference by more than :data:`IMPROVES`; else it is
-    rectified.  Either way it must fit `camera`: rows that agree, disparities mostly positive.
+    """The pair to match with `camera`, ``(left, right, how)``: as given when its robust matches'
+    rows agree (:func:`fit_rows_px`) and rectifying would not lower their median difference by
+    more than :data:`IMPROVES`, else rectified; either way its rows must agree and most
+    disparities be positive.
 
     Raises
     ------
     ParameterError
-        Naming the likely cause and its fix: photos of another size (an EXIF tag), the files
-        swapped, a tag that does not match the pixels, or photos the rig was not calibrated for.
+        Naming the likely cause and its fix (photos of another size, files swapped, an EXIF tag
+        that does not match the pixels, photos the rig was not calibrated for).
     """
     from ..images.rectify import Correspondences, robust_matches
 
