@@ -9,7 +9,7 @@ Targets are ``(x, y)`` coordinates, never feature indices (:func:`snap` makes th
 ``"upright"``: clicked on the photos turned by their EXIF orientation, as the loaders show
 them; a file without it predates that, and is refused for a photo its tag turns.  Other keys
 (top-level and per pair) survive a load and a save.  :data:`MAX_PAIRS` and :data:`MAX_BYTES`
-are checked before parsing (a class's pool holds a few thousand pairs; 10**6 took 1.56 GB).
+are checked before parsing (a class's pool holds a few thousand pairs).
 """
 
 from __future__ import annotations

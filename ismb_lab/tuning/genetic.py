@@ -1,9 +1,9 @@
-"""A real-coded genetic algorithm (thesis chapter 4) maximising a batch fitness
-``fitness(chromosomes) -> (m,)`` within :class:`Bounds` (wrap a per-chromosome score with :func:`batch`).
+"""A real-coded genetic algorithm (thesis chapter 4) maximising a batch fitness within :class:`Bounds`.
 
-One generation (§4.2): evaluate the changed chromosomes; keep the ``n_elite`` best, then
-binary-tournament winners; draw one λ ~ U[0, 1) and cross the winners in order, pair by pair,
-with probability p_c; each child mutates one gene with probability p_m.
+The fitness maps ``(m, n_genes)`` chromosomes to ``(m,)`` (:func:`batch` wraps a per-chromosome
+score).  One generation (§4.2): evaluate the changed chromosomes; keep the ``n_elite`` best,
+then binary-tournament winners; draw one λ ~ U[0, 1) and cross the winners in order, pair by
+pair, with probability p_c; each child mutates one gene with probability p_m.
 
 Where the thesis is ambiguous: winners are independent draws, so pairing them in order is a
 random pairing (an odd one is copied); only crossover children mutate; children replace their
