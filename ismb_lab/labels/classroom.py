@@ -36,8 +36,7 @@ def user_name() -> str:
 
 def voila_without_hub() -> bool:
     """Whether this kernel serves a Voilà page without a hub (Voilà sets ``SERVER_SOFTWARE``):
-    one login for every visitor, so the login name does not say who is labelling.
-    """
+    one login for every visitor, so the login name does not say who is labelling."""
     return (os.environ.get("SERVER_SOFTWARE", "").startswith("voila")
             and not os.environ.get("JUPYTERHUB_USER"))
 
@@ -79,8 +78,7 @@ def _keys(targets: TargetSet | None) -> dict:
 @contextlib.contextmanager
 def _locked(path: Path):
     """An exclusive lock beside `path` (``.name.lock``, mode 0600, so that no other user can hold
-    a student's lock), released on exit.
-    """
+    a student's lock), released on exit."""
     lock = path.with_name(f".{path.name}.lock")
     fd = os.open(lock, os.O_RDWR | os.O_CREAT | getattr(os, "O_NOFOLLOW", 0) | getattr(os, "O_CLOEXEC", 0),
                  0o600)
@@ -275,8 +273,7 @@ def _pairs(targets: TargetSet) -> list:
 
 def _ballot(targets: list) -> tuple[dict, set]:
     """One student's vote, ``({left: right}, the pairs left out)``: the union of their files'
-    pairs, without a corner they gave two partners.
-    """
+    pairs, without a corner they gave two partners."""
     pairs = {pq for t in targets for pq in _pairs(t)}
     lefts = Counter(p for p, _ in pairs)
     rights = Counter(q for _, q in pairs)
@@ -286,8 +283,7 @@ def _ballot(targets: list) -> tuple[dict, set]:
 
 def _identical(groups: dict, sets: dict) -> list:
     """Files of different students holding the same pairs for the same images: one
-    ``(students, files, pairs)`` per content, the first file of each student.
-    """
+    ``(students, files, pairs)`` per content, the first file of each student."""
     by_content = {}
     for name, group in groups.items():
         for path in group:
@@ -301,8 +297,7 @@ def _identical(groups: dict, sets: dict) -> list:
 
 def _tally(who: list, pair: tuple, copies: list) -> list:
     """The votes on `pair` of the students `who`: lists of students, those holding one file with
-    the pair (directly or through a chain of such files) in one list.
-    """
+    the pair (directly or through a chain of such files) in one list."""
     root = {n: n for n in who}
 
     def find(n):

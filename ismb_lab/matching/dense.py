@@ -1,7 +1,6 @@
 """A dense disparity beside the network's sparse matches: OpenCV's semi-global matching (SGBM),
 shown as a comparison in the window's disparity range, compared at the matched points and
-turned into metres through the same camera.
-"""
+turned into metres through the same camera."""
 
 from __future__ import annotations
 
@@ -103,8 +102,7 @@ def sgbm_disparity(left, right, low: float, high: float, *, block: int = SGBM_BL
 @dataclass(frozen=True)
 class Agreement:
     """How a dense disparity map agrees with the network's `matches`: `measured` of them have an
-    SGBM disparity, `agree` of those within `share` or `px` of the network's.
-    """
+    SGBM disparity, `agree` of those within `share` or `px` of the network's."""
 
     matches: int
     measured: int

@@ -276,8 +276,7 @@ class _Shown(str):
 
 def _refusal(sources, camera: StereoCamera, problem: str, limit: float, owner: str) -> ParameterError:
     """The refusal of a pair `camera` does not fit, naming the likely cause: the files swapped,
-    an EXIF tag that does not match the pixels, or a rig that is not this pair's.
-    """
+    an EXIF tag that does not match the pixels, or a rig that is not this pair's."""
     from ..images.rectify import load_photo, photo_orientation
 
     names = ("left", "right")

@@ -179,8 +179,7 @@ class Prepared:
 
 def prepare(left, right, config: MatchConfig | None = None) -> Prepared:
     """Load a pair (paths, arrays, or a StereoPair with `right` None), detect corners in both
-    images and compute ``M`` and the geometry.
-    """
+    images and compute ``M`` and the geometry."""
     config = MatchConfig() if config is None else config
     if not isinstance(config, MatchConfig):
         raise ParameterTypeError(message("config", "prepare", "a MatchConfig", config))
@@ -221,8 +220,7 @@ class MatchResult:
     """The outcome of matching one pair: all features ``left_xy``, ``right_xy`` (``(x, y)`` in the
     full image), the matched ``pairs`` ``(i, k)`` sorted by ``i``, the final ``energy`` (3-15), the
     candidate neurons' ``state`` after post-processing, and ``message``, why the match is empty or
-    partial ("" when all went well).
-    """
+    partial ("" when all went well)."""
 
     method: str
     params: Params

@@ -1,6 +1,5 @@
 """Point clouds as PLY files (MeshLab, CloudCompare and Open3D open them): one ``vertex`` element
-with ``x y z`` (float32) and ``red green blue`` (uchar), in ASCII or binary little-endian.
-"""
+with ``x y z`` (float32) and ``red green blue`` (uchar), in ASCII or binary little-endian."""
 
 from __future__ import annotations
 

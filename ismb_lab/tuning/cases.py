@@ -1,6 +1,5 @@
 """The train/test protocol of the thesis' Fig. 5.10, its report, and the training pair (Case):
-fit the GA on one pair and apply the parameters to every other, printing ``C/E/T`` for each.
-"""
+fit the GA on one pair and apply the parameters to every other, printing ``C/E/T`` for each."""
 
 from __future__ import annotations
 
@@ -162,8 +161,7 @@ def source_files(name: str) -> tuple:
 
 def manifest_files(path) -> list:
     """Every file a manifest makes a run read (its pairs' and its sources'), or none if it cannot
-    be read: best effort, for the check that no output is one of them.
-    """
+    be read: best effort, for the check that no output is one of them."""
     try:
         data = _read_manifest(Path(path))
         entries = data["pairs"]
@@ -244,8 +242,7 @@ class Spread:
 @dataclass(frozen=True)
 class PairReport:
     """One pair's row: a Score per update-order seed with the tested parameters and with its own
-    fit (`training` and `params` None when it was not fitted).
-    """
+    fit (`training` and `params` None when it was not fitted)."""
 
     name: str
     testing: tuple
@@ -273,8 +270,7 @@ class PeerReport:
 @dataclass(frozen=True)
 class ProtocolReport:
     """What :func:`protocol` measured: `params` fitted on pair `train` and tested on all, and
-    `held_out`, the held-out pairs' pooled Score per update-order seed.
-    """
+    `held_out`, the held-out pairs' pooled Score per update-order seed."""
 
     method: str
     params: Params
@@ -413,8 +409,7 @@ _PR_SET_PDEATHSIG = 1   # from <linux/prctl.h>
 
 def _start_worker(parent: int) -> None:
     """A worker's first step: die with its parent, then leave Ctrl-C to the parent (which stops
-    the pool and reports once).
-    """
+    the pool and reports once)."""
     _die_with_parent(parent)
     signal.signal(signal.SIGINT, signal.SIG_IGN)
 
@@ -422,8 +417,7 @@ def _start_worker(parent: int) -> None:
 @contextmanager
 def _starting_workers():
     """Within: SIGINT blocked in this thread, so that a worker started here is born with it
-    blocked (else a Ctrl-C while it imports prints a traceback); a Ctrl-C waits for the end.
-    """
+    blocked (else a Ctrl-C while it imports prints a traceback); a Ctrl-C waits for the end."""
     block = getattr(signal, "pthread_sigmask", None)
     if block is None:   # pragma: no cover - not POSIX
         yield
@@ -462,8 +456,7 @@ def _stop_workers(pool: ProcessPoolExecutor) -> None:
 class _workers:
     """A spawned process pool for ``jobs > 1`` whose workers die with the process that made them:
     an exception leaving the block terminates them, and on Linux so does that process's death.
-    They die if the thread that enters the block ends: enter it from one that outlives the pool.
-    """
+    They die if the thread that enters the block ends: enter it from one that outlives the pool."""
 
     def __init__(self, jobs: int):
         self.jobs, self.pool = jobs, None
@@ -503,8 +496,7 @@ def _over_seeds(scores, what: str) -> list[str]:
 
 def format_protocol(report: ProtocolReport) -> str:
     """The protocol as the thesis prints it: "Testing: 14/2+0/16  Training: 16/0+1/16", with the
-    mean and range over the update-order seeds on lines of their own.
-    """
+    mean and range over the update-order seeds on lines of their own."""
     lines = [f"Method-{report.method} ({report.solver}{', one match per corner' if report.one_to_one else ''}), "
              f"parameters fitted on pair {report.train}: {report.params}",
              "Per pair, update-order seed 0 (C/wrong+extra/T):"]

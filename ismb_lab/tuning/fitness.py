@@ -69,8 +69,7 @@ def evaluate(cases: Sequence, method, params: Params, seed: int = 0,
              solver=DEFAULT_SOLVER, one_to_one: bool = False) -> Score:
     """The summed C/E/T of `params` over `cases`, each solved by `solver` with `seed`; with
     `one_to_one`, after :func:`~ismb_lab.network.solvers.one_match_per_corner`.  Pass `method`
-    as a Method to resolve it once for many calls.
-    """
+    as a Method to resolve it once for many calls."""
     m = get_method(method)
     solver = get_solver(solver, "evaluate")
     check_number(seed, "seed", "evaluate", low=0, integer=True)
@@ -86,8 +85,7 @@ def evaluate(cases: Sequence, method, params: Params, seed: int = 0,
 
 def _counts(case, m, params: Params, seed: int, solver, one_to_one: bool = False, net=None) -> tuple[int, int, int]:
     """C, wrong partner and extra of one case, counted over its coded neurons; `net` is
-    ``m.network(problem, params)`` if built already.
-    """
+    ``m.network(problem, params)`` if built already."""
     problem = case.prepared.problem
     state = solve(m.network(problem, params) if net is None else net, solver, seed=seed, owner="evaluate").state
     codes = getattr(case, "neuron_codes", None)
@@ -106,8 +104,7 @@ def _counts(case, m, params: Params, seed: int, solver, one_to_one: bool = False
 class Fitness:
     """The batch fitness the GA calls: (4-1) summed over the training cases, each chromosome
     scored with the same update-order seeds (the mean over ``seed, seed + 1, ...`` when
-    ``seeds > 1``), so that a chromosome's fitness depends on its genes only.
-    """
+    ``seeds > 1``), so that a chromosome's fitness depends on its genes only."""
 
     def __init__(self, cases: Sequence, method, *, seed: int = 0, base: Params | None = None,
                  solver=DEFAULT_SOLVER, seeds: int = 1):
@@ -141,8 +138,7 @@ class Fitness:
         """The summed fitness of every chromosome in one compiled call per case
         (:func:`ismb_lab.network.kernel.fitness_runs`), as :meth:`_fitness` computes it; None where
         that path does not apply (another solver, kernel or method class, or values that Params or
-        the network would refuse): the general way then raises the error.
-        """
+        the network would refuse): the general way then raises the error."""
         solver, method = self.solver, self.method
         if not (type(solver) is NetworkSolver and solver.kernel == KERNELS[0] and type(method) in BATCHED):
             return None
@@ -186,8 +182,7 @@ class Fitness:
 
 def _table(method, population: np.ndarray, base: Params | None) -> dict | None:
     """Each Params field as an ``(m,)`` array over the chromosomes, as :func:`to_params` fills
-    it; None unless every value passes Params' check.
-    """
+    it; None unless every value passes Params' check."""
     genes = method.gene_names
     if population.ndim != 2 or population.shape[1] != len(genes) or len(population) == 0:
         return None

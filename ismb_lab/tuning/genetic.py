@@ -262,8 +262,7 @@ def elite(fitness, n: int = 2) -> np.ndarray:
 def _breed(rng, population, fitness, bounds, p_c, p_m, n_elite):
     """The next population and, per row, its unchanged source row (-1 if new): the steps of
     :func:`elite`, :func:`tournament`, :func:`arithmetic_crossover` and :func:`random_mutation`
-    with the same draws and arithmetic, without their checks (they cost more than the selection).
-    """
+    with the same draws and arithmetic, without their checks (they cost more than the selection)."""
     size = len(population)
     k = size - n_elite
     first = rng.integers(size, size=k)
