@@ -124,8 +124,9 @@ def affinity_matrix(problem, method=DEFAULT_METHOD, params=None) -> np.ndarray:
 
 def graph_matching(problem, method=DEFAULT_METHOD, params=None, *, solver="rrwm",
                    max_dissimilarity=None) -> np.ndarray:
-    """Match by RRWM or spectral matching (pygmtools, numpy backend per call) on
-    :func:`affinity_matrix`, discretised by the Hungarian algorithm, candidates only.
+    """Match by RRWM (Cho et al. 2010) or spectral matching (Leordeanu & Hebert 2005) on
+    :func:`affinity_matrix` (pygmtools, numpy backend per call), discretised by the Hungarian
+    algorithm, candidates only.
 
     `max_dissimilarity` drops matches with ``M_ik`` above it: the Hungarian step matches
     occluded features too, and the soft scores do not tell them apart.
