@@ -1,20 +1,9 @@
 """A class labelling the same pairs: a file per student, saves that lose nothing, pooling.
 
-* :func:`targets_path` names each student's own targets file, from the user
-  (``JUPYTERHUB_USER`` on a hub, else the login name) and the pair, so thirty
-  students on one server never write the same file.  Voilà without a hub serves every
-  visitor under one login (:func:`voila_without_hub`): there the labeller asks for a name.
-  A notebook that reads the file finds it beside itself (the hub's copy, where every
-  notebook shares one folder) or in the sibling folder ``../labels/`` (nbgrader's release,
-  where notebook 04 is the assignment "labels" and each notebook has its own folder).
-* :func:`save_merging` saves under a lock and merges with whatever another process
-  saved since we last read the file (a three-way merge): nobody's pair is lost.
-* :func:`pool` pools a class's files into one targets set, one vote per student (the
-  folders of :func:`collected`, as ``nbgrader collect`` leaves them), and reports where
-  the students disagree, every pair it drops and why, files that different students
-  handed in alike, and how each student agrees with an answer key.
-
-Pairs are compared by their coordinates (:mod:`ismb_lab.images.coords`), rounded to 1e-6 px.
+:func:`targets_path` names each student's own file; :func:`save_merging` saves under a lock,
+merging with what another process saved meanwhile; :func:`pool` pools a class's files, one
+vote per student, and reports disagreements, dropped pairs and files handed in alike.  Pairs
+are compared by their coordinates rounded to 1e-6 px.
 """
 
 from __future__ import annotations
@@ -40,53 +29,29 @@ _UNSAFE = re.compile(r"[^A-Za-z0-9._-]+")
 
 
 def user_name() -> str:
-    """Who is labelling: ``JUPYTERHUB_USER`` on a JupyterHub, else the login name.
-
-    Characters that do not belong in a file name are replaced by ``-``.
-    """
+    """Who is labelling: ``JUPYTERHUB_USER`` on a hub, else the login name, made safe for a file name."""
     name = os.environ.get("JUPYTERHUB_USER") or getpass.getuser() or "student"
     return _UNSAFE.sub("-", name).strip("-.") or "student"
 
 
 def voila_without_hub() -> bool:
-    """Whether this kernel serves a Voilà page with no hub behind it: one login for every
-    visitor, so the login name does not say who is labelling.
-
-    Voilà puts the request's CGI-like variables, ``SERVER_SOFTWARE=voila/...`` among them,
-    into each page's kernel environment.
-    """
+    """Whether this kernel serves a Voilà page without a hub (Voilà sets ``SERVER_SOFTWARE``):
+    one login for every visitor, so the login name does not say who is labelling."""
     return (os.environ.get("SERVER_SOFTWARE", "").startswith("voila")
             and not os.environ.get("JUPYTERHUB_USER"))
 
 
-#: Where else a notebook looks for a targets file, relative to its folder: nbgrader's folder
-#: of the assignment "labels" (notebook 04, :data:`ismb_lab.teaching.course.ASSIGNMENTS`) beside its own.
+#: Where else a notebook looks for a targets file, relative to its folder: nbgrader's folder of
+#: the assignment "labels" (notebook 04).
 SIBLINGS = ("../labels",)
 
 
 def targets_path(pair: str, folder=".", user: str | None = None, *, also=SIBLINGS) -> Path:
-    """The targets file of `user` (default :func:`user_name`) for `pair`, in `folder` or beside it.
+    """The targets file ``targets-<user>-<pair>.json`` of `user` (default :func:`user_name`).
 
-    Parameters
-    ----------
-    pair : str
-        The image pair's name (``"synthetic"``).
-    folder : str or os.PathLike
-        The notebook's folder.
-    user : str, optional
-    also : tuple or list of str or os.PathLike
-        Folders, relative to `folder`, where the file may be instead (default: nbgrader's
-        ``../labels/``).  The file in `folder` wins; else the first of these that holds it;
-        else the path in `folder` (where a save would put it).  ``also=()`` names the file
-        in `folder` only: what the labeller saves to.
+    It is the file in `folder` if there is one, else the first in the folders `also` (relative
+    to `folder`) that holds it, else the path in `folder`; ``also=()`` names what a save writes.
 
-    Returns
-    -------
-    path : Path
-        ``folder/targets-<user>-<pair>.json``, or the same name in one of `also`.
-
-    Examples
-    --------
     >>> str(targets_path("synthetic", "work", user="ann lee", also=()))
     'work/targets-ann-lee-synthetic.json'
     """
@@ -103,23 +68,17 @@ def targets_path(pair: str, folder=".", user: str | None = None, *, also=SIBLING
     return next((p for p in (Path(folder) / f / name for f in folders) if p.is_file()), here)
 
 
-def _key(left, right) -> tuple:
-    return tuple(np.round(np.concatenate([left, right]), 6).tolist())
-
-
 def _keys(targets: TargetSet | None) -> dict:
     if targets is None:
         return {}
-    return {_key(p, q): (p, q, e) for p, q, e in zip(targets.left_xy, targets.right_xy, targets.extras)}
+    return {tuple(np.round(np.concatenate([p, q]), 6).tolist()): (p, q, e)
+            for p, q, e in zip(targets.left_xy, targets.right_xy, targets.extras)}
 
 
 @contextlib.contextmanager
 def _locked(path: Path):
-    """An exclusive lock beside `path` (``.name.lock``, mode 0600), released on exit.
-
-    Only its owner can open the lock file, so no other user can hold a student's lock
-    (and block their saves); a lock left world-readable by an older version is tightened.
-    """
+    """An exclusive lock beside `path` (``.name.lock``, mode 0600, so that no other user can hold
+    a student's lock), released on exit."""
     lock = path.with_name(f".{path.name}.lock")
     fd = os.open(lock, os.O_RDWR | os.O_CREAT | getattr(os, "O_NOFOLLOW", 0) | getattr(os, "O_CLOEXEC", 0),
                  0o600)
@@ -146,15 +105,11 @@ class Merged:
 def save_merging(path, ours: TargetSet, base: TargetSet | None = None) -> Merged:
     """Save `ours` to `path`, keeping every change another process saved there meanwhile.
 
-    Under a lock beside the file, the file as it is now ("theirs") is read and
-    merged three ways with `base` (what we last loaded or saved; None when we
-    never did): our additions and our deletions since `base` are applied to
-    theirs.  A pair of theirs that uses one of our new pairs' points with another
-    partner gives way to ours (counted in ``replaced``).  Top-level keys and
-    per-pair extras of theirs survive.  The write is atomic.
+    Under a lock, the file as it is now ("theirs") is merged three ways with `base` (what we last
+    loaded or saved, None if never): our additions and deletions since `base` are applied to
+    theirs; a pair of theirs that gives one of our new pairs' points another partner gives way
+    (counted in ``replaced``).  Their keys and extras survive; the write is atomic.
 
-    Examples
-    --------
     >>> import tempfile, pathlib
     >>> path = pathlib.Path(tempfile.mkdtemp()) / "t.json"
     >>> a = save_merging(path, TargetSet([[10, 10]], [[5, 10]])).targets   # student A's first save
@@ -204,42 +159,14 @@ def save_merging(path, ours: TargetSet, base: TargetSet | None = None) -> Merged
 class Pool:
     """A class's targets pooled by :func:`pool`.
 
-    Attributes
-    ----------
-    targets : TargetSet
-        The pairs the students agree on: a pair is kept when it has a strict majority
-        of the votes cast on its left point, and of those cast on its right point, and
-        at least ``min_votes`` votes.  Each pair's extras say who labelled it
-        (``labelled_by``) and how many votes its left point got (``of``); where files
-        handed in alike made several students one vote, also ``votes`` and
-        ``identical`` (those students).  So no corner has two partners.
-    disagreements : list of dict
-        Left points whose students named different partners, with each partner's
-        students (key ``left_xy``); then right points given several left partners (key
-        ``right_xy``, many-to-one across the class).
-    students : dict of str to dict
-        Per student: their number of pairs (one ballot, however many files) and, with an
-        answer key, how many of them are in the key (within ``tol`` px) and the share of
-        the key it covers; ``files`` when they handed in more than one, ``many_to_one``
-        when some of their pairs gave a corner two partners (those pairs got no vote),
-        ``identical`` when a file of theirs holds the same pairs as another student's.
-    min_votes : int
-    dropped : list of dict
-        Every pair handed in that is not pooled, with its ``votes``, the students whose
-        votes they are (``labelled_by``; ``voters`` names each vote, the students of
-        one file handed in alike joined by ``+``) and why: ``reasons`` holds ``"left"``
-        (no strict majority at its left point), ``"right"`` (nor at its right point),
-        ``"min_votes"`` (fewer votes than that) and ``"two_partners"`` (the students in
-        ``no_vote_from`` handed it in but gave one of its corners another partner too,
-        so it got no vote from them).  A pair with no vote has only that reason.
-        ``left_rivals`` and ``right_rivals`` give the other partners of its left and
-        right points, with their votes.
-    identical : list of dict
-        Files of different students that hold the same pairs (``students``, ``files``,
-        ``pairs``); unless ``identical="each"``, the pairs of such a file count as one
-        vote among those students.
-    identical_votes : str
-        ``"once"`` or ``"each"``, as given to :func:`pool`.
+    `targets` holds the pairs with a strict majority of the votes at their left point and at
+    their right point, and at least `min_votes` (extras ``labelled_by``, ``of``, and ``votes`` and
+    ``identical`` where alike files voted once).  `disagreements` lists the left points given
+    several partners, then the right points; `students` each student's ``pairs`` (``in_key``,
+    ``key_share``, ``files``, ``many_to_one``, ``identical`` where they apply); `dropped` every
+    pair handed in but not pooled, with its votes, voters, rivals and ``reasons`` (``"left"``,
+    ``"right"``, ``"min_votes"``, ``"two_partners"``); `identical` the files of different students
+    that hold the same pairs.
     """
 
     targets: TargetSet
@@ -299,11 +226,8 @@ def _dropped_line(d: dict, min_votes: int) -> str:
 def collected(folder, pattern: str = "targets-*.json") -> dict:
     """The targets files of a collected class, by student: ``{student: [paths]}``.
 
-    `folder` is nbgrader's ``submitted/`` folder (or the course folder holding it): one
-    folder per student, named by nbgrader from who handed the work in, with the files
-    anywhere below it (``submitted/<student>/labels/targets-....json``).  The student is
-    the folder's name, never something read from a file.  Symbolic links are never followed:
-    a student's folder, a folder below it or a file that is a link is left out.
+    `folder` is nbgrader's ``submitted/`` (or the course folder holding it), a folder per student
+    named by nbgrader, the files anywhere below.  Symbolic links are never followed.
 
     >>> import tempfile, pathlib
     >>> course = pathlib.Path(tempfile.mkdtemp())
@@ -348,9 +272,8 @@ def _pairs(targets: TargetSet) -> list:
 
 
 def _ballot(targets: list) -> tuple[dict, set]:
-    """One student's vote: the union of their files' pairs; a corner they gave two partners
-    (across files or within one) gets no vote from them.  Returns ``({left: right}, the
-    pairs left out)``."""
+    """One student's vote, ``({left: right}, the pairs left out)``: the union of their files'
+    pairs, without a corner they gave two partners."""
     pairs = {pq for t in targets for pq in _pairs(t)}
     lefts = Counter(p for p, _ in pairs)
     rights = Counter(q for _, q in pairs)
@@ -359,7 +282,7 @@ def _ballot(targets: list) -> tuple[dict, set]:
 
 
 def _identical(groups: dict, sets: dict) -> list:
-    """Files of different students holding the same pairs, for the same images: one
+    """Files of different students holding the same pairs for the same images: one
     ``(students, files, pairs)`` per content, the first file of each student."""
     by_content = {}
     for name, group in groups.items():
@@ -373,8 +296,8 @@ def _identical(groups: dict, sets: dict) -> list:
 
 
 def _tally(who: list, pair: tuple, copies: list) -> list:
-    """The votes on `pair` of the students `who`: lists of students, those holding one file
-    that contains the pair (directly or through a chain of such files) in one list."""
+    """The votes on `pair` of the students `who`: lists of students, those holding one file with
+    the pair (directly or through a chain of such files) in one list."""
     root = {n: n for n in who}
 
     def find(n):
@@ -394,9 +317,7 @@ def _tally(who: list, pair: tuple, copies: list) -> list:
 
 
 def _disagreements(by_left: dict, by_right: dict) -> list:
-    """Left points with disagreeing partners, then right points given several left partners
-    (two students each pairing another left corner with the same right one: many-to-one
-    across the class)."""
+    """Left points with disagreeing partners, then right points given several left partners."""
     lefts = [{"left_xy": list(p), "partners": {str(list(q)): who for q, who in partners.items()}}
              for p, partners in by_left.items() if len(partners) > 1]
     rights = [{"right_xy": list(q), "partners": {str(list(p)): who for p, who in partners.items()}}
@@ -408,40 +329,17 @@ def pool(paths, answer_key: TargetSet | None = None, tol: float = 1.5, *, min_vo
          identical: str = "once") -> Pool:
     """Pool the targets files of a class (all for the same two images), one vote per student.
 
-    Parameters
-    ----------
-    paths : sequence of path, or dict of str to sequence of path
-        The files; a dict (e.g. :func:`collected`) names the student of each group of files.
-        Files given as a list vote by file name (stem): the same file collected twice
-        votes once.
-    answer_key : TargetSet, optional
-    tol : float
-        Answer-key tolerance in pixels.
-    min_votes : int
-        How many votes a pair needs, on top of the strict majority.
-    identical : {"once", "each"}
-        How files of different students that hold the same pairs (for the same images)
-        vote: ``"once"``, the pairs of such a file are one vote among the students who
-        handed it in, whatever else they handed in; ``"each"``, every student votes (they
-        labelled alike on their own).  Either way they are named in :attr:`Pool.identical`.
+    `paths` is a dict of each student's files (e.g. :func:`collected`) or a list, which votes by
+    file stem; `tol` is the answer key's tolerance, px; `min_votes` what a pair needs on top of a
+    strict majority; `identical` whether a file students handed in alike is one vote among them
+    (``"once"``) or one each.
 
-    Notes
-    -----
-    Two files are alike when they hold the same set of pairs (compared as pooling
-    compares them, to 1e-6 px) for the same images, whatever their order, layout, name or
-    other keys: the pairs are what votes.  Equal bytes would miss the copy most easily
-    made: another's file loaded into the labeller and saved under one's own name is
-    written with its pairs sorted by corner, while the original keeps the order of its
-    saves.  Nor would equal bytes spare honest students: two who label the same corners
-    and save once write the same bytes.  The rule's false positive is students who label
-    exactly the same corners alike on their own (for example every corner of an easy
-    pair, right): they lose one vote between them on the pairs they agree on, which
-    changes the pool only where others dispute those pairs, and the report names them.
-    A file that differs by one pair is not alike: near-copies are what honest agreement
-    on the obvious corners looks like.
+    Two files are alike when they hold the same set of pairs (to 1e-6 px) for the same images.
+    Equal bytes would miss the easiest copy (another's file loaded and saved again, its pairs
+    sorted) and would catch honest students who save the same pairs once.  Students who label
+    exactly alike on their own lose one vote between them, which matters only where others
+    dispute those pairs; the report names them.
 
-    Examples
-    --------
     >>> import tempfile, pathlib
     >>> folder = pathlib.Path(tempfile.mkdtemp())
     >>> ann = save_targets(folder / "ann.json", TargetSet([[10, 10], [20, 20]], [[5, 10], [15, 20]]))

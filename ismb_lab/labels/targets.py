@@ -1,24 +1,15 @@
 """Target pairs: hand-labelled left/right points, their file, and snapping to features.
 
-Targets are coordinates (``(x, y)``, full image, see :mod:`ismb_lab.images.coords`), never
-feature indices; :func:`snap` turns them into feature pairs ``(i, k)``.  The file::
+Targets are ``(x, y)`` coordinates, never feature indices (:func:`snap` makes those).  The file::
 
     {"version": 1, "left_image_sha256": "...", "right_image_sha256": "...",  (optional)
      "orientation": "upright",
      "pairs": [{"left_xy": [x, y], "right_xy": [x, y]}, ...]}
 
-``"orientation": "upright"`` says the points were clicked on the photos turned by their EXIF
-orientation, as every loader reads them (:func:`ismb_lab.images.io.decode`).  A file without it was
-written before the loaders did so: its points are in the photos as stored, which
-:func:`load_targets` refuses for a photo whose EXIF orientation turns it.
-
-Other top-level keys go to :attr:`TargetSet.meta`, other keys of a pair to
-:attr:`TargetSet.extras`; both survive a load and a save.
-
-A file holds at most :data:`MAX_PAIRS` pairs in at most :data:`MAX_BYTES` bytes, both
-checked before the pairs are parsed: a hand-labelled file holds tens of pairs, and even
-a pool of a class's labels a few thousand (corners per image are limited to 500 by
-default), while 10**6 pairs took 1.56 GB and 39 s to load.
+``"upright"``: clicked on the photos turned by their EXIF orientation, as the loaders show
+them; a file without it predates that, and is refused for a photo its tag turns.  Other keys
+(top-level and per pair) survive a load and a save.  :data:`MAX_PAIRS` and :data:`MAX_BYTES`
+are checked before parsing (a class's pool holds a few thousand pairs).
 """
 
 from __future__ import annotations
@@ -42,11 +33,9 @@ __all__ = ["MAX_BYTES", "MAX_PAIRS", "VERSION", "check_one_to_one", "load_target
            "snap", "Snapped", "targets_from_matches", "TargetSet"]
 
 VERSION = 1
-#: Most pairs in a targets file or a :meth:`TargetSet.from_dict` object (10,000 pairs load
-#: in about 0.4 s).
+#: Most pairs in a targets file or a :meth:`TargetSet.from_dict` object.
 MAX_PAIRS = 10_000
-#: Most bytes of a targets file, checked before it is read: 10,000 pairs with a few
-#: extra keys each.
+#: Most bytes of a targets file: 10,000 pairs with a few extra keys each.
 MAX_BYTES = 4 << 20
 _HASHES = ("left_image_sha256", "right_image_sha256")
 _POINTS = ("left_xy", "right_xy")
@@ -115,15 +104,11 @@ def _set(obj, name, value):
 class TargetSet:
     """Target pairs ``left_xy[j] <-> right_xy[j]``; immutable, methods return new sets.
 
-    `left_xy`, `right_xy` are read-only ``(m, 2)`` float arrays of points >= 0, each
-    pair at most once;
-    `left_sha256`, `right_sha256` the :func:`ismb_lab.images.io.image_sha256` of the images
-    (or None); `orientation` how the photos were shown when the points were clicked,
-    ``"upright"`` (EXIF orientation applied) or ``"as stored"`` (files from before); `meta` the file's extra top-level keys; `extras` one dict of extra
+    `left_xy`, `right_xy` are read-only ``(m, 2)`` arrays of points >= 0, each pair at most once;
+    `left_sha256`, `right_sha256` the images' hashes (or None); `orientation` ``"upright"`` (EXIF
+    applied) or ``"as stored"``; `meta` the file's other top-level keys; `extras` a dict of other
     keys per pair (None: all empty).
 
-    Examples
-    --------
     >>> t = TargetSet([[99, 99]], [[88, 100]], meta={"labeller": "ann"})
     >>> len(t), t.left_xy.tolist(), t.extras
     (1, [[99.0, 99.0]], ({},))
@@ -269,21 +254,9 @@ def save_targets(path, targets: TargetSet) -> Path:
 
 def load_targets(path, *, pair: StereoPair | None = None, shape=None,
                  check_hash: bool = True) -> TargetSet:
-    """Read and check a targets file.
+    """Read and check a targets file: its points must lie in an image of `shape` ``(H, W)`` and
+    of `pair`, whose hashes must be the file's (if it has any) unless not `check_hash`.
 
-    Parameters
-    ----------
-    path : str or os.PathLike
-    pair : StereoPair, optional
-        Its shape bounds the points, like `shape`; image hashes in the file must equal
-        its ``left_sha256`` / ``right_sha256`` (a file without hashes suits any pair).
-    shape : (int, int), optional
-        ``(H, W)``: every point must lie in ``0 <= x <= W-1, 0 <= y <= H-1``.
-    check_hash : bool
-        False accepts targets made for other images.
-
-    Examples
-    --------
     >>> import tempfile, pathlib
     >>> path = save_targets(pathlib.Path(tempfile.mkdtemp()) / "t.json", TargetSet([[9, 2]], [[7, 2]]))
     >>> len(load_targets(path, shape=(10, 10)))
@@ -340,8 +313,7 @@ def load_targets(path, *, pair: StereoPair | None = None, shape=None,
 
 
 def _refuse_turned(pair: StereoPair, path, owner: str) -> None:
-    """A file from before the loaders applied EXIF orientation, on a photo it turns: its
-    points are in the photo as stored, not as it is now shown."""
+    """Refuse a file from before EXIF orientation was applied on a photo its tag turns."""
     from ..images.io import exif_orientation
 
     for side, photo in (("left", pair.left_path), ("right", pair.right_path)):
@@ -356,10 +328,7 @@ def _refuse_turned(pair: StereoPair, path, owner: str) -> None:
 
 
 def many_to_one(targets: TargetSet) -> np.ndarray:
-    """Indices of the pairs whose left or right point another pair also uses (rounded to 1e-6 px).
-
-    One right corner given two left partners (or one left corner two right ones) cannot
-    both be true: the network pairs each corner once.
+    """Indices of the pairs whose left or right point another pair also uses (to 1e-6 px).
 
     >>> many_to_one(TargetSet([[10, 10], [20, 10], [30, 10]], [[5, 10], [5, 10], [25, 10]])).tolist()
     [0, 1]
@@ -383,10 +352,10 @@ def check_one_to_one(targets: TargetSet, source: str, owner: str) -> TargetSet:
     bad = many_to_one(targets)
     if bad.size:
         j = int(bad[0])
-        side = "right" if (np.round(targets.right_xy[bad], 6) == np.round(targets.right_xy[j], 6)).all(
-            axis=1).sum() > 1 else "left"
-        other = int(next(k for k in bad[1:] if (np.round(getattr(targets, f"{side}_xy")[k], 6)
-                                                == np.round(getattr(targets, f"{side}_xy")[j], 6)).all()))
+        right = np.round(targets.right_xy, 6)
+        side = "right" if (right[bad] == right[j]).all(axis=1).sum() > 1 else "left"
+        xy = np.round(getattr(targets, f"{side}_xy"), 6)
+        other = int(next(k for k in bad[1:] if (xy[k] == xy[j]).all()))
         raise ParameterError(f"The targets file {source!r} given to {owner} must pair each corner once. "
                              f"Got pairs[{j}] and pairs[{other}] sharing the {side} point "
                              f"{_plain(getattr(targets, f'{side}_xy')[j])} ({bad.size} pairs share a "
@@ -397,12 +366,11 @@ def check_one_to_one(targets: TargetSet, source: str, owner: str) -> TargetSet:
 
 @dataclass(frozen=True, eq=False)
 class Snapped:
-    """Targets snapped to features by :func:`snap`; all fields are read-only arrays.
+    """Targets snapped to features by :func:`snap` (read-only arrays).
 
-    `pairs` ``(s, 2)`` holds the feature pairs ``(i, k)`` of the targets that snapped
-    on both sides, `target_index` the target each came from and `distance` the larger
-    of its two snap distances; `missing_left` / `missing_right` list the targets with
-    no feature in reach on that side (a target may be in both).
+    `pairs` ``(s, 2)`` are the feature pairs of the targets that snapped on both sides,
+    `target_index` their targets, `distance` the larger snap distance; `missing_left` and
+    `missing_right` the targets with no feature in reach on that side.
 
     >>> Snapped([[0, 1], [0, 2]], [0, 3], [1], [1, 2], [0.0, 1.2]).shared.tolist()
     [0, 3]
@@ -430,12 +398,8 @@ class Snapped:
 
 
 def snap(targets: TargetSet, left_xy, right_xy, tol=1.5) -> Snapped:
-    """Snap each target point to the nearest feature within `tol` pixels (Euclidean, inclusive).
-
-    `left_xy`, `right_xy` are the ``(n, 2)`` features of each image, in feature order.
-    A target with no feature in reach is listed in ``missing_left`` / ``missing_right``,
-    not in ``pairs``.  Ties go to the lower feature index.  Two targets that snap to
-    the same feature are both kept and listed by :attr:`Snapped.shared`.
+    """Snap each target point to the nearest feature within `tol` px (inclusive; ties to the lower
+    index).  Targets that snap to the same feature are both kept (:attr:`Snapped.shared`).
 
     >>> t = TargetSet([[10, 10], [50, 50]], [[5, 10], [40, 50]])
     >>> s = snap(t, [[10, 11], [30, 30]], [[5, 10], [40, 51]])

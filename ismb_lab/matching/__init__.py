@@ -1,6 +1,5 @@
 """From a pair to matches: corners, the network's problem, a solver, and the matches in pixels or metres;
-the peer matchers and SGBM beside it.
-"""
+the peer matchers and SGBM beside it."""
 
 from .pipeline import (AUTO_MARGIN, MatchConfig, MatchResult, Prepared, auto_window, check_window, corner_problem, match,
     prepare, shift_roi, warm_up)

@@ -1,12 +1,6 @@
-"""A dense disparity beside the network's sparse matches: OpenCV's semi-global matching (SGBM).
-
-The network matches a few dozen corners; ``cv2.StereoSGBM`` gives a disparity at most pixels of
-the same rectified pair.  It is shown in the notebooks as a comparison, not as a replacement:
-:func:`sgbm_disparity` computes it in the disparity range the network's candidate window
-measured on the pair, :func:`agreement` compares the two at the network's matched points, and
-:func:`dense_points` turns a subsample of it into metres through the same
-:class:`~ismb_lab.cameras.camera.StereoCamera`.
-"""
+"""A dense disparity beside the network's sparse matches: OpenCV's semi-global matching (SGBM),
+shown as a comparison in the window's disparity range, compared at the matched points and
+turned into metres through the same camera."""
 
 from __future__ import annotations
 
@@ -22,8 +16,7 @@ from ..cameras.camera import StereoCamera
 __all__ = ["AGREE_PX", "AGREE_SHARE", "Agreement", "MAX_DENSE", "SGBM_BLOCK", "agreement", "dense_points",
            "sgbm_disparity", "sgbm_range", "window_range"]
 
-#: SGBM's matched block, pixels (odd): small enough to follow a board's edge, large enough for a
-#: 640 x 480 photo's noise.
+#: SGBM's matched block, pixels (odd): it follows a board's edge, and a 640 x 480 photo's noise.
 SGBM_BLOCK = 5
 #: Two disparities agree when they are within this share of the network's ...
 AGREE_SHARE = 0.05
@@ -49,10 +42,8 @@ def window_range(config) -> tuple[float, float]:
 
 
 def sgbm_range(low: float, high: float) -> tuple[int, int]:
-    """SGBM's ``(minDisparity, numDisparities)`` covering disparities `low` to `high` pixels.
-
-    ``numDisparities`` must be a positive multiple of 16 (OpenCV's rule); the range starts at
-    the whole pixel at or below `low`.
+    """SGBM's ``(minDisparity, numDisparities)`` for disparities `low` to `high` px: from the whole
+    pixel at or below `low`, a count that is a positive multiple of 16 (OpenCV's rule).
 
     >>> sgbm_range(19.96, 163.92)
     (19, 160)
@@ -75,38 +66,15 @@ def _grey8(image, name: str, owner: str) -> np.ndarray:
 
 
 def sgbm_disparity(left, right, low: float, high: float, *, block: int = SGBM_BLOCK) -> np.ndarray:
-    """OpenCV's semi-global matching of a rectified pair, searching disparities `low` to `high`.
+    """OpenCV's semi-global matching of a rectified pair (grey, rounded to 8 bits), searching
+    disparities `low` to `high` pixels with an odd `block`; returns ``x_left - x_right`` per left
+    pixel (in sixteenths), NaN where SGBM gives none.
 
-    Parameters
-    ----------
-    left, right : (H, W) array_like
-        The rectified pair, grey in ``[0, 255]`` (rounded to 8 bits for OpenCV).
-    low, high : float
-        The disparity range to search, pixels: for a pair the network matched, its candidate
-        window's (:func:`window_range`).  The window was measured on the pair's robust matches
-        along their rows (``shift="auto"``), so it holds the scene's disparities with a margin.
-        Searching that range, not OpenCV's usual 0 to 64 or 128, keeps SGBM from finding a
-        repeated texture's period outside it (a chessboard's squares) and costs time only for
-        the disparities the scene can have; and the two matchers are then compared on the same
-        search range.
-    block : int
-        The matched block's side, odd.
+    The range is the network's window's (:func:`window_range`), not OpenCV's usual 0 to 64: SGBM
+    then cannot find a repeated texture's period outside it, and both matchers search alike.
+    ``P1 = 8 block²``, ``P2 = 32 block²``, uniqueness 10%, left-right check 1 px, speckles under
+    100 px (range 2) removed, ``MODE_SGBM_3WAY``.
 
-    Returns
-    -------
-    (H, W) float ndarray
-        ``x_left - x_right`` of each left pixel, in pixels (sixteenths, OpenCV's precision); NaN
-        where SGBM gives none (its uniqueness, left-right and speckle checks, the left border).
-
-    Notes
-    -----
-    Settings: ``P1 = 8 block²`` and ``P2 = 32 block²`` (the smoothness penalties OpenCV's
-    documentation suggests for one channel), uniqueness 10%, left-right check 1 px, speckles
-    under 100 px with a spread of 2 px removed, three-path mode (``MODE_SGBM_3WAY``: fast on
-    two cores).
-
-    Examples
-    --------
     >>> rng = np.random.default_rng(0)
     >>> texture = cv2.GaussianBlur(rng.uniform(0, 255, (60, 160)), (0, 0), 1.5) * 4 % 255
     >>> d = sgbm_disparity(texture[:, :-12], texture[:, 12:], 4, 20)
@@ -133,19 +101,8 @@ def sgbm_disparity(left, right, low: float, high: float, *, block: int = SGBM_BL
 
 @dataclass(frozen=True)
 class Agreement:
-    """How a dense disparity map agrees with the network's matches.
-
-    Attributes
-    ----------
-    matches : int
-        The network's matches compared.
-    measured : int
-        Those whose left pixel has an SGBM disparity.
-    agree : int
-        Those within :data:`AGREE_SHARE` or :data:`AGREE_PX` of the network's disparity.
-    share, px : float
-        The rule used.
-    """
+    """How a dense disparity map agrees with the network's `matches`: `measured` of them have an
+    SGBM disparity, `agree` of those within `share` or `px` of the network's."""
 
     matches: int
     measured: int
@@ -171,7 +128,7 @@ def agreement(dense, xy, disparity, *, share: float = AGREE_SHARE, px: float = A
     """Compare a dense disparity map with the network's matches at their left pixels.
 
     A match agrees when ``|d_dense - d| <= max(px, share * d)`` at the pixel nearest its left
-    point; a pixel with no dense disparity (NaN) is left out of ``measured``.
+    point; a pixel without a dense disparity (NaN) is not ``measured``.
 
     >>> dense = np.full((10, 10), 20.0); dense[0, 0] = np.nan
     >>> str(agreement(dense, [[5, 5], [6, 5], [0, 0]], [20.5, 25.0, 20.0]))
@@ -200,19 +157,9 @@ def agreement(dense, xy, disparity, *, share: float = AGREE_SHARE, px: float = A
 def dense_points(camera: StereoCamera, dense, most: int = MAX_DENSE) -> tuple[np.ndarray, np.ndarray]:
     """At most `most` pixels of a dense disparity map of `camera`'s rectified pair, in metres.
 
-    The pixels are taken on a regular grid (every ``s``-th row and column, ``s`` as small as
-    `most` allows), so the subsample covers the image evenly and is the same on every run.
+    The pixels lie on a regular grid (every ``s``-th row and column, ``s`` as small as `most`
+    allows).  Returns ``(xyz, xy)``: metres in the rectified left camera's frame, and the pixels.
 
-    Returns
-    -------
-    xyz : (N, 3) ndarray
-        Metres in the rectified left camera's frame
-        (:meth:`~ismb_lab.cameras.camera.StereoCamera.points_from_disparity`).
-    xy : (N, 2) ndarray
-        Their left pixels.
-
-    Examples
-    --------
     >>> xyz, xy = dense_points(StereoCamera(), np.full((240, 320), 30.0), most=1000)
     >>> len(xyz) <= 1000, float(xyz[0, 2])
     (True, 1.0)

@@ -1,26 +1,9 @@
-"""Matches in metres: match a calibrated camera's pair using what the camera knows.
+"""Matches in metres: match a pair rectified by a calibrated camera with what the camera knows.
 
-A pair rectified with a calibrated :class:`~ismb_lab.cameras.camera.StereoCamera` has its
-epipolar lines on the image rows, to within the calibration's error.  Matching it
-(``ismb-lab match --rig``, :func:`prepare_for_camera`) uses that three ways, none of them
-special to any scene:
-
-1. **rows**: the corners' positions are refined to sub-pixel (:func:`subpixel`; the
-   similarity ``M`` still compares the whole-pixel patches), and a match's two corners are
-   on one row to within :func:`row_tolerance` pixels, ``2 rms``: each of the two points is
-   rectified with about the calibration's RMS reprojection error.  The candidate window is
-   that tall.  (Whole-pixel corners, as ``depth --rig`` uses, need ``1 + 2 rms``: each is up
-   to half a pixel from its point);
-2. **the disparity range**: the window's range is measured on robust SIFT matches that
-   search only their own rows and positive disparities (a point in front of both cameras)
-   (:func:`ismb_lab.matching.pipeline.auto_window` with ``rows_px``), so a repetitive texture's
-   ratio test compares a keypoint with the others of its row only;
-3. **mutual best**: of the network's matches, only those whose two corners are each
-   other's most similar candidate in that window are kept (:func:`mutual_best`).
-
-Then each match is a point ``(X, Y, Z)`` in metres in the rectified left camera's frame
-(:func:`match_points`, :meth:`~ismb_lab.cameras.camera.StereoCamera.points_from_disparity`), from
-the sub-pixel positions' disparity.
+A match's corners are refined to sub-pixel and lie on one row to within :func:`row_tolerance`;
+the disparity range is measured on robust matches along their rows (:func:`auto_window` with
+``rows_px``); only mutual-best matches are kept (:func:`mutual_best`); :func:`match_points`
+gives them in metres in the rectified left camera's frame.
 """
 
 from __future__ import annotations
@@ -33,20 +16,19 @@ import numpy as np
 
 from .._core.validation import ParameterError, ParameterTypeError, check_number, message
 from ..cameras.camera import StereoCamera
-from .pipeline import MatchConfig, MatchResult, Prepared, auto_window, match, prepare
-from ..network.methods import build_problem
+from .pipeline import MatchConfig, MatchResult, Prepared, auto_window, corner_problem, match, prepare
 
-__all__ = ["IMPROVES", "THESIS_SIZE", "photo_config", "fit_rows_px", "for_camera", "match_points", "rectify_for_camera", "match_with_camera", "mutual_best", "prepare_for_camera", "rig_config", "row_tolerance",
-           "subpixel"]
+__all__ = ["IMPROVES", "THESIS_SIZE", "photo_config", "fit_rows_px", "for_camera", "match_points",
+           "rectify_for_camera", "match_with_camera", "mutual_best", "prepare_for_camera", "rig_config",
+           "row_tolerance", "subpixel"]
 
 #: cv2.cornerSubPix stops when a step is under 0.001 px or after 40 steps.
 _SUBPIXEL_STOP = (cv2.TERM_CRITERIA_EPS + cv2.TERM_CRITERIA_COUNT, 40, 0.001)
 
 
 def row_tolerance(camera: StereoCamera, subpixel: bool = False) -> float:
-    """Largest row difference, in pixels, of a true corner match in `camera`'s rectified pair:
-    ``2 rms`` for sub-pixel corners, ``1 + 2 rms`` for whole-pixel ones (``1`` for an
-    uncalibrated, ideal camera, which has no error to go by).
+    """Largest row difference, px, of a true match in `camera`'s rectified pair: ``2 rms`` for
+    sub-pixel corners, ``1 + 2 rms`` for whole-pixel ones, ``1`` for an uncalibrated camera.
 
     >>> row_tolerance(StereoCamera())
     1.0
@@ -60,9 +42,8 @@ def row_tolerance(camera: StereoCamera, subpixel: bool = False) -> float:
 
 
 def rig_config(camera: StereoCamera, config: MatchConfig, pair=None, subpixel: bool = False) -> MatchConfig:
-    """`config` with the candidate window `camera` gives: :func:`row_tolerance` rows up and
-    down (for sub-pixel corners when `subpixel`), and, with ``shift="auto"``, the disparity
-    range measured on `pair` along those rows.
+    """`config` with the window `camera` gives: :func:`row_tolerance` rows up and down, and, with
+    ``shift="auto"``, the disparity range measured on `pair` along those rows.
 
     >>> rig_config(StereoCamera(), MatchConfig()).window_height
     2.0
@@ -79,22 +60,15 @@ def rig_config(camera: StereoCamera, config: MatchConfig, pair=None, subpixel: b
     return config
 
 
-#: The thesis' image, width x height: its 20-30 corners (``MatchConfig``'s defaults) are for
-#: the centre quarter of a 320 x 240 webcam frame.
+#: The thesis' image, width x height, which ``MatchConfig``'s 20-30 corners are for.
 THESIS_SIZE = (320, 240)
 
 
 def photo_config(camera: StereoCamera, config: MatchConfig | None = None, *, scale: float = 1.0,
                  most: int | None = None) -> MatchConfig:
-    """`config` (default :class:`~ismb_lab.matching.pipeline.MatchConfig`'s) with its corner counts
-    scaled to `camera`'s photos: ``n_min`` and ``n_max`` times the photo's area over the
-    thesis' (:data:`THESIS_SIZE`), times `scale`; with `most`, ``n_max`` is at most that and
-    ``n_min`` keeps its share of it.
-
-    On OpenCV's 13 chessboard pairs (640 x 480: 80-120 corners), each held out of its rig's
-    calibration, the default ``match --rig`` keeps 25-63 board matches, 92-100% of them within
-    5% of the board's plane (``scripts/rig_defaults.py``); the thesis' 20-30 keep 6-10 on pairs
-    01, 05 and 12.
+    """`config` with ``n_min`` and ``n_max`` scaled by `camera`'s image area over
+    :data:`THESIS_SIZE`'s, times `scale`; with `most`, ``n_max`` is at most that and ``n_min``
+    keeps its share of it.
 
     >>> c = photo_config(StereoCamera(size=(640, 480)))
     >>> c.n_min, c.n_max
@@ -119,10 +93,9 @@ def photo_config(camera: StereoCamera, config: MatchConfig | None = None, *, sca
 
 
 def subpixel(image, xy, half: int) -> np.ndarray:
-    """Corner points `xy` ``(x, y)`` of `image` refined to sub-pixel (``cv2.cornerSubPix``
-    in a ``(2 half + 1)`` square window), kept inside the image.
+    """Corners `xy` of `image` refined to sub-pixel (``cv2.cornerSubPix``, a ``2 half + 1``
+    window), kept inside the image.
 
-    >>> import numpy as np
     >>> img = np.zeros((40, 40)); img[:20, :20] = img[20:, 20:] = 255.0
     >>> subpixel(img, np.array([[21.0, 18.0]]), 5).round(1).tolist()
     [[19.5, 19.5]]
@@ -138,11 +111,8 @@ def subpixel(image, xy, half: int) -> np.ndarray:
 
 
 def prepare_for_camera(pair, config: MatchConfig, camera: StereoCamera) -> Prepared:
-    """`pair` (rectified by `camera`) prepared in the window `camera` gives: the corners are
-    detected as :func:`~ismb_lab.matching.pipeline.prepare` does and ``M`` compares their whole-pixel
-    patches, then the geometry (the candidate window, the neighbours, the disparities) uses
-    their sub-pixel positions (:func:`subpixel`, half the patch size) and rows within
-    ``row_tolerance(camera, subpixel=True)``.
+    """`pair` (rectified by `camera`) prepared in `camera`'s window: ``M`` compares whole-pixel
+    patches, the geometry uses the corners' sub-pixel positions.
 
     >>> from ismb_lab.images.io import load_pair
     >>> from ismb_lab.scenes import synthetic_scene
@@ -154,20 +124,16 @@ def prepare_for_camera(pair, config: MatchConfig, camera: StereoCamera) -> Prepa
     if not isinstance(camera, StereoCamera):
         raise ParameterTypeError(message("camera", "prepare_for_camera", "a StereoCamera", camera))
     prepared = prepare(pair, None, rig_config(camera, config, pair, subpixel=True))
-    c, half = prepared.config, prepared.config.patch_size // 2
-    lxy = subpixel(prepared.pair.left, prepared.left_corners.xy, half)
-    rxy = subpixel(prepared.pair.right, prepared.right_corners.xy, half)
-    problem = build_problem(lxy, rxy, prepared.problem.dissimilarity, shift=c.shift,
-                            window_height=c.window_height, window_width=c.window_width,
-                            radius=c.neighbour_radius, neighbourhood=c.neighbourhood)
+    pair, half = prepared.pair, prepared.config.patch_size // 2
+    lxy = subpixel(pair.left, prepared.left_corners.xy, half)
+    rxy = subpixel(pair.right, prepared.right_corners.xy, half)
+    problem = corner_problem(pair, lxy, rxy, prepared.config, prepared.problem.dissimilarity)
     return replace(prepared, problem=problem)
 
 
 def match_with_camera(pair, config: MatchConfig, camera: StereoCamera, **options) -> tuple:
-    """``ismb-lab match --rig`` on a pair rectified by `camera`: :func:`prepare_for_camera`,
-    :func:`~ismb_lab.matching.pipeline.match` with `options` (method, params, solver, seed, ...), then
-    :func:`mutual_best`.  Returns ``(prepared, found, kept)``: the network's matches and those
-    kept; ``match_points(kept, camera)`` gives them in metres.
+    """``ismb-lab match --rig``: :func:`prepare_for_camera`, :func:`match` with `options`, then
+    :func:`mutual_best`.  Returns ``(prepared, found, kept)``.
 
     >>> from ismb_lab.images.io import load_pair
     >>> from ismb_lab.scenes import synthetic_scene
@@ -182,17 +148,13 @@ def match_with_camera(pair, config: MatchConfig, camera: StereoCamera, **options
 
 
 def mutual_best(prepared: Prepared, result: MatchResult) -> MatchResult:
-    """`result` with only the matches whose two corners are each other's most similar
-    candidate (smallest ``M``) among the candidate pairs of `prepared`.
+    """`result` with only the matches whose corners are each other's most similar candidate.
 
-    >>> import numpy as np
-    >>> from ismb_lab.matching.pipeline import match, prepare
     >>> from ismb_lab.scenes import synthetic_scene
     >>> s = synthetic_scene(0)
     >>> p = prepare(s.left, s.right)
     >>> r = match(prepared=p)
-    >>> kept = mutual_best(p, r)
-    >>> 0 < len(kept.pairs) <= len(r.pairs)
+    >>> 0 < len(mutual_best(p, r).pairs) <= len(r.pairs)
     True
     """
     if not isinstance(prepared, Prepared) or not isinstance(result, MatchResult):
@@ -222,11 +184,9 @@ def mutual_best(prepared: Prepared, result: MatchResult) -> MatchResult:
 
 
 def match_points(result: MatchResult, camera: StereoCamera) -> np.ndarray:
-    """The ``(m, 3)`` points, metres, of `result`'s matches in `camera`'s rectified left
-    frame (NaN rows for a disparity that is not > 0); the pair must be rectified by `camera`.
+    """The ``(m, 3)`` points, metres, of `result`'s matches in the rectified left frame of
+    `camera`, which rectified the pair (NaN rows where the disparity is not > 0).
 
-    >>> import numpy as np
-    >>> from ismb_lab.matching.pipeline import match
     >>> from ismb_lab.scenes import synthetic_scene
     >>> s = synthetic_scene(0)
     >>> xyz = match_points(match(s.left, s.right), StereoCamera())
@@ -252,9 +212,8 @@ FIT_SHARE = 0.25
 
 
 def fit_rows_px(camera: StereoCamera) -> float:
-    """Largest median row difference, in pixels, of the robust matches of a pair `camera` fits
-    once rectified: :func:`~ismb_lab.images.rectify.row_spread_px` of its size, or the sub-pixel
-    :func:`row_tolerance` if larger (a rig calibrated with a large RMS).
+    """Largest median row difference, px, of the robust matches of a pair `camera` fits:
+    :func:`~ismb_lab.images.rectify.row_spread_px`, or the sub-pixel :func:`row_tolerance` if larger.
 
     >>> fit_rows_px(StereoCamera(size=(640, 480))), fit_rows_px(StereoCamera(size=(640, 480), rms=0.8))
     (1.0, 1.6)
@@ -265,17 +224,13 @@ def fit_rows_px(camera: StereoCamera) -> float:
 
 
 def _misfit(matches, limit: float) -> str:
-    """Why a pair whose robust matches are `matches` is not one a rig fits (a few words), or ""
-    (also when fewer than 8 matches say nothing either way)."""
+    """Why a pair with robust `matches` does not fit a rig (a few words), or "" (also for < 8)."""
     from ..images.rectify import negative_share
 
     if len(matches) < 8:
         return ""
     dy = np.abs(matches.left_xy[:, 1] - matches.right_xy[:, 1])
-    # A share, not the median: on a chessboard half the robust matches may be squares matched to
-    # their neighbours (OpenCV's board 05 with the rig it helped calibrate: 46% within 1 px, the
-    # median 16 px), while a pair the rig does not fit has almost none on their rows (4% turned
-    # by 3 degrees, 2% swapped; 74-91% on the other 12 boards).
+    # a share, not the median: on a chessboard half the robust matches may pair neighbouring squares
     within = float(np.mean(dy <= limit))
     if within < FIT_SHARE:
         return f"rows {float(np.median(dy)):.1f} px apart at the median, {within:.0%} within {limit:g} px"
@@ -296,8 +251,7 @@ def _fits(left, right, camera: StereoCamera, limit: float) -> bool:
 
 
 def _photos(left, right, camera: StereoCamera, owner: str) -> tuple:
-    """``camera.photos``, with a photo that its EXIF tag turned to another size than the rig's
-    refused by naming the tag."""
+    """``camera.photos``, refusing a photo its EXIF tag turned to another size than the rig's."""
     from ..images.rectify import load_photo, photo_orientation
 
     for name, source in (("left", left), ("right", right)):
@@ -321,9 +275,8 @@ class _Shown(str):
 
 
 def _refusal(sources, camera: StereoCamera, problem: str, limit: float, owner: str) -> ParameterError:
-    """The one-line refusal of a pair `camera` does not fit (`problem`), naming the likely cause
-    and its fix: the files swapped, an EXIF orientation tag that does not match the pixels, or a
-    rig that is not this pair's (the cameras moved since its calibration, or another camera)."""
+    """The refusal of a pair `camera` does not fit, naming the likely cause: the files swapped,
+    an EXIF tag that does not match the pixels, or a rig that is not this pair's."""
     from ..images.rectify import load_photo, photo_orientation
 
     names = ("left", "right")
@@ -358,14 +311,12 @@ def _refusal(sources, camera: StereoCamera, problem: str, limit: float, owner: s
 
 
 def rectify_for_camera(left, right, camera: StereoCamera, owner: str = "rectify_for_camera"):
-    """`left` and `right` rectified with `camera` (:meth:`~ismb_lab.cameras.camera.StereoCamera.rectify`,
-    ``ismb-lab rectify --rig``), refused unless the result fits `camera` as :func:`for_camera`
-    asks: the rows of its robust matches agree and most disparities are positive.
+    """`left` and `right` rectified with `camera`.
 
     Raises
     ------
     ParameterError
-        As :func:`for_camera`, and for a pair that is already rectified (use it as it is).
+        As :func:`for_camera`, and for a pair that is rectified already.
     """
     from ..images.rectify import Correspondences, robust_matches
 
@@ -383,23 +334,16 @@ def rectify_for_camera(left, right, camera: StereoCamera, owner: str = "rectify_
 
 
 def for_camera(left, right, camera: StereoCamera) -> tuple:
-    """The pair to match with `camera`: ``(left, right, how)``.
-
-    Raw photos of `camera` are rectified with it.  A pair is taken as already rectified, and
-    kept as it is, only when its robust matches' rows agree as given (:func:`fit_rows_px`) and
-    rectifying it with `camera` would not improve them (lower their median row difference by
-    more than :data:`IMPROVES`).  ``how`` says which, with both figures.
-
-    Then the pair must fit `camera`: its robust matches' rows agree (:func:`fit_rows_px`) and
-    most of those on their rows have a positive disparity.
+    """The pair to match with `camera`, ``(left, right, how)``: as given when its robust matches'
+    rows agree (:func:`fit_rows_px`) and rectifying would not lower their median difference by
+    more than :data:`IMPROVES`, else rectified; either way its rows must agree and most
+    disparities be positive.
 
     Raises
     ------
     ParameterError
-        In one sentence that names the likely cause and its fix: photos of another size than
-        the camera's (an EXIF orientation tag that turns them is named), or a pair the camera
-        does not fit: the two files swapped, an EXIF orientation tag that does not match the
-        pixels, or photos the rig was not calibrated for (turned, cropped, the cameras moved).
+        Naming the likely cause and its fix (photos of another size, files swapped, an EXIF tag
+        that does not match the pixels, photos the rig was not calibrated for).
     """
     from ..images.rectify import Correspondences, robust_matches
 

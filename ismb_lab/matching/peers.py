@@ -1,16 +1,6 @@
-"""Peer matchers on the network's own features and candidate window.
-
-To judge the Hopfield network honestly, these matchers see exactly what it
-sees: the corners, ``M`` and candidate neurons ``(i, k)`` of a
-:class:`~ismb_lab.network.methods.Problem`.  Each returns one-to-one matches among
-candidate neurons as an ``(m, 2)`` int array of ``(i, k)`` sorted by ``i``.
-
-* :func:`mutual_nearest`: mutual nearest neighbours on ``M`` (appearance only);
-* :func:`hungarian`: the optimal one-to-one assignment on ``M`` with a no-match cost;
-* :func:`graph_matching`: RRWM or spectral matching (pygmtools) of the method's
-  own ``S`` and ``C``, i.e. a standard solver of the thesis' quadratic objective.
-
-:data:`PEERS` maps short names to callables ``f(problem, method=DEFAULT_METHOD, params=None)`` (the default method is :data:`ismb_lab.network.methods.DEFAULT_METHOD`).
+"""Peer matchers that see what the network sees: the corners, ``M`` and candidate neurons of a
+:class:`~ismb_lab.network.methods.Problem`.  Each returns one-to-one ``(i, k)`` candidate
+pairs, an ``(m, 2)`` int array sorted by ``i``.
 
 >>> from ismb_lab.network.methods import build_problem
 >>> p = build_problem([[100, 50], [110, 50]], [[80, 51], [90, 51]], [[2.0, 40.0], [40.0, 3.0]])
@@ -54,24 +44,9 @@ def _candidate_costs(problem: Problem) -> np.ndarray:
 
 
 def mutual_nearest(problem, max_dissimilarity=None) -> np.ndarray:
-    """Mutual nearest neighbours on ``M``, among candidate neurons only.
+    """Mutual nearest neighbours on ``M`` among candidate neurons (ties to the lower index),
+    without matches whose ``M_ik`` is above `max_dissimilarity`.
 
-    ``(i, k)`` is kept when ``k`` is the candidate of ``i`` with the smallest ``M``
-    and ``i`` that of ``k`` (ties go to the lower index).
-
-    Parameters
-    ----------
-    problem : Problem
-    max_dissimilarity : float, optional
-        Also drop matches with ``M_ik`` above this value.
-
-    Returns
-    -------
-    pairs : (m, 2) int ndarray
-        Matched ``(i, k)``, sorted by ``i``.
-
-    Examples
-    --------
     >>> from ismb_lab.network.methods import build_problem
     >>> p = build_problem([[100, 50], [110, 50]], [[80, 51], [90, 51]], [[1.0, 4.0], [2.0, 3.0]])
     >>> mutual_nearest(p)      # left 1 prefers right 0, which prefers left 0
@@ -94,25 +69,9 @@ def mutual_nearest(problem, max_dissimilarity=None) -> np.ndarray:
 def hungarian(problem, no_match_cost) -> np.ndarray:
     """The one-to-one assignment of least total ``M``, where a feature may stay unmatched.
 
-    The cost matrix is ``M`` on candidate neurons (``inf`` elsewhere) augmented
-    with one dummy column per left feature and one dummy row per right feature:
-    leaving a feature unmatched costs ``no_match_cost / 2``, so the solver
-    minimises ``sum(M_ik - no_match_cost)`` over the matches and never keeps a
-    match with ``M_ik > no_match_cost``; non-candidates are never returned.
+    Dummy rows and columns make leaving a feature unmatched cost ``no_match_cost / 2``, so no
+    match with ``M_ik > no_match_cost`` (grey levels, > 0) is kept; non-candidates never are.
 
-    Parameters
-    ----------
-    problem : Problem
-    no_match_cost : float
-        The largest ``M`` worth a match, > 0, in the units of ``M`` (grey levels).
-
-    Returns
-    -------
-    pairs : (m, 2) int ndarray
-        Matched ``(i, k)``, sorted by ``i``.
-
-    Examples
-    --------
     >>> from ismb_lab.network.methods import build_problem
     >>> p = build_problem([[100, 50], [110, 50]], [[80, 51], [90, 51]], [[1.0, 4.0], [2.0, 30.0]])
     >>> hungarian(p, no_match_cost=10).tolist()     # 4 + 2 beats 1 alone
@@ -133,30 +92,10 @@ def hungarian(problem, no_match_cost) -> np.ndarray:
 
 
 def affinity_matrix(problem, method=DEFAULT_METHOD, params=None) -> np.ndarray:
-    """The non-negative affinity ``K`` of the method's energy, in pygmtools' layout.
+    """The affinity ``K`` of the method's energy in pygmtools' layout: neuron ``(i, k)`` at
+    ``k * N_l + i``, ``(S + 1) / 2`` on the diagonal, ``(C + 1) / 2`` for interacting pairs, 0
+    elsewhere (non-negative, as SM and RRWM need).  `params` default to the method's.
 
-    ``K`` spans the full ``N_l x N_r`` assignment space in pygmtools' column-major
-    ``vec`` order: neuron ``(i, k)`` has index ``k * N_l + i``.  Its diagonal is
-    ``(S + 1) / 2`` of the candidate neurons, its off-diagonal ``(C + 1) / 2`` of
-    the interacting pairs; all else is 0.  Mapping ``[-1, 1]`` to ``[0, 1]``
-    keeps ``K`` non-negative, as SM and RRWM need; ``C = -1`` then counts like no
-    interaction.
-
-    Parameters
-    ----------
-    problem : Problem
-    method : {"I", "II", "III"}
-        Which energy's ``S`` and ``C`` (see :mod:`ismb_lab.network.methods`).
-    params : Params, optional
-        By default the thesis' GA values for the method.
-
-    Returns
-    -------
-    K : (N_l * N_r, N_l * N_r) ndarray
-        Symmetric, entries in ``[0, 1]``.
-
-    Examples
-    --------
     >>> from ismb_lab.network.methods import build_problem
     >>> p = build_problem([[100, 50], [110, 50]], [[80, 51], [90, 51]], np.full((2, 2), 24.02))
     >>> affinity_matrix(p).round(2)     # S = 0 on the diagonal; vec order (0,0) (1,0) (0,1) (1,1)
@@ -185,36 +124,13 @@ def affinity_matrix(problem, method=DEFAULT_METHOD, params=None) -> np.ndarray:
 
 def graph_matching(problem, method=DEFAULT_METHOD, params=None, *, solver="rrwm",
                    max_dissimilarity=None) -> np.ndarray:
-    """Match by graph matching (pygmtools) on the method's own similarity and compatibility.
+    """Match by RRWM (Cho et al. 2010) or spectral matching (Leordeanu & Hebert 2005) on
+    :func:`affinity_matrix` (pygmtools, numpy backend per call), discretised by the Hungarian
+    algorithm, candidates only.
 
-    Solves ``max vec(X)' K vec(X)`` with ``K`` from :func:`affinity_matrix`,
-    by RRWM (Cho et al. 2010) or spectral matching (Leordeanu & Hebert 2005)
-    on pygmtools' numpy backend (passed per call: the global
-    ``pygmtools.BACKEND`` is left alone), then discretises with the Hungarian
-    algorithm and keeps candidate neurons only.
+    `max_dissimilarity` drops matches with ``M_ik`` above it: the Hungarian step matches
+    occluded features too, and the soft scores do not tell them apart.
 
-    Parameters
-    ----------
-    problem : Problem
-    method, params
-        As in :func:`affinity_matrix`.
-    solver : {"rrwm", "sm"}
-        The continuous solver.
-    max_dissimilarity : float, optional
-        The no-match rule: drop matches with ``M_ik`` above it (the Hungarian
-        step matches all it can, occluded features too).  The soft score is no
-        use for this (measured on the synthetic scenes): RRWM's Sinkhorn jumps
-        give every row similar mass, so wrong matches score 0.2-0.9 of the top
-        score like true ones (0.6-1); SM's leading eigenvector gathers on one
-        cluster of neighbouring features and scores true matches elsewhere ~0.
-
-    Returns
-    -------
-    pairs : (m, 2) int ndarray
-        Matched ``(i, k)``, sorted by ``i``.
-
-    Examples
-    --------
     >>> from ismb_lab.network.methods import build_problem
     >>> p = build_problem([[100, 50], [110, 50]], [[80, 51], [90, 51]], [[2.0, 40.0], [40.0, 3.0]])
     >>> graph_matching(p, solver="sm").tolist()
@@ -242,11 +158,8 @@ def graph_matching(problem, method=DEFAULT_METHOD, params=None, *, solver="rrwm"
 
 
 def default_no_match_cost(problem) -> float:
-    """The no-match cut of :data:`PEERS`: half the median of ``M`` over all feature pairs
-    (:func:`ismb_lab.network.similarity.no_match_cut`).
+    """The no-match cut of :data:`PEERS`: half the median of ``M`` over all feature pairs.
 
-    Examples
-    --------
     >>> from ismb_lab.network.methods import build_problem
     >>> p = build_problem([[100, 50], [110, 50]], [[80, 51], [90, 51]], [[2.0, 40.0], [40.0, 3.0]])
     >>> default_no_match_cost(p)
@@ -272,10 +185,6 @@ def _spectral(problem, method=DEFAULT_METHOD, params=None):
                           max_dissimilarity=default_no_match_cost(problem))
 
 
-#: Peer matchers by name, each ``f(problem, method=DEFAULT_METHOD, params=None) -> pairs``.
-#: All four refuse matches with ``M_ik`` above :func:`default_no_match_cost`;
-#: ``mutual-nn`` and ``hungarian`` use ``M`` only (they ignore `method` and
-#: `params`), ``rrwm`` and ``spectral`` the method's ``S`` and ``C`` (thesis GA
-#: parameters by default).  The network has no such cut: for a like-for-like
-#: look, call the functions without it.
+#: Peer matchers by name, ``f(problem, method=DEFAULT_METHOD, params=None) -> pairs``, each with the
+#: cut of :func:`default_no_match_cost`; ``mutual-nn`` and ``hungarian`` use ``M`` only.
 PEERS = {"mutual-nn": _mnn, "hungarian": _hungarian, "rrwm": _rrwm, "spectral": _spectral}

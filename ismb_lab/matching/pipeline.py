@@ -31,30 +31,14 @@ __all__ = ["AUTO_MARGIN", "MatchConfig", "MatchResult", "Prepared", "auto_window
 class MatchConfig:
     """Everything about a match that is not an energy parameter.
 
-    Attributes
-    ----------
-    roi : str or tuple
-        ``"center"`` (the centre quarter, as in the thesis), ``"full"`` or ``(x, y, w, h)``.
-    n_min, n_max : int
-        Bounds on the number of corners per image (the thesis uses [20, 30]).
-    threshold : float or None
-        Initial Harris threshold ``T``; None starts at the strongest response.
-    harris_sigma, harris_k, min_distance : float, float, int
-        Gaussian window of the structure tensor, Harris ``k``, local-maximum radius.
-    patch_size : int
-        Odd side of the window for ``M_ik`` (3-8).
-    shift, window_height, window_width : float
-        The candidate window: ``30 x 40`` centred ``shift`` pixels left (§3.3).  ``shift="auto"``
-        sets it from the pair itself (:func:`auto_window`): :func:`prepare` centres the window
-        on the disparities of robust matches and widens it to hold them all; the
-        ``Prepared.config`` it returns holds the numbers chosen.
-    neighbour_radius : float, neighbourhood : {"box", "disc"}
-        Which left features interact (3-12, §3.3).
-    right_roi : {"shifted", "same"}
-        ``"shifted"`` (default) moves the right image's ROI ``shift`` pixels left,
-        like the candidate window, so that left corners near the ROI's left edge
-        keep their partners.  ``"same"`` uses the left ROI in both images, as the
-        thesis does; it loses about one corner in eight to the ROI border.
+    `roi` is ``"center"`` (the thesis' centre quarter), ``"full"`` or ``(x, y, w, h)``; `n_min`,
+    `n_max` bound the corners per image; `threshold` is Harris' initial ``T`` (None: the strongest
+    response); `patch_size` the odd side of ``M_ik``'s window (3-8).  The candidate window is
+    ``window_height x window_width`` centred `shift` px left (§3.3; ``"auto"``: measured on the
+    pair by :func:`auto_window`, the numbers then in ``Prepared.config``); `neighbour_radius` and
+    `neighbourhood` say which left features interact (3-12).  `right_roi` ``"shifted"`` moves the
+    right ROI `shift` px left, so that corners near the left ROI's edge keep their partners;
+    ``"same"`` is the thesis' (it loses one corner in eight).
     """
 
     roi: object = "center"
@@ -114,18 +98,16 @@ AUTO_MARGIN = 5.0
 def auto_window(pair, config: MatchConfig, *, rows_px: float | None = None) -> MatchConfig:
     """`config` with ``shift="auto"`` replaced by numbers measured on `pair`.
 
-    Robust matches (:func:`ismb_lab.images.rectify.robust_matches`) whose left point lies in the
-    ROI and whose rows differ by at most 2 px give the disparity range (2nd to 98th
-    percentile); when fewer than 8 lie in the ROI, those of the whole image do.  The window is
-    centred on it, and widened to the range plus :data:`AUTO_MARGIN` on each side when the
-    range is wider than the window.  For a pair rectified with a calibrated camera, `rows_px`
-    (the rows' tolerance the camera gives) makes the robust matches search only their own
-    rows at positive disparities, and replaces the 2 px.
+    The robust matches (:func:`ismb_lab.images.rectify.robust_matches`) in the ROI (the whole
+    image if fewer than 8) whose rows differ by at most `rows_px` (default 2 px) give the
+    2nd-98th percentile disparity range; the window is centred on it and widened to hold it
+    plus :data:`AUTO_MARGIN` on each side.  `rows_px` (a calibrated camera's) also makes the
+    robust matches search their own rows at positive disparities only.
 
     Raises
     ------
     ParameterError
-        Fewer than 8 such matches: the pair gives no range to go by.
+        Fewer than 8 such matches.
     """
     from ..images.rectify import robust_matches
 
@@ -150,13 +132,9 @@ def auto_window(pair, config: MatchConfig, *, rows_px: float | None = None) -> M
 
 
 def check_window(config: MatchConfig, shape) -> MatchConfig:
-    """Check, before any work on a pair of `shape` ``(height, width)``, that `config`'s ROI lies
-    in it and that its candidate window can reach it: a shift of more than ``width - 1 +
-    window_width / 2`` pixels either way puts every left corner's window outside the right
-    image, and no pair could be a candidate.  Returns `config`.
+    """Check that `config`'s ROI lies in an image of `shape` ``(height, width)`` and that its
+    window can reach it (a shift beyond ``width - 1 + window_width / 2`` cannot); returns `config`.
 
-    Examples
-    --------
     >>> check_window(MatchConfig(shift=1e308), (240, 320))
     Traceback (most recent call last):
     ...
@@ -176,8 +154,6 @@ def check_window(config: MatchConfig, shape) -> MatchConfig:
 def shift_roi(roi, shift: float, shape) -> tuple[int, int, int, int]:
     """Move an ``(x, y, w, h)`` ROI ``shift`` pixels left, cropped to the image.
 
-    Examples
-    --------
     >>> shift_roi((80, 60, 160, 120), 20, (240, 320))
     (60, 60, 160, 120)
     >>> shift_roi((10, 60, 160, 120), 20, (240, 320))
@@ -202,18 +178,8 @@ class Prepared:
 
 
 def prepare(left, right, config: MatchConfig | None = None) -> Prepared:
-    """Load a pair, detect corners in both images and compute ``M`` and the geometry.
-
-    Parameters
-    ----------
-    left, right : path or ndarray
-        The images (see :func:`ismb_lab.images.io.load_pair`).
-    config : MatchConfig, optional
-
-    Returns
-    -------
-    prepared : Prepared
-    """
+    """Load a pair (paths, arrays, or a StereoPair with `right` None), detect corners in both
+    images and compute ``M`` and the geometry."""
     config = MatchConfig() if config is None else config
     if not isinstance(config, MatchConfig):
         raise ParameterTypeError(message("config", "prepare", "a MatchConfig", config))
@@ -232,16 +198,9 @@ def prepare(left, right, config: MatchConfig | None = None) -> Prepared:
 
 
 def corner_problem(pair: StereoPair, left_xy, right_xy, config: MatchConfig, dissimilarity=None) -> Problem:
-    """The energy's ingredients for corners of `pair`: the window dissimilarity ``M`` (3-8)
-    (unless given) and the candidates and neighbour pairs that `config`'s search window
-    and neighbourhood allow (:func:`ismb_lab.network.methods.build_problem`).
+    """The energy's ingredients for corners of `pair`: ``M`` (3-8) unless given, and the
+    candidates and neighbours of `config`'s window (:func:`ismb_lab.network.methods.build_problem`).
 
-    Every way to a :class:`Prepared` goes through here: :func:`prepare`, the depth demo's
-    corners per changed region, and a rig's sub-pixel corners.
-
-    Examples
-    --------
-    >>> from ismb_lab.images.io import load_pair
     >>> from ismb_lab.scenes import synthetic_scene
     >>> s = synthetic_scene(0)
     >>> p = prepare(s.left, s.right)
@@ -258,34 +217,10 @@ def corner_problem(pair: StereoPair, left_xy, right_xy, config: MatchConfig, dis
 
 @dataclass(frozen=True, eq=False)
 class MatchResult:
-    """The outcome of matching one pair.
-
-    Attributes
-    ----------
-    method : str
-    params : Params
-    seed : int
-    stop_rule : str
-        What stopped the network (``"sweep"``, ``"stall"``, ``"max_attempts"``), or
-        ``"minimum"`` (:attr:`ismb_lab.network.solvers.Solution.stop_rule`).
-    energy : float
-        Final energy (3-15).
-    attempts : int
-    left_xy, right_xy : (N, 2) ndarray
-        All features, ``(x, y)`` in the full image.
-    pairs : (m, 2) int ndarray
-        Matched ``(i, k)`` feature indices, sorted by ``i``.
-    message : str
-        Empty when all went well, otherwise why the match is empty or partial.
-    n_candidates : int
-        Candidate neurons.
-    state : (n,) uint8 ndarray
-        Final outputs of the candidate neurons, after the method's post-processing.
-    solver : str
-        Which of :data:`ismb_lab.network.solvers.SOLVERS` found the state.
-    one_to_one : bool
-        Whether the matches passed :func:`~ismb_lab.network.solvers.one_match_per_corner`.
-    """
+    """The outcome of matching one pair: all features ``left_xy``, ``right_xy`` (``(x, y)`` in the
+    full image), the matched ``pairs`` ``(i, k)`` sorted by ``i``, the final ``energy`` (3-15), the
+    candidate neurons' ``state`` after post-processing, and ``message``, why the match is empty or
+    partial ("" when all went well)."""
 
     method: str
     params: Params
@@ -370,33 +305,11 @@ def match(left=None, right=None, method=DEFAULT_METHOD, params: Params | None = 
           prepared: Prepared | None = None, one_to_one: bool = False) -> MatchResult:
     """Match the Harris corners of a stereo pair with the Hopfield network.
 
-    Parameters
-    ----------
-    left, right : path or ndarray
-        The image pair; ignored when `prepared` is given.
-    method : str
-        Energy recipe, a name in :func:`ismb_lab.network.methods.method_names`.
-    params : Params, optional
-        Energy parameters; by default the method's (the thesis' GA values).
-    config : MatchConfig, optional
-        Corners, candidate window and neighbourhood settings.
-    seed : int
-        Seed of the random update order (and of annealing), from 0 to 2**63 - 1.
-    solver : str or Solver
-        How the energy is minimised: a name in :data:`ismb_lab.network.solvers.SOLVERS` or a
-        configured :class:`~ismb_lab.network.solvers.Solver`.
-    stop_rule, rule, kernel
-        Options of the ``"network"`` and ``"assign"`` solvers that replace the solver's
-        own (:class:`~ismb_lab.network.solvers.NetworkSolver`); None keeps them.
-    prepared : Prepared, optional
-        Reuse corners and geometry from :func:`prepare`.
-    one_to_one : bool
-        Keep at most one match per corner afterwards, the most similar
-        (:func:`~ismb_lab.network.solvers.one_match_per_corner`).
-
-    Returns
-    -------
-    result : MatchResult
+    `method` is a name of :func:`ismb_lab.network.methods.method_names`, `params` default to its
+    own; `seed` (0 to 2**63 - 1) orders the updates; `solver` is a name of
+    :data:`ismb_lab.network.solvers.SOLVERS` or a Solver, whose options `stop_rule`, `rule` and
+    `kernel` replace unless None.  `prepared` (from :func:`prepare`) replaces `left` and `right`;
+    `one_to_one` keeps at most one match per corner, the most similar.
     """
     m = get_method(method)
     params = m.defaults if params is None else params
@@ -440,21 +353,9 @@ def _explain(prepared: Prepared, result) -> str:
 
 
 def warm_up(solvers=(DEFAULT_SOLVER,)) -> float:
-    """Compile (or load from numba's cache) the kernels a first match runs; returns the seconds.
+    """Compile (or load from numba's cache) the kernels a first match of each of `solvers`
+    runs, on a small texture made in memory; returns the seconds.
 
-    In a new kernel on a server whose cache is empty, the first call to :func:`match` spends
-    most of its time compiling.  A notebook calls this first, with a message, so that the
-    wait is announced and the cells after it run at their usual speed.  The pair matched
-    here is a small random texture and its shift, made in memory.
-
-    Parameters
-    ----------
-    solvers : tuple of str
-        The solvers to prepare (names of :func:`ismb_lab.network.solvers.solver_names`); each
-        compiles its own kernels.
-
-    Examples
-    --------
     >>> warm_up() >= 0
     True
     """

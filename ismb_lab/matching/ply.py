@@ -1,26 +1,5 @@
-"""Point clouds as PLY files, the format MeshLab, CloudCompare and Open3D open.
-
-A PLY file is a text header followed by the data.  This module writes one element, ``vertex``,
-with the properties ``x y z`` (32-bit floats, the coordinates) and ``red green blue`` (8-bit
-unsigned integers, the colour), in ASCII or in binary little-endian::
-
-    ply
-    format ascii 1.0
-    comment ...
-    element vertex 2
-    property float x
-    property float y
-    property float z
-    property uchar red
-    property uchar green
-    property uchar blue
-    end_header
-    0.1 -0.05 1.2 128 128 128
-    ...
-
-``ismb-lab match --rig ... --ply OUT.ply`` writes its matches this way: metres in the rectified
-left camera's frame (X right, Y down, Z forward), each coloured by the left image's grey level.
-"""
+"""Point clouds as PLY files (MeshLab, CloudCompare and Open3D open them): one ``vertex`` element
+with ``x y z`` (float32) and ``red green blue`` (uchar), in ASCII or binary little-endian."""
 
 from __future__ import annotations
 
@@ -35,26 +14,10 @@ _PROPERTIES = ("property float x", "property float y", "property float z",
 
 
 def ply_bytes(points, colours=None, *, binary: bool = False, comments=()) -> bytes:
-    """The PLY file of `points` with their `colours`.
+    """The PLY file of `points` (finite ``(x, y, z)``, written as float32) with their `colours`
+    (``(red, green, blue)`` or grey, 0 to 255; default mid-grey), ASCII or `binary`, with header
+    `comments` (printable ASCII).
 
-    Parameters
-    ----------
-    points : (N, 3) array_like
-        Finite ``(x, y, z)`` coordinates; they are written as 32-bit floats.
-    colours : (N, 3) or (N,) array_like, optional
-        Each point's ``(red, green, blue)``, or its grey level, from 0 to 255 (rounded); default
-        mid-grey.
-    binary : bool
-        Binary little-endian instead of ASCII text.
-    comments : sequence of str
-        Header comments, one line each (printable ASCII).
-
-    Returns
-    -------
-    bytes
-
-    Examples
-    --------
     >>> print(ply_bytes([[0.5, -0.25, 2.0]], [200], comments=["metres"]).decode())
     ply
     format ascii 1.0

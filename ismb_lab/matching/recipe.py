@@ -1,19 +1,7 @@
 """A recipe: everything about a match but the images and the corners, saved and loaded whole.
 
-A :class:`Recipe` holds the method, its parameters, the solver with its options, the
-update-order seeds the GA averaged over while fitting, and the match-time settings
-(one match per corner).  ``ismb-lab tune`` writes one (:func:`save_recipe`), and
-``ismb-lab match``, ``ismb-lab depth`` and the widgets read it (:func:`load_recipe`)
-and use it as it is; a command-line option replaces one field.
-
-The file is the params file of earlier versions with more keys, so older readers
-still find ``"method"`` and ``"params"``::
-
-    {"version": 2, "method": "NM3", "params": {...}, "solver": "anneal",
-     "solver_options": {"t_start": 2.0, ...}, "fit_seeds": 3, "one_to_one": true, ...}
-
-A file without ``"version"`` was written before recipes: its ``"solver"`` (if any) is
-what ``tune`` fitted with, which ``match`` then did not read.
+The file is a params file with more keys (``"version": 2``, ``"solver_options"``,
+``"fit_seeds"``, ``"one_to_one"``); a file without ``"version"`` predates recipes.
 
 >>> import tempfile, pathlib
 >>> path = pathlib.Path(tempfile.mkdtemp()) / "p.json"
@@ -47,25 +35,12 @@ _KEYS = ("version", "method", "params", "solver", "solver_options", "fit_seeds",
 
 @dataclass(frozen=True)
 class Recipe:
-    """Method, parameters, solver with its options, fit seeds and match-time settings.
+    """Method, parameters (default: the method's), solver with its options, fit seeds and
+    match-time settings; `method` and `solver` are resolved once.
 
-    Parameters
-    ----------
-    method : str or Method
-        Resolved once to the :class:`~ismb_lab.network.methods.Method`.
-    params : Params, optional
-        Default: the method's own.
-    solver : str or Solver
-        Resolved once to a configured :class:`~ismb_lab.network.solvers.Solver`.
-    fit_seeds : int
-        Update-order seeds each GA fitness averaged over (a record of the fit; matching
-        uses one seed).
-    one_to_one : bool
-        Keep at most one match per corner after solving
-        (:func:`~ismb_lab.network.solvers.one_match_per_corner`).
+    `fit_seeds` records how many update-order seeds each GA fitness averaged over; `one_to_one`
+    keeps at most one match per corner after solving.
 
-    Examples
-    --------
     >>> Recipe("NM3", solver="anneal").to_dict()["solver"]
     'anneal'
     >>> Recipe(one_to_one="yes")
@@ -148,18 +123,16 @@ def save_recipe(path, recipe: Recipe, **extra) -> Path:
 
 
 def _read_params_file(path, owner: str) -> dict:
-    """The JSON object of a params file, read within :data:`ismb_lab._core.files.MAX_JSON_BYTES`
-    (a params file is a few hundred bytes), checked to hold a ``"params"`` object."""
+    """The JSON object of a params file (within ``MAX_JSON_BYTES``) holding a ``"params"`` object."""
     from .._core.files import read_json
 
     try:
         data = read_json(path)
     except FileNotFoundError:
         raise ParameterError(message("path", owner, "an existing params file", str(path))) from None
-    except OSError as exc:
-        raise ParameterError(message("path", owner, f"a readable JSON file ({exc.strerror or exc})", str(path))) from None
-    except ValueError as exc:
-        raise ParameterError(message("path", owner, f"a readable JSON file ({exc})", str(path))) from None
+    except (OSError, ValueError) as exc:   # a ValueError has no strerror
+        why = getattr(exc, "strerror", None) or exc
+        raise ParameterError(message("path", owner, f"a readable JSON file ({why})", str(path))) from None
     if not isinstance(data, dict) or not isinstance(data.get("params"), dict):
         raise ParameterError(message("path", owner, "a JSON object with a 'params' object", str(path)))
     return data
@@ -168,21 +141,8 @@ def _read_params_file(path, owner: str) -> dict:
 def load_recipe(path, *, method=None, solver=DEFAULT_SOLVER, before: str | None = None) -> Loaded:
     """Read the recipe of a params file.
 
-    Parameters
-    ----------
-    path : path
-    method : str, optional
-        The method of a file that names none (default :data:`~ismb_lab.network.methods.DEFAULT_METHOD`).
-    solver : str or Solver
-        The solver of a file that names none.
-    before : str, optional
-        The solver the reading command used with a file of version 1, which it read
-        only the method and the parameters of.  When that file's solver differs, the
-        note says that the file's own is used now.
-
-    Returns
-    -------
-    Loaded
+    `method` and `solver` are used when the file names none.  `before` is the solver the reading
+    command used with a version-1 file; when the file's own differs, the note says so.
     """
     own = f"load_recipe('{path}')"
     data = _read_params_file(path, "load_recipe")

@@ -1,12 +1,5 @@
-"""The train/test protocol of the thesis' Fig. 5.10, its report, and the training pair (Case).
-
-The thesis fits the GA on one pair ("training") and applies the parameters to
-every other pair ("testing"), printing ``C/E/T`` for each.  :func:`protocol` does
-that, with every network figure measured over several update-order seeds, and
-optionally scores other solvers of the same energy and the peer matchers of
-:mod:`ismb_lab.matching.peers` on the same pairs.  Scoring itself lives in
-:mod:`ismb_lab.tuning.evaluation`, the GA's fitness in :mod:`ismb_lab.tuning.fitness`.
-"""
+"""The train/test protocol of the thesis' Fig. 5.10, its report, and the training pair (Case):
+fit the GA on one pair and apply the parameters to every other, printing ``C/E/T`` for each."""
 
 from __future__ import annotations
 
@@ -45,20 +38,10 @@ _NONE = Score(0, 0, 0, 0)
 
 @dataclass(frozen=True, eq=False)
 class Case:
-    """One stereo pair with its targets: the unit the GA trains on and the protocol scores.
+    """One stereo pair with its targets ``(i, k)``: the unit the GA trains on and the protocol scores.
 
-    Attributes
-    ----------
-    prepared : Prepared
-        The pair with its corners and energy ingredients (:func:`ismb_lab.matching.pipeline.prepare`).
-    targets : (t, 2) int ndarray
-        Target ``(i, k)`` feature indices.
-    unknown : (u,) int ndarray
-        Left features whose truth is unknown (matches there are not scored).
-    name : str
-    left_out : (m,) int ndarray
-        Targets of the source file that no corner lies close enough to (see
-        :func:`ismb_lab.labels.targets.snap`), numbered from 0 in the file's order.
+    Matches of the left features in `unknown` are not scored; `left_out` lists the source file's
+    targets that no corner is close enough to.
     """
 
     prepared: Prepared
@@ -69,13 +52,12 @@ class Case:
 
     @cached_property
     def scorer(self) -> Scorer:
-        """:func:`~ismb_lab.tuning.evaluation.score` against this case's targets, the look-ups built once."""
+        """:func:`~ismb_lab.tuning.evaluation.score` against this case's targets, built once."""
         return Scorer(self.targets, self.unknown)
 
     @cached_property
     def neuron_codes(self) -> np.ndarray:
-        """:meth:`Scorer.neuron_codes <ismb_lab.tuning.evaluation.Scorer.neuron_codes>` of this
-        case's candidate neurons, for scoring many states of them."""
+        """The scorer's codes of this case's candidate neurons."""
         problem = self.prepared.problem
         return self.scorer.neuron_codes(problem.rows, problem.cols)
 
@@ -84,13 +66,10 @@ class Case:
                    name: str | None = None, check_hash: bool = True, partial: bool = False) -> "Case":
         """A case from two image files and a targets file (as the labeller saves it).
 
-        The targets are checked against the images' hashes (unless not `check_hash`) and
-        snapped to the corners that `config` finds.  A file that gives a corner two partners
-        is refused (:func:`ismb_lab.labels.targets.check_one_to_one`): no fitness can reach both.
-        With `partial`, the file labels only some corners (a person's labels, as notebook 04
-        saves them): matches of the other left corners are not scored
-        (:func:`ismb_lab.tuning.evaluation.unlabelled`).  Without it, as in the thesis, the file
-        holds every true pair and any other match is an error.
+        The targets are checked against the images' hashes (unless not `check_hash`), refused if a
+        corner has two partners, and snapped to the corners `config` finds.  With `partial` the file
+        labels only some corners (a person's labels): matches of the others are not scored; without
+        it, as in the thesis, any other match is an error.
         """
         if not isinstance(partial, bool):
             raise ParameterTypeError(message("partial", "Case.from_files", "True or False", partial))
@@ -105,11 +84,8 @@ class Case:
 
     @classmethod
     def from_scene(cls, scene, config: MatchConfig | None = None, name: str = "") -> "Case":
-        """A case from a rendered :class:`~ismb_lab.scenes.Scene`: every corner whose true
-        partner is a detected corner (:func:`ismb_lab.scenes.true_matches`) is a target.
+        """A case from a rendered Scene: every corner whose true partner is a detected corner is a target.
 
-        Examples
-        --------
         >>> from ismb_lab.scenes import synthetic_scene
         >>> case = Case.from_scene(synthetic_scene(seed=0), name="synthetic 0")
         >>> case.name, len(case.targets) > 15
@@ -122,16 +98,10 @@ class Case:
 
 
 def family_cases(family: str, start: int, count: int) -> list:
-    """The cases of one scene family's split: layouts ``start .. start + count - 1``.
+    """The cases of one scene family's layouts ``start .. start + count - 1`` (``2 + seed % 2``
+    objects each, in their ROI and window shift), without those of fewer than 3 targets; the
+    first case is the training pair, the first with at least 8 targets.
 
-    `family` is a registered family's name (:func:`ismb_lab.scenes.families`).  Layout ``seed`` of
-    the family has ``2 + seed % 2`` objects
-    (:func:`ismb_lab.scenes.object_layout`), matched in its ROI with its window shift; a
-    layout with fewer than 3 targets is left out.  The first case is the training pair:
-    the first with at least 8 targets (``scripts/matching_families.py``'s protocol).
-
-    Examples
-    --------
     >>> cases = family_cases("cameras", 2300, 3)
     >>> len(cases[0].targets) >= 8, cases[0].name.startswith("cameras ")
     (True, True)
@@ -155,13 +125,12 @@ def family_cases(family: str, start: int, count: int) -> list:
     return [cases[first]] + cases[:first] + cases[first + 1:]
 
 
-#: Built-in ground-truth pairs a manifest can name as ``"source"``: Middlebury Motorcycle
-#: (scikit-image) and Aloe (Debian's opencv-doc), both at the thesis' width of 320 px.
+#: Built-in ground-truth pairs a manifest can name as ``"source"``, at the thesis' width of 320 px.
 SOURCES = {"middlebury-motorcycle": lambda: motorcycle(), "middlebury-aloe": lambda: aloe(320)}
 
 
 def _read_manifest(path: Path):
-    """The JSON of a manifest, read within :data:`ismb_lab._core.files.MAX_JSON_BYTES`."""
+    """The JSON of a manifest, read within ``MAX_JSON_BYTES``."""
     from .._core.files import read_json
 
     try:
@@ -191,9 +160,8 @@ def source_files(name: str) -> tuple:
 
 
 def manifest_files(path) -> list:
-    """Every file a manifest makes a run read: the files its pairs name, and those of its
-    built-in sources.  Best effort, for the check that no output is one of them: a manifest
-    that cannot be read gives none (its loader says why)."""
+    """Every file a manifest makes a run read (its pairs' and its sources'), or none if it cannot
+    be read: best effort, for the check that no output is one of them."""
     try:
         data = _read_manifest(Path(path))
         entries = data["pairs"]
@@ -206,14 +174,11 @@ def manifest_files(path) -> list:
 
 
 def load_manifest(path, config: MatchConfig | None = None) -> list[Case]:
-    """Read an evaluation manifest into :class:`Case` objects.
+    """Read an evaluation manifest, ``{"pairs": [entry, ...]}``, into :class:`Case` objects.
 
-    The manifest is JSON: ``{"pairs": [entry, ...]}``.  An entry is either a file pair,
-    ``{"name", "left", "right", "targets", "roi", "shift"}`` (paths relative to the
-    manifest; ``roi`` and ``shift`` optional), or a built-in ground-truth pair,
-    ``{"name", "source": "middlebury-motorcycle", "roi": [x, y, w, h]}`` (or another name in
-    :data:`SOURCES`), whose targets come from the ground-truth disparity
-    (:func:`ismb_lab.images.datasets.ground_truth_pairs`).
+    An entry is a file pair, ``{"name", "left", "right", "targets", "roi", "shift"}`` (paths
+    relative to the manifest; ``roi`` and ``shift`` optional), or a built-in ground-truth pair,
+    ``{"name", "source", "roi"}`` with a source of :data:`SOURCES`.
     """
     path = Path(path)
     owner = f"the manifest '{path}'"
@@ -276,11 +241,8 @@ class Spread:
 
 @dataclass(frozen=True)
 class PairReport:
-    """One pair's row: its scores with the tested parameters, and with its own fit.
-
-    `testing` and `training` hold one :class:`Score` per update-order seed;
-    `training` and `params` are None when the pair was not fitted.
-    """
+    """One pair's row: a Score per update-order seed with the tested parameters and with its own
+    fit (`training` and `params` None when it was not fitted)."""
 
     name: str
     testing: tuple
@@ -307,26 +269,8 @@ class PeerReport:
 
 @dataclass(frozen=True)
 class ProtocolReport:
-    """What :func:`protocol` measured.
-
-    Attributes
-    ----------
-    method : str
-    params : Params
-        The parameters fitted on the training pair and tested on all.
-    solver : str
-        How the tested energies were solved.
-    train : int
-        Index of the training pair.
-    rows : tuple of PairReport
-    held_out : tuple of Score
-        The held-out pairs' pooled score, one per update-order seed.
-    peers : dict of str to PeerReport
-    solvers : dict of str to SolverReport
-    one_to_one : bool
-        Whether the network's matches were scored after
-        :func:`~ismb_lab.network.solvers.one_match_per_corner`.
-    """
+    """What :func:`protocol` measured: `params` fitted on pair `train` and tested on all, and
+    `held_out`, the held-out pairs' pooled Score per update-order seed."""
 
     method: str
     params: Params
@@ -359,52 +303,16 @@ def protocol(cases, method=DEFAULT_METHOD, *, train: int = 0, seeds: int = 5, ga
              rng=0, peers: bool = False, progress=None, solver=DEFAULT_SOLVER, solvers=(),
              fit_solver=DEFAULT_SOLVER, fit_seeds: int = 1, fit_all: bool = True, jobs: int = 1,
              one_to_one: bool = False, **settings) -> ProtocolReport:
-    """Fig. 5.10's protocol: GA-fit on each pair ("training") and on one pair applied to all
-    the others ("testing"), every network figure over `seeds` update-order seeds.
+    """Fig. 5.10's protocol: GA-fit on each pair ("training", only pair `train` without `fit_all`)
+    and on pair `train` applied to all the others ("testing"), every network figure over `seeds`
+    update-order seeds.
 
-    Parameters
-    ----------
-    cases : sequence of Case
-    method : str
-        A name in :func:`ismb_lab.network.methods.method_names`.
-    train : int
-        Index of the pair whose parameters are tested on all.
-    seeds : int
-        Update-order seeds per figure.
-    ga : GAConfig, optional
-        The GA's settings; `settings` override its fields (e.g. ``generations=60``).
-    rng : int or Generator
-        Seed of the GA.
-    peers : bool
-        Also score the peer matchers of :mod:`ismb_lab.matching.peers` (deterministic), with the
-        tested parameters where they use S and C.
-    progress : callable, optional
-        ``progress(case_name, generation)`` after every GA generation.
-    solver : str or Solver
-        How the tested energies are solved (a name in :data:`ismb_lab.network.solvers.SOLVERS`
-        or a configured :class:`~ismb_lab.network.solvers.Solver`); a solver that ignores the
-        seed is run once.
-    solvers : sequence of str or Solver
-        Other solvers of the same energies with the same tested parameters, reported
-        beside `solver`'s rows.
-    fit_solver, fit_seeds
-        How the GA scores a chromosome (:class:`~ismb_lab.tuning.fitness.Fitness`).
-    fit_all : bool
-        Fit every pair for its "training" column; without it only the training pair is
-        fitted and the other rows' ``training`` and ``params`` are None (the held-out
-        figures do not use them).
-    jobs : int
-        Worker processes for the GA fits and the per-pair scores.  The report is the
-        same for every `jobs`: each fit starts from the integer seed `rng` (a
-        Generator is accepted only with ``jobs=1``), and with ``jobs > 1`` `progress`
-        is called once per finished fit, with its last generation.
-    one_to_one : bool
-        Score the matches after :func:`~ismb_lab.network.solvers.one_match_per_corner` (the
-        network's figures, not the peers' or the GA's fitness).
-
-    Returns
-    -------
-    ProtocolReport
+    `ga` (overridden by `settings`) and `rng` run the GA, which scores a chromosome with
+    `fit_solver` over `fit_seeds` seeds; `progress(case_name, generation)` follows it (once per
+    fit with ``jobs > 1``).  `solver` solves the tested energies (once if it ignores the seed),
+    `solvers` are others reported beside; `peers` also scores :mod:`ismb_lab.matching.peers`;
+    `one_to_one` scores the network's matches after one match per corner.  The report is the same
+    for every number of worker processes `jobs`.
     """
     own = "protocol"
     if not hasattr(cases, "__len__") or not all(isinstance(c, Case) for c in cases):
@@ -500,24 +408,16 @@ _PR_SET_PDEATHSIG = 1   # from <linux/prctl.h>
 
 
 def _start_worker(parent: int) -> None:
-    """A worker's first step: die with its parent, and leave Ctrl-C to the parent.
-
-    Ctrl-C reaches the whole process group; the parent stops the pool and reports once.
-    SIGINT is ignored last: a worker whose SIGINT is ignored also asked to die with its parent.
-    """
+    """A worker's first step: die with its parent, then leave Ctrl-C to the parent (which stops
+    the pool and reports once)."""
     _die_with_parent(parent)
     signal.signal(signal.SIGINT, signal.SIG_IGN)
 
 
 @contextmanager
 def _starting_workers():
-    """Within: SIGINT blocked in this thread, so that a worker process started here (a
-    pool starts them as tasks are submitted) is born with it blocked, and keeps it so.
-
-    Ctrl-C reaches the whole process group; a worker still importing the package when it
-    comes would print a KeyboardInterrupt traceback before :func:`_start_worker` ignores
-    SIGINT.  A Ctrl-C meanwhile waits for the block's end, then reaches this process.
-    """
+    """Within: SIGINT blocked in this thread, so that a worker started here is born with it
+    blocked (else a Ctrl-C while it imports prints a traceback); a Ctrl-C waits for the end."""
     block = getattr(signal, "pthread_sigmask", None)
     if block is None:   # pragma: no cover - not POSIX
         yield
@@ -530,11 +430,7 @@ def _starting_workers():
 
 
 def _die_with_parent(parent: int) -> None:
-    """On Linux, ask the kernel for SIGKILL when the parent dies, however it dies (SIGKILL too).
-
-    Elsewhere the parent's :class:`_workers` stops the pool when interrupted, and a worker
-    left without a parent ends when it next reads from the pool.
-    """
+    """On Linux, ask the kernel for SIGKILL when the parent dies, however it dies."""
     if not sys.platform.startswith("linux"):
         return
     try:
@@ -558,14 +454,9 @@ def _stop_workers(pool: ProcessPoolExecutor) -> None:
 
 
 class _workers:
-    """A process pool for ``jobs > 1`` (fresh interpreters: no state shared with the caller).
-
-    Its workers die with the process that made them: an exception leaving the ``with``
-    block (Ctrl-C, a signal, an error) terminates them before it goes on, and on Linux
-    the kernel kills them if that process dies (``PR_SET_PDEATHSIG``), even by SIGKILL.
-    The pool is made, and its workers started, by the thread that enters the block; they
-    die if that thread ends, so enter it from a thread that outlives the pool.
-    """
+    """A spawned process pool for ``jobs > 1`` whose workers die with the process that made them:
+    an exception leaving the block terminates them, and on Linux so does that process's death.
+    They die if the thread that enters the block ends: enter it from one that outlives the pool."""
 
     def __init__(self, jobs: int):
         self.jobs, self.pool = jobs, None
@@ -604,11 +495,8 @@ def _over_seeds(scores, what: str) -> list[str]:
 
 
 def format_protocol(report: ProtocolReport) -> str:
-    """The protocol as the thesis prints it: "Testing: 14/2+0/16  Training: 16/0+1/16".
-
-    Each line that shows a count shows that count's own percentages; the mean and
-    range over the update-order seeds come on a line of their own.
-    """
+    """The protocol as the thesis prints it: "Testing: 14/2+0/16  Training: 16/0+1/16", with the
+    mean and range over the update-order seeds on lines of their own."""
     lines = [f"Method-{report.method} ({report.solver}{', one match per corner' if report.one_to_one else ''}), "
              f"parameters fitted on pair {report.train}: {report.params}",
              "Per pair, update-order seed 0 (C/wrong+extra/T):"]

@@ -1,16 +1,8 @@
 """Scoring matches against target pairs: C/E/T as in the thesis' Fig. 5.10.
 
-* **C**: matched pairs identical to a target;
-* **E**: matched pairs that are not targets, split into *wrong partner* (the
-  left feature has a target, but with another right feature) and *extra* (the
-  left feature has no target at all);
-* **T**: the number of targets.
-
-The thesis prints ``C/E/T``; with E split it reads ``14/2+0/16`` (C / wrong +
-extra / T).  Matches of left features whose truth is unknown (no ground truth
-there) are not counted either way.
-
-The train/test protocol that uses these scores is in :mod:`ismb_lab.tuning.cases`.
+C: matches that are targets; E: the others, split into *wrong partner* (the left feature has
+another target) and *extra* (it has none), printed ``14/2+0/16``; T: the targets.  Matches of
+left features whose truth is unknown are not counted.
 """
 
 from __future__ import annotations
@@ -29,8 +21,6 @@ __all__ = ["Score", "Scorer", "score", "unlabelled"]
 class Score:
     """C/E/T counts of one or more pairs (scores add with ``+``).
 
-    Examples
-    --------
     >>> s = Score(correct=14, wrong_partner=2, extra=0, targets=16)
     >>> str(s), round(s.precision, 3), s.recall
     ('14/2+0/16', 0.875, 0.875)
@@ -72,20 +62,8 @@ class Score:
 
 
 class Scorer:
-    """:func:`score` against fixed targets, their look-ups built once.
+    """:func:`score` against fixed targets, their look-ups built once (for a GA).
 
-    A GA scores every chromosome's matches against the same targets; this keeps
-    the sets that :func:`score` would build on each call.
-
-    Parameters
-    ----------
-    targets : (t, 2) int array_like
-        Target ``(i, k)`` feature indices.
-    unknown : int array_like
-        Left features whose truth is unknown.
-
-    Examples
-    --------
     >>> scorer = Scorer([[0, 0], [1, 1], [2, 2]], unknown=[4])
     >>> str(scorer([[0, 0], [1, 2], [3, 3], [4, 4]])), str(scorer([[2, 2]]))
     ('1/1+1/3', '1/0+0/3')
@@ -99,16 +77,9 @@ class Scorer:
 
     def __call__(self, pairs) -> Score:
         """The :class:`Score` of matched ``(i, k)`` pairs, an ``(m, 2)`` int array_like."""
-        wanted, has_target, skip = self._wanted, self._has_target, self._skip
-        correct = wrong = extra = 0
-        for i, k in np.asarray(pairs, dtype=np.int64).reshape(-1, 2).tolist():
-            if (i, k) in wanted:
-                correct += 1
-            elif i in has_target:
-                wrong += 1
-            elif i not in skip:
-                extra += 1
-        return Score(correct, wrong, extra, len(wanted))
+        pairs = np.asarray(pairs, dtype=np.int64).reshape(-1, 2)
+        codes = self.neuron_codes(pairs[:, 0], pairs[:, 1])
+        return Score(*(int(np.sum(codes == code)) for code in (1, 2, 3)), len(self._wanted))
 
     @property
     def targets(self) -> int:
@@ -116,18 +87,9 @@ class Scorer:
         return len(self._wanted)
 
     def neuron_codes(self, rows, cols) -> np.ndarray:
-        """What a match of each candidate neuron ``(rows[a], cols[a])`` would count as.
+        """What a match of each candidate neuron ``(rows[a], cols[a])`` would count as: 1 correct,
+        2 wrong partner, 3 extra, 0 not counted; :meth:`count` then scores matched neurons.
 
-        For a GA that scores thousands of states of the same neurons: code the
-        neurons once, then :meth:`count` the matched ones.
-
-        Returns
-        -------
-        codes : (n,) uint8 ndarray
-            1 correct, 2 wrong partner, 3 extra, 0 not counted (unknown truth).
-
-        Examples
-        --------
         >>> scorer = Scorer([[0, 0], [1, 1], [2, 2]], unknown=[4])
         >>> codes = scorer.neuron_codes(rows=[0, 1, 3, 4], cols=[0, 2, 3, 4])
         >>> codes.tolist(), str(scorer.count(codes, [0, 1, 2, 3]))
@@ -140,8 +102,7 @@ class Scorer:
                          for i, k in zip(rows, cols)], dtype=np.uint8)
 
     def count(self, codes: np.ndarray, matched) -> Score:
-        """The :class:`Score` of the matched neurons (indices into `codes`, each at most once),
-        the same as calling the scorer on their ``(i, k)`` pairs."""
+        """The :class:`Score` of the matched neurons (indices into `codes`, each at most once)."""
         codes, matched = np.asarray(codes, dtype=np.uint8), np.asarray(matched, dtype=np.int64).ravel()
         correct, wrong, extra = _tally(codes, matched)
         if correct < 0:
@@ -167,14 +128,9 @@ def _tally(codes, matched):
 
 
 def unlabelled(targets, n_left: int) -> np.ndarray:
-    """The left features ``0 .. n_left - 1`` that no target starts from.
+    """The left features ``0 .. n_left - 1`` that no target starts from: a person who labels some
+    corners says nothing of the others (the thesis' targets are all the true pairs).
 
-    A person who labels some corners says nothing about the others: passed to :func:`score`
-    as `unknown`, their matches are not counted.  The thesis' fitness (4-1) counts every
-    match that is not a target as an error, because its targets are all the true pairs.
-
-    Examples
-    --------
     >>> unlabelled([[0, 3], [2, 1]], 4).tolist()
     [1, 3]
     """
@@ -183,23 +139,9 @@ def unlabelled(targets, n_left: int) -> np.ndarray:
 
 
 def score(pairs, targets, unknown=()) -> Score:
-    """Compare matched feature pairs with target feature pairs.
+    """Compare matched ``(i, k)`` feature pairs with target pairs; matches of the left features
+    in `unknown` are not counted.
 
-    Parameters
-    ----------
-    pairs : (m, 2) int array_like
-        Matched ``(i, k)`` feature indices.
-    targets : (t, 2) int array_like
-        Target ``(i, k)`` feature indices (snapped from coordinates).
-    unknown : int array_like
-        Left features whose truth is unknown; their matches are not counted.
-
-    Returns
-    -------
-    score : Score
-
-    Examples
-    --------
     >>> str(score([[0, 0], [1, 2], [3, 3], [4, 4]], [[0, 0], [1, 1], [2, 2]], unknown=[4]))
     '1/1+1/3'
     """

@@ -1,14 +1,8 @@
-"""Tuning the energy parameters with the GA: chromosome <-> Params, fitness n_c - n_e (ch. 4).
+"""Tuning the energy parameters with the GA: chromosome <-> Params, fitness n_c - n_e (4-1).
 
-The GA in :mod:`ismb_lab.tuning.genetic` knows nothing of stereo; this module gives it a
-fitness.  A chromosome holds a method's genes in its own order
-(:attr:`ismb_lab.network.methods.Method.genes`: ``[theta_c, lambda_c]`` for Method-I,
-``[theta_c, theta_s, lambda_c, lambda_s]`` for Methods II and III, the thesis'
-order), within the genes' bounds.  Its fitness (4-1) is ``n_c - n_e`` summed over
-every training pair.
-
-A training pair is a :class:`ismb_lab.tuning.cases.Case`, or anything else with a
-``prepared`` pair (:func:`ismb_lab.matching.pipeline.prepare`), ``targets`` and ``unknown``.
+A chromosome holds a method's genes in :attr:`~ismb_lab.network.methods.Method.genes` order;
+its fitness is summed over the training cases (anything with ``prepared``, ``targets`` and
+``unknown``, such as :class:`ismb_lab.tuning.cases.Case`).
 """
 
 from __future__ import annotations
@@ -37,8 +31,6 @@ _FIELDS = tuple(f.name for f in fields(Params))
 def gene_bounds(method) -> Bounds:
     """The GA's search box for a method's genes.
 
-    Examples
-    --------
     >>> gene_bounds("I").names
     ('theta_c', 'lambda_c')
     """
@@ -48,10 +40,8 @@ def gene_bounds(method) -> Bounds:
 
 def to_params(method, chromosome, base: Params | None = None) -> Params:
     """Chromosome to parameters; the genes a method does not use keep `base`'s values
-    (by default the method's own defaults).
+    (default: the method's).
 
-    Examples
-    --------
     >>> to_params("I", [41.57, 4.40])
     Params(theta_c=41.57, theta_s=24.02, lambda_c=4.4, lambda_s=2.2)
     """
@@ -69,8 +59,6 @@ def to_params(method, chromosome, base: Params | None = None) -> Params:
 def to_chromosome(method, params: Params) -> np.ndarray:
     """Parameters to the method's chromosome.
 
-    Examples
-    --------
     >>> to_chromosome("III", Params()).tolist()
     [17.97, 24.02, 6.37, 2.2]
     """
@@ -79,10 +67,9 @@ def to_chromosome(method, params: Params) -> np.ndarray:
 
 def evaluate(cases: Sequence, method, params: Params, seed: int = 0,
              solver=DEFAULT_SOLVER, one_to_one: bool = False) -> Score:
-    """The summed C/E/T of `params` over `cases`, each solved by `solver` (a name or a
-    :class:`~ismb_lab.network.solvers.Solver`) with `seed`; with `one_to_one`, the matches pass
-    :func:`~ismb_lab.network.solvers.one_match_per_corner` first.  `method` is a name or a
-    :class:`~ismb_lab.network.methods.Method`: pass the object to resolve it once for many calls."""
+    """The summed C/E/T of `params` over `cases`, each solved by `solver` with `seed`; with
+    `one_to_one`, after :func:`~ismb_lab.network.solvers.one_match_per_corner`.  Pass `method`
+    as a Method to resolve it once for many calls."""
     m = get_method(method)
     solver = get_solver(solver, "evaluate")
     check_number(seed, "seed", "evaluate", low=0, integer=True)
@@ -97,10 +84,8 @@ def evaluate(cases: Sequence, method, params: Params, seed: int = 0,
 
 
 def _counts(case, m, params: Params, seed: int, solver, one_to_one: bool = False, net=None) -> tuple[int, int, int]:
-    """C, wrong partner and extra of one case: the score of
-    :func:`~ismb_lab.network.solvers.to_matches`' pairs, counted over neurons coded once per case
-    (:meth:`~ismb_lab.tuning.evaluation.Scorer.neuron_codes`).  `net`, if given, is
-    ``m.network(problem, params)`` built already."""
+    """C, wrong partner and extra of one case, counted over its coded neurons; `net` is
+    ``m.network(problem, params)`` if built already."""
     problem = case.prepared.problem
     state = solve(m.network(problem, params) if net is None else net, solver, seed=seed, owner="evaluate").state
     codes = getattr(case, "neuron_codes", None)
@@ -117,13 +102,9 @@ def _counts(case, m, params: Params, seed: int, solver, one_to_one: bool = False
 
 
 class Fitness:
-    """The batch fitness the GA calls: (4-1) summed over the training cases.
-
-    Every chromosome is scored with the same update-order seed(s), so a chromosome's
-    fitness is a deterministic function of its genes.  With ``seeds > 1`` the
-    fitness is the mean over seeds ``seed, seed + 1, ...``: parameters that only
-    work for one visiting order score lower.
-    """
+    """The batch fitness the GA calls: (4-1) summed over the training cases, each chromosome
+    scored with the same update-order seeds (the mean over ``seed, seed + 1, ...`` when
+    ``seeds > 1``), so that a chromosome's fitness depends on its genes only."""
 
     def __init__(self, cases: Sequence, method, *, seed: int = 0, base: Params | None = None,
                  solver=DEFAULT_SOLVER, seeds: int = 1):
@@ -154,12 +135,10 @@ class Fitness:
         return np.array([self._fitness(self.params(c)) / self.seeds for c in population], dtype=float)
 
     def _batch(self, population: np.ndarray) -> np.ndarray | None:
-        """The summed fitness of every chromosome, in one compiled call per case
-        (:func:`ismb_lab.network.kernel.fitness_runs`): the same networks, runs and tallies as
-        :meth:`_fitness`, without a Python object per chromosome.  None where that path does
-        not apply (another solver, kernel or method class, parameters that :class:`Params`
-        or the network would refuse): then each chromosome goes the general way, which
-        raises the error."""
+        """The summed fitness of every chromosome in one compiled call per case
+        (:func:`ismb_lab.network.kernel.fitness_runs`), as :meth:`_fitness` computes it; None where
+        that path does not apply (another solver, kernel or method class, or values that Params or
+        the network would refuse): the general way then raises the error."""
         solver, method = self.solver, self.method
         if not (type(solver) is NetworkSolver and solver.kernel == KERNELS[0] and type(method) in BATCHED):
             return None
@@ -191,8 +170,7 @@ class Fitness:
         return totals
 
     def _fitness(self, params: Params) -> int:
-        """``evaluate(...).fitness`` summed over the seeds, without building the Score; each
-        case's network is built once for all the seeds."""
+        """``evaluate(...).fitness`` summed over the seeds, each case's network built once."""
         total = 0
         for case in self.cases:
             net = self.method.network(case.prepared.problem, params)
@@ -203,8 +181,8 @@ class Fitness:
 
 
 def _table(method, population: np.ndarray, base: Params | None) -> dict | None:
-    """Each :class:`Params` field as an ``(m,)`` float array over the chromosomes, as
-    :func:`to_params` fills it; None unless every value passes :class:`Params`' check."""
+    """Each Params field as an ``(m,)`` array over the chromosomes, as :func:`to_params` fills
+    it; None unless every value passes Params' check."""
     genes = method.gene_names
     if population.ndim != 2 or population.shape[1] != len(genes) or len(population) == 0:
         return None
@@ -234,31 +212,11 @@ def tune(cases: Sequence, method=DEFAULT_METHOD, *, rng=0, ga: GAConfig | None =
          **settings) -> Iterator[Generation]:
     """Run the GA on `cases`, yielding one :class:`~ismb_lab.tuning.genetic.Generation` per generation.
 
-    It stops when the mean fitness reaches the number of targets (every
-    chromosome reproduces the targets exactly), as in the thesis, or after
-    ``ga.generations`` generations.  Convert the best chromosome with :func:`to_params`.
-
-    Parameters
-    ----------
-    cases : sequence of Case
-        Training pairs; their fitness is summed.
-    method : str
-        Energy recipe, a name in :func:`ismb_lab.network.methods.method_names`.
-    rng : int or numpy.random.Generator
-        Seed of the GA.
-    ga : GAConfig, optional
-        Population, generations and rates (default: the thesis', 30 and 500).
-    seed : int
-        Update-order seed of every network run.
-    base : Params, optional
-        Values of the genes the method does not use (default: the method's defaults).
-    solver : str or Solver
-        How each network is solved, a name in :data:`ismb_lab.network.solvers.SOLVERS` or a
-        configured :class:`~ismb_lab.network.solvers.Solver`.
-    seeds : int
-        Update-order seeds each chromosome is scored over (mean fitness).
-    **settings
-        :class:`~ismb_lab.tuning.genetic.GAConfig` fields that override `ga`, e.g. ``generations=60``.
+    It stops when the mean fitness reaches the number of targets, as in the thesis, or after
+    ``ga.generations`` (default: the thesis' 30 chromosomes, 500 generations; `settings` override
+    its fields); :func:`to_params` converts the best chromosome.  `rng` seeds the GA; each
+    chromosome's fitness is the mean over `seeds` update-order seeds from `seed`, solved by
+    `solver`; `base` holds the genes the method does not use.
     """
     fitness = Fitness(cases, method, seed=seed, base=base, solver=solver, seeds=seeds)
     if ga is not None and not isinstance(ga, GAConfig):

@@ -1,33 +1,15 @@
-"""A real-coded genetic algorithm (thesis chapter 4) maximising any fitness.
+"""A real-coded genetic algorithm (thesis chapter 4) maximising a batch fitness within :class:`Bounds`.
 
-The GA knows nothing about stereo: it maximises a user-given ``fitness`` over
-real vectors ("chromosomes") within :class:`Bounds`.  One generation (§4.2):
+The fitness maps ``(m, n_genes)`` chromosomes to ``(m,)`` (:func:`batch` wraps a per-chromosome
+score).  One generation (§4.2): evaluate the changed chromosomes; keep the ``n_elite`` best,
+then binary-tournament winners; draw one λ ~ U[0, 1) and cross the winners in order, pair by
+pair, with probability p_c; each child mutates one gene with probability p_m.
 
-1. Evaluate the chromosomes that changed (unchanged ones keep their fitness).
-2. Intermediate population P': the ``n_elite`` (2) best first, then
-   binary-tournament winners until P' has the population size.
-3. Draw ONE λ ~ U[0, 1) for the generation.  Pair the winners in order,
-   (P'[e], P'[e+1]), (P'[e+2], P'[e+3]), ...; with probability p_c a pair is replaced
-   by its two arithmetic-crossover children, each of which then undergoes random
-   mutation with probability p_m.  The elite pass unchanged.
-
-How the thesis is read where it is ambiguous
---------------------------------------------
-* "Two chromosomes are randomly selected from P'": the winners are independent
-  draws, so pairing them in order is a random pairing; an odd one out is copied.
-* "If the two is crossed over, the offspring chromosome may mutate": only
-  crossover children mutate (p_m per chromosome, one gene); uncrossed pairs are copied.
-* "P' and those offspring ... combined to generate the new intermediate
-  population": children replace their parents, so the size stays constant (not a
-  (mu + lambda) pool of P' plus children).
-* "randomly choose two chromosomes": two *distinct* indices; a tie keeps the first.
-* Mutation draws "in [min(g_i), max(g_i)]": the gene's :class:`Bounds`.
-* "The average fitness ... equal to the maximum": ``mean >= target``, tested on
-  each evaluated population (generation 0 included) rather than on P'.
-
-The fitness is a *batch* callable, ``fitness(chromosomes) -> (m,)`` for an
-``(m, n_genes)`` array (wrap a per-chromosome score with :func:`batch`).  It must be
-deterministic: unchanged chromosomes (elite, uncrossed copies) keep their fitness.
+Where the thesis is ambiguous: winners are independent draws, so pairing them in order is a
+random pairing (an odd one is copied); only crossover children mutate; children replace their
+parents (the size stays constant); a tournament draws two distinct indices, a tie keeps the
+first; a mutated gene is drawn within its bounds; the GA stops when ``mean >= target`` on an
+evaluated population.  The fitness must be deterministic: unchanged chromosomes keep theirs.
 """
 
 from __future__ import annotations
@@ -47,19 +29,9 @@ __all__ = ["Bounds", "GAConfig", "Generation", "arithmetic_crossover", "batch", 
 class GAConfig:
     """The GA's settings; the defaults are the thesis' (§4.2, §5.2.1).
 
-    Attributes
-    ----------
-    population : int
-        Chromosomes per generation (>= 2).
-    generations : int
-        The last generation index (>= 1): the GA stops there at the latest.
-    p_crossover, p_mutation : float
-        Probability that a pair of winners is crossed, and that a child mutates.
-    n_elite : int
-        Best chromosomes copied unchanged into the next generation.
+    `generations` is the last generation's index; `p_crossover` the probability that a pair of
+    winners is crossed, `p_mutation` that a child mutates; `n_elite` best are copied unchanged.
 
-    Examples
-    --------
     >>> GAConfig()
     GAConfig(population=30, generations=500, p_crossover=0.8, p_mutation=0.05, n_elite=2)
     >>> GAConfig().updated("tune", generations=60, population=None).generations
@@ -108,8 +80,6 @@ def _check_settings(values: dict, owner: str) -> dict:
 class Bounds:
     """Per-gene search interval ``low[i] <= gene i <= high[i]`` (read-only arrays).
 
-    Examples
-    --------
     >>> Bounds([0, 0], [50, 10], names=("theta_c", "lambda_c")).n_genes
     2
     >>> Bounds([0, 2], [1, 1])
@@ -154,12 +124,9 @@ class Bounds:
 class Generation:
     """The record of one evaluated generation (index 0 is the initial population).
 
-    ``evaluations`` counts the chromosomes evaluated so far (a batch call on m
-    chromosomes counts m).  ``population`` and ``fitness`` are ``None`` unless
-    ``keep_population=True``.  Arrays are read-only copies.
+    ``evaluations`` counts the chromosomes evaluated so far; ``population`` and ``fitness`` are
+    None unless ``keep_population=True``.  Arrays are read-only copies.
 
-    Examples
-    --------
     >>> Generation(0, 1.0, 0.5, 0.0, [0.2, 0.3], None, None, 30).best_chromosome
     array([0.2, 0.3])
     """
@@ -213,8 +180,6 @@ def _scores(values, owner: str, rule: str, ok=lambda n: n > 0) -> np.ndarray:
 def batch(score: Callable) -> Callable:
     """Turn a per-chromosome ``score(chromosome) -> float`` into a batch fitness.
 
-    Examples
-    --------
     >>> batch(lambda c: float(c.sum()))(np.array([[1.0, 2.0], [0.0, 0.5]]))
     array([3. , 0.5])
     """
@@ -226,8 +191,6 @@ def batch(score: Callable) -> Callable:
 def initial_population(rng, bounds: Bounds, size: int) -> np.ndarray:
     """Draw ``size`` chromosomes uniformly within `bounds`: a ``(size, n_genes)`` array.
 
-    Examples
-    --------
     >>> initial_population(0, Bounds([0, 10], [1, 20]), 3).shape
     (3, 2)
     """
@@ -240,8 +203,6 @@ def initial_population(rng, bounds: Bounds, size: int) -> np.ndarray:
 def arithmetic_crossover(a, b, lam: float):
     """Children ``lam*a + (1-lam)*b`` and ``lam*b + (1-lam)*a`` (thesis §4.1).
 
-    Examples
-    --------
     >>> arithmetic_crossover([0.0, 4.0], [2.0, 0.0], 0.25)
     (array([1.5, 1. ]), array([0.5, 3. ]))
     """
@@ -256,8 +217,6 @@ def arithmetic_crossover(a, b, lam: float):
 def random_mutation(rng, chromosome, bounds: Bounds) -> np.ndarray:
     """Return a copy with one uniformly chosen gene redrawn uniformly within its bounds.
 
-    Examples
-    --------
     >>> child = random_mutation(0, [0.5, 0.5, 0.5], Bounds([0, 0, 0], [1, 1, 1]))
     >>> int(np.sum(child != 0.5))
     1
@@ -274,13 +233,9 @@ def random_mutation(rng, chromosome, bounds: Bounds) -> np.ndarray:
 
 
 def tournament(rng, fitness, k: int) -> np.ndarray:
-    """Indices of `k` binary-tournament winners.
+    """Indices of `k` binary-tournament winners: two distinct indices each (the first drawn
+    from all, the second from the others), the fitter kept, the first on a tie.
 
-    Each tournament draws two distinct indices, ``first = rng.integers(n)`` then
-    the second uniformly among the others, and keeps the fitter (the first on a tie).
-
-    Examples
-    --------
     >>> bool(np.all(tournament(0, [0.0, 1.0, 2.0], 100) > 0))
     True
     """
@@ -296,8 +251,6 @@ def tournament(rng, fitness, k: int) -> np.ndarray:
 def elite(fitness, n: int = 2) -> np.ndarray:
     """Indices of the `n` fittest chromosomes, best first; ties go to the lower index.
 
-    Examples
-    --------
     >>> elite([1.0, 3.0, 3.0, 0.0], 3)
     array([1, 2, 0])
     """
@@ -307,12 +260,9 @@ def elite(fitness, n: int = 2) -> np.ndarray:
 
 
 def _breed(rng, population, fitness, bounds, p_c, p_m, n_elite):
-    """The next population and, per row, its unchanged source row (-1 if new).
-
-    The steps of :func:`elite`, :func:`tournament`, :func:`arithmetic_crossover` and
-    :func:`random_mutation` on arguments already checked: the same draws from `rng` in the
-    same order, and the same arithmetic (tested against them), without their checks, which
-    had cost more than a generation's selection itself."""
+    """The next population and, per row, its unchanged source row (-1 if new): the steps of
+    :func:`elite`, :func:`tournament`, :func:`arithmetic_crossover` and :func:`random_mutation`
+    with the same draws and arithmetic, without their checks (they cost more than the selection)."""
     size = len(population)
     k = size - n_elite
     first = rng.integers(size, size=k)
@@ -336,12 +286,9 @@ def _breed(rng, population, fitness, bounds, p_c, p_m, n_elite):
 
 def next_generation(rng, population, fitness, bounds: Bounds, *, p_crossover: float | None = None,
                     p_mutation: float | None = None, n_elite: int | None = None) -> np.ndarray:
-    """Selection, crossover and mutation of one generation (thesis §4.2; see the module notes).
+    """Selection, crossover and mutation of one generation (§4.2); rates left at None take
+    :class:`GAConfig`'s defaults.
 
-    Rates left at None take :class:`GAConfig`'s defaults.
-
-    Examples
-    --------
     >>> pop = np.array([[0.1], [0.9], [0.5], [0.3]])
     >>> new = next_generation(0, pop, [1.0, 4.0, 3.0, 2.0], Bounds([0], [1]))
     >>> new.shape, new[:2].ravel().tolist()
@@ -364,35 +311,14 @@ def next_generation(rng, population, fitness, bounds: Bounds, *, p_crossover: fl
 def evolve(fitness: Callable, bounds: Bounds, *, rng, config: GAConfig | None = None,
            target: float | None = None, keep_population: bool = False,
            **settings) -> Iterator[Generation]:
-    """Maximise `fitness` within `bounds`, yielding one :class:`Generation` per generation.
+    """Maximise `fitness` (an ``(m, n_genes)`` array -> ``m`` finite numbers) within `bounds`,
+    yielding one :class:`Generation` per generation.
 
-    Arguments are checked at once, but the work is lazy: a generation is bred and
-    evaluated only when its record is requested, so a consumer stops the GA simply
-    by not iterating further.  Defaults are the thesis' settings (:class:`GAConfig`).
+    The arguments are checked at once; a generation is bred only when its record is asked for,
+    so a consumer stops the GA by not iterating further.  `rng` is the only source of randomness;
+    `target` stops after the first generation whose mean fitness reaches it; `settings` are
+    GAConfig fields that override `config` (None keeps its value).
 
-    Parameters
-    ----------
-    fitness : callable
-        Batch fitness to maximise: an ``(m, n_genes)`` array -> ``m`` finite numbers.
-    bounds : Bounds
-        The search box.  `rng` (Generator or seed) is the only source of randomness.
-    config : GAConfig, optional
-        Population, generations, rates and elite size.
-    target : float, optional
-        Stop after the first generation whose mean fitness is ``>= target``.
-    keep_population : bool
-        Whether records keep the population and fitness arrays.
-    **settings
-        :class:`GAConfig` fields that override `config` (None keeps its value),
-        e.g. ``generations=60``.
-
-    Returns
-    -------
-    records : iterator of Generation
-        Generations 0 (the initial population), 1, ..., up to index `generations`.
-
-    Examples
-    --------
     >>> sphere = lambda pop: -np.sum((pop - 0.3) ** 2, axis=1)
     >>> runs = list(evolve(sphere, Bounds([-1, -1], [1, 1]), rng=0, generations=40))
     >>> runs[-1].index, runs[-1].best > -1e-3, runs[-1].best >= runs[0].best
