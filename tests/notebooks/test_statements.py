@@ -322,7 +322,7 @@ def _library_scope() -> dict:
     from ismb_lab.depth import objects as depth, pipeline as depth_demo, outlines as silhouettes
     from ismb_lab.network import exact, methods
     from ismb_lab.scenes import gallery
-    from ismb_lab.tuning import genetic, protocol
+    from ismb_lab.tuning import cases as protocol, genetic
     from ismb_lab.matching import pipeline as matching, peers
     return {"math": math, "camera": camera, "datasets": datasets, "depth": depth, "depth_demo": depth_demo,
             "exact": exact, "features": features, "gallery": gallery, "genetic": genetic,
