@@ -9,36 +9,12 @@ rendered (:class:`Primitive`); shading is Lambertian, identical in both views.  
 """
 
 from .design import Look, Placement
-from .layouts import (
-                       FAMILIES,
-                       LAYOUT_ROI,
-                       MIN_GAP_PX,
-                       UNSEEN,
-                       Family,
-                       Layout,
-                       ObjectTruth,
-                       border_scene,
-                       camera_scene,
-                       contrast_scene,
-                       families,
-                       get_family,
-                       object_ids,
-                       object_layout,
-                       register_family,
-                       repetitive_scene,
-                       unregister_family,
-)
 from .geometry import ROI
-from .library import (
-                      CAR_DEPTH,
-                      REALISTIC_COUNT,
-                      lab_scene,
-                      realistic_scene,
-                      synthetic_scene,
-                      toy_car,
-                      toy_car_layout,
-                      toy_car_scene,
-)
+from .layouts import (FAMILIES, LAYOUT_ROI, MIN_GAP_PX, UNSEEN, Family, Layout, ObjectTruth, border_scene,
+                      camera_scene, contrast_scene, families, get_family, object_ids, object_layout,
+                      register_family, repetitive_scene, unregister_family)
+from .library import (CAR_DEPTH, REALISTIC_COUNT, lab_scene, realistic_scene, synthetic_scene, toy_car,
+                      toy_car_layout, toy_car_scene)
 from .primitives import Box, Cylinder, Group, Plane, Primitive, cast
 from .render import Scene, render, true_matches
 from .textures import Texture, random_texture

@@ -281,25 +281,9 @@ def _family_scene(family: str, owner: str, seed, n_objects, empty, supersample) 
 
 _DOC = """{what}
 
-    Parameters
-    ----------
-    seed : int or numpy.random.Generator
-        Draws the layout, the textures and then the cameras' noise.
-    n_objects : {{2, 3}}
-    empty : bool
-        Render the background instead: the same wall and cameras without the
-        objects, with fresh noise (a second photograph).
-    supersample : int
-        Rays per pixel side (see :func:`~ismb_lab.scenes.render`).
+    With `empty`, the background: the same wall and cameras without the objects, fresh noise.
+    ``primitives`` are the wall, then the objects left to right; :func:`object_layout` has the truth.
 
-    Returns
-    -------
-    Scene
-        ``primitives`` are the wall and then the objects, left to right; use
-        :func:`object_layout` for the truth.
-
-    Examples
-    --------
     >>> scene = {name}(0)
     >>> [getattr(p, "name", "wall") for p in scene.primitives]
     ['wall', 'object 1', 'object 2']

@@ -126,12 +126,9 @@ def synthetic_scene(seed=0, *, vertical_offset_px: float = 0.0, roll_deg: float 
     """
     own = "synthetic_scene"
     rng = check_rng(seed, "seed", own)
-    vertical_offset_px = check_number(vertical_offset_px, "vertical_offset_px", own)
-    roll_deg = check_number(roll_deg, "roll_deg", own, low=-180, high=180)
+    rig = _demo_rig(own, vertical_offset_px, roll_deg)
     noise_std = check_number(noise_std, "noise_std", own, low=0)
-    rig = StereoCamera.pinhole(vertical_offset_px=vertical_offset_px, roll_deg=roll_deg)
-    prims = _scene_primitives(rng, rig)
-    return render(prims, rig, seed=rng, noise_std=noise_std, gain=0.9, offset=8.0)
+    return render(_scene_primitives(rng, rig), rig, seed=rng, noise_std=noise_std, gain=0.9, offset=8.0)
 
 
 CAR_DEPTH = 0.06

@@ -176,12 +176,7 @@ class Box:
     def albedo(self, info) -> np.ndarray:
         """Each face's texture at its ``(u, v)``."""
         info = np.asarray(info, dtype=float)
-        face = info[:, 2].astype(int)
-        out = np.zeros(len(info))
-        for f in np.unique(face):
-            sel = face == f
-            out[sel] = self.textures[f](info[sel, :2])
-        return out
+        return _piecewise(info[:, 2].astype(int), info[:, :2], self.textures)
 
 
 @dataclass(frozen=True, eq=False)
@@ -363,11 +358,16 @@ class Group:
     def albedo(self, info) -> np.ndarray:
         """Each part's texture at its ``(u, v)``."""
         part, local = self._split(info)
-        out = np.zeros(len(local))
-        for n in np.unique(part):
-            sel = part == n
-            out[sel] = self.parts[n].albedo(local[sel])
-        return out
+        return _piecewise(part, local, [p.albedo for p in self.parts])
+
+
+def _piecewise(index, info, functions) -> np.ndarray:
+    """``functions[k](info)`` on the rows where `index` is ``k``."""
+    out = np.zeros(len(info))
+    for k in np.unique(index):
+        sel = index == k
+        out[sel] = functions[k](info[sel])
+    return out
 
 
 def _misses(origins, dirs, lo, hi, owner: str):
