@@ -32,20 +32,17 @@ class DepthConfig:
     position_tol_px, disparity_tol_px : float
         A scene match within these of a background match (left image; disparity) is background.
     link_px, link_disparity_px : float
-        Features this near, with matches whose disparities differ by at most
-        `link_disparity_px`, are linked into one group.
+        Features this near, with matches this close in disparity, are linked.
     consensus_px : float
         Half width of the disparity band around an object's consensus disparity.
     min_features : int
         Fewest consensus features an object needs.
     merge_px, merge_disparity_px : float
-        Objects whose features come within `merge_px` and whose median disparities differ by at
-        most `merge_disparity_px` are one.
+        Objects whose features come this near, with medians this close, are one.
     local_px : float
         Radius of the local background around a scene match.
     grouping : {"silhouettes", "features"}
-        Objects by the blobs of change (:class:`~ismb_lab.depth.outlines.Silhouettes`) or by
-        the features alone, as the thesis does.
+        Objects by the blobs of change or by the features alone, as the thesis does.
     silhouette_tol_px : float
         A match counts for its blob when its disparity lies from the blob's shift to this above it.
     silhouette_score : float
@@ -53,14 +50,12 @@ class DepthConfig:
     silhouette_grow_px : int
         A feature within this many pixels of a blob lies on it.
     band_features, band_step_px : int, float
-        Two bands of a blob's features, each of `band_features` or more, `band_step_px` or more
-        apart, may cut it in two.
+        Two bands of this many features or more, this far apart or more, may cut a blob in two.
     band_one_piece : float
         Least Dice of the two bands' shifts to cut a blob of one piece.
     firm_outline : float
         A blob that fits with this Dice or more stands in front whatever the background says.
     outline : OutlineConfig
-        How the blobs of change are found.
     focal_px, baseline_m : float
         Focal length (px) and baseline (m), > 0.
     quantisation_px : float
@@ -162,21 +157,15 @@ class DepthObject:
     ----------
     rank : int
         1 = nearest.
-    centroid_xy : (float, float)
-        Mean left-image position of its features.
     mean_disparity, disparity_std : float
-        Mean and standard deviation of its consensus matches' disparities, pixels.
-    depth : Depth
+        Of its consensus matches, pixels.
     features : (n, 2) ndarray
         Left-image positions of its consensus features (read-only).
-    n_matches : int
-        Consensus matches (a feature may have several).
-    outliers : int
-        Its matches off the consensus.
-    median_disparity : float
-        Median of its features' disparities (default `mean_disparity`).
-    disparity_spread : float
-        Median absolute deviation of its features' disparities from `median_disparity`.
+    n_matches, outliers : int
+        Its matches in the consensus (a feature may have several) and off it.
+    median_disparity, disparity_spread : float
+        Median of its features' disparities (default `mean_disparity`), and their median
+        absolute deviation from it.
     silhouette_disparity, silhouette_score : float or None
         The shift and Dice of its blob of change, None when found by its features alone;
         with no features (``n_features == 0``) the shift is its disparity.
@@ -231,18 +220,13 @@ class DepthResult:
     ----------
     objects, background_objects : tuple of DepthObject
         The scene's new objects and the background pair's own, nearest first.
-    background_removed : int
-        Scene features removed as background.
-    behind_background : int
-        Scene matches dropped as not in front of the local background.
-    dropped : int
-        Scene features in no object.
+    background_removed, behind_background, dropped : int
+        Scene features removed as background, matches not in front of the local background,
+        features in no object.
     kept_xy, kept_disparity : ndarray
         Scene matches left after the background removal.
     removed_xy : ndarray
         Left positions of the features removed as background.
-    background, scene : MatchResult
-    config : DepthConfig
     message : str
         Empty, or why there are no objects.
     scene_roi : (x, y, w, h) or None

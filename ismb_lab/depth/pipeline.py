@@ -310,12 +310,8 @@ def relative_depth(background, scene, *, method=DEFAULT_METHOD, params=None, mat
     ----------
     background, scene
         Two pairs of the same view, of one size, as :func:`load_stereo` takes them.
-    method : str
-        Energy recipe (:mod:`ismb_lab.network.methods`).
     params : Params, optional
         Default :data:`DEPTH_PARAMS` for Method-III, the method's own for the others.
-    match_config : MatchConfig, optional
-        Default :data:`DEPTH_MATCH_CONFIG`.
     seed : int
         Update-order seed of both runs.
     solver : str or Solver
@@ -372,8 +368,6 @@ def pair_silhouettes(prepared, config: DepthConfig | None = None) -> Silhouettes
     """:func:`~ismb_lab.depth.outlines.silhouettes` of :func:`depth_pairs`, in the background's ROI
     at the whole-pixel shifts of the scene's candidate window.
 
-    Examples
-    --------
     >>> from ismb_lab.scenes import lab_scene, toy_car_scene
     >>> blobs = pair_silhouettes(depth_pairs(lab_scene(0), toy_car_scene(0)))
     >>> blobs.disparity.tolist()        # the two cars, near one first (left to right)

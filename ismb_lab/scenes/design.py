@@ -39,18 +39,10 @@ HIGH, LOW = (0.28, 0.4), (0.07, 0.13)
 class ObjectTruth:
     """What was put into the scene, for scoring a ranking.
 
-    Attributes
-    ----------
-    name : str
-        The primitive's name (``"object 1"`` is the leftmost); `index` its index in ``Scene.primitives``.
-    rank : int
-        1 = nearest.
-    disparity, depth_m : float
-        Designed disparity (px) and depth (m) of the face, or cylinder line, nearest the cameras.
-    box_xy : (x0, y0, x1, y1)
-        The object's extent in the left image (may reach past the image).
-    centre_xy : (float, float)
-        A left-image point on that face, inside the image.
+    ``name`` and ``index`` are the primitive's in ``Scene.primitives`` (``"object 1"`` is the
+    leftmost), ``rank`` 1 the nearest; ``disparity`` (px) and ``depth_m`` are of the face (or
+    cylinder line) nearest the cameras; ``box_xy`` is the left-image extent ``(x0, y0, x1, y1)``
+    and ``centre_xy`` a point of that face inside the image.
     """
 
     name: str
@@ -132,25 +124,13 @@ def quiet_cameras(rng) -> dict:
 class Look:
     """What a family changes in :func:`draw_objects`: hooks that may draw from the layout's Generator.
 
-    Attributes
-    ----------
-    wall : callable ``(rng, mode) -> (kind, contrast)``
-        The wall's texture (``"posters"``, ``"stripes"``, ``"tiles"``) and contrast (:data:`HIGH`,
-        :data:`LOW`); `mode` is ``"low-on-high"``, ``"high-on-low"`` or ``"mixed"``.
-    placement : callable ``(rng, widths) -> Placement``
-    contrast : callable ``(rng, mode) -> {"low", "high"}``
-        Once per object, left to right.
-    texture : callable ``(rng) -> kind``
-        Once per object, after its tone.
-    camera : callable ``(rng) -> dict``
-        ``gain`` and ``offset`` of the right camera, ``noise_std`` of both.
-    sizes : callable ``(rng, n) -> (widths, heights)``
-        Pixels, drawn before `placement`.
-    shape : callable ``(rng, box_only) -> {"box", "cylinder"}``
-        Once per object, first; a box when `box_only`.
+    ``wall(rng, mode) -> (kind, contrast)``: the wall's texture (``"posters"``, ``"stripes"``,
+    ``"tiles"``) and contrast (:data:`HIGH`, :data:`LOW`), `mode` being ``"low-on-high"``,
+    ``"high-on-low"`` or ``"mixed"``; ``sizes(rng, n) -> (widths, heights)``;
+    ``placement(rng, widths) -> Placement``; then per object, left to right,
+    ``shape(rng, box_only) -> "box" | "cylinder"``, ``contrast(rng, mode) -> "low" | "high"``
+    and ``texture(rng) -> kind``; last ``camera(rng) -> dict`` of ``gain``, ``offset``, ``noise_std``.
 
-    Examples
-    --------
     >>> Look(camera=lambda rng: {"gain": 1.0, "offset": 0.0, "noise_std": 3.0}).camera(None)["noise_std"]
     3.0
     """

@@ -327,8 +327,6 @@ def object_layout(seed, n_objects: int = 2, *, family: str = "contrast", supersa
     `seed` (int or Generator) draws everything from the family's stream (:meth:`Family.stream`);
     ``scene`` is what the family function returns for it, ``background`` with ``empty=True``.
 
-    Examples
-    --------
     >>> lay = object_layout(7, 2, family="border")
     >>> lay.objects[0].disparity - lay.objects[1].disparity >= MIN_GAP_PX
     True

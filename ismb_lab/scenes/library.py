@@ -214,8 +214,6 @@ def lab_scene(seed=0, *, noise_std: float = 1.0, vertical_offset_px: float = 0.0
     `supersample` is rays per pixel side (1 renders 4 times faster).  The layout does not
     depend on the camera's roll or offset.
 
-    Examples
-    --------
     >>> scene = lab_scene(0)
     >>> [type(p).__name__ for p in scene.primitives]
     ['Plane', 'Plane', 'Box']
@@ -237,8 +235,6 @@ def toy_car_layout(cars=0, rig: StereoCamera = StereoCamera.pinhole()) -> tuple[
     The left car stands 0.88 to 1.0 m away, the right one 10 cm or more farther, up to 1.2 m,
     both in front of :func:`lab_scene`'s box, one on each side of it.
 
-    Examples
-    --------
     >>> (xl, zl, ll), (xr, zr, lr) = toy_car_layout(0)
     >>> bool(0.88 <= zl <= 1.0 and zl + 0.1 <= zr <= 1.2), bool(xl < 0 < xr)
     (True, True)
@@ -266,8 +262,6 @@ def toy_car_scene(seed=0, *, cars=None, noise_std: float = 1.0, vertical_offset_
     places and paint (:func:`toy_car_layout`), then fresh camera noise.  The cars are the last two
     primitives, :class:`Group` objects named ``"left car"`` and ``"right car"``.
 
-    Examples
-    --------
     >>> scene = toy_car_scene(0)
     >>> [p.name for p in scene.primitives[3:]]
     ['left car', 'right car']
@@ -299,8 +293,6 @@ def realistic_scene(index: int, *, noise_std: float = 1.5, supersample: int = 2)
     another light and right camera.  Two indices in three shift the right image down by 2.5 to
     5 px, and every fourth one also rolls the right camera by up to 1 degree.
 
-    Examples
-    --------
     >>> scene = realistic_scene(2)
     >>> scene.rig.vertical_offset_px > 0, realistic_scene(3).rig.vertical_offset_px
     (True, 0.0)

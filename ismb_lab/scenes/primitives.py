@@ -43,8 +43,6 @@ class Plane:
     """A textured two-sided rectangle: `centre`, orthogonal in-plane axes (normalised here; the
     texture's ``(u, v)`` are metres along them from the centre) and half sizes, metres.
 
-    Examples
-    --------
     >>> wall = Plane((0, 0, 1.8), (1, 0, 0), (0, 1, 0), 10, 10, Texture())
     >>> t, info = wall.intersect([[0, 0, 0], [0, 0, 0]], [[0, 0, 1], [0, 0, -1]])
     >>> t, info[0]
@@ -115,8 +113,6 @@ class Box:
     `textures` is one Texture or one per face, ``-x, +x, -y (top), +y, -z (front), +z``; a face's
     ``(u, v)`` are metres from its ``lo`` corner: ``(z, y)``, ``(x, z)`` or ``(x, y)``.
 
-    Examples
-    --------
     >>> box = Box((-0.1, -0.1, 1.0), (0.1, 0.1, 1.2), Texture())
     >>> t, info = box.intersect([[0, 0, 0]], [[0, 0, 1]])
     >>> t, info   # the front face, -z, is face 4
@@ -187,8 +183,6 @@ class Cylinder:
     ``+x``, and ``y - y_top``; `cap` (default plain ``texture.base``) lies on
     ``(x - x_axis, z - z_axis)``.
 
-    Examples
-    --------
     >>> can = Cylinder((0.0, 1.2), 0.1, (-0.1, 0.1), Texture(base=0.3))
     >>> t, info = can.intersect([[0, 0, 0], [0, -1, 0]], [[0, 0, 1], [0, 1, 0]])
     >>> t.round(3), info[:, 2], can.normals(info[:1]).round(3)   # the side; a cap, face 1
@@ -298,8 +292,6 @@ class Group:
     """Several boxes (they may overlap: the first hit wins) rendered as one primitive, e.g. a toy
     car; a hit's ``info`` is ``(u, v, 6 * part + face)``.
 
-    Examples
-    --------
     >>> g = Group([Box((-0.1, -0.1, 1.0), (0.1, 0.1, 1.2), Texture(base=0.2)),
     ...            Box((0.1, -0.1, 1.5), (0.3, 0.1, 1.7), Texture(base=0.8))], "pair")
     >>> t, info = g.intersect([[0, 0, 0], [0.2, 0, 0]], [[0, 0, 1], [0, 0, 1]])
@@ -395,8 +387,6 @@ def cast(primitives, origins, dirs) -> tuple[np.ndarray, np.ndarray, np.ndarray]
     """First hit of each ray among several primitives: the ray parameter (``inf`` for none), the
     index of the primitive hit (-1) and its surface coordinates ``(u, v, face)`` (NaN).
 
-    Examples
-    --------
     >>> wall = Plane((0, 0, 1.8), (1, 0, 0), (0, 1, 0), 10, 10, Texture())
     >>> box = Box((-0.1, -0.1, 1.0), (0.1, 0.1, 1.2), Texture())
     >>> t, which, _ = cast([wall, box], [[0, 0, 0], [0.5, 0, 0]], [[0, 0, 1], [0, 0, 1]])

@@ -213,8 +213,6 @@ def true_matches(scene: Scene, left_xy, right_xy, tol: float = 1.5) -> np.ndarra
     """Index of the true partner of each left point among right points: the nearest within `tol`
     px of its exact correspondence (:meth:`Scene.correspond`), or -1.  Two may share a partner.
 
-    Examples
-    --------
     >>> from ismb_lab.scenes import synthetic_scene
     >>> scene = synthetic_scene(0)
     >>> left = [[120.0, 30.0], [0.0, 100.0]]

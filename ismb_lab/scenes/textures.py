@@ -22,8 +22,6 @@ class Texture:
        ``levels[row, col]``, which keeps corners apart and makes evaluation a look-up;
     3. a factor ``1 + ripple * mean(sin(k_u u + k_v v + phase))`` over the rows of ``waves``.
 
-    Examples
-    --------
     >>> tex = Texture(base=0.5, cell=1.0, origin=(0, 0),
     ...               rects=[[[0.25, 0.25, 0.75, 0.75]]], levels=[[0.9]])
     >>> tex([[0.5, 0.5], [0.1, 0.5], [1.5, 0.5]])
@@ -107,20 +105,11 @@ def random_texture(rng, extent, *, cell: float, fill: float = 0.6, base: float =
                    ripple: float = 0.08, wavelengths=(0.4, 1.5)) -> Texture:
     """A random corner-rich :class:`Texture`: posters on a grid, plus mild ripple.
 
-    Parameters
-    ----------
-    extent : (4,) array_like
-        ``(u_min, v_min, u_max, v_max)`` to cover, metres.
-    cell : float
-        Approximate cell side in metres, stretched so that whole cells tile `extent`.
-    fill : float
-        Fraction of the cells that hold a rectangle (at least one).
-    contrast : (2,) floats
-        Range of ``|level - base|``; the sign is random.
-    sizes, margin : (2,) floats, float
-        A rectangle's side range and its least gap to its cell's border, fractions of ``cell``.
-    ripple, wavelengths : float, (2,) floats
-        Relative amplitude and wavelength range (m) of 3 random plane waves.
+    `extent` ``(u_min, v_min, u_max, v_max)`` is covered by cells of about `cell` metres, stretched
+    so that whole cells tile it; `fill` of them hold a rectangle (at least one) whose side is in
+    `sizes` and whose gap to the cell's border is at least `margin` (fractions of a cell), its
+    ``|level - base|`` in `contrast` of random sign.  `ripple` is the relative amplitude of 3
+    random plane waves of `wavelengths` (m).
 
     Examples
     --------
