@@ -80,16 +80,13 @@ def _cardboard(rng: np.random.Generator, lo, hi, wall_base: float) -> Box:
 
 def _room(rng: np.random.Generator, rig: StereoCamera, wall_base: float, boxes, poster_bottom: float) -> list:
     """The wall at 1.8 m with posters down to ``y = poster_bottom`` and the table: ``[wall, table]``."""
-    # Posters: none that a box's silhouette would cut in either view, so that no
-    # corner of the scene is an occlusion junction that moves between the views.
+    # No poster that a box's silhouette cuts in either view: no occlusion junction moves between them.
     wall_tex = random_texture(rng, (-1.2, -0.9, 1.2, poster_bottom), cell=0.17, fill=0.5,
                               base=wall_base, contrast=(0.32, 0.4))
     wall_tex = _clear(wall_tex, [_wall_shadow(box, rig, margin=0.04) for box in boxes])
     wall = Plane((0, 0, WALL_Z), (1, 0, 0), (0, 1, 0), 20, 20, wall_tex)
-    # The table top reaches from 15 cm in front of the cameras to the wall, so
-    # the wall/table crease has no parallax; it is lit only a little less than
-    # the wall, so the boxes' edges crossing the crease make no strong corners.
-    # Its sheets of paper lie near the cameras only (below the ROI).
+    # The table reaches the wall and is lit a little less than it, so that the crease makes no
+    # strong corners; its sheets of paper lie near the cameras only (below the ROI).
     near, depth = 0.15, WALL_Z - 0.15
     table_tex = random_texture(rng, (-0.6, -depth / 2, 0.6, -depth / 2 + 0.5), cell=0.3, fill=0.5,
                                base=wall_base * rng.uniform(0.95, 1.0), contrast=(0.3, 0.4))
@@ -194,8 +191,7 @@ def _lab_primitives(rng: np.random.Generator, rig: StereoCamera) -> list:
     wall_base = rng.uniform(0.45, 0.55)
     box = _cardboard(rng, (xa, TABLE_Y - height, z), (xa + width_px * z / f, TABLE_Y, z + deep),
                      wall_base)
-    # The posters end 9 cm above the table: toy cars on the table, seen against
-    # the plain bottom of the wall, never cut a poster.
+    # The posters end 9 cm above the table: the toy cars never cut a poster.
     return _room(rng, rig, wall_base, [box], poster_bottom=0.06) + [box]
 
 
