@@ -95,19 +95,15 @@ class DepthConfig:
 
     def __post_init__(self):
         own = "DepthConfig"
-        for name in ("position_tol_px", "disparity_tol_px", "consensus_px", "quantisation_px",
-                     "link_disparity_px", "merge_px", "merge_disparity_px", "silhouette_tol_px",
-                     "band_step_px"):
-            object.__setattr__(self, name, check_number(getattr(self, name), name, own, low=0))
-        for name in ("link_px", "local_px", "focal_px", "baseline_m"):
-            object.__setattr__(self, name, check_number(getattr(self, name), name, own,
-                                                        low=0, low_open=True))
-        for name in ("min_features", "band_features"):
-            object.__setattr__(self, name, check_number(getattr(self, name), name, own, low=1, integer=True))
-        object.__setattr__(self, "silhouette_grow_px",
-                           check_number(self.silhouette_grow_px, "silhouette_grow_px", own, low=0, integer=True))
-        for name in ("silhouette_score", "band_one_piece", "firm_outline"):
-            object.__setattr__(self, name, check_number(getattr(self, name), name, own, low=0, high=1))
+        rules = {("position_tol_px", "disparity_tol_px", "consensus_px", "quantisation_px", "link_disparity_px",
+                  "merge_px", "merge_disparity_px", "silhouette_tol_px", "band_step_px"): dict(low=0),
+                 ("link_px", "local_px", "focal_px", "baseline_m"): dict(low=0, low_open=True),
+                 ("min_features", "band_features"): dict(low=1, integer=True),
+                 ("silhouette_grow_px",): dict(low=0, integer=True),
+                 ("silhouette_score", "band_one_piece", "firm_outline"): dict(low=0, high=1)}
+        for names, rule in rules.items():
+            for name in names:
+                object.__setattr__(self, name, check_number(getattr(self, name), name, own, **rule))
         check_choice(self.grouping, "grouping", own, GROUPINGS)
         if not isinstance(self.outline, OutlineConfig):
             raise ParameterTypeError(message("outline", own, "an OutlineConfig", self.outline))

@@ -145,8 +145,6 @@ def get_family(name, owner: str = "get_family", parameter: str = "family") -> Fa
     return _FAMILIES[check_choice(name, parameter, owner, families())]
 
 
-# ------------------------------------------------------------------ the library's families
-
 def _contrast_wall(rng, mode: str) -> tuple:
     return "posters", LOW if mode == "high-on-low" else HIGH
 
@@ -194,8 +192,7 @@ for _family in (
     register_family(_family)
 
 
-# ------------------------------------------------------------------ a family the depth code never saw
-
+# A family the depth code never saw.
 def _any_wall(rng, mode: str) -> tuple:
     return rng.choice(["posters", "stripes", "tiles"]), (HIGH, LOW)[int(rng.integers(2))]
 
@@ -232,8 +229,6 @@ UNSEEN = Family("unseen", "Objects 18 to 96 px wide and 24 to 120 px tall, half 
                      camera=_any_cameras, sizes=_any_sizes, shape=_any_shape))
 """A family of wider ranges than the four, for held-out tests of the depth demo; left out of
 :func:`families` so that the scripts' recorded splits stay as they were."""
-
-# ------------------------------------------------------------------ layouts
 
 
 @dataclass(frozen=True, eq=False)
