@@ -25,41 +25,13 @@ GROUPINGS = ("silhouettes", "features")
 
 @dataclass(frozen=True)
 class DepthConfig:
-    """Tolerances of :func:`depth_from_matches` and the rig's calibration (``docs/depth.md``).
+    """Tolerances of :func:`depth_from_matches` and the rig's calibration.
 
-    Attributes
-    ----------
-    position_tol_px, disparity_tol_px : float
-        A scene match within these of a background match (left image; disparity) is background.
-    link_px, link_disparity_px : float
-        Features this near, with matches this close in disparity, are linked.
-    consensus_px : float
-        Half width of the disparity band around an object's consensus disparity.
-    min_features : int
-        Fewest consensus features an object needs.
-    merge_px, merge_disparity_px : float
-        Objects whose features come this near, with medians this close, are one.
-    local_px : float
-        Radius of the local background around a scene match.
-    grouping : {"silhouettes", "features"}
-        Objects by the blobs of change or by the features alone, as the thesis does.
-    silhouette_tol_px : float
-        A match counts for its blob when its disparity lies from the blob's shift to this above it.
-    silhouette_score : float
-        Least Dice (0-1) of a blob in front for it to be *trusted*, one object.
-    silhouette_grow_px : int
-        A feature within this many pixels of a blob lies on it.
-    band_features, band_step_px : int, float
-        Two bands of this many features or more, this far apart or more, may cut a blob in two.
-    band_one_piece : float
-        Least Dice of the two bands' shifts to cut a blob of one piece.
-    firm_outline : float
-        A blob that fits with this Dice or more stands in front whatever the background says.
-    outline : OutlineConfig
-    focal_px, baseline_m : float
-        Focal length (px) and baseline (m), > 0.
-    quantisation_px : float
-        Disparity error bar of the depth range.
+    ``docs/depth.md`` describes every field beside its default; distances and disparities are in
+    pixels, scores are Dice overlaps in [0, 1].  `grouping` is ``"silhouettes"`` (the blobs of
+    change, :class:`~ismb_lab.depth.outlines.Silhouettes`) or ``"features"`` (the thesis'),
+    `outline` an :class:`~ismb_lab.depth.outlines.OutlineConfig`, `focal_px` and `baseline_m`
+    (m) the rig's, and `quantisation_px` the disparity error bar of the depth range.
 
     Examples
     --------

@@ -30,25 +30,9 @@ CHANGE_SIGMA = 1.0
 class OutlineConfig:
     """How :func:`silhouettes` finds the blobs of change and their shifts (``DepthConfig.outline``).
 
-    Attributes
-    ----------
-    threshold_low : float
-        Hysteresis: a pixel above this (and above twice the image's median difference) is
-        changed too when it connects to one above :data:`CHANGE_THRESHOLD`.
-    min_pixels : int
-        Smaller blobs are camera noise.
-    pad_px : int
-        Columns on each side of a blob's box that its overlap counts as well.
-    merge_gap_px, merge_disparity_px, link_score : int, float, float
-        Blobs `merge_gap_px` or less apart whose shifts differ by `merge_disparity_px` or less are
-        one object, unless their shifts differ and both fit with a Dice of `link_score` or more.
-    max_fraction : float
-        A blob covering more of the ROI than this is a change of the light or the view: score 0.
-    split_score, split_step_px : float
-        A blob is cut where its two parts fit shifts `split_step_px` or more apart, each with a
-        Dice of `split_score` or more.
-    split_far_px, split_far_score, split_far_poor_px : float
-        The cuts by two shifts far apart (``docs/depth.md``).
+    ``docs/depth.md`` describes every field beside its default (section 4).  `threshold_low`
+    (grey levels) is the hysteresis threshold, from 0 to :data:`CHANGE_THRESHOLD`; distances are
+    in pixels and scores are Dice overlaps in [0, 1].
 
     Examples
     --------

@@ -102,17 +102,9 @@ def synthetic_scene(seed=0, *, vertical_offset_px: float = 0.0, roll_deg: float 
     1.4 m away in the centre-quarter ROI; the right camera has gain 0.9 and offset +8.  No poster
     is cut by a box's silhouette, so nearly every corner is a real 3-D point.
 
-    Parameters
-    ----------
-    seed : int or numpy.random.Generator
-        Draws the layout and textures, then the noise; the layout does not depend on the rest.
-    vertical_offset_px, roll_deg : float
-        Passed to :meth:`~ismb_lab.cameras.camera.StereoCamera.pinhole` (an unrectified pair).
-    noise_std : float
-        Camera noise in grey levels.
+    `seed` draws the layout and textures, then the noise; `vertical_offset_px` and `roll_deg` go
+    to :meth:`~ismb_lab.cameras.camera.StereoCamera.pinhole` and do not move the layout.
 
-    Examples
-    --------
     >>> scene = synthetic_scene(3)
     >>> [type(p).__name__ for p in scene.primitives]
     ['Plane', 'Plane', 'Box', 'Box']
