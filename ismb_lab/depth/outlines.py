@@ -215,24 +215,10 @@ def silhouettes(background, scene, roi="center", *, shifts=range(0, 41),
                 config: OutlineConfig | None = None) -> Silhouettes:
     """Blobs of change of the scene's left image, each with the shift that lays it on the right's.
 
-    The blobs of the left image that reach into `roi` are made by the threshold alone and with
-    hysteresis, and each region keeps those that fit better (:func:`_by_region`).  A blob's shift
-    is the one in `shifts` with the largest Dice overlap with the right image's change, over its
-    columns padded by ``pad_px``.  Blobs are linked, joined and cut (:func:`_partition`), and
-    numbered left to right by centroid.
+    `background` and `scene` are StereoPairs of one view; the blobs of the left image that reach
+    into `roi` each get the shift of `shifts` with the largest Dice overlap (``docs/depth.md``,
+    section 4), and are numbered left to right by centroid.
 
-    Parameters
-    ----------
-    background, scene : StereoPair
-        The two pairs of one view.
-    roi : str or (x, y, w, h)
-        Where the objects may be, as :attr:`ismb_lab.matching.pipeline.MatchConfig.roi`.
-    shifts : iterable of int
-        Disparities to try.
-    config : OutlineConfig, optional
-
-    Examples
-    --------
     >>> import numpy as np
     >>> from ismb_lab.images.io import load_pair
     >>> rng = np.random.default_rng(0)

@@ -72,18 +72,9 @@ def changed_roi(background_left, scene_left, roi="center", *, threshold: float =
                 sigma: float = CHANGE_SIGMA, margin: int = 4):
     """The box of `roi` where the scene's left image differs from the background's, or None.
 
-    Parameters
-    ----------
-    threshold : float
-        Grey levels (0-255) that the Gaussian-smoothed absolute difference must exceed.
-    sigma : float
-        Standard deviation of the smoothing, pixels.
-    margin : int
-        Pixels added on every side of the changed pixels' box (clipped to `roi`), so that
-        corners on an object's outline are inside.
+    Changed: the difference, smoothed by a Gaussian of `sigma` px, exceeds `threshold` grey levels.
+    The box grows by `margin` px (within `roi`) so that corners on an object's outline are inside.
 
-    Examples
-    --------
     >>> import numpy as np
     >>> background = np.zeros((240, 320))
     >>> scene = background.copy()

@@ -39,19 +39,11 @@ def _correspond(primitives, rig: StereoCamera, left_xy: np.ndarray):
 class Scene:
     """A rendered stereo pair with exact ground truth.
 
-    Attributes
-    ----------
-    left, right : (H, W) ndarray of float64
-        Grey images in ``[0, 255]``.
-    depth : (H, W) ndarray
-        ``z`` (m) of the surface seen at each left pixel centre, ``inf`` where none.
-    disparity : (H, W) ndarray
-        ``x_left - x_right`` of each left pixel's true correspondence; NaN where occluded, out
-        of the right view or where there is no surface.
-    occluded : (H, W) ndarray of bool
-        Left pixels whose surface point the right camera does not see.
-    gain, offset, noise_std : float
-        The right image is ``gain * radiance + offset + noise``, the left ``radiance + noise``.
+    `left` and `right` are grey float images in ``[0, 255]``; at each left pixel centre, `depth` is
+    the ``z`` (m) of the surface seen (``inf`` where none), `disparity` the true ``x_left - x_right``
+    (NaN where occluded, out of the right view or surfaceless) and `occluded` whether the right
+    camera misses that point.  The right image is ``gain * radiance + offset + noise``, the left
+    ``radiance + noise``.
 
     Examples
     --------
