@@ -128,15 +128,9 @@ def toy_car(rng, x_centre: float, z_front: float, *, length: float = 0.13, name:
     """A toy car standing on the table, its side towards the cameras: a :class:`Group` of
     ``(body, cabin, wheel, wheel, wheel, wheel)``, its side striped in a paint drawn from `rng`.
 
-    Parameters
-    ----------
-    x_centre, z_front : float
-        ``x`` of the car's middle and depth of its side facing the cameras (> 0), metres.
-    length : float
-        Body length, 0.05 to 0.5 m.
+    `x_centre` is the car's middle, `z_front` the depth of its side (> 0) and `length` its body's
+    (0.05 to 0.5), metres.
 
-    Examples
-    --------
     >>> car = toy_car(0, 0.0, 0.8)
     >>> len(car.parts), car.lo.round(3).tolist(), car.hi.round(3).tolist()
     (6, [-0.065, 0.049, 0.794], [0.065, 0.15, 0.866])

@@ -134,24 +134,11 @@ def render(primitives, rig: StereoCamera = StereoCamera.pinhole(), *, seed, nois
            ambient: float = 0.35, background: float = 0.0, quantise: bool = True) -> Scene:
     """Ray-cast both views of a scene and compute its ground truth at the left pixel centres.
 
-    Parameters
-    ----------
-    seed : int or numpy.random.Generator
-        Source of the camera noise (required).
-    noise_std : float
-        Gaussian camera noise in grey levels, every pixel of both images.
-    gain, offset : float
-        The right camera's response ``gain * radiance + offset`` (the left's is 1, 0).
-    supersample : int
-        Rays per pixel side, averaged (anti-aliasing).
-    light : (3,) array_like
-        Direction *towards* the distant light (normalised here).
-    ambient : float
-        Radiance is ``255 * albedo * (ambient + (1 - ambient) * max(0, n . light))``.
-    background : float
-        Grey level of rays that hit nothing.
-    quantise : bool
-        Round to integers like 8-bit cameras (images are clipped to ``[0, 255]`` either way).
+    `seed` (required) draws the Gaussian camera noise of `noise_std` grey levels; the right camera
+    responds ``gain * radiance + offset``; `supersample` rays per pixel side are averaged; radiance
+    is ``255 * albedo * (ambient + (1 - ambient) * max(0, n . light))`` with `light` the direction
+    *towards* the light, and `background` for rays that hit nothing.  `quantise` rounds like 8-bit
+    cameras; images are clipped to ``[0, 255]`` either way.
 
     Examples
     --------
