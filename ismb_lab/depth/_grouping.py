@@ -1,10 +1,4 @@
-"""Grouping a scene's new matches into objects: the steps behind :func:`ismb_lab.depth.objects.depth_from_matches`.
-
-Single linkage of features, the consensus band of a group's disparities and its peeling, the join of
-parts that are one object, the local background, the blob under each feature and the cut of a blob in
-two by its features' bands.  Sections 3-5
-of ``docs/depth.md`` say what each does.
-"""
+"""The grouping steps of :func:`ismb_lab.depth.objects.depth_from_matches` (``docs/depth.md``, 3-5)."""
 
 from __future__ import annotations
 
@@ -46,13 +40,8 @@ def _local_background(xy, bxy, bd, radius: float) -> np.ndarray:
 
 
 def _peel(feature: np.ndarray, d: np.ndarray, config) -> list:
-    """Consensus bands of one group, largest first: ``[(match mask, ...)]`` until too few features.
-
-    The band that most matches agree with is one object; its features leave the
-    group (with all their matches) and the rest is searched again, so that two
-    objects side by side at different depths, linked through a few in-between
-    matches, come out as two.
-    """
+    """Consensus match masks of one group, largest first, each band's features removed before the
+    next is sought, until a band has too few features."""
     left = np.ones(len(d), dtype=bool)
     bands = []
     while left.sum():
@@ -67,12 +56,8 @@ def _peel(feature: np.ndarray, d: np.ndarray, config) -> list:
 
 
 def _merge(parts: list, config) -> list:
-    """Union of parts (feature index arrays, median disparity, left xy) that are one object.
-
-    Two parts are one object when their median disparities differ by at most
-    ``merge_disparity_px`` and some feature of one lies within ``merge_px`` of
-    some feature of the other: the two halves of a sparsely textured object.
-    """
+    """Union of parts (match rows, median disparity, left xy) that are one object: medians within
+    ``merge_disparity_px`` and features within ``merge_px``."""
     n = len(parts)
     root = list(range(n))
 
@@ -108,10 +93,8 @@ def _on_blobs(xy, silhouettes: Silhouettes, grow: int) -> np.ndarray:
 
 
 def _band_cut(idx, feature, first, d, config, silhouettes: Silhouettes, k: int):
-    """Blob `k` as two objects by two bands of its features (``DepthConfig.band_features``), or None.
-
-    Returns ``[(rows, centroid, shift), (rows, centroid, shift)]``, left part first, or None when
-    the features or the outline say one object.  The three largest bands are tried in pairs."""
+    """Blob `k` as two objects ``[(rows, centroid, shift)] * 2``, left first, by two of the three
+    largest bands of its features, or None."""
     from itertools import combinations
 
     bands = [b for b in _peel(feature[idx], d[idx], config)

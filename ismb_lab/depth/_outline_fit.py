@@ -1,5 +1,5 @@
-"""How well blobs of change lie on the right image's change: the Dice fits, cuts and joins behind
-:func:`ismb_lab.depth.outlines.silhouettes` (which documents what they are for)."""
+"""How well blobs of change lie on the right image's change: the fits, cuts and joins of
+:func:`ismb_lab.depth.outlines.silhouettes`."""
 
 from __future__ import annotations
 
@@ -7,14 +7,11 @@ import numpy as np
 
 def _best_shift(mask: np.ndarray, rows: slice, cols: slice, right: np.ndarray, shifts,
                 pad: int) -> tuple[float, float]:
-    """The shift ``d`` that lays blob `mask` (a full-image mask, box `rows` x `cols`) best on
-    `right` shifted by ``d``, and its Dice overlap (ties: the first in `shifts`).
+    """The Dice overlap and the shift ``d`` that lays blob `mask` (box `rows` x `cols`) best on
+    `right` shifted by ``d`` (ties: the first in `shifts`).
 
-    The two are compared over the box widened by `pad` columns on each side, so that
-    right-image change next to the shifted blob tells against the shift, and only over the
-    columns that both images have.  Without the padding a blob that touches the image's
-    left edge fits every shift from its true one up equally well: its left part has no
-    counterpart, and its right edge lands inside the right blob."""
+    Counted over the box widened by `pad` columns, where both images have columns: without the
+    padding a blob at the image's left edge fits every shift from its true one up equally well."""
     width = right.shape[1]
     c = np.arange(max(cols.start - pad, 0), min(cols.stop + pad, width))
     mine = mask[rows, c.min():c.max() + 1]
@@ -31,20 +28,12 @@ def _best_shift(mask: np.ndarray, rows: slice, cols: slice, right: np.ndarray, s
 
 
 def _two_shifts(parts, start, one: float, right: np.ndarray, shifts, config) -> bool:
-    """Whether two shifts ``config.split_far_px`` or more apart, one per part, lay `parts` on `right`
-    better than `one`, the best Dice of their union at a single shift, both counted as one overlap
-    over the same padded columns (:func:`_placed_dice`), by at least 0.01, while `one` is
-    ``config.split_far_score`` or more (a blob that fits no shift well is no pair of well-seen
-    objects either).
+    """Whether two shifts ``split_far_px`` or more apart, one per part (by :func:`_ascend` from
+    `start`), lay `parts` better than `one`, the whole's best Dice at one shift, by 0.01.
 
-    The two shifts are found by coordinate ascent from `start` (each part's own padded fit), and each
-    part must lie wholly on the right image at its shift (a part across the image border fits any
-    shift).
-
-    A whole that fits with a Dice from ``config.split_score`` up to ``split_far_score`` passes as
-    well when the two shifts lie ``config.split_far_poor_px`` or more apart and lay both parts with
-    ``split_far_score`` or more: two objects far apart in depth that touch in the image are what
-    makes one shift fit them poorly."""
+    `one` must be ``split_far_score`` or more, or else ``split_score`` or more with the shifts
+    ``split_far_poor_px`` apart laying both parts with ``split_far_score``; each part must lie
+    wholly on the right image (a part across the border fits any shift)."""
     least, fair = config.split_far_score, config.split_score
     best, d = _ascend(parts, start, right, shifts, config.pad_px)
     if abs(d[0] - d[1]) < config.split_far_px:
@@ -57,18 +46,13 @@ def _two_shifts(parts, start, one: float, right: np.ndarray, shifts, config) -> 
 
 
 def _cut(mask: np.ndarray, right: np.ndarray, shifts, config, far: bool):
-    """Two objects side by side in one blob: the column that cuts `mask` into a left and a right
-    part that two shifts lay on `right` better (Dice) than one shift lays the whole, or None.
+    """The two parts of `mask`, cut at the column where two shifts lay them on `right` better than
+    one shift lays the whole, or None.
 
-    The cut is taken only when the two shifts differ by ``config.split_step_px`` or more, each part,
-    measured as every blob is (:func:`_best_shift`, padded by ``config.pad_px``), fits with a Dice
-    of ``config.split_score`` or more, and the two parts, each moved by its own shift, both at once,
-    lay on `right` at least as well as the best single shift lays the blob (the halves of one object
-    fit slightly different shifts, but not better together than the whole at one).  With `far`, a
-    blob whose parts fail the first test may still be cut by :func:`_two_shifts`.
-    Dice of a part at shift ``d`` is counted over its own columns (those with a counterpart in
-    `right`): per column, the blob's pixels, the right image's changed pixels ``d`` to the left
-    and their overlap add up, so cumulative sums give every cut at once."""
+    The shifts must differ by ``split_step_px`` or more, each part fit (:func:`_best_shift`) with
+    ``split_score`` or more, and both parts at once lay no worse than the whole at one shift; with
+    `far`, :func:`_two_shifts` may cut it otherwise.  Per-column counts summed cumulatively give
+    every cut's Dice at once."""
     from scipy.ndimage import find_objects
 
     min_pixels, step, least, pad = config.min_pixels, config.split_step_px, config.split_score, config.pad_px
@@ -134,8 +118,8 @@ def _cut(mask: np.ndarray, right: np.ndarray, shifts, config, far: bool):
 
 
 def _ascend(parts, start, right: np.ndarray, shifts, pad: int, line=None) -> tuple[float, list]:
-    """The best :func:`_placed_dice` of two `parts` and the shifts that give it: coordinate ascent
-    over `shifts` from `start`, each part in turn, until neither moves (at most three rounds)."""
+    """The best :func:`_placed_dice` of two `parts` and their shifts: coordinate ascent over
+    `shifts` from `start`, each part in turn, for at most three rounds."""
     d = list(start)
     best = _placed_dice(parts, d, right, pad, line)
     for _ in range(3):
@@ -153,9 +137,8 @@ def _ascend(parts, start, right: np.ndarray, shifts, pad: int, line=None) -> tup
 
 
 def _placed_dice(parts, shifts, right: np.ndarray, pad: int, line=None) -> float:
-    """Dice overlap of `parts` (full-image masks), each moved left by its shift, with `right`'s
-    change, over the rows of the parts and the columns they cover in `right` (padded by `pad`);
-    with `line`, the moved parts are closed by it first (as `right` should be)."""
+    """Dice overlap of `parts`, each moved left by its shift, with `right`, over their rows and
+    padded columns; with `line`, the moved parts are closed by it first."""
     width = right.shape[1]
     placed = np.zeros_like(right)
     for part, d in zip(parts, shifts):
@@ -182,16 +165,11 @@ def _placed_dice(parts, shifts, right: np.ndarray, pad: int, line=None) -> float
 
 
 def _join(masks: list, measure, gap_px: int, right: np.ndarray, pad: int, weak: float) -> list:
-    """Join neighbouring blobs (boxes `gap_px` or less apart) while one shift lays their union on
-    the right image's change at least as well as their own shifts, both parts moved at once, lay
-    them (:func:`_placed_dice`, one overlap over the same rows and padded columns): the pieces of one
-    object that looks like the wall in places, e.g. stripes; the best pair first.
+    """Join neighbouring blobs (boxes `gap_px` or less apart), best pair first, while one shift
+    lays their union at least as well as their own shifts, both at once, lay them.
 
-    Two objects side by side then stay apart however well or poorly each fits alone (the padding of
-    each part's own fit counts its neighbour's change against it).  A part narrower than ``2 * pad``
-    fits almost any shift, so it is moved by its neighbour's (both: by the union's).  Two neighbours
-    neither of which fits with a Dice of `weak` or more (neither a well-seen object) are joined when
-    the union fits at least as well as the better of them, whatever both moved at once give."""
+    A part narrower than ``2 * pad`` fits almost any shift, so it takes its neighbour's.  Two
+    neighbours that both fit below `weak` are joined when the union fits as well as the better."""
     fits = [measure(m) for m in masks]
     keys = [frozenset([k]) for k in range(len(masks))]
     unions = {}

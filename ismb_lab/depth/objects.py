@@ -1,20 +1,7 @@
-"""Disparity to depth, and objects ranked near -> far (thesis §5.2.3, the maths).
+"""Disparity to depth, and objects ranked near -> far (thesis §5.2.3, the steps after matching).
 
-The thesis matches a background pair (a box in front of a wall, Fig. 5.11/5.12) and a
-pair of the same view with two toy cars added (Fig. 5.13), deletes the scene's
-features that belong to the background, and compares disparities: the larger the
-disparity, the nearer the object (Fig. 5.14).  This module holds the steps after
-matching, :func:`depth_from_matches`; :mod:`ismb_lab.depth.pipeline` runs the whole demo
-from four images.  With the rig's calibration it also gives metric depth ``Z = f B / d``.
-
-The steps, each with the :class:`DepthConfig` value that rules it, are described in
-``docs/depth.md``: background removal, "in front of the background", objects by their
-outlines (:mod:`ismb_lab.depth.outlines`) or by their features alone (the thesis' grouping),
-and depth with its error bar.  The grouping's helpers are in :mod:`ismb_lab.depth._grouping`.
-
-Disparities are horizontal, ``x_left - x_right`` (:mod:`ismb_lab.images.coords`), the
-quantity that ``f B / Z`` predicts for a parallel rig even when the right image is
-shifted vertically.
+:func:`depth_from_matches` removes the background's features and groups the rest into objects
+(``docs/depth.md``); disparities are horizontal, ``x_left - x_right``, and ``Z = f B / d``.
 """
 
 from __future__ import annotations
@@ -40,64 +27,11 @@ GROUPINGS = ("silhouettes", "features")
 class DepthConfig:
     """Tolerances of :func:`depth_from_matches` and the rig's calibration.
 
-    Attributes
-    ----------
-    position_tol_px : float
-        Largest distance (left image) between a scene match and a background match
-        counted as the same place.
-    disparity_tol_px : float
-        Largest disparity difference counted as the same disparity.
-    link_px : float
-        Single-linkage distance: features closer than this may be in one object.
-    link_disparity_px : float
-        ... if they have matches whose disparities differ by at most this.
-    consensus_px : float
-        Half width of the disparity band around an object's consensus disparity.
-    min_features : int
-        Fewest consensus features an object needs; smaller groups are dropped.
-    merge_px, merge_disparity_px : float
-        Two objects whose features come within ``merge_px`` of each other and whose
-        median disparities differ by at most ``merge_disparity_px`` are one object.
-    local_px : float
-        Radius of the local background around a scene match.
-    grouping : {"silhouettes", "features"}
-        How :func:`ismb_lab.depth.pipeline.relative_depth` finds objects: by the blobs of
-        change of both images (:class:`~ismb_lab.depth.outlines.Silhouettes`, the default),
-        or by the features alone, as the thesis does.
-    silhouette_tol_px : float
-        A match counts for its blob when its disparity lies from the blob's silhouette disparity
-        to this much above it (an outline is its object's farthest visible part).
-    silhouette_score : float
-        Least Dice overlap (0-1) of the left blob and the shifted right one for the blob,
-        in front of the background, to be *trusted*: one object at the consensus of the
-        features that agree with its shift, or at its shift when none does.  A blob in front
-        that is not trusted is one object at its largest band of features (or at its shift).
-    silhouette_grow_px : int
-        A feature within this many pixels of a blob lies on it (corners sit on outlines).
-    band_features, band_step_px : int, float
-        Two objects in one blob: two bands of its features' disparities ``band_step_px`` or more
-        apart, each of ``band_features`` or more features, one on each side of a column, cut the
-        blob there when each piece, both moved at once, lies better on the right image's change at
-        its own band's shift than at the other's
-        (:meth:`~ismb_lab.depth.outlines.Silhouettes.cut_dice`) and each band lies within
-        ``silhouette_tol_px`` of the shift that lays its piece best
-        (:meth:`~ismb_lab.depth.outlines.Silhouettes.cut_shifts`).
-    band_one_piece : float
-        A blob of one piece (two objects that touch in the left image) is cut so only at the column
-        where the two bands' shifts lay the parts with a Dice of this or more, better than any one
-        shift lays the blob, and where the shifts that lay the parts best are ``band_step_px`` or
-        more apart (a cylinder's features can form two bands, but its outline fits one shift).
-    firm_outline : float
-        A blob whose outline fits with a Dice of this or more stands in front of the background
-        whatever the background's matches say: the background's matches of a repetitive wall can
-        all be one period off, and put the floor above every object.
-    outline : OutlineConfig
-        How the blobs of change and their shifts are found (:func:`ismb_lab.depth.outlines.silhouettes`).
-    focal_px, baseline_m : float
-        Focal length in pixels and baseline in metres (> 0); the defaults are
-        :data:`ismb_lab.cameras.camera.FOCAL_PX` and :data:`~ismb_lab.cameras.camera.BASELINE_M` (the thesis' 10 cm rig).
-    quantisation_px : float
-        Disparity error bar for the depth range (integer corners: 0.5 px).
+    ``docs/depth.md`` describes every field beside its default; distances and disparities are in
+    pixels, scores are Dice overlaps in [0, 1].  `grouping` is ``"silhouettes"`` (the blobs of
+    change, :class:`~ismb_lab.depth.outlines.Silhouettes`) or ``"features"`` (the thesis'),
+    `outline` an :class:`~ismb_lab.depth.outlines.OutlineConfig`, `focal_px` and `baseline_m`
+    (m) the rig's, and `quantisation_px` the disparity error bar of the depth range.
 
     Examples
     --------
@@ -133,19 +67,15 @@ class DepthConfig:
 
     def __post_init__(self):
         own = "DepthConfig"
-        for name in ("position_tol_px", "disparity_tol_px", "consensus_px", "quantisation_px",
-                     "link_disparity_px", "merge_px", "merge_disparity_px", "silhouette_tol_px",
-                     "band_step_px"):
-            object.__setattr__(self, name, check_number(getattr(self, name), name, own, low=0))
-        for name in ("link_px", "local_px", "focal_px", "baseline_m"):
-            object.__setattr__(self, name, check_number(getattr(self, name), name, own,
-                                                        low=0, low_open=True))
-        for name in ("min_features", "band_features"):
-            object.__setattr__(self, name, check_number(getattr(self, name), name, own, low=1, integer=True))
-        object.__setattr__(self, "silhouette_grow_px",
-                           check_number(self.silhouette_grow_px, "silhouette_grow_px", own, low=0, integer=True))
-        for name in ("silhouette_score", "band_one_piece", "firm_outline"):
-            object.__setattr__(self, name, check_number(getattr(self, name), name, own, low=0, high=1))
+        rules = {("position_tol_px", "disparity_tol_px", "consensus_px", "quantisation_px", "link_disparity_px",
+                  "merge_px", "merge_disparity_px", "silhouette_tol_px", "band_step_px"): dict(low=0),
+                 ("link_px", "local_px", "focal_px", "baseline_m"): dict(low=0, low_open=True),
+                 ("min_features", "band_features"): dict(low=1, integer=True),
+                 ("silhouette_grow_px",): dict(low=0, integer=True),
+                 ("silhouette_score", "band_one_piece", "firm_outline"): dict(low=0, high=1)}
+        for names, rule in rules.items():
+            for name in names:
+                object.__setattr__(self, name, check_number(getattr(self, name), name, own, **rule))
         check_choice(self.grouping, "grouping", own, GROUPINGS)
         if not isinstance(self.outline, OutlineConfig):
             raise ParameterTypeError(message("outline", own, "an OutlineConfig", self.outline))
@@ -165,24 +95,9 @@ def metric_depth(disparity, focal_px: float = FOCAL_PX, baseline_m: float = BASE
                  error_px: float = 0.5) -> Depth:
     """``Z = f B / d`` and the depth range of ``d +- error_px``.
 
-    Parameters
-    ----------
-    disparity : float
-        Horizontal disparity in pixels.
-    focal_px, baseline_m : float
-        Calibration, both > 0.
-    error_px : float
-        Disparity error bar (>= 0).
+    ``status`` is ``"finite"``, ``"at infinity"`` (``d == 0``) or ``"invalid"`` (``d < 0``, a
+    wrong match); the range's far end is ``inf`` when ``d <= error_px``.
 
-    Returns
-    -------
-    Depth
-        ``status`` is ``"finite"``, ``"at infinity"`` (``d == 0``) or ``"invalid"``
-        (``d < 0``: a point behind the cameras, i.e. a wrong match); the range's far
-        end is ``inf`` when ``d <= error_px``.
-
-    Examples
-    --------
     >>> metric_depth(30.0)
     Depth(z=1.0, near=0.9836065573770492, far=1.0169491525423728, status='finite')
     >>> metric_depth(0.0), metric_depth(-2.0).status
@@ -210,35 +125,18 @@ class DepthObject:
     ----------
     rank : int
         1 = nearest.
-    centroid_xy : (float, float)
-        Mean left-image position ``(x, y)`` of its features.
-    mean_disparity : float
-        Mean horizontal disparity of its consensus matches, pixels.
-    disparity_std : float
-        Their standard deviation.
-    depth : Depth
-        Metric depth of `mean_disparity` with its range.
+    mean_disparity, disparity_std : float
+        Of its consensus matches, pixels.
     features : (n, 2) ndarray
         Left-image positions of its consensus features (read-only).
-    n_matches : int
-        Consensus matches (a feature may have several).
-    outliers : int
-        The object's matches off the consensus, not counted.
-    median_disparity : float
-        Median over its features of each feature's consensus disparity: the robust
-        disparity, which the mean of the consensus band agrees with to a fraction of a
-        pixel (default: `mean_disparity`).
-    disparity_spread : float
-        Median absolute deviation of the features' disparities from `median_disparity`,
-        pixels: with :attr:`n_features`, how far to trust the object.
-    silhouette_disparity : float or None
-        The shift that lays the object's blob of change on the right image's
-        (:class:`~ismb_lab.depth.outlines.Silhouettes`), or None when the object was found
-        by its features alone.
-        An object with no features (``n_features == 0``) was found by its outline
-        alone and has this as its disparity.
-    silhouette_score : float or None
-        Dice overlap of the two blobs at that shift (1 = the same outline).
+    n_matches, outliers : int
+        Its matches in the consensus (a feature may have several) and off it.
+    median_disparity, disparity_spread : float
+        Median of its features' disparities (default `mean_disparity`), and their median
+        absolute deviation from it.
+    silhouette_disparity, silhouette_score : float or None
+        The shift and Dice of its blob of change, None when found by its features alone;
+        with no features (``n_features == 0``) the shift is its disparity.
     """
 
     rank: int
@@ -260,7 +158,7 @@ class DepthObject:
 
     @property
     def n_features(self) -> int:
-        """How many features the object rests on (its confidence, with `disparity_spread`)."""
+        """How many features the object rests on."""
         return len(self.features)
 
     @property
@@ -288,30 +186,21 @@ class DepthResult:
 
     Attributes
     ----------
-    objects : tuple of DepthObject
-        The scene's objects, nearest first.
-    background_objects : tuple of DepthObject
-        The background pair's own objects (e.g. the box and the wall), nearest first,
-        for comparisons like "both cars are in front of the box".
-    background_removed : int
-        Scene features removed as background.
-    behind_background : int
-        Scene matches dropped because they are not in front of the local background.
-    dropped : int
-        Scene features in groups smaller than ``min_features``.
+    objects, background_objects : tuple of DepthObject
+        The scene's new objects and the background pair's own, nearest first.
+    background_removed, behind_background, dropped : int
+        Scene features removed as background, matches not in front of the local background,
+        features in no object.
     kept_xy, kept_disparity : ndarray
-        Scene matches left after steps 1 and 2 (left ``(x, y)``, disparity), for plots.
+        Scene matches left after the background removal.
     removed_xy : ndarray
         Left positions of the features removed as background.
-    background, scene : MatchResult
-    config : DepthConfig
     message : str
         Empty, or why there are no objects.
     scene_roi : (x, y, w, h) or None
-        The box in which the scene pair's corners were sought (:func:`changed_roi`),
-        when :func:`relative_depth` made the result.
+        Where :func:`~ismb_lab.depth.pipeline.relative_depth` sought the scene's corners.
     silhouettes : Silhouettes or None
-        The blobs of change that grouped the objects, or None when the features alone did.
+        The blobs of change that grouped the objects, None when the features alone did.
     """
 
     objects: tuple
@@ -331,11 +220,7 @@ class DepthResult:
 
     def points(self, camera: StereoCamera) -> np.ndarray:
         """The kept scene matches as ``(N, 3)`` points in metres, in `camera`'s rectified left
-        frame (:meth:`ismb_lab.cameras.camera.StereoCamera.points_from_disparity`).
-
-        The camera is not optional: the principal point depends on the image's size, which a
-        result does not hold (:meth:`StereoCamera.pinhole` of the pair's width and height
-        with ``config.focal_px`` and ``config.baseline_m`` for the rendered scenes)."""
+        frame (the principal point depends on the image's size, which a result does not hold)."""
         if not isinstance(camera, StereoCamera):
             raise ParameterTypeError(message("camera", "DepthResult.points", "a StereoCamera", camera))
         return camera.points_from_disparity(self.kept_xy, self.kept_disparity)
@@ -376,11 +261,7 @@ def _object(rows, feature, first, d, config: DepthConfig, centroid=None, silhoue
 
 def _objects(feature, xy, d, config: DepthConfig, silhouettes: Silhouettes | None = None,
              trusted=None, infront=None) -> tuple[list, int]:
-    """Group matches into objects; returns (objects near -> far, features dropped).
-
-    With `silhouettes`, blob ``k`` is one object when ``trusted[k - 1]``, or at its outline alone when
-    ``infront[k - 1]``, its outline has a score and no band of its features agrees; the features of
-    the other blobs are grouped as without silhouettes."""
+    """Group matches into objects; returns (objects near -> far, features dropped)."""
     features = np.unique(feature)
     if not len(features) and silhouettes is None:
         return [], 0
@@ -440,13 +321,8 @@ def depth_from_matches(background, scene, config: DepthConfig | None = None,
         Matches of the background pair and of the scene pair (same view, same size).
     config : DepthConfig, optional
     silhouettes : Silhouettes, optional
-        The scene's blobs of change (:func:`ismb_lab.depth.outlines.silhouettes`): each
-        trusted blob is one object (step 3 of the module's docstring).  Without them
-        the features alone are grouped, whatever ``config.grouping`` says.
-
-    Returns
-    -------
-    DepthResult
+        The scene's blobs of change; without them the features alone are grouped, whatever
+        ``config.grouping`` says.
 
     Examples
     --------
@@ -489,9 +365,8 @@ def depth_from_matches(background, scene, config: DepthConfig | None = None,
     keep &= ~behind
     trusted = infront = None
     if silhouettes is not None:
-        # An object stands in front of what was there: an outline at the background's
-        # disparity or behind it is a poor outline (a sliver that looks like the wall), unless
-        # it fits firmly.  Only a background object, not a lone wrong match, sets that floor.
+        # An outline at the background's disparity or behind it is a sliver that looks like the
+        # wall, unless it fits firmly.  Only a background object, not a lone wrong match, sets that floor.
         infront = np.ones(len(silhouettes), dtype=bool)
         if len(bd) and background_objects:
             infront = ((silhouettes.disparity > bd.min() + config.disparity_tol_px)

@@ -1,14 +1,7 @@
 """Objects by their outlines: the blobs where a scene pair differs from its background pair.
 
-The depth demo (:mod:`ismb_lab.depth.pipeline`) has a background pair and a scene pair of the
-same view.  Where the scene differs from the background is where the objects are, in the
-left image and in the right one.  :func:`silhouettes` gives each left blob of change the
-shift that lays it best on the right image's change (its *silhouette disparity*), and
-:func:`ismb_lab.depth.objects.depth_from_matches` makes each well-fitting blob one object, at the
-disparity its agreeing features give.  The outline does not depend on texture, so it
-holds where the features are ambiguous (stripes, tiles) or missing (a plain object).
-This goes beyond the thesis, which groups the features alone; ``docs/depth.md`` describes
-the method step by step.
+:func:`silhouettes` gives each left blob of change the shift that lays it best on the right
+image's change; the outline does not depend on texture (beyond the thesis; ``docs/depth.md``).
 """
 
 from __future__ import annotations
@@ -25,9 +18,8 @@ from ..images.io import StereoPair
 
 __all__ = ["CHANGE_SIGMA", "CHANGE_THRESHOLD", "OutlineConfig", "Silhouettes", "changed_in_roi", "silhouettes"]
 
-#: Grey levels (0-255) by which the smoothed difference of a scene image from its background
-#: must exceed to count as a change (camera noise stays below it): the one threshold of the
-#: corners' boxes (:func:`ismb_lab.depth.pipeline.changed_roi`) and of the outlines.
+#: Grey levels (0-255) that the smoothed difference from the background must exceed to count as
+#: a change: the one threshold of the corners' boxes and of the outlines.
 CHANGE_THRESHOLD = 8.0
 
 #: Standard deviation (px) of the Gaussian that smooths that difference first.
@@ -38,38 +30,9 @@ CHANGE_SIGMA = 1.0
 class OutlineConfig:
     """How :func:`silhouettes` finds the blobs of change and their shifts (``DepthConfig.outline``).
 
-    Attributes
-    ----------
-    threshold_low : float
-        Hysteresis: a pixel whose smoothed difference exceeds this (0 to :data:`CHANGE_THRESHOLD`),
-        and twice the image's median smoothed difference (noisy cameras), is changed too when it
-        connects to one above :data:`CHANGE_THRESHOLD`.  The blobs are made with and without it, and
-        each region keeps those that fit better.
-    min_pixels : int
-        Smaller blobs are camera noise.
-    pad_px : int
-        Columns on each side of a blob's box that its overlap counts as well.
-    merge_gap_px : int
-        Largest gap between the boxes of two blobs that may be one object.
-    merge_disparity_px : float
-        Blobs whose shifts differ by this or less (and whose boxes are `merge_gap_px` apart or less)
-        are one object cut where it looks like the wall ...
-    link_score : float
-        ... unless their shifts differ and both fit with a Dice of this or more.
-    max_fraction : float
-        A blob covering more of the ROI than this is a change of the light or of the view: its
-        score is 0.
-    split_score : float
-        Least Dice of each part of a blob cut in two (each part at least ``2 * pad_px`` wide); also
-        the fit under which two neighbouring pieces count as weak.
-    split_step_px : float
-        Least difference of the two parts' shifts.
-    split_far_px, split_far_score : float
-        A blob that one shift lays with a Dice of `split_far_score` or more is cut as well when two
-        shifts `split_far_px` or more apart, both parts moved at once, lay it better.
-    split_far_poor_px : float
-        ... and one that one shift lays with a Dice from `split_score` up to `split_far_score`, when
-        two shifts this far apart or more lay both parts at once with `split_far_score` or more.
+    ``docs/depth.md`` describes every field beside its default (section 4).  `threshold_low`
+    (grey levels) is the hysteresis threshold, from 0 to :data:`CHANGE_THRESHOLD`; distances are
+    in pixels and scores are Dice overlaps in [0, 1].
 
     Examples
     --------
@@ -110,25 +73,19 @@ class OutlineConfig:
 class Silhouettes:
     """Blobs of change of a scene's left image, each with the shift that lays it on the right image's.
 
-    Made by :func:`silhouettes`; read by :func:`ismb_lab.depth.objects.depth_from_matches`.
-
     Attributes
     ----------
     labels : (H, W) int ndarray
         0 where the left image did not change, ``k`` on blob ``k`` (1..n) (read-only).
-    disparity : (n,) ndarray
-        Blob ``k``'s silhouette disparity at index ``k - 1``: the whole-pixel shift
-        ``x_left - x_right`` with the largest Dice overlap.
-    score : (n,) ndarray
-        That overlap, 0-1; 0 for a blob that covers more than :attr:`OutlineConfig.max_fraction`
-        of the ROI, which is a change of the light or of the view rather than an object.
+    disparity, score : (n,) ndarray
+        Blob ``k``'s shift ``x_left - x_right`` with the largest Dice overlap, and that Dice, at
+        index ``k - 1``.
     centroid_xy : (n, 2) ndarray
         Mean left-image ``(x, y)`` of each blob's pixels.
     right : (H, W) bool ndarray or None
-        The right image's changed pixels (read-only), which :meth:`cut_dice` lays the blobs on;
-        None when not known.
+        The right image's changed pixels (read-only), which :meth:`cut_dice` lays the blobs on.
     pad_px : int
-        Columns on each side that an overlap counts as well (:attr:`OutlineConfig.pad_px`).
+        :attr:`OutlineConfig.pad_px`.
     shifts : tuple of int
         The shifts tried.
     """
@@ -169,18 +126,11 @@ class Silhouettes:
         return len(self.disparity)
 
     def cut_dice(self, k: int, column: int, shifts) -> float:
-        """How well blob `k` (1..n), cut at left-image `column` into a left and a right part moved
-        at once by ``shifts = (left, right)``, lies on the right image's change: one Dice over the
-        parts' rows and the columns they cover (padded by :attr:`pad_px`), the moved parts and the
-        right image's change each with holes narrower than ``pad_px + 1`` columns closed; nan
-        without :attr:`right`.
+        """How well blob `k` (1..n), cut at left-image `column` into two parts moved at once by
+        ``shifts = (left, right)``, lies on the right image's change (one Dice; nan without
+        :attr:`right`).  Holes narrower than ``pad_px + 1`` columns are closed on both sides,
+        since where an object looks like the wall its blob has holes that do not tell shifts apart.
 
-        Equal shifts give the whole blob at that shift.  Where an object's texture looks like the
-        wall behind it, its blob has holes, and the wall behind differs between the two views:
-        closed, the holes do not tell shifts apart.
-
-        Examples
-        --------
         >>> import numpy as np
         >>> labels = np.zeros((20, 60), dtype=np.int32); labels[5:15, 30:50] = 1
         >>> right = np.zeros((20, 60), dtype=bool)
@@ -195,12 +145,9 @@ class Silhouettes:
         return float(_placed_dice(parts, shifts, right, self.pad_px, line))
 
     def cut_shifts(self, k: int, column: int, start) -> tuple:
-        """The shifts ``(left, right)`` that lay the two parts of :meth:`cut_dice` best, both moved at
-        once: coordinate ascent over :attr:`shifts` from `start`, each part in turn, until neither
-        moves (at most three rounds).
+        """The shifts ``(left, right)`` that lay the two parts of :meth:`cut_dice` best, by coordinate
+        ascent over :attr:`shifts` from `start`.
 
-        Examples
-        --------
         >>> import numpy as np
         >>> labels = np.zeros((20, 60), dtype=np.int32); labels[5:15, 30:50] = 1
         >>> right = np.zeros((20, 60), dtype=bool)
@@ -215,8 +162,7 @@ class Silhouettes:
         return tuple(int(v) for v in _ascend(parts, start, right, self.shifts, self.pad_px, line)[1])
 
     def _cut_parts(self, k: int, column: int):
-        """Blob `k` cut at `column` (left part, right part), the right image's change with holes
-        narrower than ``pad_px + 1`` columns closed, and the line that closes them."""
+        """Blob `k` cut at `column` (left, right part), the right image's change closed, and the line."""
         from scipy.ndimage import binary_closing
 
         line = np.ones((1, self.pad_px + 1), dtype=bool)
@@ -231,17 +177,12 @@ class Silhouettes:
 def changed_in_roi(background, scene, roi, threshold, sigma, margin, own: str, name: str, low=None):
     """The pixels of `roi` whose smoothed difference exceeds `threshold`, the ROI and the margin.
 
-    The one test of "changed" behind :func:`silhouettes` and
-    :func:`ismb_lab.depth.pipeline.changed_roi` / :func:`~ismb_lab.depth.pipeline.changed_regions`:
-    the absolute difference of two grey images, Gaussian-smoothed with `sigma`, above
-    `threshold` grey levels.  With `low` (a hysteresis threshold, named `threshold_low` to the
-    caller), pixels above `low` that connect to one above `threshold` count as well; `low` is
-    raised to twice the image's median smoothed difference (the noise floor, since most of the
-    image is unchanged), and at most to `threshold`.  Bad values are named as parameters of
-    `own`; `name` is the parameter that holds `scene`.
+    The one test of "changed": the absolute difference of two grey images, Gaussian-smoothed with
+    `sigma`, above `threshold` grey levels.  With `low` (``threshold_low`` to the caller), pixels
+    above it that connect to one above `threshold` count as well; `low` is raised to twice the
+    median difference (the noise floor), at most to `threshold`.  Bad values are named as
+    parameters of `own`; `name` holds `scene`.
 
-    Examples
-    --------
     >>> import numpy as np
     >>> background = np.zeros((6, 8))
     >>> scene = background.copy(); scene[2:4, 3:5] = 50.0
@@ -274,39 +215,10 @@ def silhouettes(background, scene, roi="center", *, shifts=range(0, 41),
                 config: OutlineConfig | None = None) -> Silhouettes:
     """Blobs of change of the scene's left image, each with the shift that lays it on the right's.
 
-    Where the scene pair differs from the background pair is where the objects are, in both
-    images: the pixels :func:`changed_in_roi` counts as changed (whole image; the blobs of the left
-    one that reach into `roi`).  The blobs are made twice, by the threshold alone and with
-    hysteresis (:attr:`OutlineConfig.threshold_low`), and each region keeps the blobs that fit
-    better (:func:`_by_region`).  A blob's silhouette disparity is the shift ``d`` in `shifts`
-    with the largest Dice overlap between the blob and the right image's changed pixels ``d``
-    pixels left, counted over the blob's columns padded by ``pad_px`` and only where both images
-    see it.  The outline does not depend on texture, so a striped object whose stripes match one
-    period off still has its true shift; the features then give it to a fraction of a pixel
-    (:func:`ismb_lab.depth.objects.depth_from_matches`).
+    `background` and `scene` are StereoPairs of one view; the blobs of the left image that reach
+    into `roi` each get the shift of `shifts` with the largest Dice overlap (``docs/depth.md``,
+    section 4), and are numbered left to right by centroid.
 
-    In each partition (:func:`_partition`) blobs that are one object cut where it looks like the
-    wall are linked, neighbours are joined while one shift lays their union at least as well as
-    their own shifts lay both at once, and a blob that two shifts lay better than one is cut into
-    two objects that touch in the image.
-
-    Parameters
-    ----------
-    background, scene : StereoPair
-        The two pairs of one view (images of one size).
-    roi : str or (x, y, w, h)
-        Where the objects may be, as :attr:`ismb_lab.matching.pipeline.MatchConfig.roi`.
-    shifts : iterable of int
-        Disparities to try (:func:`ismb_lab.depth.pipeline.pair_silhouettes`: the candidate window's).
-    config : OutlineConfig, optional
-
-    Returns
-    -------
-    Silhouettes
-        Blobs numbered left to right by centroid.
-
-    Examples
-    --------
     >>> import numpy as np
     >>> from ismb_lab.images.io import load_pair
     >>> rng = np.random.default_rng(0)
@@ -344,8 +256,7 @@ def silhouettes(background, scene, roi="center", *, shifts=range(0, 41),
 
 
 def _partition(left, right, box, shifts, config: OutlineConfig) -> Silhouettes:
-    """:func:`silhouettes` of the changed pixels `left` and `right` (full-image masks): the blobs of
-    `left` that reach into `box`, linked, joined and cut."""
+    """:func:`silhouettes` of the changed pixels `left` and `right` (full-image masks)."""
     from scipy.ndimage import find_objects, label
     from scipy.sparse.csgraph import connected_components
 
@@ -403,13 +314,10 @@ def _numbered(masks, score, disparity, centroids, right, pad, shifts) -> Silhoue
 
 
 def _by_region(plain: Silhouettes, grown: Silhouettes) -> Silhouettes:
-    """The blobs of `plain` or of `grown` (the same with hysteresis), region by region.
+    """The blobs of `plain` or of `grown` (with hysteresis), region by region.
 
-    A region is a set of blobs of the two that overlap, directly or through others.  Each region
-    keeps the blobs of the one whose blobs fit better on average (mean Dice; a tie keeps `plain`'s);
-    a region that only `grown` has (an object too faint for the threshold alone) keeps `grown`'s.
-    Each blob keeps its own Dice, shift and centroid.  The right image's change is `plain`'s, which
-    the depth stage's cuts of a blob (:meth:`Silhouettes.cut_dice`) lay blobs on.
+    A region is a set of overlapping blobs of the two; it keeps the blobs of the one that fit
+    better on average (a tie keeps `plain`'s).  The right image's change is `plain`'s.
     """
     from scipy.sparse.csgraph import connected_components
 

@@ -1,30 +1,8 @@
 """The toy-car depth demo of the thesis' §5.2.3, from four images to objects near -> far.
 
-``relative_depth(background, scene)`` matches a background pair and a scene pair of the
-same view (:func:`depth_match`) and hands both to
-:func:`ismb_lab.depth.objects.depth_from_matches`, which removes the background and ranks the
-objects left.
-
-*Corners where something changed.*  The corner detector keeps the strongest corners
-of its ROI, and textured posters have stronger corners than a small toy car, so with
-the thesis' ROI a far car can end with one corner or none.  The demo knows the
-background, so it looks for the scene pair's corners only in the bounding box of the
-ROI's pixels whose smoothed left-image difference from the background exceeds
-:data:`~ismb_lab.depth.outlines.CHANGE_THRESHOLD` grey levels, plus a margin (:func:`changed_roi`).  The box still holds some background, so
-the background removal has work to do; where nothing changed, or everything did
-(another day's lighting), it is the whole ROI.  The background pair keeps the ROI.
-The figures behind this choice are in ``benchmarks/README.md``.
-
-*Objects by their outlines* (beyond the thesis).  The same differences, in the left and
-in the right image, are the objects' outlines: :func:`ismb_lab.depth.outlines.silhouettes`
-gives each left blob of change the shift that lays it on the right image's blobs, and
-:func:`ismb_lab.depth.objects.depth_from_matches` makes each well-fitting blob one object at the
-disparity its agreeing features give (``DepthConfig.grouping``; ``"features"`` is the
-thesis' grouping).  ``docs/depth.md`` describes the method as it runs;
-``scripts/depth_layouts.py`` scores it on random object layouts.
-
-The demo's defaults, :data:`DEPTH_PARAMS`, :data:`DEPTH_MATCH_CONFIG` and
-:data:`DEPTH_SOLVER`, are declared here once; the command line and the widget read them.
+:func:`relative_depth` matches a background pair and a scene pair of the same view, the scene's
+corners sought where it changed, and hands both to :func:`~ismb_lab.depth.objects.depth_from_matches`;
+``docs/depth.md`` describes the method.  The demo's defaults are declared here once.
 
 >>> from ismb_lab.scenes import lab_scene, toy_car_scene
 >>> result = relative_depth(lab_scene(0), toy_car_scene(0))
@@ -54,16 +32,12 @@ __all__ = ["DEPTH_MATCH_CONFIG", "DEPTH_PARAMS", "DEPTH_SOLVER", "REGION_CORNERS
            "layout_match_config", "load_stereo", "relative_depth", "scene_match_config",
            "pair_silhouettes", "scene_prepared"]
 
-#: Corners of the depth demo: the thesis' centre quarter, but 40 to 60 corners instead of
-#: 20 to 30, so that the small toy cars get some next to the posters' many.
+#: The thesis' centre quarter with 40 to 60 corners, so that small toy cars get some.
 DEPTH_MATCH_CONFIG = MatchConfig(n_min=40, n_max=60)
 
 
-#: Method-III parameters of the depth demo, fitted by the GA on the background pair
-#: images/lab and its answer key only, with :data:`DEPTH_MATCH_CONFIG`'s corners
-#: (``python scripts/fit_depth_params.py``: GA seed 0, 500 generations, each chromosome
-#: scored over update orders 0-4).  The thesis' values were fitted to its webcams and
-#: give many extra matches on rendered scenes.
+#: Method-III parameters fitted by the GA on the background pair images/lab and its answer key
+#: alone (``scripts/fit_depth_params.py``).
 DEPTH_PARAMS = Params(theta_c=1.945540697133651, theta_s=13.577571706866182,
                       lambda_c=7.143116184828514, lambda_s=6.966076587109354)
 
@@ -73,38 +47,21 @@ DEPTH_METHOD = "III"
 #: Corners per blob of change in the scene pair (:func:`scene_prepared`): at least, at most.
 REGION_CORNERS = (20, 40)
 
-#: How the demo solves the energy, a name in :data:`ismb_lab.network.solvers.SOLVERS`: mean-field
-#: annealing ranked the cars right on more development layouts than the discrete network
-#: (the figures are in ``benchmarks/README.md``).
+#: How the demo solves the energy, a name in :data:`ismb_lab.network.solvers.SOLVERS`.
 DEPTH_SOLVER = ANNEAL
 
 
 def layout_match_config(layout, match_config=None) -> MatchConfig:
-    """The demo's corner settings with a layout's ROI and candidate-window shift.
+    """The demo's corner settings (default :data:`DEPTH_MATCH_CONFIG`) with the ROI and
+    candidate-window shift of `layout` (an object with ``.roi`` and ``.shift``).
 
-    Parameters
-    ----------
-    layout : object with ``.roi`` and ``.shift``
-        E.g. a :class:`ismb_lab.scenes.Layout`, which knows its disparity range.
-    match_config : MatchConfig, optional
-        Default :data:`DEPTH_MATCH_CONFIG`.
-
-    Returns
-    -------
-    MatchConfig
-        As ``ismb-lab depth --roi X,Y,W,H --shift S`` would use.
-
-    Examples
-    --------
     >>> from ismb_lab.scenes import object_layout
     >>> c = layout_match_config(object_layout(0))
     >>> c.roi, c.shift, c.n_min
     ((40, 40, 240, 160), 11.0, 40)
     """
     own = "layout_match_config"
-    match_config = DEPTH_MATCH_CONFIG if match_config is None else match_config
-    if not isinstance(match_config, MatchConfig):
-        raise ParameterTypeError(message("match_config", own, "a MatchConfig", match_config))
+    match_config = _match_config(match_config, own)
     if not (hasattr(layout, "roi") and hasattr(layout, "shift")):
         raise ParameterTypeError(message("layout", own, "an object with .roi and .shift", layout))
     return replace(match_config, roi=tuple(int(v) for v in layout.roi),
@@ -113,30 +70,11 @@ def layout_match_config(layout, match_config=None) -> MatchConfig:
 
 def changed_roi(background_left, scene_left, roi="center", *, threshold: float = CHANGE_THRESHOLD,
                 sigma: float = CHANGE_SIGMA, margin: int = 4):
-    """The box of `roi` where the scene's left image differs from the background's.
+    """The box of `roi` where the scene's left image differs from the background's, or None.
 
-    Parameters
-    ----------
-    background_left, scene_left : (H, W) array_like
-        Grey left images of the background and of the scene, one size.
-    roi : str or (x, y, w, h)
-        Where to look, as :attr:`ismb_lab.matching.pipeline.MatchConfig.roi`.
-    threshold : float
-        Grey levels (0-255) by which the Gaussian-smoothed absolute difference must
-        exceed to count as a change; camera noise alone stays below it.
-    sigma : float
-        Standard deviation of the Gaussian smoothing, pixels.
-    margin : int
-        Pixels added on every side of the changed pixels' bounding box (clipped
-        to `roi`), so that corners on an object's outline are inside.
+    Changed: the difference, smoothed by a Gaussian of `sigma` px, exceeds `threshold` grey levels.
+    The box grows by `margin` px (within `roi`) so that corners on an object's outline are inside.
 
-    Returns
-    -------
-    box : (x, y, w, h) or None
-        None when no pixel of `roi` changed.
-
-    Examples
-    --------
     >>> import numpy as np
     >>> background = np.zeros((240, 320))
     >>> scene = background.copy()
@@ -162,23 +100,9 @@ def _grown_box(x, y, w, h, c0, r0, c1, r1, margin) -> tuple[int, int, int, int]:
 
 
 def scene_match_config(background, scene, match_config=None):
-    """The demo's corner settings for a scene pair: `match_config` with its ROI cut
-    down to :func:`changed_roi`.
+    """`match_config` (default :data:`DEPTH_MATCH_CONFIG`) with its ROI cut down to
+    :func:`changed_roi` of two StereoPairs; `match_config` itself when nothing changed.
 
-    Parameters
-    ----------
-    background, scene : StereoPair
-        The two pairs of the same view (:func:`ismb_lab.images.io.load_pair`).
-    match_config : MatchConfig, optional
-        Default :data:`DEPTH_MATCH_CONFIG`.
-
-    Returns
-    -------
-    MatchConfig
-        `match_config` itself when nothing in its ROI changed.
-
-    Examples
-    --------
     >>> from ismb_lab.images.io import load_pair
     >>> from ismb_lab.scenes import lab_scene, toy_car_scene
     >>> bg, sc = (load_pair(s.left, s.right) for s in (lab_scene(0), toy_car_scene(0)))
@@ -186,9 +110,7 @@ def scene_match_config(background, scene, match_config=None):
     (97, 127, 134, 49)
     """
     own = "scene_match_config"
-    match_config = DEPTH_MATCH_CONFIG if match_config is None else match_config
-    if not isinstance(match_config, MatchConfig):
-        raise ParameterTypeError(message("match_config", own, "a MatchConfig", match_config))
+    match_config = _match_config(match_config, own)
     if match_config.shift == "auto" and background is not None:
         match_config = auto_window(load_stereo(background, "background", own), match_config)
     for name, value in (("background", background), ("scene", scene)):
@@ -201,19 +123,9 @@ def scene_match_config(background, scene, match_config=None):
 
 def changed_regions(background_image, scene_image, roi="center", *, threshold: float = CHANGE_THRESHOLD,
                     sigma: float = CHANGE_SIGMA, margin: int = 4, min_pixels: int = 20) -> list:
-    """Boxes of the separate blobs of `roi` where `scene_image` differs from `background_image`.
+    """Boxes ``(x, y, w, h)``, left to right, of the blobs (8-neighbours, `min_pixels` or more) of
+    the pixels :func:`changed_roi` counts as changed, each grown by `margin` within `roi`.
 
-    The pixels that :func:`changed_roi` counts as changed, split into connected
-    blobs (8-neighbours); each blob's bounding box grows by `margin` (clipped to
-    `roi`).  Blobs of fewer than `min_pixels` pixels are camera noise and skipped.
-
-    Returns
-    -------
-    list of (x, y, w, h)
-        Left to right (by ``x``); empty when nothing changed.
-
-    Examples
-    --------
     >>> import numpy as np
     >>> background = np.zeros((240, 320))
     >>> scene = background.copy()
@@ -234,8 +146,8 @@ def changed_regions(background_image, scene_image, roi="center", *, threshold: f
 
 
 def _region_corners(image, boxes, config: MatchConfig, n_min: int, n_max: int) -> Corners:
-    """Corners of every box (the first with ``config``'s numbers, each other its own
-    `n_min`..`n_max`), merged row-major, duplicates once."""
+    """Corners of every box (the first with `config`'s numbers, the others `n_min`..`n_max`),
+    merged row-major, duplicates once."""
     kw = dict(threshold=config.threshold, sigma=config.harris_sigma, k=config.harris_k,
               min_distance=config.min_distance)
     found = [detect_corners(image, roi=box, n_min=config.n_min if not n else n_min,
@@ -255,27 +167,10 @@ def _region_corners(image, boxes, config: MatchConfig, n_min: int, n_max: int) -
 def scene_prepared(background, scene, match_config=None) -> Prepared:
     """Corners and energy ingredients of a scene pair, sought where it differs from the background.
 
-    The changed box (:func:`scene_match_config`) keeps its corners, and each blob of
-    change (:func:`changed_regions`) of the left images gets corners of its own, as
-    does each blob of the right images (in the right ROI, ``shift``
-    pixels left): a textured poster beside a plain object no longer takes the
-    object's share of the corner budget, and a striped object does not take its
-    neighbour's.  Each blob keeps :data:`REGION_CORNERS` corners.  Where nothing
-    changed this is :func:`ismb_lab.matching.pipeline.prepare` with ``match_config``.
+    The changed box (:func:`scene_match_config`, the returned ``config.roi``) keeps its corners,
+    and each blob of change (:func:`changed_regions`) of either image gets :data:`REGION_CORNERS`
+    of its own, so that a textured poster cannot take a plain object's share.
 
-    Parameters
-    ----------
-    background, scene : StereoPair
-    match_config : MatchConfig, optional
-        Default :data:`DEPTH_MATCH_CONFIG`.
-
-    Returns
-    -------
-    Prepared
-        Its ``config.roi`` is :func:`scene_match_config`'s box.
-
-    Examples
-    --------
     >>> from ismb_lab.images.io import load_pair
     >>> from ismb_lab.scenes import lab_scene, toy_car_scene
     >>> bg, sc = (load_pair(s.left, s.right) for s in (lab_scene(0), toy_car_scene(0)))
@@ -294,8 +189,7 @@ def scene_prepared(background, scene, match_config=None) -> Prepared:
     right = changed_regions(background.right, scene.right, shift_roi(roi, base.shift, scene.shape))
     if not right:
         right = [shift_roi(box, base.shift, scene.shape) for box in left]
-    # The changed box's own corners, as before (the background removal needs some
-    # background), plus each blob's.
+    # The changed box's own corners (the background removal needs some background), plus each blob's.
     left, right = [config.roi] + left, [shift_roi(config.roi, base.shift, scene.shape)] + right
     lo, hi = REGION_CORNERS
     lc = _region_corners(scene.left, left, config, lo, hi)
@@ -314,8 +208,6 @@ def load_stereo(value, name: str, owner: str) -> StereoPair:
     """A pair as the demo takes it: a StereoPair, a pair folder (``left.png`` and ``right.png``),
     a ``(left, right)`` pair of images or paths, or an object with ``.left`` and ``.right``.
 
-    Examples
-    --------
     >>> import numpy as np
     >>> load_stereo((np.zeros((40, 60)), np.zeros((40, 60))), "background", "demo").shape
     (40, 60)
@@ -343,33 +235,11 @@ def load_stereo(value, name: str, owner: str) -> StereoPair:
 
 def depth_match(pair, *, background=None, method=DEFAULT_METHOD, params=None, match_config=None,
                 seed: int = 0, solver=DEPTH_SOLVER, one_to_one: bool = False, **network) -> MatchResult:
-    """Match one stereo pair as the depth demo does.
+    """Match one pair (any kind :func:`load_stereo` takes) as the depth demo does.
 
-    Parameters
-    ----------
-    pair : StereoPair, (left, right) or object with ``.left`` and ``.right``
-        Images (arrays or paths); a :class:`~ismb_lab.scenes.Scene` works too.
-    background : same kinds as `pair`, optional
-        The background pair of the same view.  When given, `pair` is a scene and its
-        corners are sought only in :func:`changed_roi` of the ROI (the whole ROI
-        where nothing changed).
-    method, params, match_config, seed
-        As in :func:`relative_depth` (``params`` default: :data:`DEPTH_PARAMS` for
-        Method-III).
-    solver : str or Solver
-        A name in :data:`ismb_lab.network.solvers.SOLVERS` or a configured solver (default :data:`DEPTH_SOLVER`).
-    one_to_one : bool
-        Keep at most one match per corner (:func:`ismb_lab.matching.pipeline.match`).
-    **network
-        Options of the solver (e.g. ``stop_rule``, ``rule`` or ``kernel`` of the discrete network)
-        (:func:`ismb_lab.matching.pipeline.match`).
+    With `background`, `pair` is a scene whose corners are sought where it changed
+    (:func:`scene_prepared`).  The other arguments are :func:`relative_depth`'s.
 
-    Returns
-    -------
-    MatchResult
-
-    Examples
-    --------
     >>> from ismb_lab.scenes import lab_scene
     >>> m = depth_match(lab_scene(0, supersample=1))
     >>> m.solver, m.stop_rule, len(m.pairs) > 10
@@ -384,11 +254,15 @@ def depth_match(pair, *, background=None, method=DEFAULT_METHOD, params=None, ma
     return _match(_prepared(pair, background, match_config, own), method, params, seed, solver, one_to_one)
 
 
-def _prepared(pair, background, match_config, own: str) -> Prepared:
-    """:func:`depth_match`'s corners and energy ingredients of `pair`."""
+def _match_config(match_config, own: str) -> MatchConfig:
     match_config = DEPTH_MATCH_CONFIG if match_config is None else match_config
     if not isinstance(match_config, MatchConfig):
         raise ParameterTypeError(message("match_config", own, "a MatchConfig", match_config))
+    return match_config
+
+
+def _prepared(pair, background, match_config, own: str) -> Prepared:
+    match_config = _match_config(match_config, own)
     if match_config.shift == "auto" and background is not None:
         match_config = auto_window(load_stereo(background, "background", own), match_config)
     pair = load_stereo(pair, "pair", own)
@@ -404,22 +278,8 @@ def _match(prepared: Prepared, method, params, seed, solver, one_to_one=False) -
 
 
 def depth_pairs(background, scene, match_config=None) -> tuple[Prepared, Prepared]:
-    """The background and scene pairs prepared as :func:`relative_depth` prepares them.
-
-    Corners, ``M`` and the geometry do not depend on the method, the parameters, the
-    seed or the tolerances: pass the result as ``relative_depth(..., prepared=...)``
-    to change those without preparing the pairs again.
-
-    Parameters
-    ----------
-    background, scene, match_config
-        As in :func:`relative_depth`.
-
-    Returns
-    -------
-    (Prepared, Prepared)
-        The background pair's and the scene pair's.
-    """
+    """The (background, scene) Prepared pairs of :func:`relative_depth`, to pass back as its
+    `prepared` when only the method, parameters, seed or tolerances change."""
     return _depth_pairs(background, scene, match_config, "depth_pairs")
 
 
@@ -439,39 +299,22 @@ def relative_depth(background, scene, *, method=DEFAULT_METHOD, params=None, mat
 
     Parameters
     ----------
-    background, scene : pair folder, (left, right) or object with ``.left`` and ``.right``
-        The two stereo pairs of the same view (:func:`load_stereo`; a
-        :class:`~ismb_lab.scenes.Scene` works too).  All four images must have one size.
-    method : str
-        Energy recipe, see :mod:`ismb_lab.network.methods` (the thesis uses Method-III).
+    background, scene
+        Two pairs of the same view, of one size, as :func:`load_stereo` takes them.
     params : Params, optional
-        Energy parameters (default: :data:`DEPTH_PARAMS` for Method-III, fitted on the
-        background pair images/lab; the method's own defaults for the others).
-    match_config : MatchConfig, optional
-        Corners, ROI and candidate window (default: :data:`DEPTH_MATCH_CONFIG`, the
-        thesis' settings with 40 to 60 corners).  The scene pair's corners are
-        sought in the part of the ROI that changed (:func:`changed_roi`).
-    config : DepthConfig, optional
-        Tolerances and calibration.
+        Default :data:`DEPTH_PARAMS` for Method-III, the method's own for the others.
     seed : int
         Update-order seed of both runs.
     solver : str or Solver
-        How the energy is solved (see :func:`depth_match`).
+        A name in :data:`ismb_lab.network.solvers.SOLVERS` or a configured solver.
     prepared : (Prepared, Prepared), optional
-        Both pairs already prepared by :func:`depth_pairs` with these images and
-        `match_config` (which are then not read again): a change of method, parameters,
-        seed or tolerances need not find the corners again.
+        :func:`depth_pairs` of these images and `match_config`, which are then not read again.
     silhouettes : Silhouettes, optional
-        :func:`pair_silhouettes` of these `prepared` pairs, found once as well (with
-        ``config.grouping`` ``"silhouettes"`` only).
+        :func:`pair_silhouettes` of `prepared`, found once as well (``grouping="silhouettes"`` only).
     one_to_one : bool
-        Keep at most one match per corner in both pairs (:func:`ismb_lab.matching.pipeline.match`).
+        Keep at most one match per corner (:func:`ismb_lab.matching.pipeline.match`).
     **network
-        The solver's options, as in :func:`depth_match`.
-
-    Returns
-    -------
-    DepthResult
+        The solver's options (e.g. ``stop_rule`` of the discrete network).
 
     Examples
     --------
@@ -513,13 +356,9 @@ def _check_prepared(prepared, own: str) -> None:
 
 
 def pair_silhouettes(prepared, config: DepthConfig | None = None) -> Silhouettes:
-    """:func:`~ismb_lab.depth.outlines.silhouettes` of two pairs prepared by :func:`depth_pairs`.
+    """:func:`~ismb_lab.depth.outlines.silhouettes` of :func:`depth_pairs`, in the background's ROI
+    at the whole-pixel shifts of the scene's candidate window.
 
-    The blobs are sought in the background's ROI, at the whole-pixel shifts of the scene's
-    candidate window (the disparities the matcher may find), as ``config.outline`` says.
-
-    Examples
-    --------
     >>> from ismb_lab.scenes import lab_scene, toy_car_scene
     >>> blobs = pair_silhouettes(depth_pairs(lab_scene(0), toy_car_scene(0)))
     >>> blobs.disparity.tolist()        # the two cars, near one first (left to right)

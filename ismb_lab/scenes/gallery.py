@@ -1,12 +1,7 @@
 """The project's own stereo pairs in ``images/``, rendered from :mod:`ismb_lab.scenes`.
 
-``ismb-lab render`` writes them; a test renders them again and compares bytes, so the
-committed files are exactly what this code produces.
-
-Each pair folder holds ``left.png`` and ``right.png`` (8-bit grey), ``disparity.png``
-(16-bit, horizontal disparity of the left view times 256, 0 where the left pixel is
-occluded or leaves the right view: the KITTI convention) and ``scene.json`` (the rig and
-how the pair was made).
+Each pair folder holds ``left.png`` and ``right.png`` (8-bit grey), ``disparity.png`` (16-bit,
+disparity times 256, 0 = unknown: the KITTI convention) and ``scene.json`` (the rig and its making).
 """
 
 from __future__ import annotations
@@ -39,8 +34,6 @@ def _png(image: np.ndarray) -> bytes:
 def encode_disparity(disparity: np.ndarray) -> np.ndarray:
     """Disparity map to the 16-bit KITTI encoding (``round(256 d)``, 0 = unknown).
 
-    Examples
-    --------
     >>> encode_disparity(np.array([[16.5, np.nan]]))
     array([[4224,    0]], dtype=uint16)
     """
@@ -53,8 +46,6 @@ def encode_disparity(disparity: np.ndarray) -> np.ndarray:
 def decode_disparity(encoded: np.ndarray) -> np.ndarray:
     """Inverse of :func:`encode_disparity`; unknown pixels become NaN.
 
-    Examples
-    --------
     >>> decode_disparity(np.array([[4224, 0]], dtype=np.uint16))
     array([[16.5,  nan]])
     """
@@ -88,20 +79,9 @@ SNAP_PX = 1.5
 
 
 def answer_key(scene: Scene, left_path, right_path):
-    """Target pairs of a rendered pair from its ground truth, on the default matcher's corners.
-
-    Corners come from :func:`ismb_lab.matching.pipeline.prepare` with the default
-    :class:`~ismb_lab.matching.pipeline.MatchConfig` on the image files; a left corner's
-    target partner is the right corner within :data:`SNAP_PX` of its exact
-    correspondence (:func:`ismb_lab.scenes.true_matches`).  When two left corners
-    share a right corner, only the nearer one keeps it.  Corners without a
-    partner (occluded, out of view, occlusion junctions) get no target.
-
-    Returns
-    -------
-    TargetSet
-        With the images' SHA-256 and a ``kind`` / ``how`` note in its meta.
-    """
+    """Target pairs (a TargetSet) of a rendered pair from its ground truth, on the default
+    matcher's corners: a left corner's partner is the right corner within :data:`SNAP_PX` of its
+    exact correspondence; of two left corners sharing one, the nearer keeps it."""
     from ..matching.pipeline import prepare
 
     prepared = prepare(left_path, right_path)
