@@ -99,7 +99,7 @@ def answer_key(scene: Scene, left_path, right_path):
         np.array(pairs, dtype=np.intp).reshape(-1, 2), left_xy, right_xy,
         left_sha256=image_sha256(left_path), right_sha256=image_sha256(right_path),
         kind="answer key generated from ground truth",
-        how=(f"corners of ismb_lab.matching.pipeline.prepare with the default MatchConfig; a left corner's "
+        how=(f"corners of ismb_lab.matching.prepare with the default MatchConfig; a left corner's "
              f"target is the right corner within {SNAP_PX} px of its exact correspondence "
              f"(ismb_lab.scenes.true_matches), one left corner per right corner"),
         left_corners=len(left_xy), right_corners=len(right_xy))
