@@ -1,9 +1,5 @@
-"""Explore the energy parameters: move a slider, the pair is matched again and scored.
-
-:class:`ExplorerModel` is the plain-Python model; :class:`ParameterExplorer` adds
-sliders for θc, θs, λc, λs, the matches on the image pair, the C/E/T score
-against the loaded targets and the transfer functions S and C (thesis Fig. 3.3).
-"""
+"""Explore the energy parameters: move a slider, the pair is matched again and scored, and the
+transfer functions S and C (thesis Fig. 3.3) follow."""
 
 from __future__ import annotations
 
@@ -26,27 +22,18 @@ from ._common import Base, Pane, draw_pair, pair_figsize, pair_files, update_pai
 __all__ = ["draw_transfer", "ExplorerModel", "ParameterExplorer", "similarity_theta", "update_transfer"]
 
 
-
 class ExplorerModel:
     """Match one pair with given parameters and score it against target feature pairs.
 
     Parameters
     ----------
-    prepared : Prepared
-    method : {"I", "II", "III"}
     params : Params, optional
         The thesis' values for the method by default.
-    seed : int
-        Update-order seed.
     targets : (t, 2) int array_like, optional
         Target ``(i, k)`` feature pairs (see :func:`ismb_lab.labels.targets.snap`).
-    solver : str
     unknown : int array_like
-        Left features whose matches are not scored (see :func:`ismb_lab.tuning.evaluation.unlabelled`).
+        Left features whose matches are not scored.
 
-    Examples
-    --------
-    >>> from ismb_lab.matching.pipeline import prepare
     >>> from ismb_lab.scenes import synthetic_scene
     >>> scene = synthetic_scene(0)
     >>> model = ExplorerModel(prepare(scene.left, scene.right), targets=[[0, 0]])
@@ -128,8 +115,6 @@ class ExplorerModel:
                 f"C/T {pct(s.recall)}, precision {pct(s.precision)}, fitness {s.fitness}")
 
 
-# --- view -------------------------------------------------------------------------------
-
 def draw_transfer(axes, model: ExplorerModel) -> dict:
     """S(M) and C(X) (thesis 3-10, 3-13; Fig. 3.3) with a marker at the current θ."""
     x = np.linspace(0, THETA_C.high, 241)
@@ -150,21 +135,16 @@ def draw_transfer(axes, model: ExplorerModel) -> dict:
     return art
 
 
-#: The λs of the probe that reads back a derived θs: |λs (M - θs) / 2| stays far below tanh's
-#: saturation for any M of grey levels, so the inverse loses no digits.
+#: The λs that reads back a derived θs: far below tanh's saturation for any M, so no digit is lost.
 _PROBE_LAMBDA = 1e-3
 
 
 def similarity_theta(model: ExplorerModel) -> float | None:
     """The θs the model's method really uses on its pair, or None when it forms no ``S(M)``.
 
-    A method that sets θs from each pair (``"theta_s"`` in its ``derived``, as Method-NM3)
-    ignores the θs of ``model.params``: the value is read back from the method's own
-    similarity of the pair's neurons, ``S = -tanh(λs (M - θs) / 2)``, formed with a λs so
-    small that no ``S`` saturates, at the neuron whose ``S`` is nearest 0.
+    A θs derived from each pair (as Method-NM3's) is read back from the method's own
+    ``S = -tanh(λs (M - θs) / 2)`` at the neuron whose ``S`` is nearest 0.
 
-    Examples
-    --------
     >>> from ismb_lab.scenes import synthetic_scene
     >>> pair = synthetic_scene(0)
     >>> model = ExplorerModel(prepare(pair.left, pair.right), "NM3")
@@ -189,17 +169,13 @@ def similarity_theta(model: ExplorerModel) -> float | None:
 def update_transfer(art: dict, model: ExplorerModel) -> None:
     p = model.params
     theta_s = similarity_theta(model)
-    uses_s = theta_s is not None
     for key, theta, lam in (("s", p.theta_s if theta_s is None else theta_s, p.lambda_s),
                             ("c", p.theta_c, p.lambda_c)):
         art[key].set_ydata(transfer(art["x"], theta, lam))
         art[key + "_theta"].set_xdata([theta, theta])
         art[key + "_dot"].set_data([theta], [0.0])
-        faded = key == "s" and not uses_s
-        art[key].set_alpha(0.25 if faded else 1.0)
+        art[key].set_alpha(0.25 if key == "s" and theta_s is None else 1.0)
 
-
-# --- controller -------------------------------------------------------------------------
 
 class ParameterExplorer(Base):
     """Sliders for the four energy parameters with live matches, score and transfer functions.
@@ -207,16 +183,10 @@ class ParameterExplorer(Base):
     Parameters
     ----------
     left, right : path or ndarray, or a Prepared as `left`
-    method : {"I", "II", "III"}
-    params : Params, optional
-    seed : int
-    config : MatchConfig, optional
     targets : TargetSet, path, or (t, 2) feature pairs, optional
         What C/E/T is scored against.
-    solver : str
     partial : bool
-        The targets label only some corners (a person's labels): matches of the other left
-        corners are not scored (see :meth:`ismb_lab.tuning.cases.Case.from_files`).
+        The targets label only some corners: matches of the other left corners are not scored.
 
     Notes
     -----
@@ -232,7 +202,7 @@ class ParameterExplorer(Base):
 
         super().__init__()
         prepared = left if isinstance(left, Prepared) else prepare(left, right, config)
-        if targets is not None and not isinstance(targets, np.ndarray) and not isinstance(targets, list):
+        if targets is not None and not isinstance(targets, (np.ndarray, list)):
             if not isinstance(targets, TargetSet):
                 targets = load_targets(targets, pair=prepared.pair)
             targets = snap(targets, prepared.problem.left_xy, prepared.problem.right_xy).pairs
@@ -288,15 +258,10 @@ class ParameterExplorer(Base):
 
     @classmethod
     def from_photos(cls, *, folder=".", **kw):
-        """A :class:`~ismb_lab.widgets.photos.PhotoLoader` whose "Use this pair" opens an explorer
-        on the saved (rectified) photos, with the dragged ROI and ``shift="auto"``."""
-        from .photos import PhotoLoader
+        """A :class:`~ismb_lab.widgets.photos.PhotoLoader` whose "Use this pair" opens an explorer."""
+        from .photos import opening
 
-        def open_with(pair_folder, roi):
-            config = MatchConfig(roi=roi if roi is not None else "center", shift="auto")
-            return cls.from_folder(pair_folder, config=config, **kw)
-
-        return PhotoLoader(open_with, folder=folder)
+        return opening(cls.from_folder, folder, **kw)
 
     @property
     def params(self) -> Params:
@@ -343,8 +308,7 @@ class ParameterExplorer(Base):
 
         fig = Figure(figsize=(6.6, 5.0), layout="constrained")
         top, bottom = fig.subfigures(2, 1, height_ratios=[1.2, 1])
-        art = draw_pair(top.add_subplot(), self.model)
-        update_pair(art, self.model)
+        update_pair(draw_pair(top.add_subplot(), self.model), self.model)
         top.suptitle(self.model.score_text(), fontsize=8)
         update_transfer(draw_transfer(bottom.subplots(1, 2), self.model), self.model)
         return fig

@@ -1,20 +1,8 @@
 """Run the GA (thesis ch. 4) live: fitness curves grow while the notebook stays usable.
 
-Why a background thread
------------------------
-A GA generation is a burst of CPU work (a population of network runs per
-training pair).  Run in a worker thread, it leaves the kernel's main thread
-free to handle Pause and Stop clicks at once, and it works the same in a
-notebook, in Voilà, in a script and in tests, none of which needs an event loop.
-An asyncio task would run on the kernel's own loop: every generation would hold
-up the handling of clicks until it ended, and outside a kernel someone would
-have to drive the loop.  The thread checks a stop :class:`threading.Event`
-between generations (a stopped GA computes no further generation) and waits on
-a resume event while paused; widget values are set from the thread (ipywidgets
-sends them through the kernel's thread-safe I/O channel) and figure draws are
-serialised by a lock.
-
-:class:`GAModel` is the plain-Python model; :class:`GARunner` the widget.
+The GA runs in a worker thread, not an asyncio task on the kernel's loop: clicks on Pause
+and Stop are handled at once, and scripts and tests need no event loop.  The thread checks a
+stop event between generations and waits on a resume event while paused.
 """
 
 from __future__ import annotations
@@ -43,7 +31,7 @@ __all__ = ["as_cases", "case_from_folder", "chromosome_html", "draw_fitness", "G
 
 
 def case_from_folder(folder, config: MatchConfig | None = None) -> Case:
-    """A training :class:`~ismb_lab.tuning.cases.Case` from ``left.png``, ``right.png`` and ``answer_key.json``."""
+    """A training :class:`~ismb_lab.tuning.cases.Case` from a pair folder with an ``answer_key.json``."""
     left, right, key = pair_files(folder, "case_from_folder")
     if not key.is_file():
         raise ParameterError(f"The 'folder' parameter of case_from_folder must be a folder with an "
@@ -73,22 +61,14 @@ class GAModel:
 
     Parameters
     ----------
-    cases : list of Case
-    method : str
-        A name in :func:`ismb_lab.network.methods.method_names`.
     population, generations : int, optional
-        GA size (default: :class:`~ismb_lab.tuning.genetic.GAConfig`'s, the thesis' 30 and 500).
+        GA size (default: :class:`~ismb_lab.tuning.genetic.GAConfig`'s).
     seed : int
-        Seed of the GA (and of every network run's update order, as in ``tune``).
+        Seed of the GA and of every network run's update order, as in ``tune``.
     save_to : str or os.PathLike, optional
-        A params file (as ``ismb-lab tune`` writes it) rewritten atomically whenever the
-        best fitness improves, so that a kernel that is shut down, culled or killed
-        mid-run leaves the best parameters so far on disk.
-    solver : str
-        How each chromosome's network is solved (a name in :data:`ismb_lab.network.solvers.SOLVERS`).
+        A params file rewritten atomically whenever the best fitness improves, so that a
+        kernel killed mid-run leaves the best parameters so far on disk.
 
-    Examples
-    --------
     >>> from ismb_lab.matching.pipeline import prepare
     >>> from ismb_lab.scenes import synthetic_scene, true_matches
     >>> scene = synthetic_scene(0)
@@ -136,7 +116,7 @@ class GAModel:
 
     @property
     def best_params(self) -> Params | None:
-        """The best chromosome so far as :class:`~ismb_lab.network.methods.Params` (None before generation 0)."""
+        """The best chromosome so far as Params (None before generation 0)."""
         return None if not self.history else to_params(self.method, self.history[-1].best_chromosome)
 
     def start(self) -> bool:
@@ -221,8 +201,6 @@ class GAModel:
         return text
 
 
-# --- view -------------------------------------------------------------------------------
-
 def draw_fitness(ax, model: GAModel) -> dict:
     """Best and mean fitness per generation (thesis Figs. 5.4, 5.5)."""
     from matplotlib.ticker import MaxNLocator
@@ -262,8 +240,6 @@ def chromosome_html(model: GAModel) -> str:
     return f'<table class="ismb-table"><tr><td>best chromosome:</td>{cells}</tr></table>'
 
 
-# --- controller -------------------------------------------------------------------------
-
 class GARunner(Base):
     """Start, pause and stop the GA and watch its fitness; apply the best parameters elsewhere.
 
@@ -271,21 +247,15 @@ class GARunner(Base):
     ----------
     cases_or_folder : Case, folder, or a list of them
         Training pairs; a folder gives ``left.png``, ``right.png`` and ``answer_key.json``.
-    method, population, generations, seed, solver
-        As in :func:`ismb_lab.tuning.fitness.tune` (seed: GA and update order).
     config : MatchConfig, optional
         Corner settings for folders.
-    save_to : str or os.PathLike, optional
-        Where the best parameters so far are kept on disk (see :class:`GAModel`).
     redraw_every : float
-        Seconds between redraws of the curves while running (every generation
-        updates the progress bar and the status; the last one is always drawn).
+        Seconds between redraws of the curves while running (the last one is always drawn).
+
+    The other parameters are :class:`GAModel`'s.
 
     Notes
     -----
-    The ``generations`` field sets the most generations of the next run (the thesis stops at
-    500, which the project's pairs reach in seconds).
-
     CSS classes: root ``ismb-ga``; buttons ``ismb-start``, ``ismb-pause``, ``ismb-stop``,
     ``ismb-apply``; ``ismb-solver``; ``ismb-generations``; ``ismb-progress``; figure ``ismb-fitness``; best chromosome
     ``ismb-chromosome``; ``ismb-status``; ``ismb-log``.
@@ -349,7 +319,6 @@ class GARunner(Base):
             raise ParameterTypeError(message("callback", "GARunner.on_apply", "a callable", callback))
         self._apply.append(callback)
 
-    # --- actions ------------------------------------------------------------------------
     def set_solver(self, name: str) -> None:
         """Solve with `name` from the next Start on (refused while a run is going)."""
         try:
@@ -421,7 +390,6 @@ class GARunner(Base):
         self.say(f"applied {params} to {len(self._apply)} widget(s)")
         return params
 
-    # --- updates from the worker thread -------------------------------------------------
     def _on_generation(self, record: Generation) -> None:
         self.progress.value = record.index
         self.say(self.model.describe())

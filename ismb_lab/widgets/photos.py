@@ -200,6 +200,18 @@ def update_photos(art: dict, model: PhotoModel) -> None:
         art["roi"].set_visible(True)
 
 
+def opening(from_folder, folder, **kw) -> "PhotoLoader":
+    """A :class:`PhotoLoader` whose "Use this pair" returns ``from_folder(pair_folder, config=...,
+    **kw)`` on the saved pair, with the dragged ROI and the window measured on it."""
+    from ..matching.pipeline import MatchConfig
+
+    def open_with(pair_folder, roi):
+        config = MatchConfig(roi=roi if roi is not None else "center", shift="auto")
+        return from_folder(pair_folder, config=config, **kw)
+
+    return PhotoLoader(open_with, folder=folder)
+
+
 class PhotoLoader(Base):
     """Bring two photos of one's own: upload, check, rectify, pick the ROI, then use them.
 
