@@ -1,16 +1,7 @@
 """A class's own stereo photos: upload, check, rectify, pick a ROI, then label, explore or match.
 
-:class:`PhotoModel` is the plain-Python model: two photos in, the rectification check
-(:func:`ismb_lab.images.rectify.check_rectified`) and, on request, the rectified pair
-(:func:`ismb_lab.images.rectify.rectify_pair`); :meth:`PhotoModel.save` writes the pair the
-student works on to a folder of their own (``photos-<user>-<name>/left.png``, ``right.png``
-and ``rectify.json``), so that labels saved against its images can be used again later;
-another pair uploaded under the same name gets a folder of its own (``...-2``).
-:class:`PhotoLoader` is the widget: a file-upload control (or a folder path), the pair with
-each match's row difference drawn as a line (the epipolar check: on a rectified pair every
-line is level), Rectify, a ROI dragged on the left image, and "Use this pair", which opens
-the widget it was made for (``TargetLabeler.from_photos()``,
-``ParameterExplorer.from_photos()``) on the saved pair.
+:meth:`PhotoModel.save` writes the pair to the student's own ``photos-<user>-<name>/`` (with
+``rectify.json``), so that labels saved against its images stay valid.
 """
 
 from __future__ import annotations
@@ -25,7 +16,7 @@ import numpy as np
 from .._core.files import atomic_write_text
 from .._core.validation import ParameterError, ParameterTypeError, message
 from ..labels.classroom import user_name
-from ..plotting import OKABE_ITO
+from ..plotting import GAP, OKABE_ITO, side_by_side
 from ..images.io import save_pair
 from ..images.rectify import Rectified, apply_rectification, check_rectified, pair_inputs, rectify_pair
 from ._common import Base, Pane, button, grey_rgb, row, with_class
@@ -41,18 +32,14 @@ class PhotoModel:
     Parameters
     ----------
     folder : str or os.PathLike
-        Where :meth:`save` makes the pair's folder (default: the working folder).
+        Where :meth:`save` makes the pair's folder.
     user : str, optional
         Whose folder (default :func:`ismb_lab.labels.classroom.user_name`).
     role : str
-        Added to the folder's name (e.g. ``"background"``), so two pairs of one upload name
-        do not share a folder.
+        Added to the folder's name (e.g. ``"background"``).
     homographies : (H_left, H_right, (width, height)), optional
-        A rectification found on another pair of the same two camera positions (the depth
-        demo's background): applied as it is, nothing is estimated.
+        A rectification found on another pair of the same cameras, applied as it is.
 
-    Examples
-    --------
     >>> import cv2
     >>> rng = np.random.default_rng(0)
     >>> scene = cv2.GaussianBlur(rng.uniform(0, 255, (200, 260)), (0, 0), 2) * 3 % 255
@@ -138,12 +125,7 @@ class PhotoModel:
         return self.roi
 
     def save(self) -> Path:
-        """Write the pair used (rectified when it was) to ``photos-<user>-<name>/`` and return it.
-
-        A folder of that name that holds another pair is left as it is (labels may rest on its
-        images): the pair goes to ``photos-<user>-<name>-2/``, ``-3/``, ... instead.  The same
-        pair saved again (another ROI, say) reuses its folder.
-        """
+        """Write the pair used to ``photos-<user>-<name>/`` (or ``-2/``, ... where another pair is)."""
         if not self.ready:
             raise ParameterError(message("photos", "PhotoModel.save", "a rectified pair (press 'Rectify' first)",
                                          self.message))
@@ -180,24 +162,18 @@ def update_photos(art: dict, model: PhotoModel) -> None:
     if pair is None:
         return
     left, right, lxy, rxy = pair
-    gap = 8
-    both = np.full((left.shape[0], 2 * left.shape[1] + gap), 255.0)
-    both[:, :left.shape[1]] = left
-    both[:, left.shape[1] + gap:] = right
+    both = side_by_side(left, right)
     art["image"].set_data(grey_rgb(both))
     art["image"].set_extent((-0.5, both.shape[1] - 0.5, both.shape[0] - 0.5, -0.5))
     art["image"].axes.set_xlim(-0.5, both.shape[1] - 0.5)
     art["image"].axes.set_ylim(both.shape[0] - 0.5, -0.5)
-    art["offset"] = offset = left.shape[1] + gap
+    art["offset"] = offset = left.shape[1] + GAP
     segments = np.stack([lxy, rxy + [offset, 0]], axis=1) if len(lxy) else np.zeros((0, 2, 2))
     art["lines"].set_segments(segments)
     art["lines"].set_array(np.abs(lxy[:, 1] - rxy[:, 1]) if len(lxy) else np.zeros(0))
-    if model.roi is None:
-        art["roi"].set_visible(False)
-    else:
-        x, y, w, h = model.roi
-        art["roi"].set_bounds(x, y, w, h)
-        art["roi"].set_visible(True)
+    if model.roi is not None:
+        art["roi"].set_bounds(*model.roi)
+    art["roi"].set_visible(model.roi is not None)
 
 
 def opening(from_folder, folder, **kw) -> "PhotoLoader":
@@ -215,13 +191,8 @@ def opening(from_folder, folder, **kw) -> "PhotoLoader":
 class PhotoLoader(Base):
     """Bring two photos of one's own: upload, check, rectify, pick the ROI, then use them.
 
-    Parameters
-    ----------
-    open_with : callable, optional
-        ``open_with(folder, roi) -> widget``: what "Use this pair" opens on the saved pair
-        (its ``.widget`` is shown below the loader).
-    folder, user
-        As in :class:`PhotoModel`.
+    `open_with(folder, roi) -> widget` is what "Use this pair" opens on the saved pair; the
+    other parameters are :class:`PhotoModel`'s.
 
     Notes
     -----
@@ -273,7 +244,6 @@ class PhotoLoader(Base):
             row([self.rectify_button, self.use_button]), self.status, self.log, self.area]), "ismb-photos")
         self.say(self.model.message)
 
-    # --- actions -----------------------------------------------------------------------------
     def load(self, left, right, name: str = "photos") -> str:
         try:
             return self.model.set_photos(left, right, name)
@@ -323,7 +293,6 @@ class PhotoLoader(Base):
                 self.opened.show()
         return self.opened
 
-    # --- view --------------------------------------------------------------------------------
     def refresh(self) -> None:
         update_photos(self.artists, self.model)
         problem = bool(self.model.check and self.model.check["problem"])

@@ -1,20 +1,5 @@
-"""Any rig's pair in 3-D: the network's matches in metres, with OpenCV's SGBM beside them.
-
-:class:`RigCloudModel` is the plain-Python model: a rig (a file of ``ismb-lab calibrate`` or
-``ismb-lab rig``, :func:`ismb_lab.cameras.camera.load_camera`) and a pair (paths, file bytes or
-arrays) taken the way ``ismb-lab match --rig`` takes them: :func:`ismb_lab.matching.metric.for_camera`
-(a pair the rig does not fit is refused, in one line), then
-:func:`ismb_lab.matching.metric.match_with_camera` with the corner counts of
-:func:`ismb_lab.matching.metric.photo_config`, the whole photo (``roi="full"``) and the window measured
-on the pair (``shift="auto"``).  Beside the network's matches it computes SGBM's dense
-disparity of the same rectified pair (:mod:`ismb_lab.matching.dense`), its agreement with the network
-at the matched points, and a subsample of it in metres.
-
-:class:`RigCloud` is the widget: the rig file's path, the upload of
-:class:`~ismb_lab.widgets.photos.PhotoLoader` (two photos, or a folder), the pair as given,
-the status line, a toggle for SGBM's points, and the 3-D view
-(:class:`~ismb_lab.widgets.cloud.PointCloudView`), all created once and updated in place.
-"""
+"""Any rig's pair in 3-D: the network's matches in metres, as ``ismb-lab match --rig --roi full``
+gives them, with OpenCV's SGBM dense disparity of the same rectified pair beside them."""
 
 from __future__ import annotations
 
@@ -50,15 +35,11 @@ class RigCloudModel:
     Parameters
     ----------
     rig : StereoCamera, str or os.PathLike
-        The rig, or its file (path or JSON text) as ``ismb-lab calibrate`` or ``ismb-lab rig``
-        write it.
+        The rig, or its file (path or JSON text) from ``ismb-lab calibrate`` or ``ismb-lab rig``.
     method : str
-        The energy (the thesis' parameters of :class:`~ismb_lab.matching.recipe.Recipe`, its solver).
-    seed : int
-        The network's update order.
+        The energy, with :class:`~ismb_lab.matching.recipe.Recipe`'s parameters and solver.
     board : bool
-        Whether the pair shows the rig's calibration board: a note then gives its corners'
-        median depth (found by OpenCV, not by the network), for comparison.
+        Whether the pair shows the calibration board: a note then gives its corners' median depth.
     most : int
         At most this many SGBM points in the view.
 
@@ -67,17 +48,10 @@ class RigCloudModel:
     cloud : Cloud or None
         The network's matches in metres (None before a pair, or when the pair was refused).
     dense : (H, W) ndarray or None
-        SGBM's disparity of the rectified pair (NaN: none).
-    dense_xyz : (M, 3) ndarray
-        Its subsample in metres.
-    agreement : ismb_lab.matching.dense.Agreement or None
+        SGBM's disparity of the rectified pair (NaN: none); `dense_xyz` its subsample in metres.
     refused : str
         The one-line refusal of a pair the rig does not fit ("" when it fits).
-    message : str
-        One line on what was done.
 
-    Examples
-    --------
     >>> from ismb_lab.scenes import synthetic_scene
     >>> s = synthetic_scene(0)
     >>> model = RigCloudModel(s.rig)
@@ -118,10 +92,7 @@ class RigCloudModel:
 
     def load(self, left, right, name: str = "pair") -> str:
         """Match `left` and `right` (paths, file bytes or arrays) with the rig; returns the status line.
-
-        A pair the rig does not fit (:func:`ismb_lab.matching.metric.for_camera`'s refusal: swapped,
-        turned, tagged, another camera's) leaves no cloud; its one line is :attr:`refused`.
-        """
+        A pair the rig does not fit (:func:`ismb_lab.matching.metric.for_camera`) leaves no cloud."""
         from ..images.io import load_pair
         from ..matching.metric import for_camera, match_with_camera
 
@@ -158,21 +129,16 @@ class RigCloud(Base):
     rig : StereoCamera, str or os.PathLike, optional
         The rig or its file; else type its path in the widget and press *Load rig*.
     left, right : path, bytes or ndarray, optional
-        A pair to show at once; else upload two photos (the left camera's first, or named
-        ``left...`` and ``right...``) or open a folder holding ``left.*`` and ``right.*``.
-    name : str
-        What the status line calls the pair given.
-    method, seed, board
-        As in :class:`RigCloudModel`.
+        A pair to show at once; else upload two photos or open a folder.
     height : int
-        The 3-D view's height, px (it is as wide as the output area).
+        The 3-D view's height, px.
+
+    The other parameters are :class:`RigCloudModel`'s.
 
     Notes
     -----
-    The upload is :class:`~ismb_lab.widgets.photos.PhotoLoader`'s (its pair figure shows the
-    photos as given, each robust match's rows joined by a line); its *Rectify* and *Use this
-    pair* buttons are hidden, since the rig rectifies.  Every pair the loader takes reaches
-    :meth:`load` as it was given (the file's bytes or path, not the loader's scaled copy).
+    The upload is :class:`~ismb_lab.widgets.photos.PhotoLoader`'s, without *Rectify* and *Use
+    this pair* (the rig rectifies); each pair reaches :meth:`load` as given, not scaled.
 
     CSS classes: root ``ismb-rig-cloud``; rig path ``ismb-rig-file``, button ``ismb-load-rig``;
     the toggle ``ismb-dense``; ``ismb-status``; ``ismb-log``; the loader's (``ismb-upload``,
@@ -227,7 +193,6 @@ class RigCloud(Base):
             self.loader.log, self.log], layout=ipywidgets.Layout(width="100%")), "ismb-rig-cloud")
         self.refresh()
 
-    # --- actions -----------------------------------------------------------------------------
     def set_rig(self, rig) -> str:
         """Use `rig` (a StereoCamera, or a rig file's path); the pair shown, if any, is matched again."""
         if isinstance(rig, str) and not rig:
@@ -253,7 +218,6 @@ class RigCloud(Base):
             if hasattr(self, "view"):
                 self.refresh()
 
-    # --- view --------------------------------------------------------------------------------
     def refresh(self) -> None:
         model = self.model
         if model is None:

@@ -1,10 +1,5 @@
-"""Step the Hopfield network one update attempt at a time (thesis §3.3, Fig. 5.6).
-
-:class:`StepperModel` consumes :func:`ismb_lab.network.dynamics.iter_updates`, the same
-generator the core runs, so the widget shows exactly what the network does;
-:class:`HopfieldStepper` adds the neuron grid, the matches on the image pair and
-the energy curve.
-"""
+"""Step the Hopfield network one update attempt at a time (thesis §3.3, Fig. 5.6), through
+:func:`ismb_lab.network.dynamics.iter_updates`, the generator the core runs."""
 
 from __future__ import annotations
 
@@ -28,19 +23,13 @@ class StepperModel:
 
     Parameters
     ----------
-    prepared : Prepared
-    method : {"I", "II", "III"}
     params : Params, optional
         The thesis' values for the method by default.
     seed : int
         Seed of the random visiting order (as in :func:`ismb_lab.network.dynamics.run`).
     rule : {"exact", "thesis"}
         ``"thesis"`` is the literal (3-17)/(3-20) rule, whose energy can rise.
-    stop_rule : {"sweep", "stall"}
 
-    Examples
-    --------
-    >>> from ismb_lab.matching.pipeline import prepare
     >>> from ismb_lab.scenes import synthetic_scene
     >>> scene = synthetic_scene(0)
     >>> model = StepperModel(prepare(scene.left, scene.right))
@@ -93,7 +82,7 @@ class StepperModel:
         out = []
         while len(out) < n and not self.done:
             update = next(self._updates, None)
-            if update is None:  # the generator ended without a stop record: cannot happen, but be safe
+            if update is None:  # the generator ended without a stop record
                 self.stop = self.stop or "ended"
                 break
             self.state[update.neuron] = update.new
@@ -143,26 +132,18 @@ class StepperModel:
         return text
 
 
-# --- view -------------------------------------------------------------------------------
-
-#: The cursor on the neuron just attempted: orange when it flipped, black when it kept its state
-#: (two colours apart in lightness and hue for every common colour-vision deficiency; the grid
-#: itself is grey, white and dark blue).
+#: The cursor on the neuron just attempted: orange when it flipped, black when it kept its state.
 CURSOR_COLOURS = {True: OKABE_ITO["orange"], False: OKABE_ITO["black"]}
-
-
-def _grid_colours():
-    from matplotlib.colors import ListedColormap
-
-    return ListedColormap(["#d9d9d9", "#ffffff", "#1f4e9c"])  # no neuron, off, on
 
 
 def draw_grid(ax, model: StepperModel) -> dict:
     """The ``N_l x N_r`` neuron grid with a cursor on the neuron just attempted."""
+    from matplotlib.colors import ListedColormap
     from matplotlib.patches import Rectangle
     from matplotlib.transforms import blended_transform_factory
 
-    grid = ax.imshow(model.grid() + 1, cmap=_grid_colours(), vmin=0, vmax=2, interpolation="nearest")
+    colours = ListedColormap(["#d9d9d9", "#ffffff", "#1f4e9c"])  # no neuron, off, on
+    grid = ax.imshow(model.grid() + 1, cmap=colours, vmin=0, vmax=2, interpolation="nearest")
     ax.set_xlabel("right feature k", labelpad=12)
     ax.set_ylabel("left feature i", labelpad=16)
     ax.set_xticks([])
@@ -181,27 +162,26 @@ def draw_grid(ax, model: StepperModel) -> dict:
                 offset_transform=below, ha="center")
     path_labels(ax, [(0, i) for i in rows], [i + 1 for i in rows], "black", size=7, shift=(-3, -2.5),
                 offset_transform=beside, ha="right")
-    cursor = Rectangle((-0.5, -0.5), 1, 1, fill=False, ec=CURSOR_COLOURS[False], lw=2.5, visible=False)
-    ax.add_patch(cursor)
+    cursor = ax.add_patch(Rectangle((-0.5, -0.5), 1, 1, fill=False, ec=CURSOR_COLOURS[False], lw=2.5,
+                                    visible=False))
     return {"grid": grid, "cursor": cursor}
 
 
 def update_grid(art: dict, model: StepperModel) -> None:
     art["grid"].set_data(model.grid() + 1)
     cursor = art["cursor"]
-    if model.last is None:
-        cursor.set_visible(False)
-    else:
-        cursor.set_visible(True)
+    cursor.set_visible(model.last is not None)
+    if model.last is not None:
         cursor.set_xy((model.last.k - 0.5, model.last.i - 0.5))
         cursor.set_edgecolor(CURSOR_COLOURS[bool(model.last.changed)])
 
 
 def draw_energy(ax, model: StepperModel) -> dict:
     """The energy (3-15) after each attempt, as in the thesis' Fig. 5.6."""
+    from matplotlib.ticker import MaxNLocator
+
     line, = ax.plot([0], model.energies[:1], "-", color=OKABE_ITO["blue"], lw=1.2)
     rises = ax.scatter([], [], s=14, color=OKABE_ITO["vermillion"], zorder=3, label="energy went up")
-    from matplotlib.ticker import MaxNLocator
 
     ax.set_xlabel("update attempt")
     ax.set_ylabel("energy E (3-15)")
@@ -224,18 +204,12 @@ def update_energy(art: dict, model: StepperModel) -> None:
     ax.set_ylim(low - pad, high + pad)
 
 
-# --- controller -------------------------------------------------------------------------
-
 class HopfieldStepper(Base):
     """Buttons to step the network, with its grid, its matches and its energy curve.
 
     Parameters
     ----------
     left, right : path or ndarray, or a Prepared as `left`
-    method : {"I", "II", "III"}
-    params : Params, optional
-    seed : int
-    config : MatchConfig, optional
     run_limit : int
         "Run to convergence" makes at most this many attempts per click, then redraws once.
 
@@ -341,6 +315,5 @@ class HopfieldStepper(Base):
                                                          width_ratios=[1, 2.2]).values()
         update_grid(draw_grid(grid_ax, self.model), self.model)
         update_pair(draw_pair(pair_ax, self.model), self.model)
-        art = draw_energy(energy_ax, self.model)
-        update_energy(art, self.model)
+        update_energy(draw_energy(energy_ax, self.model), self.model)
         return fig
