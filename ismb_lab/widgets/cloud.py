@@ -135,8 +135,7 @@ def depth_cloud(model) -> Cloud:
 
 
 def _board(camera: StereoCamera, rectified, owner: str) -> tuple:
-    """The board's corners in both rectified views (cv2), their disparities and a note at their
-    centre with their median depth."""
+    """The board's corners in both rectified views (cv2), their disparities and a note of their median depth."""
     from ..cameras.rig import find_board
 
     left, right = find_board(rectified.left, camera.board), find_board(rectified.right, camera.board)
@@ -145,8 +144,8 @@ def _board(camera: StereoCamera, rectified, owner: str) -> tuple:
                                      "a pair where it was not found"))
     d = left[:, 0] - right[:, 0]
     median = float(np.median(d))
-    z = float(camera.disparity_at(median))
-    return left, d, (f"board's corners (cv2), median Z {z:.3f} m", left.mean(axis=0), median)
+    note = f"board's corners (cv2), median Z {float(camera.disparity_at(median)):.3f} m"
+    return left, d, (note, left.mean(axis=0), median)
 
 
 def board_cloud(camera: StereoCamera, rectified) -> Cloud:
@@ -154,10 +153,13 @@ def board_cloud(camera: StereoCamera, rectified) -> Cloud:
     if not isinstance(camera, StereoCamera):
         raise ParameterTypeError(message("camera", "board_cloud", "a StereoCamera", camera))
     left, d, note = _board(camera, rectified, "board_cloud")
-    caption = (f"the board's {len(left)} corners matched between the rectified views, in metres "
-               f"(f = {camera.focal_px:.1f} px, B = {camera.baseline_m * 100:.2f} cm); left camera at 0, "
-               "Z forward, colour = Z")
+    caption = f"the board's {len(left)} corners matched between the rectified views, " + _in_metres(camera)
     return _cloud(camera, camera.points_from_disparity(left, d), [note], caption)
+
+
+def _in_metres(camera: StereoCamera) -> str:
+    return (f"in metres (f = {camera.focal_px:.1f} px, B = {camera.baseline_m * 100:.2f} cm); left camera at 0, "
+            "Z forward, colour = Z")
 
 
 def match_cloud(result, camera: StereoCamera, board=None) -> Cloud:
@@ -179,9 +181,7 @@ def match_cloud(result, camera: StereoCamera, board=None) -> Cloud:
     if not isinstance(camera, StereoCamera):
         raise ParameterTypeError(message("camera", "match_cloud", "a StereoCamera", camera))
     notes = [] if board is None else [_board(camera, board, "match_cloud")[2]]
-    caption = (f"the network's {len(result.pairs)} matches (Method-{result.method}) in metres "
-               f"(f = {camera.focal_px:.1f} px, B = {camera.baseline_m * 100:.2f} cm); left camera at 0, "
-               "Z forward, colour = Z")
+    caption = f"the network's {len(result.pairs)} matches (Method-{result.method}) " + _in_metres(camera)
     return _cloud(camera, match_points(result, camera), notes, caption)
 
 

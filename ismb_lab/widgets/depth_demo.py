@@ -22,11 +22,11 @@ __all__ = ["CMAP", "GROUPING_LABELS", "TOLERANCES", "depth_text", "support_text"
            "DepthModel", "disparity_limits", "draw_background", "draw_scene", "label_positions",
            "update_background", "update_scene"]
 
-#: The DepthConfig fields of the background removal that get a slider, with their labels.
+#: The DepthConfig fields that get a slider, with their labels.
 TOLERANCES = {"position_tol_px": "same place (px)", "disparity_tol_px": "same disparity (px)",
               "local_px": "local background (px)"}
 CMAP = "plasma"
-#: The choices of "objects by": blobs of change in both images, or the thesis' features alone.
+#: The choices of "objects by".
 GROUPING_LABELS = (("outlines and features", "silhouettes"), ("features only (thesis)", "features"))
 
 
@@ -34,17 +34,8 @@ class DepthModel:
     """A background pair and a scene pair (:func:`ismb_lab.depth.pipeline.load_stereo`), matched
     with :func:`~ismb_lab.depth.pipeline.relative_depth` and ranked near -> far.
 
-    Parameters
-    ----------
-    params : Params, optional
-        None: the thesis' values of whichever method is chosen.
-    seed : int
-        Update-order seed of both network runs.
-    background_name : str
-        What the ranking sentence calls the background's nearest object.
-    recipe : Recipe or path, optional
-        Used as it is: its method, parameters, solver and one-to-one replace `method`, `params`
-        and :data:`~ismb_lab.depth.pipeline.DEPTH_SOLVER`.
+    `background_name` is what the ranking sentence calls the background's nearest object; a
+    `recipe` (or its path) replaces `method`, `params` and :data:`~ismb_lab.depth.pipeline.DEPTH_SOLVER`.
 
     >>> from ismb_lab.scenes import lab_scene, toy_car_scene
     >>> model = DepthModel(lab_scene(0), toy_car_scene(0))

@@ -25,14 +25,8 @@ __all__ = ["draw_transfer", "ExplorerModel", "ParameterExplorer", "similarity_th
 class ExplorerModel:
     """Match one pair with given parameters and score it against target feature pairs.
 
-    Parameters
-    ----------
-    params : Params, optional
-        The thesis' values for the method by default.
-    targets : (t, 2) int array_like, optional
-        Target ``(i, k)`` feature pairs (see :func:`ismb_lab.labels.targets.snap`).
-    unknown : int array_like
-        Left features whose matches are not scored.
+    `targets` are ``(i, k)`` feature pairs (:func:`ismb_lab.labels.targets.snap`); matches of
+    the `unknown` left features are not scored.
 
     >>> from ismb_lab.scenes import synthetic_scene
     >>> scene = synthetic_scene(0)
@@ -180,13 +174,8 @@ def update_transfer(art: dict, model: ExplorerModel) -> None:
 class ParameterExplorer(Base):
     """Sliders for the four energy parameters with live matches, score and transfer functions.
 
-    Parameters
-    ----------
-    left, right : path or ndarray, or a Prepared as `left`
-    targets : TargetSet, path, or (t, 2) feature pairs, optional
-        What C/E/T is scored against.
-    partial : bool
-        The targets label only some corners: matches of the other left corners are not scored.
+    `left` and `right` are paths or images, or `left` a Prepared; C/E/T is scored against `targets`
+    (a TargetSet, its path or feature pairs), only on their left corners when `partial`.
 
     Notes
     -----

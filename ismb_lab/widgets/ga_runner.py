@@ -59,15 +59,8 @@ def as_cases(cases_or_folder, config: MatchConfig | None = None) -> list[Case]:
 class GAModel:
     """A GA run in a worker thread, with pause, resume and stop.
 
-    Parameters
-    ----------
-    population, generations : int, optional
-        GA size (default: :class:`~ismb_lab.tuning.genetic.GAConfig`'s).
-    seed : int
-        Seed of the GA and of every network run's update order, as in ``tune``.
-    save_to : str or os.PathLike, optional
-        A params file rewritten atomically whenever the best fitness improves, so that a
-        kernel killed mid-run leaves the best parameters so far on disk.
+    `seed` seeds the GA and every run's update order, as in ``tune``; `save_to`, a params file,
+    is rewritten atomically whenever the best fitness improves, so that a killed kernel loses nothing.
 
     >>> from ismb_lab.matching.pipeline import prepare
     >>> from ismb_lab.scenes import synthetic_scene, true_matches
@@ -243,16 +236,8 @@ def chromosome_html(model: GAModel) -> str:
 class GARunner(Base):
     """Start, pause and stop the GA and watch its fitness; apply the best parameters elsewhere.
 
-    Parameters
-    ----------
-    cases_or_folder : Case, folder, or a list of them
-        Training pairs; a folder gives ``left.png``, ``right.png`` and ``answer_key.json``.
-    config : MatchConfig, optional
-        Corner settings for folders.
-    redraw_every : float
-        Seconds between redraws of the curves while running (the last one is always drawn).
-
-    The other parameters are :class:`GAModel`'s.
+    `cases_or_folder` is a Case, a pair folder with an ``answer_key.json`` (corners by `config`),
+    or a list of them; the curves are redrawn at most every `redraw_every` s while running.
 
     Notes
     -----

@@ -70,15 +70,9 @@ def _pair_array(pairs) -> np.ndarray:
 class LabelModel:
     """The labels of one stereo pair and every edit on them.
 
-    Parameters
-    ----------
-    path : str or os.PathLike, optional
-        Where :meth:`save` and :meth:`load` go by default.
-    snap_radius, key_tol : float
-        Pixels within which a click, and an answer-key point, snap to a feature.
-    exclusive : bool
-        Refuse to save into an existing file that this model did not load or save first,
-        instead of merging with it (on a page many visitors share).
+    A click snaps to a feature within `snap_radius` px, an answer-key point within `key_tol` px.
+    With `exclusive`, :meth:`save` refuses an existing file this model did not load or save
+    instead of merging with it (on a page many visitors share).
 
     >>> from ismb_lab.scenes import synthetic_scene
     >>> scene = synthetic_scene(0)
@@ -121,18 +115,13 @@ class LabelModel:
 
     @property
     def pairs(self) -> np.ndarray:
-        """The labelled ``(i, k)`` feature pairs, sorted by left feature: an ``(m, 2)`` array."""
+        """The labelled ``(i, k)`` feature pairs, sorted: an ``(m, 2)`` array."""
         return _pair_array(self._pairs)
-
-    @property
-    def dirty(self) -> bool:
-        """Whether the labels differ from the last save or load."""
-        return tuple(self._pairs) != self._saved
 
     @property
     def save_status(self) -> str:
         """``"unsaved"``, ``"saved"`` (as last saved or loaded here) or ``""`` (nothing yet)."""
-        if self.dirty:
+        if tuple(self._pairs) != self._saved:
             return "unsaved"
         return "saved" if self._base is not None else ""
 
@@ -418,16 +407,9 @@ def pairs_html(model: LabelModel) -> str:
 class TargetLabeler(Base):
     """Label target pairs by clicking; save them in the targets format.
 
-    Parameters
-    ----------
-    path : str or os.PathLike, optional
-        The targets file of Save and Load; by default the student's own
-        (:func:`ismb_lab.labels.classroom.targets_path`).  Under Voilà without a hub, where
-        visitors share one login, the labeller asks for a name (box ``ismb-name``) first.
-    pair_name : str, optional
-        The pair's name in that file name (default: the first 12 hex digits of the left image's hash).
-    answer_key : TargetSet or path, optional
-        Ground truth for "Show answer key".
+    `path`, the targets file of Save and Load, is by default the student's own
+    (:func:`ismb_lab.labels.classroom.targets_path`, named after `pair_name`); under Voilà without
+    a hub, where visitors share one login, the labeller asks for a name first.
 
     Notes
     -----

@@ -29,16 +29,9 @@ _IMAGE = re.compile(r"\.(jpe?g|png|bmp|tiff?|webp)$", re.IGNORECASE)
 class PhotoModel:
     """Two photos on their way to a rectified pair in the student's own folder.
 
-    Parameters
-    ----------
-    folder : str or os.PathLike
-        Where :meth:`save` makes the pair's folder.
-    user : str, optional
-        Whose folder (default :func:`ismb_lab.labels.classroom.user_name`).
-    role : str
-        Added to the folder's name (e.g. ``"background"``).
-    homographies : (H_left, H_right, (width, height)), optional
-        A rectification found on another pair of the same cameras, applied as it is.
+    :meth:`save` makes the pair's folder in `folder`, named after `user` (default
+    :func:`ismb_lab.labels.classroom.user_name`) and `role`; `homographies`, ``(H_left, H_right,
+    (width, height))`` found on another pair of the same cameras, are applied as they are.
 
     >>> import cv2
     >>> rng = np.random.default_rng(0)
@@ -210,7 +203,6 @@ class PhotoLoader(Base):
             raise ParameterTypeError(message("open_with", "PhotoLoader", "a callable (folder, roi) -> widget",
                                              open_with))
         self.model = PhotoModel(folder, user, role, homographies)
-        self.title = title
         self.open_with = open_with
         self.opened = None
         self.pane = Pane((5.8, 2.12), "ismb-photo-pair")

@@ -32,16 +32,9 @@ def _camera(rig, owner: str) -> tuple[StereoCamera, str]:
 class RigCloudModel:
     """A rig's pair matched as ``ismb-lab match --rig`` matches it, in metres, with SGBM beside it.
 
-    Parameters
-    ----------
-    rig : StereoCamera, str or os.PathLike
-        The rig, or its file (path or JSON text) from ``ismb-lab calibrate`` or ``ismb-lab rig``.
-    method : str
-        The energy, with :class:`~ismb_lab.matching.recipe.Recipe`'s parameters and solver.
-    board : bool
-        Whether the pair shows the calibration board: a note then gives its corners' median depth.
-    most : int
-        At most this many SGBM points in the view.
+    `rig` is a StereoCamera or its file (path or JSON text); `method` runs with
+    :class:`~ismb_lab.matching.recipe.Recipe`'s parameters and solver; with `board` (the pair shows
+    the calibration board) a note gives its corners' median depth; at most `most` SGBM points.
 
     Attributes
     ----------
@@ -124,16 +117,8 @@ class RigCloud(Base):
     """Your rig and your pair in 3-D: the network's matches coloured by depth, the cameras, and
     SGBM's dense points at the press of a toggle.
 
-    Parameters
-    ----------
-    rig : StereoCamera, str or os.PathLike, optional
-        The rig or its file; else type its path in the widget and press *Load rig*.
-    left, right : path, bytes or ndarray, optional
-        A pair to show at once; else upload two photos or open a folder.
-    height : int
-        The 3-D view's height, px.
-
-    The other parameters are :class:`RigCloudModel`'s.
+    Without `rig`, its path is typed in the widget; without `left` and `right`, two photos are
+    uploaded or a folder opened.  The other parameters are :class:`RigCloudModel`'s.
 
     Notes
     -----

@@ -21,14 +21,8 @@ __all__ = ["draw_energy", "draw_grid", "HopfieldStepper", "StepperModel", "updat
 class StepperModel:
     """A network being run attempt by attempt.
 
-    Parameters
-    ----------
-    params : Params, optional
-        The thesis' values for the method by default.
-    seed : int
-        Seed of the random visiting order (as in :func:`ismb_lab.network.dynamics.run`).
-    rule : {"exact", "thesis"}
-        ``"thesis"`` is the literal (3-17)/(3-20) rule, whose energy can rise.
+    `seed` orders the visits as in :func:`ismb_lab.network.dynamics.run`; ``rule="thesis"`` is the
+    literal (3-17)/(3-20) rule, whose energy can rise.
 
     >>> from ismb_lab.scenes import synthetic_scene
     >>> scene = synthetic_scene(0)
@@ -207,11 +201,8 @@ def update_energy(art: dict, model: StepperModel) -> None:
 class HopfieldStepper(Base):
     """Buttons to step the network, with its grid, its matches and its energy curve.
 
-    Parameters
-    ----------
-    left, right : path or ndarray, or a Prepared as `left`
-    run_limit : int
-        "Run to convergence" makes at most this many attempts per click, then redraws once.
+    `left` and `right` are paths or images, or `left` a Prepared; "Run to convergence" makes
+    at most `run_limit` attempts per click.
 
     Notes
     -----
