@@ -47,23 +47,12 @@ def side_by_side(left: np.ndarray, right: np.ndarray, gap: int = GAP) -> np.ndar
 
 def plot_matches(ax, left, right, left_xy, right_xy, pairs, *, numbers: bool = True,
                  cmap: str = "viridis", targets=None, unknown=()) -> dict:
-    """Draw a pair side by side with its features and match lines.
+    """Draw a pair side by side with its features (``(N, 2)`` points, the right ones offset by
+    ``W + GAP``) and lines for the matched ``(i, k)`` `pairs`, coloured by Euclidean disparity or
+    by their :func:`verdicts` against `targets` (grey where `unknown`); `numbers` labels features
+    1, 2, ... as in the thesis' figures.
 
-    Parameters
-    ----------
-    left_xy, right_xy : (N, 2) ndarray
-        Feature points ``(x, y)``; right points are drawn offset by ``W + GAP``.
-    pairs : (m, 2) int ndarray
-        Matched ``(i, k)``; lines are coloured by Euclidean disparity, or by verdict with `targets`.
-    numbers : bool
-        Label features 1, 2, ... as in the thesis' figures.
-    targets : (t, 2) int array_like, optional
-        Target ``(i, k)`` pairs: lines take their :func:`verdicts` colour (grey where `unknown`).
-
-    Returns
-    -------
-    artists : dict
-        ``image``, ``left_points``, ``right_points``, ``lines`` and ``labels``.
+    Returns the artists: ``image``, ``left_points``, ``right_points``, ``lines`` and ``labels``.
     """
     from matplotlib.collections import LineCollection
 
@@ -121,11 +110,8 @@ def plot_depth(ax, left, result, *, cmap: str = "plasma") -> dict:
     :class:`~ismb_lab.depth.objects.DepthResult`) by disparity, the removed ones as grey crosses,
     each object's rank and depth, the dashed box where corners were sought and the cyan blobs.
 
-    Returns
-    -------
-    artists : dict
-        ``image``, ``features``, ``removed``, ``labels``, ``box`` (None without
-        ``result.scene_roi``) and ``outlines`` (None without ``result.silhouettes``).
+    Returns the artists: ``image``, ``features``, ``removed``, ``labels``, ``box`` (None without
+    ``result.scene_roi``) and ``outlines`` (None without ``result.silhouettes``).
     """
     from matplotlib.collections import LineCollection
     from matplotlib.patches import Rectangle

@@ -286,8 +286,6 @@ class PointCloudView:
     The view draws its own axes: k3d's grid titles each axis twice, and its colour bar
     covered the numbers.
 
-    Notes
-    -----
     CSS classes: root ``ismb-cloud``; caption ``ismb-cloud-caption``; colour scale
     ``ismb-cloud-colours``; the k3d plot ``ismb-cloud-plot``.
     """

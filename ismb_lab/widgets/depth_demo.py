@@ -245,8 +245,7 @@ def draw_scene(ax, cax, model: DepthModel) -> dict:
     bar = ax.figure.colorbar(features, cax=cax) if cax is not None else ax.figure.colorbar(features, ax=ax)
     bar.set_label("disparity (px)", fontsize=8)
     bar.ax.tick_params(labelsize=7)
-    return {"ax": ax, "removed": removed, "features": features, "box": box, "outlines": drawn,
-            "labels": None}
+    return {"ax": ax, "removed": removed, "features": features, "box": box, "outlines": drawn, "labels": None}
 
 
 def update_scene(art: dict, model: DepthModel) -> None:
@@ -293,8 +292,6 @@ class DepthDemo(Base):
     """Rank the objects added to a background near -> far, with both figures of the thesis;
     the parameters are :class:`DepthModel`'s.
 
-    Notes
-    -----
     CSS classes: root ``ismb-depth``; ranking ``ismb-ranking``; ``ismb-seed``; ``ismb-method``;
     sliders ``ismb-position-tol-px``, ``ismb-disparity-tol-px``, ``ismb-local-px``; button
     ``ismb-recompute``; figures ``ismb-background`` (Fig. 5.12) and ``ismb-scene`` (Fig. 5.14);

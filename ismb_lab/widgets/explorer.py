@@ -177,8 +177,6 @@ class ParameterExplorer(Base):
     `left` and `right` are paths or images, or `left` a Prepared; C/E/T is scored against `targets`
     (a TargetSet, its path or feature pairs), only on their left corners when `partial`.
 
-    Notes
-    -----
     CSS classes: root ``ismb-explorer``; sliders ``ismb-theta-c``, ``ismb-theta-s``,
     ``ismb-lambda-c``, ``ismb-lambda-s``; ``ismb-method``; ``ismb-solver``; ``ismb-seed``; ``ismb-score``;
     figures ``ismb-matches`` and ``ismb-transfer``; ``ismb-status``; ``ismb-log``.

@@ -239,8 +239,6 @@ class GARunner(Base):
     `cases_or_folder` is a Case, a pair folder with an ``answer_key.json`` (corners by `config`),
     or a list of them; the curves are redrawn at most every `redraw_every` s while running.
 
-    Notes
-    -----
     CSS classes: root ``ismb-ga``; buttons ``ismb-start``, ``ismb-pause``, ``ismb-stop``,
     ``ismb-apply``; ``ismb-solver``; ``ismb-generations``; ``ismb-progress``; figure ``ismb-fitness``; best chromosome
     ``ismb-chromosome``; ``ismb-status``; ``ismb-log``.

@@ -411,8 +411,6 @@ class TargetLabeler(Base):
     (:func:`ismb_lab.labels.classroom.targets_path`, named after `pair_name`); under Voilà without
     a hub, where visitors share one login, the labeller asks for a name first.
 
-    Notes
-    -----
     CSS classes: root ``ismb-labeler``, figure ``ismb-stereo``, buttons ``ismb-undo``,
     ``ismb-delete``, ``ismb-save``, ``ismb-load``, toggle ``ismb-answer-key``, table
     ``ismb-pairs``, unsaved-changes flag ``ismb-dirty``, key summary ``ismb-key-summary``,

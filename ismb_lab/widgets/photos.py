@@ -187,8 +187,6 @@ class PhotoLoader(Base):
     `open_with(folder, roi) -> widget` is what "Use this pair" opens on the saved pair; the
     other parameters are :class:`PhotoModel`'s.
 
-    Notes
-    -----
     CSS classes: root ``ismb-photos``; upload ``ismb-upload``; folder field ``ismb-photo-folder``
     and button ``ismb-open-folder``; figure ``ismb-photo-pair``; buttons ``ismb-rectify`` and
     ``ismb-use``; the opened widget's area ``ismb-opened``; ``ismb-status``; ``ismb-log``.

@@ -120,8 +120,6 @@ class RigCloud(Base):
     Without `rig`, its path is typed in the widget; without `left` and `right`, two photos are
     uploaded or a folder opened.  The other parameters are :class:`RigCloudModel`'s.
 
-    Notes
-    -----
     The upload is :class:`~ismb_lab.widgets.photos.PhotoLoader`'s, without *Rectify* and *Use
     this pair* (the rig rectifies); each pair reaches :meth:`load` as given, not scaled.
 

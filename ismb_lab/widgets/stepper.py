@@ -54,8 +54,7 @@ class StepperModel:
             self.seed = check_number(seed, "seed", owner, low=0, integer=True)
         if rule is not None:
             self.rule = check_choice(rule, "rule", owner, RULES)
-        self._updates = iter_updates(self.network, rng=self.seed, rule=self.rule,
-                                     stop_rule=self.stop_rule)
+        self._updates = iter_updates(self.network, rng=self.seed, rule=self.rule, stop_rule=self.stop_rule)
         self.state = self.network.initial_state().copy()
         self.energies = [energy(self.network, self.state)]
         self.last: Update | None = None
@@ -204,8 +203,6 @@ class HopfieldStepper(Base):
     `left` and `right` are paths or images, or `left` a Prepared; "Run to convergence" makes
     at most `run_limit` attempts per click.
 
-    Notes
-    -----
     CSS classes: root ``ismb-stepper``; buttons ``ismb-step``, ``ismb-step10``, ``ismb-run``,
     ``ismb-reset``; seed field ``ismb-seed``; checkbox ``ismb-thesis-rule``; figures
     ``ismb-grid`` (neurons), ``ismb-matches`` (image pair) and ``ismb-energy``;
