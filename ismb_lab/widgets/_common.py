@@ -134,9 +134,7 @@ class Base:
     def syncing(self):
         """Set controls from the model without their guarded observers answering.
 
-        >>> class Demo(Base):
-        ...     pass
-        >>> demo, calls = Demo(), []
+        >>> demo, calls = Base(), []
         >>> callback = demo.guard(lambda: calls.append(1))
         >>> with demo.syncing():
         ...     callback()

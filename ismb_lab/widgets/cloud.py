@@ -135,7 +135,7 @@ def depth_cloud(model) -> Cloud:
 
 
 def _board(camera: StereoCamera, rectified, owner: str) -> tuple:
-    """The board's corners in both rectified views (cv2), their disparities and a note of their median depth."""
+    """The board's corners in both rectified views (cv2), their disparities and a note of their depth."""
     from ..cameras.rig import find_board
 
     left, right = find_board(rectified.left, camera.board), find_board(rectified.right, camera.board)
@@ -158,8 +158,8 @@ def board_cloud(camera: StereoCamera, rectified) -> Cloud:
 
 
 def _in_metres(camera: StereoCamera) -> str:
-    return (f"in metres (f = {camera.focal_px:.1f} px, B = {camera.baseline_m * 100:.2f} cm); left camera at 0, "
-            "Z forward, colour = Z")
+    return (f"in metres (f = {camera.focal_px:.1f} px, B = {camera.baseline_m * 100:.2f} cm); "
+            "left camera at 0, Z forward, colour = Z")
 
 
 def match_cloud(result, camera: StereoCamera, board=None) -> Cloud:
@@ -327,7 +327,8 @@ class PointCloudView:
         self.plot.colorbar_object_id = self.cameras.id
         self.plot.add_class("ismb-cloud-plot")
         self.caption = with_class(ipywidgets.HTML(""), "ismb-cloud-caption")
-        self.colours = with_class(ipywidgets.HTML("", layout=ipywidgets.Layout(width="100%")), "ismb-cloud-colours")
+        self.colours = with_class(ipywidgets.HTML("", layout=ipywidgets.Layout(width="100%")),
+                                  "ismb-cloud-colours")
         self.widget = with_class(ipywidgets.VBox([self.caption, self.colours, self.plot],
                                                  layout=ipywidgets.Layout(width="100%")), "ismb-cloud")
         self._dense_points = np.zeros((0, 3))

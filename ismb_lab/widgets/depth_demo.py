@@ -118,8 +118,8 @@ class DepthModel:
     def ranking(self) -> list[str]:
         """One line per object, nearest first, with what it rests on, e.g. ``1. object at (98, 163):
         d = 33.9 px, Z = 0.88 m ± 0.01 (13 features, spread 0.0 px; outline 34 px)``."""
-        return [f"{o.rank}. object at ({_xy(o)}): d = {o.mean_disparity:.1f} px, {depth_text(o)} ({support_text(o)})"
-                for o in self.result.objects]
+        return [f"{o.rank}. object at ({_xy(o)}): d = {o.mean_disparity:.1f} px, "
+                f"{depth_text(o)} ({support_text(o)})" for o in self.result.objects]
 
     def sentence(self) -> str:
         """The thesis' conclusion: which object is nearer, and what they are in front of."""
@@ -339,8 +339,8 @@ class DepthDemo(Base):
         for control in (*self.sliders.values(), self.method_menu, self.seed_field, self.grouping_menu):
             control.observe(self.guard(lambda _: self.recompute()), names="value")
         self.recompute_button.on_click(self.guard(lambda _: self.recompute()))
-        controls = row([ipywidgets.VBox([self.method_menu, self.seed_field, self.grouping_menu, self.recompute_button]),
-                        ipywidgets.VBox(list(self.sliders.values()))])
+        menus = [self.method_menu, self.seed_field, self.grouping_menu, self.recompute_button]
+        controls = row([ipywidgets.VBox(menus), ipywidgets.VBox(list(self.sliders.values()))])
         views = row([self.background_pane.widget, self.scene_pane.widget])
         self.widget = with_class(ipywidgets.VBox([controls, self.status, self.ranking, views, self.cloud.widget,
                                                   self.log]), "ismb-depth")
@@ -349,7 +349,8 @@ class DepthDemo(Base):
     @classmethod
     def from_folders(cls, background_folder, scene_folder, **kw) -> "DepthDemo":
         """The demo on two pair folders, e.g. ``images/lab`` and ``images/toy_cars``."""
-        return cls(*[pair_files(f, "DepthDemo.from_folders")[:2] for f in (background_folder, scene_folder)], **kw)
+        pairs = [pair_files(f, "DepthDemo.from_folders")[:2] for f in (background_folder, scene_folder)]
+        return cls(*pairs, **kw)
 
     @classmethod
     def from_photos(cls, *, folder=".", **kw):

@@ -7,6 +7,7 @@
 from __future__ import annotations
 
 import html
+import json
 import re
 from pathlib import Path
 from typing import Callable
@@ -110,10 +111,11 @@ class PhotoModel:
         h, w = self.current()[0].shape
         xs = sorted((int(np.clip(round(x0), 0, w)), int(np.clip(round(x1), 0, w))))
         ys = sorted((int(np.clip(round(y0), 0, h)), int(np.clip(round(y1), 0, h))))
-        if xs[1] - xs[0] < 24 or ys[1] - ys[0] < 24:
+        roi = (xs[0], ys[0], xs[1] - xs[0], ys[1] - ys[0])
+        if roi[2] < 24 or roi[3] < 24:
             raise ParameterError(message("roi", "PhotoModel.set_roi", "at least 24 x 24 pixels inside the image",
-                                         (xs[0], ys[0], xs[1] - xs[0], ys[1] - ys[0])))
-        self.roi = (xs[0], ys[0], xs[1] - xs[0], ys[1] - ys[0])
+                                         roi))
+        self.roi = roi
         self.message = f"ROI {self.roi} (x, y, width, height)"
         return self.roi
 
@@ -127,8 +129,6 @@ class PhotoModel:
                   {k: v for k, v in self.check.items() if not k.endswith("_xy")} | {"method": "already rectified"})
         record["roi"] = None if self.roi is None else list(self.roi)
         folder = save_pair(left, right, self.folder, f"photos-{self.user}-{self.name}")
-        import json
-
         atomic_write_text(folder / "rectify.json", json.dumps(record, indent=2))
         self.saved = folder
         self.message = f"saved to {folder}"
@@ -142,11 +142,9 @@ def draw_photos(ax, model: PhotoModel) -> dict:
 
     ax.set_axis_off()
     image = ax.imshow(np.zeros((2, 2, 3), np.uint8), interpolation="nearest")
-    lines = LineCollection([], linewidths=0.8, cmap="coolwarm")
+    lines = ax.add_collection(LineCollection([], linewidths=0.8, cmap="coolwarm"))
     lines.set_clim(0, 4)
-    ax.add_collection(lines)
-    roi = Rectangle((0, 0), 0, 0, fill=False, ec=OKABE_ITO["yellow"], lw=1.5, visible=False)
-    ax.add_patch(roi)
+    roi = ax.add_patch(Rectangle((0, 0), 0, 0, fill=False, ec=OKABE_ITO["yellow"], lw=1.5, visible=False))
     return {"image": image, "lines": lines, "roi": roi, "offset": 0.0}
 
 
@@ -245,11 +243,9 @@ class PhotoLoader(Base):
         if len(files) != 2:
             raise ParameterError(message("upload", "PhotoLoader", "two photos at once (the left camera's "
                                          "first, or named left... and right...)", f"{len(files)} files"))
-        names = [f["name"] for f in files]
-        if "right" in names[0].lower() and "left" in names[1].lower():
+        if "right" in files[0]["name"].lower() and "left" in files[1]["name"].lower():
             files.reverse()
-        contents = [bytes(f["content"]) for f in files]
-        self.load(contents[0], contents[1], Path(files[0]["name"]).stem)
+        self.load(bytes(files[0]["content"]), bytes(files[1]["content"]), Path(files[0]["name"]).stem)
 
     def open_folder(self, folder) -> str:
         folder = Path(str(folder).strip()).expanduser()
