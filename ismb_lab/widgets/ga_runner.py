@@ -139,9 +139,8 @@ class GAModel:
                                 targets=self.target)
                 for listener in list(self.listeners):
                     listener(record)
-                while not self._resume.wait(0.1):
-                    if self._stop.is_set():
-                        break
+                while not (self._resume.wait(0.1) or self._stop.is_set()):
+                    pass
                 if self._stop.is_set():
                     self.status = "stopped"
                     return

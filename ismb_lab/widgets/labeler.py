@@ -432,8 +432,7 @@ class TargetLabeler(Base):
         self.model = LabelModel(prepared, path=path, answer_key=answer_key, exclusive=ask)
         # each image gets half the column (286 px of 320 px images); on larger photos the
         # toolbar's zoom tells corners apart, and clicks still land in image coordinates
-        self.pane = Pane(column_figsize(self.model.offset + self.model.width, self.model.height),
-                         "ismb-stereo")
+        self.pane = Pane(column_figsize(self.model.offset + self.model.width, self.model.height), "ismb-stereo")
         self.panes = (self.pane,)
         self.ax = self.pane.fig.add_axes((0, 0, 1, 1))
         self.artists = draw_labels(self.ax, self.model)
@@ -469,8 +468,7 @@ class TargetLabeler(Base):
         bar = ipywidgets.HBox([self.undo_button, self.delete_button, self.save_button,
                                self.load_button, self.key_toggle, self.dirty_label])
         head = [self.name_box, self.path_label] if self.name_box is not None else [self.path_label]
-        self.widget = with_class(ipywidgets.VBox([self.pane.widget, *head, bar, self.status,
-                                                  self.key_summary,
+        self.widget = with_class(ipywidgets.VBox([self.pane.widget, *head, bar, self.status, self.key_summary,
                                                   self.table, self.log]), "ismb-labeler")
         self.refresh()
 
@@ -587,6 +585,5 @@ class TargetLabeler(Base):
         from matplotlib.figure import Figure
 
         fig = Figure(figsize=(9.0, 3.6))
-        ax = fig.add_axes((0, 0, 1, 1))
-        update_labels(draw_labels(ax, self.model), self.model, self.key_toggle.value)
+        update_labels(draw_labels(fig.add_axes((0, 0, 1, 1)), self.model), self.model, self.key_toggle.value)
         return fig
