@@ -356,7 +356,7 @@ class PointCloudView:
         _fill(self.dense, dense, dense[:, 2], 0.4 * size, colour_range, self._dense_wanted)
         vertices, _ = frustum_edges(cloud.centres, cloud.frustum)
         self.cameras.vertices = _shown(vertices)
-        self._draw_axes(cloud, dense)
+        self._draw_axes(cloud, dense, vertices)
         for k, text in enumerate(self.notes):
             if k < len(cloud.notes):
                 words, xyz = cloud.notes[k]
@@ -371,8 +371,7 @@ class PointCloudView:
         self._dense_wanted = bool(shown)
         self.dense.visible = bool(shown and len(self._dense_points))
 
-    def _draw_axes(self, cloud: Cloud, dense) -> None:
-        vertices, _ = frustum_edges(cloud.centres, cloud.frustum)
+    def _draw_axes(self, cloud: Cloud, dense, vertices) -> None:
         every = _shown(np.vstack([cloud.points, dense, vertices]))
         self._box = (every.min(axis=0), every.max(axis=0))
         lines, segments, texts = axes_frame(*self._box)

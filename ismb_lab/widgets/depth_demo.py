@@ -236,7 +236,6 @@ def draw_scene(ax, cax, model: DepthModel) -> dict:
     from matplotlib.patches import Rectangle
 
     ax.imshow(grey_rgb(model.scene.left), interpolation="nearest")
-
     drawn = ax.add_collection(LineCollection([], colors=OKABE_ITO["sky blue"], linewidths=0.8, visible=False))
     removed, = ax.plot([], [], "x", color="0.75", alpha=0.7, ms=4, mew=1)
     features = ax.scatter([], [], c=[], cmap=CMAP, s=30, edgecolors="white", linewidths=0.6)

@@ -60,30 +60,27 @@ class ExplorerModel:
         owner = "ExplorerModel.set"
         before = (self.method, self.params, self.seed, self.solver)
         try:
-            return self._set(owner, method, params, seed, solver, genes)
+            if solver is not None:
+                self.solver = get_solver(solver, owner).name
+            if method is not None:
+                self.method = get_method(method).name
+            if params is not None:
+                if not isinstance(params, Params):
+                    raise ParameterTypeError(message("params", owner, "a Params", params))
+                self.params = params
+            if genes:
+                self.params = replace(self.params, **genes)
+            if seed is not None:
+                self.seed = check_number(seed, "seed", owner, low=0, integer=True)
+            m = get_method(self.method)
+            unset = {g: getattr(m.defaults, g) for g in m.gene_names if getattr(self.params, g) is None}
+            if unset:   # e.g. Method-NM's match bias after a four-gene method
+                self.params = replace(self.params, **unset)
+            return self.rematch()
         except Exception:
             # e.g. the exact solver on a problem too large for it: keep the last working state
             self.method, self.params, self.seed, self.solver = before
             raise
-
-    def _set(self, owner, method, params, seed, solver, genes) -> "ExplorerModel":
-        if solver is not None:
-            self.solver = get_solver(solver, owner).name
-        if method is not None:
-            self.method = get_method(method).name
-        if params is not None:
-            if not isinstance(params, Params):
-                raise ParameterTypeError(message("params", owner, "a Params", params))
-            self.params = params
-        if genes:
-            self.params = replace(self.params, **genes)
-        if seed is not None:
-            self.seed = check_number(seed, "seed", owner, low=0, integer=True)
-        m = get_method(self.method)
-        unset = {g: getattr(m.defaults, g) for g in m.gene_names if getattr(self.params, g) is None}
-        if unset:   # e.g. Method-NM's match bias after a four-gene method
-            self.params = replace(self.params, **unset)
-        return self.rematch()
 
     def rematch(self) -> "ExplorerModel":
         self.result = match(prepared=self.prepared, method=self.method, params=self.params, seed=self.seed,
