@@ -197,11 +197,16 @@ def with_class(widget, css: str):
     return widget
 
 
+def check_type(value, kind, name: str, owner: str, rule: str):
+    """`value` if it is a `kind`, else a ParameterTypeError naming `name`, `owner` and `rule`."""
+    if not isinstance(value, kind):
+        raise ParameterTypeError(message(name, owner, rule, value))
+    return value
+
+
 def pair_files(folder, owner: str) -> tuple[Path, Path, Path]:
     """``left.png``, ``right.png`` and ``answer_key.json`` of a pair folder (the key may be absent)."""
-    if not isinstance(folder, (str, Path)):
-        raise ParameterTypeError(message("folder", owner, "a folder path (str or Path)", folder))
-    folder = Path(folder)
+    folder = Path(check_type(folder, (str, Path), "folder", owner, "a folder path (str or Path)"))
     for name in ("left.png", "right.png"):
         if not (folder / name).is_file():
             raise ParameterError(f"The 'folder' parameter of {owner} must be a folder holding "

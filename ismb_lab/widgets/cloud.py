@@ -13,7 +13,7 @@ import numpy as np
 
 from .._core.validation import ParameterError, ParameterTypeError, message, readonly
 from ..cameras.camera import StereoCamera
-from ._common import with_class
+from ._common import check_type, with_class
 
 __all__ = ["AXIS_TITLES", "Cloud", "MAX_NOTES", "MAX_TICKS", "PointCloudView", "axes_frame", "axis_ticks", "board_cloud",
            "colour_bar_html", "depth_cloud", "frustum_edges", "match_cloud"]
@@ -94,8 +94,7 @@ class Cloud:
         object.__setattr__(self, "colour", readonly(colour))
         if not isinstance(self.notes, tuple) or len(self.notes) > MAX_NOTES:
             raise ParameterError(message("notes", owner, f"a tuple of at most {MAX_NOTES} (text, xyz)", self.notes))
-        if not isinstance(self.caption, str):
-            raise ParameterTypeError(message("caption", owner, "a str", self.caption))
+        check_type(self.caption, str, "caption", owner, "a str")
         lo, hi = (float(colour.min()), float(colour.max())) if len(colour) else (0.0, 1.0)
         object.__setattr__(self, "depth_range", (lo, hi))
 
@@ -150,8 +149,7 @@ def _board(camera: StereoCamera, rectified, owner: str) -> tuple:
 
 def board_cloud(camera: StereoCamera, rectified) -> Cloud:
     """A chessboard's corners, found in both views of a pair rectified with `camera`, in metres."""
-    if not isinstance(camera, StereoCamera):
-        raise ParameterTypeError(message("camera", "board_cloud", "a StereoCamera", camera))
+    check_type(camera, StereoCamera, "camera", "board_cloud", "a StereoCamera")
     left, d, note = _board(camera, rectified, "board_cloud")
     caption = f"the board's {len(left)} corners matched between the rectified views, " + _in_metres(camera)
     return _cloud(camera, camera.points_from_disparity(left, d), [note], caption)
@@ -178,8 +176,7 @@ def match_cloud(result, camera: StereoCamera, board=None) -> Cloud:
     """
     from ..matching.metric import match_points
 
-    if not isinstance(camera, StereoCamera):
-        raise ParameterTypeError(message("camera", "match_cloud", "a StereoCamera", camera))
+    check_type(camera, StereoCamera, "camera", "match_cloud", "a StereoCamera")
     notes = [] if board is None else [_board(camera, board, "match_cloud")[2]]
     caption = f"the network's {len(result.pairs)} matches (Method-{result.method}) " + _in_metres(camera)
     return _cloud(camera, match_points(result, camera), notes, caption)
@@ -294,8 +291,7 @@ class PointCloudView:
         import ipywidgets
         import k3d
 
-        if not isinstance(cloud, Cloud):
-            raise ParameterTypeError(message("cloud", "PointCloudView", "a Cloud", cloud))
+        check_type(cloud, Cloud, "cloud", "PointCloudView", "a Cloud")
         self.plot = k3d.plot(height=int(height), menu_visibility=False, axes_helper=0, grid_visible=False,
                              camera_auto_fit=False)
         # made with the first cloud's data: a k3d points object created empty never shows its
@@ -339,8 +335,7 @@ class PointCloudView:
     def update(self, cloud: Cloud, dense=None) -> None:
         """Show `cloud` and `dense` (``(M, 3)`` metres, or None) in the same objects, with one
         colour scale from the nearest to the farthest point of either; the camera stays."""
-        if not isinstance(cloud, Cloud):
-            raise ParameterTypeError(message("cloud", "PointCloudView.update", "a Cloud", cloud))
+        check_type(cloud, Cloud, "cloud", "PointCloudView.update", "a Cloud")
         dense = np.zeros((0, 3)) if dense is None else np.asarray(dense, dtype=float).reshape(-1, 3)
         dense = dense[np.isfinite(dense).all(axis=1)]
         lo, hi = cloud.depth_range

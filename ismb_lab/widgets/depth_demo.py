@@ -15,7 +15,7 @@ from ..network.methods import DEFAULT_METHOD, get_method, method_names
 from ..network.params import Params
 from ..plotting import OKABE_ITO, outlines
 from ..matching.recipe import recipe_of
-from ._common import Base, Pane, button, grey_rgb, pair_files, path_labels, row, with_class
+from ._common import Base, Pane, button, check_type, grey_rgb, pair_files, path_labels, row, with_class
 from .cloud import PointCloudView, depth_cloud
 
 __all__ = ["CMAP", "GROUPING_LABELS", "TOLERANCES", "depth_text", "support_text", "DepthDemo",
@@ -57,9 +57,7 @@ class DepthModel:
         self.background = load_stereo(background, "background", owner)
         self.scene = load_stereo(scene, "scene", owner)
         self.match_config = match_config
-        if not isinstance(background_name, str):
-            raise ParameterTypeError(message("background_name", owner, "a str", background_name))
-        self.background_name = background_name
+        self.background_name = check_type(background_name, str, "background_name", owner, "a str")
         self.method = get_method(method).name
         self.params = self._check_params(params, owner)
         self.config = self._check_config(DepthConfig() if config is None else config, owner)
@@ -77,9 +75,7 @@ class DepthModel:
 
     @staticmethod
     def _check_config(config, owner):
-        if not isinstance(config, DepthConfig):
-            raise ParameterTypeError(message("config", owner, "None or a DepthConfig", config))
-        return config
+        return check_type(config, DepthConfig, "config", owner, "None or a DepthConfig")
 
     def _blobs(self, config):
         """The blobs of change for `config` (None for features alone), found again on new outline settings."""

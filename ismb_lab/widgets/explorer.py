@@ -17,7 +17,7 @@ from ..network.params import THETA_C, Params
 from ..network.similarity import transfer
 from ..network.solvers import DEFAULT_SOLVER, SOLVERS, get_solver
 from ..labels.targets import TargetSet, load_targets, snap
-from ._common import Base, Pane, draw_pair, pair_figsize, pair_files, update_pair, with_class
+from ._common import Base, Pane, check_type, draw_pair, pair_figsize, pair_files, update_pair, with_class
 
 __all__ = ["draw_transfer", "ExplorerModel", "ParameterExplorer", "similarity_theta", "update_transfer"]
 
@@ -39,9 +39,7 @@ class ExplorerModel:
                  targets=None, solver: str = DEFAULT_SOLVER, unknown=()):
         owner = "ExplorerModel"
         self.solver = get_solver(solver, owner).name
-        if not isinstance(prepared, Prepared):
-            raise ParameterTypeError(message("prepared", owner, "a Prepared (see matching.prepare)", prepared))
-        self.prepared = prepared
+        self.prepared = check_type(prepared, Prepared, "prepared", owner, "a Prepared (see matching.prepare)")
         self.method = get_method(method).name
         self.params = get_method(self.method).defaults if params is None else params
         if not isinstance(self.params, Params):
@@ -65,9 +63,7 @@ class ExplorerModel:
             if method is not None:
                 self.method = get_method(method).name
             if params is not None:
-                if not isinstance(params, Params):
-                    raise ParameterTypeError(message("params", owner, "a Params", params))
-                self.params = params
+                self.params = check_type(params, Params, "params", owner, "a Params")
             if genes:
                 self.params = replace(self.params, **genes)
             if seed is not None:
@@ -190,8 +186,7 @@ class ParameterExplorer(Base):
             if not isinstance(targets, TargetSet):
                 targets = load_targets(targets, pair=prepared.pair)
             targets = snap(targets, prepared.problem.left_xy, prepared.problem.right_xy).pairs
-        if not isinstance(partial, bool):
-            raise ParameterTypeError(message("partial", "ParameterExplorer", "True or False", partial))
+        check_type(partial, bool, "partial", "ParameterExplorer", "True or False")
         unknown = unlabelled(targets, len(prepared.problem.left_xy)) if partial and targets is not None else ()
         self.model = ExplorerModel(prepared, method, params, seed, targets, solver, unknown)
         self.pair_pane = Pane(pair_figsize(prepared.pair), "ismb-matches")
@@ -253,8 +248,7 @@ class ParameterExplorer(Base):
 
     def set_params(self, params: Params) -> None:
         """Show and use `params` (e.g. the GA's best): one rematch, whatever changed."""
-        if not isinstance(params, Params):
-            raise ParameterTypeError(message("params", "ParameterExplorer.set_params", "a Params", params))
+        check_type(params, Params, "params", "ParameterExplorer.set_params", "a Params")
         with self.syncing():
             for gene, slider in self.sliders.items():
                 if getattr(params, gene) is not None:

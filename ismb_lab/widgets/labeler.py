@@ -19,7 +19,7 @@ from ..network.methods import DEFAULT_METHOD
 from ..plotting import GAP, OKABE_ITO, VERDICT_COLOURS
 from ..labels.classroom import save_merging, targets_path, voila_without_hub
 from ..labels.targets import TargetSet, load_targets, snap, targets_from_matches
-from ._common import Base, Pane, button, column_figsize, draw_pair, pair_files, with_class
+from ._common import Base, Pane, button, check_type, column_figsize, draw_pair, pair_files, with_class
 
 __all__ = ["COLUMNS", "KEY_AFTER", "Comparison", "draw_labels", "LabelModel", "pairs_html", "SavedScore", "TargetLabeler",
            "update_labels"]
@@ -87,11 +87,8 @@ class LabelModel:
     def __init__(self, prepared: Prepared, *, path=None, answer_key: TargetSet | None = None,
                  snap_radius: float = 8.0, key_tol: float = 3.0, exclusive: bool = False):
         owner = "LabelModel"
-        if not isinstance(exclusive, bool):
-            raise ParameterTypeError(message("exclusive", owner, "True or False", exclusive))
-        self.exclusive = exclusive
-        if not isinstance(prepared, Prepared):
-            raise ParameterTypeError(message("prepared", owner, "a Prepared (see matching.prepare)", prepared))
+        self.exclusive = check_type(exclusive, bool, "exclusive", owner, "True or False")
+        check_type(prepared, Prepared, "prepared", owner, "a Prepared (see matching.prepare)")
         if answer_key is not None and not isinstance(answer_key, TargetSet):
             raise ParameterTypeError(message("answer_key", owner, "None or a TargetSet", answer_key))
         self.prepared = prepared
@@ -266,9 +263,7 @@ class LabelModel:
         if path is None:
             raise ParameterError(message("path", owner, "a file path (none was given here or to the "
                                          "labeler)", None))
-        if not isinstance(path, (str, Path)):
-            raise ParameterTypeError(message("path", owner, "a str or Path", path))
-        return Path(path)
+        return Path(check_type(path, (str, Path), "path", owner, "a str or Path"))
 
     def save(self, path=None) -> Path:
         """Write the labels atomically, merged with what others saved to the file meanwhile
@@ -510,8 +505,7 @@ class TargetLabeler(Base):
 
     def set_name(self, name: str) -> None:
         """Choose the visitor's own targets file by their name (Voilà without a hub)."""
-        if not isinstance(name, str):
-            raise ParameterTypeError(message("name", "TargetLabeler.set_name", "a str", name))
+        check_type(name, str, "name", "TargetLabeler.set_name", "a str")
         self.model.path = targets_path(self.pair_name, Path.cwd(), user=name, also=()) if name.strip() else None
         self._show_path()
 

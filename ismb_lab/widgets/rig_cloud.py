@@ -9,11 +9,11 @@ from pathlib import Path
 
 import numpy as np
 
-from .._core.validation import ParameterError, ParameterTypeError, message
+from .._core.validation import ParameterError, message
 from ..cameras.camera import StereoCamera, load_camera
 from ..matching.dense import MAX_DENSE, agreement, dense_points, sgbm_disparity, window_range
 from ..network.methods import DEFAULT_METHOD
-from ._common import Base, button, row, with_class
+from ._common import Base, button, check_type, row, with_class
 from .cloud import Cloud, PointCloudView, _cloud, match_cloud
 
 __all__ = ["RigCloud", "RigCloudModel"]
@@ -23,8 +23,7 @@ def _camera(rig, owner: str) -> tuple[StereoCamera, str]:
     """The rig and how to name it: a StereoCamera as it is, else a rig file (path or JSON text)."""
     if isinstance(rig, StereoCamera):
         return rig, "the rig given"
-    if not isinstance(rig, (str, Path)):
-        raise ParameterTypeError(message("rig", owner, "a StereoCamera or a rig file (path or JSON text)", rig))
+    check_type(rig, (str, Path), "rig", owner, "a StereoCamera or a rig file (path or JSON text)")
     camera = load_camera(rig)
     return camera, ("the rig file given" if str(rig).lstrip().startswith("{") else Path(rig).name)
 

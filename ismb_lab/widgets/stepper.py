@@ -13,7 +13,8 @@ from ..plotting import OKABE_ITO
 from ..network.methods import DEFAULT_METHOD, get_method
 from ..network.params import Params
 from ..network.solvers import to_matches
-from ._common import Base, Pane, button, draw_pair, pair_figsize, pair_files, path_labels, row, update_pair, with_class
+from ._common import (Base, Pane, button, check_type, draw_pair, pair_figsize, pair_files, path_labels, row,
+                      update_pair, with_class)
 
 __all__ = ["draw_energy", "draw_grid", "HopfieldStepper", "StepperModel", "update_energy", "update_grid"]
 
@@ -36,9 +37,7 @@ class StepperModel:
     def __init__(self, prepared: Prepared, method=DEFAULT_METHOD, params: Params | None = None, seed: int = 0,
                  rule: str = "exact", stop_rule: str = "sweep"):
         owner = "StepperModel"
-        if not isinstance(prepared, Prepared):
-            raise ParameterTypeError(message("prepared", owner, "a Prepared (see matching.prepare)", prepared))
-        self.prepared = prepared
+        self.prepared = check_type(prepared, Prepared, "prepared", owner, "a Prepared (see matching.prepare)")
         self.method = get_method(method)
         self.params = self.method.defaults if params is None else params
         if not isinstance(self.params, Params):
