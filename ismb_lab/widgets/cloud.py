@@ -9,6 +9,7 @@ from __future__ import annotations
 import html
 from dataclasses import dataclass, field
 
+import ipywidgets
 import numpy as np
 
 from .._core.validation import ParameterError, ParameterTypeError, message, readonly
@@ -288,7 +289,6 @@ class PointCloudView:
     """
 
     def __init__(self, cloud: Cloud, height: int = 360, dense=None):
-        import ipywidgets
         import k3d
 
         check_type(cloud, Cloud, "cloud", "PointCloudView", "a Cloud")

@@ -6,7 +6,9 @@ import html
 import math
 from dataclasses import fields, replace
 
+import ipywidgets
 import numpy as np
+from matplotlib.figure import Figure
 
 from .._core.validation import ParameterTypeError, check_number, message
 from ..depth.objects import DepthConfig, DepthObject, DepthResult
@@ -297,8 +299,6 @@ class DepthDemo(Base):
     def __init__(self, background, scene, *, method=DEFAULT_METHOD, params: Params | None = None, seed: int = 0,
                  config: DepthConfig | None = None, match_config=None,
                  background_name: str = "the nearest background object", recipe=None):
-        import ipywidgets
-
         super().__init__()
         self.model = DepthModel(background, scene, method, params, seed, config, match_config,
                                 background_name, recipe)
@@ -405,8 +405,6 @@ class DepthDemo(Base):
 
     def static_figure(self):
         """A plain Figure: Fig. 5.12 and Fig. 5.14 side by side under the ranking sentence (for print)."""
-        from matplotlib.figure import Figure
-
         fig = Figure(figsize=(9.0, 3.6), layout="constrained")
         bg_ax, scene_ax = fig.subplots(1, 2)
         update_background(draw_background(bg_ax, self.model), self.model)

@@ -6,7 +6,9 @@ from __future__ import annotations
 import html
 from dataclasses import replace
 
+import ipywidgets
 import numpy as np
+from matplotlib.figure import Figure
 
 from .._core.validation import ParameterTypeError, check_number, message
 from ..tuning.evaluation import Score, score, unlabelled
@@ -178,8 +180,6 @@ class ParameterExplorer(Base):
     def __init__(self, left, right=None, *, method=DEFAULT_METHOD, params: Params | None = None, seed: int = 0,
                  config: MatchConfig | None = None, targets=None, solver: str = DEFAULT_SOLVER,
                  partial: bool = False):
-        import ipywidgets
-
         super().__init__()
         prepared = left if isinstance(left, Prepared) else prepare(left, right, config)
         if targets is not None and not isinstance(targets, (np.ndarray, list)):
@@ -282,8 +282,6 @@ class ParameterExplorer(Base):
 
     def static_figure(self):
         """A plain Figure: the matches and the transfer functions (for print)."""
-        from matplotlib.figure import Figure
-
         fig = Figure(figsize=(6.6, 5.0), layout="constrained")
         top, bottom = fig.subfigures(2, 1, height_ratios=[1.2, 1])
         update_pair(draw_pair(top.add_subplot(), self.model), self.model)

@@ -12,7 +12,9 @@ import time
 from pathlib import Path
 from typing import Callable
 
+import ipywidgets
 import numpy as np
+from matplotlib.figure import Figure
 
 from .._core.validation import ParameterError, ParameterTypeError, check_number, message
 from ..tuning.genetic import GAConfig, Generation
@@ -246,8 +248,6 @@ class GARunner(Base):
     def __init__(self, cases_or_folder, *, method=DEFAULT_METHOD, population: int | None = None,
                  generations: int | None = None, seed: int = 0, config: MatchConfig | None = None,
                  redraw_every: float = 0.2, save_to=None, solver: str = DEFAULT_SOLVER):
-        import ipywidgets
-
         super().__init__()
         self.model = GAModel(as_cases(cases_or_folder, config), method, population=population,
                              generations=generations, seed=seed, save_to=save_to, solver=solver)
@@ -414,8 +414,6 @@ class GARunner(Base):
 
     def static_figure(self):
         """A plain Figure of the fitness curves so far (for print)."""
-        from matplotlib.figure import Figure
-
         fig = Figure(figsize=(6.0, 3.0), layout="constrained")
         update_fitness(draw_fitness(fig.add_subplot(), self.model), list(self.model.history))
         return fig

@@ -10,7 +10,9 @@ import html
 from dataclasses import dataclass
 from pathlib import Path
 
+import ipywidgets
 import numpy as np
+from matplotlib.figure import Figure
 
 from .._core.validation import ParameterError, ParameterTypeError, check_choice, check_number, message
 from ..tuning.evaluation import Score, score, unlabelled
@@ -414,8 +416,6 @@ class TargetLabeler(Base):
 
     def __init__(self, left, right=None, *, path=None, config: MatchConfig | None = None,
                  answer_key=None, pair_name: str | None = None):
-        import ipywidgets
-
         super().__init__()
         prepared = left if isinstance(left, Prepared) else prepare(left, right, config)
         if answer_key is not None and not isinstance(answer_key, TargetSet):
@@ -576,8 +576,6 @@ class TargetLabeler(Base):
 
     def static_figure(self):
         """A plain matplotlib Figure of the pair and its labels (for print)."""
-        from matplotlib.figure import Figure
-
         fig = Figure(figsize=(9.0, 3.6))
         update_labels(draw_labels(fig.add_axes((0, 0, 1, 1)), self.model), self.model, self.key_toggle.value)
         return fig

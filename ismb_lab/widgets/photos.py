@@ -12,6 +12,7 @@ import re
 from pathlib import Path
 from typing import Callable
 
+import ipywidgets
 import numpy as np
 
 from .._core.files import atomic_write_text
@@ -192,8 +193,6 @@ class PhotoLoader(Base):
 
     def __init__(self, open_with: Callable | None = None, *, folder=".", user: str | None = None, role: str = "",
                  homographies=None, title: str = ""):
-        import ipywidgets
-
         super().__init__()
         if open_with is not None and not callable(open_with):
             raise ParameterTypeError(message("open_with", "PhotoLoader", "a callable (folder, roi) -> widget",

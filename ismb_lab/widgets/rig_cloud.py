@@ -7,6 +7,7 @@ import html
 from dataclasses import replace
 from pathlib import Path
 
+import ipywidgets
 import numpy as np
 
 from .._core.validation import ParameterError, message
@@ -130,8 +131,6 @@ class RigCloud(Base):
 
     def __init__(self, rig=None, left=None, right=None, *, name: str = "pair", method: str = DEFAULT_METHOD, seed: int = 0,
                  board: bool = False, height: int = 360, folder=".", user: str | None = None):
-        import ipywidgets
-
         from .photos import PhotoLoader
 
         super().__init__()

@@ -3,7 +3,9 @@
 
 from __future__ import annotations
 
+import ipywidgets
 import numpy as np
+from matplotlib.figure import Figure
 
 from .._core.validation import ParameterTypeError, check_choice, check_number, message
 from ..network.hopfield import RULES, energy
@@ -210,8 +212,6 @@ class HopfieldStepper(Base):
 
     def __init__(self, left, right=None, *, method=DEFAULT_METHOD, params: Params | None = None, seed: int = 0,
                  config: MatchConfig | None = None, run_limit: int = 50_000):
-        import ipywidgets
-
         super().__init__()
         prepared = left if isinstance(left, Prepared) else prepare(left, right, config)
         self.model = StepperModel(prepared, method, params, seed)
@@ -292,8 +292,6 @@ class HopfieldStepper(Base):
 
     def static_figure(self):
         """A plain Figure: grid, matches and energy curve of the current state (for print)."""
-        from matplotlib.figure import Figure
-
         fig = Figure(figsize=(10.0, 6.0), layout="constrained")
         grid_ax, pair_ax, energy_ax = fig.subplot_mosaic([["grid", "pair"], ["energy", "energy"]],
                                                          width_ratios=[1, 2.2]).values()
