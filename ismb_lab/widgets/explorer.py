@@ -19,7 +19,7 @@ from ..network.params import THETA_C, Params
 from ..network.similarity import transfer
 from ..network.solvers import DEFAULT_SOLVER, SOLVERS, get_solver
 from ..labels.targets import TargetSet, load_targets, snap
-from ._common import Base, Pane, check_type, draw_pair, pair_figsize, pair_files, update_pair, with_class
+from ._common import Base, Pane, check_type, draw_pair, pair_figsize, pair_files, row, update_pair, with_class
 
 __all__ = ["draw_transfer", "ExplorerModel", "ParameterExplorer", "similarity_theta", "update_transfer"]
 
@@ -193,9 +193,8 @@ class ParameterExplorer(Base):
         self.transfer_pane = Pane((5.8, 2.2), "ismb-transfer")
         self.panes = (self.pair_pane, self.transfer_pane)
         self.pair_artists = draw_pair(self.pair_pane.fig.add_axes((0, 0, 1, 1)), self.model)
-        axes = self.transfer_pane.fig.subplots(1, 2)
         self.transfer_pane.fig.subplots_adjust(left=0.08, right=0.98, bottom=0.2, top=0.88, wspace=0.25)
-        self.transfer_artists = draw_transfer(axes, self.model)
+        self.transfer_artists = draw_transfer(self.transfer_pane.fig.subplots(1, 2), self.model)
 
         self.sliders = {}
         # a gene the current parameters leave unset shows the value of a method that uses it
@@ -206,9 +205,8 @@ class ParameterExplorer(Base):
             s = ipywidgets.FloatSlider(value=fallback[gene.name] if value is None else value, min=gene.low,
                                        max=gene.high, step=0.01, description=gene.symbol or gene.name,
                                        continuous_update=False, readout_format=".2f")
-            s.add_class("ismb-" + gene.name.replace("_", "-"))
             s.observe(self.guard(self._on_slider), names="value")
-            self.sliders[gene.name] = s
+            self.sliders[gene.name] = with_class(s, "ismb-" + gene.name.replace("_", "-"))
         self.method_menu = with_class(ipywidgets.Dropdown(options=list(method_names()), value=self.model.method,
                                                           description="method"), "ismb-method")
         self.seed_field = with_class(ipywidgets.BoundedIntText(value=self.model.seed, min=0, max=2**31 - 1,
@@ -219,9 +217,8 @@ class ParameterExplorer(Base):
         self.solver_menu.observe(self.guard(lambda c: self._change(solver=c["new"])), names="value")
         self.method_menu.observe(self.guard(lambda c: self._change(method=c["new"])), names="value")
         self.seed_field.observe(self.guard(lambda c: self._change(seed=c["new"])), names="value")
-        controls = ipywidgets.HBox([ipywidgets.VBox(list(self.sliders.values())),
-                                    ipywidgets.VBox([self.method_menu, self.solver_menu, self.seed_field])],
-                                   layout=ipywidgets.Layout(flex_flow="row wrap"))
+        controls = row([ipywidgets.VBox(list(self.sliders.values())),
+                        ipywidgets.VBox([self.method_menu, self.solver_menu, self.seed_field])])
         self.widget = with_class(ipywidgets.VBox([controls, self.score_label, self.status,
                                                   self.pair_pane.widget, self.transfer_pane.widget,
                                                   self.log]), "ismb-explorer")
