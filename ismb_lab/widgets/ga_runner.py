@@ -324,8 +324,7 @@ class GARunner(Base):
         self.say(self.model.describe())
 
     def start(self) -> bool:
-        started = self.model.start()
-        if not started:
+        if not self.model.start():
             self.say("the GA is running already: Stop it first")
             return False
         self._drawn_at = 0.0
