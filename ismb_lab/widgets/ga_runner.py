@@ -1,20 +1,8 @@
 """Run the GA (thesis ch. 4) live: fitness curves grow while the notebook stays usable.
 
-Why a background thread
------------------------
-A GA generation is a burst of CPU work (a population of network runs per
-training pair).  Run in a worker thread, it leaves the kernel's main thread
-free to handle Pause and Stop clicks at once, and it works the same in a
-notebook, in Voilà, in a script and in tests, none of which needs an event loop.
-An asyncio task would run on the kernel's own loop: every generation would hold
-up the handling of clicks until it ended, and outside a kernel someone would
-have to drive the loop.  The thread checks a stop :class:`threading.Event`
-between generations (a stopped GA computes no further generation) and waits on
-a resume event while paused; widget values are set from the thread (ipywidgets
-sends them through the kernel's thread-safe I/O channel) and figure draws are
-serialised by a lock.
-
-:class:`GAModel` is the plain-Python model; :class:`GARunner` the widget.
+The GA runs in a worker thread, not an asyncio task on the kernel's loop: clicks on Pause
+and Stop are handled at once, and scripts and tests need no event loop.  The thread checks a
+stop event between generations and waits on a resume event while paused.
 """
 
 from __future__ import annotations
@@ -24,7 +12,9 @@ import time
 from pathlib import Path
 from typing import Callable
 
+import ipywidgets
 import numpy as np
+from matplotlib.figure import Figure
 
 from .._core.validation import ParameterError, ParameterTypeError, check_number, message
 from ..tuning.genetic import GAConfig, Generation
@@ -43,7 +33,7 @@ __all__ = ["as_cases", "case_from_folder", "chromosome_html", "draw_fitness", "G
 
 
 def case_from_folder(folder, config: MatchConfig | None = None) -> Case:
-    """A training :class:`~ismb_lab.tuning.cases.Case` from ``left.png``, ``right.png`` and ``answer_key.json``."""
+    """A training :class:`~ismb_lab.tuning.cases.Case` from a pair folder with an ``answer_key.json``."""
     left, right, key = pair_files(folder, "case_from_folder")
     if not key.is_file():
         raise ParameterError(f"The 'folder' parameter of case_from_folder must be a folder with an "
@@ -71,24 +61,9 @@ def as_cases(cases_or_folder, config: MatchConfig | None = None) -> list[Case]:
 class GAModel:
     """A GA run in a worker thread, with pause, resume and stop.
 
-    Parameters
-    ----------
-    cases : list of Case
-    method : str
-        A name in :func:`ismb_lab.network.methods.method_names`.
-    population, generations : int, optional
-        GA size (default: :class:`~ismb_lab.tuning.genetic.GAConfig`'s, the thesis' 30 and 500).
-    seed : int
-        Seed of the GA (and of every network run's update order, as in ``tune``).
-    save_to : str or os.PathLike, optional
-        A params file (as ``ismb-lab tune`` writes it) rewritten atomically whenever the
-        best fitness improves, so that a kernel that is shut down, culled or killed
-        mid-run leaves the best parameters so far on disk.
-    solver : str
-        How each chromosome's network is solved (a name in :data:`ismb_lab.network.solvers.SOLVERS`).
+    `seed` seeds the GA and every run's update order, as in ``tune``; `save_to`, a params file,
+    is rewritten atomically whenever the best fitness improves, so that a killed kernel loses nothing.
 
-    Examples
-    --------
     >>> from ismb_lab.matching.pipeline import prepare
     >>> from ismb_lab.scenes import synthetic_scene, true_matches
     >>> scene = synthetic_scene(0)
@@ -136,7 +111,7 @@ class GAModel:
 
     @property
     def best_params(self) -> Params | None:
-        """The best chromosome so far as :class:`~ismb_lab.network.methods.Params` (None before generation 0)."""
+        """The best chromosome so far as Params (None before generation 0)."""
         return None if not self.history else to_params(self.method, self.history[-1].best_chromosome)
 
     def start(self) -> bool:
@@ -166,9 +141,8 @@ class GAModel:
                                 targets=self.target)
                 for listener in list(self.listeners):
                     listener(record)
-                while not self._resume.wait(0.1):
-                    if self._stop.is_set():
-                        break
+                while not (self._resume.wait(0.1) or self._stop.is_set()):
+                    pass
                 if self._stop.is_set():
                     self.status = "stopped"
                     return
@@ -221,8 +195,6 @@ class GAModel:
         return text
 
 
-# --- view -------------------------------------------------------------------------------
-
 def draw_fitness(ax, model: GAModel) -> dict:
     """Best and mean fitness per generation (thesis Figs. 5.4, 5.5)."""
     from matplotlib.ticker import MaxNLocator
@@ -262,29 +234,11 @@ def chromosome_html(model: GAModel) -> str:
     return f'<table class="ismb-table"><tr><td>best chromosome:</td>{cells}</tr></table>'
 
 
-# --- controller -------------------------------------------------------------------------
-
 class GARunner(Base):
     """Start, pause and stop the GA and watch its fitness; apply the best parameters elsewhere.
 
-    Parameters
-    ----------
-    cases_or_folder : Case, folder, or a list of them
-        Training pairs; a folder gives ``left.png``, ``right.png`` and ``answer_key.json``.
-    method, population, generations, seed, solver
-        As in :func:`ismb_lab.tuning.fitness.tune` (seed: GA and update order).
-    config : MatchConfig, optional
-        Corner settings for folders.
-    save_to : str or os.PathLike, optional
-        Where the best parameters so far are kept on disk (see :class:`GAModel`).
-    redraw_every : float
-        Seconds between redraws of the curves while running (every generation
-        updates the progress bar and the status; the last one is always drawn).
-
-    Notes
-    -----
-    The ``generations`` field sets the most generations of the next run (the thesis stops at
-    500, which the project's pairs reach in seconds).
+    `cases_or_folder` is a Case, a pair folder with an ``answer_key.json`` (corners by `config`),
+    or a list of them; the curves are redrawn at most every `redraw_every` s while running.
 
     CSS classes: root ``ismb-ga``; buttons ``ismb-start``, ``ismb-pause``, ``ismb-stop``,
     ``ismb-apply``; ``ismb-solver``; ``ismb-generations``; ``ismb-progress``; figure ``ismb-fitness``; best chromosome
@@ -294,8 +248,6 @@ class GARunner(Base):
     def __init__(self, cases_or_folder, *, method=DEFAULT_METHOD, population: int | None = None,
                  generations: int | None = None, seed: int = 0, config: MatchConfig | None = None,
                  redraw_every: float = 0.2, save_to=None, solver: str = DEFAULT_SOLVER):
-        import ipywidgets
-
         super().__init__()
         self.model = GAModel(as_cases(cases_or_folder, config), method, population=population,
                              generations=generations, seed=seed, save_to=save_to, solver=solver)
@@ -349,7 +301,6 @@ class GARunner(Base):
             raise ParameterTypeError(message("callback", "GARunner.on_apply", "a callable", callback))
         self._apply.append(callback)
 
-    # --- actions ------------------------------------------------------------------------
     def set_solver(self, name: str) -> None:
         """Solve with `name` from the next Start on (refused while a run is going)."""
         try:
@@ -373,8 +324,7 @@ class GARunner(Base):
         self.say(self.model.describe())
 
     def start(self) -> bool:
-        started = self.model.start()
-        if not started:
+        if not self.model.start():
             self.say("the GA is running already: Stop it first")
             return False
         self._drawn_at = 0.0
@@ -421,7 +371,6 @@ class GARunner(Base):
         self.say(f"applied {params} to {len(self._apply)} widget(s)")
         return params
 
-    # --- updates from the worker thread -------------------------------------------------
     def _on_generation(self, record: Generation) -> None:
         self.progress.value = record.index
         self.say(self.model.describe())
@@ -464,8 +413,6 @@ class GARunner(Base):
 
     def static_figure(self):
         """A plain Figure of the fitness curves so far (for print)."""
-        from matplotlib.figure import Figure
-
         fig = Figure(figsize=(6.0, 3.0), layout="constrained")
         update_fitness(draw_fitness(fig.add_subplot(), self.model), list(self.model.history))
         return fig
