@@ -189,6 +189,7 @@ def test_drop_takes_a_path_as_typed_or_the_bare_name(rig):
         recalibrate(rig, ["boards/99 left"])
 
 
+@pytest.mark.slow
 def test_leave_one_out_holds_each_pair_out_and_scores_it_under_the_others(rig):
     held = leave_one_out(rig)
     assert len(held) == 13

@@ -74,6 +74,7 @@ def test_the_camera_defaults_are_declared_once():
     assert found == []
 
 
+@pytest.mark.slow
 def test_a_depth_results_points_are_its_kept_matches_in_metres(rendered):
     config = MatchConfig(roi=(40, 40, 240, 160), shift=22.0)
     lab, cars = rendered(lab_scene, 3), rendered(toy_car_scene, 3)

@@ -84,6 +84,7 @@ def test_a_new_family_has_a_stream_of_its_own():
     assert DIM.stream(rng) is rng                                  # a Generator is used as it is
 
 
+@pytest.mark.slow
 def test_a_new_familys_layouts_depend_neither_on_the_registration_order_nor_on_the_process(dim):
     first = pair(object_layout(8, 2, family="dim"))
     other = register_family(Family("aaa", "registered after dim", DIM.look))

@@ -98,6 +98,7 @@ def test_targets_record_the_orientation_and_old_files_on_turned_photos_are_refus
     assert "\n" not in str(info.value) and "orientation 6" in str(info.value) and "label the pair again" in str(info.value)
 
 
+@pytest.mark.slow
 def test_rectify_names_what_its_figures_were_measured_on(opencv_data):
     from ismb_lab.images.rectify import load_photo, measured, rectify_pair
 

@@ -227,6 +227,7 @@ def test_correspondence_is_sharp_on_textured_pixels(scene):
         assert residual(scene, pts, shift).mean() > exact + 0.4
 
 
+@pytest.mark.slow
 def test_images_are_float_grey_levels_and_the_right_camera_differs(scene):
     for img in (scene.left, scene.right):
         assert img.dtype == np.float64 and img.shape == (240, 320)

@@ -15,6 +15,9 @@ import pytest
 
 from ismb_lab._core import numba_share as _numba_share
 
+#: Each check starts interpreters that compile a kernel: more than a CPU-second apiece.
+pytestmark = pytest.mark.slow
+
 ROOT = Path(__file__).resolve().parents[2]
 #: Call the kernel once; report whether numba's cache was cold, and where it loaded from.
 CALL = """

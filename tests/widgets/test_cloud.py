@@ -169,6 +169,7 @@ def test_the_board_cloud_lies_at_the_board_depth(opencv_data):
     assert np.median(step) == pytest.approx(rig.square_m, rel=0.05)
 
 
+@pytest.mark.slow
 def test_the_networks_matches_of_a_held_out_pair_are_placed_by_the_rig(opencv_data):
     """The path of ``ismb-lab match --rig`` (as notebook 09 takes it) on held-out pair 14: the
     cloud holds the matches' points in metres, most of them at the board's depths (the board

@@ -128,6 +128,7 @@ def test_sentence_says_which_is_nearer_and_what_they_are_in_front_of(demo):
     assert model.sentence() == "no matches in the scene pair" and model.ranking() == []
 
 
+@pytest.mark.slow
 def test_controls_recompute_and_redraw(demo):
     demo.seed_field.value = 3
     assert demo.model.result.to_dict() == expected(seed=3)

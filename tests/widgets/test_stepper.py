@@ -128,6 +128,7 @@ def _lab(colour) -> np.ndarray:
     return np.array([116 * fy - 16, 500 * (fx - fy), 200 * (fy - fz)])
 
 
+@pytest.mark.slow
 def test_the_cursor_tells_a_flip_from_a_kept_state_by_far_apart_colours(prepared):
     """Orange beside vermillion differ mostly in lightness (ΔE about 37); the cursor's two
     colours are far apart (ΔE above 50) and neither is vermillion."""
