@@ -12,7 +12,7 @@ as the user who starts the script, with a home folder in a temporary folder, and
 deployment's memory limits (cgroups, RLIMIT_DATA) are not applied.  Each home gets its copy
 of the course before start-up (timed on its own), and a numba cache of its own, as students
 who cannot write into the venv.  ``--numba shared`` (the default, as deployed): the teacher's
-step compiles the kernels once into a read-only folder (``ismb_lab._core.numba_share.compile_into``,
+step compiles the kernels once into a read-only folder (``ismb_lab.teaching.kernels.compile_into``,
 what ``hub_start stage`` runs; timed), and each student's process copies them into their
 own cache.  ``--numba private`` (the deployment before that step): every student's kernels
 compile on their first run.

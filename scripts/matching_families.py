@@ -1,6 +1,6 @@
 """Matching on the new scene families: the network's methods beside the peers, train on one pair.
 
-For each family of :mod:`ismb_lab.scenes.families` (contrast, repetitive, border, cameras) a set
+For each family of :func:`ismb_lab.scenes.families` (contrast, repetitive, border, cameras) a set
 of layouts is rendered (two or three objects each); the targets are every corner whose true
 partner is a detected corner; layouts with fewer than 3 targets are left out. The GA is fitted
 on one pair of each set (the first with at least 8 targets, a rule fixed before any result)

@@ -86,7 +86,7 @@ def test_committed_scene_metric_depth_of_each_car_within_ten_percent(committed):
 # (DEPTH_PARAMS come from images/lab alone; the layouts 100-139 served for development).
 # The first 20 were checked once with the thesis' ROI for the scene (19 right; in 48274
 # the far car had a single correct match) and again after the change box of
-# ismb_lab.depth.objects.changed_roi was chosen on the development layouts; the second 20 were
+# ismb_lab.depth.pipeline.changed_roi was chosen on the development layouts; the second 20 were
 # drawn after that choice and checked once.  Measured with the demo's defaults: 40 of 40
 # right here (supersample 1); rendered at the committed images' supersample 2, 39 of 40
 # (in 35318 the near car, 1.00 m against 1.15 m, kept no object).

@@ -163,7 +163,7 @@ class Method:
             problem._measures[self] = kept
         return kept
 
-    def _columns(self, problem: Problem, table: dict, thesis: bool):
+    def batch_columns(self, problem: Problem, table: dict, thesis: bool):
         """``(S, C, self_C, match_bias)`` of the networks :meth:`network` builds from each row
         of `table` (an ``(m,)`` array per :class:`Params` field), for a GA's batch; ``self_C``
         only for the thesis rule.  The same operations on the same numbers, element by
@@ -427,7 +427,7 @@ THESIS_PARAMS = _Defaults()
 for _method in (MethodI(), MethodII(), MethodIII(), MethodNM(), MethodNM4(), MethodNM3()):
     register_method(_method)
 
-#: The methods whose networks :meth:`Method._columns` builds for a batch of parameter sets.
+#: The methods whose networks :meth:`Method.batch_columns` builds for a batch of parameter sets.
 BATCHED = (MethodI, MethodII, MethodIII, MethodNM, MethodNM4, MethodNM3)
 
 #: The method used wherever none is named: the thesis' own.

@@ -152,7 +152,7 @@ class Fitness:
             problem = case.prepared.problem
             if problem.n_neurons == 0:
                 continue
-            s, c, self_c, beta = method._columns(problem, table, not exact)
+            s, c, self_c, beta = method.batch_columns(problem, table, not exact)
             crowd, neighbours = problem.topology.crowding
             if beta is None or not np.all(np.abs(beta) + 1 + 2 * (crowd + 1) + 2 * neighbours < MAX_INPUT):
                 return None   # Network refuses it (_check_fits, uniqueness 1)
