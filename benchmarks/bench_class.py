@@ -187,7 +187,7 @@ def teachers_step(work: Path) -> Path:
     import (this repository, on their PYTHONPATH); the folder, made read-only."""
     import resource
 
-    from ismb_lab._core.numba_share import compile_into
+    from ismb_lab.teaching.kernels import compile_into
 
     root = Path(__file__).resolve().parents[1]
     os.environ["PYTHONPATH"] = os.pathsep.join(filter(None, [str(root), os.environ.get("PYTHONPATH")]))
