@@ -47,6 +47,25 @@ def mutual_nearest(problem, max_dissimilarity=None) -> np.ndarray:
     """Mutual nearest neighbours on ``M`` among candidate neurons (ties to the lower index),
     without matches whose ``M_ik`` is above `max_dissimilarity`.
 
+    Parameters
+    ----------
+    problem : Problem
+        Corners, ``M`` and candidate neurons (:func:`ismb_lab.network.methods.build_problem`).
+    max_dissimilarity : float, optional
+        Largest ``M_ik`` kept; None keeps all.
+
+    Returns
+    -------
+    pairs : (m, 2) int array
+        One-to-one ``(i, k)`` candidate pairs, sorted by ``i``.
+
+    Raises
+    ------
+    ParameterTypeError
+        `problem` is not a Problem.
+
+    Examples
+    --------
     >>> from ismb_lab.network.methods import build_problem
     >>> p = build_problem([[100, 50], [110, 50]], [[80, 51], [90, 51]], [[1.0, 4.0], [2.0, 3.0]])
     >>> mutual_nearest(p)      # left 1 prefers right 0, which prefers left 0
@@ -72,6 +91,27 @@ def hungarian(problem, no_match_cost) -> np.ndarray:
     Dummy rows and columns make leaving a feature unmatched cost ``no_match_cost / 2``, so no
     match with ``M_ik > no_match_cost`` (grey levels, > 0) is kept; non-candidates never are.
 
+    Parameters
+    ----------
+    problem : Problem
+        Corners, ``M`` and candidate neurons (:func:`ismb_lab.network.methods.build_problem`).
+    no_match_cost : float
+        Cost of leaving a left and a right feature unmatched, in grey levels (> 0).
+
+    Returns
+    -------
+    pairs : (m, 2) int array
+        One-to-one ``(i, k)`` candidate pairs, sorted by ``i``.
+
+    Raises
+    ------
+    ParameterTypeError
+        `problem` is not a Problem.
+    ParameterError
+        `no_match_cost` not > 0.
+
+    Examples
+    --------
     >>> from ismb_lab.network.methods import build_problem
     >>> p = build_problem([[100, 50], [110, 50]], [[80, 51], [90, 51]], [[1.0, 4.0], [2.0, 30.0]])
     >>> hungarian(p, no_match_cost=10).tolist()     # 4 + 2 beats 1 alone
@@ -96,6 +136,27 @@ def affinity_matrix(problem, method=DEFAULT_METHOD, params=None) -> np.ndarray:
     ``k * N_l + i``, ``(S + 1) / 2`` on the diagonal, ``(C + 1) / 2`` for interacting pairs, 0
     elsewhere (non-negative, as SM and RRWM need).  `params` default to the method's.
 
+    Parameters
+    ----------
+    problem : Problem
+        Corners, ``M`` and candidate neurons (:func:`ismb_lab.network.methods.build_problem`).
+    method : str or Method, default "III"
+        The energy recipe.
+    params : Params, optional
+        Energy parameters; by default the method's.
+
+    Returns
+    -------
+    K : (N_l * N_r, N_l * N_r) float array
+        The affinity matrix.
+
+    Raises
+    ------
+    ParameterError
+        More than :data:`MAX_ASSIGNMENTS` feature pairs.
+
+    Examples
+    --------
     >>> from ismb_lab.network.methods import build_problem
     >>> p = build_problem([[100, 50], [110, 50]], [[80, 51], [90, 51]], np.full((2, 2), 24.02))
     >>> affinity_matrix(p).round(2)     # S = 0 on the diagonal; vec order (0,0) (1,0) (0,1) (1,1)
@@ -131,6 +192,26 @@ def graph_matching(problem, method=DEFAULT_METHOD, params=None, *, solver="rrwm"
     `max_dissimilarity` drops matches with ``M_ik`` above it: the Hungarian step matches
     occluded features too, and the soft scores do not tell them apart.
 
+    Parameters
+    ----------
+    problem : Problem
+        Corners, ``M`` and candidate neurons (:func:`ismb_lab.network.methods.build_problem`).
+    method : str or Method, default "III"
+        The energy recipe of the affinity.
+    params : Params, optional
+        Energy parameters; by default the method's.
+    solver : {"rrwm", "sm"}, default "rrwm"
+        RRWM or spectral matching.
+    max_dissimilarity : float, optional
+        Largest ``M_ik`` kept; None keeps all.
+
+    Returns
+    -------
+    pairs : (m, 2) int array
+        One-to-one ``(i, k)`` candidate pairs, sorted by ``i``.
+
+    Examples
+    --------
     >>> from ismb_lab.network.methods import build_problem
     >>> p = build_problem([[100, 50], [110, 50]], [[80, 51], [90, 51]], [[2.0, 40.0], [40.0, 3.0]])
     >>> graph_matching(p, solver="sm").tolist()
@@ -160,6 +241,18 @@ def graph_matching(problem, method=DEFAULT_METHOD, params=None, *, solver="rrwm"
 def default_no_match_cost(problem) -> float:
     """The no-match cut of :data:`PEERS`: half the median of ``M`` over all feature pairs.
 
+    Parameters
+    ----------
+    problem : Problem
+        Corners, ``M`` and candidate neurons (:func:`ismb_lab.network.methods.build_problem`).
+
+    Returns
+    -------
+    cut : float
+        The cut, in grey levels.
+
+    Examples
+    --------
     >>> from ismb_lab.network.methods import build_problem
     >>> p = build_problem([[100, 50], [110, 50]], [[80, 51], [90, 51]], [[2.0, 40.0], [40.0, 3.0]])
     >>> default_no_match_cost(p)

@@ -41,6 +41,26 @@ class Recipe:
     `fit_seeds` records how many update-order seeds each GA fitness averaged over; `one_to_one`
     keeps at most one match per corner after solving.
 
+    Attributes
+    ----------
+    method : Method or str, default "III"
+        The energy recipe; a name is resolved to its Method.
+    params : Params, optional
+        Energy parameters; None gives the method's defaults.
+    solver : Solver or str, default "network"
+        How the energy is minimised; a name is resolved to its Solver.
+    fit_seeds : int, default 1
+        Update-order seeds each GA fitness averaged over.
+    one_to_one : bool, default False
+        Keep at most one match per corner after solving.
+
+    Raises
+    ------
+    ParameterTypeError
+        `params` not a Params, or `one_to_one` not a bool.
+
+    Examples
+    --------
     >>> Recipe("NM3", solver="anneal").to_dict()["solver"]
     'anneal'
     >>> Recipe(one_to_one="yes")
@@ -69,19 +89,44 @@ class Recipe:
             raise ParameterTypeError(message("one_to_one", own, "True or False", self.one_to_one))
 
     def to_dict(self) -> dict:
-        """The recipe's keys of the params file."""
+        """The recipe's keys of the params file.
+
+        Returns
+        -------
+        data : dict
+            ``version``, ``method``, ``params``, ``solver``, ``solver_options``, ``fit_seeds``,
+            ``one_to_one``.
+        """
         return {"version": RECIPE_VERSION, "method": self.method.name, "params": self.params.to_dict(),
                 "solver": self.solver.name, "solver_options": self.solver.options(),
                 "fit_seeds": int(self.fit_seeds), "one_to_one": self.one_to_one}
 
     def match_settings(self) -> dict:
-        """The keyword arguments of :func:`ismb_lab.matching.pipeline.match` that the recipe sets."""
+        """The keyword arguments of :func:`ismb_lab.matching.pipeline.match` that the recipe sets.
+
+        Returns
+        -------
+        kwargs : dict
+            ``method``, ``params``, ``solver`` and ``one_to_one``.
+        """
         return {"method": self.method, "params": self.params, "solver": self.solver,
                 "one_to_one": self.one_to_one}
 
     def changes(self, other: "Recipe") -> list[str]:
         """What differs from `other`, as ``"field old -> new"`` (for a command's note).
 
+        Parameters
+        ----------
+        other : Recipe
+            The recipe to compare with.
+
+        Returns
+        -------
+        changes : list of str
+            One entry per differing field (per parameter for `params`).
+
+        Examples
+        --------
         >>> Recipe(solver="anneal").changes(Recipe(solver="network", one_to_one=True))
         ['solver anneal -> network', 'one_to_one False -> True']
         """
@@ -106,14 +151,44 @@ def _shown(value):
 
 
 class Loaded(NamedTuple):
-    """A recipe read from a file, and what the reader should be told once (or "")."""
+    """A recipe read from a file, and what the reader should be told once (or "").
+
+    Attributes
+    ----------
+    recipe : Recipe
+        The recipe read.
+    note : str
+        A note for the reader, or "".
+    """
 
     recipe: Recipe
     note: str
 
 
 def save_recipe(path, recipe: Recipe, **extra) -> Path:
-    """Write `recipe` and `extra` keys (e.g. the GA's fitness) atomically as JSON."""
+    """Write `recipe` and `extra` keys (e.g. the GA's fitness) atomically as JSON.
+
+    Parameters
+    ----------
+    path : str or Path
+        The params file to write.
+    recipe : Recipe
+        The recipe to save.
+    **extra
+        More JSON keys, other than the recipe's own.
+
+    Returns
+    -------
+    path : Path
+        The file written.
+
+    Raises
+    ------
+    ParameterTypeError
+        `recipe` is not a Recipe.
+    ParameterError
+        An `extra` key clashes with a recipe key.
+    """
     if not isinstance(recipe, Recipe):
         raise ParameterTypeError(message("recipe", "save_recipe", "a Recipe", recipe))
     clash = sorted(set(extra) & set(_KEYS))
@@ -143,6 +218,27 @@ def load_recipe(path, *, method=None, solver=DEFAULT_SOLVER, before: str | None 
 
     `method` and `solver` are used when the file names none.  `before` is the solver the reading
     command used with a version-1 file; when the file's own differs, the note says so.
+
+    Parameters
+    ----------
+    path : str or Path
+        The params file.
+    method : str or Method, optional
+        Method used when the file names none; default "III".
+    solver : str or Solver, default "network"
+        Solver used when the file names none.
+    before : str, optional
+        The solver the reading command used with a version-1 file.
+
+    Returns
+    -------
+    loaded : Loaded
+        The recipe and a note for the reader ("" if none).
+
+    Raises
+    ------
+    ParameterError
+        A missing or unreadable file, or a key of the wrong kind.
     """
     own = f"load_recipe('{path}')"
     data = _read_params_file(path, "load_recipe")
@@ -171,6 +267,27 @@ def load_recipe(path, *, method=None, solver=DEFAULT_SOLVER, before: str | None 
 def recipe_of(recipe, owner: str = "recipe_of", solver=DEFAULT_SOLVER) -> Recipe:
     """A :class:`Recipe` as it is, or the recipe of a params file (`solver`: when it names none).
 
+    Parameters
+    ----------
+    recipe : Recipe, str or Path
+        A recipe, or the path of a params file.
+    owner : str, default "recipe_of"
+        Name given in error messages.
+    solver : str or Solver, default "network"
+        Solver used when the file names none.
+
+    Returns
+    -------
+    recipe : Recipe
+        The recipe.
+
+    Raises
+    ------
+    ParameterTypeError
+        `recipe` is neither a Recipe nor a path.
+
+    Examples
+    --------
     >>> recipe_of(Recipe("NM3")).method.name
     'NM3'
     >>> recipe_of(3)
