@@ -54,6 +54,19 @@ __all__ = ["euclidean_disparity", "horizontal_disparity", "vertical_disparity"]
 def horizontal_disparity(left_xy, right_xy) -> np.ndarray:
     """Horizontal disparity ``x_left - x_right`` of matched points.
 
+    Parameters
+    ----------
+    left_xy, right_xy : (n, 2) float array
+        Matched points ``(x, y)``, row ``n`` with row ``n``.
+
+    Returns
+    -------
+    disparity : (n,) float array
+        ``x_left - x_right`` of each match.
+
+    Examples
+    --------
+
     >>> horizontal_disparity([[99, 99]], [[88, 100]])
     array([11.])
     """
@@ -63,6 +76,19 @@ def horizontal_disparity(left_xy, right_xy) -> np.ndarray:
 def vertical_disparity(left_xy, right_xy) -> np.ndarray:
     """Vertical disparity ``y_right - y_left`` of matched points.
 
+    Parameters
+    ----------
+    left_xy, right_xy : (n, 2) float array
+        Matched points ``(x, y)``, row ``n`` with row ``n``.
+
+    Returns
+    -------
+    disparity : (n,) float array
+        ``y_right - y_left`` of each match.
+
+    Examples
+    --------
+
     >>> vertical_disparity([[99, 99]], [[88, 100]])
     array([1.])
     """
@@ -71,6 +97,19 @@ def vertical_disparity(left_xy, right_xy) -> np.ndarray:
 
 def euclidean_disparity(left_xy, right_xy) -> np.ndarray:
     """Euclidean disparity ``||p - q||``, as in the thesis' tables.
+
+    Parameters
+    ----------
+    left_xy, right_xy : (n, 2) float array
+        Matched points ``(x, y)``, row ``n`` with row ``n``.
+
+    Returns
+    -------
+    disparity : (n,) float array
+        ``||p - q||`` of each match.
+
+    Examples
+    --------
 
     >>> euclidean_disparity([[99, 99]], [[88, 100]]).round(2)   # Table 5.1, pair 1
     array([11.05])

@@ -37,6 +37,18 @@ _RATIO = 0.75
 def row_spread_px(shape) -> float:
     """The largest median row difference (px) of a rectified pair of `shape`'s robust matches.
 
+    Parameters
+    ----------
+    shape : tuple of int
+        ``(height, width, ...)`` of the images.
+
+    Returns
+    -------
+    spread : float
+        Pixels: :data:`ROW_SPREAD` times the longer side.
+
+    Examples
+    --------
     >>> row_spread_px((480, 640)), row_spread_px((3000, 4000))
     (1.0, 6.25)
     """
@@ -47,6 +59,22 @@ def negative_share(matches: "Correspondences", rows_px: float) -> tuple[float, i
     """The share of `matches` on their rows (``|dy| <= rows_px``) with a negative disparity (most
     negative: the photos were given right first), and how many are on their rows.
 
+    Parameters
+    ----------
+    matches : Correspondences
+        Matched points of the pair.
+    rows_px : float
+        Largest row difference of a match on its row.
+
+    Returns
+    -------
+    share : float
+        Share of the matches on their rows with ``x_left < x_right``.
+    count : int
+        Matches on their rows.
+
+    Examples
+    --------
     >>> m = Correspondences(np.array([[10.0, 5], [20, 5], [30, 9]]), np.array([[12.0, 5], [25, 5], [20, 1]]))
     >>> negative_share(m, 1.0)
     (1.0, 2)
@@ -61,6 +89,18 @@ def negative_share(matches: "Correspondences", rows_px: float) -> tuple[float, i
 def photo_orientation(source) -> int:
     """The EXIF orientation tag (1-8) of a photo's path or file bytes; 1 for an array or no tag.
 
+    Parameters
+    ----------
+    source : str, Path, bytes or array
+        The photo.
+
+    Returns
+    -------
+    orientation : int
+        The tag, 1 to 8.
+
+    Examples
+    --------
     >>> photo_orientation(np.zeros((4, 4)))
     1
     """
@@ -83,7 +123,31 @@ _UNDO = {1: 1, 2: 2, 3: 3, 4: 4, 5: 5, 6: 8, 7: 7, 8: 6}
 
 def load_photo(source, name: str = "photo", owner: str = "load_photo", *, upright: bool = True) -> np.ndarray:
     """A photo (path, file bytes or grey/RGB/RGBA array) as a grey float image in ``[0, 255]``,
-    EXIF orientation applied unless `upright` is False."""
+    EXIF orientation applied unless `upright` is False.
+
+    Parameters
+    ----------
+    source : str, Path, bytes or array
+        A photo's path, its file's bytes, or a grey, RGB or RGBA array.
+    name : str, default "photo"
+        Name of `source` in error messages.
+    owner : str, default "load_photo"
+        Function named in error messages.
+    upright : bool, default True
+        Apply the EXIF orientation; False gives the pixels as stored.
+
+    Returns
+    -------
+    image : (H, W) float64 array
+        Grey values in ``[0, 255]``.
+
+    Raises
+    ------
+    ParameterError
+        An unreadable or undecodable photo, or one too large.
+    ParameterTypeError
+        `source` of another type.
+    """
     from .io import orient
 
     image = _photo(source, name, owner, None)[0]
@@ -116,7 +180,20 @@ def _photo(source, name: str, owner: str, max_side: int | None) -> tuple[np.ndar
 
 
 def working_size(shape, max_side: int = WORKING_SIDE) -> float:
-    """The factor (at most 1) that brings an image of `shape` within `max_side` pixels."""
+    """The factor (at most 1) that brings an image of `shape` within `max_side` pixels.
+
+    Parameters
+    ----------
+    shape : tuple of int
+        ``(height, width, ...)`` of the image.
+    max_side : int, default WORKING_SIDE
+        Longest side allowed, pixels.
+
+    Returns
+    -------
+    factor : float
+        Scale factor, at most 1.
+    """
     return min(1.0, max_side / max(shape[:2]))
 
 
@@ -129,7 +206,13 @@ def _scale(image: np.ndarray, factor: float) -> np.ndarray:
 
 @dataclass(frozen=True, eq=False)
 class Correspondences:
-    """Matched points ``(x, y)`` of a left and a right image, row ``n`` with row ``n``."""
+    """Matched points ``(x, y)`` of a left and a right image, row ``n`` with row ``n``.
+
+    Attributes
+    ----------
+    left_xy, right_xy : (n, 2) float array
+        The matched points ``(x, y)`` in each image.
+    """
 
     left_xy: np.ndarray
     right_xy: np.ndarray
@@ -145,6 +228,22 @@ def robust_matches(left, right, *, max_features: int = 4000, rows_px: float | No
     keypoints within `rows_px` of its row at a positive disparity: on a repetitive texture the
     ratio test then compares against the keypoint's own row, not the whole pattern.
 
+    Parameters
+    ----------
+    left, right : (H, W) float array
+        Grey images in ``[0, 255]``.
+    max_features : int, default 4000
+        Most SIFT keypoints per image (at least 8).
+    rows_px : float, optional
+        Row band of a rectified pair's candidates; None searches the whole image.
+
+    Returns
+    -------
+    matches : Correspondences
+        The mutual matches that pass the ratio test.
+
+    Examples
+    --------
     >>> rng = np.random.default_rng(0)
     >>> img = cv2.GaussianBlur(rng.uniform(0, 255, (200, 240)), (0, 0), 2) * 3 % 255
     >>> m = robust_matches(img[:, 10:], img[:, :-10])
@@ -220,6 +319,29 @@ class Rectified:
     ``inliers`` counts the correspondences (``left_xy``, ``right_xy``, after rectification) that
     the row differences and the 2nd to 98th percentile of ``x_left - x_right`` were measured on,
     and ``measured_on`` says which; ``scale`` is the factor the inputs were scaled by first.
+
+    Attributes
+    ----------
+    left, right : (H, W) float64 array
+        The rectified grey images.
+    left_h, right_h : (3, 3) float array
+        Homographies from the scaled inputs.
+    method : str
+        How the pair was rectified (e.g. ``"already rectified"``).
+    inliers : int
+        Correspondences the figures were measured on.
+    median_abs_dy_px, p90_abs_dy_px : float
+        Median and 90th percentile of their row differences, px.
+    disparity_range_px : list of float
+        2nd and 98th percentile of ``x_left - x_right``.
+    scale : float
+        Factor the inputs were scaled by first.
+    left_xy, right_xy : (n, 2) float array
+        The correspondences, after rectification.
+    measured_on : str
+        Which correspondences these are.
+    warnings : tuple of str
+        One-line warnings about the result.
     """
 
     left: np.ndarray
@@ -239,10 +361,17 @@ class Rectified:
 
     @property
     def size(self) -> list:
+        """``[width, height]`` of the rectified images."""
         return [int(self.left.shape[1]), int(self.left.shape[0])]
 
     def to_dict(self) -> dict:
-        """What ``ismb-lab rectify`` writes to ``rectify.json``."""
+        """What ``ismb-lab rectify`` writes to ``rectify.json``.
+
+        Returns
+        -------
+        data : dict
+            Method, figures, size, scale and both homographies.
+        """
         return {"method": self.method, "inliers": self.inliers, "measured_on": self.measured_on,
                 "warnings": list(self.warnings), "median_abs_dy_px": self.median_abs_dy_px,
                 "p90_abs_dy_px": self.p90_abs_dy_px, "disparity_range_px": list(self.disparity_range_px),
@@ -250,11 +379,29 @@ class Rectified:
                 "left_homography": self.left_h.tolist(), "right_homography": self.right_h.tolist()}
 
     def to_json(self) -> str:
+        """:meth:`to_dict` as indented JSON text."""
         return json.dumps(self.to_dict(), indent=2)
 
 
 def pair_inputs(left, right, owner: str, max_side: int):
-    """Both photos grey, of one size, scaled by one factor so the longer side is <= `max_side`."""
+    """Both photos grey, of one size, scaled by one factor so the longer side is <= `max_side`.
+
+    Parameters
+    ----------
+    left, right : str, Path, bytes or array
+        The photos, the left camera's first, of one size.
+    owner : str
+        Function named in error messages.
+    max_side : int
+        Longest side allowed, pixels.
+
+    Returns
+    -------
+    left, right : (H, W) float64 array
+        The scaled grey images.
+    factor : float
+        The scale factor.
+    """
     (left, factor), (right, other) = (_photo(left, "left", owner, max_side),
                                       _photo(right, "right", owner, max_side))
     if left.shape != right.shape or factor != other:
@@ -301,6 +448,22 @@ def sideways_step(left_xy, right_xy, F, shape) -> float | None:
     that under 80% of the matches put in front of both cameras, or mostly forward
     (``|x| < 0.2``), decides nothing.
 
+    Parameters
+    ----------
+    left_xy, right_xy : (n, 2) float array
+        Inlier correspondences.
+    F : (3, 3) float array
+        The fundamental matrix.
+    shape : tuple of int
+        ``(height, width)`` of the images.
+
+    Returns
+    -------
+    x : float or None
+        The x component, or None when undecided.
+
+    Examples
+    --------
     >>> xy = np.random.default_rng(0).uniform(0, 400, (40, 2))
     >>> depth = np.random.default_rng(1).uniform(1, 2, 40)
     >>> shifted = xy - np.c_[40 / depth, np.zeros(40)]     # a right view: near points move more
@@ -347,6 +510,23 @@ def check_for_matching(left, right, owner: str = "check_for_matching") -> str:
     """Refuse a swapped pair, and return a one-line warning for an unrectified one ("" if none).
 
     Measured on the robust matches of the grey pair as given; fewer than 8 say nothing.
+
+    Parameters
+    ----------
+    left, right : (H, W) float array
+        The grey pair.
+    owner : str, default "check_for_matching"
+        Function named in error messages.
+
+    Returns
+    -------
+    warning : str
+        The warning, or "".
+
+    Raises
+    ------
+    ParameterError
+        The pair is swapped.
     """
     matches = robust_matches(left, right)
     if len(matches) < 8:
@@ -366,6 +546,20 @@ def epipole_warning(F, shape) -> str:
     Rectification sends the epipoles to infinity: the nearer one is, the more the framing changes
     with every small error in `F`.
 
+    Parameters
+    ----------
+    F : (3, 3) float array
+        The fundamental matrix.
+    shape : tuple of int
+        ``(height, width)`` of the images.
+
+    Returns
+    -------
+    warning : str
+        The warning, or "".
+
+    Examples
+    --------
     >>> F = np.array([[0, 0, 0], [0, 0, -1], [0, 1, 0]], float)   # sideways: epipoles at infinity
     >>> epipole_warning(F, (480, 640))
     ''
@@ -410,6 +604,24 @@ def rectify_pair(left, right, *, max_side: int = WORKING_SIDE) -> Rectified:
     Both are scaled so the longer side, also of the warped output, is at most `max_side`.  A pair
     whose inliers already agree (median ``|dy|`` <= 0.5 px, 90th percentile <= 1.5 px) is left
     as it is.  A ParameterError says in one sentence why a pair cannot be rectified.
+
+    Parameters
+    ----------
+    left, right : str, Path, bytes or array
+        The photos, the left camera's first, of one size.
+    max_side : int, default WORKING_SIDE
+        Longest side of the inputs and of the output, pixels (at least 64).
+
+    Returns
+    -------
+    rectified : Rectified
+        The rectified pair and how it was made.
+
+    Raises
+    ------
+    ParameterError
+        Photos of different sizes, too few matches, the same photo twice, no common epipolar
+        geometry, no parallax, or the two photos swapped.
     """
     owner = "rectify_pair"
     max_side = check_number(max_side, "max_side", owner, low=64, integer=True)
@@ -456,7 +668,22 @@ def _aligned(figures: dict) -> bool:
 
 def apply_rectification(left, right, left_h, right_h, size) -> Rectified:
     """Warp a pair to `size` ``(width, height)`` by homographies found on another pair of the same
-    camera positions (the depth demo's background), measured on new robust matches."""
+    camera positions (the depth demo's background), measured on new robust matches.
+
+    Parameters
+    ----------
+    left, right : (H, W) float array
+        The grey pair.
+    left_h, right_h : (3, 3) float array
+        The homographies.
+    size : tuple of int
+        ``(width, height)`` of the output.
+
+    Returns
+    -------
+    rectified : Rectified
+        The warped pair and its figures.
+    """
     size = (int(size[0]), int(size[1]))
     warp = lambda image, h: np.clip(cv2.warpPerspective(np.asarray(image, np.float32), np.asarray(h, float), size)
                                     .astype(float), 0, 255)
@@ -464,7 +691,22 @@ def apply_rectification(left, right, left_h, right_h, size) -> Rectified:
 
 
 def measured(left, right, left_h, right_h, method: str) -> Rectified:
-    """A pair rectified some other way, with its figures measured on new robust matches."""
+    """A pair rectified some other way, with its figures measured on new robust matches.
+
+    Parameters
+    ----------
+    left, right : (H, W) float array
+        The rectified grey pair.
+    left_h, right_h : (3, 3) float array
+        The homographies that made it.
+    method : str
+        How it was rectified.
+
+    Returns
+    -------
+    rectified : Rectified
+        The pair with its figures.
+    """
     matches = robust_matches(left, right)
     figures = (_dy_figures(matches.left_xy, matches.right_xy) if len(matches) else
                {"median_abs_dy_px": float("nan"), "p90_abs_dy_px": float("nan"), "disparity_range_px": [0.0, 0.0]})
@@ -476,7 +718,21 @@ def measured(left, right, left_h, right_h, method: str) -> Rectified:
 def check_rectified(left, right, *, max_side: int = WORKING_SIDE) -> dict:
     """How far a pair is from rectified, without warping it: :class:`Rectified`'s figures for the
     inliers as they are, with ``matches``, ``inliers``, ``rectified`` (:func:`rectify_pair`'s test),
-    ``problem`` (why it cannot be rectified, or "") and the inliers ``left_xy``, ``right_xy``."""
+    ``problem`` (why it cannot be rectified, or "") and the inliers ``left_xy``, ``right_xy``.
+
+    Parameters
+    ----------
+    left, right : str, Path, bytes or array
+        The photos, the left camera's first, of one size.
+    max_side : int, default WORKING_SIDE
+        Longest side the photos are scaled to, pixels.
+
+    Returns
+    -------
+    figures : dict
+        ``matches``, ``inliers``, ``rectified``, ``problem``, ``median_abs_dy_px``,
+        ``p90_abs_dy_px``, ``disparity_range_px``, ``left_xy``, ``right_xy``.
+    """
     owner = "check_rectified"
     left, right, _ = pair_inputs(left, right, owner, max_side)
     matches = robust_matches(left, right)
