@@ -64,6 +64,20 @@ def visiting_order(seed: int, n: int, stop_rule: str) -> Iterator[np.ndarray]:
     ``"sweep"``: the previous order shuffled again (Fisher-Yates, from the last position
     down), starting from ``0, 1, ..., n - 1``; ``"stall"``: `n` indices drawn with replacement.
 
+    Parameters
+    ----------
+    seed : int
+        Seed of the SplitMix64 stream.
+    n : int
+        Neurons.
+    stop_rule : {"sweep", "stall"}
+        Which kind of sweep.
+
+    Yields
+    ------
+    order : (n,) int64 array
+        The neurons of one sweep, in the order attempted.
+
     Examples
     --------
     >>> sorted(next(visiting_order(0, 5, "sweep")).tolist())
@@ -100,6 +114,23 @@ class Update:
     ``attempt`` counts from 0; ``neuron`` is the attempted candidate, ``i`` and ``k`` its
     features, ``u`` its net input under the rule in use, ``old`` and ``new`` its output before
     and after, ``energy`` (3-15) that after the attempt; ``stop`` is set on a run's last attempt.
+
+    Attributes
+    ----------
+    attempt : int
+        Attempt number, from 0.
+    neuron : int
+        The attempted candidate neuron.
+    i, k : int
+        Its left and right feature.
+    u : float
+        Its net input under the rule in use.
+    old, new : int
+        Its output before and after.
+    energy : float
+        Energy (3-15) after the attempt.
+    stop : str or None
+        The stop rule that fired on a run's last attempt, else None.
     """
 
     attempt: int
@@ -114,6 +145,7 @@ class Update:
 
     @property
     def changed(self) -> bool:
+        """bool: whether the output changed."""
         return self.old != self.new
 
 
@@ -167,16 +199,19 @@ def iter_updates(net: Network, *, rng=0, state=None, stop_rule: str = "sweep",
 
     Parameters
     ----------
-    rng : int or numpy.random.Generator
+    net : Network
+        The network to run.
+    rng : int or numpy.random.Generator, default 0
         Seed of the visiting order (:func:`visiting_order`); a Generator gives one seed per run.
     state : (n,) array_like of {0, 1}, optional
         Initial outputs; all candidates on by default (§3.3).
-    stop_rule : {"sweep", "stall"}
-    rule : {"exact", "thesis"}
+    stop_rule : {"sweep", "stall"}, default "sweep"
+        What stops the run (see the module).
+    rule : {"exact", "thesis"}, default "exact"
         The sound Hopfield form, or (3-17)/(3-20) literally.
-    patience : int
+    patience : int, default 200
         Unchanged attempts in a row that stop the ``"stall"`` rule.
-    max_sweeps : int
+    max_sweeps : int, default 500
         Give up after ``max_sweeps * n`` attempts.
 
     Yields
@@ -243,6 +278,19 @@ class RunResult:
 
     ``stop_rule`` is what stopped it (``"sweep"``, ``"stall"`` or ``"max_attempts"``);
     ``energy`` (3-15) of the final state is computed when first read, as a GA never reads it.
+
+    Attributes
+    ----------
+    state : (n,) uint8 array
+        Final output of each candidate neuron.
+    stop_rule : str
+        ``"sweep"``, ``"stall"`` or ``"max_attempts"``.
+    attempts : int
+        Update attempts made.
+    flips : int
+        Attempts that changed an output.
+    net : Network
+        The network run.
     """
 
     state: np.ndarray
@@ -253,6 +301,7 @@ class RunResult:
 
     @cached_property
     def energy(self) -> float:
+        """float: energy (3-15) of the final state."""
         return _energy_of(self.net, self.state)
 
     @classmethod
@@ -279,6 +328,35 @@ def run(net: Network, *, rng=0, state=None, stop_rule: str = "sweep", rule: str 
 
     Parameters are those of :func:`iter_updates`, and `kernel`: ``"numba"`` (compiled) or
     ``"textbook"`` (:func:`iter_updates`), bit-identical for the same arguments.
+
+    Parameters
+    ----------
+    net : Network
+        The network to run.
+    rng : int or numpy.random.Generator, default 0
+        Seed of the visiting order.
+    state : (n,) array_like of {0, 1}, optional
+        Initial outputs; all candidates on by default.
+    stop_rule : {"sweep", "stall"}, default "sweep"
+        What stops the run.
+    rule : {"exact", "thesis"}, default "exact"
+        Which weights.
+    patience : int, default 200
+        Unchanged attempts in a row that stop the ``"stall"`` rule.
+    max_sweeps : int, default 500
+        Give up after ``max_sweeps * n`` attempts.
+    kernel : {"numba", "textbook"}, default "numba"
+        Compiled or readable kernel.
+
+    Returns
+    -------
+    result : RunResult
+        Final state, stop rule, attempts and flips.
+
+    Raises
+    ------
+    ParameterError
+        An unknown choice, a bad state or seed.
 
     Examples
     --------

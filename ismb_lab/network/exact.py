@@ -39,7 +39,19 @@ MAX_TIME_LIMIT = 3600.0
 class Minimum:
     """A global minimum of the energy: a minimising ``state`` (the first met, exhaustively),
     its ``energy``, how many states tie exactly (``n_minima``; 1 for the MILP, which reports
-    one) and the ``method``, ``"exhaustive"`` or ``"milp"``."""
+    one) and the ``method``, ``"exhaustive"`` or ``"milp"``.
+
+    Attributes
+    ----------
+    state : (n,) uint8 array
+        A minimising state.
+    energy : float
+        Its energy (3-15).
+    n_minima : int
+        States that tie exactly (1 for the MILP).
+    method : str
+        ``"exhaustive"`` or ``"milp"``.
+    """
 
     state: np.ndarray
     energy: float
@@ -82,6 +94,21 @@ def _gray_search(W, I):
 def exhaustive_minimum(net: Network) -> Minimum:
     """Search all ``2**n`` states (``n`` at most :data:`MAX_EXHAUSTIVE`) for the lowest energy.
 
+    Parameters
+    ----------
+    net : Network
+        The network, of at most :data:`MAX_EXHAUSTIVE` neurons.
+
+    Returns
+    -------
+    minimum : Minimum
+        The first minimising state in Gray-code order, and how many tie.
+
+    Raises
+    ------
+    ParameterError
+        More than :data:`MAX_EXHAUSTIVE` neurons.
+
     Examples
     --------
     >>> net = Network.from_arrays(1, 2, rows=[0, 0], cols=[0, 1], similarity=[0.5, 0.0],
@@ -106,6 +133,23 @@ def milp_minimum(net: Network, *, time_limit: float = 60.0) -> Minimum:
 
     A ``ParameterError`` says when the solver gave up within `time_limit` seconds (at most
     :data:`MAX_TIME_LIMIT`) without proving optimality.
+
+    Parameters
+    ----------
+    net : Network
+        The network.
+    time_limit : float, default 60.0
+        Seconds the solver may take, > 0 and at most :data:`MAX_TIME_LIMIT`.
+
+    Returns
+    -------
+    minimum : Minimum
+        A minimising state (``n_minima`` 1, ``method`` ``"milp"``).
+
+    Raises
+    ------
+    ParameterError
+        A bad `time_limit`, or no proven optimum within it.
 
     Examples
     --------

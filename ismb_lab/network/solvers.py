@@ -47,6 +47,21 @@ class Solution:
     ``stop_rule`` is what stopped the discrete network (``"sweep"``, ``"stall"`` or
     ``"max_attempts"``), or ``"minimum"`` for a proven global minimum; ``attempts`` are the
     discrete network's (0 for annealing and exact); ``energy`` (3-15) is computed when first read.
+
+    Attributes
+    ----------
+    state : (n,) uint8 array
+        Final output of each candidate neuron.
+    stop_rule : str
+        ``"sweep"``, ``"stall"``, ``"max_attempts"`` or ``"minimum"``.
+    attempts : int
+        The discrete network's update attempts.
+    net : Network
+        The network solved.
+    converged : bool, default True
+        Whether a stop rule fired, rather than the attempt limit.
+    solver : str, default "network"
+        Name of the solver.
     """
 
     state: np.ndarray
@@ -58,6 +73,7 @@ class Solution:
 
     @cached_property
     def energy(self) -> float:
+        """float: energy (3-15) of the final state."""
         return _energy_of(self.net, self.state)
 
     @classmethod
@@ -77,6 +93,15 @@ class Solver:
     A subclass sets `name`, `description` and `seeded` (whether the seed matters), declares
     its options as dataclass fields with defaults, checks them in ``__post_init__`` and
     implements :meth:`solve`.
+
+    Attributes
+    ----------
+    name : str
+        Registry name (class variable).
+    description : str
+        One line for help texts (class variable).
+    seeded : bool
+        Whether the seed matters (class variable).
     """
 
     name: ClassVar[str] = ""
@@ -84,12 +109,32 @@ class Solver:
     seeded: ClassVar[bool] = True
 
     def solve(self, net: Network, seed: int) -> Solution:
-        """Minimise `net`'s energy from update-order (or annealing) seed `seed`."""
+        """Minimise `net`'s energy from update-order (or annealing) seed `seed`.
+
+        Parameters
+        ----------
+        net : Network
+            The network whose energy is minimised.
+        seed : int
+            Update-order (or annealing) seed.
+
+        Returns
+        -------
+        solution : Solution
+            The final state and what stopped it.
+        """
         raise NotImplementedError
 
     def options(self) -> dict:
         """The solver's options, by name (JSON-ready).
 
+        Returns
+        -------
+        options : dict
+            Each dataclass field and its value.
+
+        Examples
+        --------
         >>> ExactSolver().options()
         {'time_limit': 60.0}
         """
@@ -98,6 +143,25 @@ class Solver:
     def configured(self, owner: str = "Solver.configured", **options) -> "Solver":
         """A copy with some options changed; an option this solver does not have is an error.
 
+        Parameters
+        ----------
+        owner : str, default "Solver.configured"
+            Function named in error messages.
+        **options
+            Options to change.
+
+        Returns
+        -------
+        solver : Solver
+            The copy, or this solver when nothing changes.
+
+        Raises
+        ------
+        ParameterError
+            An option this solver does not have.
+
+        Examples
+        --------
         >>> SOLVERS["network"].configured(stop_rule="stall").stop_rule
         'stall'
         >>> SOLVERS["anneal"].configured(stop_rule="stall")
@@ -115,7 +179,17 @@ class Solver:
 
 @dataclass(frozen=True)
 class NetworkSolver(Solver):
-    """The thesis' discrete network (:func:`ismb_lab.network.dynamics.run`) from "all on"."""
+    """The thesis' discrete network (:func:`ismb_lab.network.dynamics.run`) from "all on".
+
+    Attributes
+    ----------
+    stop_rule : {"sweep", "stall"}, default "sweep"
+        What stops the run.
+    rule : {"exact", "thesis"}, default "exact"
+        Which weights.
+    kernel : {"numba", "textbook"}, default "numba"
+        Compiled or readable kernel.
+    """
 
     name: ClassVar[str] = NETWORK
     description: ClassVar[str] = "the thesis' discrete network: asynchronous flips to a fixed point"
@@ -136,7 +210,19 @@ class NetworkSolver(Solver):
 
 @dataclass(frozen=True)
 class AnnealSolver(Solver):
-    """Mean-field annealing (:func:`ismb_lab.network.annealing.anneal`, whose arguments the fields are)."""
+    """Mean-field annealing (:func:`ismb_lab.network.annealing.anneal`, whose arguments the fields are).
+
+    Attributes
+    ----------
+    t_start, t_end : float, default 2.0, 0.02
+        First and last temperature.
+    cooling : float, default 0.9
+        Factor of each temperature step.
+    sweeps : int, default 2
+        Mean-field sweeps per temperature.
+    settle : float, default 0.0
+        In [0, 1/2): stop once every ``v`` is within it of 0 or 1 (0: the whole schedule).
+    """
 
     name: ClassVar[str] = ANNEAL
     description: ClassVar[str] = "mean-field annealing, then the discrete network from the rounded state"
@@ -159,7 +245,13 @@ class AnnealSolver(Solver):
 
 @dataclass(frozen=True)
 class ExactSolver(Solver):
-    """The global minimum as a mixed-integer programme (:func:`ismb_lab.network.exact.milp_minimum`)."""
+    """The global minimum as a mixed-integer programme (:func:`ismb_lab.network.exact.milp_minimum`).
+
+    Attributes
+    ----------
+    time_limit : float, default 60.0
+        Seconds the MILP solver may take.
+    """
 
     name: ClassVar[str] = EXACT
     description: ClassVar[str] = "the global minimum energy as a mixed-integer programme (small problems)"
@@ -176,6 +268,16 @@ class ExactSolver(Solver):
 
 def similarity_assignment(net: Network) -> np.ndarray:
     """The state of the one-to-one assignment of largest total ``S``, among neurons with ``S > 0``.
+
+    Parameters
+    ----------
+    net : Network
+        The network whose energy is minimised.
+
+    Returns
+    -------
+    state : (n,) uint8 array
+        1 on the assigned neurons.
 
     Examples
     --------
@@ -222,6 +324,23 @@ DEFAULT_SOLVER = NETWORK
 def register_solver(solver: Solver) -> Solver:
     """Add a solver to the registry that the command line, the GA and the widgets read.
 
+    Parameters
+    ----------
+    solver : Solver
+        An instance with a new, non-empty name that implements ``solve``.
+
+    Returns
+    -------
+    solver : Solver
+        `solver` itself.
+
+    Raises
+    ------
+    ParameterTypeError
+        Not a Solver.
+    ParameterError
+        A name already taken or empty, or no ``solve``.
+
     Examples
     --------
     >>> @dataclass(frozen=True)
@@ -247,7 +366,13 @@ def register_solver(solver: Solver) -> Solver:
 
 
 def unregister_solver(name: str) -> None:
-    """Remove a solver added by :func:`register_solver`."""
+    """Remove a solver added by :func:`register_solver`.
+
+    Parameters
+    ----------
+    name : str
+        The solver's name.
+    """
     check_choice(name, "name", "unregister_solver", tuple(SOLVERS))
     del SOLVERS[name]
 
@@ -259,6 +384,13 @@ for _solver in (NetworkSolver(), AnnealSolver(), ExactSolver(), AssignSolver()):
 def solver_names() -> tuple[str, ...]:
     """The registered solvers' names.
 
+    Returns
+    -------
+    names : tuple of str
+        In the order help texts list them.
+
+    Examples
+    --------
     >>> solver_names()
     ('network', 'anneal', 'exact', 'assign')
     """
@@ -269,6 +401,31 @@ def get_solver(solver, owner: str = "get_solver", parameter: str = "solver", **o
     """Resolve a solver once: a name or a :class:`Solver`, with some `options` changed (None
     keeps the solver's own), checked as `owner`'s argument `parameter`.
 
+    Parameters
+    ----------
+    solver : str or Solver
+        A name of :data:`SOLVERS` or a configured solver.
+    owner : str, default "get_solver"
+        Function named in error messages.
+    parameter : str, default "solver"
+        Argument named in error messages.
+    **options
+        Options to change; None values are ignored.
+
+    Returns
+    -------
+    solver : Solver
+        The configured solver.
+
+    Raises
+    ------
+    ParameterError
+        An unknown name or option.
+    ParameterTypeError
+        Neither a name nor a Solver.
+
+    Examples
+    --------
     >>> get_solver("annealing")
     Traceback (most recent call last):
     ...
@@ -286,7 +443,33 @@ def get_solver(solver, owner: str = "get_solver", parameter: str = "solver", **o
 def solve(net: Network, solver=DEFAULT_SOLVER, *, seed: int = 0, owner: str = "solve", **options) -> Solution:
     """Minimise `net`'s energy with a solver of :data:`SOLVERS` (a name or a configured
     :class:`Solver`) and its `options`; `seed` is the update-order (and annealing) seed, and
-    `owner` the function named in error messages."""
+    `owner` the function named in error messages.
+
+    Parameters
+    ----------
+    net : Network
+        The network whose energy is minimised.
+    solver : str or Solver, default "network"
+        The solver.
+    seed : int, default 0
+        Update-order (and annealing) seed, >= 0.
+    owner : str, default "solve"
+        Function named in error messages.
+    **options
+        Solver options to change.
+
+    Returns
+    -------
+    solution : Solution
+        The final state, before any post-processing.
+
+    Raises
+    ------
+    ParameterTypeError
+        `net` not a Network.
+    ParameterError
+        An unknown solver or option, or a bad seed.
+    """
     chosen = solver if isinstance(solver, Solver) and not options else get_solver(solver, owner, **options)
     if not isinstance(net, Network):
         raise ParameterTypeError(message("net", owner, "a Network", net))
@@ -297,7 +480,15 @@ def solve(net: Network, solver=DEFAULT_SOLVER, *, seed: int = 0, owner: str = "s
 
 
 class Matches(NamedTuple):
-    """Matched feature pairs and the post-processed state they come from."""
+    """Matched feature pairs and the post-processed state they come from.
+
+    Attributes
+    ----------
+    pairs : (m, 2) int64 array
+        Matched ``(i, k)`` feature pairs, sorted by neuron.
+    state : (n,) uint8 array
+        The post-processed state.
+    """
 
     pairs: np.ndarray
     state: np.ndarray
@@ -306,6 +497,20 @@ class Matches(NamedTuple):
 def matched_neurons(neurons, state, method=None) -> np.ndarray:
     """Indices of the neurons that are matches in a final state, sorted: those on, less any
     that `method`'s :meth:`~ismb_lab.network.methods.Method.postprocess` drops.
+
+    Parameters
+    ----------
+    neurons : Problem, Network or Topology
+        Anything with ``rows`` and ``cols``.
+    state : (n,) 0/1 array
+        A final state.
+    method : Method, optional
+        Whose post-processing applies; None keeps every neuron on.
+
+    Returns
+    -------
+    on : (m,) int64 array
+        Indices of the matched neurons, sorted.
 
     Examples
     --------
@@ -327,6 +532,25 @@ def one_match_per_corner(problem, on, key=None) -> np.ndarray:
     leave both on.  A decoding option (``match(..., one_to_one=True)``); the GA's fitness
     does not apply it.  `problem` is anything with ``rows``, ``cols`` and
     ``neuron_dissimilarity``.
+
+    Parameters
+    ----------
+    problem : Problem
+        Anything with ``rows``, ``cols`` and ``neuron_dissimilarity``.
+    on : (m,) int array
+        Indices of the matched neurons.
+    key : (m,) float array, optional
+        Order of preference, lowest first; default ``M`` of each neuron.
+
+    Returns
+    -------
+    kept : (m',) int64 array
+        The neurons kept, sorted.
+
+    Raises
+    ------
+    ParameterError
+        `key` not as long as `on`.
 
     Examples
     --------
@@ -362,6 +586,20 @@ def to_matches(neurons, state, method=None) -> Matches:
 
     `neurons` is anything with ``rows`` and ``cols`` (a Problem, Network or Topology);
     `method`'s :meth:`~ismb_lab.network.methods.Method.postprocess` decides which neurons stay.
+
+    Parameters
+    ----------
+    neurons : Problem, Network or Topology
+        Anything with ``rows`` and ``cols``.
+    state : (n,) 0/1 array
+        A final state.
+    method : Method, optional
+        Whose post-processing applies; None keeps every neuron on.
+
+    Returns
+    -------
+    matches : Matches
+        ``pairs`` (``(m, 2)`` int64) and the post-processed ``state``.
 
     Examples
     --------
