@@ -62,7 +62,24 @@ def _unit(vectors: np.ndarray) -> np.ndarray:
 @dataclass(frozen=True, eq=False)
 class BoardPair:
     """One calibration pair: photo names, board corners in each, the board's pose in the left
-    camera (Rodrigues ``rvec``, ``tvec`` in metres) and the pair's RMS reprojection error (px)."""
+    camera (Rodrigues ``rvec``, ``tvec`` in metres) and the pair's RMS reprojection error (px).
+
+    Attributes
+    ----------
+    left, right : str
+        Names of the two photos.
+    left_corners, right_corners : (n, 2) float array
+        The board's inner corners ``(x, y)`` in each photo.
+    rms_px : float, default NaN
+        The pair's RMS reprojection error, pixels.
+    rvec, tvec : (3,) float array, default NaN
+        The board's pose in the left camera (Rodrigues vector; metres).
+
+    Raises
+    ------
+    ParameterError
+        Corners not finite ``(x, y)`` rows, or not as many in each photo.
+    """
 
     left: str
     right: str
@@ -87,9 +104,11 @@ class BoardPair:
 
     @property
     def names(self) -> tuple:
+        """tuple of str: ``(left, right)``."""
         return (self.left, self.right)
 
     def to_dict(self) -> dict:
+        """The pair's record in a rig file (JSON-ready)."""
         return {"left": self.left, "right": self.right, "rms_px": self.rms_px, "rvec": self.rvec.tolist(),
                 "tvec": self.tvec.tolist(), "left_corners": self.left_corners.tolist(),
                 "right_corners": self.right_corners.tolist()}
@@ -108,6 +127,36 @@ class StereoCamera:
     :data:`BASELINE_M` to the right); ``rms`` the calibration's reprojection error in pixels
     (NaN: none measured); ``used``, ``skipped`` and ``pairs`` the calibration's pairs.
 
+    Attributes
+    ----------
+    size : tuple of int, default (320, 240)
+        ``(width, height)`` of the images.
+    k_left, k_right : (3, 3) float array, optional
+        Camera matrices.
+    d_left, d_right : (1, k) float array, optional
+        Distortion coefficients.
+    rotation : (3, 3) float array, optional
+        Rotation from the left camera's frame to the right one's.
+    translation : (3, 1) float array, optional
+        Translation of the same transform, metres.
+    rms : float, default NaN
+        The calibration's RMS reprojection error, pixels.
+    board : tuple of int, default BOARD
+        Inner corners ``(columns, rows)`` of the calibration board.
+    square_m : float, default SQUARE_M
+        Side of its squares, metres.
+    used, skipped : tuple of str
+        Names of the pairs used and of those where the board was not found.
+    pairs : tuple of BoardPair
+        The corners of the pairs used.
+
+    Raises
+    ------
+    ParameterError
+        A bad size, matrix or distortion.
+
+    Examples
+    --------
     >>> camera = StereoCamera()
     >>> camera.focal_px, camera.baseline_m, camera.size
     (300.0, 0.1, (320, 240))
@@ -161,6 +210,26 @@ class StereoCamera:
         `vertical_offset_px`; a positive `roll_deg` turns the right camera's ``x`` axis towards
         its ``y`` axis (the scene turns counter-clockwise on screen).
 
+        Parameters
+        ----------
+        width, height : int, default 320, 240
+            Image size, pixels.
+        focal_px : float, default FOCAL_PX
+            Focal length, pixels (> 0).
+        baseline_m : float, default BASELINE_M
+            Distance between the cameras, metres (> 0).
+        vertical_offset_px : float, default 0.0
+            Shift of the right image down, pixels.
+        roll_deg : float, default 0.0
+            Roll of the right camera, degrees, -180 to 180.
+
+        Returns
+        -------
+        camera : StereoCamera
+            The pair of cameras.
+
+        Examples
+        --------
         >>> cam = StereoCamera.pinhole()
         >>> float(cam.disparity_at(1.8)), float(cam.disparity_at(1.0))
         (16.666666666666668, 30.0)
@@ -197,6 +266,29 @@ class StereoCamera:
         so the search band is 1 px up and down (:func:`ismb_lab.matching.metric.row_tolerance`):
         a guessed smaller RMS would narrow the band and widen the auto disparity window.
 
+        Parameters
+        ----------
+        focal_px : float
+            Rectified focal length, pixels (> 0).
+        baseline_m : float
+            Baseline, metres (> 0, at most :data:`MAX_BASELINE_M`).
+        size : tuple of int
+            ``(width, height)`` of the images.
+        centre : tuple of float, optional
+            Principal point ``(cx, cy)``; default the image centre.
+
+        Returns
+        -------
+        camera : StereoCamera
+            A rectified camera.
+
+        Raises
+        ------
+        ParameterError
+            A value out of range, or a centre outside the image.
+
+        Examples
+        --------
         >>> cam = StereoCamera.from_factory(520.8, 0.0836, (640, 480), centre=(350.6, 243.1))
         >>> cam.focal_px, cam.baseline_m, cam.rectified_centre.tolist(), cam.is_rectified
         (520.8, 0.0836, [350.6, 243.1], True)
@@ -232,6 +324,25 @@ class StereoCamera:
         over several files, each given once.  `size` defaults to the files' ``image_width`` and
         ``image_height`` (or ``imageSize``); `units` is the unit of ``T`` (:data:`UNITS`).
         The rig has no measured RMS, so its search band is 1 px (see :meth:`from_factory`).
+
+        Parameters
+        ----------
+        *paths : str or Path
+            The ``FileStorage`` files.
+        size : tuple of int, optional
+            ``(width, height)``; default the files' own.
+        units : {"m", "cm", "mm"}, default "m"
+            Unit of ``T``.
+
+        Returns
+        -------
+        camera : StereoCamera
+            The rig.
+
+        Raises
+        ------
+        ParameterError
+            No file, a matrix missing or given twice, no size, or an implausible baseline.
         """
         own = "StereoCamera.from_opencv"
         if not paths:
@@ -284,10 +395,12 @@ class StereoCamera:
 
     @property
     def width(self) -> int:
+        """int: image width, pixels."""
         return self.size[0]
 
     @property
     def height(self) -> int:
+        """int: image height, pixels."""
         return self.size[1]
 
     @property
@@ -340,6 +453,18 @@ class StereoCamera:
     def project_left(self, points3d) -> np.ndarray:
         """Left-image ``(x, y)`` of 3-D points (no distortion); NaN rows behind the camera.
 
+        Parameters
+        ----------
+        points3d : (n, 3) float array
+            Points ``(X, Y, Z)`` in the left camera's frame, metres.
+
+        Returns
+        -------
+        xy : (n, 2) float array
+            Left-image points.
+
+        Examples
+        --------
         >>> StereoCamera().project_left([[0.1, -0.05, 1.0]])
         array([[189.5, 104.5]])
         """
@@ -348,6 +473,18 @@ class StereoCamera:
     def project_right(self, points3d) -> np.ndarray:
         """Right-image ``(x, y)`` of left-frame 3-D points (no distortion); NaN rows behind it.
 
+        Parameters
+        ----------
+        points3d : (n, 3) float array
+            Points ``(X, Y, Z)`` in the left camera's frame, metres.
+
+        Returns
+        -------
+        xy : (n, 2) float array
+            Right-image points.
+
+        Examples
+        --------
         >>> StereoCamera.pinhole(vertical_offset_px=2).project_right([[0.1, -0.05, 1.0]])
         array([[159.5, 106.5]])
         """
@@ -363,6 +500,18 @@ class StereoCamera:
     def rays_left(self, xy) -> tuple[np.ndarray, np.ndarray]:
         """Rays through left-image points: ``(origins, unit directions)``, both ``(N, 3)``.
 
+        Parameters
+        ----------
+        xy : (N, 2) float array
+            Left-image points ``(x, y)``.
+
+        Returns
+        -------
+        origins, directions : (N, 3) float array
+            The rays, in the left camera's frame.
+
+        Examples
+        --------
         >>> StereoCamera().rays_left([[159.5, 119.5]])
         (array([[0., 0., 0.]]), array([[0., 0., 1.]]))
         """
@@ -373,6 +522,18 @@ class StereoCamera:
     def rays_right(self, xy) -> tuple[np.ndarray, np.ndarray]:
         """Rays through right-image points, in the left camera's frame.
 
+        Parameters
+        ----------
+        xy : (N, 2) float array
+            Right-image points ``(x, y)``.
+
+        Returns
+        -------
+        origins, directions : (N, 3) float array
+            The rays, in the left camera's frame.
+
+        Examples
+        --------
         >>> StereoCamera().rays_right([[159.5, 119.5]])
         (array([[0.1, 0. , 0. ]]), array([[0., 0., 1.]]))
         """
@@ -420,6 +581,18 @@ class StereoCamera:
     def disparity_at(self, depth) -> np.ndarray:
         """Disparity ``focal_px * baseline_m / depth`` of the rectified pair, in pixels.
 
+        Parameters
+        ----------
+        depth : float or array
+            Depths ``Z``, metres.
+
+        Returns
+        -------
+        disparity : float array
+            Pixels, shaped as `depth`.
+
+        Examples
+        --------
         >>> StereoCamera().disparity_at([1.0, 1.5])
         array([30., 20.])
         """
@@ -429,6 +602,25 @@ class StereoCamera:
         """3-D points ``(X, Y, Z)`` in metres of rectified-left pixels and their disparities
         (``x_left - x_right``); NaN rows where the disparity is not > 0.
 
+        Parameters
+        ----------
+        xy_left : (n, 2) float array
+            Rectified-left pixels ``(x, y)``.
+        disparity : (n,) float array
+            Their disparities, pixels.
+
+        Returns
+        -------
+        points : (n, 3) float array
+            ``(X, Y, Z)`` in the rectified left frame, metres.
+
+        Raises
+        ------
+        ParameterError
+            Not one finite disparity per point.
+
+        Examples
+        --------
         >>> StereoCamera().points_from_disparity([[10.0, 20.0]], [0.0])
         array([[nan, nan, nan]])
         """
@@ -450,7 +642,20 @@ class StereoCamera:
         return self.focal_px / min(float(self.k_left[0, 0]), float(self.k_right[0, 0]))
 
     def rectify_points(self, xy, side: str = "left") -> np.ndarray:
-        """Raw-image points ``(x, y)`` of one camera in its rectified view."""
+        """Raw-image points ``(x, y)`` of one camera in its rectified view.
+
+        Parameters
+        ----------
+        xy : (n, 2) float array
+            Points in the raw image.
+        side : {"left", "right"}, default "left"
+            Which camera.
+
+        Returns
+        -------
+        xy : (n, 2) float array
+            The points in the rectified view.
+        """
         rect = self._rectification()
         k, d, r, p = ((self.k_left, self.d_left, rect["r1"], rect["p1"]) if side == "left"
                       else (self.k_right, self.d_right, rect["r2"], rect["p2"]))
@@ -458,7 +663,13 @@ class StereoCamera:
         return cv2.undistortPoints(xy, k, d, R=r, P=p).reshape(-1, 2)
 
     def cropped(self) -> tuple:
-        """Names of the pairs whose board has a corner outside a rectified view."""
+        """Names of the pairs whose board has a corner outside a rectified view.
+
+        Returns
+        -------
+        names : tuple of str
+            Left photo names.
+        """
         (w, h), out = self.size, []
         for pair in self.pairs:
             for corners, side in ((pair.left_corners, "left"), (pair.right_corners, "right")):
@@ -469,7 +680,13 @@ class StereoCamera:
         return tuple(out)
 
     def warnings(self) -> tuple:
-        """What makes this rig's rectified views doubtful, each naming the fix."""
+        """What makes this rig's rectified views doubtful, each naming the fix.
+
+        Returns
+        -------
+        warnings : tuple of str
+            One sentence each; empty for a sound rig.
+        """
         found = []
         if self.zoom > MAX_ZOOM:
             found.append(f"the rectified views are zoomed {self.zoom:.2f}x (above {MAX_ZOOM}x): the lens "
@@ -482,14 +699,38 @@ class StereoCamera:
         return tuple(found)
 
     def maps(self):
-        """The ``cv2.remap`` maps of the left and the right view."""
+        """The ``cv2.remap`` maps of the left and the right view.
+
+        Returns
+        -------
+        left, right : tuple of (H, W) float32 array
+            ``(map_x, map_y)`` of each view.
+        """
         rect = self._rectification()
         make = lambda k, d, r, p: cv2.initUndistortRectifyMap(k, d, r, p, tuple(self.size), cv2.CV_32FC1)
         return (make(self.k_left, self.d_left, rect["r1"], rect["p1"]),
                 make(self.k_right, self.d_right, rect["r2"], rect["p2"]))
 
     def photos(self, left, right, owner: str = "StereoCamera.photos") -> tuple:
-        """A pair of this camera's size loaded grey (:func:`ismb_lab.images.rectify.load_photo`)."""
+        """A pair of this camera's size loaded grey (:func:`ismb_lab.images.rectify.load_photo`).
+
+        Parameters
+        ----------
+        left, right : str, Path, bytes or array
+            The photos.
+        owner : str, default "StereoCamera.photos"
+            Function named in error messages.
+
+        Returns
+        -------
+        left, right : (H, W) float array
+            Grey images in ``[0, 255]``.
+
+        Raises
+        ------
+        ParameterError
+            A photo of another size than the rig's.
+        """
         from ..images.rectify import load_photo
 
         left, right = load_photo(left, "left", owner), load_photo(right, "right", owner)
@@ -500,7 +741,18 @@ class StereoCamera:
         return left, right
 
     def rectify(self, left, right):
-        """The pair rectified exactly, as a :class:`ismb_lab.images.rectify.Rectified`."""
+        """The pair rectified exactly, as a :class:`ismb_lab.images.rectify.Rectified`.
+
+        Parameters
+        ----------
+        left, right : str, Path, bytes or array
+            Photos of the rig's size.
+
+        Returns
+        -------
+        rectified : Rectified
+            The rectified pair, measured on new robust matches.
+        """
         from ..images.rectify import measured
 
         left, right = self.photos(left, right, "StereoCamera.rectify")
@@ -509,7 +761,13 @@ class StereoCamera:
         return measured(warp(left, lx, ly), warp(right, rx, ry), np.eye(3), np.eye(3), "rig")
 
     def to_dict(self) -> dict:
-        """The rig file's record (:data:`FORMAT`); None for an unmeasured RMS or an unused board."""
+        """The rig file's record (:data:`FORMAT`); None for an unmeasured RMS or an unused board.
+
+        Returns
+        -------
+        record : dict
+            JSON-ready fields of the rig file.
+        """
         boarded = bool(self.used)
         return {"format": FORMAT, "size": list(self.size), "rms_px": self.rms if math.isfinite(self.rms) else None,
                 "focal_px": self.focal_px, "baseline_m": self.baseline_m, "zoom": self.zoom,
@@ -522,6 +780,7 @@ class StereoCamera:
                 "pairs": [pair.to_dict() for pair in self.pairs]}
 
     def to_json(self) -> str:
+        """:meth:`to_dict` as indented JSON text."""
         return json.dumps(self.to_dict(), indent=2)
 
 
@@ -627,6 +886,24 @@ def _check_intrinsics(k, d, name: str, owner: str) -> None:
 def check_board(board, square_m, owner: str) -> tuple:
     """`board` (inner corners per row, per column) and `square_m` (metres), checked as `owner`'s.
 
+    Parameters
+    ----------
+    board : tuple of int
+        Inner corners per row and per column, 2 to :data:`MAX_BOARD_SIDE`.
+    square_m : float
+        Side of a square, metres.
+    owner : str
+        Function named in error messages.
+
+    Returns
+    -------
+    board : tuple of int
+        The board.
+    square_m : float
+        The square side.
+
+    Examples
+    --------
     >>> check_board([9, 6], 0.025, "calibrate_rig")
     ((9, 6), 0.025)
     >>> check_board((9, 6), -1, "the rig file")
@@ -814,6 +1091,23 @@ def load_camera(source) -> StereoCamera:
     ``square_m`` are null only for a rig that no board calibrated; the derived ``focal_px`` and
     ``baseline_m`` must agree with the cameras'.
 
+    Parameters
+    ----------
+    source : str or Path
+        The rig file, or its JSON text.
+
+    Returns
+    -------
+    camera : StereoCamera
+        The rig.
+
+    Raises
+    ------
+    ParameterError
+        An unreadable file, another format, or a field that fails its check.
+
+    Examples
+    --------
     >>> cam = load_camera(StereoCamera.from_factory(500.0, 0.06, (640, 480)).to_json())
     >>> cam.focal_px, cam.baseline_m, cam.is_rectified
     (500.0, 0.06, True)
