@@ -271,7 +271,28 @@ class Method:
         """``(S, C, self_C, match_bias)`` of the networks :meth:`network` builds from each row
         of `table` (an ``(m,)`` array per :class:`Params` field), for a GA's batch; ``self_C``
         only for the thesis rule.  The same operations on the same numbers, element by
-        element.  Only the built-in methods (:data:`BATCHED`) use it."""
+        element.  Only the built-in methods (:data:`BATCHED`) use it.
+
+        Parameters
+        ----------
+        problem : Problem
+            The pair's energy ingredients.
+        table : dict
+            An ``(m,)`` float array per :class:`Params` field.
+        thesis : bool
+            Whether the thesis rule's ``self_C`` is wanted.
+
+        Returns
+        -------
+        S : (m, n) float array
+            Similarity of each neuron, per row of `table`.
+        C : (m, P) float array
+            Compatibility of each interacting pair.
+        self_C : (m, n) float array or None
+            ``C_ikik``, only for the thesis rule.
+        match_bias : (m,) float array
+            ``beta`` of each network.
+        """
         pair_x, self_x = self._measures(problem)
         theta_c, lambda_c = table["theta_c"][:, None], table["lambda_c"][:, None]
         c = transfer(pair_x, theta_c, lambda_c)

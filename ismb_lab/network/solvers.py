@@ -302,7 +302,13 @@ def similarity_assignment(net: Network) -> np.ndarray:
 
 @dataclass(frozen=True)
 class AssignSolver(NetworkSolver):
-    """The discrete network started from :func:`similarity_assignment` (beyond the thesis)."""
+    """The discrete network started from :func:`similarity_assignment` (beyond the thesis).
+
+    Attributes
+    ----------
+    stop_rule, rule, kernel : str
+        As :class:`NetworkSolver`'s.
+    """
 
     name: ClassVar[str] = ASSIGN
     description: ClassVar[str] = ("the discrete network started from the assignment of largest total similarity "
