@@ -379,7 +379,13 @@ class Rectified:
                 "left_homography": self.left_h.tolist(), "right_homography": self.right_h.tolist()}
 
     def to_json(self) -> str:
-        """:meth:`to_dict` as indented JSON text."""
+        """:meth:`to_dict` as indented JSON text.
+
+        Returns
+        -------
+        text : str
+            The JSON document.
+        """
         return json.dumps(self.to_dict(), indent=2)
 
 
