@@ -108,7 +108,13 @@ class BoardPair:
         return (self.left, self.right)
 
     def to_dict(self) -> dict:
-        """The pair's record in a rig file (JSON-ready)."""
+        """The pair's record in a rig file (JSON-ready).
+
+        Returns
+        -------
+        record : dict
+            Names, error, pose and corners of the pair.
+        """
         return {"left": self.left, "right": self.right, "rms_px": self.rms_px, "rvec": self.rvec.tolist(),
                 "tvec": self.tvec.tolist(), "left_corners": self.left_corners.tolist(),
                 "right_corners": self.right_corners.tolist()}
@@ -780,7 +786,13 @@ class StereoCamera:
                 "pairs": [pair.to_dict() for pair in self.pairs]}
 
     def to_json(self) -> str:
-        """:meth:`to_dict` as indented JSON text."""
+        """:meth:`to_dict` as indented JSON text.
+
+        Returns
+        -------
+        text : str
+            The JSON document.
+        """
         return json.dumps(self.to_dict(), indent=2)
 
 
