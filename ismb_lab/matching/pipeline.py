@@ -471,7 +471,13 @@ class MatchResult:
         }
 
     def to_json(self) -> str:
-        """:meth:`to_dict` as indented JSON text."""
+        """:meth:`to_dict` as indented JSON text.
+
+        Returns
+        -------
+        text : str
+            The JSON document.
+        """
         return json.dumps(self.to_dict(), indent=2)
 
 
