@@ -221,7 +221,7 @@ class AnnealSolver(Solver):
     sweeps : int, default 2
         Mean-field sweeps per temperature.
     settle : float, default 0.0
-        In [0, 1/2): stop once every ``v`` is within it of 0 or 1 (0: the whole schedule).
+        In [0, 1/2): end the schedule early (:func:`~ismb_lab.network.annealing.iter_annealing`).
     """
 
     name: ClassVar[str] = ANNEAL
