@@ -62,24 +62,7 @@ def _unit(vectors: np.ndarray) -> np.ndarray:
 @dataclass(frozen=True, eq=False)
 class BoardPair:
     """One calibration pair: photo names, board corners in each, the board's pose in the left
-    camera (Rodrigues ``rvec``, ``tvec`` in metres) and the pair's RMS reprojection error (px).
-
-    Attributes
-    ----------
-    left, right : str
-        Names of the two photos.
-    left_corners, right_corners : (n, 2) float array
-        The board's inner corners ``(x, y)`` in each photo.
-    rms_px : float, default NaN
-        The pair's RMS reprojection error, pixels.
-    rvec, tvec : (3,) float array, default NaN
-        The board's pose in the left camera (Rodrigues vector; metres).
-
-    Raises
-    ------
-    ParameterError
-        Corners not finite ``(x, y)`` rows, or not as many in each photo.
-    """
+    camera (Rodrigues ``rvec``, ``tvec`` in metres) and the pair's RMS reprojection error (px)."""
 
     left: str
     right: str
@@ -216,26 +199,6 @@ class StereoCamera:
         `vertical_offset_px`; a positive `roll_deg` turns the right camera's ``x`` axis towards
         its ``y`` axis (the scene turns counter-clockwise on screen).
 
-        Parameters
-        ----------
-        width, height : int, default 320, 240
-            Image size, pixels.
-        focal_px : float, default FOCAL_PX
-            Focal length, pixels (> 0).
-        baseline_m : float, default BASELINE_M
-            Distance between the cameras, metres (> 0).
-        vertical_offset_px : float, default 0.0
-            Shift of the right image down, pixels.
-        roll_deg : float, default 0.0
-            Roll of the right camera, degrees, -180 to 180.
-
-        Returns
-        -------
-        camera : StereoCamera
-            The pair of cameras.
-
-        Examples
-        --------
         >>> cam = StereoCamera.pinhole()
         >>> float(cam.disparity_at(1.8)), float(cam.disparity_at(1.0))
         (16.666666666666668, 30.0)
@@ -459,18 +422,6 @@ class StereoCamera:
     def project_left(self, points3d) -> np.ndarray:
         """Left-image ``(x, y)`` of 3-D points (no distortion); NaN rows behind the camera.
 
-        Parameters
-        ----------
-        points3d : (n, 3) float array
-            Points ``(X, Y, Z)`` in the left camera's frame, metres.
-
-        Returns
-        -------
-        xy : (n, 2) float array
-            Left-image points.
-
-        Examples
-        --------
         >>> StereoCamera().project_left([[0.1, -0.05, 1.0]])
         array([[189.5, 104.5]])
         """
@@ -479,18 +430,6 @@ class StereoCamera:
     def project_right(self, points3d) -> np.ndarray:
         """Right-image ``(x, y)`` of left-frame 3-D points (no distortion); NaN rows behind it.
 
-        Parameters
-        ----------
-        points3d : (n, 3) float array
-            Points ``(X, Y, Z)`` in the left camera's frame, metres.
-
-        Returns
-        -------
-        xy : (n, 2) float array
-            Right-image points.
-
-        Examples
-        --------
         >>> StereoCamera.pinhole(vertical_offset_px=2).project_right([[0.1, -0.05, 1.0]])
         array([[159.5, 106.5]])
         """
@@ -506,18 +445,6 @@ class StereoCamera:
     def rays_left(self, xy) -> tuple[np.ndarray, np.ndarray]:
         """Rays through left-image points: ``(origins, unit directions)``, both ``(N, 3)``.
 
-        Parameters
-        ----------
-        xy : (N, 2) float array
-            Left-image points ``(x, y)``.
-
-        Returns
-        -------
-        origins, directions : (N, 3) float array
-            The rays, in the left camera's frame.
-
-        Examples
-        --------
         >>> StereoCamera().rays_left([[159.5, 119.5]])
         (array([[0., 0., 0.]]), array([[0., 0., 1.]]))
         """
@@ -528,18 +455,6 @@ class StereoCamera:
     def rays_right(self, xy) -> tuple[np.ndarray, np.ndarray]:
         """Rays through right-image points, in the left camera's frame.
 
-        Parameters
-        ----------
-        xy : (N, 2) float array
-            Right-image points ``(x, y)``.
-
-        Returns
-        -------
-        origins, directions : (N, 3) float array
-            The rays, in the left camera's frame.
-
-        Examples
-        --------
         >>> StereoCamera().rays_right([[159.5, 119.5]])
         (array([[0.1, 0. , 0. ]]), array([[0., 0., 1.]]))
         """
@@ -587,18 +502,6 @@ class StereoCamera:
     def disparity_at(self, depth) -> np.ndarray:
         """Disparity ``focal_px * baseline_m / depth`` of the rectified pair, in pixels.
 
-        Parameters
-        ----------
-        depth : float or array
-            Depths ``Z``, metres.
-
-        Returns
-        -------
-        disparity : float array
-            Pixels, shaped as `depth`.
-
-        Examples
-        --------
         >>> StereoCamera().disparity_at([1.0, 1.5])
         array([30., 20.])
         """
@@ -648,20 +551,7 @@ class StereoCamera:
         return self.focal_px / min(float(self.k_left[0, 0]), float(self.k_right[0, 0]))
 
     def rectify_points(self, xy, side: str = "left") -> np.ndarray:
-        """Raw-image points ``(x, y)`` of one camera in its rectified view.
-
-        Parameters
-        ----------
-        xy : (n, 2) float array
-            Points in the raw image.
-        side : {"left", "right"}, default "left"
-            Which camera.
-
-        Returns
-        -------
-        xy : (n, 2) float array
-            The points in the rectified view.
-        """
+        """Raw-image points ``(x, y)`` of one camera in its rectified view."""
         rect = self._rectification()
         k, d, r, p = ((self.k_left, self.d_left, rect["r1"], rect["p1"]) if side == "left"
                       else (self.k_right, self.d_right, rect["r2"], rect["p2"]))
@@ -669,13 +559,7 @@ class StereoCamera:
         return cv2.undistortPoints(xy, k, d, R=r, P=p).reshape(-1, 2)
 
     def cropped(self) -> tuple:
-        """Names of the pairs whose board has a corner outside a rectified view.
-
-        Returns
-        -------
-        names : tuple of str
-            Left photo names.
-        """
+        """Names of the pairs whose board has a corner outside a rectified view."""
         (w, h), out = self.size, []
         for pair in self.pairs:
             for corners, side in ((pair.left_corners, "left"), (pair.right_corners, "right")):
@@ -705,13 +589,7 @@ class StereoCamera:
         return tuple(found)
 
     def maps(self):
-        """The ``cv2.remap`` maps of the left and the right view.
-
-        Returns
-        -------
-        left, right : tuple of (H, W) float32 array
-            ``(map_x, map_y)`` of each view.
-        """
+        """The ``cv2.remap`` maps of the left and the right view."""
         rect = self._rectification()
         make = lambda k, d, r, p: cv2.initUndistortRectifyMap(k, d, r, p, tuple(self.size), cv2.CV_32FC1)
         return (make(self.k_left, self.d_left, rect["r1"], rect["p1"]),
@@ -898,24 +776,6 @@ def _check_intrinsics(k, d, name: str, owner: str) -> None:
 def check_board(board, square_m, owner: str) -> tuple:
     """`board` (inner corners per row, per column) and `square_m` (metres), checked as `owner`'s.
 
-    Parameters
-    ----------
-    board : tuple of int
-        Inner corners per row and per column, 2 to :data:`MAX_BOARD_SIDE`.
-    square_m : float
-        Side of a square, metres.
-    owner : str
-        Function named in error messages.
-
-    Returns
-    -------
-    board : tuple of int
-        The board.
-    square_m : float
-        The square side.
-
-    Examples
-    --------
     >>> check_board([9, 6], 0.025, "calibrate_rig")
     ((9, 6), 0.025)
     >>> check_board((9, 6), -1, "the rig file")

@@ -37,20 +37,7 @@ def _u8(image) -> np.ndarray:
 
 
 def find_board(image, board=BOARD) -> np.ndarray | None:
-    """The board's inner corners ``(x, y)``, refined to sub-pixel, or None when not found.
-
-    Parameters
-    ----------
-    image : (H, W) float array
-        Grey image in ``[0, 255]``.
-    board : tuple of int, default BOARD
-        Inner corners ``(columns, rows)``.
-
-    Returns
-    -------
-    corners : (columns * rows, 2) float array or None
-        The corners in ``cv2.findChessboardCorners``' order.
-    """
+    """The board's inner corners ``(x, y)``, refined to sub-pixel, or None when not found."""
     grey = _u8(image)
     found, corners = cv2.findChessboardCorners(grey, tuple(board), cv2.CALIB_CB_ADAPTIVE_THRESH
                                                + cv2.CALIB_CB_NORMALIZE_IMAGE)
@@ -63,20 +50,6 @@ def find_board(image, board=BOARD) -> np.ndarray | None:
 def board_points(board, square_m: float) -> np.ndarray:
     """The board's inner corners in its own frame, metres, in ``cv2.findChessboardCorners``' order.
 
-    Parameters
-    ----------
-    board : tuple of int
-        Inner corners ``(columns, rows)``.
-    square_m : float
-        Side of a square, metres.
-
-    Returns
-    -------
-    points : (columns * rows, 3) float32 array
-        ``(x, y, 0)`` of each corner.
-
-    Examples
-    --------
     >>> board_points((3, 2), 0.5)[[0, 1, 3]].tolist()
     [[0.0, 0.0, 0.0], [0.5, 0.0, 0.0], [0.0, 0.5, 0.0]]
     """
@@ -251,15 +224,7 @@ def _refit(rig: StereoCamera, kept, owner: str) -> StereoCamera:
 
 
 class HeldOut(NamedTuple):
-    """One pair's figures under the rig calibrated without it (:func:`leave_one_out`).
-
-    Attributes
-    ----------
-    reprojection_px : float
-        RMS error of the board's corners over both views, pixels.
-    depth_error : float
-        Median relative depth error of the corners.
-    """
+    """One pair's figures under the rig calibrated without it (:func:`leave_one_out`)."""
 
     reprojection_px: float
     depth_error: float

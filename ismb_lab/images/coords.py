@@ -54,19 +54,6 @@ __all__ = ["euclidean_disparity", "horizontal_disparity", "vertical_disparity"]
 def horizontal_disparity(left_xy, right_xy) -> np.ndarray:
     """Horizontal disparity ``x_left - x_right`` of matched points.
 
-    Parameters
-    ----------
-    left_xy, right_xy : (n, 2) float array
-        Matched points ``(x, y)``, row ``n`` with row ``n``.
-
-    Returns
-    -------
-    disparity : (n,) float array
-        ``x_left - x_right`` of each match.
-
-    Examples
-    --------
-
     >>> horizontal_disparity([[99, 99]], [[88, 100]])
     array([11.])
     """
@@ -75,19 +62,6 @@ def horizontal_disparity(left_xy, right_xy) -> np.ndarray:
 
 def vertical_disparity(left_xy, right_xy) -> np.ndarray:
     """Vertical disparity ``y_right - y_left`` of matched points.
-
-    Parameters
-    ----------
-    left_xy, right_xy : (n, 2) float array
-        Matched points ``(x, y)``, row ``n`` with row ``n``.
-
-    Returns
-    -------
-    disparity : (n,) float array
-        ``y_right - y_left`` of each match.
-
-    Examples
-    --------
 
     >>> vertical_disparity([[99, 99]], [[88, 100]])
     array([1.])

@@ -30,17 +30,7 @@ MOTORCYCLE_ROIS = ((0, 0, 160, 108), (160, 0, 160, 108), (0, 108, 160, 108), (16
 
 @dataclass(frozen=True, eq=False)
 class GroundTruthPair:
-    """A rectified grey pair in ``[0, 255]`` and its left view's ``x_left - x_right`` (NaN: unknown).
-
-    Attributes
-    ----------
-    left, right : (H, W) float array
-        Grey images in ``[0, 255]``.
-    disparity : (H, W) float array
-        ``x_left - x_right`` of each left pixel, NaN where unknown.
-    name : str
-        The pair's name, with its width when scaled (``"motorcycle@320"``).
-    """
+    """A rectified grey pair in ``[0, 255]`` and its left view's ``x_left - x_right`` (NaN: unknown)."""
 
     left: np.ndarray
     right: np.ndarray
@@ -103,13 +93,7 @@ def _scaled(left, right, disparity, width: int, name: str) -> GroundTruthPair:
 
 
 def motorcycle_files() -> tuple:
-    """The files :func:`motorcycle` reads: scikit-image's copies of the pair and its disparity.
-
-    Returns
-    -------
-    paths : tuple of Path
-        Left image, right image, disparity.
-    """
+    """The files :func:`motorcycle` reads: scikit-image's copies of the pair and its disparity."""
     import skimage.data
 
     folder = Path(skimage.data.__file__).parent
@@ -117,23 +101,7 @@ def motorcycle_files() -> tuple:
 
 
 def aloe_files(folder=None) -> tuple:
-    """The files :func:`aloe` reads (`folder`: see :func:`opencv_samples`).
-
-    Parameters
-    ----------
-    folder : str or Path, optional
-        Folder of OpenCV's sample data (:func:`opencv_samples`).
-
-    Returns
-    -------
-    paths : tuple of Path
-        Left image, right image, ground truth.
-
-    Raises
-    ------
-    SampleDataMissing
-        OpenCV's sample data is not installed.
-    """
+    """The files :func:`aloe` reads (`folder`: see :func:`opencv_samples`)."""
     root = opencv_samples(folder)
     return tuple(root / name for name in ("aloeL.jpg", "aloeR.jpg", "aloeGT.png"))
 
@@ -186,25 +154,6 @@ def aloe(width: int | None = None, *, folder=None) -> GroundTruthPair:
     `width` scales it as :func:`motorcycle` does (default: the full 1282 x 1110); `folder`: see
     :func:`opencv_samples`.
 
-    Parameters
-    ----------
-    width : int, optional
-        Width of the scaled pair, pixels; None keeps the full size.
-    folder : str or Path, optional
-        Folder of OpenCV's sample data (:func:`opencv_samples`).
-
-    Returns
-    -------
-    pair : GroundTruthPair
-        The grey pair and its disparity map.
-
-    Raises
-    ------
-    SampleDataMissing
-        OpenCV's sample data is not installed.
-
-    Examples
-    --------
     >>> pair = aloe(320)                                  # doctest: +SKIP
     >>> pair.left.shape                                   # doctest: +SKIP
     (277, 320)
@@ -222,23 +171,7 @@ def aloe(width: int | None = None, *, folder=None) -> GroundTruthPair:
 
 
 def books(*, folder=None) -> tuple[np.ndarray, np.ndarray]:
-    """Two hand-held photographs of books on a floor (612 x 459, grey): not rectified.
-
-    Parameters
-    ----------
-    folder : str or Path, optional
-        Folder of OpenCV's sample data (:func:`opencv_samples`).
-
-    Returns
-    -------
-    left, right : (459, 612) float array
-        The grey photos.
-
-    Raises
-    ------
-    SampleDataMissing
-        OpenCV's sample data is not installed.
-    """
+    """Two hand-held photographs of books on a floor (612 x 459, grey): not rectified."""
     return (_sample("left.jpg", folder).astype(float), _sample("right.jpg", folder).astype(float))
 
 

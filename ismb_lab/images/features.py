@@ -55,23 +55,6 @@ def image_gradients(image) -> tuple[np.ndarray, np.ndarray]:
     ``x`` grows along columns, ``y`` down the rows.  Dividing by 8 makes a ramp rising by 1 per
     pixel give exactly 1.  Borders are mirrored without repeating the edge pixel (``'mirror'``).
 
-    Parameters
-    ----------
-    image : (H, W) float or unsigned integer array
-        Grey image, finite values.
-
-    Returns
-    -------
-    Ix, Iy : (H, W) float64 array
-        Derivatives along ``x`` and ``y``.
-
-    Raises
-    ------
-    ParameterError, ParameterTypeError
-        Not a non-empty 2-D array of finite float or unsigned integer values.
-
-    Examples
-    --------
     >>> Ix, Iy = image_gradients(np.tile(np.arange(4.0), (3, 1)))   # I = x
     >>> Ix[1]
     array([0., 1., 1., 0.])
@@ -173,25 +156,6 @@ def resolve_roi(roi, shape) -> tuple[int, int, int, int]:
     `roi` is ``"center"`` (the centre quarter, a ``W//2 x H//2`` box at ``(W//4, H//4)``, as in
     the thesis' tables), ``"full"``, ``(x, y, w, h)`` or ``"X,Y,W,H"``.
 
-    Parameters
-    ----------
-    roi : str or tuple of int
-        The region, in one of the forms above.
-    shape : tuple of int
-        ``(H, W)`` of the image.
-
-    Returns
-    -------
-    box : tuple of int
-        ``(x, y, w, h)`` inside the image.
-
-    Raises
-    ------
-    ParameterError
-        A malformed `roi`, or a box not inside the image.
-
-    Examples
-    --------
     >>> resolve_roi("center", (240, 320))
     (80, 60, 160, 120)
     >>> resolve_roi("10, 20, 30, 40", (240, 320))
@@ -218,25 +182,6 @@ def resolve_roi(roi, shape) -> tuple[int, int, int, int]:
 def check_roi(roi, owner: str):
     """`roi`, its form checked before any image is read (see :func:`resolve_roi`).
 
-    Parameters
-    ----------
-    roi : str or tuple of int
-        ``"center"``, ``"full"``, ``(x, y, w, h)`` or ``"X,Y,W,H"``.
-    owner : str
-        Name given in error messages.
-
-    Returns
-    -------
-    roi : str or tuple of int
-        `roi` itself.
-
-    Raises
-    ------
-    ParameterError, ParameterTypeError
-        A malformed `roi`.
-
-    Examples
-    --------
     >>> check_roi("10,20,30,40", "MatchConfig")
     '10,20,30,40'
     >>> check_roi("1,2,3", "MatchConfig")

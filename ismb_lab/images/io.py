@@ -43,18 +43,6 @@ def max_pixels() -> int:
     """The pixel limit in force: ``ISMB_LAB_MAX_PIXELS`` (1 to :data:`MOST_PIXELS`) if set, else
     :data:`MAX_PIXELS`.
 
-    Returns
-    -------
-    limit : int
-        Most pixels of one image.
-
-    Raises
-    ------
-    ParameterError
-        ``ISMB_LAB_MAX_PIXELS`` is not a whole number in range.
-
-    Examples
-    --------
     >>> max_pixels() >= 1
     True
     """
@@ -78,18 +66,6 @@ def _too_large(error, what: str, limit: int) -> ParameterError:
 def exif_orientation(data: bytes) -> int:
     """The EXIF Orientation tag (1-8) of a JPEG file's bytes; 1 (upright) when there is none.
 
-    Parameters
-    ----------
-    data : bytes
-        The file's bytes.
-
-    Returns
-    -------
-    orientation : int
-        The tag, 1 to 8.
-
-    Examples
-    --------
     >>> exif_orientation(b"not a JPEG")
     1
     """
@@ -119,25 +95,6 @@ def _tiff_orientation(tiff: bytes) -> int:
 def orient(image: np.ndarray, orientation: int) -> np.ndarray:
     """`image` (``image[y, x]``) turned upright by its EXIF `orientation`, as viewers show it.
 
-    Parameters
-    ----------
-    image : (H, W, ...) array
-        The image as decoded.
-    orientation : int
-        EXIF Orientation tag, 1 to 8.
-
-    Returns
-    -------
-    image : (H', W', ...) array
-        The upright image, C-contiguous.
-
-    Raises
-    ------
-    ParameterError
-        `orientation` out of 1-8, or `image` of fewer than 2 dimensions.
-
-    Examples
-    --------
     >>> orient(np.array([[1, 2], [3, 4]]), 6).tolist()   # 6: turn 90 degrees clockwise
     [[3, 1], [4, 2]]
     >>> orient(np.zeros((2, 2)), 9)
@@ -187,20 +144,6 @@ def decode(data: bytes, flags: int, error) -> np.ndarray:
 
     A JPEG is turned upright by its EXIF orientation with every flag, ``IMREAD_UNCHANGED``
     included.  `error(why)` makes the exception raised.
-
-    Parameters
-    ----------
-    data : bytes
-        The file's bytes.
-    flags : int
-        ``cv2.IMREAD_*`` flags.
-    error : callable
-        ``error(why)`` returns the exception to raise.
-
-    Returns
-    -------
-    image : ndarray
-        The decoded image, as OpenCV gives it.
     """
     from .._core.header import HeaderError, image_size
 
@@ -324,18 +267,6 @@ def image_sha256(source) -> str:
     """SHA-256 hex digest of an image file's bytes (as ``sha256sum``), or of an array: of
     ``b"ismb_lab-array-v1\\n"``, then ``f"{dtype.str} {shape}\\n"`` in ASCII, then its C-order bytes.
 
-    Parameters
-    ----------
-    source : str, PathLike or array
-        An image file or a numeric array.
-
-    Returns
-    -------
-    digest : str
-        64 hex digits.
-
-    Examples
-    --------
     >>> a = np.zeros((2, 3), dtype=np.uint8)
     >>> image_sha256(a) == image_sha256(a.copy())
     True
@@ -448,23 +379,6 @@ def load_pair(left, right, *, min_shape=(1, 1)) -> StereoPair:
 def png_bytes(image) -> bytes:
     """A grey image as 8-bit PNG bytes: rounded to whole grey levels and clipped to 0-255.
 
-    Parameters
-    ----------
-    image : (H, W) float array
-        Finite grey values.
-
-    Returns
-    -------
-    data : bytes
-        The PNG file.
-
-    Raises
-    ------
-    ParameterError
-        Not a non-empty 2-D array of finite numbers.
-
-    Examples
-    --------
     >>> import cv2, numpy as np
     >>> data = png_bytes(np.full((2, 2), 300.4))
     >>> data[1:4], cv2.imdecode(np.frombuffer(data, np.uint8), cv2.IMREAD_UNCHANGED).tolist()
@@ -488,20 +402,6 @@ def png_bytes(image) -> bytes:
 def save_image(path, image):
     """Write a grey image as an 8-bit PNG at `path`, atomically; returns the path.
 
-    Parameters
-    ----------
-    path : str or Path
-        The file to write.
-    image : (H, W) float array
-        Grey values (rounded and clipped to 0-255).
-
-    Returns
-    -------
-    path : Path
-        The file written.
-
-    Examples
-    --------
     >>> import tempfile, pathlib, numpy as np
     >>> path = save_image(pathlib.Path(tempfile.mkdtemp()) / "grey.png", np.full((3, 4), 127.6))
     >>> load_image(path).shape, float(load_image(path)[0, 0])

@@ -37,18 +37,6 @@ _RATIO = 0.75
 def row_spread_px(shape) -> float:
     """The largest median row difference (px) of a rectified pair of `shape`'s robust matches.
 
-    Parameters
-    ----------
-    shape : tuple of int
-        ``(height, width, ...)`` of the images.
-
-    Returns
-    -------
-    spread : float
-        Pixels: :data:`ROW_SPREAD` times the longer side.
-
-    Examples
-    --------
     >>> row_spread_px((480, 640)), row_spread_px((3000, 4000))
     (1.0, 6.25)
     """
@@ -59,22 +47,6 @@ def negative_share(matches: "Correspondences", rows_px: float) -> tuple[float, i
     """The share of `matches` on their rows (``|dy| <= rows_px``) with a negative disparity (most
     negative: the photos were given right first), and how many are on their rows.
 
-    Parameters
-    ----------
-    matches : Correspondences
-        Matched points of the pair.
-    rows_px : float
-        Largest row difference of a match on its row.
-
-    Returns
-    -------
-    share : float
-        Share of the matches on their rows with ``x_left < x_right``.
-    count : int
-        Matches on their rows.
-
-    Examples
-    --------
     >>> m = Correspondences(np.array([[10.0, 5], [20, 5], [30, 9]]), np.array([[12.0, 5], [25, 5], [20, 1]]))
     >>> negative_share(m, 1.0)
     (1.0, 2)
@@ -89,18 +61,6 @@ def negative_share(matches: "Correspondences", rows_px: float) -> tuple[float, i
 def photo_orientation(source) -> int:
     """The EXIF orientation tag (1-8) of a photo's path or file bytes; 1 for an array or no tag.
 
-    Parameters
-    ----------
-    source : str, Path, bytes or array
-        The photo.
-
-    Returns
-    -------
-    orientation : int
-        The tag, 1 to 8.
-
-    Examples
-    --------
     >>> photo_orientation(np.zeros((4, 4)))
     1
     """
@@ -180,20 +140,7 @@ def _photo(source, name: str, owner: str, max_side: int | None) -> tuple[np.ndar
 
 
 def working_size(shape, max_side: int = WORKING_SIDE) -> float:
-    """The factor (at most 1) that brings an image of `shape` within `max_side` pixels.
-
-    Parameters
-    ----------
-    shape : tuple of int
-        ``(height, width, ...)`` of the image.
-    max_side : int, default WORKING_SIDE
-        Longest side allowed, pixels.
-
-    Returns
-    -------
-    factor : float
-        Scale factor, at most 1.
-    """
+    """The factor (at most 1) that brings an image of `shape` within `max_side` pixels."""
     return min(1.0, max_side / max(shape[:2]))
 
 
@@ -206,13 +153,7 @@ def _scale(image: np.ndarray, factor: float) -> np.ndarray:
 
 @dataclass(frozen=True, eq=False)
 class Correspondences:
-    """Matched points ``(x, y)`` of a left and a right image, row ``n`` with row ``n``.
-
-    Attributes
-    ----------
-    left_xy, right_xy : (n, 2) float array
-        The matched points ``(x, y)`` in each image.
-    """
+    """Matched points ``(x, y)`` of a left and a right image, row ``n`` with row ``n``."""
 
     left_xy: np.ndarray
     right_xy: np.ndarray
@@ -228,22 +169,6 @@ def robust_matches(left, right, *, max_features: int = 4000, rows_px: float | No
     keypoints within `rows_px` of its row at a positive disparity: on a repetitive texture the
     ratio test then compares against the keypoint's own row, not the whole pattern.
 
-    Parameters
-    ----------
-    left, right : (H, W) float array
-        Grey images in ``[0, 255]``.
-    max_features : int, default 4000
-        Most SIFT keypoints per image (at least 8).
-    rows_px : float, optional
-        Row band of a rectified pair's candidates; None searches the whole image.
-
-    Returns
-    -------
-    matches : Correspondences
-        The mutual matches that pass the ratio test.
-
-    Examples
-    --------
     >>> rng = np.random.default_rng(0)
     >>> img = cv2.GaussianBlur(rng.uniform(0, 255, (200, 240)), (0, 0), 2) * 3 % 255
     >>> m = robust_matches(img[:, 10:], img[:, :-10])
@@ -319,29 +244,6 @@ class Rectified:
     ``inliers`` counts the correspondences (``left_xy``, ``right_xy``, after rectification) that
     the row differences and the 2nd to 98th percentile of ``x_left - x_right`` were measured on,
     and ``measured_on`` says which; ``scale`` is the factor the inputs were scaled by first.
-
-    Attributes
-    ----------
-    left, right : (H, W) float64 array
-        The rectified grey images.
-    left_h, right_h : (3, 3) float array
-        Homographies from the scaled inputs.
-    method : str
-        How the pair was rectified (e.g. ``"already rectified"``).
-    inliers : int
-        Correspondences the figures were measured on.
-    median_abs_dy_px, p90_abs_dy_px : float
-        Median and 90th percentile of their row differences, px.
-    disparity_range_px : list of float
-        2nd and 98th percentile of ``x_left - x_right``.
-    scale : float
-        Factor the inputs were scaled by first.
-    left_xy, right_xy : (n, 2) float array
-        The correspondences, after rectification.
-    measured_on : str
-        Which correspondences these are.
-    warnings : tuple of str
-        One-line warnings about the result.
     """
 
     left: np.ndarray
@@ -390,24 +292,7 @@ class Rectified:
 
 
 def pair_inputs(left, right, owner: str, max_side: int):
-    """Both photos grey, of one size, scaled by one factor so the longer side is <= `max_side`.
-
-    Parameters
-    ----------
-    left, right : str, Path, bytes or array
-        The photos, the left camera's first, of one size.
-    owner : str
-        Function named in error messages.
-    max_side : int
-        Longest side allowed, pixels.
-
-    Returns
-    -------
-    left, right : (H, W) float64 array
-        The scaled grey images.
-    factor : float
-        The scale factor.
-    """
+    """Both photos grey, of one size, scaled by one factor so the longer side is <= `max_side`."""
     (left, factor), (right, other) = (_photo(left, "left", owner, max_side),
                                       _photo(right, "right", owner, max_side))
     if left.shape != right.shape or factor != other:
@@ -454,22 +339,6 @@ def sideways_step(left_xy, right_xy, F, shape) -> float | None:
     that under 80% of the matches put in front of both cameras, or mostly forward
     (``|x| < 0.2``), decides nothing.
 
-    Parameters
-    ----------
-    left_xy, right_xy : (n, 2) float array
-        Inlier correspondences.
-    F : (3, 3) float array
-        The fundamental matrix.
-    shape : tuple of int
-        ``(height, width)`` of the images.
-
-    Returns
-    -------
-    x : float or None
-        The x component, or None when undecided.
-
-    Examples
-    --------
     >>> xy = np.random.default_rng(0).uniform(0, 400, (40, 2))
     >>> depth = np.random.default_rng(1).uniform(1, 2, 40)
     >>> shifted = xy - np.c_[40 / depth, np.zeros(40)]     # a right view: near points move more
@@ -516,23 +385,6 @@ def check_for_matching(left, right, owner: str = "check_for_matching") -> str:
     """Refuse a swapped pair, and return a one-line warning for an unrectified one ("" if none).
 
     Measured on the robust matches of the grey pair as given; fewer than 8 say nothing.
-
-    Parameters
-    ----------
-    left, right : (H, W) float array
-        The grey pair.
-    owner : str, default "check_for_matching"
-        Function named in error messages.
-
-    Returns
-    -------
-    warning : str
-        The warning, or "".
-
-    Raises
-    ------
-    ParameterError
-        The pair is swapped.
     """
     matches = robust_matches(left, right)
     if len(matches) < 8:
@@ -552,20 +404,6 @@ def epipole_warning(F, shape) -> str:
     Rectification sends the epipoles to infinity: the nearer one is, the more the framing changes
     with every small error in `F`.
 
-    Parameters
-    ----------
-    F : (3, 3) float array
-        The fundamental matrix.
-    shape : tuple of int
-        ``(height, width)`` of the images.
-
-    Returns
-    -------
-    warning : str
-        The warning, or "".
-
-    Examples
-    --------
     >>> F = np.array([[0, 0, 0], [0, 0, -1], [0, 1, 0]], float)   # sideways: epipoles at infinity
     >>> epipole_warning(F, (480, 640))
     ''
@@ -674,22 +512,7 @@ def _aligned(figures: dict) -> bool:
 
 def apply_rectification(left, right, left_h, right_h, size) -> Rectified:
     """Warp a pair to `size` ``(width, height)`` by homographies found on another pair of the same
-    camera positions (the depth demo's background), measured on new robust matches.
-
-    Parameters
-    ----------
-    left, right : (H, W) float array
-        The grey pair.
-    left_h, right_h : (3, 3) float array
-        The homographies.
-    size : tuple of int
-        ``(width, height)`` of the output.
-
-    Returns
-    -------
-    rectified : Rectified
-        The warped pair and its figures.
-    """
+    camera positions (the depth demo's background), measured on new robust matches."""
     size = (int(size[0]), int(size[1]))
     warp = lambda image, h: np.clip(cv2.warpPerspective(np.asarray(image, np.float32), np.asarray(h, float), size)
                                     .astype(float), 0, 255)
@@ -697,22 +520,7 @@ def apply_rectification(left, right, left_h, right_h, size) -> Rectified:
 
 
 def measured(left, right, left_h, right_h, method: str) -> Rectified:
-    """A pair rectified some other way, with its figures measured on new robust matches.
-
-    Parameters
-    ----------
-    left, right : (H, W) float array
-        The rectified grey pair.
-    left_h, right_h : (3, 3) float array
-        The homographies that made it.
-    method : str
-        How it was rectified.
-
-    Returns
-    -------
-    rectified : Rectified
-        The pair with its figures.
-    """
+    """A pair rectified some other way, with its figures measured on new robust matches."""
     matches = robust_matches(left, right)
     figures = (_dy_figures(matches.left_xy, matches.right_xy) if len(matches) else
                {"median_abs_dy_px": float("nan"), "p90_abs_dy_px": float("nan"), "disparity_range_px": [0.0, 0.0]})

@@ -29,23 +29,6 @@ MAX_DENSE = 20_000
 def window_range(config) -> tuple[float, float]:
     """The disparities a candidate window searches: ``shift -/+ window_width / 2`` pixels.
 
-    Parameters
-    ----------
-    config : MatchConfig
-        Settings with a numeric `shift`.
-
-    Returns
-    -------
-    low, high : float
-        The range, pixels.
-
-    Raises
-    ------
-    ParameterError
-        ``shift="auto"`` not yet measured.
-
-    Examples
-    --------
     >>> from ismb_lab.matching.pipeline import MatchConfig
     >>> window_range(MatchConfig())
     (0.0, 40.0)
@@ -62,20 +45,6 @@ def sgbm_range(low: float, high: float) -> tuple[int, int]:
     """SGBM's ``(minDisparity, numDisparities)`` for disparities `low` to `high` px: from the whole
     pixel at or below `low`, a count that is a positive multiple of 16 (OpenCV's rule).
 
-    Parameters
-    ----------
-    low, high : float
-        The disparity range, pixels, ``low < high``.
-
-    Returns
-    -------
-    min_disparity : int
-        SGBM's ``minDisparity``.
-    num_disparities : int
-        SGBM's ``numDisparities``.
-
-    Examples
-    --------
     >>> sgbm_range(19.96, 163.92)
     (19, 160)
     >>> sgbm_range(-3.5, 4.0)
@@ -106,27 +75,6 @@ def sgbm_disparity(left, right, low: float, high: float, *, block: int = SGBM_BL
     ``P1 = 8 block²``, ``P2 = 32 block²``, uniqueness 10%, left-right check 1 px, speckles under
     100 px (range 2) removed, ``MODE_SGBM_3WAY``.
 
-    Parameters
-    ----------
-    left, right : (H, W) float array
-        Rectified grey images, at least 8 x 8, of one shape.
-    low, high : float
-        Disparity range searched, pixels.
-    block : int, default SGBM_BLOCK
-        Odd matched block side, 1 to 31 pixels.
-
-    Returns
-    -------
-    disparity : (H, W) float array
-        ``x_left - x_right`` per left pixel, NaN where none.
-
-    Raises
-    ------
-    ParameterError
-        Bad images, an even block, or a bad range.
-
-    Examples
-    --------
     >>> rng = np.random.default_rng(0)
     >>> texture = cv2.GaussianBlur(rng.uniform(0, 255, (60, 160)), (0, 0), 1.5) * 4 % 255
     >>> d = sgbm_disparity(texture[:, :-12], texture[:, 12:], 4, 20)
@@ -154,21 +102,7 @@ def sgbm_disparity(left, right, low: float, high: float, *, block: int = SGBM_BL
 @dataclass(frozen=True)
 class Agreement:
     """How a dense disparity map agrees with the network's `matches`: `measured` of them have an
-    SGBM disparity, `agree` of those within `share` or `px` of the network's.
-
-    Attributes
-    ----------
-    matches : int
-        The network's matches compared.
-    measured : int
-        Those with a dense disparity.
-    agree : int
-        Those that agree.
-    share : float, default AGREE_SHARE
-        Relative tolerance.
-    px : float, default AGREE_PX
-        Absolute tolerance, pixels.
-    """
+    SGBM disparity, `agree` of those within `share` or `px` of the network's."""
 
     matches: int
     measured: int
@@ -196,31 +130,6 @@ def agreement(dense, xy, disparity, *, share: float = AGREE_SHARE, px: float = A
     A match agrees when ``|d_dense - d| <= max(px, share * d)`` at the pixel nearest its left
     point; a pixel without a dense disparity (NaN) is not ``measured``.
 
-    Parameters
-    ----------
-    dense : (H, W) float array
-        Dense disparity map, NaN where unknown.
-    xy : (n, 2) float array
-        The matches' left points ``(x, y)``.
-    disparity : (n,) float array
-        The network's disparities.
-    share : float, default AGREE_SHARE
-        Relative tolerance (>= 0).
-    px : float, default AGREE_PX
-        Absolute tolerance, pixels (>= 0).
-
-    Returns
-    -------
-    agreement : Agreement
-        The counts.
-
-    Raises
-    ------
-    ParameterError
-        A map that is not 2-D, or not one finite disparity per point.
-
-    Examples
-    --------
     >>> dense = np.full((10, 10), 20.0); dense[0, 0] = np.nan
     >>> str(agreement(dense, [[5, 5], [6, 5], [0, 0]], [20.5, 25.0, 20.0]))
     'SGBM agrees with the network at 1 of 2 matched points (50%) within 5% or 1 px; 1 of the 3 have no SGBM disparity'
@@ -251,31 +160,6 @@ def dense_points(camera: StereoCamera, dense, most: int = MAX_DENSE) -> tuple[np
     The pixels lie on a regular grid (every ``s``-th row and column, ``s`` as small as `most`
     allows).  Returns ``(xyz, xy)``: metres in the rectified left camera's frame, and the pixels.
 
-    Parameters
-    ----------
-    camera : StereoCamera
-        The camera that rectified the pair.
-    dense : (H, W) float array
-        Dense disparity map, NaN where unknown.
-    most : int, default MAX_DENSE
-        Most points returned.
-
-    Returns
-    -------
-    xyz : (m, 3) float array
-        Points, metres.
-    xy : (m, 2) float array
-        Their left pixels ``(x, y)``.
-
-    Raises
-    ------
-    ParameterTypeError
-        `camera` not a StereoCamera.
-    ParameterError
-        A map that is not 2-D.
-
-    Examples
-    --------
     >>> xyz, xy = dense_points(StereoCamera(), np.full((240, 320), 30.0), most=1000)
     >>> len(xyz) <= 1000, float(xyz[0, 2])
     (True, 1.0)

@@ -59,31 +59,6 @@ def rig_config(camera: StereoCamera, config: MatchConfig, pair=None, subpixel: b
     """`config` with the window `camera` gives: :func:`row_tolerance` rows up and down, and, with
     ``shift="auto"``, the disparity range measured on `pair` along those rows.
 
-    Parameters
-    ----------
-    camera : StereoCamera
-        The calibrated camera that rectified the pair.
-    config : MatchConfig
-        The match settings.
-    pair : StereoPair, optional
-        The pair; needed with ``shift="auto"``.
-    subpixel : bool, default False
-        Whether the corners are sub-pixel.
-
-    Returns
-    -------
-    config : MatchConfig
-        `config` with ``window_height`` (and the auto window) set.
-
-    Raises
-    ------
-    ParameterTypeError
-        `config` not a MatchConfig.
-    ParameterError
-        ``shift="auto"`` without a pair.
-
-    Examples
-    --------
     >>> rig_config(StereoCamera(), MatchConfig()).window_height
     2.0
     """
@@ -158,22 +133,6 @@ def subpixel(image, xy, half: int) -> np.ndarray:
     """Corners `xy` of `image` refined to sub-pixel (``cv2.cornerSubPix``, a ``2 half + 1``
     window), kept inside the image.
 
-    Parameters
-    ----------
-    image : (H, W) float array
-        Grey image.
-    xy : (n, 2) float array
-        Corners ``(x, y)``.
-    half : int
-        Half the side of the search window.
-
-    Returns
-    -------
-    xy : (n, 2) float array
-        The refined corners.
-
-    Examples
-    --------
     >>> img = np.zeros((40, 40)); img[:20, :20] = img[20:, 20:] = 255.0
     >>> subpixel(img, np.array([[21.0, 18.0]]), 5).round(1).tolist()
     [[19.5, 19.5]]
@@ -192,27 +151,6 @@ def prepare_for_camera(pair, config: MatchConfig, camera: StereoCamera) -> Prepa
     """`pair` (rectified by `camera`) prepared in `camera`'s window: ``M`` compares whole-pixel
     patches, the geometry uses the corners' sub-pixel positions.
 
-    Parameters
-    ----------
-    pair : StereoPair
-        A pair rectified by `camera`.
-    config : MatchConfig
-        The match settings.
-    camera : StereoCamera
-        The calibrated camera that rectified the pair.
-
-    Returns
-    -------
-    prepared : Prepared
-        Corners, ``M`` and geometry in the camera's window.
-
-    Raises
-    ------
-    ParameterTypeError
-        `camera` not a StereoCamera.
-
-    Examples
-    --------
     >>> from ismb_lab.images.io import load_pair
     >>> from ismb_lab.scenes import synthetic_scene
     >>> s = synthetic_scene(0)
@@ -234,28 +172,6 @@ def match_with_camera(pair, config: MatchConfig, camera: StereoCamera, **options
     """``ismb-lab match --rig``: :func:`prepare_for_camera`, :func:`match` with `options`, then
     :func:`mutual_best`.  Returns ``(prepared, found, kept)``.
 
-    Parameters
-    ----------
-    pair : StereoPair
-        A pair rectified by `camera`.
-    config : MatchConfig
-        The match settings.
-    camera : StereoCamera
-        The calibrated camera that rectified the pair.
-    **options
-        Keyword arguments of :func:`match` (method, params, solver, seed, ...).
-
-    Returns
-    -------
-    prepared : Prepared
-        The prepared pair.
-    found : MatchResult
-        The network's matches.
-    kept : MatchResult
-        Those that are mutually most similar.
-
-    Examples
-    --------
     >>> from ismb_lab.images.io import load_pair
     >>> from ismb_lab.scenes import synthetic_scene
     >>> s = synthetic_scene(0)
@@ -271,25 +187,6 @@ def match_with_camera(pair, config: MatchConfig, camera: StereoCamera, **options
 def mutual_best(prepared: Prepared, result: MatchResult) -> MatchResult:
     """`result` with only the matches whose corners are each other's most similar candidate.
 
-    Parameters
-    ----------
-    prepared : Prepared
-        The prepared pair.
-    result : MatchResult
-        Its matches.
-
-    Returns
-    -------
-    result : MatchResult
-        `result` with fewer ``pairs`` (and its ``state`` to match).
-
-    Raises
-    ------
-    ParameterTypeError
-        Arguments of the wrong types.
-
-    Examples
-    --------
     >>> from ismb_lab.scenes import synthetic_scene
     >>> s = synthetic_scene(0)
     >>> p = prepare(s.left, s.right)
@@ -327,25 +224,6 @@ def match_points(result: MatchResult, camera: StereoCamera) -> np.ndarray:
     """The ``(m, 3)`` points, metres, of `result`'s matches in the rectified left frame of
     `camera`, which rectified the pair (NaN rows where the disparity is not > 0).
 
-    Parameters
-    ----------
-    result : MatchResult
-        The matches.
-    camera : StereoCamera
-        The calibrated camera that rectified the pair.
-
-    Returns
-    -------
-    points : (m, 3) float array
-        ``(X, Y, Z)``, metres.
-
-    Raises
-    ------
-    ParameterTypeError
-        `camera` not a StereoCamera.
-
-    Examples
-    --------
     >>> from ismb_lab.scenes import synthetic_scene
     >>> s = synthetic_scene(0)
     >>> xyz = match_points(match(s.left, s.right), StereoCamera())
@@ -374,18 +252,6 @@ def fit_rows_px(camera: StereoCamera) -> float:
     """Largest median row difference, px, of the robust matches of a pair `camera` fits:
     :func:`~ismb_lab.images.rectify.row_spread_px`, or the sub-pixel :func:`row_tolerance` if larger.
 
-    Parameters
-    ----------
-    camera : StereoCamera
-        The rig.
-
-    Returns
-    -------
-    rows_px : float
-        The limit, pixels.
-
-    Examples
-    --------
     >>> fit_rows_px(StereoCamera(size=(640, 480))), fit_rows_px(StereoCamera(size=(640, 480), rms=0.8))
     (1.0, 1.6)
     """
@@ -484,20 +350,6 @@ def _refusal(sources, camera: StereoCamera, problem: str, limit: float, owner: s
 def rectify_for_camera(left, right, camera: StereoCamera, owner: str = "rectify_for_camera"):
     """`left` and `right` rectified with `camera`.
 
-    Parameters
-    ----------
-    left, right : str, Path, bytes or array
-        Raw photos of the rig.
-    camera : StereoCamera
-        The calibrated rig.
-    owner : str, default "rectify_for_camera"
-        Function named in error messages.
-
-    Returns
-    -------
-    rectified : Rectified
-        The rectified pair.
-
     Raises
     ------
     ParameterError
@@ -523,20 +375,6 @@ def for_camera(left, right, camera: StereoCamera) -> tuple:
     rows agree (:func:`fit_rows_px`) and rectifying would not lower their median difference by
     more than :data:`IMPROVES`, else rectified; either way its rows must agree and most
     disparities be positive.
-
-    Parameters
-    ----------
-    left, right : str, Path, bytes or array
-        Photos of the rig, raw or rectified.
-    camera : StereoCamera
-        The calibrated rig.
-
-    Returns
-    -------
-    left, right : (H, W) float array
-        The grey pair to match.
-    how : str
-        One sentence: as given or rectified, with the rows' figures.
 
     Raises
     ------

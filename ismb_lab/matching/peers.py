@@ -136,27 +136,6 @@ def affinity_matrix(problem, method=DEFAULT_METHOD, params=None) -> np.ndarray:
     ``k * N_l + i``, ``(S + 1) / 2`` on the diagonal, ``(C + 1) / 2`` for interacting pairs, 0
     elsewhere (non-negative, as SM and RRWM need).  `params` default to the method's.
 
-    Parameters
-    ----------
-    problem : Problem
-        Corners, ``M`` and candidate neurons (:func:`ismb_lab.network.methods.build_problem`).
-    method : str or Method, default "III"
-        The energy recipe.
-    params : Params, optional
-        Energy parameters; by default the method's.
-
-    Returns
-    -------
-    K : (N_l * N_r, N_l * N_r) float array
-        The affinity matrix.
-
-    Raises
-    ------
-    ParameterError
-        More than :data:`MAX_ASSIGNMENTS` feature pairs.
-
-    Examples
-    --------
     >>> from ismb_lab.network.methods import build_problem
     >>> p = build_problem([[100, 50], [110, 50]], [[80, 51], [90, 51]], np.full((2, 2), 24.02))
     >>> affinity_matrix(p).round(2)     # S = 0 on the diagonal; vec order (0,0) (1,0) (0,1) (1,1)
@@ -192,26 +171,6 @@ def graph_matching(problem, method=DEFAULT_METHOD, params=None, *, solver="rrwm"
     `max_dissimilarity` drops matches with ``M_ik`` above it: the Hungarian step matches
     occluded features too, and the soft scores do not tell them apart.
 
-    Parameters
-    ----------
-    problem : Problem
-        Corners, ``M`` and candidate neurons (:func:`ismb_lab.network.methods.build_problem`).
-    method : str or Method, default "III"
-        The energy recipe of the affinity.
-    params : Params, optional
-        Energy parameters; by default the method's.
-    solver : {"rrwm", "sm"}, default "rrwm"
-        RRWM or spectral matching.
-    max_dissimilarity : float, optional
-        Largest ``M_ik`` kept; None keeps all.
-
-    Returns
-    -------
-    pairs : (m, 2) int array
-        One-to-one ``(i, k)`` candidate pairs, sorted by ``i``.
-
-    Examples
-    --------
     >>> from ismb_lab.network.methods import build_problem
     >>> p = build_problem([[100, 50], [110, 50]], [[80, 51], [90, 51]], [[2.0, 40.0], [40.0, 3.0]])
     >>> graph_matching(p, solver="sm").tolist()

@@ -117,13 +117,7 @@ class MatchConfig:
 
     @property
     def min_shape(self) -> tuple[int, int]:
-        """Smallest image (height, width) that holds the similarity and Harris windows.
-
-        Returns
-        -------
-        shape : tuple of int
-            ``(height, width)`` in pixels.
-        """
+        """Smallest image (height, width) that holds the similarity and Harris windows."""
         border = int(np.ceil(3 * self.harris_sigma)) + 1
         side = max(self.patch_size, 2 * border + 1)
         return side, side
@@ -141,20 +135,6 @@ def auto_window(pair, config: MatchConfig, *, rows_px: float | None = None) -> M
     2nd-98th percentile disparity range; the window is centred on it and widened to hold it
     plus :data:`AUTO_MARGIN` on each side.  `rows_px` (a calibrated camera's) also makes the
     robust matches search their own rows at positive disparities only.
-
-    Parameters
-    ----------
-    pair : StereoPair
-        The loaded pair.
-    config : MatchConfig
-        The settings; returned unchanged unless ``shift="auto"``.
-    rows_px : float, optional
-        Rows' tolerance of a calibrated camera; default 2 px.
-
-    Returns
-    -------
-    config : MatchConfig
-        `config` with numbers for `shift` and `window_width`.
 
     Raises
     ------
@@ -187,25 +167,6 @@ def check_window(config: MatchConfig, shape) -> MatchConfig:
     """Check that `config`'s ROI lies in an image of `shape` ``(height, width)`` and that its
     window can reach it (a shift beyond ``width - 1 + window_width / 2`` cannot); returns `config`.
 
-    Parameters
-    ----------
-    config : MatchConfig
-        The settings to check.
-    shape : tuple of int
-        ``(height, width)`` of the images.
-
-    Returns
-    -------
-    config : MatchConfig
-        `config` itself.
-
-    Raises
-    ------
-    ParameterError
-        The ROI lies outside the image, or the window cannot reach it.
-
-    Examples
-    --------
     >>> check_window(MatchConfig(shift=1e308), (240, 320))
     Traceback (most recent call last):
     ...
@@ -225,22 +186,6 @@ def check_window(config: MatchConfig, shape) -> MatchConfig:
 def shift_roi(roi, shift: float, shape) -> tuple[int, int, int, int]:
     """Move an ``(x, y, w, h)`` ROI ``shift`` pixels left, cropped to the image.
 
-    Parameters
-    ----------
-    roi : tuple of int
-        ``(x, y, w, h)`` in pixels.
-    shift : float
-        Pixels to move left (rounded).
-    shape : tuple of int
-        ``(height, width)`` of the image.
-
-    Returns
-    -------
-    roi : tuple of int
-        The moved ``(x, y, w, h)``, at least one pixel wide.
-
-    Examples
-    --------
     >>> shift_roi((80, 60, 160, 120), 20, (240, 320))
     (60, 60, 160, 120)
     >>> shift_roi((10, 60, 160, 120), 20, (240, 320))
@@ -255,19 +200,7 @@ def shift_roi(roi, shift: float, shape) -> tuple[int, int, int, int]:
 
 @dataclass(frozen=True, eq=False)
 class Prepared:
-    """A loaded pair with its corners and parameter-free energy ingredients.
-
-    Attributes
-    ----------
-    pair : StereoPair
-        The two grey images.
-    config : MatchConfig
-        The settings used, with ``shift="auto"`` replaced by its numbers.
-    left_corners, right_corners : Corners
-        The Harris corners of each image.
-    problem : Problem
-        ``M``, the candidates and the neighbour pairs (:func:`corner_problem`).
-    """
+    """A loaded pair with its corners and parameter-free energy ingredients."""
 
     pair: StereoPair
     config: MatchConfig

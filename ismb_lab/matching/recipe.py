@@ -102,31 +102,13 @@ class Recipe:
                 "fit_seeds": int(self.fit_seeds), "one_to_one": self.one_to_one}
 
     def match_settings(self) -> dict:
-        """The keyword arguments of :func:`ismb_lab.matching.pipeline.match` that the recipe sets.
-
-        Returns
-        -------
-        kwargs : dict
-            ``method``, ``params``, ``solver`` and ``one_to_one``.
-        """
+        """The keyword arguments of :func:`ismb_lab.matching.pipeline.match` that the recipe sets."""
         return {"method": self.method, "params": self.params, "solver": self.solver,
                 "one_to_one": self.one_to_one}
 
     def changes(self, other: "Recipe") -> list[str]:
         """What differs from `other`, as ``"field old -> new"`` (for a command's note).
 
-        Parameters
-        ----------
-        other : Recipe
-            The recipe to compare with.
-
-        Returns
-        -------
-        changes : list of str
-            One entry per differing field (per parameter for `params`).
-
-        Examples
-        --------
         >>> Recipe(solver="anneal").changes(Recipe(solver="network", one_to_one=True))
         ['solver anneal -> network', 'one_to_one False -> True']
         """
@@ -151,44 +133,14 @@ def _shown(value):
 
 
 class Loaded(NamedTuple):
-    """A recipe read from a file, and what the reader should be told once (or "").
-
-    Attributes
-    ----------
-    recipe : Recipe
-        The recipe read.
-    note : str
-        A note for the reader, or "".
-    """
+    """A recipe read from a file, and what the reader should be told once (or "")."""
 
     recipe: Recipe
     note: str
 
 
 def save_recipe(path, recipe: Recipe, **extra) -> Path:
-    """Write `recipe` and `extra` keys (e.g. the GA's fitness) atomically as JSON.
-
-    Parameters
-    ----------
-    path : str or Path
-        The params file to write.
-    recipe : Recipe
-        The recipe to save.
-    **extra
-        More JSON keys, other than the recipe's own.
-
-    Returns
-    -------
-    path : Path
-        The file written.
-
-    Raises
-    ------
-    ParameterTypeError
-        `recipe` is not a Recipe.
-    ParameterError
-        An `extra` key clashes with a recipe key.
-    """
+    """Write `recipe` and `extra` keys (e.g. the GA's fitness) atomically as JSON."""
     if not isinstance(recipe, Recipe):
         raise ParameterTypeError(message("recipe", "save_recipe", "a Recipe", recipe))
     clash = sorted(set(extra) & set(_KEYS))
@@ -218,27 +170,6 @@ def load_recipe(path, *, method=None, solver=DEFAULT_SOLVER, before: str | None 
 
     `method` and `solver` are used when the file names none.  `before` is the solver the reading
     command used with a version-1 file; when the file's own differs, the note says so.
-
-    Parameters
-    ----------
-    path : str or Path
-        The params file.
-    method : str or Method, optional
-        Method used when the file names none; default "III".
-    solver : str or Solver, default "network"
-        Solver used when the file names none.
-    before : str, optional
-        The solver the reading command used with a version-1 file.
-
-    Returns
-    -------
-    loaded : Loaded
-        The recipe and a note for the reader ("" if none).
-
-    Raises
-    ------
-    ParameterError
-        A missing or unreadable file, or a key of the wrong kind.
     """
     own = f"load_recipe('{path}')"
     data = _read_params_file(path, "load_recipe")
@@ -267,27 +198,6 @@ def load_recipe(path, *, method=None, solver=DEFAULT_SOLVER, before: str | None 
 def recipe_of(recipe, owner: str = "recipe_of", solver=DEFAULT_SOLVER) -> Recipe:
     """A :class:`Recipe` as it is, or the recipe of a params file (`solver`: when it names none).
 
-    Parameters
-    ----------
-    recipe : Recipe, str or Path
-        A recipe, or the path of a params file.
-    owner : str, default "recipe_of"
-        Name given in error messages.
-    solver : str or Solver, default "network"
-        Solver used when the file names none.
-
-    Returns
-    -------
-    recipe : Recipe
-        The recipe.
-
-    Raises
-    ------
-    ParameterTypeError
-        `recipe` is neither a Recipe nor a path.
-
-    Examples
-    --------
     >>> recipe_of(Recipe("NM3")).method.name
     'NM3'
     >>> recipe_of(3)

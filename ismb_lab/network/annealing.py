@@ -45,19 +45,6 @@ class AnnealStep:
     ``change`` is the largest ``|dv|`` of the last sweep, ``energy`` is
     ``const - 1/2 v'Wv - I'v`` of the analog state, and ``committed`` the share of neurons
     with ``v`` below 0.05 or above 0.95.
-
-    Attributes
-    ----------
-    index : int
-        Temperature number, from 0.
-    temperature : float
-        The temperature.
-    change : float
-        Largest ``|dv|`` of its last sweep.
-    energy : float
-        Energy of the analog state.
-    committed : float
-        Share of neurons with ``v`` below 0.05 or above 0.95.
     """
 
     index: int
@@ -71,21 +58,7 @@ class AnnealStep:
 class AnnealResult:
     """Outcome of :func:`anneal`: the discrete fixed point ``state`` and its ``energy``, the
     ``rounded`` analog state ``v > 1/2`` before the polish, the final ``analog`` ``v``, and
-    the temperatures visited (``steps``).
-
-    Attributes
-    ----------
-    state : (n,) uint8 array
-        The discrete fixed point after the polish.
-    energy : float
-        Its energy (3-15).
-    rounded : (n,) uint8 array
-        The analog state rounded at 1/2, before the polish.
-    analog : (n,) float array
-        The final analog outputs ``v``.
-    steps : int
-        Temperatures visited.
-    """
+    the temperatures visited (``steps``)."""
 
     state: np.ndarray
     energy: float

@@ -72,19 +72,7 @@ def left_neighbours(left_xy, *, radius: float = 20.0, shape: str = "box") -> np.
 
 @dataclass(frozen=True)
 class NeuronPairs:
-    """Interacting neuron pairs ``a < b`` and their differences ``dd``, ``dD``, ``dY`` (pixels).
-
-    Attributes
-    ----------
-    a, b : (P,) int64 array
-        The two neurons of each pair.
-    dd : (P,) float array
-        ``|d_ik - d_jl|``, the difference of their Euclidean disparities.
-    dD : (P,) float array
-        ``| ||p_i - p_j|| - ||q_k - q_l|| |``, the change of the point distance.
-    dY : (P,) float array
-        ``|(y_k - y_i) - (y_l - y_j)|``, the difference of their vertical disparities.
-    """
+    """Interacting neuron pairs ``a < b`` and their differences ``dd``, ``dD``, ``dY`` (pixels)."""
 
     a: np.ndarray
     b: np.ndarray
@@ -100,25 +88,6 @@ def neuron_pairs(left_xy, right_xy, rows, cols, neighbours) -> NeuronPairs:
     """All pairs of candidate neurons (`rows` sorted, `cols`) whose left points are `neighbours`.
 
     Every ``(a, b)`` with ``(rows[a], rows[b])`` a neighbour pair and ``cols[a] != cols[b]``.
-
-    Parameters
-    ----------
-    left_xy, right_xy : (N_l, 2), (N_r, 2) float array
-        Features ``(x, y)`` of each image.
-    rows, cols : (n,) int array
-        Left and right feature of each candidate neuron, `rows` sorted.
-    neighbours : (P, 2) int array
-        Neighbouring left features (:func:`left_neighbours`).
-
-    Returns
-    -------
-    pairs : NeuronPairs
-        The interacting pairs and their differences.
-
-    Raises
-    ------
-    ParameterError
-        `rows` not sorted.
 
     Examples
     --------

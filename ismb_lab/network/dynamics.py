@@ -64,20 +64,6 @@ def visiting_order(seed: int, n: int, stop_rule: str) -> Iterator[np.ndarray]:
     ``"sweep"``: the previous order shuffled again (Fisher-Yates, from the last position
     down), starting from ``0, 1, ..., n - 1``; ``"stall"``: `n` indices drawn with replacement.
 
-    Parameters
-    ----------
-    seed : int
-        Seed of the SplitMix64 stream.
-    n : int
-        Neurons.
-    stop_rule : {"sweep", "stall"}
-        Which kind of sweep.
-
-    Yields
-    ------
-    order : (n,) int64 array
-        The neurons of one sweep, in the order attempted.
-
     Examples
     --------
     >>> sorted(next(visiting_order(0, 5, "sweep")).tolist())
@@ -114,23 +100,6 @@ class Update:
     ``attempt`` counts from 0; ``neuron`` is the attempted candidate, ``i`` and ``k`` its
     features, ``u`` its net input under the rule in use, ``old`` and ``new`` its output before
     and after, ``energy`` (3-15) that after the attempt; ``stop`` is set on a run's last attempt.
-
-    Attributes
-    ----------
-    attempt : int
-        Attempt number, from 0.
-    neuron : int
-        The attempted candidate neuron.
-    i, k : int
-        Its left and right feature.
-    u : float
-        Its net input under the rule in use.
-    old, new : int
-        Its output before and after.
-    energy : float
-        Energy (3-15) after the attempt.
-    stop : str or None
-        The stop rule that fired on a run's last attempt, else None.
     """
 
     attempt: int
@@ -278,19 +247,6 @@ class RunResult:
 
     ``stop_rule`` is what stopped it (``"sweep"``, ``"stall"`` or ``"max_attempts"``);
     ``energy`` (3-15) of the final state is computed when first read, as a GA never reads it.
-
-    Attributes
-    ----------
-    state : (n,) uint8 array
-        Final output of each candidate neuron.
-    stop_rule : str
-        ``"sweep"``, ``"stall"`` or ``"max_attempts"``.
-    attempts : int
-        Update attempts made.
-    flips : int
-        Attempts that changed an output.
-    net : Network
-        The network run.
     """
 
     state: np.ndarray

@@ -39,19 +39,7 @@ MAX_TIME_LIMIT = 3600.0
 class Minimum:
     """A global minimum of the energy: a minimising ``state`` (the first met, exhaustively),
     its ``energy``, how many states tie exactly (``n_minima``; 1 for the MILP, which reports
-    one) and the ``method``, ``"exhaustive"`` or ``"milp"``.
-
-    Attributes
-    ----------
-    state : (n,) uint8 array
-        A minimising state.
-    energy : float
-        Its energy (3-15).
-    n_minima : int
-        States that tie exactly (1 for the MILP).
-    method : str
-        ``"exhaustive"`` or ``"milp"``.
-    """
+    one) and the ``method``, ``"exhaustive"`` or ``"milp"``."""
 
     state: np.ndarray
     energy: float
@@ -93,21 +81,6 @@ def _gray_search(W, I):
 
 def exhaustive_minimum(net: Network) -> Minimum:
     """Search all ``2**n`` states (``n`` at most :data:`MAX_EXHAUSTIVE`) for the lowest energy.
-
-    Parameters
-    ----------
-    net : Network
-        The network, of at most :data:`MAX_EXHAUSTIVE` neurons.
-
-    Returns
-    -------
-    minimum : Minimum
-        The first minimising state in Gray-code order, and how many tie.
-
-    Raises
-    ------
-    ParameterError
-        More than :data:`MAX_EXHAUSTIVE` neurons.
 
     Examples
     --------

@@ -60,19 +60,12 @@ _Layout = namedtuple("_Layout", "nb_ptr nb_idx nb_pair row_ptr row_idx col_ptr c
 class Topology:
     """Which neurons exist and which pairs of them interact (shared by all networks of a pair).
 
-    Attributes
+    Parameters
     ----------
-    n_left, n_right : int
-        Features in the left and the right image.
     rows, cols : (n,) int array_like
         Left and right feature of each candidate neuron, sorted by ``(i, k)``.
     pair_a, pair_b : (P,) int array_like
         Interacting neuron pairs, ``pair_a < pair_b``, on different rows and columns.
-
-    Raises
-    ------
-    ParameterError
-        Indices out of range, unsorted neurons, or a pair sharing a row or column.
 
     Examples
     --------
@@ -291,28 +284,11 @@ class Network:
         return self.uniqueness * self.target_count ** 2 * (self.n_left + self.n_right)
 
     def initial_state(self) -> np.ndarray:
-        """Every candidate neuron on, as in §3.3.
-
-        Returns
-        -------
-        state : (n,) uint8 array
-            All ones.
-        """
+        """Every candidate neuron on, as in §3.3."""
         return np.ones(self.n_neurons, dtype=np.uint8)
 
     def to_matrix(self, state) -> np.ndarray:
-        """The full ``N_l x N_r`` 0/1 grid of a state over the candidate neurons.
-
-        Parameters
-        ----------
-        state : (n,) 0/1 array
-            Output of each candidate neuron.
-
-        Returns
-        -------
-        grid : (N_l, N_r) uint8 array
-            ``grid[i, k]`` is neuron ``(i, k)``'s output, 0 for non-candidates.
-        """
+        """The full ``N_l x N_r`` 0/1 grid of a state over the candidate neurons."""
         grid = np.zeros((self.n_left, self.n_right), dtype=np.uint8)
         grid[self.rows, self.cols] = np.asarray(state, dtype=np.uint8)
         return grid

@@ -293,38 +293,7 @@ def run_network(seed, sweep_rule, patience, max_attempts, y0, all_on, packed, va
     The first sweep pulls (most neurons flip in it, and pushing each flip cost more than
     the sums); later sweeps flip few neurons, so they push.  The stop tests are those of
     :func:`_updates`, in its order; after a sweep of few flips, a run that has settled
-    counts the last sweep's attempts without drawing its order.
-
-    Parameters
-    ----------
-    seed : int
-        Seed of the visiting order.
-    sweep_rule : bool
-        True for the ``"sweep"`` stop rule, False for ``"stall"``.
-    patience : int
-        Unchanged attempts in a row that stop the ``"stall"`` rule.
-    max_attempts : int
-        Attempts after which the run gives up.
-    y0 : (n,) uint8 array
-        Initial state (unread with `all_on`).
-    all_on : bool
-        Start from every neuron on.
-    packed : int64 array
-        :attr:`Topology.packed`.
-    values : int64 array
-        The :class:`_Weights` buffer.
-
-    Returns
-    -------
-    state : (n,) uint8 array
-        Final state.
-    code : int
-        Stop code (1 sweep, 2 stall, 3 max_attempts).
-    attempts : int
-        Attempts made.
-    flips : int
-        Attempts that changed an output.
-    """
+    counts the last sweep's attempts without drawing its order."""
     # indices read as unsigned: numba then skips the test for a negative (from-the-end) index
 
     nb_ptr = _segment(packed, _NB_PTR).view(np.uint64)
@@ -412,52 +381,7 @@ def fitness_runs(packed, nb_ptr, nb_pair, nb_idx, pair_c, similarity, self_c, ma
     """``sum over seeds of (correct - wrong - extra)`` for each row of `pair_c`, `similarity`,
     `self_c` and `match_bias`: each network run from every neuron on, its matches (after
     Method-I's step with `least_dy`) tallied by `codes` as
-    :func:`ismb_lab.tuning.evaluation._tally` does.
-
-    Parameters
-    ----------
-    packed : int64 array
-        :attr:`Topology.packed`.
-    nb_ptr, nb_pair, nb_idx : int64 array
-        The topology's neighbour layout (:attr:`Topology.layout`).
-    pair_c : (m, P) float array
-        ``C`` of each interacting pair, one row per parameter set.
-    similarity, self_c : (m, n) float array
-        ``S`` and ``C_ikik`` of each neuron, one row per parameter set.
-    match_bias : (m,) float array
-        ``beta`` of each parameter set.
-    exact : bool
-        The exact rule, else the thesis' literal one.
-    scale : float
-        Fixed-point scale, :data:`SCALE`.
-    self_penalty : float
-        ``2 kappa``.
-    unique : int64
-        Fixed-point uniqueness weight of a shared row or column.
-    seeds : int64 array
-        The update-order seeds.
-    sweep_rule : bool
-        True for the ``"sweep"`` stop rule.
-    patience : int
-        Unchanged attempts that stop the ``"stall"`` rule.
-    max_attempts : int
-        Attempts after which a run gives up.
-    codes : (n,) uint8 array
-        Each neuron's score code (1 correct, 2 wrong, 3 extra, 0 neither).
-    least_dy : bool
-        Apply Method-I's post-processing.
-    rows, cols : (n,) int64 array
-        Left and right feature of each neuron.
-    n_left, n_right : int
-        Features in each image.
-    dy : (n,) float array
-        ``|y_right - y_left|`` of each neuron, for `least_dy`.
-
-    Returns
-    -------
-    totals : (m,) int64 array
-        Summed fitness of each parameter set.
-    """
+    :func:`ismb_lab.tuning.evaluation._tally` does."""
     m = pair_c.shape[0]
     totals = np.zeros(m, dtype=np.int64)
     no_state = np.zeros(0, dtype=np.uint8)

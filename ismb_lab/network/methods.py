@@ -271,28 +271,7 @@ class Method:
         """``(S, C, self_C, match_bias)`` of the networks :meth:`network` builds from each row
         of `table` (an ``(m,)`` array per :class:`Params` field), for a GA's batch; ``self_C``
         only for the thesis rule.  The same operations on the same numbers, element by
-        element.  Only the built-in methods (:data:`BATCHED`) use it.
-
-        Parameters
-        ----------
-        problem : Problem
-            The pair's energy ingredients.
-        table : dict
-            An ``(m,)`` float array per :class:`Params` field.
-        thesis : bool
-            Whether the thesis rule's ``self_C`` is wanted.
-
-        Returns
-        -------
-        S : (m, n) float array
-            Similarity of each neuron, per row of `table`.
-        C : (m, P) float array
-            Compatibility of each interacting pair.
-        self_C : (m, n) float array or None
-            ``C_ikik``, only for the thesis rule.
-        match_bias : (m,) float array
-            ``beta`` of each network.
-        """
+        element.  Only the built-in methods (:data:`BATCHED`) use it."""
         pair_x, self_x = self._measures(problem)
         theta_c, lambda_c = table["theta_c"][:, None], table["lambda_c"][:, None]
         c = transfer(pair_x, theta_c, lambda_c)
@@ -527,24 +506,13 @@ def register_method(method: Method) -> Method:
 
 
 def unregister_method(name: str) -> None:
-    """Remove a method added by :func:`register_method`.
-
-    Parameters
-    ----------
-    name : str
-        The method's name.
-    """
+    """Remove a method added by :func:`register_method`."""
     check_choice(name, "name", "unregister_method", tuple(_METHODS))
     del _METHODS[name]
 
 
 def all_genes() -> tuple[Gene, ...]:
     """Every registered method's genes, each once, in the order of :class:`Params`' fields.
-
-    Returns
-    -------
-    genes : tuple of Gene
-        One per searched parameter.
 
     Examples
     --------
@@ -560,11 +528,6 @@ def all_genes() -> tuple[Gene, ...]:
 
 def method_names() -> tuple[str, ...]:
     """The registered methods' names, in registration order.
-
-    Returns
-    -------
-    names : tuple of str
-        The names.
 
     Examples
     --------
@@ -639,27 +602,6 @@ def get_method(name) -> Method:
 def save_params(path, method, params: Params, **extra) -> Path:
     """Write ``{"method": ..., "params": {...}, **extra}`` atomically (the file of ``ismb-lab tune``).
 
-    Parameters
-    ----------
-    path : str or Path
-        The file to write.
-    method : str or Method
-        The energy recipe.
-    params : Params
-        Its parameters.
-    **extra
-        More JSON keys (e.g. the fitness).
-
-    Returns
-    -------
-    path : Path
-        The file written.
-
-    Raises
-    ------
-    ParameterTypeError
-        `params` not a Params.
-
     Examples
     --------
     >>> import tempfile, pathlib
@@ -680,31 +622,7 @@ def params_of(data: dict, path, method: str | None = None,
               owner: str = "params_of") -> tuple[str | None, Params]:
     """The method (None if `data` names none) and the parameters of a params file's object
     `data`, read from `path`.  Missing values take the defaults of its method, else of
-    `method`, else of :data:`DEFAULT_METHOD`; errors name the file.
-
-    Parameters
-    ----------
-    data : dict
-        The file's JSON object, with a ``"params"`` object.
-    path : str or Path
-        The file, for error messages.
-    method : str, optional
-        Method whose defaults fill in when `data` names none.
-    owner : str, default "params_of"
-        Function named in error messages.
-
-    Returns
-    -------
-    method : str or None
-        The method `data` names.
-    params : Params
-        The parameters.
-
-    Raises
-    ------
-    ParameterError
-        An unknown method or parameter key.
-    """
+    `method`, else of :data:`DEFAULT_METHOD`; errors name the file."""
     named = data.get("method")
     if named is not None:
         named = get_method(named).name if isinstance(named, str) and named in _METHODS else None

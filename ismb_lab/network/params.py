@@ -105,27 +105,7 @@ class Params:
 
     @classmethod
     def from_dict(cls, values, owner: str = "Params.from_dict") -> "Params":
-        """Build from a mapping; unknown keys are an error, missing keys take the defaults.
-
-        Parameters
-        ----------
-        values : dict
-            Field name to value.
-        owner : str, default "Params.from_dict"
-            Function named in error messages.
-
-        Returns
-        -------
-        params : Params
-            The parameters.
-
-        Raises
-        ------
-        ParameterTypeError
-            `values` not a dict.
-        ParameterError
-            An unknown key or a value out of range.
-        """
+        """Build from a mapping; unknown keys are an error, missing keys take the defaults."""
         if not isinstance(values, dict):
             raise ParameterTypeError(message("params", owner, "a JSON object of parameter values", values))
         unknown = sorted(set(values) - {f.name for f in fields(cls)})

@@ -85,25 +85,6 @@ def patches(image: np.ndarray, xy, size: int) -> np.ndarray:
     (``BORDER_REFLECT_101``); the ``(N, size, size)`` result holds at most
     :data:`MAX_WINDOW_VALUES` values.
 
-    Parameters
-    ----------
-    image : (H, W) float array
-        Grey image.
-    xy : (N, 2) float array
-        Centres ``(x, y)``.
-    size : int
-        Odd window side.
-
-    Returns
-    -------
-    windows : (N, size, size) float array
-        The zero-mean windows.
-
-    Raises
-    ------
-    ParameterError
-        A bad image, an even or too large `size`.
-
     Examples
     --------
     >>> patches(np.arange(25.0).reshape(5, 5), [[2, 2]], 3)[0]
@@ -143,20 +124,6 @@ def mean_abs_difference(left: np.ndarray, right: np.ndarray, left_xy, right_xy,
     `size` is the odd window side (the thesis does not state it).  ``M`` equals, bit for
     bit, ``np.abs(lp[:, None] - rp[None]).mean(axis=2)`` of the flattened windows, without
     that ``N_l x N_r x size²`` array: the compiled loop repeats NumPy's pairwise summation.
-
-    Parameters
-    ----------
-    left, right : (H, W) float array
-        Grey images.
-    left_xy, right_xy : (N_l, 2), (N_r, 2) float array
-        Features ``(x, y)`` of each image.
-    size : int, default 11
-        Odd window side.
-
-    Returns
-    -------
-    M : (N_l, N_r) float array
-        Mean absolute difference of the zero-mean windows.
 
     Examples
     --------
@@ -316,25 +283,6 @@ def candidate_mask(left_xy, right_xy, *, shift: float = 20.0, height: float = 30
     Right feature ``k`` is a candidate of left feature ``i`` when it lies in the
     ``height x width`` window centred at ``(x_i - shift, y_i)``, borders included (the
     thesis: 30 x 40 px, ``shift = 20``).  At most :data:`MAX_CANDIDATE_PAIRS` pairs.
-
-    Parameters
-    ----------
-    left_xy, right_xy : (N_l, 2), (N_r, 2) float array
-        Features ``(x, y)`` of each image.
-    shift : float, default 20.0
-        Pixels left of the left feature at which the window is centred.
-    height, width : float, default 30.0, 40.0
-        Window size, pixels (> 0).
-
-    Returns
-    -------
-    mask : (N_l, N_r) bool array
-        True for candidates.
-
-    Raises
-    ------
-    ParameterError
-        Bad points or window, or more than :data:`MAX_CANDIDATE_PAIRS` pairs.
 
     Examples
     --------

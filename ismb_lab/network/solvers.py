@@ -128,13 +128,6 @@ class Solver:
     def options(self) -> dict:
         """The solver's options, by name (JSON-ready).
 
-        Returns
-        -------
-        options : dict
-            Each dataclass field and its value.
-
-        Examples
-        --------
         >>> ExactSolver().options()
         {'time_limit': 60.0}
         """
@@ -143,25 +136,6 @@ class Solver:
     def configured(self, owner: str = "Solver.configured", **options) -> "Solver":
         """A copy with some options changed; an option this solver does not have is an error.
 
-        Parameters
-        ----------
-        owner : str, default "Solver.configured"
-            Function named in error messages.
-        **options
-            Options to change.
-
-        Returns
-        -------
-        solver : Solver
-            The copy, or this solver when nothing changes.
-
-        Raises
-        ------
-        ParameterError
-            An option this solver does not have.
-
-        Examples
-        --------
         >>> SOLVERS["network"].configured(stop_rule="stall").stop_rule
         'stall'
         >>> SOLVERS["anneal"].configured(stop_rule="stall")
@@ -179,17 +153,7 @@ class Solver:
 
 @dataclass(frozen=True)
 class NetworkSolver(Solver):
-    """The thesis' discrete network (:func:`ismb_lab.network.dynamics.run`) from "all on".
-
-    Attributes
-    ----------
-    stop_rule : {"sweep", "stall"}, default "sweep"
-        What stops the run.
-    rule : {"exact", "thesis"}, default "exact"
-        Which weights.
-    kernel : {"numba", "textbook"}, default "numba"
-        Compiled or readable kernel.
-    """
+    """The thesis' discrete network (:func:`ismb_lab.network.dynamics.run`) from "all on"."""
 
     name: ClassVar[str] = NETWORK
     description: ClassVar[str] = "the thesis' discrete network: asynchronous flips to a fixed point"
@@ -210,19 +174,7 @@ class NetworkSolver(Solver):
 
 @dataclass(frozen=True)
 class AnnealSolver(Solver):
-    """Mean-field annealing (:func:`ismb_lab.network.annealing.anneal`, whose arguments the fields are).
-
-    Attributes
-    ----------
-    t_start, t_end : float, default 2.0, 0.02
-        First and last temperature.
-    cooling : float, default 0.9
-        Factor of each temperature step.
-    sweeps : int, default 2
-        Mean-field sweeps per temperature.
-    settle : float, default 0.0
-        In [0, 1/2): end the schedule early (:func:`~ismb_lab.network.annealing.iter_annealing`).
-    """
+    """Mean-field annealing (:func:`ismb_lab.network.annealing.anneal`, whose arguments the fields are)."""
 
     name: ClassVar[str] = ANNEAL
     description: ClassVar[str] = "mean-field annealing, then the discrete network from the rounded state"
@@ -245,13 +197,7 @@ class AnnealSolver(Solver):
 
 @dataclass(frozen=True)
 class ExactSolver(Solver):
-    """The global minimum as a mixed-integer programme (:func:`ismb_lab.network.exact.milp_minimum`).
-
-    Attributes
-    ----------
-    time_limit : float, default 60.0
-        Seconds the MILP solver may take.
-    """
+    """The global minimum as a mixed-integer programme (:func:`ismb_lab.network.exact.milp_minimum`)."""
 
     name: ClassVar[str] = EXACT
     description: ClassVar[str] = "the global minimum energy as a mixed-integer programme (small problems)"
@@ -268,16 +214,6 @@ class ExactSolver(Solver):
 
 def similarity_assignment(net: Network) -> np.ndarray:
     """The state of the one-to-one assignment of largest total ``S``, among neurons with ``S > 0``.
-
-    Parameters
-    ----------
-    net : Network
-        The network whose energy is minimised.
-
-    Returns
-    -------
-    state : (n,) uint8 array
-        1 on the assigned neurons.
 
     Examples
     --------
@@ -302,13 +238,7 @@ def similarity_assignment(net: Network) -> np.ndarray:
 
 @dataclass(frozen=True)
 class AssignSolver(NetworkSolver):
-    """The discrete network started from :func:`similarity_assignment` (beyond the thesis).
-
-    Attributes
-    ----------
-    stop_rule, rule, kernel : str
-        As :class:`NetworkSolver`'s.
-    """
+    """The discrete network started from :func:`similarity_assignment` (beyond the thesis)."""
 
     name: ClassVar[str] = ASSIGN
     description: ClassVar[str] = ("the discrete network started from the assignment of largest total similarity "
@@ -372,13 +302,7 @@ def register_solver(solver: Solver) -> Solver:
 
 
 def unregister_solver(name: str) -> None:
-    """Remove a solver added by :func:`register_solver`.
-
-    Parameters
-    ----------
-    name : str
-        The solver's name.
-    """
+    """Remove a solver added by :func:`register_solver`."""
     check_choice(name, "name", "unregister_solver", tuple(SOLVERS))
     del SOLVERS[name]
 
@@ -390,13 +314,6 @@ for _solver in (NetworkSolver(), AnnealSolver(), ExactSolver(), AssignSolver()):
 def solver_names() -> tuple[str, ...]:
     """The registered solvers' names.
 
-    Returns
-    -------
-    names : tuple of str
-        In the order help texts list them.
-
-    Examples
-    --------
     >>> solver_names()
     ('network', 'anneal', 'exact', 'assign')
     """
@@ -407,31 +324,6 @@ def get_solver(solver, owner: str = "get_solver", parameter: str = "solver", **o
     """Resolve a solver once: a name or a :class:`Solver`, with some `options` changed (None
     keeps the solver's own), checked as `owner`'s argument `parameter`.
 
-    Parameters
-    ----------
-    solver : str or Solver
-        A name of :data:`SOLVERS` or a configured solver.
-    owner : str, default "get_solver"
-        Function named in error messages.
-    parameter : str, default "solver"
-        Argument named in error messages.
-    **options
-        Options to change; None values are ignored.
-
-    Returns
-    -------
-    solver : Solver
-        The configured solver.
-
-    Raises
-    ------
-    ParameterError
-        An unknown name or option.
-    ParameterTypeError
-        Neither a name nor a Solver.
-
-    Examples
-    --------
     >>> get_solver("annealing")
     Traceback (most recent call last):
     ...
@@ -486,15 +378,7 @@ def solve(net: Network, solver=DEFAULT_SOLVER, *, seed: int = 0, owner: str = "s
 
 
 class Matches(NamedTuple):
-    """Matched feature pairs and the post-processed state they come from.
-
-    Attributes
-    ----------
-    pairs : (m, 2) int64 array
-        Matched ``(i, k)`` feature pairs, sorted by neuron.
-    state : (n,) uint8 array
-        The post-processed state.
-    """
+    """Matched feature pairs and the post-processed state they come from."""
 
     pairs: np.ndarray
     state: np.ndarray
