@@ -87,9 +87,17 @@ class BoardPair:
 
     @property
     def names(self) -> tuple:
+        """tuple of str: ``(left, right)``."""
         return (self.left, self.right)
 
     def to_dict(self) -> dict:
+        """The pair's record in a rig file (JSON-ready).
+
+        Returns
+        -------
+        record : dict
+            Names, error, pose and corners of the pair.
+        """
         return {"left": self.left, "right": self.right, "rms_px": self.rms_px, "rvec": self.rvec.tolist(),
                 "tvec": self.tvec.tolist(), "left_corners": self.left_corners.tolist(),
                 "right_corners": self.right_corners.tolist()}
@@ -108,6 +116,36 @@ class StereoCamera:
     :data:`BASELINE_M` to the right); ``rms`` the calibration's reprojection error in pixels
     (NaN: none measured); ``used``, ``skipped`` and ``pairs`` the calibration's pairs.
 
+    Attributes
+    ----------
+    size : tuple of int, default (320, 240)
+        ``(width, height)`` of the images.
+    k_left, k_right : (3, 3) float array, optional
+        Camera matrices.
+    d_left, d_right : (1, k) float array, optional
+        Distortion coefficients.
+    rotation : (3, 3) float array, optional
+        Rotation from the left camera's frame to the right one's.
+    translation : (3, 1) float array, optional
+        Translation of the same transform, metres.
+    rms : float, default NaN
+        The calibration's RMS reprojection error, pixels.
+    board : tuple of int, default BOARD
+        Inner corners ``(columns, rows)`` of the calibration board.
+    square_m : float, default SQUARE_M
+        Side of its squares, metres.
+    used, skipped : tuple of str
+        Names of the pairs used and of those where the board was not found.
+    pairs : tuple of BoardPair
+        The corners of the pairs used.
+
+    Raises
+    ------
+    ParameterError
+        A bad size, matrix or distortion.
+
+    Examples
+    --------
     >>> camera = StereoCamera()
     >>> camera.focal_px, camera.baseline_m, camera.size
     (300.0, 0.1, (320, 240))
@@ -197,6 +235,29 @@ class StereoCamera:
         so the search band is 1 px up and down (:func:`ismb_lab.matching.metric.row_tolerance`):
         a guessed smaller RMS would narrow the band and widen the auto disparity window.
 
+        Parameters
+        ----------
+        focal_px : float
+            Rectified focal length, pixels (> 0).
+        baseline_m : float
+            Baseline, metres (> 0, at most :data:`MAX_BASELINE_M`).
+        size : tuple of int
+            ``(width, height)`` of the images.
+        centre : tuple of float, optional
+            Principal point ``(cx, cy)``; default the image centre.
+
+        Returns
+        -------
+        camera : StereoCamera
+            A rectified camera.
+
+        Raises
+        ------
+        ParameterError
+            A value out of range, or a centre outside the image.
+
+        Examples
+        --------
         >>> cam = StereoCamera.from_factory(520.8, 0.0836, (640, 480), centre=(350.6, 243.1))
         >>> cam.focal_px, cam.baseline_m, cam.rectified_centre.tolist(), cam.is_rectified
         (520.8, 0.0836, [350.6, 243.1], True)
@@ -232,6 +293,25 @@ class StereoCamera:
         over several files, each given once.  `size` defaults to the files' ``image_width`` and
         ``image_height`` (or ``imageSize``); `units` is the unit of ``T`` (:data:`UNITS`).
         The rig has no measured RMS, so its search band is 1 px (see :meth:`from_factory`).
+
+        Parameters
+        ----------
+        *paths : str or Path
+            The ``FileStorage`` files.
+        size : tuple of int, optional
+            ``(width, height)``; default the files' own.
+        units : {"m", "cm", "mm"}, default "m"
+            Unit of ``T``.
+
+        Returns
+        -------
+        camera : StereoCamera
+            The rig.
+
+        Raises
+        ------
+        ParameterError
+            No file, a matrix missing or given twice, no size, or an implausible baseline.
         """
         own = "StereoCamera.from_opencv"
         if not paths:
@@ -284,10 +364,12 @@ class StereoCamera:
 
     @property
     def width(self) -> int:
+        """int: image width, pixels."""
         return self.size[0]
 
     @property
     def height(self) -> int:
+        """int: image height, pixels."""
         return self.size[1]
 
     @property
@@ -429,6 +511,25 @@ class StereoCamera:
         """3-D points ``(X, Y, Z)`` in metres of rectified-left pixels and their disparities
         (``x_left - x_right``); NaN rows where the disparity is not > 0.
 
+        Parameters
+        ----------
+        xy_left : (n, 2) float array
+            Rectified-left pixels ``(x, y)``.
+        disparity : (n,) float array
+            Their disparities, pixels.
+
+        Returns
+        -------
+        points : (n, 3) float array
+            ``(X, Y, Z)`` in the rectified left frame, metres.
+
+        Raises
+        ------
+        ParameterError
+            Not one finite disparity per point.
+
+        Examples
+        --------
         >>> StereoCamera().points_from_disparity([[10.0, 20.0]], [0.0])
         array([[nan, nan, nan]])
         """
@@ -469,7 +570,13 @@ class StereoCamera:
         return tuple(out)
 
     def warnings(self) -> tuple:
-        """What makes this rig's rectified views doubtful, each naming the fix."""
+        """What makes this rig's rectified views doubtful, each naming the fix.
+
+        Returns
+        -------
+        warnings : tuple of str
+            One sentence each; empty for a sound rig.
+        """
         found = []
         if self.zoom > MAX_ZOOM:
             found.append(f"the rectified views are zoomed {self.zoom:.2f}x (above {MAX_ZOOM}x): the lens "
@@ -489,7 +596,25 @@ class StereoCamera:
                 make(self.k_right, self.d_right, rect["r2"], rect["p2"]))
 
     def photos(self, left, right, owner: str = "StereoCamera.photos") -> tuple:
-        """A pair of this camera's size loaded grey (:func:`ismb_lab.images.rectify.load_photo`)."""
+        """A pair of this camera's size loaded grey (:func:`ismb_lab.images.rectify.load_photo`).
+
+        Parameters
+        ----------
+        left, right : str, Path, bytes or array
+            The photos.
+        owner : str, default "StereoCamera.photos"
+            Function named in error messages.
+
+        Returns
+        -------
+        left, right : (H, W) float array
+            Grey images in ``[0, 255]``.
+
+        Raises
+        ------
+        ParameterError
+            A photo of another size than the rig's.
+        """
         from ..images.rectify import load_photo
 
         left, right = load_photo(left, "left", owner), load_photo(right, "right", owner)
@@ -500,7 +625,18 @@ class StereoCamera:
         return left, right
 
     def rectify(self, left, right):
-        """The pair rectified exactly, as a :class:`ismb_lab.images.rectify.Rectified`."""
+        """The pair rectified exactly, as a :class:`ismb_lab.images.rectify.Rectified`.
+
+        Parameters
+        ----------
+        left, right : str, Path, bytes or array
+            Photos of the rig's size.
+
+        Returns
+        -------
+        rectified : Rectified
+            The rectified pair, measured on new robust matches.
+        """
         from ..images.rectify import measured
 
         left, right = self.photos(left, right, "StereoCamera.rectify")
@@ -509,7 +645,13 @@ class StereoCamera:
         return measured(warp(left, lx, ly), warp(right, rx, ry), np.eye(3), np.eye(3), "rig")
 
     def to_dict(self) -> dict:
-        """The rig file's record (:data:`FORMAT`); None for an unmeasured RMS or an unused board."""
+        """The rig file's record (:data:`FORMAT`); None for an unmeasured RMS or an unused board.
+
+        Returns
+        -------
+        record : dict
+            JSON-ready fields of the rig file.
+        """
         boarded = bool(self.used)
         return {"format": FORMAT, "size": list(self.size), "rms_px": self.rms if math.isfinite(self.rms) else None,
                 "focal_px": self.focal_px, "baseline_m": self.baseline_m, "zoom": self.zoom,
@@ -522,6 +664,13 @@ class StereoCamera:
                 "pairs": [pair.to_dict() for pair in self.pairs]}
 
     def to_json(self) -> str:
+        """:meth:`to_dict` as indented JSON text.
+
+        Returns
+        -------
+        text : str
+            The JSON document.
+        """
         return json.dumps(self.to_dict(), indent=2)
 
 
@@ -814,6 +963,23 @@ def load_camera(source) -> StereoCamera:
     ``square_m`` are null only for a rig that no board calibrated; the derived ``focal_px`` and
     ``baseline_m`` must agree with the cameras'.
 
+    Parameters
+    ----------
+    source : str or Path
+        The rig file, or its JSON text.
+
+    Returns
+    -------
+    camera : StereoCamera
+        The rig.
+
+    Raises
+    ------
+    ParameterError
+        An unreadable file, another format, or a field that fails its check.
+
+    Examples
+    --------
     >>> cam = load_camera(StereoCamera.from_factory(500.0, 0.06, (640, 480)).to_json())
     >>> cam.focal_px, cam.baseline_m, cam.is_rectified
     (500.0, 0.06, True)

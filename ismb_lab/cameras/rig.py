@@ -62,6 +62,18 @@ def board_points(board, square_m: float) -> np.ndarray:
 def outliers(pairs) -> tuple:
     """Indices of the pairs whose error is above both three times the median and 0.5 px.
 
+    Parameters
+    ----------
+    pairs : sequence of BoardPair
+        The rig's pairs, with their ``rms_px``.
+
+    Returns
+    -------
+    indices : tuple of int
+        The outliers' positions in `pairs`.
+
+    Examples
+    --------
     >>> outliers([BoardPair("a", "b", [[0, 0]], [[0, 0]], e) for e in (0.2, 0.3, 0.25, 1.2, 0.4)])
     (3,)
     """
@@ -76,6 +88,27 @@ def calibrate_rig(pairs, board=BOARD, square_m: float = SQUARE_M, progress=None)
     """Calibrate a rig from ``(name, left, right)`` chessboard pairs (paths, bytes or grey arrays,
     all of one size); `progress` is called once per pair.  Pairs where the board is not found in
     both views are named in ``skipped``; fewer than 3 usable pairs raise a ParameterError.
+
+    Parameters
+    ----------
+    pairs : iterable of tuple
+        ``(name, left, right)``, the photos as paths, bytes or grey arrays.
+    board : tuple of int, default BOARD
+        Inner corners ``(columns, rows)`` of the chessboard.
+    square_m : float, default SQUARE_M
+        Side of a square, metres: the scale of everything metric.
+    progress : callable, optional
+        Called with each pair's name once it is searched.
+
+    Returns
+    -------
+    rig : StereoCamera
+        The calibrated rig, with its pairs' corners and errors.
+
+    Raises
+    ------
+    ParameterError
+        Photos of different sizes, fewer than 3 usable pairs, or corners OpenCV refuses.
     """
     owner = "calibrate_rig"
     board, square_m = check_board(board, square_m, owner)
@@ -149,7 +182,25 @@ def _calibrate(pairs, used, skipped, size, board, square_m, owner) -> StereoCame
 
 def recalibrate(rig: StereoCamera, drop=()) -> StereoCamera:
     """`rig` calibrated again from its own corners without the pairs in `drop`, each named by its
-    left or right photo (a path names it by its file name) or by its name in ``rig.used``."""
+    left or right photo (a path names it by its file name) or by its name in ``rig.used``.
+
+    Parameters
+    ----------
+    rig : StereoCamera
+        A calibrated rig.
+    drop : str, Path or iterable of them, optional
+        The pairs to leave out.
+
+    Returns
+    -------
+    rig : StereoCamera
+        The rig calibrated from the other pairs.
+
+    Raises
+    ------
+    ParameterError
+        A rig without its pairs' corners, an unknown pair, or fewer than 3 left.
+    """
     owner = "recalibrate"
     if not rig.pairs:
         raise ParameterError(message("rig", owner, "a rig that keeps its pairs' corners (format "
@@ -209,6 +260,23 @@ def leave_one_out(rig: StereoCamera, progress=None) -> tuple:
     corners over both views.  ``depth_error``: the median over the corners of
     ``|Z_stereo - Z_pose| / Z_pose`` in the rectified frame.  NaN where the others do not
     calibrate.  `rig` keeps the corners of at least 4 pairs.
+
+    Parameters
+    ----------
+    rig : StereoCamera
+        A calibrated rig.
+    progress : callable, optional
+        Called with each pair's index once it is done.
+
+    Returns
+    -------
+    held_out : tuple of HeldOut
+        One per pair of `rig`, in order.
+
+    Raises
+    ------
+    ParameterError
+        A rig that keeps the corners of 3 pairs or fewer.
     """
     owner = "leave_one_out"
     if len(rig.pairs) <= MIN_PAIRS:
@@ -229,7 +297,25 @@ def leave_one_out(rig: StereoCamera, progress=None) -> tuple:
 def board_depth(rig: StereoCamera, left, right) -> dict:
     """The board's median depth in a pair of `rig`, in the rectified left frame, two ways whose
     agreement checks the calibration: ``"stereo"`` (``Z = f B / d`` of the rectified corners)
-    and ``"pnp"`` (the pose from the left view and the board's known size)."""
+    and ``"pnp"`` (the pose from the left view and the board's known size).
+
+    Parameters
+    ----------
+    rig : StereoCamera
+        A calibrated rig.
+    left, right : str, Path, bytes or array
+        A pair of photos taken by the rig, showing the whole board.
+
+    Returns
+    -------
+    depths : dict
+        ``"stereo"`` and ``"pnp"`` in metres, and ``"disparity_px"``, the corners' [min, max].
+
+    Raises
+    ------
+    ParameterError
+        The board is not found in both views.
+    """
     owner = "board_depth"
     rectified = rig.rectify(left, right)
     corners = find_board(rectified.left, rig.board), find_board(rectified.right, rig.board)

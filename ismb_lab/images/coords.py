@@ -72,6 +72,19 @@ def vertical_disparity(left_xy, right_xy) -> np.ndarray:
 def euclidean_disparity(left_xy, right_xy) -> np.ndarray:
     """Euclidean disparity ``||p - q||``, as in the thesis' tables.
 
+    Parameters
+    ----------
+    left_xy, right_xy : (n, 2) float array
+        Matched points ``(x, y)``, row ``n`` with row ``n``.
+
+    Returns
+    -------
+    disparity : (n,) float array
+        ``||p - q||`` of each match.
+
+    Examples
+    --------
+
     >>> euclidean_disparity([[99, 99]], [[88, 100]]).round(2)   # Table 5.1, pair 1
     array([11.05])
     """

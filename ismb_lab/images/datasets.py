@@ -45,6 +45,23 @@ def motorcycle(width: int = 320) -> GroundTruthPair:
     than half its footprint was known (the whole would leave half the corners, on depth edges,
     unknown).
 
+    Parameters
+    ----------
+    width : int, default 320
+        Width of the scaled pair, 16 to 741 pixels.
+
+    Returns
+    -------
+    pair : GroundTruthPair
+        The grey pair and its disparity map.
+
+    Raises
+    ------
+    ImportError
+        scikit-image is not installed.
+
+    Examples
+    --------
     >>> pair = motorcycle()
     >>> pair.left.shape, bool(np.nanmax(pair.disparity) < 30)
     ((216, 320), True)
@@ -95,7 +112,23 @@ class SampleDataMissing(FileNotFoundError):
 
 def opencv_samples(folder=None) -> Path:
     """The folder of OpenCV's sample data: `folder`, else ``ISMB_LAB_OPENCV_DATA``, else
-    :data:`OPENCV_DATA`; :class:`SampleDataMissing` says how to install it."""
+    :data:`OPENCV_DATA`; :class:`SampleDataMissing` says how to install it.
+
+    Parameters
+    ----------
+    folder : str or Path, optional
+        A folder holding the sample files.
+
+    Returns
+    -------
+    folder : Path
+        The folder.
+
+    Raises
+    ------
+    SampleDataMissing
+        OpenCV's sample data is not installed.
+    """
     chosen = folder if folder is not None else os.environ.get(OPENCV_DATA_VARIABLE) or OPENCV_DATA
     path = Path(chosen)
     if not (path / "aloeL.jpg").is_file():
@@ -143,7 +176,23 @@ def books(*, folder=None) -> tuple[np.ndarray, np.ndarray]:
 
 
 def chessboard_pairs(*, folder=None) -> list[tuple[str, np.ndarray, np.ndarray]]:
-    """The 13 ``(name, left, right)`` grey 640 x 480 pairs of OpenCV's calibration rig."""
+    """The 13 ``(name, left, right)`` grey 640 x 480 pairs of OpenCV's calibration rig.
+
+    Parameters
+    ----------
+    folder : str or Path, optional
+        Folder of OpenCV's sample data (:func:`opencv_samples`).
+
+    Returns
+    -------
+    pairs : list of tuple
+        ``(name, left, right)``: the name of :data:`CHESSBOARD_PAIRS`, two (480, 640) float arrays.
+
+    Raises
+    ------
+    SampleDataMissing
+        OpenCV's sample data is not installed.
+    """
     return [(n, _sample(f"left{n}.jpg", folder).astype(float), _sample(f"right{n}.jpg", folder).astype(float))
             for n in CHESSBOARD_PAIRS]
 
@@ -154,6 +203,29 @@ def ground_truth_pairs(disparity: np.ndarray, left_xy, right_xy, tol: float = 1.
     A left corner's partner is the right corner within `tol` pixels of ``(x - d(x, y), y)``;
     where ``d`` is unknown (NaN), the corner is neither a target nor an error when matched.
 
+    Parameters
+    ----------
+    disparity : (H, W) float array
+        Ground-truth ``x_left - x_right``, NaN where unknown.
+    left_xy, right_xy : (n, 2) float array
+        Corners ``(x, y)`` of each image.
+    tol : float, default 1.5
+        Largest distance, pixels, from the expected position.
+
+    Returns
+    -------
+    pairs : (m, 2) int array
+        Target ``(i, k)`` pairs.
+    unknown : (u,) int array
+        Left corners where the disparity is unknown.
+
+    Raises
+    ------
+    ParameterError
+        A left corner outside the map.
+
+    Examples
+    --------
     >>> d = np.full((10, 20), 5.0); d[:, :3] = np.nan
     >>> pairs, unknown = ground_truth_pairs(d, [[10, 4], [2, 4], [15, 4]], [[5, 4], [10.5, 4]])
     >>> pairs.tolist(), unknown.tolist()

@@ -71,6 +71,20 @@ def structure_tensor(image, sigma: float = 1.0) -> tuple[np.ndarray, np.ndarray,
     """The Harris matrix ``M = [[Axx, Axy], [Axy, Ayy]]`` at every pixel: the products of the
     gradients averaged over a Gaussian window of `sigma` pixels (``'mirror'`` borders).
 
+    Parameters
+    ----------
+    image : (H, W) float or unsigned integer array
+        Grey image, finite values.
+    sigma : float, default 1.0
+        Standard deviation of the Gaussian window, pixels (> 0, at most :data:`MAX_SIGMA`).
+
+    Returns
+    -------
+    Axx, Axy, Ayy : (H, W) float64 array
+        The tensor's entries at every pixel.
+
+    Examples
+    --------
     >>> Axx, Axy, Ayy = structure_tensor(np.tile(np.arange(9.0), (9, 1)))
     >>> float(Axx[4, 4]), float(Axy[4, 4]), float(Ayy[4, 4])
     (1.0, 0.0, 0.0)
@@ -83,6 +97,20 @@ def structure_tensor(image, sigma: float = 1.0) -> tuple[np.ndarray, np.ndarray,
 def harris_from_tensor(Axx, Axy, Ayy, k: float = 0.04) -> np.ndarray:
     """Harris response ``det(M) - k tr(M)^2`` of a structure tensor (the thesis: k from 0.04 to 0.06).
 
+    Parameters
+    ----------
+    Axx, Axy, Ayy : float or array
+        The tensor's entries (:func:`structure_tensor`).
+    k : float, default 0.04
+        Harris ``k``, in (0, 0.25).
+
+    Returns
+    -------
+    R : float64 array
+        The response, shaped as the entries.
+
+    Examples
+    --------
     >>> float(harris_from_tensor(1.0, 0.0, 1.0))    # corner: two strong directions
     0.84
     >>> float(harris_from_tensor(1.0, 0.0, 0.0))    # edge: one direction
@@ -96,6 +124,22 @@ def harris_from_tensor(Axx, Axy, Ayy, k: float = 0.04) -> np.ndarray:
 def harris_response(image, sigma: float = 1.0, k: float = 0.04) -> np.ndarray:
     """Harris response ``R`` of every pixel (see :func:`structure_tensor`, :func:`harris_from_tensor`).
 
+    Parameters
+    ----------
+    image : (H, W) float or unsigned integer array
+        Grey image, finite values.
+    sigma : float, default 1.0
+        Gaussian window of the structure tensor, pixels.
+    k : float, default 0.04
+        Harris ``k``, in (0, 0.25).
+
+    Returns
+    -------
+    R : (H, W) float64 array
+        Positive at corners, negative on edges, zero in flat regions.
+
+    Examples
+    --------
     >>> img = np.zeros((20, 20)); img[10:, 10:] = 100.0     # one bright quadrant
     >>> R = harris_response(img)
     >>> bool(R[10, 10] > 0), bool(R[15, 10] < 0), bool(R[2, 2] == 0)
@@ -175,7 +219,23 @@ class Corners:
     """Harris corners of one image: ``xy`` in full-image coordinates, sorted row-major, with
     their ``response``; the final ``threshold`` T (NaN when there was no candidate and none was
     given), how many ``iterations`` relaxed it, the ``roi`` box searched, and a ``message``
-    saying why fewer than ``n_min`` were found (empty otherwise)."""
+    saying why fewer than ``n_min`` were found (empty otherwise).
+
+    Attributes
+    ----------
+    xy : (n, 2) float64 array
+        Corners ``(x, y)`` in the full image, row-major.
+    response : (n,) float64 array
+        Their Harris response ``R``.
+    threshold : float
+        The final threshold ``T``.
+    iterations : int
+        How many times ``T`` was relaxed.
+    roi : tuple of int
+        The ``(x, y, w, h)`` box searched.
+    message : str
+        Why fewer than ``n_min`` were found, or "".
+    """
 
     xy: np.ndarray
     response: np.ndarray
@@ -238,18 +298,33 @@ def detect_corners(image, *, roi="center", n_min: int = 20, n_max: int = 30,
 
     Parameters
     ----------
-    n_min, n_max : int
+    image : (H, W) float or unsigned integer array
+        Grey image, finite values.
+    roi : str or tuple of int, default "center"
+        Region searched (:func:`resolve_roi`).
+    n_min, n_max : int, default 20, 30
         Fewest corners wanted and most corners kept (the thesis uses 20 and 30).
-    threshold : float or None
+    threshold : float or None, default None
         Initial ``T``.  ``R`` scales with the fourth power of the contrast, so no fixed value
         suits every image; None starts at the strongest candidate.
-    sigma, k
-        See :func:`structure_tensor` and :func:`harris_from_tensor`.
+    sigma : float, default 1.0
+        Gaussian window of the structure tensor (:func:`structure_tensor`).
+    k : float, default 0.04
+        Harris ``k`` (:func:`harris_from_tensor`).
+    min_distance : int, default 3
+        Radius of the local-maximum square, pixels.
+    relax : float, default 0.8
+        Factor that lowers ``T``, in (0, 1).
 
     Returns
     -------
     Corners
         Sorted row-major; fewer than `n_min` (never an error) come with ``message`` saying why.
+
+    Raises
+    ------
+    ParameterError, ParameterTypeError
+        A bad image or a setting out of its range.
 
     Examples
     --------

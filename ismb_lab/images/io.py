@@ -234,6 +234,27 @@ def load_image(source, name: str = "image") -> np.ndarray:
     Colour becomes BT.601 luma in float32 (no rounding); alpha is dropped.  `name` names
     `source` in error messages.
 
+    Parameters
+    ----------
+    source : str, PathLike or array
+        An image file, or an ``(H, W)`` or ``(H, W, 3|4)`` array.
+    name : str, default "image"
+        Name of `source` in error messages.
+
+    Returns
+    -------
+    image : (H, W) float64 array
+        Grey values in ``[0, 255]``.
+
+    Raises
+    ------
+    ParameterError
+        An unreadable file, a bad shape or values, or more than :func:`max_pixels` pixels.
+    ParameterTypeError
+        An array of an unsupported dtype.
+
+    Examples
+    --------
     >>> load_image(np.array([[0, 65535]], dtype=np.uint16))
     array([[  0., 255.]])
     >>> load_image(np.full((1, 1, 3), [255, 0, 0], dtype=np.uint8)).round(3)   # pure red
@@ -275,7 +296,17 @@ def image_sha256(source) -> str:
 @dataclass(frozen=True, eq=False)
 class StereoPair:
     """A left and a right grey image of equal size, with their :func:`image_sha256` and paths
-    (None for arrays)."""
+    (None for arrays).
+
+    Attributes
+    ----------
+    left, right : (H, W) float64 array
+        Grey images in ``[0, 255]``.
+    left_sha256, right_sha256 : str
+        Their :func:`image_sha256`.
+    left_path, right_path : str or None
+        Their files, or None for arrays.
+    """
 
     left: np.ndarray
     right: np.ndarray
@@ -293,6 +324,27 @@ class StereoPair:
 def load_pair(left, right, *, min_shape=(1, 1)) -> StereoPair:
     """Load a stereo pair with :func:`load_image`; `min_shape` is the smallest ``(height, width)``.
 
+    Parameters
+    ----------
+    left, right : str, PathLike or array
+        The two images, of equal size.
+    min_shape : tuple of int, default (1, 1)
+        Smallest ``(height, width)`` accepted.
+
+    Returns
+    -------
+    pair : StereoPair
+        Both grey images, their digests and paths.
+
+    Raises
+    ------
+    ParameterError
+        An unreadable image, images of different sizes, or smaller than `min_shape`.
+    ParameterTypeError
+        `min_shape` not a pair.
+
+    Examples
+    --------
     >>> pair = load_pair(np.zeros((4, 6)), np.ones((4, 6)))
     >>> pair.shape, pair.left_path
     ((4, 6), None)
@@ -366,6 +418,22 @@ def save_pair(left, right, parent, name: str):
     A folder holding other images (labels may rest on them), a file or a link is skipped for
     ``name-2``, ``name-3``, ...; the same pair saved again reuses its folder.  Returns the folder.
 
+    Parameters
+    ----------
+    left, right : (H, W) float array
+        The grey images.
+    parent : str or Path
+        Folder that holds the pair's folder.
+    name : str
+        The pair's folder name.
+
+    Returns
+    -------
+    folder : Path
+        The folder written.
+
+    Examples
+    --------
     >>> import tempfile, pathlib, numpy as np
     >>> parent = pathlib.Path(tempfile.mkdtemp())
     >>> a, b = np.zeros((4, 4)), np.full((4, 4), 9.0)

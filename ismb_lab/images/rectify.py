@@ -83,7 +83,31 @@ _UNDO = {1: 1, 2: 2, 3: 3, 4: 4, 5: 5, 6: 8, 7: 7, 8: 6}
 
 def load_photo(source, name: str = "photo", owner: str = "load_photo", *, upright: bool = True) -> np.ndarray:
     """A photo (path, file bytes or grey/RGB/RGBA array) as a grey float image in ``[0, 255]``,
-    EXIF orientation applied unless `upright` is False."""
+    EXIF orientation applied unless `upright` is False.
+
+    Parameters
+    ----------
+    source : str, Path, bytes or array
+        A photo's path, its file's bytes, or a grey, RGB or RGBA array.
+    name : str, default "photo"
+        Name of `source` in error messages.
+    owner : str, default "load_photo"
+        Function named in error messages.
+    upright : bool, default True
+        Apply the EXIF orientation; False gives the pixels as stored.
+
+    Returns
+    -------
+    image : (H, W) float64 array
+        Grey values in ``[0, 255]``.
+
+    Raises
+    ------
+    ParameterError
+        An unreadable or undecodable photo, or one too large.
+    ParameterTypeError
+        `source` of another type.
+    """
     from .io import orient
 
     image = _photo(source, name, owner, None)[0]
@@ -239,10 +263,17 @@ class Rectified:
 
     @property
     def size(self) -> list:
+        """``[width, height]`` of the rectified images."""
         return [int(self.left.shape[1]), int(self.left.shape[0])]
 
     def to_dict(self) -> dict:
-        """What ``ismb-lab rectify`` writes to ``rectify.json``."""
+        """What ``ismb-lab rectify`` writes to ``rectify.json``.
+
+        Returns
+        -------
+        data : dict
+            Method, figures, size, scale and both homographies.
+        """
         return {"method": self.method, "inliers": self.inliers, "measured_on": self.measured_on,
                 "warnings": list(self.warnings), "median_abs_dy_px": self.median_abs_dy_px,
                 "p90_abs_dy_px": self.p90_abs_dy_px, "disparity_range_px": list(self.disparity_range_px),
@@ -250,6 +281,13 @@ class Rectified:
                 "left_homography": self.left_h.tolist(), "right_homography": self.right_h.tolist()}
 
     def to_json(self) -> str:
+        """:meth:`to_dict` as indented JSON text.
+
+        Returns
+        -------
+        text : str
+            The JSON document.
+        """
         return json.dumps(self.to_dict(), indent=2)
 
 
@@ -410,6 +448,24 @@ def rectify_pair(left, right, *, max_side: int = WORKING_SIDE) -> Rectified:
     Both are scaled so the longer side, also of the warped output, is at most `max_side`.  A pair
     whose inliers already agree (median ``|dy|`` <= 0.5 px, 90th percentile <= 1.5 px) is left
     as it is.  A ParameterError says in one sentence why a pair cannot be rectified.
+
+    Parameters
+    ----------
+    left, right : str, Path, bytes or array
+        The photos, the left camera's first, of one size.
+    max_side : int, default WORKING_SIDE
+        Longest side of the inputs and of the output, pixels (at least 64).
+
+    Returns
+    -------
+    rectified : Rectified
+        The rectified pair and how it was made.
+
+    Raises
+    ------
+    ParameterError
+        Photos of different sizes, too few matches, the same photo twice, no common epipolar
+        geometry, no parallax, or the two photos swapped.
     """
     owner = "rectify_pair"
     max_side = check_number(max_side, "max_side", owner, low=64, integer=True)
@@ -476,7 +532,21 @@ def measured(left, right, left_h, right_h, method: str) -> Rectified:
 def check_rectified(left, right, *, max_side: int = WORKING_SIDE) -> dict:
     """How far a pair is from rectified, without warping it: :class:`Rectified`'s figures for the
     inliers as they are, with ``matches``, ``inliers``, ``rectified`` (:func:`rectify_pair`'s test),
-    ``problem`` (why it cannot be rectified, or "") and the inliers ``left_xy``, ``right_xy``."""
+    ``problem`` (why it cannot be rectified, or "") and the inliers ``left_xy``, ``right_xy``.
+
+    Parameters
+    ----------
+    left, right : str, Path, bytes or array
+        The photos, the left camera's first, of one size.
+    max_side : int, default WORKING_SIDE
+        Longest side the photos are scaled to, pixels.
+
+    Returns
+    -------
+    figures : dict
+        ``matches``, ``inliers``, ``rectified``, ``problem``, ``median_abs_dy_px``,
+        ``p90_abs_dy_px``, ``disparity_range_px``, ``left_xy``, ``right_xy``.
+    """
     owner = "check_rectified"
     left, right, _ = pair_inputs(left, right, owner, max_side)
     matches = robust_matches(left, right)

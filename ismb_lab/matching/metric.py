@@ -30,6 +30,20 @@ def row_tolerance(camera: StereoCamera, subpixel: bool = False) -> float:
     """Largest row difference, px, of a true match in `camera`'s rectified pair: ``2 rms`` for
     sub-pixel corners, ``1 + 2 rms`` for whole-pixel ones, ``1`` for an uncalibrated camera.
 
+    Parameters
+    ----------
+    camera : StereoCamera
+        The calibrated camera that rectified the pair.
+    subpixel : bool, default False
+        Whether the corners are sub-pixel.
+
+    Returns
+    -------
+    rows_px : float
+        The tolerance, pixels.
+
+    Examples
+    --------
     >>> row_tolerance(StereoCamera())
     1.0
     >>> row_tolerance(StereoCamera(rms=0.25)), row_tolerance(StereoCamera(rms=0.25), subpixel=True)
@@ -70,6 +84,29 @@ def photo_config(camera: StereoCamera, config: MatchConfig | None = None, *, sca
     :data:`THESIS_SIZE`'s, times `scale`; with `most`, ``n_max`` is at most that and ``n_min``
     keeps its share of it.
 
+    Parameters
+    ----------
+    camera : StereoCamera
+        The camera whose image size counts.
+    config : MatchConfig, optional
+        The settings to scale; default ``MatchConfig()``.
+    scale : float, default 1.0
+        Extra factor (> 0).
+    most : int, optional
+        Largest ``n_max``.
+
+    Returns
+    -------
+    config : MatchConfig
+        `config` with the scaled corner counts.
+
+    Raises
+    ------
+    ParameterTypeError
+        `config` or `camera` of the wrong type.
+
+    Examples
+    --------
     >>> c = photo_config(StereoCamera(size=(640, 480)))
     >>> c.n_min, c.n_max
     (80, 120)

@@ -47,6 +47,25 @@ def mutual_nearest(problem, max_dissimilarity=None) -> np.ndarray:
     """Mutual nearest neighbours on ``M`` among candidate neurons (ties to the lower index),
     without matches whose ``M_ik`` is above `max_dissimilarity`.
 
+    Parameters
+    ----------
+    problem : Problem
+        Corners, ``M`` and candidate neurons (:func:`ismb_lab.network.methods.build_problem`).
+    max_dissimilarity : float, optional
+        Largest ``M_ik`` kept; None keeps all.
+
+    Returns
+    -------
+    pairs : (m, 2) int array
+        One-to-one ``(i, k)`` candidate pairs, sorted by ``i``.
+
+    Raises
+    ------
+    ParameterTypeError
+        `problem` is not a Problem.
+
+    Examples
+    --------
     >>> from ismb_lab.network.methods import build_problem
     >>> p = build_problem([[100, 50], [110, 50]], [[80, 51], [90, 51]], [[1.0, 4.0], [2.0, 3.0]])
     >>> mutual_nearest(p)      # left 1 prefers right 0, which prefers left 0
@@ -72,6 +91,27 @@ def hungarian(problem, no_match_cost) -> np.ndarray:
     Dummy rows and columns make leaving a feature unmatched cost ``no_match_cost / 2``, so no
     match with ``M_ik > no_match_cost`` (grey levels, > 0) is kept; non-candidates never are.
 
+    Parameters
+    ----------
+    problem : Problem
+        Corners, ``M`` and candidate neurons (:func:`ismb_lab.network.methods.build_problem`).
+    no_match_cost : float
+        Cost of leaving a left and a right feature unmatched, in grey levels (> 0).
+
+    Returns
+    -------
+    pairs : (m, 2) int array
+        One-to-one ``(i, k)`` candidate pairs, sorted by ``i``.
+
+    Raises
+    ------
+    ParameterTypeError
+        `problem` is not a Problem.
+    ParameterError
+        `no_match_cost` not > 0.
+
+    Examples
+    --------
     >>> from ismb_lab.network.methods import build_problem
     >>> p = build_problem([[100, 50], [110, 50]], [[80, 51], [90, 51]], [[1.0, 4.0], [2.0, 30.0]])
     >>> hungarian(p, no_match_cost=10).tolist()     # 4 + 2 beats 1 alone
@@ -160,6 +200,18 @@ def graph_matching(problem, method=DEFAULT_METHOD, params=None, *, solver="rrwm"
 def default_no_match_cost(problem) -> float:
     """The no-match cut of :data:`PEERS`: half the median of ``M`` over all feature pairs.
 
+    Parameters
+    ----------
+    problem : Problem
+        Corners, ``M`` and candidate neurons (:func:`ismb_lab.network.methods.build_problem`).
+
+    Returns
+    -------
+    cut : float
+        The cut, in grey levels.
+
+    Examples
+    --------
     >>> from ismb_lab.network.methods import build_problem
     >>> p = build_problem([[100, 50], [110, 50]], [[80, 51], [90, 51]], [[2.0, 40.0], [40.0, 3.0]])
     >>> default_no_match_cost(p)

@@ -39,6 +39,38 @@ class MatchConfig:
     `neighbourhood` say which left features interact (3-12).  `right_roi` ``"shifted"`` moves the
     right ROI `shift` px left, so that corners near the left ROI's edge keep their partners;
     ``"same"`` is the thesis' (it loses one corner in eight).
+
+    Attributes
+    ----------
+    roi : str or tuple of int, default "center"
+        ``"center"``, ``"full"`` or ``(x, y, w, h)``.
+    n_min, n_max : int, default 20, 30
+        Bounds on the number of corners per image.
+    threshold : float or None, default None
+        Initial Harris threshold ``T``; None starts at the strongest response.
+    harris_sigma : float, default 1.0
+        Gaussian window of the structure tensor.
+    harris_k : float, default 0.04
+        Harris ``k``, in (0, 0.25).
+    min_distance : int, default 3
+        Local-maximum radius of the corners.
+    patch_size : int, default 11
+        Odd side of the window for ``M_ik`` (3-8).
+    shift : float or "auto", default 20.0
+        Pixels left of each left corner at which the candidate window is centred.
+    window_height, window_width : float, default 30.0, 40.0
+        Size of the candidate window.
+    neighbour_radius : float, default 20.0
+        Radius within which left features interact (3-12).
+    neighbourhood : {"box", "disc"}, default "box"
+        Shape of that neighbourhood.
+    right_roi : {"shifted", "same"}, default "shifted"
+        The right image's ROI: the left one moved `shift` px left, or the same.
+
+    Raises
+    ------
+    ParameterError
+        A field out of its range.
     """
 
     roi: object = "center"
@@ -179,7 +211,27 @@ class Prepared:
 
 def prepare(left, right, config: MatchConfig | None = None) -> Prepared:
     """Load a pair (paths, arrays, or a StereoPair with `right` None), detect corners in both
-    images and compute ``M`` and the geometry."""
+    images and compute ``M`` and the geometry.
+
+    Parameters
+    ----------
+    left, right : path, ndarray or StereoPair
+        The images (see :func:`ismb_lab.images.io.load_pair`); `right` None with a StereoPair.
+    config : MatchConfig, optional
+        Corners, candidate window and neighbourhood; default ``MatchConfig()``.
+
+    Returns
+    -------
+    prepared : Prepared
+        The pair, its corners and the energy's ingredients.
+
+    Raises
+    ------
+    ParameterTypeError
+        `config` is not a MatchConfig.
+    ParameterError
+        The images or the window are not usable.
+    """
     config = MatchConfig() if config is None else config
     if not isinstance(config, MatchConfig):
         raise ParameterTypeError(message("config", "prepare", "a MatchConfig", config))
@@ -201,6 +253,24 @@ def corner_problem(pair: StereoPair, left_xy, right_xy, config: MatchConfig, dis
     """The energy's ingredients for corners of `pair`: ``M`` (3-8) unless given, and the
     candidates and neighbours of `config`'s window (:func:`ismb_lab.network.methods.build_problem`).
 
+    Parameters
+    ----------
+    pair : StereoPair
+        The loaded pair.
+    left_xy, right_xy : (n, 2) float array
+        Corners ``(x, y)`` in each image.
+    config : MatchConfig
+        Patch size, candidate window and neighbourhood.
+    dissimilarity : (n_left, n_right) float array, optional
+        ``M`` to use instead of the mean absolute difference of patches.
+
+    Returns
+    -------
+    problem : Problem
+        ``M``, the candidate neurons and their neighbour pairs.
+
+    Examples
+    --------
     >>> from ismb_lab.scenes import synthetic_scene
     >>> s = synthetic_scene(0)
     >>> p = prepare(s.left, s.right)
@@ -220,7 +290,37 @@ class MatchResult:
     """The outcome of matching one pair: all features ``left_xy``, ``right_xy`` (``(x, y)`` in the
     full image), the matched ``pairs`` ``(i, k)`` sorted by ``i``, the final ``energy`` (3-15), the
     candidate neurons' ``state`` after post-processing, and ``message``, why the match is empty or
-    partial ("" when all went well)."""
+    partial ("" when all went well).
+
+    Attributes
+    ----------
+    method : str
+        The energy recipe's name.
+    params : Params
+        The energy parameters used.
+    seed : int
+        Seed of the update order.
+    stop_rule : str
+        What stopped the network (``"sweep"``, ``"stall"``, ``"max_attempts"``) or ``"minimum"``.
+    energy : float
+        Final energy (3-15).
+    attempts : int
+        Update attempts made.
+    left_xy, right_xy : (n, 2) float array
+        All features, ``(x, y)`` in the full image.
+    pairs : (m, 2) int array
+        Matched ``(i, k)`` feature indices, sorted by ``i``.
+    message : str
+        Empty when all went well, otherwise why the match is empty or partial.
+    n_candidates : int
+        Candidate neurons.
+    state : (n_candidates,) uint8 array
+        Final outputs of the candidate neurons, after post-processing.
+    solver : str
+        Name of the solver that found the state.
+    one_to_one : bool
+        Whether at most one match per corner was kept.
+    """
 
     method: str
     params: Params
@@ -239,23 +339,32 @@ class MatchResult:
 
     @property
     def left_match_xy(self) -> np.ndarray:
+        """(m, 2) float array: the matched left features ``(x, y)``."""
         return self.left_xy[self.pairs[:, 0]]
 
     @property
     def right_match_xy(self) -> np.ndarray:
+        """(m, 2) float array: the matched right features ``(x, y)``."""
         return self.right_xy[self.pairs[:, 1]]
 
     @property
     def disparity(self) -> np.ndarray:
-        """Euclidean disparity of each match, as in the thesis' tables."""
+        """(m,) float array: Euclidean disparity of each match, as in the thesis' tables."""
         return euclidean_disparity(self.left_match_xy, self.right_match_xy)
 
     @property
     def horizontal_disparity(self) -> np.ndarray:
+        """(m,) float array: ``x_left - x_right`` of each match."""
         return horizontal_disparity(self.left_match_xy, self.right_match_xy)
 
     def table(self) -> str:
-        """A plain-text table shaped like Table 5.3 (features numbered from 1)."""
+        """A plain-text table shaped like Table 5.3 (features numbered from 1).
+
+        Returns
+        -------
+        text : str
+            One line per match, then `message` if any.
+        """
         head = ("Pair", "Left", "Right", "y_left", "x_left", "y_right", "x_right", "disparity")
         lines = ["{:>4} {:>5} {:>5} {:>7} {:>7} {:>7} {:>7} {:>9}".format(*head)]
         for n, ((i, k), p, q, d) in enumerate(zip(self.pairs, self.left_match_xy,
@@ -267,7 +376,13 @@ class MatchResult:
         return "\n".join(lines)
 
     def to_dict(self) -> dict:
-        """The JSON contract of ``ismb-lab match --json``."""
+        """The JSON contract of ``ismb-lab match --json``.
+
+        Returns
+        -------
+        data : dict
+            Method, solver, params, seed, energy, stop rule, features and matches.
+        """
         return {
             "method": self.method,
             "solver": self.solver,
@@ -289,6 +404,13 @@ class MatchResult:
         }
 
     def to_json(self) -> str:
+        """:meth:`to_dict` as indented JSON text.
+
+        Returns
+        -------
+        text : str
+            The JSON document.
+        """
         return json.dumps(self.to_dict(), indent=2)
 
 
@@ -310,6 +432,39 @@ def match(left=None, right=None, method=DEFAULT_METHOD, params: Params | None = 
     :data:`ismb_lab.network.solvers.SOLVERS` or a Solver, whose options `stop_rule`, `rule` and
     `kernel` replace unless None.  `prepared` (from :func:`prepare`) replaces `left` and `right`;
     `one_to_one` keeps at most one match per corner, the most similar.
+
+    Parameters
+    ----------
+    left, right : path, ndarray or StereoPair, optional
+        The image pair; ignored when `prepared` is given.
+    method : str, default "III"
+        Energy recipe, a name of :func:`ismb_lab.network.methods.method_names`.
+    params : Params, optional
+        Energy parameters; by default the method's.
+    config : MatchConfig, optional
+        Corners, candidate window and neighbourhood; default ``MatchConfig()``.
+    seed : int, default 0
+        Seed of the random update order (and of annealing), 0 to 2**63 - 1.
+    solver : str or Solver, default "network"
+        How the energy is minimised.
+    stop_rule, rule, kernel : str, optional
+        Solver options that replace the solver's own; None keeps them.
+    prepared : Prepared, optional
+        Corners and geometry from :func:`prepare`.
+    one_to_one : bool, default False
+        Keep at most one match per corner, the most similar.
+
+    Returns
+    -------
+    result : MatchResult
+        The matches, the final energy and why it stopped.
+
+    Raises
+    ------
+    ParameterTypeError
+        `params`, `one_to_one` or `prepared` of the wrong type.
+    ParameterError
+        An unknown method or solver, a seed out of range, or unusable images.
     """
     m = get_method(method)
     params = m.defaults if params is None else params
@@ -356,6 +511,18 @@ def warm_up(solvers=(DEFAULT_SOLVER,)) -> float:
     """Compile (or load from numba's cache) the kernels a first match of each of `solvers`
     runs, on a small texture made in memory; returns the seconds.
 
+    Parameters
+    ----------
+    solvers : tuple of str, default ("network",)
+        Names of the solvers to prepare; each compiles its own kernels.
+
+    Returns
+    -------
+    seconds : float
+        Time spent.
+
+    Examples
+    --------
     >>> warm_up() >= 0
     True
     """

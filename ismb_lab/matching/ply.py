@@ -18,6 +18,29 @@ def ply_bytes(points, colours=None, *, binary: bool = False, comments=()) -> byt
     (``(red, green, blue)`` or grey, 0 to 255; default mid-grey), ASCII or `binary`, with header
     `comments` (printable ASCII).
 
+    Parameters
+    ----------
+    points : (n, 3) float array
+        Finite ``(x, y, z)``.
+    colours : (n, 3) or (n,) float array, optional
+        RGB rows or grey levels, 0 to 255; default 128.
+    binary : bool, default False
+        Binary little-endian instead of ASCII.
+    comments : iterable of str, optional
+        Header comment lines, printable ASCII.
+
+    Returns
+    -------
+    data : bytes
+        The PLY file.
+
+    Raises
+    ------
+    ParameterError, ParameterTypeError
+        Bad points, colours or comments.
+
+    Examples
+    --------
     >>> print(ply_bytes([[0.5, -0.25, 2.0]], [200], comments=["metres"]).decode())
     ply
     format ascii 1.0

@@ -41,6 +41,26 @@ class Recipe:
     `fit_seeds` records how many update-order seeds each GA fitness averaged over; `one_to_one`
     keeps at most one match per corner after solving.
 
+    Attributes
+    ----------
+    method : Method or str, default "III"
+        The energy recipe; a name is resolved to its Method.
+    params : Params, optional
+        Energy parameters; None gives the method's defaults.
+    solver : Solver or str, default "network"
+        How the energy is minimised; a name is resolved to its Solver.
+    fit_seeds : int, default 1
+        Update-order seeds each GA fitness averaged over.
+    one_to_one : bool, default False
+        Keep at most one match per corner after solving.
+
+    Raises
+    ------
+    ParameterTypeError
+        `params` not a Params, or `one_to_one` not a bool.
+
+    Examples
+    --------
     >>> Recipe("NM3", solver="anneal").to_dict()["solver"]
     'anneal'
     >>> Recipe(one_to_one="yes")
@@ -69,7 +89,14 @@ class Recipe:
             raise ParameterTypeError(message("one_to_one", own, "True or False", self.one_to_one))
 
     def to_dict(self) -> dict:
-        """The recipe's keys of the params file."""
+        """The recipe's keys of the params file.
+
+        Returns
+        -------
+        data : dict
+            ``version``, ``method``, ``params``, ``solver``, ``solver_options``, ``fit_seeds``,
+            ``one_to_one``.
+        """
         return {"version": RECIPE_VERSION, "method": self.method.name, "params": self.params.to_dict(),
                 "solver": self.solver.name, "solver_options": self.solver.options(),
                 "fit_seeds": int(self.fit_seeds), "one_to_one": self.one_to_one}

@@ -101,19 +101,31 @@ def iter_annealing(net: Network, *, rng=0, t_start: float = 2.0, t_end: float = 
 
     Parameters
     ----------
-    rng : int or numpy.random.Generator
+    net : Network
+        The network to anneal.
+    rng : int or numpy.random.Generator, default 0
         Seeds the start (``v = 1/2`` plus noise of 0.01) and the visiting orders.
-    t_start, t_end : float
+    t_start, t_end : float, default 2.0, 0.02
         First and last temperature, ``t_start > t_end > 0``, in units of the weights (2 is "hot").
-    cooling : float
+    cooling : float, default 0.9
         Factor in (0, 1) between consecutive temperatures.
-    sweeps : int
+    sweeps : int, default 2
         Sweeps per temperature; at most :data:`MAX_SWEEPS` sweeps in all.
-    settle : float
+    settle : float, default 0.0
         In [0, 1/2): stop after the first temperature that moved no ``v`` across 1/2 and
         left every ``v`` within `settle` of 0 or 1; 0 runs the whole schedule.
     state : list, optional
         A one-element list that receives the analog state array (updated in place).
+
+    Yields
+    ------
+    step : AnnealStep
+        One per temperature, after its sweeps.
+
+    Raises
+    ------
+    ParameterError
+        A schedule out of range or longer than :data:`MAX_SWEEPS` sweeps.
 
     Examples
     --------
@@ -198,6 +210,31 @@ def anneal(net: Network, *, rng=0, t_start: float = 2.0, t_end: float = 0.02, co
 
     The schedule runs in one compiled call on neighbour lists instead of the dense rows of
     ``W``: the same updates in the same order from the same generator, so the same ``v``.
+
+    Parameters
+    ----------
+    net : Network
+        The network to anneal.
+    rng : int or numpy.random.Generator, default 0
+        Seeds the start (``v = 1/2`` plus noise of 0.01), the visiting orders and the polish.
+    t_start, t_end : float, default 2.0, 0.02
+        First and last temperature, ``t_start > t_end > 0``.
+    cooling : float, default 0.9
+        Factor in (0, 1) between consecutive temperatures.
+    sweeps : int, default 2
+        Sweeps per temperature; at most :data:`MAX_SWEEPS` sweeps in all.
+    settle : float, default 0.0
+        In [0, 1/2): stop early once every ``v`` is within it of 0 or 1 (see :func:`iter_annealing`).
+
+    Returns
+    -------
+    result : AnnealResult
+        The polished state, its energy, the rounded and analog states.
+
+    Raises
+    ------
+    ParameterError
+        A schedule out of range or longer than :data:`MAX_SWEEPS` sweeps.
 
     Examples
     --------

@@ -32,6 +32,20 @@ def left_neighbours(left_xy, *, radius: float = 20.0, shape: str = "box") -> np.
     The thesis gives "distance < 20 px" (3-12, ``shape="disc"``) and "a 40 x 40 region
     centred on feature i" (§3.3, the procedure it runs; ``"box"``, the default).
 
+    Parameters
+    ----------
+    left_xy : (N, 2) float array
+        Left features ``(x, y)``.
+    radius : float, default 20.0
+        Features closer than this interact (> 0).
+    shape : {"box", "disc"}, default "box"
+        Chebyshev or Euclidean distance.
+
+    Returns
+    -------
+    pairs : (P, 2) int64 array
+        The pairs ``(i, j)``.
+
     Examples
     --------
     >>> left_neighbours([[0, 0], [15, 15], [40, 0]])

@@ -114,6 +114,7 @@ class Update:
 
     @property
     def changed(self) -> bool:
+        """bool: whether the output changed."""
         return self.old != self.new
 
 
@@ -167,16 +168,19 @@ def iter_updates(net: Network, *, rng=0, state=None, stop_rule: str = "sweep",
 
     Parameters
     ----------
-    rng : int or numpy.random.Generator
+    net : Network
+        The network to run.
+    rng : int or numpy.random.Generator, default 0
         Seed of the visiting order (:func:`visiting_order`); a Generator gives one seed per run.
     state : (n,) array_like of {0, 1}, optional
         Initial outputs; all candidates on by default (§3.3).
-    stop_rule : {"sweep", "stall"}
-    rule : {"exact", "thesis"}
+    stop_rule : {"sweep", "stall"}, default "sweep"
+        What stops the run (see the module).
+    rule : {"exact", "thesis"}, default "exact"
         The sound Hopfield form, or (3-17)/(3-20) literally.
-    patience : int
+    patience : int, default 200
         Unchanged attempts in a row that stop the ``"stall"`` rule.
-    max_sweeps : int
+    max_sweeps : int, default 500
         Give up after ``max_sweeps * n`` attempts.
 
     Yields
@@ -253,6 +257,7 @@ class RunResult:
 
     @cached_property
     def energy(self) -> float:
+        """float: energy (3-15) of the final state."""
         return _energy_of(self.net, self.state)
 
     @classmethod
@@ -279,6 +284,35 @@ def run(net: Network, *, rng=0, state=None, stop_rule: str = "sweep", rule: str 
 
     Parameters are those of :func:`iter_updates`, and `kernel`: ``"numba"`` (compiled) or
     ``"textbook"`` (:func:`iter_updates`), bit-identical for the same arguments.
+
+    Parameters
+    ----------
+    net : Network
+        The network to run.
+    rng : int or numpy.random.Generator, default 0
+        Seed of the visiting order.
+    state : (n,) array_like of {0, 1}, optional
+        Initial outputs; all candidates on by default.
+    stop_rule : {"sweep", "stall"}, default "sweep"
+        What stops the run.
+    rule : {"exact", "thesis"}, default "exact"
+        Which weights.
+    patience : int, default 200
+        Unchanged attempts in a row that stop the ``"stall"`` rule.
+    max_sweeps : int, default 500
+        Give up after ``max_sweeps * n`` attempts.
+    kernel : {"numba", "textbook"}, default "numba"
+        Compiled or readable kernel.
+
+    Returns
+    -------
+    result : RunResult
+        Final state, stop rule, attempts and flips.
+
+    Raises
+    ------
+    ParameterError
+        An unknown choice, a bad state or seed.
 
     Examples
     --------

@@ -107,6 +107,23 @@ def milp_minimum(net: Network, *, time_limit: float = 60.0) -> Minimum:
     A ``ParameterError`` says when the solver gave up within `time_limit` seconds (at most
     :data:`MAX_TIME_LIMIT`) without proving optimality.
 
+    Parameters
+    ----------
+    net : Network
+        The network.
+    time_limit : float, default 60.0
+        Seconds the solver may take, > 0 and at most :data:`MAX_TIME_LIMIT`.
+
+    Returns
+    -------
+    minimum : Minimum
+        A minimising state (``n_minima`` 1, ``method`` ``"milp"``).
+
+    Raises
+    ------
+    ParameterError
+        A bad `time_limit`, or no proven optimum within it.
+
     Examples
     --------
     >>> net = Network.from_arrays(1, 2, rows=[0, 0], cols=[0, 1], similarity=[0.5, -0.7],

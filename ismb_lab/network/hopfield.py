@@ -112,10 +112,12 @@ class Topology:
 
     @property
     def n_neurons(self) -> int:
+        """int: candidate neurons."""
         return len(self.rows)
 
     @property
     def n_pairs(self) -> int:
+        """int: interacting neuron pairs."""
         return len(self.pair_a)
 
     @cached_property
@@ -156,18 +158,25 @@ class Topology:
 class Network:
     """An energy (3-15) over the candidate neurons of one image pair.
 
-    Parameters
+    Attributes
     ----------
+    topology : Topology
+        The candidate neurons and their interacting pairs.
     similarity : (n,) float array_like
         ``S_ik`` of each neuron, in ``[-1, 1]``.
     pair_c : (P,) float array_like
         Compatibility ``C_ab`` in ``[-1, 1]`` of each interacting pair.
     self_c : (n,) float array_like, optional
         ``C_ikik``; only the thesis' literal rule uses it.
-    uniqueness : float
+    uniqueness : float, default 1.0
         ``kappa > 0`` (1 in (3-15)).
-    match_bias : float
+    match_bias : float, default 2.0
         ``beta`` (2 in (3-15): exactly one match per feature).
+
+    Raises
+    ------
+    ParameterError
+        Arrays of the wrong length, values outside ``[-1, 1]``, or ``kappa <= 0``.
 
     Examples
     --------
@@ -221,7 +230,32 @@ class Network:
     @classmethod
     def from_arrays(cls, n_left, n_right, rows, cols, similarity, pair_a, pair_b, pair_c,
                     self_c=None, uniqueness: float = 1.0, match_bias: float = 2.0) -> "Network":
-        """Build the topology and the network in one call."""
+        """Build the topology and the network in one call.
+
+        Parameters
+        ----------
+        n_left, n_right : int
+            Features in the left and the right image.
+        rows, cols : (n,) int array_like
+            Left and right feature of each candidate neuron, sorted by ``(i, k)``.
+        similarity : (n,) float array_like
+            ``S_ik`` of each neuron, in ``[-1, 1]``.
+        pair_a, pair_b : (P,) int array_like
+            Interacting neuron pairs.
+        pair_c : (P,) float array_like
+            ``C_ab`` of each pair, in ``[-1, 1]``.
+        self_c : (n,) float array_like, optional
+            ``C_ikik``, for the thesis' literal rule.
+        uniqueness : float, default 1.0
+            ``kappa``.
+        match_bias : float, default 2.0
+            ``beta``.
+
+        Returns
+        -------
+        net : Network
+            The network.
+        """
         return cls(Topology(n_left, n_right, rows, cols, pair_a, pair_b), similarity, pair_c, self_c,
                    uniqueness, match_bias)
 
@@ -379,6 +413,20 @@ def hopfield_form(net: Network, rule: str = "exact") -> tuple[np.ndarray, np.nda
     ``"thesis"``: (3-17) literally, with the diagonal ``C_ikik - 2 kappa``.  Both have
     ``I = beta + S``; the constant is :attr:`Network.constant`.
 
+    Parameters
+    ----------
+    net : Network
+        The network.
+    rule : {"exact", "thesis"}, default "exact"
+        Which weights.
+
+    Returns
+    -------
+    W : (n, n) float array
+        The weights.
+    I : (n,) float array
+        The biases.
+
     Examples
     --------
     >>> net = Network.from_arrays(1, 2, rows=[0, 0], cols=[0, 1], similarity=[0.5, 0.0],
@@ -407,6 +455,23 @@ def hopfield_form(net: Network, rule: str = "exact") -> tuple[np.ndarray, np.nda
 
 def energy(net: Network, state) -> float:
     """The energy (3-15) of a 0/1 `state`, from ``C`` and ``S`` directly (never the weights).
+
+    Parameters
+    ----------
+    net : Network
+        The network.
+    state : (n,) 0/1 array
+        Output of each candidate neuron.
+
+    Returns
+    -------
+    E : float
+        The energy.
+
+    Raises
+    ------
+    ParameterError
+        `state` not a 0/1 array of length ``n``.
 
     Examples
     --------

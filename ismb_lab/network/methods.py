@@ -43,12 +43,16 @@ class Problem:
 
     Attributes
     ----------
+    left_xy, right_xy : (N_l, 2), (N_r, 2) float ndarray
+        The features ``(x, y)`` of each image.
     dissimilarity : (N_l, N_r) ndarray
         ``M_ik`` (3-8).
     rows, cols : (n,) int ndarray
         Candidate neurons ``(i, k)``, sorted.
     pairs : NeuronPairs
         Interacting neuron pairs with their ``dd``, ``dD``, ``dY``.
+    topology : Topology
+        The neurons and pairs, shared by every network of the pair.
     """
 
     left_xy: np.ndarray
@@ -63,6 +67,7 @@ class Problem:
 
     @property
     def n_neurons(self) -> int:
+        """int: candidate neurons."""
         return len(self.rows)
 
     def __getstate__(self) -> dict:
@@ -95,6 +100,31 @@ def build_problem(left_xy, right_xy, dissimilarity, *, shift: float = 20.0,
     the window options are :func:`~ismb_lab.network.similarity.candidate_mask`'s, and
     `radius` and `neighbourhood` those of :func:`~ismb_lab.network.compatibility.left_neighbours`.
 
+    Parameters
+    ----------
+    left_xy, right_xy : (N_l, 2), (N_r, 2) float array
+        Features ``(x, y)`` of each image.
+    dissimilarity : (N_l, N_r) float array
+        ``M_ik`` (3-8).
+    shift : float, default 20.0
+        Pixels left of each left feature at which the candidate window is centred.
+    window_height, window_width : float, default 30.0, 40.0
+        Size of the candidate window.
+    radius : float, default 20.0
+        Radius within which left features interact.
+    neighbourhood : {"box", "disc"}, default "box"
+        Shape of that neighbourhood.
+
+    Returns
+    -------
+    problem : Problem
+        The candidates, their interacting pairs and ``M``.
+
+    Raises
+    ------
+    ParameterError
+        `dissimilarity` not of shape ``(N_l, N_r)``, or a bad window.
+
     Examples
     --------
     >>> p = build_problem([[100, 50], [110, 50]], [[80, 51], [90, 51]], np.zeros((2, 2)))
@@ -117,7 +147,25 @@ def build_problem(left_xy, right_xy, dissimilarity, *, shift: float = 20.0,
 
 
 class Method:
-    """An energy recipe: how ``S`` and ``X`` are formed, and any post-processing (see :func:`get_method`)."""
+    """An energy recipe: how ``S`` and ``X`` are formed, and any post-processing (see :func:`get_method`).
+
+    Attributes
+    ----------
+    name : str
+        Registry name (``"III"``).
+    section : str
+        Where the thesis describes it.
+    genes : tuple of Gene
+        The parameters a GA searches.
+    defaults : Params
+        Default parameters (the thesis' GA values where it has them).
+    fixed : dict
+        Parameters the method runs with whatever ``params`` says.
+    derived : tuple of str
+        Parameters the method sets from each image pair.
+    description : str
+        One line for help texts.
+    """
 
     name: str = ""
     section: str = ""
@@ -131,20 +179,76 @@ class Method:
 
     @property
     def gene_names(self) -> tuple[str, ...]:
+        """tuple of str: the names of :attr:`genes`."""
         return tuple(g.name for g in self.genes)
 
     def similarity(self, problem: Problem, params: Params) -> np.ndarray:
+        """``S`` of every candidate neuron (3-10).
+
+        Parameters
+        ----------
+        problem : Problem
+            The pair's energy ingredients.
+        params : Params
+            The energy parameters.
+
+        Returns
+        -------
+        S : (n,) float array
+            In ``[-1, 1]``.
+        """
         return transfer(problem.neuron_dissimilarity, params.theta_s, params.lambda_s)
 
     def pair_measure(self, problem: Problem) -> np.ndarray:
-        """``X`` for every interacting pair, and ``X`` of a neuron with itself."""
+        """``X`` for every interacting pair, and ``X`` of a neuron with itself.
+
+        Parameters
+        ----------
+        problem : Problem
+            The pair's energy ingredients.
+
+        Returns
+        -------
+        X : (P,) float array
+            ``X`` of each interacting pair.
+        """
         raise NotImplementedError
 
     def self_measure(self, problem: Problem) -> np.ndarray:
+        """``X`` of each neuron with itself (zeros unless the method says otherwise).
+
+        Parameters
+        ----------
+        problem : Problem
+            The pair's energy ingredients.
+
+        Returns
+        -------
+        X : (n,) float array
+            One value per neuron.
+        """
         return np.zeros(problem.n_neurons)
 
     def network(self, problem: Problem, params: Params) -> Network:
-        """The network whose energy (3-15) this method minimises."""
+        """The network whose energy (3-15) this method minimises.
+
+        Parameters
+        ----------
+        problem : Problem
+            The pair's energy ingredients.
+        params : Params
+            The energy parameters.
+
+        Returns
+        -------
+        net : Network
+            The network of `problem` with these parameters.
+
+        Raises
+        ------
+        ParameterTypeError
+            `params` not a Params.
+        """
         if not isinstance(params, Params):
             raise ParameterTypeError(message("params", f"Method-{self.name}", "a Params instance", params))
         pair_x, self_x = self._measures(problem)
@@ -181,7 +285,20 @@ class Method:
         return np.full(len(table["theta_c"]), 2.0)   # Network's default, which network() keeps
 
     def postprocess(self, problem: Problem, on: np.ndarray) -> np.ndarray:
-        """Which of the neurons that are on (indices `on`) stay matches; `on` itself by default."""
+        """Which of the neurons that are on (indices `on`) stay matches; `on` itself by default.
+
+        Parameters
+        ----------
+        problem : Problem
+            The pair's energy ingredients.
+        on : (m,) int array
+            Indices of the neurons on.
+
+        Returns
+        -------
+        kept : (m',) int array
+            The neurons that stay matches.
+        """
         return on
 
     def __repr__(self) -> str:
@@ -344,6 +461,21 @@ def register_method(method: Method) -> Method:
 
     Returns `method`.
 
+    Parameters
+    ----------
+    method : Method
+        An instance with a new name, distinct genes and Params defaults.
+
+    Returns
+    -------
+    method : Method
+        `method` itself.
+
+    Raises
+    ------
+    ParameterError, ParameterTypeError
+        A name already taken, no or repeated genes, or defaults that are not Params.
+
     Examples
     --------
     >>> class Flat(MethodIII):
@@ -437,6 +569,20 @@ DEFAULT_METHOD = MethodIII.name
 def get_method(name) -> Method:
     """Look a method up by name (a ``Method`` passes through).
 
+    Parameters
+    ----------
+    name : str or Method
+        A name of :func:`method_names`, or a Method.
+
+    Returns
+    -------
+    method : Method
+        The registered method.
+
+    Raises
+    ------
+    ParameterError
+        An unknown name.
 
     Examples
     --------

@@ -36,6 +36,24 @@ class Params:
     The defaults are the thesis' Method-III values (§5.2.2).  ``match_bias`` is None unless
     set, and then left out of ``repr`` and :meth:`to_dict`.
 
+    Attributes
+    ----------
+    theta_c : float, default 17.97
+        Tolerance of ``X`` in ``C`` (3-13), pixels, in [0, :data:`MAX_THETA`].
+    theta_s : float, default 24.02
+        Tolerance of ``M`` in ``S`` (3-10), grey levels, in [0, :data:`MAX_THETA`].
+    lambda_c : float, default 6.37
+        Steepness of ``C``, in (0, :data:`MAX_LAMBDA`].
+    lambda_s : float, default 2.2
+        Steepness of ``S``, in (0, :data:`MAX_LAMBDA`].
+    match_bias : float or None, default None
+        ``beta`` of Method-NM, ``|beta|`` at most :data:`MAX_BIAS`.
+
+    Raises
+    ------
+    ParameterError
+        A value out of its range.
+
     Examples
     --------
     >>> Params()
@@ -76,6 +94,13 @@ class Params:
         return "Params(" + ", ".join(f"{k}={v!r}" for k, v in self.to_dict().items()) + ")"
 
     def to_dict(self) -> dict:
+        """The fields by name, without ``match_bias`` when it is None.
+
+        Returns
+        -------
+        values : dict
+            Field name to value.
+        """
         return {k: v for k, v in asdict(self).items() if v is not None}
 
     @classmethod
@@ -94,6 +119,17 @@ class Params:
 class Gene:
     """One parameter a method's GA searches: a :class:`Params` field, its search bounds, what
     it means (for help texts) and its thesis symbol (for slider labels).
+
+    Attributes
+    ----------
+    name : str
+        A field of :class:`Params`.
+    low, high : float
+        Search bounds, ``low < high``.
+    meaning : str, default ""
+        What it means, for help texts.
+    symbol : str, default ""
+        Its thesis symbol, for slider labels.
 
     Examples
     --------

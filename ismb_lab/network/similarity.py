@@ -29,6 +29,25 @@ def transfer(x, theta: float, lam: float) -> np.ndarray:
     Evaluated as the identical ``-tanh(lam * (x - theta) / 2)``, which never overflows.
     `theta` is the value of `x` where the output crosses zero, `lam` the steepness (Fig. 3.3).
 
+    Parameters
+    ----------
+    x : float or array
+        The measure (``M`` or ``X``).
+    theta : float or array
+        Where the output crosses zero.
+    lam : float or array
+        Steepness.
+
+    Returns
+    -------
+    y : float array
+        In ``[-1, 1]``, broadcast from the inputs.
+
+    Raises
+    ------
+    ParameterError
+        A non-finite `theta` or `lam`.
+
     Examples
     --------
     >>> transfer([0.0, 10.0, 1e6], theta=10.0, lam=2.0).round(4)
@@ -237,6 +256,16 @@ def no_match_cut(dissimilarity) -> float:
     Nearly all pairs are unrelated, so the median is a typical wrong match in this pair's
     own contrast.  The peer matchers' no-match cost, and Method-NM3's ``theta_s``; 1.0
     when there are no pairs.
+
+    Parameters
+    ----------
+    dissimilarity : (N_l, N_r) float array
+        ``M``.
+
+    Returns
+    -------
+    cut : float
+        Half the median, at least machine epsilon.
 
     Examples
     --------

@@ -47,6 +47,21 @@ class Solution:
     ``stop_rule`` is what stopped the discrete network (``"sweep"``, ``"stall"`` or
     ``"max_attempts"``), or ``"minimum"`` for a proven global minimum; ``attempts`` are the
     discrete network's (0 for annealing and exact); ``energy`` (3-15) is computed when first read.
+
+    Attributes
+    ----------
+    state : (n,) uint8 array
+        Final output of each candidate neuron.
+    stop_rule : str
+        ``"sweep"``, ``"stall"``, ``"max_attempts"`` or ``"minimum"``.
+    attempts : int
+        The discrete network's update attempts.
+    net : Network
+        The network solved.
+    converged : bool, default True
+        Whether a stop rule fired, rather than the attempt limit.
+    solver : str, default "network"
+        Name of the solver.
     """
 
     state: np.ndarray
@@ -58,6 +73,7 @@ class Solution:
 
     @cached_property
     def energy(self) -> float:
+        """float: energy (3-15) of the final state."""
         return _energy_of(self.net, self.state)
 
     @classmethod
@@ -77,6 +93,15 @@ class Solver:
     A subclass sets `name`, `description` and `seeded` (whether the seed matters), declares
     its options as dataclass fields with defaults, checks them in ``__post_init__`` and
     implements :meth:`solve`.
+
+    Attributes
+    ----------
+    name : str
+        Registry name (class variable).
+    description : str
+        One line for help texts (class variable).
+    seeded : bool
+        Whether the seed matters (class variable).
     """
 
     name: ClassVar[str] = ""
@@ -84,7 +109,20 @@ class Solver:
     seeded: ClassVar[bool] = True
 
     def solve(self, net: Network, seed: int) -> Solution:
-        """Minimise `net`'s energy from update-order (or annealing) seed `seed`."""
+        """Minimise `net`'s energy from update-order (or annealing) seed `seed`.
+
+        Parameters
+        ----------
+        net : Network
+            The network whose energy is minimised.
+        seed : int
+            Update-order (or annealing) seed.
+
+        Returns
+        -------
+        solution : Solution
+            The final state and what stopped it.
+        """
         raise NotImplementedError
 
     def options(self) -> dict:
@@ -222,6 +260,23 @@ DEFAULT_SOLVER = NETWORK
 def register_solver(solver: Solver) -> Solver:
     """Add a solver to the registry that the command line, the GA and the widgets read.
 
+    Parameters
+    ----------
+    solver : Solver
+        An instance with a new, non-empty name that implements ``solve``.
+
+    Returns
+    -------
+    solver : Solver
+        `solver` itself.
+
+    Raises
+    ------
+    ParameterTypeError
+        Not a Solver.
+    ParameterError
+        A name already taken or empty, or no ``solve``.
+
     Examples
     --------
     >>> @dataclass(frozen=True)
@@ -286,7 +341,33 @@ def get_solver(solver, owner: str = "get_solver", parameter: str = "solver", **o
 def solve(net: Network, solver=DEFAULT_SOLVER, *, seed: int = 0, owner: str = "solve", **options) -> Solution:
     """Minimise `net`'s energy with a solver of :data:`SOLVERS` (a name or a configured
     :class:`Solver`) and its `options`; `seed` is the update-order (and annealing) seed, and
-    `owner` the function named in error messages."""
+    `owner` the function named in error messages.
+
+    Parameters
+    ----------
+    net : Network
+        The network whose energy is minimised.
+    solver : str or Solver, default "network"
+        The solver.
+    seed : int, default 0
+        Update-order (and annealing) seed, >= 0.
+    owner : str, default "solve"
+        Function named in error messages.
+    **options
+        Solver options to change.
+
+    Returns
+    -------
+    solution : Solution
+        The final state, before any post-processing.
+
+    Raises
+    ------
+    ParameterTypeError
+        `net` not a Network.
+    ParameterError
+        An unknown solver or option, or a bad seed.
+    """
     chosen = solver if isinstance(solver, Solver) and not options else get_solver(solver, owner, **options)
     if not isinstance(net, Network):
         raise ParameterTypeError(message("net", owner, "a Network", net))
@@ -306,6 +387,20 @@ class Matches(NamedTuple):
 def matched_neurons(neurons, state, method=None) -> np.ndarray:
     """Indices of the neurons that are matches in a final state, sorted: those on, less any
     that `method`'s :meth:`~ismb_lab.network.methods.Method.postprocess` drops.
+
+    Parameters
+    ----------
+    neurons : Problem, Network or Topology
+        Anything with ``rows`` and ``cols``.
+    state : (n,) 0/1 array
+        A final state.
+    method : Method, optional
+        Whose post-processing applies; None keeps every neuron on.
+
+    Returns
+    -------
+    on : (m,) int64 array
+        Indices of the matched neurons, sorted.
 
     Examples
     --------
@@ -327,6 +422,25 @@ def one_match_per_corner(problem, on, key=None) -> np.ndarray:
     leave both on.  A decoding option (``match(..., one_to_one=True)``); the GA's fitness
     does not apply it.  `problem` is anything with ``rows``, ``cols`` and
     ``neuron_dissimilarity``.
+
+    Parameters
+    ----------
+    problem : Problem
+        Anything with ``rows``, ``cols`` and ``neuron_dissimilarity``.
+    on : (m,) int array
+        Indices of the matched neurons.
+    key : (m,) float array, optional
+        Order of preference, lowest first; default ``M`` of each neuron.
+
+    Returns
+    -------
+    kept : (m',) int64 array
+        The neurons kept, sorted.
+
+    Raises
+    ------
+    ParameterError
+        `key` not as long as `on`.
 
     Examples
     --------
@@ -362,6 +476,20 @@ def to_matches(neurons, state, method=None) -> Matches:
 
     `neurons` is anything with ``rows`` and ``cols`` (a Problem, Network or Topology);
     `method`'s :meth:`~ismb_lab.network.methods.Method.postprocess` decides which neurons stay.
+
+    Parameters
+    ----------
+    neurons : Problem, Network or Topology
+        Anything with ``rows`` and ``cols``.
+    state : (n,) 0/1 array
+        A final state.
+    method : Method, optional
+        Whose post-processing applies; None keeps every neuron on.
+
+    Returns
+    -------
+    matches : Matches
+        ``pairs`` (``(m, 2)`` int64) and the post-processed ``state``.
 
     Examples
     --------
