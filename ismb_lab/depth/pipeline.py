@@ -55,6 +55,20 @@ def layout_match_config(layout, match_config=None) -> MatchConfig:
     """The demo's corner settings (default :data:`DEPTH_MATCH_CONFIG`) with the ROI and
     candidate-window shift of `layout` (an object with ``.roi`` and ``.shift``).
 
+    Parameters
+    ----------
+    layout : ObjectLayout or object with .roi and .shift
+        The scene layout whose ROI and shift are taken.
+    match_config : MatchConfig, optional
+        The settings to start from; default :data:`DEPTH_MATCH_CONFIG`.
+
+    Returns
+    -------
+    config : MatchConfig
+        `match_config` with ``roi`` and ``shift`` of `layout`.
+
+    Examples
+    --------
     >>> from ismb_lab.scenes import object_layout
     >>> c = layout_match_config(object_layout(0))
     >>> c.roi, c.shift, c.n_min
@@ -75,6 +89,26 @@ def changed_roi(background_left, scene_left, roi="center", *, threshold: float =
     Changed: the difference, smoothed by a Gaussian of `sigma` px, exceeds `threshold` grey levels.
     The box grows by `margin` px (within `roi`) so that corners on an object's outline are inside.
 
+    Parameters
+    ----------
+    background_left, scene_left : (h, w) array
+        The left images of the background and of the scene, of one size.
+    roi : str or (x, y, w, h) tuple, default "center"
+        Where to look, as :func:`resolve_roi` takes it.
+    threshold : float, default :data:`CHANGE_THRESHOLD`
+        Grey levels of smoothed difference that count as a change.
+    sigma : float, default :data:`CHANGE_SIGMA`
+        Standard deviation (px) of the Gaussian smoothing the difference.
+    margin : int, default 4
+        Pixels the box grows by on every side, clipped to `roi`.
+
+    Returns
+    -------
+    box : (x, y, w, h) tuple of int or None
+        The changed box in image coordinates; None when nothing changed.
+
+    Examples
+    --------
     >>> import numpy as np
     >>> background = np.zeros((240, 320))
     >>> scene = background.copy()
@@ -103,6 +137,20 @@ def scene_match_config(background, scene, match_config=None):
     """`match_config` (default :data:`DEPTH_MATCH_CONFIG`) with its ROI cut down to
     :func:`changed_roi` of two StereoPairs; `match_config` itself when nothing changed.
 
+    Parameters
+    ----------
+    background, scene : StereoPair
+        The empty view and the view with objects, of one size.
+    match_config : MatchConfig, optional
+        The settings to cut down; default :data:`DEPTH_MATCH_CONFIG`.
+
+    Returns
+    -------
+    config : MatchConfig
+        `match_config` with ``roi`` the changed box.
+
+    Examples
+    --------
     >>> from ismb_lab.images.io import load_pair
     >>> from ismb_lab.scenes import lab_scene, toy_car_scene
     >>> bg, sc = (load_pair(s.left, s.right) for s in (lab_scene(0), toy_car_scene(0)))
@@ -126,6 +174,22 @@ def changed_regions(background_image, scene_image, roi="center", *, threshold: f
     """Boxes ``(x, y, w, h)``, left to right, of the blobs (8-neighbours, `min_pixels` or more) of
     the pixels :func:`changed_roi` counts as changed, each grown by `margin` within `roi`.
 
+    Parameters
+    ----------
+    background_image, scene_image : (h, w) array
+        The two images to compare, of one size.
+    roi, threshold, sigma, margin
+        As in :func:`changed_roi`.
+    min_pixels : int, default 20
+        Smallest blob (changed pixels) that counts.
+
+    Returns
+    -------
+    boxes : list of (x, y, w, h) tuple
+        One box per blob, sorted left to right.
+
+    Examples
+    --------
     >>> import numpy as np
     >>> background = np.zeros((240, 320))
     >>> scene = background.copy()
@@ -171,6 +235,20 @@ def scene_prepared(background, scene, match_config=None) -> Prepared:
     and each blob of change (:func:`changed_regions`) of either image gets :data:`REGION_CORNERS`
     of its own, so that a textured poster cannot take a plain object's share.
 
+    Parameters
+    ----------
+    background, scene : StereoPair
+        The empty view and the view with objects, of one size.
+    match_config : MatchConfig, optional
+        The settings; default :data:`DEPTH_MATCH_CONFIG`.
+
+    Returns
+    -------
+    prepared : Prepared
+        The scene pair, its config (``roi`` the changed box), corners and energy ingredients.
+
+    Examples
+    --------
     >>> from ismb_lab.images.io import load_pair
     >>> from ismb_lab.scenes import lab_scene, toy_car_scene
     >>> bg, sc = (load_pair(s.left, s.right) for s in (lab_scene(0), toy_car_scene(0)))
@@ -208,6 +286,29 @@ def load_stereo(value, name: str, owner: str) -> StereoPair:
     """A pair as the demo takes it: a StereoPair, a pair folder (``left.png`` and ``right.png``),
     a ``(left, right)`` pair of images or paths, or an object with ``.left`` and ``.right``.
 
+    Parameters
+    ----------
+    value : StereoPair, str, Path, (left, right) tuple or object with .left and .right
+        The pair to load.
+    name : str
+        The parameter's name, for error messages.
+    owner : str
+        The calling function's name, for error messages.
+
+    Returns
+    -------
+    pair : StereoPair
+        The two images as grey float arrays of one size.
+
+    Raises
+    ------
+    ParameterError
+        A folder without ``left.png`` or ``right.png``.
+    ParameterTypeError
+        Any other kind of value.
+
+    Examples
+    --------
     >>> import numpy as np
     >>> load_stereo((np.zeros((40, 60)), np.zeros((40, 60))), "background", "demo").shape
     (40, 60)
@@ -240,6 +341,22 @@ def depth_match(pair, *, background=None, method=DEFAULT_METHOD, params=None, ma
     With `background`, `pair` is a scene whose corners are sought where it changed
     (:func:`scene_prepared`).  The other arguments are :func:`relative_depth`'s.
 
+    Parameters
+    ----------
+    pair : StereoPair, folder or (left, right) pair
+        The pair to match.
+    background : StereoPair, folder or (left, right) pair, optional
+        The empty view; corners are then sought only where `pair` differs from it.
+    method, params, match_config, seed, solver, one_to_one, **network
+        As in :func:`relative_depth`.
+
+    Returns
+    -------
+    result : MatchResult
+        The matches of `pair`.
+
+    Examples
+    --------
     >>> from ismb_lab.scenes import lab_scene
     >>> m = depth_match(lab_scene(0, supersample=1))
     >>> m.solver, m.stop_rule, len(m.pairs) > 10
@@ -279,7 +396,20 @@ def _match(prepared: Prepared, method, params, seed, solver, one_to_one=False) -
 
 def depth_pairs(background, scene, match_config=None) -> tuple[Prepared, Prepared]:
     """The (background, scene) Prepared pairs of :func:`relative_depth`, to pass back as its
-    `prepared` when only the method, parameters, seed or tolerances change."""
+    `prepared` when only the method, parameters, seed or tolerances change.
+
+    Parameters
+    ----------
+    background, scene : StereoPair, folder or (left, right) pair
+        Two pairs of the same view, of one size.
+    match_config : MatchConfig, optional
+        Corner and window settings; default :data:`DEPTH_MATCH_CONFIG`.
+
+    Returns
+    -------
+    prepared : (Prepared, Prepared) tuple
+        The background's and the scene's prepared pairs.
+    """
     return _depth_pairs(background, scene, match_config, "depth_pairs")
 
 
@@ -299,13 +429,19 @@ def relative_depth(background, scene, *, method=DEFAULT_METHOD, params=None, mat
 
     Parameters
     ----------
-    background, scene
+    background, scene : StereoPair, folder or (left, right) pair
         Two pairs of the same view, of one size, as :func:`load_stereo` takes them.
+    method : str, default ``DEFAULT_METHOD``
+        The matching method, a registered method name.
     params : Params, optional
         Default :data:`DEPTH_PARAMS` for Method-III, the method's own for the others.
-    seed : int
+    match_config : MatchConfig, optional
+        Corner and window settings; default :data:`DEPTH_MATCH_CONFIG`.
+    config : DepthConfig, optional
+        Depth settings (tolerances, grouping); default ``DepthConfig()``.
+    seed : int, default 0
         Update-order seed of both runs.
-    solver : str or Solver
+    solver : str or Solver, default :data:`DEPTH_SOLVER`
         A name in :data:`ismb_lab.network.solvers.SOLVERS` or a configured solver.
     prepared : (Prepared, Prepared), optional
         :func:`depth_pairs` of these images and `match_config`, which are then not read again.
@@ -315,6 +451,16 @@ def relative_depth(background, scene, *, method=DEFAULT_METHOD, params=None, mat
         Keep at most one match per corner (:func:`ismb_lab.matching.pipeline.match`).
     **network
         The solver's options (e.g. ``stop_rule`` of the discrete network).
+
+    Returns
+    -------
+    result : DepthResult
+        The scene's objects ranked near to far, with ``scene_roi`` set to the scene's searched box.
+
+    Raises
+    ------
+    ParameterError, ParameterTypeError
+        Pairs of different sizes, or a bad `config`, `prepared` or `silhouettes`.
 
     Examples
     --------
@@ -359,6 +505,20 @@ def pair_silhouettes(prepared, config: DepthConfig | None = None) -> Silhouettes
     """:func:`~ismb_lab.depth.outlines.silhouettes` of :func:`depth_pairs`, in the background's ROI
     at the whole-pixel shifts of the scene's candidate window.
 
+    Parameters
+    ----------
+    prepared : (Prepared, Prepared) tuple
+        What :func:`depth_pairs` returns.
+    config : DepthConfig, optional
+        Its ``outline`` settings are used; default ``DepthConfig()``.
+
+    Returns
+    -------
+    blobs : Silhouettes
+        The scene's new objects, with their disparities.
+
+    Examples
+    --------
     >>> from ismb_lab.scenes import lab_scene, toy_car_scene
     >>> blobs = pair_silhouettes(depth_pairs(lab_scene(0), toy_car_scene(0)))
     >>> blobs.disparity.tolist()        # the two cars, near one first (left to right)
