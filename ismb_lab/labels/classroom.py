@@ -29,14 +29,26 @@ _UNSAFE = re.compile(r"[^A-Za-z0-9._-]+")
 
 
 def user_name() -> str:
-    """Who is labelling: ``JUPYTERHUB_USER`` on a hub, else the login name, made safe for a file name."""
+    """Who is labelling: ``JUPYTERHUB_USER`` on a hub, else the login name, made safe for a file name.
+
+    Returns
+    -------
+    name : str
+        Letters, digits, ``.``, ``_`` and ``-`` only; ``"student"`` if nothing is left.
+    """
     name = os.environ.get("JUPYTERHUB_USER") or getpass.getuser() or "student"
     return _UNSAFE.sub("-", name).strip("-.") or "student"
 
 
 def voila_without_hub() -> bool:
     """Whether this kernel serves a Voilà page without a hub (Voilà sets ``SERVER_SOFTWARE``):
-    one login for every visitor, so the login name does not say who is labelling."""
+    one login for every visitor, so the login name does not say who is labelling.
+
+    Returns
+    -------
+    flag : bool
+        True on a Voilà page served without a hub.
+    """
     return (os.environ.get("SERVER_SOFTWARE", "").startswith("voila")
             and not os.environ.get("JUPYTERHUB_USER"))
 
@@ -52,6 +64,24 @@ def targets_path(pair: str, folder=".", user: str | None = None, *, also=SIBLING
     It is the file in `folder` if there is one, else the first in the folders `also` (relative
     to `folder`) that holds it, else the path in `folder`; ``also=()`` names what a save writes.
 
+    Parameters
+    ----------
+    pair : str
+        The image pair's name.
+    folder : str or Path, default "."
+        The notebook's folder.
+    user : str, optional
+        The student; default :func:`user_name`.
+    also : tuple of str, default :data:`SIBLINGS`
+        Other folders, relative to `folder`, to look in.
+
+    Returns
+    -------
+    path : Path
+        The targets file to read or write.
+
+    Examples
+    --------
     >>> str(targets_path("synthetic", "work", user="ann lee", also=()))
     'work/targets-ann-lee-synthetic.json'
     """
@@ -95,7 +125,17 @@ def _locked(path: Path):
 
 @dataclass(frozen=True, eq=False)
 class Merged:
-    """What :func:`save_merging` wrote: the targets, and what it took from the file on disk."""
+    """What :func:`save_merging` wrote: the targets, and what it took from the file on disk.
+
+    Attributes
+    ----------
+    targets : TargetSet
+        The pairs written.
+    kept_from_disk : int
+        Pairs another process saved that were kept.
+    replaced : int
+        Pairs on disk that gave way to one of our new pairs.
+    """
 
     targets: TargetSet
     kept_from_disk: int
@@ -110,6 +150,27 @@ def save_merging(path, ours: TargetSet, base: TargetSet | None = None) -> Merged
     theirs; a pair of theirs that gives one of our new pairs' points another partner gives way
     (counted in ``replaced``).  Their keys and extras survive; the write is atomic.
 
+    Parameters
+    ----------
+    path : str or Path
+        The targets file, in an existing folder.
+    ours : TargetSet
+        The pairs as we have them now.
+    base : TargetSet, optional
+        What we last loaded or saved; None if never.
+
+    Returns
+    -------
+    merged : Merged
+        The targets written and the counts of what was taken from disk.
+
+    Raises
+    ------
+    ParameterError
+        No such folder, or the file holds targets for other images.
+
+    Examples
+    --------
     >>> import tempfile, pathlib
     >>> path = pathlib.Path(tempfile.mkdtemp()) / "t.json"
     >>> a = save_merging(path, TargetSet([[10, 10]], [[5, 10]])).targets   # student A's first save
@@ -167,6 +228,23 @@ class Pool:
     pair handed in but not pooled, with its votes, voters, rivals and ``reasons`` (``"left"``,
     ``"right"``, ``"min_votes"``, ``"two_partners"``); `identical` the files of different students
     that hold the same pairs.
+
+    Attributes
+    ----------
+    targets : TargetSet
+        The pooled pairs, with extras ``labelled_by`` and ``of``.
+    disagreements : list of dict
+        Points given several partners.
+    students : dict of str to dict
+        Per student, their counts.
+    min_votes : int, default 1
+        Votes a pair needed on top of a majority.
+    dropped : list of dict
+        Pairs handed in but not pooled, with why.
+    identical : list of dict
+        Groups of students whose files hold the same pairs.
+    identical_votes : {"once", "each"}, default "once"
+        How alike files voted.
     """
 
     targets: TargetSet
@@ -178,6 +256,7 @@ class Pool:
     identical_votes: str = "once"
 
     def report(self) -> str:
+        """The pool as text: counts, each student's line, identical files and dropped pairs."""
         files = sum(s.get("files", 1) for s in self.students.values())
         source = (f"{files} files" if files == len(self.students)
                   else f"{len(self.students)} students ({files} files)")
@@ -229,6 +308,20 @@ def collected(folder, pattern: str = "targets-*.json") -> dict:
     `folder` is nbgrader's ``submitted/`` (or the course folder holding it), a folder per student
     named by nbgrader, the files anywhere below.  Symbolic links are never followed.
 
+    Parameters
+    ----------
+    folder : str or Path
+        nbgrader's ``submitted/`` folder or the course folder holding it.
+    pattern : str, default "targets-*.json"
+        The files' name pattern.
+
+    Returns
+    -------
+    files : dict of str to list of Path
+        Each student's files, sorted.
+
+    Examples
+    --------
     >>> import tempfile, pathlib
     >>> course = pathlib.Path(tempfile.mkdtemp())
     >>> for who in ("ann", "bob"):
@@ -340,6 +433,26 @@ def pool(paths, answer_key: TargetSet | None = None, tol: float = 1.5, *, min_vo
     exactly alike on their own lose one vote between them, which matters only where others
     dispute those pairs; the report names them.
 
+    Parameters
+    ----------
+    paths : dict of str to list of path, or list of path
+        Each student's targets files, or files voting by stem.
+    answer_key : TargetSet, optional
+        The teacher's pairs; each student's share of it is reported.
+    tol : float, default 1.5
+        The answer key's tolerance, px.
+    min_votes : int, default 1
+        Votes a pair needs on top of a strict majority.
+    identical : {"once", "each"}, default "once"
+        Whether alike files vote once between them or once each.
+
+    Returns
+    -------
+    pooled : Pool
+        The pooled targets, disagreements, per-student counts and dropped pairs.
+
+    Examples
+    --------
     >>> import tempfile, pathlib
     >>> folder = pathlib.Path(tempfile.mkdtemp())
     >>> ann = save_targets(folder / "ann.json", TargetSet([[10, 10], [20, 20]], [[5, 10], [15, 20]]))

@@ -104,11 +104,21 @@ def _set(obj, name, value):
 class TargetSet:
     """Target pairs ``left_xy[j] <-> right_xy[j]``; immutable, methods return new sets.
 
-    `left_xy`, `right_xy` are read-only ``(m, 2)`` arrays of points >= 0, each pair at most once;
-    `left_sha256`, `right_sha256` the images' hashes (or None); `orientation` ``"upright"`` (EXIF
-    applied) or ``"as stored"``; `meta` the file's other top-level keys; `extras` a dict of other
-    keys per pair (None: all empty).
+    Attributes
+    ----------
+    left_xy, right_xy : (m, 2) float ndarray
+        Read-only ``(x, y)`` points >= 0, each pair at most once.
+    left_sha256, right_sha256 : str or None
+        The images' SHA-256 hashes, or None.
+    meta : dict
+        The file's other top-level keys (JSON values).
+    extras : tuple of dict
+        Other keys per pair; None when built means all empty.
+    orientation : {"upright", "as stored"}, default "upright"
+        Whether the points were clicked on photos with their EXIF orientation applied.
 
+    Examples
+    --------
     >>> t = TargetSet([[99, 99]], [[88, 100]], meta={"labeller": "ann"})
     >>> len(t), t.left_xy.tolist(), t.extras
     (1, [[99.0, 99.0]], ({},))
@@ -152,6 +162,20 @@ class TargetSet:
     def add(self, left_xy, right_xy, **extra) -> "TargetSet":
         """A new set with the pair ``left_xy <-> right_xy`` (and `extra` keys) appended.
 
+        Parameters
+        ----------
+        left_xy, right_xy : (x, y) pair of float
+            The new pair's points.
+        **extra
+            JSON values stored with the pair.
+
+        Returns
+        -------
+        targets : TargetSet
+            The longer set; this one is unchanged.
+
+        Examples
+        --------
         >>> t = TargetSet([[1, 2]], [[0, 2]])
         >>> len(t.add([5, 6], [4, 6], note="corner")), len(t)
         (2, 1)
@@ -163,6 +187,18 @@ class TargetSet:
     def remove(self, index) -> "TargetSet":
         """A new set without pair `index` (0-based; negative indices are refused).
 
+        Parameters
+        ----------
+        index : int
+            The pair to drop, ``0 <= index < len(self)``.
+
+        Returns
+        -------
+        targets : TargetSet
+            The shorter set; this one is unchanged.
+
+        Examples
+        --------
         >>> TargetSet([[1, 2], [5, 6]], [[0, 2], [4, 6]]).remove(0).left_xy.tolist()
         [[5.0, 6.0]]
         """
@@ -174,6 +210,13 @@ class TargetSet:
     def to_dict(self) -> dict:
         """The file's JSON object (integral coordinates as integers, no hash key for None).
 
+        Returns
+        -------
+        d : dict
+            ``version``, hashes, ``orientation``, `meta` and ``pairs``.
+
+        Examples
+        --------
         >>> TargetSet([[1, 2.5]], [[0, 2.5]]).to_dict()
         {'version': 1, 'orientation': 'upright', 'pairs': [{'left_xy': [1, 2.5], 'right_xy': [0, 2.5]}]}
         """
@@ -190,6 +233,20 @@ class TargetSet:
     def from_dict(cls, d, *, source: str = "TargetSet.from_dict") -> "TargetSet":
         """Read the file's JSON object; errors name `source` and the key (pairs from 0).
 
+        Parameters
+        ----------
+        d : dict
+            The JSON object, as :meth:`to_dict` makes it.
+        source : str, default "TargetSet.from_dict"
+            What error messages name.
+
+        Returns
+        -------
+        targets : TargetSet
+            The pairs, hashes, orientation and other keys.
+
+        Examples
+        --------
         >>> TargetSet.from_dict({"version": 1, "pairs": [{"left_xy": [1, 2], "right_xy": [0, "2"]}]})
         Traceback (most recent call last):
         ismb_lab.ParameterTypeError: The 'pairs[0].right_xy' parameter of TargetSet.from_dict must be
@@ -238,6 +295,20 @@ def _path_error(path, owner, rule) -> ParameterError:
 def save_targets(path, targets: TargetSet) -> Path:
     """Write `targets` as pretty JSON ending in a newline, atomically (temp file, fsync, rename).
 
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The file, in an existing folder.
+    targets : TargetSet
+        The pairs to save.
+
+    Returns
+    -------
+    path : Path
+        The file written.
+
+    Examples
+    --------
     >>> import tempfile, pathlib
     >>> path = save_targets(pathlib.Path(tempfile.mkdtemp()) / "t.json", TargetSet([[1, 2]], [[0, 2]]))
     >>> path.read_text().splitlines()[5]
@@ -257,6 +328,29 @@ def load_targets(path, *, pair: StereoPair | None = None, shape=None,
     """Read and check a targets file: its points must lie in an image of `shape` ``(H, W)`` and
     of `pair`, whose hashes must be the file's (if it has any) unless not `check_hash`.
 
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The targets JSON file, at most :data:`MAX_BYTES`.
+    pair : StereoPair, optional
+        The images the targets belong to: their size and hashes are checked.
+    shape : (H, W) tuple of int, optional
+        An image size the points must lie in.
+    check_hash : bool, default True
+        Refuse targets whose hashes are not `pair`'s.
+
+    Returns
+    -------
+    targets : TargetSet
+        The checked pairs.
+
+    Raises
+    ------
+    ParameterError
+        An unreadable or invalid file, other images' hashes, or points outside the image.
+
+    Examples
+    --------
     >>> import tempfile, pathlib
     >>> path = save_targets(pathlib.Path(tempfile.mkdtemp()) / "t.json", TargetSet([[9, 2]], [[7, 2]]))
     >>> len(load_targets(path, shape=(10, 10)))
@@ -330,6 +424,18 @@ def _refuse_turned(pair: StereoPair, path, owner: str) -> None:
 def many_to_one(targets: TargetSet) -> np.ndarray:
     """Indices of the pairs whose left or right point another pair also uses (to 1e-6 px).
 
+    Parameters
+    ----------
+    targets : TargetSet
+        The pairs to check.
+
+    Returns
+    -------
+    indices : int ndarray
+        The pairs sharing a point, ascending.
+
+    Examples
+    --------
     >>> many_to_one(TargetSet([[10, 10], [20, 10], [30, 10]], [[5, 10], [5, 10], [25, 10]])).tolist()
     [0, 1]
     """
@@ -345,6 +451,27 @@ def many_to_one(targets: TargetSet) -> np.ndarray:
 def check_one_to_one(targets: TargetSet, source: str, owner: str) -> TargetSet:
     """Refuse targets that give a corner two partners, naming the first such pairs and the fix.
 
+    Parameters
+    ----------
+    targets : TargetSet
+        The pairs to check.
+    source : str
+        The file's name, for the message.
+    owner : str
+        The calling function or command, for the message.
+
+    Returns
+    -------
+    targets : TargetSet
+        `targets` itself when every corner has one partner.
+
+    Raises
+    ------
+    ParameterError
+        Two pairs share a point.
+
+    Examples
+    --------
     >>> check_one_to_one(TargetSet([[10, 10], [20, 10]], [[5, 10], [5, 10]]), "t.json", "tune")
     Traceback (most recent call last):
     ismb_lab.ParameterError: The targets file 't.json' given to tune must pair each corner once. Got pairs[0] ...
@@ -368,10 +495,19 @@ def check_one_to_one(targets: TargetSet, source: str, owner: str) -> TargetSet:
 class Snapped:
     """Targets snapped to features by :func:`snap` (read-only arrays).
 
-    `pairs` ``(s, 2)`` are the feature pairs of the targets that snapped on both sides,
-    `target_index` their targets, `distance` the larger snap distance; `missing_left` and
-    `missing_right` the targets with no feature in reach on that side.
+    Attributes
+    ----------
+    pairs : (s, 2) int ndarray
+        Feature pairs ``(i, k)`` of the targets that snapped on both sides.
+    target_index : (s,) int ndarray
+        Their targets' indices.
+    missing_left, missing_right : int ndarray
+        Targets with no feature in reach on that side.
+    distance : (s,) float ndarray
+        The larger of the two snap distances, px.
 
+    Examples
+    --------
     >>> Snapped([[0, 1], [0, 2]], [0, 3], [1], [1, 2], [0.0, 1.2]).shared.tolist()
     [0, 3]
     """
@@ -401,6 +537,22 @@ def snap(targets: TargetSet, left_xy, right_xy, tol=1.5) -> Snapped:
     """Snap each target point to the nearest feature within `tol` px (inclusive; ties to the lower
     index).  Targets that snap to the same feature are both kept (:attr:`Snapped.shared`).
 
+    Parameters
+    ----------
+    targets : TargetSet
+        The labelled points.
+    left_xy, right_xy : (n, 2) float array_like
+        The left and right features (corners).
+    tol : float, default 1.5
+        Largest snap distance, px.
+
+    Returns
+    -------
+    snapped : Snapped
+        Feature pairs of the snapped targets and the targets that did not snap.
+
+    Examples
+    --------
     >>> t = TargetSet([[10, 10], [50, 50]], [[5, 10], [40, 50]])
     >>> s = snap(t, [[10, 11], [30, 30]], [[5, 10], [40, 51]])
     >>> s.pairs.tolist(), s.target_index.tolist(), s.missing_left.tolist(), s.distance.tolist()
@@ -426,6 +578,24 @@ def targets_from_matches(pairs, left_xy, right_xy, *, left_sha256=None, right_sh
                          **meta) -> TargetSet:
     """Targets at the coordinates of feature pairs ``(i, k)``; extra keywords become `meta`.
 
+    Parameters
+    ----------
+    pairs : (m, 2) int array_like
+        Feature pairs ``(i, k)``.
+    left_xy, right_xy : (n, 2) float array_like
+        The left and right features.
+    left_sha256, right_sha256 : str, optional
+        The images' hashes.
+    **meta
+        JSON values stored as the file's top-level keys.
+
+    Returns
+    -------
+    targets : TargetSet
+        One pair per feature pair.
+
+    Examples
+    --------
     >>> t = targets_from_matches([[1, 0]], [[0, 0], [9, 4]], [[7, 4]], labeller="ann")
     >>> t.left_xy.tolist(), t.right_xy.tolist(), t.meta
     ([[9.0, 4.0]], [[7.0, 4.0]], {'labeller': 'ann'})
