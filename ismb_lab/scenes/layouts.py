@@ -235,7 +235,25 @@ UNSEEN = Family("unseen", "Objects 18 to 96 px wide and 24 to 120 px tall, half 
 class Layout:
     """One random layout: the background and scene pairs (Scene), the objects' truth nearest
     first, the wall's disparity, the candidate-window shift and the ROI; `seed` is None when it
-    was drawn from a Generator."""
+    was drawn from a Generator.
+
+    Attributes
+    ----------
+    family : str
+        The family's name.
+    seed : int or None
+        The layout's seed.
+    background, scene : Scene
+        The pair without and with the objects.
+    objects : tuple of ObjectTruth
+        The objects' truth, nearest first.
+    wall_disparity : float
+        The wall's disparity, px.
+    shift : float
+        The candidate window's shift, px: midway between the wall and the nearest object.
+    roi : (x, y, w, h) tuple, default :data:`LAYOUT_ROI`
+        Where the corners are sought.
+    """
 
     family: str
     seed: int | None
@@ -322,6 +340,24 @@ def object_layout(seed, n_objects: int = 2, *, family: str = "contrast", supersa
     `seed` (int or Generator) draws everything from the family's stream (:meth:`Family.stream`);
     ``scene`` is what the family function returns for it, ``background`` with ``empty=True``.
 
+    Parameters
+    ----------
+    seed : int or numpy.random.Generator
+        Draws the layout, textures and noise.
+    n_objects : int, default 2
+        2 or 3.
+    family : str, default "contrast"
+        A family's name (:func:`families`, or ``"unseen"``).
+    supersample : int, default 1
+        Rays per pixel side, 1 to 8.
+
+    Returns
+    -------
+    layout : Layout
+        Both rendered pairs, the objects' truth, the window shift and the ROI.
+
+    Examples
+    --------
     >>> lay = object_layout(7, 2, family="border")
     >>> lay.objects[0].disparity - lay.objects[1].disparity >= MIN_GAP_PX
     True
@@ -349,6 +385,18 @@ def object_ids(scene: Scene) -> np.ndarray:
     """Which primitive each left pixel centre sees: an ``(H, W)`` index into ``scene.primitives``
     (-1 where none; for the families 0 is the wall and ``k`` is ``"object k"``).
 
+    Parameters
+    ----------
+    scene : Scene
+        A rendered scene.
+
+    Returns
+    -------
+    ids : (H, W) int ndarray
+        Index into ``scene.primitives`` per pixel, -1 where none.
+
+    Examples
+    --------
     >>> lay = object_layout(0, 2)
     >>> ids = object_ids(lay.scene)
     >>> o = lay.objects[0]

@@ -45,6 +45,23 @@ class Scene:
     camera misses that point.  The right image is ``gain * radiance + offset + noise``, the left
     ``radiance + noise``.
 
+    Attributes
+    ----------
+    left, right : (H, W) float ndarray
+        The grey images, read-only.
+    depth : (H, W) float ndarray
+        ``z`` (m) of the surface seen at each left pixel, ``inf`` where none.
+    disparity : (H, W) float ndarray
+        True ``x_left - x_right``, px; NaN where unknown.
+    occluded : (H, W) bool ndarray
+        Whether the right camera misses the point.
+    rig : StereoCamera
+        The cameras.
+    primitives : tuple of Primitive
+        What was rendered.
+    gain, offset, noise_std : float
+        The right camera's response and the noise, grey levels.
+
     Examples
     --------
     >>> from ismb_lab.scenes import synthetic_scene
@@ -85,6 +102,18 @@ class Scene:
     def surface_points(self, left_xy) -> np.ndarray:
         """3-D points seen at left-image points (exact ray cast); NaN rows where no surface.
 
+        Parameters
+        ----------
+        left_xy : (n, 2) float array_like
+            Left-image points ``(x, y)``.
+
+        Returns
+        -------
+        points : (n, 3) float ndarray
+            In the left camera's frame, m.
+
+        Examples
+        --------
         >>> from ismb_lab.scenes import synthetic_scene
         >>> synthetic_scene(0).surface_points([[20.0, 20.0]]).round(6)   # the back wall
         array([[-0.837, -0.597,  1.8  ]])
@@ -96,6 +125,18 @@ class Scene:
         """True right-image positions of left-image points, by exact ray casting both ways; NaN
         rows for occluded, out-of-view or surface-less points.
 
+        Parameters
+        ----------
+        left_xy : (n, 2) float array_like
+            Left-image points ``(x, y)``.
+
+        Returns
+        -------
+        right_xy : (n, 2) float ndarray
+            Their right-image positions.
+
+        Examples
+        --------
         >>> from ismb_lab.scenes import synthetic_scene
         >>> scene = synthetic_scene(0)
         >>> scene.correspond([[20.0, 20.0], [0.0, 100.0]]).round(3)  # wall; out of the right view
@@ -139,6 +180,36 @@ def render(primitives, rig: StereoCamera = StereoCamera.pinhole(), *, seed, nois
     is ``255 * albedo * (ambient + (1 - ambient) * max(0, n . light))`` with `light` the direction
     *towards* the light, and `background` for rays that hit nothing.  `quantise` rounds like 8-bit
     cameras; images are clipped to ``[0, 255]`` either way.
+
+    Parameters
+    ----------
+    primitives : sequence of Primitive
+        The objects to render.
+    rig : StereoCamera, default ``StereoCamera.pinhole()``
+        The cameras.
+    seed : int or numpy.random.Generator
+        Draws the camera noise (required).
+    noise_std : float, default 1.0
+        Standard deviation of the noise, grey levels.
+    gain : float, default 1.0
+        The right camera's gain, > 0.
+    offset : float, default 0.0
+        The right camera's offset, grey levels.
+    supersample : int, default 2
+        Rays per pixel side, 1 to 8.
+    light : (3,) float tuple, default (0.3, -0.8, -1.0)
+        Direction towards the light.
+    ambient : float, default 0.35
+        Share of light that does not depend on the normal, 0 to 1.
+    background : float, default 0.0
+        Radiance of rays that hit nothing, 0 to 255.
+    quantise : bool, default True
+        Round the images to whole grey levels.
+
+    Returns
+    -------
+    scene : Scene
+        Both images with their exact ground truth.
 
     Examples
     --------
@@ -192,6 +263,22 @@ def true_matches(scene: Scene, left_xy, right_xy, tol: float = 1.5) -> np.ndarra
     """Index of the true partner of each left point among right points: the nearest within `tol`
     px of its exact correspondence (:meth:`Scene.correspond`), or -1.  Two may share a partner.
 
+    Parameters
+    ----------
+    scene : Scene
+        The rendered scene.
+    left_xy, right_xy : (n, 2) and (m, 2) float array_like
+        Left and right points.
+    tol : float, default 1.5
+        Largest distance from the exact correspondence, px, > 0.
+
+    Returns
+    -------
+    index : (n,) int ndarray
+        Index into `right_xy` of each left point's partner, or -1.
+
+    Examples
+    --------
     >>> from ismb_lab.scenes import synthetic_scene
     >>> scene = synthetic_scene(0)
     >>> left = [[120.0, 30.0], [0.0, 100.0]]
