@@ -289,6 +289,27 @@ class DepthDemo(Base):
     """Rank the objects added to a background near -> far, with both figures of the thesis;
     the parameters are :class:`DepthModel`'s.
 
+    Parameters
+    ----------
+    background, scene : pair folder, (left, right) or object with ``.left`` and ``.right``
+        The two stereo pairs of the same view.
+    method : str, default ``DEFAULT_METHOD``
+        The matching method.
+    params : Params, optional
+        Default the method's (Method-III: the demo's).
+    seed : int, default 0
+        Update-order seed of both runs.
+    config : DepthConfig, optional
+        Tolerances and calibration.
+    match_config : MatchConfig, optional
+        Corner and window settings.
+    background_name : str, default "the nearest background object"
+        How the ranking sentence calls the background's nearest object.
+    recipe : Recipe or path, optional
+        Replaces `method`, `params` and the solver.
+
+    Notes
+    -----
     CSS classes: root ``ismb-depth``; ranking ``ismb-ranking``; ``ismb-seed``; ``ismb-method``;
     sliders ``ismb-position-tol-px``, ``ismb-disparity-tol-px``, ``ismb-local-px``; button
     ``ismb-recompute``; figures ``ismb-background`` (Fig. 5.12) and ``ismb-scene`` (Fig. 5.14);

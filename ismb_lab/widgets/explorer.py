@@ -172,6 +172,27 @@ class ParameterExplorer(Base):
     `left` and `right` are paths or images, or `left` a Prepared; C/E/T is scored against `targets`
     (a TargetSet, its path or feature pairs), only on their left corners when `partial`.
 
+    Parameters
+    ----------
+    left, right : path or ndarray, or a Prepared as `left`
+        The image pair.
+    method : str, default ``DEFAULT_METHOD``
+        The matching method.
+    params : Params, optional
+        Starting slider values; default the method's.
+    seed : int, default 0
+        Update-order seed.
+    config : MatchConfig, optional
+        Corner settings.
+    targets : TargetSet, path or (t, 2) int array_like, optional
+        What C/E/T is scored against.
+    solver : str, default ``DEFAULT_SOLVER``
+        How the network is solved.
+    partial : bool, default False
+        The targets label only some corners: matches of the others are not scored.
+
+    Notes
+    -----
     CSS classes: root ``ismb-explorer``; sliders ``ismb-theta-c``, ``ismb-theta-s``,
     ``ismb-lambda-c``, ``ismb-lambda-s``; ``ismb-method``; ``ismb-solver``; ``ismb-seed``; ``ismb-score``;
     figures ``ismb-matches`` and ``ismb-transfer``; ``ismb-status``; ``ismb-log``.

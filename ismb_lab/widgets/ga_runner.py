@@ -240,6 +240,27 @@ class GARunner(Base):
     `cases_or_folder` is a Case, a pair folder with an ``answer_key.json`` (corners by `config`),
     or a list of them; the curves are redrawn at most every `redraw_every` s while running.
 
+    Parameters
+    ----------
+    cases_or_folder : Case, folder, or a list of them
+        The training pairs.
+    method : str, default ``DEFAULT_METHOD``
+        The method to tune.
+    population, generations : int, optional
+        GA size; default :class:`~ismb_lab.tuning.genetic.GAConfig`'s.
+    seed : int, default 0
+        Seed of the GA and of every network run's update order.
+    config : MatchConfig, optional
+        Corner settings for folders.
+    redraw_every : float, default 0.2
+        Seconds between redraws of the curves while running.
+    save_to : str or os.PathLike, optional
+        A params file rewritten whenever the best fitness improves.
+    solver : str, default ``DEFAULT_SOLVER``
+        How each chromosome's network is solved.
+
+    Notes
+    -----
     CSS classes: root ``ismb-ga``; buttons ``ismb-start``, ``ismb-pause``, ``ismb-stop``,
     ``ismb-apply``; ``ismb-solver``; ``ismb-generations``; ``ismb-progress``; figure ``ismb-fitness``; best chromosome
     ``ismb-chromosome``; ``ismb-status``; ``ismb-log``.

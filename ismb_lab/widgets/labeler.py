@@ -408,6 +408,21 @@ class TargetLabeler(Base):
     (:func:`ismb_lab.labels.classroom.targets_path`, named after `pair_name`); under Voilà without
     a hub, where visitors share one login, the labeller asks for a name first.
 
+    Parameters
+    ----------
+    left, right : path or ndarray, or a Prepared as `left`
+        The image pair.
+    path : str or os.PathLike, optional
+        The targets file of Save and Load; default the student's own.
+    config : MatchConfig, optional
+        Corner settings: labels snap to the features the matcher sees.
+    answer_key : TargetSet or path, optional
+        Ground truth for "Show answer key".
+    pair_name : str, optional
+        The pair's name in the default file name.
+
+    Notes
+    -----
     CSS classes: root ``ismb-labeler``, figure ``ismb-stereo``, buttons ``ismb-undo``,
     ``ismb-delete``, ``ismb-save``, ``ismb-load``, toggle ``ismb-answer-key``, table
     ``ismb-pairs``, unsaved-changes flag ``ismb-dirty``, key summary ``ismb-key-summary``,

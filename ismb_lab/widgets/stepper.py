@@ -204,6 +204,23 @@ class HopfieldStepper(Base):
     `left` and `right` are paths or images, or `left` a Prepared; "Run to convergence" makes
     at most `run_limit` attempts per click.
 
+    Parameters
+    ----------
+    left, right : path or ndarray, or a Prepared as `left`
+        The image pair.
+    method : str, default ``DEFAULT_METHOD``
+        The matching method.
+    params : Params, optional
+        Default the method's.
+    seed : int, default 0
+        Seed of the random visiting order.
+    config : MatchConfig, optional
+        Corner settings.
+    run_limit : int, default 50000
+        Most attempts per click of "Run to convergence".
+
+    Notes
+    -----
     CSS classes: root ``ismb-stepper``; buttons ``ismb-step``, ``ismb-step10``, ``ismb-run``,
     ``ismb-reset``; seed field ``ismb-seed``; checkbox ``ismb-thesis-rule``; figures
     ``ismb-grid`` (neurons), ``ismb-matches`` (image pair) and ``ismb-energy``;
