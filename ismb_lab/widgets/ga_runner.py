@@ -64,6 +64,23 @@ class GAModel:
     `seed` seeds the GA and every run's update order, as in ``tune``; `save_to`, a params file,
     is rewritten atomically whenever the best fitness improves, so that a killed kernel loses nothing.
 
+    Parameters
+    ----------
+    cases : list of Case
+        The training pairs.
+    method : str, default ``DEFAULT_METHOD``
+        The method to tune.
+    population, generations : int, optional
+        GA size; default :class:`~ismb_lab.tuning.genetic.GAConfig`'s (30 and 500).
+    seed : int, default 0
+        Seed of the GA and of every run's update order.
+    save_to : str or os.PathLike, optional
+        A params file kept with the best parameters so far.
+    solver : str, default ``DEFAULT_SOLVER``
+        How each chromosome's network is solved.
+
+    Examples
+    --------
     >>> from ismb_lab.matching.pipeline import prepare
     >>> from ismb_lab.scenes import synthetic_scene, true_matches
     >>> scene = synthetic_scene(0)

@@ -76,6 +76,24 @@ class LabelModel:
     With `exclusive`, :meth:`save` refuses an existing file this model did not load or save
     instead of merging with it (on a page many visitors share).
 
+    Parameters
+    ----------
+    prepared : Prepared
+        The pair and its features.
+    path : str or os.PathLike, optional
+        Where :meth:`save` and :meth:`load` go by default; a save merges with what another
+        process saved there.
+    answer_key : TargetSet, optional
+        Ground truth for :meth:`compare`.
+    snap_radius : float, default 8.0
+        A click snaps to the nearest feature within this many px.
+    key_tol : float, default 3.0
+        Answer-key points snap to features within this many px.
+    exclusive : bool, default False
+        Refuse to save into an existing file this model did not load or save.
+
+    Examples
+    --------
     >>> from ismb_lab.scenes import synthetic_scene
     >>> scene = synthetic_scene(0)
     >>> model = LabelModel(prepare(scene.left, scene.right))

@@ -35,6 +35,19 @@ class PhotoModel:
     :func:`ismb_lab.labels.classroom.user_name`) and `role`; `homographies`, ``(H_left, H_right,
     (width, height))`` found on another pair of the same cameras, are applied as they are.
 
+    Parameters
+    ----------
+    folder : str or os.PathLike, default "."
+        Where :meth:`save` makes the pair's folder.
+    user : str, optional
+        Whose folder; default :func:`~ismb_lab.labels.classroom.user_name`.
+    role : str, default ""
+        Added to the folder's name (e.g. ``"background"``).
+    homographies : (H_left, H_right, (width, height)), optional
+        A rectification of the same cameras, applied as it is.
+
+    Examples
+    --------
     >>> import cv2
     >>> rng = np.random.default_rng(0)
     >>> scene = cv2.GaussianBlur(rng.uniform(0, 255, (200, 260)), (0, 0), 2) * 3 % 255

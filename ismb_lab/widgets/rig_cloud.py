@@ -36,6 +36,19 @@ class RigCloudModel:
     :class:`~ismb_lab.matching.recipe.Recipe`'s parameters and solver; with `board` (the pair shows
     the calibration board) a note gives its corners' median depth; at most `most` SGBM points.
 
+    Parameters
+    ----------
+    rig : StereoCamera, str or os.PathLike
+        The rig, or its file (path or JSON text).
+    method : str, default ``DEFAULT_METHOD``
+        The energy.
+    seed : int, default 0
+        The network's update order.
+    board : bool, default False
+        The pair shows the calibration board.
+    most : int, default ``MAX_DENSE``
+        Most SGBM points in the view.
+
     Attributes
     ----------
     cloud : Cloud or None
@@ -45,6 +58,8 @@ class RigCloudModel:
     refused : str
         The one-line refusal of a pair the rig does not fit ("" when it fits).
 
+    Examples
+    --------
     >>> from ismb_lab.scenes import synthetic_scene
     >>> s = synthetic_scene(0)
     >>> model = RigCloudModel(s.rig)

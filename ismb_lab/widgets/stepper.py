@@ -27,6 +27,23 @@ class StepperModel:
     `seed` orders the visits as in :func:`ismb_lab.network.dynamics.run`; ``rule="thesis"`` is the
     literal (3-17)/(3-20) rule, whose energy can rise.
 
+    Parameters
+    ----------
+    prepared : Prepared
+        The pair and its energy ingredients.
+    method : str, default ``DEFAULT_METHOD``
+        The matching method.
+    params : Params, optional
+        Default the method's.
+    seed : int, default 0
+        Seed of the random visiting order.
+    rule : {"exact", "thesis"}, default "exact"
+        The update rule.
+    stop_rule : {"sweep", "stall"}, default "sweep"
+        When the run stops.
+
+    Examples
+    --------
     >>> from ismb_lab.scenes import synthetic_scene
     >>> scene = synthetic_scene(0)
     >>> model = StepperModel(prepare(scene.left, scene.right))
