@@ -34,6 +34,31 @@ class OutlineConfig:
     (grey levels) is the hysteresis threshold, from 0 to :data:`CHANGE_THRESHOLD`; distances are
     in pixels and scores are Dice overlaps in [0, 1].
 
+    Attributes
+    ----------
+    threshold_low : float, default 5.0
+        Hysteresis threshold: weaker change that connects to a stronger one counts too.
+    min_pixels : int, default 20
+        Smaller blobs are camera noise.
+    pad_px : int, default 8
+        Columns on each side of a blob's box that its overlap counts as well.
+    merge_gap_px : int, default 10
+        Largest gap between the boxes of two blobs that may be one object.
+    merge_disparity_px : float, default 1.0
+        Blobs this close in shift (and `merge_gap_px` apart) are one object ...
+    link_score : float, default 0.9
+        ... unless their shifts differ and both fit with a Dice of this or more.
+    max_fraction : float, default 0.5
+        A blob covering more of the ROI than this is a change of light or view: its score is 0.
+    split_score : float, default 0.9
+        Least Dice of each part of a blob cut in two.
+    split_step_px : float, default 3.0
+        Least difference of the two parts' shifts.
+    split_far_px, split_far_score : float, default 5.0 and 0.94
+        A blob one shift lays this well is cut when two shifts this far apart lay it better.
+    split_far_poor_px : float, default 8.0
+        ... and one laid less well, when two shifts this far apart lay both parts well.
+
     Examples
     --------
     >>> OutlineConfig(pad_px=6).pad_px
@@ -131,6 +156,22 @@ class Silhouettes:
         :attr:`right`).  Holes narrower than ``pad_px + 1`` columns are closed on both sides,
         since where an object looks like the wall its blob has holes that do not tell shifts apart.
 
+        Parameters
+        ----------
+        k : int
+            The blob, 1..n.
+        column : int
+            Left-image column of the cut.
+        shifts : (int, int) tuple
+            Shifts of the left and the right part.
+
+        Returns
+        -------
+        dice : float
+            Dice overlap of both parts with the right image's change; nan without :attr:`right`.
+
+        Examples
+        --------
         >>> import numpy as np
         >>> labels = np.zeros((20, 60), dtype=np.int32); labels[5:15, 30:50] = 1
         >>> right = np.zeros((20, 60), dtype=bool)
@@ -148,6 +189,22 @@ class Silhouettes:
         """The shifts ``(left, right)`` that lay the two parts of :meth:`cut_dice` best, by coordinate
         ascent over :attr:`shifts` from `start`.
 
+        Parameters
+        ----------
+        k : int
+            The blob, 1..n.
+        column : int
+            Left-image column of the cut.
+        start : (int, int) tuple
+            Shifts to start the ascent from.
+
+        Returns
+        -------
+        shifts : (int, int) tuple
+            The best shifts of the left and the right part.
+
+        Examples
+        --------
         >>> import numpy as np
         >>> labels = np.zeros((20, 60), dtype=np.int32); labels[5:15, 30:50] = 1
         >>> right = np.zeros((20, 60), dtype=bool)
@@ -183,6 +240,34 @@ def changed_in_roi(background, scene, roi, threshold, sigma, margin, own: str, n
     median difference (the noise floor), at most to `threshold`.  Bad values are named as
     parameters of `own`; `name` holds `scene`.
 
+    Parameters
+    ----------
+    background, scene : (H, W) float array_like
+        The two grey images.
+    roi : str or (x, y, w, h) tuple
+        Where to look.
+    threshold : float
+        Grey levels of smoothed difference that count as a change.
+    sigma : float
+        Standard deviation of the Gaussian smoothing, px (0: none).
+    margin : int
+        Checked and returned as is.
+    own, name : str
+        The caller's name and the name of its `scene` parameter, for error messages.
+    low : float, optional
+        Hysteresis threshold.
+
+    Returns
+    -------
+    changed : (h, w) bool ndarray
+        The ROI's changed pixels.
+    roi : (x, y, w, h) tuple
+        The resolved ROI.
+    margin : int
+        The checked margin.
+
+    Examples
+    --------
     >>> import numpy as np
     >>> background = np.zeros((6, 8))
     >>> scene = background.copy(); scene[2:4, 3:5] = 50.0
@@ -219,6 +304,24 @@ def silhouettes(background, scene, roi="center", *, shifts=range(0, 41),
     into `roi` each get the shift of `shifts` with the largest Dice overlap (``docs/depth.md``,
     section 4), and are numbered left to right by centroid.
 
+    Parameters
+    ----------
+    background, scene : StereoPair
+        The empty view and the view with objects, of one size.
+    roi : str or (x, y, w, h) tuple, default "center"
+        Blobs must reach into it.
+    shifts : iterable of int, default range(0, 41)
+        The shifts tried, px.
+    config : OutlineConfig, optional
+        Default ``OutlineConfig()``.
+
+    Returns
+    -------
+    blobs : Silhouettes
+        The blobs, their best shifts and Dice overlaps.
+
+    Examples
+    --------
     >>> import numpy as np
     >>> from ismb_lab.images.io import load_pair
     >>> rng = np.random.default_rng(0)
