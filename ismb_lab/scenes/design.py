@@ -43,6 +43,29 @@ class ObjectTruth:
     leftmost), ``rank`` 1 the nearest; ``disparity`` (px) and ``depth_m`` are of the face (or
     cylinder line) nearest the cameras; ``box_xy`` is the left-image extent ``(x0, y0, x1, y1)``
     and ``centre_xy`` a point of that face inside the image.
+
+    Attributes
+    ----------
+    name : str
+        The primitive's name, ``"object k"``.
+    index : int
+        Its index in ``Scene.primitives``.
+    rank : int
+        1 for the nearest.
+    kind : str
+        ``"box"`` or ``"cylinder"``.
+    disparity : float
+        Of the nearest face, px.
+    depth_m : float
+        Of the nearest face, m.
+    box_xy : (x0, y0, x1, y1) tuple
+        Left-image extent.
+    centre_xy : (x, y) tuple
+        A point of the nearest face inside the image.
+    contrast : str
+        ``"low"`` or ``"high"``.
+    texture : str
+        The object's texture kind (what the family's ``texture`` hook drew).
     """
 
     name: str
@@ -61,7 +84,23 @@ class ObjectTruth:
 class Design:
     """A drawn layout before rendering: primitives (objects left to right), truth (nearest first),
     the right camera's ``gain``, ``offset`` and ``noise_std``, and the noise seeds of the
-    background and of the scene."""
+    background and of the scene.
+
+    Attributes
+    ----------
+    wall : Plane
+        The wall.
+    objects : tuple of Primitive
+        The objects, left to right.
+    truth : tuple of ObjectTruth
+        Their truth, nearest first.
+    wall_disparity : float
+        The wall's disparity, px.
+    camera : dict
+        The right camera's ``gain``, ``offset`` and ``noise_std``.
+    noise : tuple
+        Noise seeds of the background and of the scene.
+    """
 
     wall: Plane
     objects: tuple
@@ -74,7 +113,19 @@ class Design:
 @dataclass(frozen=True)
 class Placement:
     """Where the objects of `widths` stand: left edges between `lo` and `hi`, gaps in `gap`; with
-    `pin_left` the first starts at `lo` (a box), with `pin_right` the last ends at `hi`."""
+    `pin_left` the first starts at `lo` (a box), with `pin_right` the last ends at `hi`.
+
+    Attributes
+    ----------
+    lo, hi : float
+        Range of the left edges, px.
+    gap : (float, float) tuple
+        Range of the gaps between objects, px.
+    widths : (n,) float ndarray
+        The objects' widths, px.
+    pin_left, pin_right : bool, default False
+        Pin the first object to `lo`, the last to `hi`.
+    """
 
     lo: float
     hi: float
@@ -131,6 +182,14 @@ class Look:
     ``shape(rng, box_only) -> "box" | "cylinder"``, ``contrast(rng, mode) -> "low" | "high"``
     and ``texture(rng) -> kind``; last ``camera(rng) -> dict`` of ``gain``, ``offset``, ``noise_std``.
 
+    Attributes
+    ----------
+    wall, placement, contrast, texture, camera, sizes, shape : callable
+        The hooks above; defaults :func:`plain_wall`, :func:`side_by_side`, :func:`high_contrast`,
+        :func:`posters`, :func:`quiet_cameras`, :func:`common_sizes`, :func:`box_or_cylinder`.
+
+    Examples
+    --------
     >>> Look(camera=lambda rng: {"gain": 1.0, "offset": 0.0, "noise_std": 3.0}).camera(None)["noise_std"]
     3.0
     """
@@ -238,6 +297,24 @@ def _object(rng, look: Look, mode: str, k: int, left: float, width: float, heigh
 def draw_objects(rng: np.random.Generator, n: int, rig: StereoCamera, look: Look) -> Design:
     """Draw `n` objects (2 or 3) at distinct depths before a wall, as `look` says, from `rng`.
 
+    Parameters
+    ----------
+    rng : numpy.random.Generator
+        Random source.
+    n : int
+        2 or 3 objects.
+    rig : StereoCamera
+        The cameras.
+    look : Look
+        The family's hooks.
+
+    Returns
+    -------
+    design : Design
+        The wall, objects, truth and camera settings.
+
+    Examples
+    --------
     >>> d = draw_objects(np.random.default_rng(1), 3, StereoCamera.pinhole(), Look())
     >>> bool(np.all(np.diff([t.disparity for t in d.truth]) <= -MIN_GAP_PX)), len(d.objects)
     (True, 3)
