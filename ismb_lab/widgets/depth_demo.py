@@ -385,7 +385,20 @@ class DepthDemo(Base):
 
     @classmethod
     def from_folders(cls, background_folder, scene_folder, **kw) -> "DepthDemo":
-        """The demo on two pair folders, e.g. ``images/lab`` and ``images/toy_cars``."""
+        """The demo on two pair folders, e.g. ``images/lab`` and ``images/toy_cars``.
+
+        Parameters
+        ----------
+        background_folder, scene_folder : str or Path
+            Pair folders holding ``left.png`` and ``right.png``.
+        **kw
+            The constructor's keyword parameters.
+
+        Returns
+        -------
+        demo : DepthDemo
+            The widget.
+        """
         pairs = [pair_files(f, "DepthDemo.from_folders")[:2] for f in (background_folder, scene_folder)]
         return cls(*pairs, **kw)
 
@@ -394,7 +407,20 @@ class DepthDemo(Base):
         """The §5.2.3 demo on photos of one's own from two fixed cameras: a
         :class:`~ismb_lab.widgets.photos.PhotoLoader` for the empty scene, whose "Use this pair"
         opens a second for the scene (warped with the background's rectification), whose own
-        opens the demo on both saved pairs."""
+        opens the demo on both saved pairs.
+
+        Parameters
+        ----------
+        folder : str or os.PathLike, default "."
+            Where the pairs' folders are made.
+        **kw
+            The constructor's keyword parameters.
+
+        Returns
+        -------
+        loader : PhotoLoader
+            The first loader widget.
+        """
         from .photos import PhotoLoader
 
         def scene_loader(background_folder, roi):

@@ -266,7 +266,20 @@ class ParameterExplorer(Base):
 
     @classmethod
     def from_folder(cls, folder, **kw) -> "ParameterExplorer":
-        """Explore ``folder/left.png``, ``folder/right.png``, scored against ``answer_key.json`` if present."""
+        """Explore ``folder/left.png``, ``folder/right.png``, scored against ``answer_key.json`` if present.
+
+        Parameters
+        ----------
+        folder : str or Path
+            A pair folder.
+        **kw
+            The constructor's keyword parameters.
+
+        Returns
+        -------
+        explorer : ParameterExplorer
+            The widget.
+        """
         left, right, key = pair_files(folder, "ParameterExplorer.from_folder")
         if key.is_file():
             kw.setdefault("targets", key)
@@ -274,7 +287,20 @@ class ParameterExplorer(Base):
 
     @classmethod
     def from_photos(cls, *, folder=".", **kw):
-        """A :class:`~ismb_lab.widgets.photos.PhotoLoader` whose "Use this pair" opens an explorer."""
+        """A :class:`~ismb_lab.widgets.photos.PhotoLoader` whose "Use this pair" opens an explorer.
+
+        Parameters
+        ----------
+        folder : str or os.PathLike, default "."
+            Where the pair's folder is made.
+        **kw
+            Passed to :meth:`from_folder`.
+
+        Returns
+        -------
+        loader : PhotoLoader
+            The loader widget.
+        """
         from .photos import opening
 
         return opening(cls.from_folder, folder, **kw)

@@ -330,11 +330,30 @@ class GARunner(Base):
 
     @classmethod
     def from_folder(cls, folder, **kw) -> "GARunner":
-        """Tune on one pair folder (targets: its ``answer_key.json``)."""
+        """Tune on one pair folder (targets: its ``answer_key.json``).
+
+        Parameters
+        ----------
+        folder : str or Path
+            A pair folder with ``answer_key.json``.
+        **kw
+            The constructor's keyword parameters.
+
+        Returns
+        -------
+        runner : GARunner
+            The widget.
+        """
         return cls(Path(folder) if isinstance(folder, str) else folder, **kw)
 
     def on_apply(self, callback: Callable[[Params], object]) -> None:
-        """Call ``callback(params)`` when "Apply best parameters" is pressed."""
+        """Call ``callback(params)`` when "Apply best parameters" is pressed.
+
+        Parameters
+        ----------
+        callback : callable
+            Called with the best :class:`~ismb_lab.network.params.Params`, e.g. an explorer's ``set_params``.
+        """
         if not callable(callback):
             raise ParameterTypeError(message("callback", "GARunner.on_apply", "a callable", callback))
         self._apply.append(callback)

@@ -35,7 +35,17 @@ KEY_AFTER = 5
 @dataclass(frozen=True)
 class Comparison:
     """Student labels against the answer key, as feature pairs ``(i, k)``; `off_feature` counts
-    key pairs with no feature within reach (not missing: they cannot be labelled)."""
+    key pairs with no feature within reach (not missing: they cannot be labelled).
+
+    Attributes
+    ----------
+    correct, wrong : (n, 2) int ndarray
+        Labelled pairs that are, and are not, key pairs.
+    missing : (n, 2) int ndarray
+        Key pairs not labelled.
+    off_feature : int
+        Key pairs with no feature within reach.
+    """
 
     correct: np.ndarray
     wrong: np.ndarray
@@ -50,7 +60,23 @@ class Comparison:
 @dataclass(frozen=True, eq=False)
 class SavedScore:
     """A method's matches scored against the labels saved in a file (:meth:`LabelModel.score_saved`):
-    E counts only wrong partners of labelled left corners, T the saved pairs."""
+    E counts only wrong partners of labelled left corners, T the saved pairs.
+
+    Attributes
+    ----------
+    path : Path
+        The targets file.
+    method : str
+        The method's name.
+    seed : int
+        The update-order seed.
+    pairs : (t, 2) int ndarray
+        The saved pairs, as feature pairs.
+    score : Score
+        The method's C/E/T against them.
+    errors : (e, 2) int ndarray
+        Its wrong partners of labelled left corners.
+    """
 
     path: Path
     method: str
@@ -309,6 +335,24 @@ class LabelModel:
         """Match the pair with `method` and score it against the labels saved in `path` (default:
         the labeller's file), leaving out unlabelled left corners; None when nothing is saved there.
 
+        Parameters
+        ----------
+        method : str, default ``DEFAULT_METHOD``
+            The matching method.
+        seed : int, default 0
+            Update-order seed.
+        params : Params, optional
+            Default the method's.
+        path : str or os.PathLike, optional
+            The targets file; default the model's.
+
+        Returns
+        -------
+        result : SavedScore or None
+            The score and its errors.
+
+        Examples
+        --------
         >>> import tempfile, pathlib
         >>> from ismb_lab.scenes import synthetic_scene
         >>> scene = synthetic_scene(0)
@@ -502,7 +546,22 @@ class TargetLabeler(Base):
 
     @classmethod
     def from_folder(cls, folder, *, path=None, config: MatchConfig | None = None) -> "TargetLabeler":
-        """Label ``folder/left.png`` and ``folder/right.png`` (answer key: ``answer_key.json``, if any)."""
+        """Label ``folder/left.png`` and ``folder/right.png`` (answer key: ``answer_key.json``, if any).
+
+        Parameters
+        ----------
+        folder : str or Path
+            A pair folder.
+        path : str or os.PathLike, optional
+            The targets file; default the student's own, named after the folder.
+        config : MatchConfig, optional
+            Corner settings.
+
+        Returns
+        -------
+        labeler : TargetLabeler
+            The widget.
+        """
         left, right, key = pair_files(folder, "TargetLabeler.from_folder")
         return cls(left, right, path=path, config=config, answer_key=key if key.is_file() else None,
                    pair_name=Path(folder).resolve().name)
@@ -510,7 +569,20 @@ class TargetLabeler(Base):
     @classmethod
     def from_photos(cls, *, folder=".", **kw):
         """A :class:`~ismb_lab.widgets.photos.PhotoLoader` whose "Use this pair" saves two photos of
-        one's own (rectified) in `folder` and opens a labeller on them."""
+        one's own (rectified) in `folder` and opens a labeller on them.
+
+        Parameters
+        ----------
+        folder : str or os.PathLike, default "."
+            Where the pair's folder is made.
+        **kw
+            Passed to :meth:`from_folder`.
+
+        Returns
+        -------
+        loader : PhotoLoader
+            The loader widget.
+        """
         from .photos import opening
 
         return opening(cls.from_folder, folder, **kw)

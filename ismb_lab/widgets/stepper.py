@@ -288,7 +288,20 @@ class HopfieldStepper(Base):
 
     @classmethod
     def from_folder(cls, folder, **kw) -> "HopfieldStepper":
-        """Step the network on ``folder/left.png`` and ``folder/right.png``."""
+        """Step the network on ``folder/left.png`` and ``folder/right.png``.
+
+        Parameters
+        ----------
+        folder : str or Path
+            A pair folder.
+        **kw
+            The constructor's keyword parameters.
+
+        Returns
+        -------
+        stepper : HopfieldStepper
+            The widget.
+        """
         left, right, _ = pair_files(folder, "HopfieldStepper.from_folder")
         return cls(left, right, **kw)
 
