@@ -345,7 +345,15 @@ class PointCloudView:
 
     def update(self, cloud: Cloud, dense=None) -> None:
         """Show `cloud` and `dense` (``(M, 3)`` metres, or None) in the same objects, with one
-        colour scale from the nearest to the farthest point of either; the camera stays."""
+        colour scale from the nearest to the farthest point of either; the camera stays.
+
+        Parameters
+        ----------
+        cloud : Cloud
+            The new points and cameras.
+        dense : (M, 3) float array_like, optional
+            Dense points, metres.
+        """
         check_type(cloud, Cloud, "cloud", "PointCloudView.update", "a Cloud")
         dense = np.zeros((0, 3)) if dense is None else np.asarray(dense, dtype=float).reshape(-1, 3)
         dense = dense[np.isfinite(dense).all(axis=1)]
@@ -373,7 +381,13 @@ class PointCloudView:
         self.colours.value = colour_bar_html(*colour_range) if len(cloud.points) or len(dense) else ""
 
     def show_dense(self, shown: bool) -> None:
-        """Show or hide the dense points (shown only when there are some)."""
+        """Show or hide the dense points (shown only when there are some).
+
+        Parameters
+        ----------
+        shown : bool
+            Whether to show them.
+        """
         self._dense_wanted = bool(shown)
         self.dense.visible = bool(shown and len(self._dense_points))
 

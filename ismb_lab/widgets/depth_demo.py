@@ -117,7 +117,26 @@ class DepthModel:
     def set(self, *, method=None, params: Params | None = None, seed=None, config=None,
             **tolerances) -> "DepthModel":
         """Change any of method, params, seed, config or single config fields; recompute.
-        All or nothing: on an error the model is left as it was."""
+        All or nothing: on an error the model is left as it was.
+
+        Parameters
+        ----------
+        method : str, optional
+            The matching method.
+        params : Params, optional
+            New parameters.
+        seed : int, optional
+            New update-order seed.
+        config : DepthConfig, optional
+            New tolerances.
+        **tolerances
+            Single DepthConfig fields, e.g. ``position_tol_px=4``.
+
+        Returns
+        -------
+        model : DepthModel
+            This model, recomputed.
+        """
         owner = "DepthModel.set"
         new_method = self.method if method is None else get_method(method).name
         new_params = self.params if params is None else self._check_params(params, owner)

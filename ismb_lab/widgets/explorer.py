@@ -75,7 +75,26 @@ class ExplorerModel:
     def set(self, *, method=None, params: Params | None = None, seed=None, solver=None,
             **genes) -> "ExplorerModel":
         """Change any of method, params (whole or gene by gene, e.g. ``theta_c=12``), seed and
-        solver; rematch."""
+        solver; rematch.
+
+        Parameters
+        ----------
+        method : str, optional
+            The matching method.
+        params : Params, optional
+            New parameters.
+        seed : int, optional
+            New update-order seed.
+        solver : str, optional
+            New solver.
+        **genes
+            Single parameters, e.g. ``theta_c=12``.
+
+        Returns
+        -------
+        model : ExplorerModel
+            This model, rematched.
+        """
         owner = "ExplorerModel.set"
         before = (self.method, self.params, self.seed, self.solver)
         try:
@@ -310,7 +329,13 @@ class ParameterExplorer(Base):
         return self.model.params
 
     def set_params(self, params: Params) -> None:
-        """Show and use `params` (e.g. the GA's best): one rematch, whatever changed."""
+        """Show and use `params` (e.g. the GA's best): one rematch, whatever changed.
+
+        Parameters
+        ----------
+        params : Params
+            The parameters to use.
+        """
         check_type(params, Params, "params", "ParameterExplorer.set_params", "a Params")
         with self.syncing():
             for gene, slider in self.sliders.items():

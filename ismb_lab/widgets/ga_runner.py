@@ -193,7 +193,18 @@ class GAModel:
         self._resume.set()
 
     def wait(self, timeout: float | None = None) -> bool:
-        """Wait for the run to end; True when no run is alive any more."""
+        """Wait for the run to end; True when no run is alive any more.
+
+        Parameters
+        ----------
+        timeout : float, optional
+            Most seconds to wait; None waits for the end.
+
+        Returns
+        -------
+        done : bool
+            True when no run is alive any more.
+        """
         if self._thread is not None:
             self._thread.join(timeout)
         return not self.running
@@ -359,7 +370,13 @@ class GARunner(Base):
         self._apply.append(callback)
 
     def set_solver(self, name: str) -> None:
-        """Solve with `name` from the next Start on (refused while a run is going)."""
+        """Solve with `name` from the next Start on (refused while a run is going).
+
+        Parameters
+        ----------
+        name : str
+            A solver's name.
+        """
         try:
             if self.model.running:
                 raise ParameterError(message("solver", "GARunner.set_solver", "changed only while no GA "
@@ -408,7 +425,18 @@ class GARunner(Base):
             self.model.stop()
 
     def wait(self, timeout: float | None = None) -> bool:
-        """Wait until the run and its final redraw are done; True if nothing is left running."""
+        """Wait until the run and its final redraw are done; True if nothing is left running.
+
+        Parameters
+        ----------
+        timeout : float, optional
+            Most seconds to wait; None waits for the end.
+
+        Returns
+        -------
+        done : bool
+            True if nothing is left running.
+        """
         end = None if timeout is None else time.monotonic() + timeout
         done = self.model.wait(timeout)
         watcher = self._watcher

@@ -231,6 +231,18 @@ class LabelModel:
 
         A left feature starts a pair, a right one completes it; a feature already paired
         selects its pair; the pending left feature clicked again is released.
+
+        Parameters
+        ----------
+        x, y : float
+            Where the click was.
+        side : {"left", "right"}, optional
+            The image clicked; None: side-by-side coordinates.
+
+        Returns
+        -------
+        text : str
+            The status text.
         """
         where = self.locate(x, y, side)
         if where is None:
@@ -260,7 +272,13 @@ class LabelModel:
         return self.message
 
     def add_pair(self, i, k) -> None:
-        """Label left feature `i` with right feature `k` (0-based); each feature pairs once."""
+        """Label left feature `i` with right feature `k` (0-based); each feature pairs once.
+
+        Parameters
+        ----------
+        i, k : int
+            Left and right feature, 0-based.
+        """
         owner = "LabelModel.add_pair"
         i = check_number(i, "i", owner, low=0, high=len(self.left_xy) - 1, integer=True)
         k = check_number(k, "k", owner, low=0, high=len(self.right_xy) - 1, integer=True)
@@ -277,7 +295,13 @@ class LabelModel:
                   f"({len(self._pairs)} pairs)")
 
     def select(self, index) -> None:
-        """Select pair `index` (0-based, table order) or None."""
+        """Select pair `index` (0-based, table order) or None.
+
+        Parameters
+        ----------
+        index : int or None
+            The pair, or None for none.
+        """
         if index is not None:
             index = check_number(index, "index", "LabelModel.select", low=0,
                                  high=len(self._pairs) - 1, integer=True)
@@ -313,7 +337,18 @@ class LabelModel:
 
     def save(self, path=None) -> Path:
         """Write the labels atomically, merged with what others saved to the file meanwhile
-        (:func:`ismb_lab.labels.classroom.save_merging`); on failure the old file is untouched."""
+        (:func:`ismb_lab.labels.classroom.save_merging`); on failure the old file is untouched.
+
+        Parameters
+        ----------
+        path : str or os.PathLike, optional
+            Default the model's file.
+
+        Returns
+        -------
+        path : Path
+            The file written.
+        """
         path = self._path(path, "LabelModel.save")
         base = self._base if self._base is not None and path == self._base_path else None
         if self.exclusive and base is None and path.exists():
@@ -375,7 +410,18 @@ class LabelModel:
 
     def load(self, path=None) -> int:
         """Replace the labels by a targets file's, each on its own feature (within 1.5 px); any
-        error leaves the labels as they were."""
+        error leaves the labels as they were.
+
+        Parameters
+        ----------
+        path : str or os.PathLike, optional
+            Default the model's file.
+
+        Returns
+        -------
+        n : int
+            The number of pairs loaded.
+        """
         owner = "LabelModel.load"
         path = self._path(path, owner)
         targets = load_targets(path, pair=self.prepared.pair)
@@ -609,7 +655,13 @@ class TargetLabeler(Base):
         return self._redrawn(self.model.delete_selected())
 
     def set_name(self, name: str) -> None:
-        """Choose the visitor's own targets file by their name (Voilà without a hub)."""
+        """Choose the visitor's own targets file by their name (Voilà without a hub).
+
+        Parameters
+        ----------
+        name : str
+            The visitor's name.
+        """
         check_type(name, str, "name", "TargetLabeler.set_name", "a str")
         self.model.path = targets_path(self.pair_name, Path.cwd(), user=name, also=()) if name.strip() else None
         self._show_path()

@@ -76,7 +76,18 @@ class RigCloudModel:
         self.set_rig(rig)
 
     def set_rig(self, rig) -> str:
-        """Use `rig` from now on (a pair matched before is forgotten)."""
+        """Use `rig` from now on (a pair matched before is forgotten).
+
+        Parameters
+        ----------
+        rig : StereoCamera, str or os.PathLike
+            The rig, or its file (path or JSON text).
+
+        Returns
+        -------
+        text : str
+            The status line.
+        """
         from ..matching.metric import photo_config
 
         self.camera, self.rig_name = _camera(rig, "RigCloudModel")
@@ -100,7 +111,20 @@ class RigCloudModel:
 
     def load(self, left, right, name: str = "pair") -> str:
         """Match `left` and `right` (paths, file bytes or arrays) with the rig; returns the status line.
-        A pair the rig does not fit (:func:`ismb_lab.matching.metric.for_camera`) leaves no cloud."""
+        A pair the rig does not fit (:func:`ismb_lab.matching.metric.for_camera`) leaves no cloud.
+
+        Parameters
+        ----------
+        left, right : path, bytes or ndarray
+            The pair.
+        name : str, default "pair"
+            The pair's name in the status line.
+
+        Returns
+        -------
+        text : str
+            The status line.
+        """
         from ..images.io import load_pair
         from ..matching.metric import for_camera, match_with_camera
 
@@ -213,7 +237,18 @@ class RigCloud(Base):
         self.refresh()
 
     def set_rig(self, rig) -> str:
-        """Use `rig` (a StereoCamera, or a rig file's path); the pair shown, if any, is matched again."""
+        """Use `rig` (a StereoCamera, or a rig file's path); the pair shown, if any, is matched again.
+
+        Parameters
+        ----------
+        rig : StereoCamera, str or os.PathLike
+            The rig or its file.
+
+        Returns
+        -------
+        text : str
+            The status line.
+        """
         if isinstance(rig, str) and not rig:
             raise ParameterError(message("rig", "RigCloud", "a rig file's path", rig))
         if self.model is None:
@@ -226,7 +261,20 @@ class RigCloud(Base):
         return self.model.message
 
     def load(self, left, right, name: str = "pair") -> str:
-        """Match a pair (paths, file bytes or arrays) with the rig and show it."""
+        """Match a pair (paths, file bytes or arrays) with the rig and show it.
+
+        Parameters
+        ----------
+        left, right : path, bytes or ndarray
+            The pair.
+        name : str, default "pair"
+            The pair's name in the status line.
+
+        Returns
+        -------
+        text : str
+            The status line.
+        """
         if self.model is None:
             raise ParameterError(message("rig", "RigCloud", "loaded before a pair (type its path, press "
                                          "'Load rig')", None))

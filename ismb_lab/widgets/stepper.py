@@ -66,7 +66,15 @@ class StepperModel:
         self.reset(seed, rule)
 
     def reset(self, seed: int | None = None, rule: str | None = None) -> None:
-        """Start again from every candidate on, optionally with another seed or rule."""
+        """Start again from every candidate on, optionally with another seed or rule.
+
+        Parameters
+        ----------
+        seed : int, optional
+            New visiting-order seed.
+        rule : {"exact", "thesis"}, optional
+            New update rule.
+        """
         owner = "StepperModel.reset"
         if seed is not None:
             self.seed = check_number(seed, "seed", owner, low=0, integer=True)
@@ -88,7 +96,18 @@ class StepperModel:
         return len(self.energies) - 1
 
     def step(self, n: int = 1) -> list[Update]:
-        """Make up to `n` update attempts (fewer if the network stops); return their records."""
+        """Make up to `n` update attempts (fewer if the network stops); return their records.
+
+        Parameters
+        ----------
+        n : int, default 1
+            Most attempts.
+
+        Returns
+        -------
+        updates : list of Update
+            One record per attempt made.
+        """
         n = check_number(n, "n", "StepperModel.step", low=0, integer=True)
         out = []
         while len(out) < n and not self.done:
@@ -104,7 +123,18 @@ class StepperModel:
         return out
 
     def run(self, limit: int = 50_000) -> int:
-        """Step until the network stops or `limit` attempts were made; return the attempts made."""
+        """Step until the network stops or `limit` attempts were made; return the attempts made.
+
+        Parameters
+        ----------
+        limit : int, default 50000
+            Most attempts.
+
+        Returns
+        -------
+        attempts : int
+            The attempts made.
+        """
         limit = check_number(limit, "limit", "StepperModel.run", low=1, integer=True)
         return len(self.step(limit))
 
@@ -306,7 +336,18 @@ class HopfieldStepper(Base):
         return cls(left, right, **kw)
 
     def step(self, n: int = 1) -> list[Update]:
-        """`n` update attempts, then one redraw (the image pair only if an output changed)."""
+        """`n` update attempts, then one redraw (the image pair only if an output changed).
+
+        Parameters
+        ----------
+        n : int, default 1
+            Most attempts.
+
+        Returns
+        -------
+        updates : list of Update
+            One record per attempt made.
+        """
         updates = self.model.step(n)
         self.refresh(matches=any(u.changed for u in updates))
         return updates
