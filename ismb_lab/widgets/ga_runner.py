@@ -169,7 +169,13 @@ class GAModel:
             self.error, self.status = exc, "failed"
 
     def set_generations(self, generations: int) -> None:
-        """Run at most `generations` generations from the next Start on (refused while a run is going)."""
+        """Run at most `generations` generations from the next Start on (refused while a run is going).
+
+        Parameters
+        ----------
+        generations : int
+            The last generation's index, >= 1.
+        """
         owner = "GAModel.set_generations"
         if self.running:
             raise ParameterError(message("generations", owner, "changed only while no GA is running (Stop it "
@@ -388,7 +394,13 @@ class GARunner(Base):
         self.say(self.model.describe())
 
     def set_generations(self, generations: int) -> None:
-        """Run at most `generations` generations from the next Start on (refused while a run is going)."""
+        """Run at most `generations` generations from the next Start on (refused while a run is going).
+
+        Parameters
+        ----------
+        generations : int
+            The last generation's index, >= 1.
+        """
         try:
             self.model.set_generations(generations)
             self.progress.max = self.model.generations

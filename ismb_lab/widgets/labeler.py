@@ -642,7 +642,20 @@ class TargetLabeler(Base):
         return value
 
     def click(self, x, y, side=None) -> str:
-        """:meth:`LabelModel.click` (side-by-side coordinates unless `side` is given), redrawn."""
+        """:meth:`LabelModel.click` (side-by-side coordinates unless `side` is given), redrawn.
+
+        Parameters
+        ----------
+        x, y : float
+            Where the click was.
+        side : {"left", "right"}, optional
+            The image clicked; None: side-by-side coordinates.
+
+        Returns
+        -------
+        text : str
+            The status text.
+        """
         return self._redrawn(self.model.click(x, y, side))
 
     def add_pair(self, i, k) -> None:
@@ -671,7 +684,18 @@ class TargetLabeler(Base):
                                  else f"your targets file: <code>{html.escape(str(self.model.path))}</code>")
 
     def save(self, path=None) -> Path:
-        """Save (raising on failure, after saying so in the status line)."""
+        """Save (raising on failure, after saying so in the status line).
+
+        Parameters
+        ----------
+        path : str or os.PathLike, optional
+            Default the labeller's file.
+
+        Returns
+        -------
+        path : Path
+            The file written.
+        """
         try:
             if path is None and self.model.path is None and self.name_box is not None:
                 raise ParameterError("The 'name' parameter of TargetLabeler.save must be typed in the "
@@ -686,7 +710,18 @@ class TargetLabeler(Base):
             self.refresh()
 
     def load(self, path=None) -> int:
-        """Load (raising on failure, after saying so; the current labels stay)."""
+        """Load (raising on failure, after saying so; the current labels stay).
+
+        Parameters
+        ----------
+        path : str or os.PathLike, optional
+            Default the labeller's file.
+
+        Returns
+        -------
+        n : int
+            The number of pairs loaded.
+        """
         try:
             return self.model.load(path)
         except Exception as exc:
@@ -696,7 +731,24 @@ class TargetLabeler(Base):
             self.refresh()
 
     def score_saved(self, method=DEFAULT_METHOD, *, seed: int = 0, params=None, path=None) -> SavedScore | None:
-        """:meth:`LabelModel.score_saved`: `method`'s matches against the saved labels."""
+        """:meth:`LabelModel.score_saved`: `method`'s matches against the saved labels.
+
+        Parameters
+        ----------
+        method : str, default ``DEFAULT_METHOD``
+            The matching method.
+        seed : int, default 0
+            Update-order seed.
+        params : Params, optional
+            Default the method's.
+        path : str or os.PathLike, optional
+            The targets file; default the labeller's.
+
+        Returns
+        -------
+        result : SavedScore or None
+            The score and its errors; None when nothing is saved there.
+        """
         return self.model.score_saved(method, seed=seed, params=params, path=path)
 
     @staticmethod
