@@ -38,6 +38,8 @@ class Texture:
         Checker period (m, 0: none) and contrast.
     waves : (k, 3) float ndarray
         Ripple waves ``(k_u, k_v, phase)``.
+    ripple : float, default 0.0
+        Relative amplitude of the ripple, 0 to 1.
 
     Examples
     --------

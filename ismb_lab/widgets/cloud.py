@@ -61,7 +61,7 @@ def frustum_edges(centres, corners_xyz) -> tuple[np.ndarray, np.ndarray]:
 class Cloud:
     """What a point-cloud view shows.
 
-    Parameters
+    Attributes
     ----------
     points : (N, 3) array
         Finite points, metres, in the rectified left camera's frame.
@@ -73,7 +73,13 @@ class Cloud:
         What each point is coloured by; None: its depth Z.
     notes : tuple of (str, (x, y, z))
         Short texts placed in 3-D (at most :data:`MAX_NOTES`).
+    caption : str
+        One line saying what is shown and in which units.
+    depth_range : (float, float) tuple
+        Lowest and highest `colour` (Z by default); ``(0.0, 1.0)`` without points.
 
+    Examples
+    --------
     >>> c = Cloud([[0, 0, 1.0]], [[0, 0, 0], [0.1, 0, 0]], np.ones((4, 3)))
     >>> c.colour.tolist(), c.depth_range
     ([1.0], (1.0, 1.0))
