@@ -329,7 +329,7 @@ class Layout:
     wall_disparity : float
         The wall's disparity, px.
     shift : float
-        The candidate window's shift, px: midway between the wall and the nearest object.
+        The candidate window's shift, px: midway between the wall and the nearest object, rounded.
     roi : (x, y, w, h) tuple, default :data:`LAYOUT_ROI`
         Where the corners are sought.
     """

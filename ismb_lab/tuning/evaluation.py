@@ -22,8 +22,8 @@ class Score:
     """C/E/T counts of one or more pairs (scores add with ``+``).
 
     Its text form is ``correct/wrong_partner+extra/targets``: ``'14/2+0/16'`` is 14 correct
-    matches, 2 matches of a labelled left feature to a wrong partner, 0 matches of an unlabelled
-    (not `unknown`) left feature, and 16 targets; C = 14, E = 2 + 0, T = 16.
+    matches, 2 matches of a left feature that has a target to another right feature, 0 extra
+    matches (of a left feature with no target), and 16 targets; C = 14, E = 2 + 0, T = 16.
 
     Attributes
     ----------

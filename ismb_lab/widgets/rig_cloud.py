@@ -178,10 +178,8 @@ class RigCloud(Base):
         The pair shows the calibration board.
     height : int, default 360
         The 3-D view's height, px.
-    folder : str or os.PathLike, default "."
-        Where uploaded photos are saved.
-    user : str, optional
-        Whose folder.
+    folder, user
+        The photo loader's (:class:`~ismb_lab.widgets.photos.PhotoLoader`).
 
     Notes
     -----
