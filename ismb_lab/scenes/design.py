@@ -136,38 +136,125 @@ class Placement:
 
 
 def plain_wall(rng, mode: str) -> tuple:
-    """Posters of high contrast (no draw)."""
+    """Posters of high contrast (no draw).
+
+    Parameters
+    ----------
+    rng : numpy.random.Generator
+        Not drawn from.
+    mode : str
+        The layout's contrast mode (ignored).
+
+    Returns
+    -------
+    wall : (str, (float, float)) tuple
+        ``("posters", HIGH)``.
+    """
     return "posters", HIGH
 
 
 def side_by_side(rng, widths: np.ndarray) -> Placement:
-    """Anywhere in the layout ROI, 8 to 20 px apart (no draw)."""
+    """Anywhere in the layout ROI, 8 to 20 px apart (no draw).
+
+    Parameters
+    ----------
+    rng : numpy.random.Generator
+        Not drawn from.
+    widths : (n,) float ndarray
+        The objects' widths, px.
+
+    Returns
+    -------
+    placement : Placement
+        Within the layout ROI's columns.
+    """
     rx, _, rw, _ = LAYOUT_ROI
     return Placement(rx + 2, rx + rw - 2, (8.0, 20.0), widths)
 
 
 def high_contrast(rng, mode: str) -> str:
-    """Every object of high contrast (no draw)."""
+    """Every object of high contrast (no draw).
+
+    Parameters
+    ----------
+    rng : numpy.random.Generator
+        Not drawn from.
+    mode : str
+        The layout's contrast mode (ignored).
+
+    Returns
+    -------
+    contrast : str
+        ``"high"``.
+    """
     return "high"
 
 
 def posters(rng) -> str:
-    """Every object papered with posters (no draw)."""
+    """Every object papered with posters (no draw).
+
+    Parameters
+    ----------
+    rng : numpy.random.Generator
+        Not drawn from.
+
+    Returns
+    -------
+    texture : str
+        ``"posters"``.
+    """
     return "posters"
 
 
 def common_sizes(rng, n: int) -> tuple:
-    """Widths 32 to 64 px and heights 36 to 68 px."""
+    """Widths 32 to 64 px and heights 36 to 68 px.
+
+    Parameters
+    ----------
+    rng : numpy.random.Generator
+        Random source.
+    n : int
+        Number of objects.
+
+    Returns
+    -------
+    widths, heights : (n,) float ndarray
+        Uniform draws, px.
+    """
     return rng.uniform(32, 64, n), rng.uniform(36, 68, n)
 
 
 def box_or_cylinder(rng, box_only: bool) -> str:
-    """A cylinder one time in three (0.35), a box otherwise or when `box_only` (one draw either way)."""
+    """A cylinder one time in three (0.35), a box otherwise or when `box_only` (one draw either way).
+
+    Parameters
+    ----------
+    rng : numpy.random.Generator
+        Random source.
+    box_only : bool
+        Always a box.
+
+    Returns
+    -------
+    shape : str
+        ``"box"`` or ``"cylinder"``.
+    """
     return "cylinder" if rng.random() < 0.35 and not box_only else "box"
 
 
 def quiet_cameras(rng) -> dict:
-    """Noise of 1 grey level, the right camera with gain 0.92 and offset 6 (no draw)."""
+    """Noise of 1 grey level, the right camera with gain 0.92 and offset 6 (no draw).
+
+    Parameters
+    ----------
+    rng : numpy.random.Generator
+        Not drawn from.
+
+    Returns
+    -------
+    camera : dict
+        ``gain``, ``offset`` and ``noise_std``.
+    """
     return {"gain": 0.92, "offset": 6.0, "noise_std": 1.0}
 
 
