@@ -217,6 +217,18 @@ def _read_manifest(path: Path):
 def source_files(name: str) -> tuple:
     """The files a built-in source of :data:`SOURCES` reads (those that exist).
 
+    Parameters
+    ----------
+    name : str
+        A key of :data:`SOURCES`.
+
+    Returns
+    -------
+    files : tuple of Path
+        The existing files; empty for an unknown or missing source.
+
+    Examples
+    --------
     >>> [p.name for p in source_files("middlebury-motorcycle")][:2]
     ['motorcycle_left.png', 'motorcycle_right.png']
     """
@@ -231,7 +243,18 @@ def source_files(name: str) -> tuple:
 
 def manifest_files(path) -> list:
     """Every file a manifest makes a run read (its pairs' and its sources'), or none if it cannot
-    be read: best effort, for the check that no output is one of them."""
+    be read: best effort, for the check that no output is one of them.
+
+    Parameters
+    ----------
+    path : str or Path
+        The manifest.
+
+    Returns
+    -------
+    files : list of Path
+        The pairs' files, then the sources'.
+    """
     try:
         data = _read_manifest(Path(path))
         entries = data["pairs"]
