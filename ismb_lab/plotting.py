@@ -26,22 +26,6 @@ def verdicts(pairs, targets, unknown=()) -> list:
     """Each matched pair's verdict as :func:`ismb_lab.tuning.evaluation.score` counts it
     (None: its left feature's truth is unknown).
 
-    Parameters
-    ----------
-    pairs : (m, 2) int array_like
-        Matched ``(i, k)`` feature pairs.
-    targets : (n, 2) int array_like
-        Target pairs.
-    unknown : int array_like, optional
-        Left features whose truth is unknown.
-
-    Returns
-    -------
-    kinds : list of str or None
-        ``"correct"``, ``"wrong partner"``, ``"extra"`` or None, one per pair.
-
-    Examples
-    --------
     >>> verdicts([[0, 0], [1, 2], [3, 3], [4, 4]], [[0, 0], [1, 1]], unknown=[4])
     ['correct', 'wrong partner', 'extra', None]
     """
@@ -55,20 +39,6 @@ def verdicts(pairs, targets, unknown=()) -> list:
 def side_by_side(left: np.ndarray, right: np.ndarray, gap: int = GAP) -> np.ndarray:
     """The two images next to each other, separated by a white gap.
 
-    Parameters
-    ----------
-    left, right : (H, W) float ndarray
-        Grey images of one height.
-    gap : int, default ``GAP``
-        Width of the gap, px.
-
-    Returns
-    -------
-    image : (H, 2 W + gap) float ndarray
-        The joined image.
-
-    Examples
-    --------
     >>> side_by_side(np.zeros((2, 3)), np.ones((2, 3)), gap=1).shape
     (2, 7)
     """
@@ -172,22 +142,8 @@ def plot_depth(ax, left, result, *, cmap: str = "plasma") -> dict:
     :class:`~ismb_lab.depth.objects.DepthResult`) by disparity, the removed ones as grey crosses,
     each object's rank and depth, the dashed box where corners were sought and the cyan blobs.
 
-    Parameters
-    ----------
-    ax : matplotlib.axes.Axes
-        Where to draw.
-    left : (H, W) float ndarray
-        The scene's left image.
-    result : DepthResult
-        What :func:`~ismb_lab.depth.pipeline.relative_depth` returned.
-    cmap : str, default "plasma"
-        Colour map of the features' disparity.
-
-    Returns
-    -------
-    artists : dict
-        ``image``, ``features``, ``removed``, ``labels``, ``box`` (None without
-        ``result.scene_roi``) and ``outlines`` (None without ``result.silhouettes``).
+    Returns the artists: ``image``, ``features``, ``removed``, ``labels``, ``box`` (None without
+    ``result.scene_roi``) and ``outlines`` (None without ``result.silhouettes``).
     """
     from matplotlib.collections import LineCollection
     from matplotlib.patches import Rectangle

@@ -120,17 +120,7 @@ class DepthConfig:
 
 @dataclass(frozen=True)
 class Depth:
-    """Metric depth of one disparity: ``z`` (None unless ``status == "finite"``) and its range.
-
-    Attributes
-    ----------
-    z : float or None
-        Depth in metres, None unless ``status == "finite"``.
-    near, far : float or None
-        Depth range (m) of the disparity plus and minus its error; `far` may be ``inf``.
-    status : str
-        ``"finite"``, ``"at infinity"`` or ``"invalid"``.
-    """
+    """Metric depth of one disparity: ``z`` (None unless ``status == "finite"``) and its range."""
 
     z: float | None
     near: float | None
@@ -190,12 +180,8 @@ class DepthObject:
     ----------
     rank : int
         1 = nearest.
-    centroid_xy : (x, y) tuple of float
-        Left-image centre of its features (or of its blob).
     mean_disparity, disparity_std : float
         Of its consensus matches, pixels.
-    depth : Depth
-        Metric depth of `mean_disparity`.
     features : (n, 2) ndarray
         Left-image positions of its consensus features (read-only).
     n_matches, outliers : int

@@ -156,22 +156,6 @@ class Silhouettes:
         :attr:`right`).  Holes narrower than ``pad_px + 1`` columns are closed on both sides,
         since where an object looks like the wall its blob has holes that do not tell shifts apart.
 
-        Parameters
-        ----------
-        k : int
-            The blob, 1..n.
-        column : int
-            Left-image column of the cut.
-        shifts : (int, int) tuple
-            Shifts of the left and the right part.
-
-        Returns
-        -------
-        dice : float
-            Dice overlap of both parts with the right image's change; nan without :attr:`right`.
-
-        Examples
-        --------
         >>> import numpy as np
         >>> labels = np.zeros((20, 60), dtype=np.int32); labels[5:15, 30:50] = 1
         >>> right = np.zeros((20, 60), dtype=bool)
@@ -189,22 +173,6 @@ class Silhouettes:
         """The shifts ``(left, right)`` that lay the two parts of :meth:`cut_dice` best, by coordinate
         ascent over :attr:`shifts` from `start`.
 
-        Parameters
-        ----------
-        k : int
-            The blob, 1..n.
-        column : int
-            Left-image column of the cut.
-        start : (int, int) tuple
-            Shifts to start the ascent from.
-
-        Returns
-        -------
-        shifts : (int, int) tuple
-            The best shifts of the left and the right part.
-
-        Examples
-        --------
         >>> import numpy as np
         >>> labels = np.zeros((20, 60), dtype=np.int32); labels[5:15, 30:50] = 1
         >>> right = np.zeros((20, 60), dtype=bool)
@@ -240,34 +208,6 @@ def changed_in_roi(background, scene, roi, threshold, sigma, margin, own: str, n
     median difference (the noise floor), at most to `threshold`.  Bad values are named as
     parameters of `own`; `name` holds `scene`.
 
-    Parameters
-    ----------
-    background, scene : (H, W) float array_like
-        The two grey images.
-    roi : str or (x, y, w, h) tuple
-        Where to look.
-    threshold : float
-        Grey levels of smoothed difference that count as a change.
-    sigma : float
-        Standard deviation of the Gaussian smoothing, px (0: none).
-    margin : int
-        Checked and returned as is.
-    own, name : str
-        The caller's name and the name of its `scene` parameter, for error messages.
-    low : float, optional
-        Hysteresis threshold.
-
-    Returns
-    -------
-    changed : (h, w) bool ndarray
-        The ROI's changed pixels.
-    roi : (x, y, w, h) tuple
-        The resolved ROI.
-    margin : int
-        The checked margin.
-
-    Examples
-    --------
     >>> import numpy as np
     >>> background = np.zeros((6, 8))
     >>> scene = background.copy(); scene[2:4, 3:5] = 50.0
@@ -304,24 +244,6 @@ def silhouettes(background, scene, roi="center", *, shifts=range(0, 41),
     into `roi` each get the shift of `shifts` with the largest Dice overlap (``docs/depth.md``,
     section 4), and are numbered left to right by centroid.
 
-    Parameters
-    ----------
-    background, scene : StereoPair
-        The empty view and the view with objects, of one size.
-    roi : str or (x, y, w, h) tuple, default "center"
-        Blobs must reach into it.
-    shifts : iterable of int, default range(0, 41)
-        The shifts tried, px.
-    config : OutlineConfig, optional
-        Default ``OutlineConfig()``.
-
-    Returns
-    -------
-    blobs : Silhouettes
-        The blobs, their best shifts and Dice overlaps.
-
-    Examples
-    --------
     >>> import numpy as np
     >>> from ismb_lab.images.io import load_pair
     >>> rng = np.random.default_rng(0)

@@ -55,20 +55,6 @@ def layout_match_config(layout, match_config=None) -> MatchConfig:
     """The demo's corner settings (default :data:`DEPTH_MATCH_CONFIG`) with the ROI and
     candidate-window shift of `layout` (an object with ``.roi`` and ``.shift``).
 
-    Parameters
-    ----------
-    layout : ObjectLayout or object with .roi and .shift
-        The scene layout whose ROI and shift are taken.
-    match_config : MatchConfig, optional
-        The settings to start from; default :data:`DEPTH_MATCH_CONFIG`.
-
-    Returns
-    -------
-    config : MatchConfig
-        `match_config` with ``roi`` and ``shift`` of `layout`.
-
-    Examples
-    --------
     >>> from ismb_lab.scenes import object_layout
     >>> c = layout_match_config(object_layout(0))
     >>> c.roi, c.shift, c.n_min
@@ -137,20 +123,6 @@ def scene_match_config(background, scene, match_config=None):
     """`match_config` (default :data:`DEPTH_MATCH_CONFIG`) with its ROI cut down to
     :func:`changed_roi` of two StereoPairs; `match_config` itself when nothing changed.
 
-    Parameters
-    ----------
-    background, scene : StereoPair
-        The empty view and the view with objects, of one size.
-    match_config : MatchConfig, optional
-        The settings to cut down; default :data:`DEPTH_MATCH_CONFIG`.
-
-    Returns
-    -------
-    config : MatchConfig
-        `match_config` with ``roi`` the changed box.
-
-    Examples
-    --------
     >>> from ismb_lab.images.io import load_pair
     >>> from ismb_lab.scenes import lab_scene, toy_car_scene
     >>> bg, sc = (load_pair(s.left, s.right) for s in (lab_scene(0), toy_car_scene(0)))
@@ -235,20 +207,6 @@ def scene_prepared(background, scene, match_config=None) -> Prepared:
     and each blob of change (:func:`changed_regions`) of either image gets :data:`REGION_CORNERS`
     of its own, so that a textured poster cannot take a plain object's share.
 
-    Parameters
-    ----------
-    background, scene : StereoPair
-        The empty view and the view with objects, of one size.
-    match_config : MatchConfig, optional
-        The settings; default :data:`DEPTH_MATCH_CONFIG`.
-
-    Returns
-    -------
-    prepared : Prepared
-        The scene pair, its config (``roi`` the changed box), corners and energy ingredients.
-
-    Examples
-    --------
     >>> from ismb_lab.images.io import load_pair
     >>> from ismb_lab.scenes import lab_scene, toy_car_scene
     >>> bg, sc = (load_pair(s.left, s.right) for s in (lab_scene(0), toy_car_scene(0)))
@@ -341,22 +299,6 @@ def depth_match(pair, *, background=None, method=DEFAULT_METHOD, params=None, ma
     With `background`, `pair` is a scene whose corners are sought where it changed
     (:func:`scene_prepared`).  The other arguments are :func:`relative_depth`'s.
 
-    Parameters
-    ----------
-    pair : StereoPair, folder or (left, right) pair
-        The pair to match.
-    background : StereoPair, folder or (left, right) pair, optional
-        The empty view; corners are then sought only where `pair` differs from it.
-    method, params, match_config, seed, solver, one_to_one, **network
-        As in :func:`relative_depth`.
-
-    Returns
-    -------
-    result : MatchResult
-        The matches of `pair`.
-
-    Examples
-    --------
     >>> from ismb_lab.scenes import lab_scene
     >>> m = depth_match(lab_scene(0, supersample=1))
     >>> m.solver, m.stop_rule, len(m.pairs) > 10
@@ -396,20 +338,7 @@ def _match(prepared: Prepared, method, params, seed, solver, one_to_one=False) -
 
 def depth_pairs(background, scene, match_config=None) -> tuple[Prepared, Prepared]:
     """The (background, scene) Prepared pairs of :func:`relative_depth`, to pass back as its
-    `prepared` when only the method, parameters, seed or tolerances change.
-
-    Parameters
-    ----------
-    background, scene : StereoPair, folder or (left, right) pair
-        Two pairs of the same view, of one size.
-    match_config : MatchConfig, optional
-        Corner and window settings; default :data:`DEPTH_MATCH_CONFIG`.
-
-    Returns
-    -------
-    prepared : (Prepared, Prepared) tuple
-        The background's and the scene's prepared pairs.
-    """
+    `prepared` when only the method, parameters, seed or tolerances change."""
     return _depth_pairs(background, scene, match_config, "depth_pairs")
 
 
@@ -505,20 +434,6 @@ def pair_silhouettes(prepared, config: DepthConfig | None = None) -> Silhouettes
     """:func:`~ismb_lab.depth.outlines.silhouettes` of :func:`depth_pairs`, in the background's ROI
     at the whole-pixel shifts of the scene's candidate window.
 
-    Parameters
-    ----------
-    prepared : (Prepared, Prepared) tuple
-        What :func:`depth_pairs` returns.
-    config : DepthConfig, optional
-        Its ``outline`` settings are used; default ``DepthConfig()``.
-
-    Returns
-    -------
-    blobs : Silhouettes
-        The scene's new objects, with their disparities.
-
-    Examples
-    --------
     >>> from ismb_lab.scenes import lab_scene, toy_car_scene
     >>> blobs = pair_silhouettes(depth_pairs(lab_scene(0), toy_car_scene(0)))
     >>> blobs.disparity.tolist()        # the two cars, near one first (left to right)

@@ -42,13 +42,7 @@ def user_name() -> str:
 
 def voila_without_hub() -> bool:
     """Whether this kernel serves a Voilà page without a hub (Voilà sets ``SERVER_SOFTWARE``):
-    one login for every visitor, so the login name does not say who is labelling.
-
-    Returns
-    -------
-    flag : bool
-        True on a Voilà page served without a hub.
-    """
+    one login for every visitor, so the login name does not say who is labelling."""
     return (os.environ.get("SERVER_SOFTWARE", "").startswith("voila")
             and not os.environ.get("JUPYTERHUB_USER"))
 
@@ -125,17 +119,7 @@ def _locked(path: Path):
 
 @dataclass(frozen=True, eq=False)
 class Merged:
-    """What :func:`save_merging` wrote: the targets, and what it took from the file on disk.
-
-    Attributes
-    ----------
-    targets : TargetSet
-        The pairs written.
-    kept_from_disk : int
-        Pairs another process saved that were kept.
-    replaced : int
-        Pairs on disk that gave way to one of our new pairs.
-    """
+    """What :func:`save_merging` wrote: the targets, and what it took from the file on disk."""
 
     targets: TargetSet
     kept_from_disk: int
@@ -150,27 +134,6 @@ def save_merging(path, ours: TargetSet, base: TargetSet | None = None) -> Merged
     theirs; a pair of theirs that gives one of our new pairs' points another partner gives way
     (counted in ``replaced``).  Their keys and extras survive; the write is atomic.
 
-    Parameters
-    ----------
-    path : str or Path
-        The targets file, in an existing folder.
-    ours : TargetSet
-        The pairs as we have them now.
-    base : TargetSet, optional
-        What we last loaded or saved; None if never.
-
-    Returns
-    -------
-    merged : Merged
-        The targets written and the counts of what was taken from disk.
-
-    Raises
-    ------
-    ParameterError
-        No such folder, or the file holds targets for other images.
-
-    Examples
-    --------
     >>> import tempfile, pathlib
     >>> path = pathlib.Path(tempfile.mkdtemp()) / "t.json"
     >>> a = save_merging(path, TargetSet([[10, 10]], [[5, 10]])).targets   # student A's first save
@@ -228,23 +191,6 @@ class Pool:
     pair handed in but not pooled, with its votes, voters, rivals and ``reasons`` (``"left"``,
     ``"right"``, ``"min_votes"``, ``"two_partners"``); `identical` the files of different students
     that hold the same pairs.
-
-    Attributes
-    ----------
-    targets : TargetSet
-        The pooled pairs, with extras ``labelled_by`` and ``of``.
-    disagreements : list of dict
-        Points given several partners.
-    students : dict of str to dict
-        Per student, their counts.
-    min_votes : int, default 1
-        Votes a pair needed on top of a majority.
-    dropped : list of dict
-        Pairs handed in but not pooled, with why.
-    identical : list of dict
-        Groups of students whose files hold the same pairs.
-    identical_votes : {"once", "each"}, default "once"
-        How alike files voted.
     """
 
     targets: TargetSet
@@ -308,20 +254,6 @@ def collected(folder, pattern: str = "targets-*.json") -> dict:
     `folder` is nbgrader's ``submitted/`` (or the course folder holding it), a folder per student
     named by nbgrader, the files anywhere below.  Symbolic links are never followed.
 
-    Parameters
-    ----------
-    folder : str or Path
-        nbgrader's ``submitted/`` folder or the course folder holding it.
-    pattern : str, default "targets-*.json"
-        The files' name pattern.
-
-    Returns
-    -------
-    files : dict of str to list of Path
-        Each student's files, sorted.
-
-    Examples
-    --------
     >>> import tempfile, pathlib
     >>> course = pathlib.Path(tempfile.mkdtemp())
     >>> for who in ("ann", "bob"):

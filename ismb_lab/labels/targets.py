@@ -162,20 +162,6 @@ class TargetSet:
     def add(self, left_xy, right_xy, **extra) -> "TargetSet":
         """A new set with the pair ``left_xy <-> right_xy`` (and `extra` keys) appended.
 
-        Parameters
-        ----------
-        left_xy, right_xy : (x, y) pair of float
-            The new pair's points.
-        **extra
-            JSON values stored with the pair.
-
-        Returns
-        -------
-        targets : TargetSet
-            The longer set; this one is unchanged.
-
-        Examples
-        --------
         >>> t = TargetSet([[1, 2]], [[0, 2]])
         >>> len(t.add([5, 6], [4, 6], note="corner")), len(t)
         (2, 1)
@@ -187,18 +173,6 @@ class TargetSet:
     def remove(self, index) -> "TargetSet":
         """A new set without pair `index` (0-based; negative indices are refused).
 
-        Parameters
-        ----------
-        index : int
-            The pair to drop, ``0 <= index < len(self)``.
-
-        Returns
-        -------
-        targets : TargetSet
-            The shorter set; this one is unchanged.
-
-        Examples
-        --------
         >>> TargetSet([[1, 2], [5, 6]], [[0, 2], [4, 6]]).remove(0).left_xy.tolist()
         [[5.0, 6.0]]
         """
@@ -233,20 +207,6 @@ class TargetSet:
     def from_dict(cls, d, *, source: str = "TargetSet.from_dict") -> "TargetSet":
         """Read the file's JSON object; errors name `source` and the key (pairs from 0).
 
-        Parameters
-        ----------
-        d : dict
-            The JSON object, as :meth:`to_dict` makes it.
-        source : str, default "TargetSet.from_dict"
-            What error messages name.
-
-        Returns
-        -------
-        targets : TargetSet
-            The pairs, hashes, orientation and other keys.
-
-        Examples
-        --------
         >>> TargetSet.from_dict({"version": 1, "pairs": [{"left_xy": [1, 2], "right_xy": [0, "2"]}]})
         Traceback (most recent call last):
         ismb_lab.ParameterTypeError: The 'pairs[0].right_xy' parameter of TargetSet.from_dict must be
@@ -424,18 +384,6 @@ def _refuse_turned(pair: StereoPair, path, owner: str) -> None:
 def many_to_one(targets: TargetSet) -> np.ndarray:
     """Indices of the pairs whose left or right point another pair also uses (to 1e-6 px).
 
-    Parameters
-    ----------
-    targets : TargetSet
-        The pairs to check.
-
-    Returns
-    -------
-    indices : int ndarray
-        The pairs sharing a point, ascending.
-
-    Examples
-    --------
     >>> many_to_one(TargetSet([[10, 10], [20, 10], [30, 10]], [[5, 10], [5, 10], [25, 10]])).tolist()
     [0, 1]
     """
@@ -451,27 +399,6 @@ def many_to_one(targets: TargetSet) -> np.ndarray:
 def check_one_to_one(targets: TargetSet, source: str, owner: str) -> TargetSet:
     """Refuse targets that give a corner two partners, naming the first such pairs and the fix.
 
-    Parameters
-    ----------
-    targets : TargetSet
-        The pairs to check.
-    source : str
-        The file's name, for the message.
-    owner : str
-        The calling function or command, for the message.
-
-    Returns
-    -------
-    targets : TargetSet
-        `targets` itself when every corner has one partner.
-
-    Raises
-    ------
-    ParameterError
-        Two pairs share a point.
-
-    Examples
-    --------
     >>> check_one_to_one(TargetSet([[10, 10], [20, 10]], [[5, 10], [5, 10]]), "t.json", "tune")
     Traceback (most recent call last):
     ismb_lab.ParameterError: The targets file 't.json' given to tune must pair each corner once. Got pairs[0] ...
@@ -495,19 +422,10 @@ def check_one_to_one(targets: TargetSet, source: str, owner: str) -> TargetSet:
 class Snapped:
     """Targets snapped to features by :func:`snap` (read-only arrays).
 
-    Attributes
-    ----------
-    pairs : (s, 2) int ndarray
-        Feature pairs ``(i, k)`` of the targets that snapped on both sides.
-    target_index : (s,) int ndarray
-        Their targets' indices.
-    missing_left, missing_right : int ndarray
-        Targets with no feature in reach on that side.
-    distance : (s,) float ndarray
-        The larger of the two snap distances, px.
+    `pairs` ``(s, 2)`` are the feature pairs of the targets that snapped on both sides,
+    `target_index` their targets, `distance` the larger snap distance; `missing_left` and
+    `missing_right` the targets with no feature in reach on that side.
 
-    Examples
-    --------
     >>> Snapped([[0, 1], [0, 2]], [0, 3], [1], [1, 2], [0.0, 1.2]).shared.tolist()
     [0, 3]
     """
@@ -578,24 +496,6 @@ def targets_from_matches(pairs, left_xy, right_xy, *, left_sha256=None, right_sh
                          **meta) -> TargetSet:
     """Targets at the coordinates of feature pairs ``(i, k)``; extra keywords become `meta`.
 
-    Parameters
-    ----------
-    pairs : (m, 2) int array_like
-        Feature pairs ``(i, k)``.
-    left_xy, right_xy : (n, 2) float array_like
-        The left and right features.
-    left_sha256, right_sha256 : str, optional
-        The images' hashes.
-    **meta
-        JSON values stored as the file's top-level keys.
-
-    Returns
-    -------
-    targets : TargetSet
-        One pair per feature pair.
-
-    Examples
-    --------
     >>> t = targets_from_matches([[1, 0]], [[0, 0], [9, 4]], [[7, 4]], labeller="ann")
     >>> t.left_xy.tolist(), t.right_xy.tolist(), t.meta
     ([[9.0, 4.0]], [[7.0, 4.0]], {'labeller': 'ann'})

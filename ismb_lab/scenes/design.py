@@ -43,29 +43,6 @@ class ObjectTruth:
     leftmost), ``rank`` 1 the nearest; ``disparity`` (px) and ``depth_m`` are of the face (or
     cylinder line) nearest the cameras; ``box_xy`` is the left-image extent ``(x0, y0, x1, y1)``
     and ``centre_xy`` a point of that face inside the image.
-
-    Attributes
-    ----------
-    name : str
-        The primitive's name, ``"object k"``.
-    index : int
-        Its index in ``Scene.primitives``.
-    rank : int
-        1 for the nearest.
-    kind : str
-        ``"box"`` or ``"cylinder"``.
-    disparity : float
-        Of the nearest face, px.
-    depth_m : float
-        Of the nearest face, m.
-    box_xy : (x0, y0, x1, y1) tuple
-        Left-image extent.
-    centre_xy : (x, y) tuple
-        A point of the nearest face inside the image.
-    contrast : str
-        ``"low"`` or ``"high"``.
-    texture : str
-        The object's texture kind (what the family's ``texture`` hook drew).
     """
 
     name: str
@@ -84,23 +61,7 @@ class ObjectTruth:
 class Design:
     """A drawn layout before rendering: primitives (objects left to right), truth (nearest first),
     the right camera's ``gain``, ``offset`` and ``noise_std``, and the noise seeds of the
-    background and of the scene.
-
-    Attributes
-    ----------
-    wall : Plane
-        The wall.
-    objects : tuple of Primitive
-        The objects, left to right.
-    truth : tuple of ObjectTruth
-        Their truth, nearest first.
-    wall_disparity : float
-        The wall's disparity, px.
-    camera : dict
-        The right camera's ``gain``, ``offset`` and ``noise_std``.
-    noise : tuple
-        Noise seeds of the background and of the scene.
-    """
+    background and of the scene."""
 
     wall: Plane
     objects: tuple
@@ -113,19 +74,7 @@ class Design:
 @dataclass(frozen=True)
 class Placement:
     """Where the objects of `widths` stand: left edges between `lo` and `hi`, gaps in `gap`; with
-    `pin_left` the first starts at `lo` (a box), with `pin_right` the last ends at `hi`.
-
-    Attributes
-    ----------
-    lo, hi : float
-        Range of the left edges, px.
-    gap : (float, float) tuple
-        Range of the gaps between objects, px.
-    widths : (n,) float ndarray
-        The objects' widths, px.
-    pin_left, pin_right : bool, default False
-        Pin the first object to `lo`, the last to `hi`.
-    """
+    `pin_left` the first starts at `lo` (a box), with `pin_right` the last ends at `hi`."""
 
     lo: float
     hi: float
@@ -136,125 +85,38 @@ class Placement:
 
 
 def plain_wall(rng, mode: str) -> tuple:
-    """Posters of high contrast (no draw).
-
-    Parameters
-    ----------
-    rng : numpy.random.Generator
-        Not drawn from.
-    mode : str
-        The layout's contrast mode (ignored).
-
-    Returns
-    -------
-    wall : (str, (float, float)) tuple
-        ``("posters", HIGH)``.
-    """
+    """Posters of high contrast (no draw)."""
     return "posters", HIGH
 
 
 def side_by_side(rng, widths: np.ndarray) -> Placement:
-    """Anywhere in the layout ROI, 8 to 20 px apart (no draw).
-
-    Parameters
-    ----------
-    rng : numpy.random.Generator
-        Not drawn from.
-    widths : (n,) float ndarray
-        The objects' widths, px.
-
-    Returns
-    -------
-    placement : Placement
-        Within the layout ROI's columns.
-    """
+    """Anywhere in the layout ROI, 8 to 20 px apart (no draw)."""
     rx, _, rw, _ = LAYOUT_ROI
     return Placement(rx + 2, rx + rw - 2, (8.0, 20.0), widths)
 
 
 def high_contrast(rng, mode: str) -> str:
-    """Every object of high contrast (no draw).
-
-    Parameters
-    ----------
-    rng : numpy.random.Generator
-        Not drawn from.
-    mode : str
-        The layout's contrast mode (ignored).
-
-    Returns
-    -------
-    contrast : str
-        ``"high"``.
-    """
+    """Every object of high contrast (no draw)."""
     return "high"
 
 
 def posters(rng) -> str:
-    """Every object papered with posters (no draw).
-
-    Parameters
-    ----------
-    rng : numpy.random.Generator
-        Not drawn from.
-
-    Returns
-    -------
-    texture : str
-        ``"posters"``.
-    """
+    """Every object papered with posters (no draw)."""
     return "posters"
 
 
 def common_sizes(rng, n: int) -> tuple:
-    """Widths 32 to 64 px and heights 36 to 68 px.
-
-    Parameters
-    ----------
-    rng : numpy.random.Generator
-        Random source.
-    n : int
-        Number of objects.
-
-    Returns
-    -------
-    widths, heights : (n,) float ndarray
-        Uniform draws, px.
-    """
+    """Widths 32 to 64 px and heights 36 to 68 px."""
     return rng.uniform(32, 64, n), rng.uniform(36, 68, n)
 
 
 def box_or_cylinder(rng, box_only: bool) -> str:
-    """A cylinder one time in three (0.35), a box otherwise or when `box_only` (one draw either way).
-
-    Parameters
-    ----------
-    rng : numpy.random.Generator
-        Random source.
-    box_only : bool
-        Always a box.
-
-    Returns
-    -------
-    shape : str
-        ``"box"`` or ``"cylinder"``.
-    """
+    """A cylinder one time in three (0.35), a box otherwise or when `box_only` (one draw either way)."""
     return "cylinder" if rng.random() < 0.35 and not box_only else "box"
 
 
 def quiet_cameras(rng) -> dict:
-    """Noise of 1 grey level, the right camera with gain 0.92 and offset 6 (no draw).
-
-    Parameters
-    ----------
-    rng : numpy.random.Generator
-        Not drawn from.
-
-    Returns
-    -------
-    camera : dict
-        ``gain``, ``offset`` and ``noise_std``.
-    """
+    """Noise of 1 grey level, the right camera with gain 0.92 and offset 6 (no draw)."""
     return {"gain": 0.92, "offset": 6.0, "noise_std": 1.0}
 
 

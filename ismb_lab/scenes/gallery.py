@@ -34,18 +34,6 @@ def _png(image: np.ndarray) -> bytes:
 def encode_disparity(disparity: np.ndarray) -> np.ndarray:
     """Disparity map to the 16-bit KITTI encoding (``round(256 d)``, 0 = unknown).
 
-    Parameters
-    ----------
-    disparity : (H, W) float ndarray
-        Disparity, px; NaN or <= 0 where unknown.
-
-    Returns
-    -------
-    encoded : (H, W) uint16 ndarray
-        The encoded map.
-
-    Examples
-    --------
     >>> encode_disparity(np.array([[16.5, np.nan]]))
     array([[4224,    0]], dtype=uint16)
     """
@@ -79,22 +67,7 @@ def decode_disparity(encoded: np.ndarray) -> np.ndarray:
 
 
 def write_scene(scene: Scene, folder, **about) -> list[Path]:
-    """Write a rendered scene as a pair folder; returns the files written.
-
-    Parameters
-    ----------
-    scene : Scene
-        The rendered scene.
-    folder : str or Path
-        The pair folder, made if missing.
-    **about
-        JSON values added to ``scene.json``.
-
-    Returns
-    -------
-    written : list of Path
-        ``left.png``, ``right.png``, ``disparity.png`` and ``scene.json``.
-    """
+    """Write a rendered scene as a pair folder; returns the files written."""
     folder = Path(folder)
     folder.mkdir(parents=True, exist_ok=True)
     rig = scene.rig
@@ -158,22 +131,7 @@ def answer_key(scene: Scene, left_path, right_path):
 
 
 def write_pair(scene: Scene, folder, **about) -> list[Path]:
-    """:func:`write_scene` plus the pair's ``answer_key.json``; returns the files written.
-
-    Parameters
-    ----------
-    scene : Scene
-        The rendered scene.
-    folder : str or Path
-        The pair folder.
-    **about
-        JSON values added to ``scene.json``.
-
-    Returns
-    -------
-    written : list of Path
-        The files written.
-    """
+    """:func:`write_scene` plus the pair's ``answer_key.json``; returns the files written."""
     folder = Path(folder)
     written = write_scene(scene, folder, **about)
     written.append(save_targets(folder / ANSWER_KEY, answer_key(scene, folder / "left.png",
@@ -182,22 +140,7 @@ def write_pair(scene: Scene, folder, **about) -> list[Path]:
 
 
 def write_manifest(folder, pairs, about: str) -> Path:
-    """An ``ismb-lab evaluate`` manifest of pair folders ``pairs`` (relative to `folder`).
-
-    Parameters
-    ----------
-    folder : str or Path
-        Where ``manifest.json`` is written.
-    pairs : iterable of (name, relative folder) tuple
-        The pairs; a relative folder is ``""`` or ends in ``/``.
-    about : str
-        The manifest's ``about`` line.
-
-    Returns
-    -------
-    path : Path
-        The manifest written.
-    """
+    """An ``ismb-lab evaluate`` manifest of pair folders ``pairs`` (relative to `folder`)."""
     entries = [{"name": name, "left": f"{rel}left.png", "right": f"{rel}right.png",
                 "targets": f"{rel}{ANSWER_KEY}"} for name, rel in pairs]
     return atomic_write_text(Path(folder) / "manifest.json",
@@ -259,18 +202,6 @@ PAIR_FILES = ("left.png", "right.png", "disparity.png", "scene.json", ANSWER_KEY
 def gallery_files(out="images") -> list[Path]:
     """Every file :func:`render_gallery` writes into `out`, known before anything is rendered.
 
-    Parameters
-    ----------
-    out : str or Path, default "images"
-        The gallery's folder.
-
-    Returns
-    -------
-    files : list of Path
-        The files, pair by pair, then manifests and READMEs.
-
-    Examples
-    --------
     >>> [p.as_posix() for p in gallery_files("images")][:2]
     ['images/synthetic/left.png', 'images/synthetic/right.png']
     """
@@ -282,18 +213,7 @@ def gallery_files(out="images") -> list[Path]:
 
 
 def render_gallery(out="images") -> list[Path]:
-    """Render every committed pair into `out`; returns the files written.
-
-    Parameters
-    ----------
-    out : str or Path, default "images"
-        The gallery's folder.
-
-    Returns
-    -------
-    written : list of Path
-        The files written.
-    """
+    """Render every committed pair into `out`; returns the files written."""
     out = Path(out)
     written = write_pair(synthetic_scene(seed=0), out / "synthetic",
                          made_by="ismb_lab.scenes.synthetic_scene(seed=0)")

@@ -170,13 +170,7 @@ def register_family(family: Family) -> Family:
 
 
 def unregister_family(name: str) -> None:
-    """Remove a family added by :func:`register_family`.
-
-    Parameters
-    ----------
-    name : str
-        A registered family's name.
-    """
+    """Remove a family added by :func:`register_family`."""
     check_choice(name, "name", "unregister_family", families())
     del _FAMILIES[name]
 
@@ -184,13 +178,6 @@ def unregister_family(name: str) -> None:
 def families() -> tuple[str, ...]:
     """The registered families' names, in registration order (the order the scripts cycle through).
 
-    Returns
-    -------
-    names : tuple of str
-        The families' names.
-
-    Examples
-    --------
     >>> families()
     ('contrast', 'repetitive', 'border', 'cameras')
     """
@@ -200,20 +187,6 @@ def families() -> tuple[str, ...]:
 def get_family(name, owner: str = "get_family", parameter: str = "family") -> Family:
     """Look a registered family up by name.
 
-    Parameters
-    ----------
-    name : str
-        A registered family's name.
-    owner, parameter : str, default "get_family" and "family"
-        The caller's and its parameter's names, for error messages.
-
-    Returns
-    -------
-    family : Family
-        The registered family.
-
-    Examples
-    --------
     >>> get_family("border").description.split(",")[0]
     'One box across the left image border'
     >>> get_family("stripes")
@@ -314,25 +287,7 @@ UNSEEN = Family("unseen", "Objects 18 to 96 px wide and 24 to 120 px tall, half 
 class Layout:
     """One random layout: the background and scene pairs (Scene), the objects' truth nearest
     first, the wall's disparity, the candidate-window shift and the ROI; `seed` is None when it
-    was drawn from a Generator.
-
-    Attributes
-    ----------
-    family : str
-        The family's name.
-    seed : int or None
-        The layout's seed.
-    background, scene : Scene
-        The pair without and with the objects.
-    objects : tuple of ObjectTruth
-        The objects' truth, nearest first.
-    wall_disparity : float
-        The wall's disparity, px.
-    shift : float
-        The candidate window's shift, px: midway between the wall and the nearest object, rounded.
-    roi : (x, y, w, h) tuple, default :data:`LAYOUT_ROI`
-        Where the corners are sought.
-    """
+    was drawn from a Generator."""
 
     family: str
     seed: int | None
@@ -464,18 +419,6 @@ def object_ids(scene: Scene) -> np.ndarray:
     """Which primitive each left pixel centre sees: an ``(H, W)`` index into ``scene.primitives``
     (-1 where none; for the families 0 is the wall and ``k`` is ``"object k"``).
 
-    Parameters
-    ----------
-    scene : Scene
-        A rendered scene.
-
-    Returns
-    -------
-    ids : (H, W) int ndarray
-        Index into ``scene.primitives`` per pixel, -1 where none.
-
-    Examples
-    --------
     >>> lay = object_layout(0, 2)
     >>> ids = object_ids(lay.scene)
     >>> o = lay.objects[0]

@@ -105,24 +105,6 @@ def synthetic_scene(seed=0, *, vertical_offset_px: float = 0.0, roll_deg: float 
     `seed` draws the layout and textures, then the noise; `vertical_offset_px` and `roll_deg` go
     to :meth:`~ismb_lab.cameras.camera.StereoCamera.pinhole` and do not move the layout.
 
-    Parameters
-    ----------
-    seed : int or numpy.random.Generator, default 0
-        Draws the layout, textures and noise.
-    vertical_offset_px : float, default 0.0
-        Downward shift of the right image, px.
-    roll_deg : float, default 0.0
-        Roll of the right camera, degrees in [-180, 180].
-    noise_std : float, default 1.0
-        Standard deviation of the camera noise, grey levels.
-
-    Returns
-    -------
-    scene : Scene
-        Both images with their exact disparity and depth.
-
-    Examples
-    --------
     >>> scene = synthetic_scene(3)
     >>> [type(p).__name__ for p in scene.primitives]
     ['Plane', 'Plane', 'Box', 'Box']
@@ -149,26 +131,6 @@ def toy_car(rng, x_centre: float, z_front: float, *, length: float = 0.13, name:
     `x_centre` is the car's middle, `z_front` the depth of its side (> 0) and `length` its body's
     (0.05 to 0.5), metres.
 
-    Parameters
-    ----------
-    rng : int or numpy.random.Generator
-        Draws the paint.
-    x_centre : float
-        The car's middle, m.
-    z_front : float
-        Depth of its side, m, > 0.
-    length : float, default 0.13
-        Body length, m, 0.05 to 0.5.
-    name : str, default "toy car"
-        The group's name.
-
-    Returns
-    -------
-    car : Group
-        Body, cabin and four wheels.
-
-    Examples
-    --------
     >>> car = toy_car(0, 0.0, 0.8)
     >>> len(car.parts), car.lo.round(3).tolist(), car.hi.round(3).tolist()
     (6, [-0.065, 0.049, 0.794], [0.065, 0.15, 0.866])
@@ -234,24 +196,6 @@ def lab_scene(seed=0, *, noise_std: float = 1.0, vertical_offset_px: float = 0.0
     `supersample` is rays per pixel side (1 renders 4 times faster).  The layout does not
     depend on the camera's roll or offset.
 
-    Parameters
-    ----------
-    seed : int or numpy.random.Generator, default 0
-        Draws the box, posters and noise.
-    noise_std : float, default 1.0
-        Camera noise, grey levels.
-    vertical_offset_px, roll_deg : float, default 0.0
-        The right camera's downward shift (px) and roll (degrees).
-    supersample : int, default 2
-        Rays per pixel side.
-
-    Returns
-    -------
-    scene : Scene
-        The rendered background pair with its ground truth.
-
-    Examples
-    --------
     >>> scene = lab_scene(0)
     >>> [type(p).__name__ for p in scene.primitives]
     ['Plane', 'Plane', 'Box']
@@ -273,20 +217,6 @@ def toy_car_layout(cars=0, rig: StereoCamera = StereoCamera.pinhole()) -> tuple[
     The left car stands 0.88 to 1.0 m away, the right one 10 cm or more farther, up to 1.2 m,
     both in front of :func:`lab_scene`'s box, one on each side of it.
 
-    Parameters
-    ----------
-    cars : int or numpy.random.Generator, default 0
-        Draws the places.
-    rig : StereoCamera, default ``StereoCamera.pinhole()``
-        The cameras whose image the cars are placed in.
-
-    Returns
-    -------
-    layout : tuple of (x, z, length) tuple
-        Each car's middle, side depth and length, m.
-
-    Examples
-    --------
     >>> (xl, zl, ll), (xr, zr, lr) = toy_car_layout(0)
     >>> bool(0.88 <= zl <= 1.0 and zl + 0.1 <= zr <= 1.2), bool(xl < 0 < xr)
     (True, True)
@@ -314,22 +244,6 @@ def toy_car_scene(seed=0, *, cars=None, noise_std: float = 1.0, vertical_offset_
     places and paint (:func:`toy_car_layout`), then fresh camera noise.  The cars are the last two
     primitives, :class:`Group` objects named ``"left car"`` and ``"right car"``.
 
-    Parameters
-    ----------
-    seed : int or numpy.random.Generator, default 0
-        The background's seed, as in :func:`lab_scene`.
-    cars : int or numpy.random.Generator, optional
-        Draws the cars and the noise; default `seed`.
-    noise_std, vertical_offset_px, roll_deg, supersample
-        As in :func:`lab_scene`.
-
-    Returns
-    -------
-    scene : Scene
-        The rendered scene pair with its ground truth.
-
-    Examples
-    --------
     >>> scene = toy_car_scene(0)
     >>> [p.name for p in scene.primitives[3:]]
     ['left car', 'right car']
@@ -361,22 +275,6 @@ def realistic_scene(index: int, *, noise_std: float = 1.5, supersample: int = 2)
     another light and right camera.  Two indices in three shift the right image down by 2.5 to
     5 px, and every fourth one also rolls the right camera by up to 1 degree.
 
-    Parameters
-    ----------
-    index : int
-        Which pair, >= 1 (1 to :data:`REALISTIC_COUNT` are saved in ``images/realistic/``).
-    noise_std : float, default 1.5
-        Camera noise, grey levels.
-    supersample : int, default 2
-        Rays per pixel side.
-
-    Returns
-    -------
-    scene : Scene
-        The rendered pair with its ground truth.
-
-    Examples
-    --------
     >>> scene = realistic_scene(2)
     >>> scene.rig.vertical_offset_px > 0, realistic_scene(3).rig.vertical_offset_px
     (True, 0.0)

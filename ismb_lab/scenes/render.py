@@ -102,18 +102,6 @@ class Scene:
     def surface_points(self, left_xy) -> np.ndarray:
         """3-D points seen at left-image points (exact ray cast); NaN rows where no surface.
 
-        Parameters
-        ----------
-        left_xy : (n, 2) float array_like
-            Left-image points ``(x, y)``.
-
-        Returns
-        -------
-        points : (n, 3) float ndarray
-            In the left camera's frame, m.
-
-        Examples
-        --------
         >>> from ismb_lab.scenes import synthetic_scene
         >>> synthetic_scene(0).surface_points([[20.0, 20.0]]).round(6)   # the back wall
         array([[-0.837, -0.597,  1.8  ]])
@@ -125,18 +113,6 @@ class Scene:
         """True right-image positions of left-image points, by exact ray casting both ways; NaN
         rows for occluded, out-of-view or surface-less points.
 
-        Parameters
-        ----------
-        left_xy : (n, 2) float array_like
-            Left-image points ``(x, y)``.
-
-        Returns
-        -------
-        right_xy : (n, 2) float ndarray
-            Their right-image positions.
-
-        Examples
-        --------
         >>> from ismb_lab.scenes import synthetic_scene
         >>> scene = synthetic_scene(0)
         >>> scene.correspond([[20.0, 20.0], [0.0, 100.0]]).round(3)  # wall; out of the right view
@@ -263,22 +239,6 @@ def true_matches(scene: Scene, left_xy, right_xy, tol: float = 1.5) -> np.ndarra
     """Index of the true partner of each left point among right points: the nearest within `tol`
     px of its exact correspondence (:meth:`Scene.correspond`), or -1.  Two may share a partner.
 
-    Parameters
-    ----------
-    scene : Scene
-        The rendered scene.
-    left_xy, right_xy : (n, 2) and (m, 2) float array_like
-        Left and right points.
-    tol : float, default 1.5
-        Largest distance from the exact correspondence, px, > 0.
-
-    Returns
-    -------
-    index : (n,) int ndarray
-        Index into `right_xy` of each left point's partner, or -1.
-
-    Examples
-    --------
     >>> from ismb_lab.scenes import synthetic_scene
     >>> scene = synthetic_scene(0)
     >>> left = [[120.0, 30.0], [0.0, 100.0]]

@@ -22,27 +22,6 @@ class Texture:
        ``levels[row, col]``, which keeps corners apart and makes evaluation a look-up;
     3. a factor ``1 + ripple * mean(sin(k_u u + k_v v + phase))`` over the rows of ``waves``.
 
-    Attributes
-    ----------
-    base : float, default 0.5
-        Albedo where nothing else is drawn.
-    cell : (float, float) tuple, default (1.0, 1.0)
-        Poster cell size ``(u, v)``, m.
-    origin : (float, float) tuple, default (0.0, 0.0)
-        Where the cell grid starts, m.
-    rects : (rows, cols, 4) float ndarray
-        One rectangle per cell in fractions of the cell, NaN for none.
-    levels : (rows, cols) float ndarray
-        Albedo of each cell's rectangle.
-    checker, checker_contrast : float, default 0.0
-        Checker period (m, 0: none) and contrast.
-    waves : (k, 3) float ndarray
-        Ripple waves ``(k_u, k_v, phase)``.
-    ripple : float, default 0.0
-        Relative amplitude of the ripple, 0 to 1.
-
-    Examples
-    --------
     >>> tex = Texture(base=0.5, cell=1.0, origin=(0, 0),
     ...               rects=[[[0.25, 0.25, 0.75, 0.75]]], levels=[[0.9]])
     >>> tex([[0.5, 0.5], [0.1, 0.5], [1.5, 0.5]])
@@ -131,36 +110,6 @@ def random_texture(rng, extent, *, cell: float, fill: float = 0.6, base: float =
     `sizes` and whose gap to the cell's border is at least `margin` (fractions of a cell), its
     ``|level - base|`` in `contrast` of random sign.  `ripple` is the relative amplitude of 3
     random plane waves of `wavelengths` (m).
-
-    Parameters
-    ----------
-    rng : int or numpy.random.Generator
-        Random source.
-    extent : (u_min, v_min, u_max, v_max) tuple
-        The surface's extent, m.
-    cell : float
-        About the cell size, m.
-    fill : float, default 0.6
-        Share of cells holding a rectangle.
-    base : float, default 0.55
-        Background albedo.
-    contrast : (float, float) tuple, default (0.25, 0.45)
-        Range of ``|level - base|``.
-    sizes : (float, float) tuple, default (0.4, 0.76)
-        Range of a rectangle's side, fractions of a cell.
-    margin : float, default 0.12
-        Least gap to the cell's border, fraction of a cell.
-    checker, checker_contrast : float, default 0.0
-        As in :class:`Texture`.
-    ripple : float, default 0.08
-        Relative amplitude of the ripple.
-    wavelengths : (float, float) tuple, default (0.4, 1.5)
-        Range of the ripple's wavelengths, m.
-
-    Returns
-    -------
-    texture : Texture
-        The drawn texture.
 
     Examples
     --------

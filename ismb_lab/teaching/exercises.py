@@ -28,15 +28,6 @@ __all__ = ["check_depth_range", "check_disparity", "check_energy_derivation", "c
 class Feedback:
     """The verdict of one exercise check: `text` is ``"correct"``, or what is off and a hint.
 
-    Attributes
-    ----------
-    correct : bool
-        Whether the answer is right (the Feedback's truth value).
-    text : str
-        What ``str()`` prints.
-
-    Examples
-    --------
     >>> print(Feedback(True, "correct"))
     correct
     """
@@ -165,18 +156,6 @@ def random_network(rng) -> Network:
     """A small random network (2 to 5 features a side, at least two candidates), for checking a
     derivation on more than one example; every value drawn in [-1, 1].
 
-    Parameters
-    ----------
-    rng : int or numpy.random.Generator
-        Random source.
-
-    Returns
-    -------
-    net : Network
-        The drawn network.
-
-    Examples
-    --------
     >>> net = random_network(0)
     >>> 2 <= net.n_neurons <= 25, bool(np.all(np.abs(net.similarity) <= 1))
     (True, True)
@@ -332,24 +311,6 @@ def check_transfer(values, x, theta: float, lam: float) -> Feedback:
     """Check a student's transfer function (3-10, 3-13): its `values` at `x` (``M_ik`` for S, ``X``
     for C), with tolerance `theta` and steepness `lam`.
 
-    Parameters
-    ----------
-    values : float array_like
-        The student's function values at `x`.
-    x : float array_like
-        Where they were computed.
-    theta : float
-        The tolerance.
-    lam : float
-        The steepness.
-
-    Returns
-    -------
-    feedback : Feedback
-        ``"correct"``, or what is off and a hint; true when correct.
-
-    Examples
-    --------
     >>> x = np.linspace(0, 40, 9)
     >>> print(check_transfer(transfer(x, 20, 2.0), x, 20, 2.0))
     correct

@@ -217,18 +217,6 @@ def _read_manifest(path: Path):
 def source_files(name: str) -> tuple:
     """The files a built-in source of :data:`SOURCES` reads (those that exist).
 
-    Parameters
-    ----------
-    name : str
-        A key of :data:`SOURCES`.
-
-    Returns
-    -------
-    files : tuple of Path
-        The existing files; empty for an unknown or missing source.
-
-    Examples
-    --------
     >>> [p.name for p in source_files("middlebury-motorcycle")][:2]
     ['motorcycle_left.png', 'motorcycle_right.png']
     """
@@ -243,18 +231,7 @@ def source_files(name: str) -> tuple:
 
 def manifest_files(path) -> list:
     """Every file a manifest makes a run read (its pairs' and its sources'), or none if it cannot
-    be read: best effort, for the check that no output is one of them.
-
-    Parameters
-    ----------
-    path : str or Path
-        The manifest.
-
-    Returns
-    -------
-    files : list of Path
-        The pairs' files, then the sources'.
-    """
+    be read: best effort, for the check that no output is one of them."""
     try:
         data = _read_manifest(Path(path))
         entries = data["pairs"]
@@ -330,15 +307,7 @@ def load_manifest(path, config: MatchConfig | None = None) -> list[Case]:
 
 @dataclass(frozen=True)
 class Spread:
-    """A figure measured over several update-order seeds.
-
-    Attributes
-    ----------
-    mean, std, low, high : float
-        Mean, standard deviation, minimum and maximum.
-    n : int
-        Number of seeds.
-    """
+    """A figure measured over several update-order seeds."""
 
     mean: float
     std: float
@@ -361,19 +330,7 @@ class Spread:
 @dataclass(frozen=True)
 class PairReport:
     """One pair's row: a Score per update-order seed with the tested parameters and with its own
-    fit (`training` and `params` None when it was not fitted).
-
-    Attributes
-    ----------
-    name : str
-        The pair's name.
-    testing : tuple of Score
-        Per seed, with the parameters fitted on the training pair.
-    training : tuple of Score or None
-        Per seed, with the pair's own fit.
-    params : Params or None
-        The pair's own fit.
-    """
+    fit (`training` and `params` None when it was not fitted)."""
 
     name: str
     testing: tuple
@@ -383,17 +340,7 @@ class PairReport:
 
 @dataclass(frozen=True)
 class SolverReport:
-    """The tested parameters solved another way: per pair and per seed, and pooled.
-
-    Attributes
-    ----------
-    rows : tuple of tuple of Score
-        Per pair, a Score per seed.
-    held_out : tuple of Score
-        The held-out pairs pooled, per seed.
-    seeded : bool
-        Whether the solver uses the seed.
-    """
+    """The tested parameters solved another way: per pair and per seed, and pooled."""
 
     rows: tuple
     held_out: tuple
@@ -402,15 +349,7 @@ class SolverReport:
 
 @dataclass(frozen=True)
 class PeerReport:
-    """A deterministic peer matcher: per pair, and pooled over the held-out pairs.
-
-    Attributes
-    ----------
-    rows : tuple of Score
-        One per pair.
-    held_out : Score
-        The held-out pairs pooled.
-    """
+    """A deterministic peer matcher: per pair, and pooled over the held-out pairs."""
 
     rows: tuple
     held_out: Score

@@ -82,15 +82,6 @@ class Score:
 class Scorer:
     """:func:`score` against fixed targets, their look-ups built once (for a GA).
 
-    Parameters
-    ----------
-    targets : (n, 2) int array_like
-        Target ``(i, k)`` pairs of left and right feature indices.
-    unknown : int array_like, optional
-        Left features whose matches are not counted.
-
-    Examples
-    --------
     >>> scorer = Scorer([[0, 0], [1, 1], [2, 2]], unknown=[4])
     >>> str(scorer([[0, 0], [1, 2], [3, 3], [4, 4]])), str(scorer([[2, 2]]))
     ('1/1+1/3', '1/0+0/3')
@@ -117,18 +108,6 @@ class Scorer:
         """What a match of each candidate neuron ``(rows[a], cols[a])`` would count as: 1 correct,
         2 wrong partner, 3 extra, 0 not counted; :meth:`count` then scores matched neurons.
 
-        Parameters
-        ----------
-        rows, cols : int array_like
-            Left and right feature index of each candidate neuron.
-
-        Returns
-        -------
-        codes : uint8 ndarray
-            One code per neuron.
-
-        Examples
-        --------
         >>> scorer = Scorer([[0, 0], [1, 1], [2, 2]], unknown=[4])
         >>> codes = scorer.neuron_codes(rows=[0, 1, 3, 4], cols=[0, 2, 3, 4])
         >>> codes.tolist(), str(scorer.count(codes, [0, 1, 2, 3]))
@@ -183,20 +162,6 @@ def unlabelled(targets, n_left: int) -> np.ndarray:
     """The left features ``0 .. n_left - 1`` that no target starts from: a person who labels some
     corners says nothing of the others (the thesis' targets are all the true pairs).
 
-    Parameters
-    ----------
-    targets : (n, 2) int array_like
-        Target ``(i, k)`` pairs.
-    n_left : int
-        The number of left features.
-
-    Returns
-    -------
-    unknown : int ndarray
-        The left features with no target, ascending.
-
-    Examples
-    --------
     >>> unlabelled([[0, 3], [2, 1]], 4).tolist()
     [1, 3]
     """

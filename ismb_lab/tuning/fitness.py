@@ -92,20 +92,6 @@ def to_params(method, chromosome, base: Params | None = None) -> Params:
 def to_chromosome(method, params: Params) -> np.ndarray:
     """Parameters to the method's chromosome.
 
-    Parameters
-    ----------
-    method : str or Method
-        The method whose genes to take.
-    params : Params
-        The parameters.
-
-    Returns
-    -------
-    chromosome : (n_genes,) float ndarray
-        The genes in the method's order.
-
-    Examples
-    --------
     >>> to_chromosome("III", Params()).tolist()
     [17.97, 24.02, 6.37, 2.2]
     """

@@ -65,20 +65,7 @@ class GAConfig:
             object.__setattr__(self, name, value)
 
     def updated(self, owner: str, **changes) -> "GAConfig":
-        """A copy with the `changes` that are not None, checked in the name of `owner`.
-
-        Parameters
-        ----------
-        owner : str
-            The calling function's name, for error messages.
-        **changes
-            GAConfig fields; None keeps the current value.
-
-        Returns
-        -------
-        config : GAConfig
-            The updated settings.
-        """
+        """A copy with the `changes` that are not None, checked in the name of `owner`."""
         unknown = sorted(set(changes) - {f.name for f in fields(self)})
         if unknown:
             raise ParameterTypeError(message("settings", owner, "GAConfig fields", unknown))
@@ -105,15 +92,6 @@ def _check_settings(values: dict, owner: str) -> dict:
 class Bounds:
     """Per-gene search interval ``low[i] <= gene i <= high[i]`` (read-only arrays).
 
-    Attributes
-    ----------
-    low, high : (n_genes,) float ndarray
-        Lower and upper bound of each gene, ``low < high``.
-    names : tuple of str, optional
-        The genes' names.
-
-    Examples
-    --------
     >>> Bounds([0, 0], [50, 10], names=("theta_c", "lambda_c")).n_genes
     2
     >>> Bounds([0, 2], [1, 1])
@@ -162,23 +140,6 @@ class Generation:
     ``evaluations`` counts the chromosomes evaluated so far; ``population`` and ``fitness`` are
     None unless ``keep_population=True``.  Arrays are read-only copies.
 
-    Attributes
-    ----------
-    index : int
-        Generation number, 0 the initial population.
-    best, mean, worst : float
-        Fitness statistics of the generation.
-    best_chromosome : (n_genes,) float ndarray
-        The fittest chromosome.
-    population : (m, n_genes) float ndarray or None
-        All chromosomes, when kept.
-    fitness : (m,) float ndarray or None
-        Their fitnesses, when kept.
-    evaluations : int
-        Chromosomes evaluated so far.
-
-    Examples
-    --------
     >>> Generation(0, 1.0, 0.5, 0.0, [0.2, 0.3], None, None, 30).best_chromosome
     array([0.2, 0.3])
     """
@@ -232,18 +193,6 @@ def _scores(values, owner: str, rule: str, ok=lambda n: n > 0) -> np.ndarray:
 def batch(score: Callable) -> Callable:
     """Turn a per-chromosome ``score(chromosome) -> float`` into a batch fitness.
 
-    Parameters
-    ----------
-    score : callable
-        Fitness of one chromosome.
-
-    Returns
-    -------
-    fitness : callable
-        ``(m, n_genes)`` array -> ``(m,)`` float array.
-
-    Examples
-    --------
     >>> batch(lambda c: float(c.sum()))(np.array([[1.0, 2.0], [0.0, 0.5]]))
     array([3. , 0.5])
     """
@@ -429,28 +378,6 @@ def next_generation(rng, population, fitness, bounds: Bounds, *, p_crossover: fl
     """Selection, crossover and mutation of one generation (§4.2); rates left at None take
     :class:`GAConfig`'s defaults.
 
-    Parameters
-    ----------
-    rng : int or numpy.random.Generator
-        Random source.
-    population : (m, n_genes) float array_like
-        The current chromosomes, m >= 2.
-    fitness : (m,) float array_like
-        Their fitnesses.
-    bounds : Bounds
-        The search box.
-    p_crossover, p_mutation : float, optional
-        Crossover and mutation probabilities.
-    n_elite : int, optional
-        Best chromosomes copied unchanged.
-
-    Returns
-    -------
-    population : (m, n_genes) float ndarray
-        The next generation, elite first.
-
-    Examples
-    --------
     >>> pop = np.array([[0.1], [0.9], [0.5], [0.3]])
     >>> new = next_generation(0, pop, [1.0, 4.0, 3.0, 2.0], Bounds([0], [1]))
     >>> new.shape, new[:2].ravel().tolist()

@@ -27,22 +27,8 @@ def frustum_edges(centres, corners_xyz) -> tuple[np.ndarray, np.ndarray]:
     """A pyramid per camera centre (``(K, 3)``): apex at it, base the image's 4 corners
     `corners_xyz` (``(4, 3)``, in order around the image, relative to a centre).
 
-    Parameters
-    ----------
-    centres : (K, 3) float array_like
-        Camera centres.
-    corners_xyz : (4, 3) float array_like
-        The image's corners relative to a centre, in order around the image.
+    Returns ``(5 K, 3)`` float32 vertices and ``(8 K, 2)`` uint32 edges (4 from the apex, 4 around).
 
-    Returns
-    -------
-    vertices : (5 K, 3) float32 ndarray
-        Each apex, then its 4 corners.
-    segments : (8 K, 2) uint32 ndarray
-        Vertex indices of each edge: 4 from the apex, 4 around the base.
-
-    Examples
-    --------
     >>> v, s = frustum_edges([[0, 0, 0], [0.1, 0, 0]], [[-1, -1, 1], [1, -1, 1], [1, 1, 1], [-1, 1, 1]])
     >>> v.shape, s.shape, s[:5].tolist()
     ((10, 3), (16, 2), [[0, 1], [0, 2], [0, 3], [0, 4], [1, 2]])
@@ -61,7 +47,7 @@ def frustum_edges(centres, corners_xyz) -> tuple[np.ndarray, np.ndarray]:
 class Cloud:
     """What a point-cloud view shows.
 
-    Attributes
+    Parameters
     ----------
     points : (N, 3) array
         Finite points, metres, in the rectified left camera's frame.
@@ -73,13 +59,7 @@ class Cloud:
         What each point is coloured by; None: its depth Z.
     notes : tuple of (str, (x, y, z))
         Short texts placed in 3-D (at most :data:`MAX_NOTES`).
-    caption : str
-        One line saying what is shown and in which units.
-    depth_range : (float, float) tuple
-        Lowest and highest `colour` (Z by default); ``(0.0, 1.0)`` without points.
 
-    Examples
-    --------
     >>> c = Cloud([[0, 0, 1.0]], [[0, 0, 0], [0.1, 0, 0]], np.ones((4, 3)))
     >>> c.colour.tolist(), c.depth_range
     ([1.0], (1.0, 1.0))
@@ -138,18 +118,7 @@ def _cloud(camera: StereoCamera, points, notes, caption: str) -> Cloud:
 
 def depth_cloud(model) -> Cloud:
     """The depth demo's background matches and kept scene matches in 3-D, with each object's rank
-    and depth, in metres of a pinhole camera of ``model.config``'s ``focal_px`` and ``baseline_m``.
-
-    Parameters
-    ----------
-    model : DepthModel
-        The depth demo's model, with its result.
-
-    Returns
-    -------
-    cloud : Cloud
-        The points, the cameras and one note per object.
-    """
+    and depth, in metres of a pinhole camera of ``model.config``'s ``focal_px`` and ``baseline_m``."""
     r, cfg = model.result, model.config
     h, w = model.scene.left.shape
     camera = StereoCamera.pinhole(width=w, height=h, focal_px=cfg.focal_px, baseline_m=cfg.baseline_m)
@@ -180,20 +149,7 @@ def _board(camera: StereoCamera, rectified, owner: str) -> tuple:
 
 
 def board_cloud(camera: StereoCamera, rectified) -> Cloud:
-    """A chessboard's corners, found in both views of a pair rectified with `camera`, in metres.
-
-    Parameters
-    ----------
-    camera : StereoCamera
-        The calibrated rig, with its board.
-    rectified : Rectified
-        The pair rectified with `camera`, showing the whole board in both views.
-
-    Returns
-    -------
-    cloud : Cloud
-        The corners in metres, with a note of their median depth.
-    """
+    """A chessboard's corners, found in both views of a pair rectified with `camera`, in metres."""
     check_type(camera, StereoCamera, "camera", "board_cloud", "a StereoCamera")
     left, d, note = _board(camera, rectified, "board_cloud")
     caption = f"the board's {len(left)} corners matched between the rectified views, " + _in_metres(camera)
@@ -212,22 +168,6 @@ def match_cloud(result, camera: StereoCamera, board=None) -> Cloud:
     `board`, the rectified pair when it shows the calibration board, adds a note with its
     corners' median depth (found by cv2, not by the network).
 
-    Parameters
-    ----------
-    result : MatchResult
-        The matches.
-    camera : StereoCamera
-        The camera that rectified the pair.
-    board : Rectified, optional
-        The rectified pair, when it shows the calibration board.
-
-    Returns
-    -------
-    cloud : Cloud
-        The matched points in metres and the cameras.
-
-    Examples
-    --------
     >>> from ismb_lab.matching.pipeline import match
     >>> from ismb_lab.scenes import synthetic_scene
     >>> s = synthetic_scene(0)
@@ -266,18 +206,6 @@ MAX_TICKS = 6
 def axis_ticks(lo: float, hi: float) -> np.ndarray:
     """Round values from `lo` to `hi` to number an axis with (at most :data:`MAX_TICKS`).
 
-    Parameters
-    ----------
-    lo, hi : float
-        The axis' range.
-
-    Returns
-    -------
-    ticks : float ndarray
-        The values, ascending.
-
-    Examples
-    --------
     >>> axis_ticks(0.0, 1.62).tolist()
     [0.0, 0.5, 1.0, 1.5]
     """
@@ -293,22 +221,9 @@ def axes_frame(lo, hi) -> tuple[np.ndarray, np.ndarray, list]:
     """Three axes along the edges of the box `lo` - `hi` (plot coordinates) that meet at its
     near, left, bottom corner, each numbered and titled once.
 
-    Parameters
-    ----------
-    lo, hi : (3,) float array_like
-        Opposite corners of the box.
+    Returns ``(V, 3)`` float32 vertices, ``(S, 2)`` uint32 segments and the texts as
+    ``(str, (x, y, z), reference_point)``.
 
-    Returns
-    -------
-    vertices : (V, 3) float32 ndarray
-        Segment ends.
-    segments : (S, 2) uint32 ndarray
-        Vertex indices of each segment.
-    texts : list of (str, (x, y, z), str) tuple
-        Each number and title, where it sits and its reference point.
-
-    Examples
-    --------
     >>> v, s, texts = axes_frame([0, 0, 0], [1, 2, 1])
     >>> [t for t, _, _ in texts if t.endswith("(m)")]
     ['X (m)', 'Z (m)', '-Y (m)']
@@ -341,18 +256,7 @@ def axes_frame(lo, hi) -> tuple[np.ndarray, np.ndarray, list]:
 
 
 def colour_bar_html(lo: float, hi: float) -> str:
-    """The colour scale, depth `lo` m (yellow) to `hi` m, as HTML outside the canvas (never over the axes).
-
-    Parameters
-    ----------
-    lo, hi : float
-        Nearest and farthest depth, m.
-
-    Returns
-    -------
-    html : str
-        A small flex row: the two depths around a gradient.
-    """
+    """The colour scale, depth `lo` m (yellow) to `hi` m, as HTML outside the canvas (never over the axes)."""
     stops = ", ".join(f"rgb({int(255 * r)},{int(255 * g)},{int(255 * b)}) {100 * t:.0f}%"
                       for t, r, g, b in _colours(9))
     return ("<div style='display:flex;align-items:center;gap:0.5em;font-size:small'>"
@@ -441,15 +345,7 @@ class PointCloudView:
 
     def update(self, cloud: Cloud, dense=None) -> None:
         """Show `cloud` and `dense` (``(M, 3)`` metres, or None) in the same objects, with one
-        colour scale from the nearest to the farthest point of either; the camera stays.
-
-        Parameters
-        ----------
-        cloud : Cloud
-            The new points and cameras.
-        dense : (M, 3) float array_like, optional
-            Dense points, metres.
-        """
+        colour scale from the nearest to the farthest point of either; the camera stays."""
         check_type(cloud, Cloud, "cloud", "PointCloudView.update", "a Cloud")
         dense = np.zeros((0, 3)) if dense is None else np.asarray(dense, dtype=float).reshape(-1, 3)
         dense = dense[np.isfinite(dense).all(axis=1)]
@@ -477,13 +373,7 @@ class PointCloudView:
         self.colours.value = colour_bar_html(*colour_range) if len(cloud.points) or len(dense) else ""
 
     def show_dense(self, shown: bool) -> None:
-        """Show or hide the dense points (shown only when there are some).
-
-        Parameters
-        ----------
-        shown : bool
-            Whether to show them.
-        """
+        """Show or hide the dense points (shown only when there are some)."""
         self._dense_wanted = bool(shown)
         self.dense.visible = bool(shown and len(self._dense_points))
 

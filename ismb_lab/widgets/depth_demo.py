@@ -39,27 +39,6 @@ class DepthModel:
     `background_name` is what the ranking sentence calls the background's nearest object; a
     `recipe` (or its path) replaces `method`, `params` and :data:`~ismb_lab.depth.pipeline.DEPTH_SOLVER`.
 
-    Parameters
-    ----------
-    background, scene : pair folder, (left, right) or object with ``.left`` and ``.right``
-        The two stereo pairs of the same view.
-    method : str, default ``DEFAULT_METHOD``
-        The matching method.
-    params : Params, optional
-        Default the method's.
-    seed : int, default 0
-        Update-order seed of both runs.
-    config : DepthConfig, optional
-        Tolerances and calibration.
-    match_config : MatchConfig, optional
-        Corner and window settings.
-    background_name : str, default "the nearest background object"
-        What the ranking sentence calls the background's nearest object.
-    recipe : Recipe or path, optional
-        Replaces `method`, `params` and the solver.
-
-    Examples
-    --------
     >>> from ismb_lab.scenes import lab_scene, toy_car_scene
     >>> model = DepthModel(lab_scene(0), toy_car_scene(0))
     >>> model.result.objects == () or model.ranking()[0].startswith("1. object at (")

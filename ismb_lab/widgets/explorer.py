@@ -30,25 +30,6 @@ class ExplorerModel:
     `targets` are ``(i, k)`` feature pairs (:func:`ismb_lab.labels.targets.snap`); matches of
     the `unknown` left features are not scored.
 
-    Parameters
-    ----------
-    prepared : Prepared
-        The pair and its energy ingredients.
-    method : str, default ``DEFAULT_METHOD``
-        The matching method.
-    params : Params, optional
-        Default the method's.
-    seed : int, default 0
-        Update-order seed.
-    targets : (t, 2) int array_like, optional
-        Target ``(i, k)`` feature pairs.
-    solver : str, default ``DEFAULT_SOLVER``
-        How the network is solved.
-    unknown : int array_like, optional
-        Left features whose matches are not scored.
-
-    Examples
-    --------
     >>> from ismb_lab.scenes import synthetic_scene
     >>> scene = synthetic_scene(0)
     >>> model = ExplorerModel(prepare(scene.left, scene.right), targets=[[0, 0]])
@@ -329,13 +310,7 @@ class ParameterExplorer(Base):
         return self.model.params
 
     def set_params(self, params: Params) -> None:
-        """Show and use `params` (e.g. the GA's best): one rematch, whatever changed.
-
-        Parameters
-        ----------
-        params : Params
-            The parameters to use.
-        """
+        """Show and use `params` (e.g. the GA's best): one rematch, whatever changed."""
         check_type(params, Params, "params", "ParameterExplorer.set_params", "a Params")
         with self.syncing():
             for gene, slider in self.sliders.items():

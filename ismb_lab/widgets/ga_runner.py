@@ -64,23 +64,6 @@ class GAModel:
     `seed` seeds the GA and every run's update order, as in ``tune``; `save_to`, a params file,
     is rewritten atomically whenever the best fitness improves, so that a killed kernel loses nothing.
 
-    Parameters
-    ----------
-    cases : list of Case
-        The training pairs.
-    method : str, default ``DEFAULT_METHOD``
-        The method to tune.
-    population, generations : int, optional
-        GA size; default :class:`~ismb_lab.tuning.genetic.GAConfig`'s (30 and 500).
-    seed : int, default 0
-        Seed of the GA and of every run's update order.
-    save_to : str or os.PathLike, optional
-        A params file kept with the best parameters so far.
-    solver : str, default ``DEFAULT_SOLVER``
-        How each chromosome's network is solved.
-
-    Examples
-    --------
     >>> from ismb_lab.matching.pipeline import prepare
     >>> from ismb_lab.scenes import synthetic_scene, true_matches
     >>> scene = synthetic_scene(0)
@@ -169,13 +152,7 @@ class GAModel:
             self.error, self.status = exc, "failed"
 
     def set_generations(self, generations: int) -> None:
-        """Run at most `generations` generations from the next Start on (refused while a run is going).
-
-        Parameters
-        ----------
-        generations : int
-            The last generation's index, >= 1.
-        """
+        """Run at most `generations` generations from the next Start on (refused while a run is going)."""
         owner = "GAModel.set_generations"
         if self.running:
             raise ParameterError(message("generations", owner, "changed only while no GA is running (Stop it "
@@ -199,18 +176,7 @@ class GAModel:
         self._resume.set()
 
     def wait(self, timeout: float | None = None) -> bool:
-        """Wait for the run to end; True when no run is alive any more.
-
-        Parameters
-        ----------
-        timeout : float, optional
-            Most seconds to wait; None waits for the end.
-
-        Returns
-        -------
-        done : bool
-            True when no run is alive any more.
-        """
+        """Wait for the run to end; True when no run is alive any more."""
         if self._thread is not None:
             self._thread.join(timeout)
         return not self.running
@@ -376,13 +342,7 @@ class GARunner(Base):
         self._apply.append(callback)
 
     def set_solver(self, name: str) -> None:
-        """Solve with `name` from the next Start on (refused while a run is going).
-
-        Parameters
-        ----------
-        name : str
-            A solver's name.
-        """
+        """Solve with `name` from the next Start on (refused while a run is going)."""
         try:
             if self.model.running:
                 raise ParameterError(message("solver", "GARunner.set_solver", "changed only while no GA "
@@ -394,13 +354,7 @@ class GARunner(Base):
         self.say(self.model.describe())
 
     def set_generations(self, generations: int) -> None:
-        """Run at most `generations` generations from the next Start on (refused while a run is going).
-
-        Parameters
-        ----------
-        generations : int
-            The last generation's index, >= 1.
-        """
+        """Run at most `generations` generations from the next Start on (refused while a run is going)."""
         try:
             self.model.set_generations(generations)
             self.progress.max = self.model.generations
@@ -437,18 +391,7 @@ class GARunner(Base):
             self.model.stop()
 
     def wait(self, timeout: float | None = None) -> bool:
-        """Wait until the run and its final redraw are done; True if nothing is left running.
-
-        Parameters
-        ----------
-        timeout : float, optional
-            Most seconds to wait; None waits for the end.
-
-        Returns
-        -------
-        done : bool
-            True if nothing is left running.
-        """
+        """Wait until the run and its final redraw are done; True if nothing is left running."""
         end = None if timeout is None else time.monotonic() + timeout
         done = self.model.wait(timeout)
         watcher = self._watcher

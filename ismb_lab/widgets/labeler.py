@@ -35,17 +35,7 @@ KEY_AFTER = 5
 @dataclass(frozen=True)
 class Comparison:
     """Student labels against the answer key, as feature pairs ``(i, k)``; `off_feature` counts
-    key pairs with no feature within reach (not missing: they cannot be labelled).
-
-    Attributes
-    ----------
-    correct, wrong : (n, 2) int ndarray
-        Labelled pairs that are, and are not, key pairs.
-    missing : (n, 2) int ndarray
-        Key pairs not labelled.
-    off_feature : int
-        Key pairs with no feature within reach.
-    """
+    key pairs with no feature within reach (not missing: they cannot be labelled)."""
 
     correct: np.ndarray
     wrong: np.ndarray
@@ -60,23 +50,7 @@ class Comparison:
 @dataclass(frozen=True, eq=False)
 class SavedScore:
     """A method's matches scored against the labels saved in a file (:meth:`LabelModel.score_saved`):
-    E counts only wrong partners of labelled left corners, T the saved pairs.
-
-    Attributes
-    ----------
-    path : Path
-        The targets file.
-    method : str
-        The method's name.
-    seed : int
-        The update-order seed.
-    pairs : (t, 2) int ndarray
-        The saved pairs, as feature pairs.
-    score : Score
-        The method's C/E/T against them.
-    errors : (e, 2) int ndarray
-        Its wrong partners of labelled left corners.
-    """
+    E counts only wrong partners of labelled left corners, T the saved pairs."""
 
     path: Path
     method: str
@@ -102,24 +76,6 @@ class LabelModel:
     With `exclusive`, :meth:`save` refuses an existing file this model did not load or save
     instead of merging with it (on a page many visitors share).
 
-    Parameters
-    ----------
-    prepared : Prepared
-        The pair and its features.
-    path : str or os.PathLike, optional
-        Where :meth:`save` and :meth:`load` go by default; a save merges with what another
-        process saved there.
-    answer_key : TargetSet, optional
-        Ground truth for :meth:`compare`.
-    snap_radius : float, default 8.0
-        A click snaps to the nearest feature within this many px.
-    key_tol : float, default 3.0
-        Answer-key points snap to features within this many px.
-    exclusive : bool, default False
-        Refuse to save into an existing file this model did not load or save.
-
-    Examples
-    --------
     >>> from ismb_lab.scenes import synthetic_scene
     >>> scene = synthetic_scene(0)
     >>> model = LabelModel(prepare(scene.left, scene.right))
@@ -231,18 +187,6 @@ class LabelModel:
 
         A left feature starts a pair, a right one completes it; a feature already paired
         selects its pair; the pending left feature clicked again is released.
-
-        Parameters
-        ----------
-        x, y : float
-            Where the click was.
-        side : {"left", "right"}, optional
-            The image clicked; None: side-by-side coordinates.
-
-        Returns
-        -------
-        text : str
-            The status text.
         """
         where = self.locate(x, y, side)
         if where is None:
@@ -272,13 +216,7 @@ class LabelModel:
         return self.message
 
     def add_pair(self, i, k) -> None:
-        """Label left feature `i` with right feature `k` (0-based); each feature pairs once.
-
-        Parameters
-        ----------
-        i, k : int
-            Left and right feature, 0-based.
-        """
+        """Label left feature `i` with right feature `k` (0-based); each feature pairs once."""
         owner = "LabelModel.add_pair"
         i = check_number(i, "i", owner, low=0, high=len(self.left_xy) - 1, integer=True)
         k = check_number(k, "k", owner, low=0, high=len(self.right_xy) - 1, integer=True)
@@ -295,13 +233,7 @@ class LabelModel:
                   f"({len(self._pairs)} pairs)")
 
     def select(self, index) -> None:
-        """Select pair `index` (0-based, table order) or None.
-
-        Parameters
-        ----------
-        index : int or None
-            The pair, or None for none.
-        """
+        """Select pair `index` (0-based, table order) or None."""
         if index is not None:
             index = check_number(index, "index", "LabelModel.select", low=0,
                                  high=len(self._pairs) - 1, integer=True)
@@ -337,18 +269,7 @@ class LabelModel:
 
     def save(self, path=None) -> Path:
         """Write the labels atomically, merged with what others saved to the file meanwhile
-        (:func:`ismb_lab.labels.classroom.save_merging`); on failure the old file is untouched.
-
-        Parameters
-        ----------
-        path : str or os.PathLike, optional
-            Default the model's file.
-
-        Returns
-        -------
-        path : Path
-            The file written.
-        """
+        (:func:`ismb_lab.labels.classroom.save_merging`); on failure the old file is untouched."""
         path = self._path(path, "LabelModel.save")
         base = self._base if self._base is not None and path == self._base_path else None
         if self.exclusive and base is None and path.exists():
@@ -410,18 +331,7 @@ class LabelModel:
 
     def load(self, path=None) -> int:
         """Replace the labels by a targets file's, each on its own feature (within 1.5 px); any
-        error leaves the labels as they were.
-
-        Parameters
-        ----------
-        path : str or os.PathLike, optional
-            Default the model's file.
-
-        Returns
-        -------
-        n : int
-            The number of pairs loaded.
-        """
+        error leaves the labels as they were."""
         owner = "LabelModel.load"
         path = self._path(path, owner)
         targets = load_targets(path, pair=self.prepared.pair)
@@ -642,20 +552,7 @@ class TargetLabeler(Base):
         return value
 
     def click(self, x, y, side=None) -> str:
-        """:meth:`LabelModel.click` (side-by-side coordinates unless `side` is given), redrawn.
-
-        Parameters
-        ----------
-        x, y : float
-            Where the click was.
-        side : {"left", "right"}, optional
-            The image clicked; None: side-by-side coordinates.
-
-        Returns
-        -------
-        text : str
-            The status text.
-        """
+        """:meth:`LabelModel.click` (side-by-side coordinates unless `side` is given), redrawn."""
         return self._redrawn(self.model.click(x, y, side))
 
     def add_pair(self, i, k) -> None:
@@ -668,13 +565,7 @@ class TargetLabeler(Base):
         return self._redrawn(self.model.delete_selected())
 
     def set_name(self, name: str) -> None:
-        """Choose the visitor's own targets file by their name (Voilà without a hub).
-
-        Parameters
-        ----------
-        name : str
-            The visitor's name.
-        """
+        """Choose the visitor's own targets file by their name (Voilà without a hub)."""
         check_type(name, str, "name", "TargetLabeler.set_name", "a str")
         self.model.path = targets_path(self.pair_name, Path.cwd(), user=name, also=()) if name.strip() else None
         self._show_path()
@@ -684,18 +575,7 @@ class TargetLabeler(Base):
                                  else f"your targets file: <code>{html.escape(str(self.model.path))}</code>")
 
     def save(self, path=None) -> Path:
-        """Save (raising on failure, after saying so in the status line).
-
-        Parameters
-        ----------
-        path : str or os.PathLike, optional
-            Default the labeller's file.
-
-        Returns
-        -------
-        path : Path
-            The file written.
-        """
+        """Save (raising on failure, after saying so in the status line)."""
         try:
             if path is None and self.model.path is None and self.name_box is not None:
                 raise ParameterError("The 'name' parameter of TargetLabeler.save must be typed in the "
@@ -710,18 +590,7 @@ class TargetLabeler(Base):
             self.refresh()
 
     def load(self, path=None) -> int:
-        """Load (raising on failure, after saying so; the current labels stay).
-
-        Parameters
-        ----------
-        path : str or os.PathLike, optional
-            Default the labeller's file.
-
-        Returns
-        -------
-        n : int
-            The number of pairs loaded.
-        """
+        """Load (raising on failure, after saying so; the current labels stay)."""
         try:
             return self.model.load(path)
         except Exception as exc:

@@ -35,19 +35,6 @@ class PhotoModel:
     :func:`ismb_lab.labels.classroom.user_name`) and `role`; `homographies`, ``(H_left, H_right,
     (width, height))`` found on another pair of the same cameras, are applied as they are.
 
-    Parameters
-    ----------
-    folder : str or os.PathLike, default "."
-        Where :meth:`save` makes the pair's folder.
-    user : str, optional
-        Whose folder; default :func:`~ismb_lab.labels.classroom.user_name`.
-    role : str, default ""
-        Added to the folder's name (e.g. ``"background"``).
-    homographies : (H_left, H_right, (width, height)), optional
-        A rectification of the same cameras, applied as it is.
-
-    Examples
-    --------
     >>> import cv2
     >>> rng = np.random.default_rng(0)
     >>> scene = cv2.GaussianBlur(rng.uniform(0, 255, (200, 260)), (0, 0), 2) * 3 % 255
@@ -75,20 +62,7 @@ class PhotoModel:
         return self.rectified is not None or bool(self.check and self.check["rectified"])
 
     def set_photos(self, left, right, name: str = "photos") -> str:
-        """Load two photos (paths, file bytes or arrays) and check them; nothing is kept on failure.
-
-        Parameters
-        ----------
-        left, right : path, bytes or ndarray
-            The left camera's photo and the right's.
-        name : str, default "photos"
-            The pair's name.
-
-        Returns
-        -------
-        text : str
-            The status line.
-        """
+        """Load two photos (paths, file bytes or arrays) and check them; nothing is kept on failure."""
         left, right, _ = pair_inputs(left, right, "PhotoModel.set_photos", 1600)
         check = check_rectified(left, right)
         self.left, self.right, self.check, self.rectified, self.roi, self.saved = left, right, check, None, None, None
@@ -132,18 +106,7 @@ class PhotoModel:
         return self.left, self.right, self.check["left_xy"], self.check["right_xy"]
 
     def set_roi(self, x0, y0, x1, y1) -> tuple:
-        """The ROI from two corners of a dragged rectangle, clipped to the image.
-
-        Parameters
-        ----------
-        x0, y0, x1, y1 : float
-            Two opposite corners, px.
-
-        Returns
-        -------
-        roi : (x, y, w, h) tuple
-            The ROI, at least 24 x 24 px.
-        """
+        """The ROI from two corners of a dragged rectangle, clipped to the image."""
         if self.left is None:
             raise ParameterError(message("roi", "PhotoModel.set_roi", "set after the photos are loaded", None))
         h, w = self.current()[0].shape

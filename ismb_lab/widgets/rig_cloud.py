@@ -36,19 +36,6 @@ class RigCloudModel:
     :class:`~ismb_lab.matching.recipe.Recipe`'s parameters and solver; with `board` (the pair shows
     the calibration board) a note gives its corners' median depth; at most `most` SGBM points.
 
-    Parameters
-    ----------
-    rig : StereoCamera, str or os.PathLike
-        The rig, or its file (path or JSON text).
-    method : str, default ``DEFAULT_METHOD``
-        The energy.
-    seed : int, default 0
-        The network's update order.
-    board : bool, default False
-        The pair shows the calibration board.
-    most : int, default ``MAX_DENSE``
-        Most SGBM points in the view.
-
     Attributes
     ----------
     cloud : Cloud or None
@@ -58,8 +45,6 @@ class RigCloudModel:
     refused : str
         The one-line refusal of a pair the rig does not fit ("" when it fits).
 
-    Examples
-    --------
     >>> from ismb_lab.scenes import synthetic_scene
     >>> s = synthetic_scene(0)
     >>> model = RigCloudModel(s.rig)
@@ -76,18 +61,7 @@ class RigCloudModel:
         self.set_rig(rig)
 
     def set_rig(self, rig) -> str:
-        """Use `rig` from now on (a pair matched before is forgotten).
-
-        Parameters
-        ----------
-        rig : StereoCamera, str or os.PathLike
-            The rig, or its file (path or JSON text).
-
-        Returns
-        -------
-        text : str
-            The status line.
-        """
+        """Use `rig` from now on (a pair matched before is forgotten)."""
         from ..matching.metric import photo_config
 
         self.camera, self.rig_name = _camera(rig, "RigCloudModel")
@@ -111,20 +85,7 @@ class RigCloudModel:
 
     def load(self, left, right, name: str = "pair") -> str:
         """Match `left` and `right` (paths, file bytes or arrays) with the rig; returns the status line.
-        A pair the rig does not fit (:func:`ismb_lab.matching.metric.for_camera`) leaves no cloud.
-
-        Parameters
-        ----------
-        left, right : path, bytes or ndarray
-            The pair.
-        name : str, default "pair"
-            The pair's name in the status line.
-
-        Returns
-        -------
-        text : str
-            The status line.
-        """
+        A pair the rig does not fit (:func:`ismb_lab.matching.metric.for_camera`) leaves no cloud."""
         from ..images.io import load_pair
         from ..matching.metric import for_camera, match_with_camera
 
@@ -235,18 +196,7 @@ class RigCloud(Base):
         self.refresh()
 
     def set_rig(self, rig) -> str:
-        """Use `rig` (a StereoCamera, or a rig file's path); the pair shown, if any, is matched again.
-
-        Parameters
-        ----------
-        rig : StereoCamera, str or os.PathLike
-            The rig or its file.
-
-        Returns
-        -------
-        text : str
-            The status line.
-        """
+        """Use `rig` (a StereoCamera, or a rig file's path); the pair shown, if any, is matched again."""
         if isinstance(rig, str) and not rig:
             raise ParameterError(message("rig", "RigCloud", "a rig file's path", rig))
         if self.model is None:
@@ -259,20 +209,7 @@ class RigCloud(Base):
         return self.model.message
 
     def load(self, left, right, name: str = "pair") -> str:
-        """Match a pair (paths, file bytes or arrays) with the rig and show it.
-
-        Parameters
-        ----------
-        left, right : path, bytes or ndarray
-            The pair.
-        name : str, default "pair"
-            The pair's name in the status line.
-
-        Returns
-        -------
-        text : str
-            The status line.
-        """
+        """Match a pair (paths, file bytes or arrays) with the rig and show it."""
         if self.model is None:
             raise ParameterError(message("rig", "RigCloud", "loaded before a pair (type its path, press "
                                          "'Load rig')", None))

@@ -27,23 +27,6 @@ class StepperModel:
     `seed` orders the visits as in :func:`ismb_lab.network.dynamics.run`; ``rule="thesis"`` is the
     literal (3-17)/(3-20) rule, whose energy can rise.
 
-    Parameters
-    ----------
-    prepared : Prepared
-        The pair and its energy ingredients.
-    method : str, default ``DEFAULT_METHOD``
-        The matching method.
-    params : Params, optional
-        Default the method's.
-    seed : int, default 0
-        Seed of the random visiting order.
-    rule : {"exact", "thesis"}, default "exact"
-        The update rule.
-    stop_rule : {"sweep", "stall"}, default "sweep"
-        When the run stops.
-
-    Examples
-    --------
     >>> from ismb_lab.scenes import synthetic_scene
     >>> scene = synthetic_scene(0)
     >>> model = StepperModel(prepare(scene.left, scene.right))
@@ -66,15 +49,7 @@ class StepperModel:
         self.reset(seed, rule)
 
     def reset(self, seed: int | None = None, rule: str | None = None) -> None:
-        """Start again from every candidate on, optionally with another seed or rule.
-
-        Parameters
-        ----------
-        seed : int, optional
-            New visiting-order seed.
-        rule : {"exact", "thesis"}, optional
-            New update rule.
-        """
+        """Start again from every candidate on, optionally with another seed or rule."""
         owner = "StepperModel.reset"
         if seed is not None:
             self.seed = check_number(seed, "seed", owner, low=0, integer=True)
@@ -96,18 +71,7 @@ class StepperModel:
         return len(self.energies) - 1
 
     def step(self, n: int = 1) -> list[Update]:
-        """Make up to `n` update attempts (fewer if the network stops); return their records.
-
-        Parameters
-        ----------
-        n : int, default 1
-            Most attempts.
-
-        Returns
-        -------
-        updates : list of Update
-            One record per attempt made.
-        """
+        """Make up to `n` update attempts (fewer if the network stops); return their records."""
         n = check_number(n, "n", "StepperModel.step", low=0, integer=True)
         out = []
         while len(out) < n and not self.done:
@@ -336,18 +300,7 @@ class HopfieldStepper(Base):
         return cls(left, right, **kw)
 
     def step(self, n: int = 1) -> list[Update]:
-        """`n` update attempts, then one redraw (the image pair only if an output changed).
-
-        Parameters
-        ----------
-        n : int, default 1
-            Most attempts.
-
-        Returns
-        -------
-        updates : list of Update
-            One record per attempt made.
-        """
+        """`n` update attempts, then one redraw (the image pair only if an output changed)."""
         updates = self.model.step(n)
         self.refresh(matches=any(u.changed for u in updates))
         return updates
