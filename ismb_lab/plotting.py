@@ -52,7 +52,29 @@ def plot_matches(ax, left, right, left_xy, right_xy, pairs, *, numbers: bool = T
     by their :func:`verdicts` against `targets` (grey where `unknown`); `numbers` labels features
     1, 2, ... as in the thesis' figures.
 
-    Returns the artists: ``image``, ``left_points``, ``right_points``, ``lines`` and ``labels``.
+    Parameters
+    ----------
+    ax : matplotlib.axes.Axes
+        Where to draw.
+    left, right : (H, W) float ndarray
+        The grey images.
+    left_xy, right_xy : (N, 2) float array_like
+        Left and right features ``(x, y)``.
+    pairs : (m, 2) int array_like
+        Matched ``(i, k)`` feature pairs.
+    numbers : bool, default True
+        Label the features 1, 2, ...
+    cmap : str, default "viridis"
+        Colour map of the disparity, without `targets`.
+    targets : (n, 2) int array_like, optional
+        Target pairs: lines are then coloured by verdict.
+    unknown : int array_like, optional
+        Left features whose truth is unknown (grey lines).
+
+    Returns
+    -------
+    artists : dict
+        ``image``, ``left_points``, ``right_points``, ``lines`` and ``labels``.
     """
     from matplotlib.collections import LineCollection
 
@@ -87,6 +109,16 @@ def plot_matches(ax, left, right, left_xy, right_xy, pairs, *, numbers: bool = T
 
 def outlines(labels: np.ndarray) -> list:
     """The outer outline of every blob of `labels` (> 0) as a closed polygon of pixel centres.
+
+    Parameters
+    ----------
+    labels : (H, W) int ndarray
+        Blob labels, 0 for none.
+
+    Returns
+    -------
+    polygons : list of (n, 2) float ndarray
+        One closed ``(x, y)`` polygon per outline.
 
     Examples
     --------

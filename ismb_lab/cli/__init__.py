@@ -37,6 +37,7 @@ def _commands():
 
 
 def build_parser():
+    """The ``ismb-lab`` argument parser, with every command's subparser added."""
     from ._common import Parser
 
     parser = Parser(prog="ismb-lab", description="Hopfield-network stereo matching of Harris "

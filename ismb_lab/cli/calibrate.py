@@ -12,6 +12,7 @@ __all__ = ["add_parser", "files", "report", "run"]
 
 
 def add_parser(sub) -> None:
+    """Add the ``calibrate`` command: calibrate a fixed rig from chessboard pairs and write it as JSON."""
     from ..cameras.rig import BOARD, MAX_ZOOM, OUTLIER_PX, OUTLIER_RATIO, SQUARE_M
 
     c = sub.add_parser("calibrate", help="calibrate a fixed rig from chessboard pairs",
@@ -106,6 +107,7 @@ def _from_rig(args):
 
 
 def run(args) -> int:
+    """Calibrate the rig from the chessboard pairs of `args` and write the rig file; returns the exit code."""
     from .._core.files import atomic_write_text
     from ..cameras.camera import MAX_SQUARE_M, MIN_SQUARE_M
     from ..cameras.rig import BOARD, MIN_PAIRS, SQUARE_M, calibrate_rig, leave_one_out

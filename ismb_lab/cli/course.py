@@ -8,6 +8,7 @@ __all__ = ["add_parser", "run"]
 
 
 def add_parser(sub) -> None:
+    """Add the ``course`` command: write the nbgrader course's source folders from the notebooks."""
     from ..teaching.course import ASSIGNMENTS
 
     c = sub.add_parser("course", help="the nbgrader course (deploy/course/README.md)",
@@ -28,6 +29,7 @@ def add_parser(sub) -> None:
 
 
 def run(args) -> int:
+    """Write ``source/<assignment>/`` of the chosen assignments; returns the exit code."""
     from ..teaching.course import ASSIGNMENTS, make_source
 
     names = sorted(ASSIGNMENTS) if args.assignment == "all" else [args.assignment]

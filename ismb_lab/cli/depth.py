@@ -17,6 +17,7 @@ __all__ = ["add_parser", "run"]
 
 
 def add_parser(sub) -> None:
+    """Add the ``depth`` command: rank the objects added to a background pair by depth (§5.2.3)."""
     dp = sub.add_parser("depth", help="rank the objects added to a background by depth (§5.2.3)",
                         description="Match a background pair and a scene pair of the same view, "
                         "remove the scene's background features and rank the objects left "
@@ -70,6 +71,8 @@ def files(args) -> Files:
 
 
 def run(args) -> int:
+    """Match the background and scene pairs and print the objects near to far;
+    returns the exit code."""
     from ..depth.pipeline import relative_depth
 
     calibration = {}

@@ -22,6 +22,7 @@ DEFAULTS = {name: default_of(protocol, name) for name in ("train", "seeds", "fit
 
 
 def add_parser(sub) -> None:
+    """Add the ``evaluate`` command: the train/test protocol of Fig. 5.10 over a manifest's pairs."""
     e = sub.add_parser("evaluate", help="train on one pair, test on the others (Fig. 5.10)",
                        description="Run the thesis' train/test protocol over the pairs of a "
                        "manifest, with every network figure over several update-order seeds.")
@@ -87,6 +88,8 @@ def available_cores() -> int:
 
 
 def run(args) -> int:
+    """Run :func:`~ismb_lab.tuning.cases.protocol` on the manifest and print its report;
+    returns the exit code."""
     jobs = available_cores() if args.jobs is None else args.jobs
     if jobs < 1:
         raise UsageError(f"--jobs must be an integer >= 1, got {jobs}")

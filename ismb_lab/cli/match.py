@@ -19,6 +19,7 @@ __all__ = ["add_parser", "run"]
 
 
 def add_parser(sub) -> None:
+    """Add the ``match`` command: match a pair's corners and print them as the thesis' Table 5.3."""
     m = sub.add_parser("match", help="match the corners of a stereo pair and print Table 5.3",
                        description="Match the Harris corners of LEFT and RIGHT and print the "
                        "matches in the shape of the thesis' Table 5.3.")
@@ -121,6 +122,8 @@ def rig_record(args, camera, how: str) -> dict:
 
 
 def run(args) -> int:
+    """Match LEFT and RIGHT, print the table and write the optional outputs;
+    returns the exit code."""
     from ..matching.pipeline import match
 
     if args.ply is not None and args.rig is None:

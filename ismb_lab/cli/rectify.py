@@ -16,6 +16,7 @@ FILES = ("left.png", "right.png", "rectify.json")
 
 
 def add_parser(sub) -> None:
+    """Add the ``rectify`` command: rectify a hand-held pair, or a calibrated rig's."""
     from ..images.rectify import WORKING_SIDE
 
     r = sub.add_parser("rectify", help="rectify a stereo pair (hand-held photos, or a calibrated rig's)",
@@ -52,6 +53,7 @@ def files(args) -> Files:
 
 
 def run(args) -> int:
+    """Rectify the pair of `args` and write DIR/left.png and DIR/right.png; returns the exit code."""
     from ..images.io import png_bytes
     from ..images.rectify import rectify_pair
 

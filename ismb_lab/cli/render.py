@@ -10,6 +10,7 @@ __all__ = ["add_parser", "run"]
 
 
 def add_parser(sub) -> None:
+    """Add the ``render`` command: render the project's synthetic pairs into ``images/``."""
     r = sub.add_parser("render", help="render the project's stereo pairs into images/",
                        description="Render the project's synthetic stereo pairs with their ground "
                        "truth. The output is byte for byte what is committed in images/.")
@@ -46,6 +47,7 @@ def check_outputs(out: Path) -> None:
 
 
 def run(args) -> int:
+    """Render the gallery into ``args.out``; returns the exit code."""
     from ..scenes.gallery import render_gallery
 
     check_outputs(Path(args.out))

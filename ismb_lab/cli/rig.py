@@ -34,6 +34,7 @@ def _centre(text: str) -> tuple:
 
 
 def add_parser(sub) -> None:
+    """Add the ``rig`` command: write a rig file from a factory calibration, without a chessboard."""
     from ..cameras.camera import MAX_BASELINE_M, UNITS
 
     r = sub.add_parser("rig", help="write a rig file from a factory calibration (no chessboard)",
@@ -102,6 +103,7 @@ def _opencv(args):
 
 
 def run(args) -> int:
+    """Build the rig from the given numbers or OpenCV file and write it; returns the exit code."""
     from .._core.files import atomic_write_text
     from ..matching.metric import row_tolerance
 

@@ -21,6 +21,7 @@ MERGE_HELP = ("Pool the targets files of a class (all for the same two images), 
 
 
 def add_parser(sub) -> None:
+    """Add the ``targets`` command: work with targets files (``merge`` pools a class's labels)."""
     t = sub.add_parser("targets", help="work with targets files (merge a class's labels)",
                        description="Work with targets files as the labeller saves them.")
     actions = t.add_subparsers(dest="action", metavar="ACTION", parser_class=type(t))
@@ -73,6 +74,7 @@ def _inputs(args) -> tuple[list, object]:
 
 
 def run(args) -> int:
+    """Pool the students' targets files into ``--out`` and print the report; returns the exit code."""
     from ..labels.classroom import pool
     from ..labels.targets import load_targets, save_targets
 

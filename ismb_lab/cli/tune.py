@@ -25,6 +25,7 @@ GA_SEED, FIT_SEEDS = default_of(tuning.tune, "rng"), default_of(tuning.tune, "se
 
 
 def add_parser(sub) -> None:
+    """Add the ``tune`` command: fit a method's parameters to a pair's targets with the GA (ch. 4)."""
     t = sub.add_parser("tune", help="fit the parameters to target pairs with the GA (ch. 4)",
                        description="Fit a method's parameters to the target pairs of one image pair "
                        "with the real-coded GA, and write them for 'ismb-lab match --params-file'. "
@@ -87,6 +88,7 @@ class _Fit:
 
 
 def run(args) -> int:
+    """Run the GA on the pair and write the best parameters; returns the exit code."""
     fit = _Fit(args)
     try:
         return _run(args, fit)

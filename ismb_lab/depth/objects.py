@@ -28,10 +28,47 @@ class DepthConfig:
     """Tolerances of :func:`depth_from_matches` and the rig's calibration.
 
     ``docs/depth.md`` describes every field beside its default; distances and disparities are in
-    pixels, scores are Dice overlaps in [0, 1].  `grouping` is ``"silhouettes"`` (the blobs of
-    change, :class:`~ismb_lab.depth.outlines.Silhouettes`) or ``"features"`` (the thesis'),
-    `outline` an :class:`~ismb_lab.depth.outlines.OutlineConfig`, `focal_px` and `baseline_m`
-    (m) the rig's, and `quantisation_px` the disparity error bar of the depth range.
+    pixels, scores are Dice overlaps in [0, 1].
+
+    Attributes
+    ----------
+    position_tol_px : float, default 2.0
+        Largest distance (left image) between a scene and a background match at the same place.
+    disparity_tol_px : float, default 1.5
+        Largest disparity difference counted as the same disparity.
+    link_px : float, default 30.0
+        Single-linkage distance: features closer than this may be in one object.
+    link_disparity_px : float, default 2.0
+        ... if they have matches whose disparities differ by at most this.
+    consensus_px : float, default 1.0
+        Half width of the disparity band around an object's consensus disparity.
+    min_features : int, default 2
+        Fewest consensus features an object needs; smaller groups are dropped.
+    merge_px, merge_disparity_px : float, default 45.0 and 1.5
+        Objects whose features come this close and whose median disparities differ this little are one.
+    local_px : float, default 40.0
+        Radius of the local background around a scene match.
+    grouping : {"silhouettes", "features"}, default "silhouettes"
+        Objects by the blobs of change (:class:`~ismb_lab.depth.outlines.Silhouettes`) or by the
+        features alone (the thesis').
+    silhouette_tol_px : float, default 3.0
+        A match counts for its blob when its disparity lies from the blob's shift to this much above.
+    silhouette_score : float, default 0.8
+        Least Dice overlap of a blob in front of the background for it to be trusted as one object.
+    silhouette_grow_px : int, default 3
+        A feature within this many pixels of a blob lies on it.
+    band_features, band_step_px : int, float, default 3 and 3.0
+        Two bands of this many features this far apart in disparity may cut a blob in two.
+    band_one_piece : float, default 0.97
+        Least Dice of both parts for a blob of one piece to be cut.
+    firm_outline : float, default 0.95
+        A blob whose outline fits this well stands in front of the background.
+    outline : OutlineConfig
+        How the blobs of change and their shifts are found.
+    focal_px, baseline_m : float
+        The rig's focal length (px) and baseline (m), > 0; defaults ``FOCAL_PX`` and ``BASELINE_M``.
+    quantisation_px : float, default 0.5
+        Disparity error bar of the depth range.
 
     Examples
     --------
@@ -98,6 +135,24 @@ def metric_depth(disparity, focal_px: float = FOCAL_PX, baseline_m: float = BASE
     ``status`` is ``"finite"``, ``"at infinity"`` (``d == 0``) or ``"invalid"`` (``d < 0``, a
     wrong match); the range's far end is ``inf`` when ``d <= error_px``.
 
+    Parameters
+    ----------
+    disparity : float
+        Horizontal disparity ``d`` in pixels.
+    focal_px : float, default ``FOCAL_PX``
+        Focal length in pixels, > 0.
+    baseline_m : float, default ``BASELINE_M``
+        Baseline in metres, > 0.
+    error_px : float, default 0.5
+        Disparity error bar (px), >= 0.
+
+    Returns
+    -------
+    depth : Depth
+        Depth ``z``, its ``near``/``far`` range and ``status``.
+
+    Examples
+    --------
     >>> metric_depth(30.0)
     Depth(z=1.0, near=0.9836065573770492, far=1.0169491525423728, status='finite')
     >>> metric_depth(0.0), metric_depth(-2.0).status
@@ -195,6 +250,10 @@ class DepthResult:
         Scene matches left after the background removal.
     removed_xy : ndarray
         Left positions of the features removed as background.
+    background, scene : MatchResult
+        The two matchings the result comes from.
+    config : DepthConfig
+        The settings used.
     message : str
         Empty, or why there are no objects.
     scene_roi : (x, y, w, h) or None
@@ -220,7 +279,18 @@ class DepthResult:
 
     def points(self, camera: StereoCamera) -> np.ndarray:
         """The kept scene matches as ``(N, 3)`` points in metres, in `camera`'s rectified left
-        frame (the principal point depends on the image's size, which a result does not hold)."""
+        frame (the principal point depends on the image's size, which a result does not hold).
+
+        Parameters
+        ----------
+        camera : StereoCamera
+            The rig, set up for the images' size.
+
+        Returns
+        -------
+        points : (N, 3) float array
+            One point per kept scene match, metres.
+        """
         if not isinstance(camera, StereoCamera):
             raise ParameterTypeError(message("camera", "DepthResult.points", "a StereoCamera", camera))
         return camera.points_from_disparity(self.kept_xy, self.kept_disparity)
@@ -320,9 +390,22 @@ def depth_from_matches(background, scene, config: DepthConfig | None = None,
     background, scene : MatchResult
         Matches of the background pair and of the scene pair (same view, same size).
     config : DepthConfig, optional
+        Tolerances and the rig's calibration; default ``DepthConfig()``.
     silhouettes : Silhouettes, optional
         The scene's blobs of change; without them the features alone are grouped, whatever
         ``config.grouping`` says.
+
+    Returns
+    -------
+    result : DepthResult
+        The new objects nearest first, the background's own, and the counts of removed features.
+
+    Raises
+    ------
+    ParameterTypeError
+        `background` or `scene` not a MatchResult, or a bad `config` or `silhouettes`.
+    ParameterError
+        `silhouettes` smaller than the scene's images.
 
     Examples
     --------

@@ -34,6 +34,31 @@ class OutlineConfig:
     (grey levels) is the hysteresis threshold, from 0 to :data:`CHANGE_THRESHOLD`; distances are
     in pixels and scores are Dice overlaps in [0, 1].
 
+    Attributes
+    ----------
+    threshold_low : float, default 5.0
+        Hysteresis threshold: weaker change that connects to a stronger one counts too.
+    min_pixels : int, default 20
+        Smaller blobs are camera noise.
+    pad_px : int, default 8
+        Columns on each side of a blob's box that its overlap counts as well.
+    merge_gap_px : int, default 10
+        Largest gap between the boxes of two blobs that may be one object.
+    merge_disparity_px : float, default 1.0
+        Blobs this close in shift (and `merge_gap_px` apart) are one object ...
+    link_score : float, default 0.9
+        ... unless their shifts differ and both fit with a Dice of this or more.
+    max_fraction : float, default 0.5
+        A blob covering more of the ROI than this is a change of light or view: its score is 0.
+    split_score : float, default 0.9
+        Least Dice of each part of a blob cut in two.
+    split_step_px : float, default 3.0
+        Least difference of the two parts' shifts.
+    split_far_px, split_far_score : float, default 5.0 and 0.94
+        A blob one shift lays this well is cut when two shifts this far apart lay it better.
+    split_far_poor_px : float, default 8.0
+        ... and one laid less well, when two shifts this far apart lay both parts well.
+
     Examples
     --------
     >>> OutlineConfig(pad_px=6).pad_px

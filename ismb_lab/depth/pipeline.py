@@ -75,6 +75,26 @@ def changed_roi(background_left, scene_left, roi="center", *, threshold: float =
     Changed: the difference, smoothed by a Gaussian of `sigma` px, exceeds `threshold` grey levels.
     The box grows by `margin` px (within `roi`) so that corners on an object's outline are inside.
 
+    Parameters
+    ----------
+    background_left, scene_left : (h, w) array
+        The left images of the background and of the scene, of one size.
+    roi : str or (x, y, w, h) tuple, default "center"
+        Where to look, as :func:`resolve_roi` takes it.
+    threshold : float, default :data:`CHANGE_THRESHOLD`
+        Grey levels of smoothed difference that count as a change.
+    sigma : float, default :data:`CHANGE_SIGMA`
+        Standard deviation (px) of the Gaussian smoothing the difference.
+    margin : int, default 4
+        Pixels the box grows by on every side, clipped to `roi`.
+
+    Returns
+    -------
+    box : (x, y, w, h) tuple of int or None
+        The changed box in image coordinates; None when nothing changed.
+
+    Examples
+    --------
     >>> import numpy as np
     >>> background = np.zeros((240, 320))
     >>> scene = background.copy()
@@ -126,6 +146,22 @@ def changed_regions(background_image, scene_image, roi="center", *, threshold: f
     """Boxes ``(x, y, w, h)``, left to right, of the blobs (8-neighbours, `min_pixels` or more) of
     the pixels :func:`changed_roi` counts as changed, each grown by `margin` within `roi`.
 
+    Parameters
+    ----------
+    background_image, scene_image : (h, w) array
+        The two images to compare, of one size.
+    roi, threshold, sigma, margin
+        As in :func:`changed_roi`.
+    min_pixels : int, default 20
+        Smallest blob (changed pixels) that counts.
+
+    Returns
+    -------
+    boxes : list of (x, y, w, h) tuple
+        One box per blob, sorted left to right.
+
+    Examples
+    --------
     >>> import numpy as np
     >>> background = np.zeros((240, 320))
     >>> scene = background.copy()
@@ -208,6 +244,29 @@ def load_stereo(value, name: str, owner: str) -> StereoPair:
     """A pair as the demo takes it: a StereoPair, a pair folder (``left.png`` and ``right.png``),
     a ``(left, right)`` pair of images or paths, or an object with ``.left`` and ``.right``.
 
+    Parameters
+    ----------
+    value : StereoPair, str, Path, (left, right) tuple or object with .left and .right
+        The pair to load.
+    name : str
+        The parameter's name, for error messages.
+    owner : str
+        The calling function's name, for error messages.
+
+    Returns
+    -------
+    pair : StereoPair
+        The two images as grey float arrays of one size.
+
+    Raises
+    ------
+    ParameterError
+        A folder without ``left.png`` or ``right.png``.
+    ParameterTypeError
+        Any other kind of value.
+
+    Examples
+    --------
     >>> import numpy as np
     >>> load_stereo((np.zeros((40, 60)), np.zeros((40, 60))), "background", "demo").shape
     (40, 60)
@@ -299,13 +358,19 @@ def relative_depth(background, scene, *, method=DEFAULT_METHOD, params=None, mat
 
     Parameters
     ----------
-    background, scene
+    background, scene : StereoPair, folder or (left, right) pair
         Two pairs of the same view, of one size, as :func:`load_stereo` takes them.
+    method : str, default ``DEFAULT_METHOD``
+        The matching method, a registered method name.
     params : Params, optional
         Default :data:`DEPTH_PARAMS` for Method-III, the method's own for the others.
-    seed : int
+    match_config : MatchConfig, optional
+        Corner and window settings; default :data:`DEPTH_MATCH_CONFIG`.
+    config : DepthConfig, optional
+        Depth settings (tolerances, grouping); default ``DepthConfig()``.
+    seed : int, default 0
         Update-order seed of both runs.
-    solver : str or Solver
+    solver : str or Solver, default :data:`DEPTH_SOLVER`
         A name in :data:`ismb_lab.network.solvers.SOLVERS` or a configured solver.
     prepared : (Prepared, Prepared), optional
         :func:`depth_pairs` of these images and `match_config`, which are then not read again.
@@ -315,6 +380,16 @@ def relative_depth(background, scene, *, method=DEFAULT_METHOD, params=None, mat
         Keep at most one match per corner (:func:`ismb_lab.matching.pipeline.match`).
     **network
         The solver's options (e.g. ``stop_rule`` of the discrete network).
+
+    Returns
+    -------
+    result : DepthResult
+        The scene's objects ranked near to far, with ``scene_roi`` set to the scene's searched box.
+
+    Raises
+    ------
+    ParameterError, ParameterTypeError
+        Pairs of different sizes, or a bad `config`, `prepared` or `silhouettes`.
 
     Examples
     --------

@@ -29,7 +29,13 @@ _UNSAFE = re.compile(r"[^A-Za-z0-9._-]+")
 
 
 def user_name() -> str:
-    """Who is labelling: ``JUPYTERHUB_USER`` on a hub, else the login name, made safe for a file name."""
+    """Who is labelling: ``JUPYTERHUB_USER`` on a hub, else the login name, made safe for a file name.
+
+    Returns
+    -------
+    name : str
+        Letters, digits, ``.``, ``_`` and ``-`` only; ``"student"`` if nothing is left.
+    """
     name = os.environ.get("JUPYTERHUB_USER") or getpass.getuser() or "student"
     return _UNSAFE.sub("-", name).strip("-.") or "student"
 
@@ -52,6 +58,24 @@ def targets_path(pair: str, folder=".", user: str | None = None, *, also=SIBLING
     It is the file in `folder` if there is one, else the first in the folders `also` (relative
     to `folder`) that holds it, else the path in `folder`; ``also=()`` names what a save writes.
 
+    Parameters
+    ----------
+    pair : str
+        The image pair's name.
+    folder : str or Path, default "."
+        The notebook's folder.
+    user : str, optional
+        The student; default :func:`user_name`.
+    also : tuple of str, default :data:`SIBLINGS`
+        Other folders, relative to `folder`, to look in.
+
+    Returns
+    -------
+    path : Path
+        The targets file to read or write.
+
+    Examples
+    --------
     >>> str(targets_path("synthetic", "work", user="ann lee", also=()))
     'work/targets-ann-lee-synthetic.json'
     """
@@ -178,6 +202,7 @@ class Pool:
     identical_votes: str = "once"
 
     def report(self) -> str:
+        """The pool as text: counts, each student's line, identical files and dropped pairs."""
         files = sum(s.get("files", 1) for s in self.students.values())
         source = (f"{files} files" if files == len(self.students)
                   else f"{len(self.students)} students ({files} files)")
@@ -340,6 +365,26 @@ def pool(paths, answer_key: TargetSet | None = None, tol: float = 1.5, *, min_vo
     exactly alike on their own lose one vote between them, which matters only where others
     dispute those pairs; the report names them.
 
+    Parameters
+    ----------
+    paths : dict of str to list of path, or list of path
+        Each student's targets files, or files voting by stem.
+    answer_key : TargetSet, optional
+        The teacher's pairs; each student's share of it is reported.
+    tol : float, default 1.5
+        The answer key's tolerance, px.
+    min_votes : int, default 1
+        Votes a pair needs on top of a strict majority.
+    identical : {"once", "each"}, default "once"
+        Whether alike files vote once between them or once each.
+
+    Returns
+    -------
+    pooled : Pool
+        The pooled targets, disagreements, per-student counts and dropped pairs.
+
+    Examples
+    --------
     >>> import tempfile, pathlib
     >>> folder = pathlib.Path(tempfile.mkdtemp())
     >>> ann = save_targets(folder / "ann.json", TargetSet([[10, 10], [20, 20]], [[5, 10], [15, 20]]))

@@ -104,11 +104,21 @@ def _set(obj, name, value):
 class TargetSet:
     """Target pairs ``left_xy[j] <-> right_xy[j]``; immutable, methods return new sets.
 
-    `left_xy`, `right_xy` are read-only ``(m, 2)`` arrays of points >= 0, each pair at most once;
-    `left_sha256`, `right_sha256` the images' hashes (or None); `orientation` ``"upright"`` (EXIF
-    applied) or ``"as stored"``; `meta` the file's other top-level keys; `extras` a dict of other
-    keys per pair (None: all empty).
+    Attributes
+    ----------
+    left_xy, right_xy : (m, 2) float ndarray
+        Read-only ``(x, y)`` points >= 0, each pair at most once.
+    left_sha256, right_sha256 : str or None
+        The images' SHA-256 hashes, or None.
+    meta : dict
+        The file's other top-level keys (JSON values).
+    extras : tuple of dict
+        Other keys per pair; None when built means all empty.
+    orientation : {"upright", "as stored"}, default "upright"
+        Whether the points were clicked on photos with their EXIF orientation applied.
 
+    Examples
+    --------
     >>> t = TargetSet([[99, 99]], [[88, 100]], meta={"labeller": "ann"})
     >>> len(t), t.left_xy.tolist(), t.extras
     (1, [[99.0, 99.0]], ({},))
@@ -174,6 +184,13 @@ class TargetSet:
     def to_dict(self) -> dict:
         """The file's JSON object (integral coordinates as integers, no hash key for None).
 
+        Returns
+        -------
+        d : dict
+            ``version``, hashes, ``orientation``, `meta` and ``pairs``.
+
+        Examples
+        --------
         >>> TargetSet([[1, 2.5]], [[0, 2.5]]).to_dict()
         {'version': 1, 'orientation': 'upright', 'pairs': [{'left_xy': [1, 2.5], 'right_xy': [0, 2.5]}]}
         """
@@ -238,6 +255,20 @@ def _path_error(path, owner, rule) -> ParameterError:
 def save_targets(path, targets: TargetSet) -> Path:
     """Write `targets` as pretty JSON ending in a newline, atomically (temp file, fsync, rename).
 
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The file, in an existing folder.
+    targets : TargetSet
+        The pairs to save.
+
+    Returns
+    -------
+    path : Path
+        The file written.
+
+    Examples
+    --------
     >>> import tempfile, pathlib
     >>> path = save_targets(pathlib.Path(tempfile.mkdtemp()) / "t.json", TargetSet([[1, 2]], [[0, 2]]))
     >>> path.read_text().splitlines()[5]
@@ -257,6 +288,29 @@ def load_targets(path, *, pair: StereoPair | None = None, shape=None,
     """Read and check a targets file: its points must lie in an image of `shape` ``(H, W)`` and
     of `pair`, whose hashes must be the file's (if it has any) unless not `check_hash`.
 
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The targets JSON file, at most :data:`MAX_BYTES`.
+    pair : StereoPair, optional
+        The images the targets belong to: their size and hashes are checked.
+    shape : (H, W) tuple of int, optional
+        An image size the points must lie in.
+    check_hash : bool, default True
+        Refuse targets whose hashes are not `pair`'s.
+
+    Returns
+    -------
+    targets : TargetSet
+        The checked pairs.
+
+    Raises
+    ------
+    ParameterError
+        An unreadable or invalid file, other images' hashes, or points outside the image.
+
+    Examples
+    --------
     >>> import tempfile, pathlib
     >>> path = save_targets(pathlib.Path(tempfile.mkdtemp()) / "t.json", TargetSet([[9, 2]], [[7, 2]]))
     >>> len(load_targets(path, shape=(10, 10)))
@@ -401,6 +455,22 @@ def snap(targets: TargetSet, left_xy, right_xy, tol=1.5) -> Snapped:
     """Snap each target point to the nearest feature within `tol` px (inclusive; ties to the lower
     index).  Targets that snap to the same feature are both kept (:attr:`Snapped.shared`).
 
+    Parameters
+    ----------
+    targets : TargetSet
+        The labelled points.
+    left_xy, right_xy : (n, 2) float array_like
+        The left and right features (corners).
+    tol : float, default 1.5
+        Largest snap distance, px.
+
+    Returns
+    -------
+    snapped : Snapped
+        Feature pairs of the snapped targets and the targets that did not snap.
+
+    Examples
+    --------
     >>> t = TargetSet([[10, 10], [50, 50]], [[5, 10], [40, 50]])
     >>> s = snap(t, [[10, 11], [30, 30]], [[5, 10], [40, 51]])
     >>> s.pairs.tolist(), s.target_index.tolist(), s.missing_left.tolist(), s.distance.tolist()

@@ -131,6 +131,14 @@ class Look:
     ``shape(rng, box_only) -> "box" | "cylinder"``, ``contrast(rng, mode) -> "low" | "high"``
     and ``texture(rng) -> kind``; last ``camera(rng) -> dict`` of ``gain``, ``offset``, ``noise_std``.
 
+    Attributes
+    ----------
+    wall, placement, contrast, texture, camera, sizes, shape : callable
+        The hooks above; defaults :func:`plain_wall`, :func:`side_by_side`, :func:`high_contrast`,
+        :func:`posters`, :func:`quiet_cameras`, :func:`common_sizes`, :func:`box_or_cylinder`.
+
+    Examples
+    --------
     >>> Look(camera=lambda rng: {"gain": 1.0, "offset": 0.0, "noise_std": 3.0}).camera(None)["noise_std"]
     3.0
     """
@@ -238,6 +246,24 @@ def _object(rng, look: Look, mode: str, k: int, left: float, width: float, heigh
 def draw_objects(rng: np.random.Generator, n: int, rig: StereoCamera, look: Look) -> Design:
     """Draw `n` objects (2 or 3) at distinct depths before a wall, as `look` says, from `rng`.
 
+    Parameters
+    ----------
+    rng : numpy.random.Generator
+        Random source.
+    n : int
+        2 or 3 objects.
+    rig : StereoCamera
+        The cameras.
+    look : Look
+        The family's hooks.
+
+    Returns
+    -------
+    design : Design
+        The wall, objects, truth and camera settings.
+
+    Examples
+    --------
     >>> d = draw_objects(np.random.default_rng(1), 3, StereoCamera.pinhole(), Look())
     >>> bool(np.all(np.diff([t.disparity for t in d.truth]) <= -MIN_GAP_PX)), len(d.objects)
     (True, 3)

@@ -46,6 +46,18 @@ def encode_disparity(disparity: np.ndarray) -> np.ndarray:
 def decode_disparity(encoded: np.ndarray) -> np.ndarray:
     """Inverse of :func:`encode_disparity`; unknown pixels become NaN.
 
+    Parameters
+    ----------
+    encoded : (H, W) uint16 ndarray
+        The encoded map.
+
+    Returns
+    -------
+    disparity : (H, W) float ndarray
+        Disparity, px; NaN where unknown.
+
+    Examples
+    --------
     >>> decode_disparity(np.array([[4224, 0]], dtype=np.uint16))
     array([[16.5,  nan]])
     """
@@ -81,7 +93,20 @@ SNAP_PX = 1.5
 def answer_key(scene: Scene, left_path, right_path):
     """Target pairs (a TargetSet) of a rendered pair from its ground truth, on the default
     matcher's corners: a left corner's partner is the right corner within :data:`SNAP_PX` of its
-    exact correspondence; of two left corners sharing one, the nearer keeps it."""
+    exact correspondence; of two left corners sharing one, the nearer keeps it.
+
+    Parameters
+    ----------
+    scene : Scene
+        The rendered scene.
+    left_path, right_path : str or Path
+        Its written images.
+
+    Returns
+    -------
+    targets : TargetSet
+        The answer key, with the images' hashes.
+    """
     from ..matching.pipeline import prepare
 
     prepared = prepare(left_path, right_path)

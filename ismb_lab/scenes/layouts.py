@@ -56,6 +56,17 @@ class Family:
     """A scene family: its name, a one-line description, and the hooks of
     :func:`~ismb_lab.scenes.design.draw_objects` it changes.
 
+    Attributes
+    ----------
+    name : str
+        Non-empty; the name :func:`get_family` looks up.
+    description : str
+        One line on what the family varies.
+    look : Look, default ``Look()``
+        The design hooks it replaces.
+
+    Examples
+    --------
     >>> from ismb_lab.scenes.design import Look
     >>> dim = Family("dim", "A darker right camera", Look(camera=lambda rng: {
     ...     "gain": float(rng.uniform(0.5, 0.6)), "offset": 0.0, "noise_std": 1.0}))
@@ -78,6 +89,20 @@ class Family:
     def stream(self, seed, owner: str = "Family.stream") -> np.random.Generator:
         """The family's random stream for `seed` (a Generator is returned as it is).
 
+        Parameters
+        ----------
+        seed : int or numpy.random.Generator
+            The layout's seed.
+        owner : str, default "Family.stream"
+            The caller's name, for error messages.
+
+        Returns
+        -------
+        rng : numpy.random.Generator
+            The built-in families' stream is ``default_rng(seed)``; others' are keyed by name.
+
+        Examples
+        --------
         >>> mine = Family("mine", "").stream(0).integers(1000, size=3)
         >>> bool(np.array_equal(mine, np.random.default_rng(0).integers(1000, size=3)))
         False
@@ -91,7 +116,22 @@ class Family:
         return np.random.default_rng(np.random.SeedSequence(int(seed), spawn_key=(_name_key(self.name),)))
 
     def draw(self, rng: np.random.Generator, n_objects: int, rig: StereoCamera) -> Design:
-        """One layout's design, drawn from `rng` (see :func:`~ismb_lab.scenes.design.draw_objects`)."""
+        """One layout's design, drawn from `rng` (see :func:`~ismb_lab.scenes.design.draw_objects`).
+
+        Parameters
+        ----------
+        rng : numpy.random.Generator
+            Random source (:meth:`stream`).
+        n_objects : int
+            2 or 3.
+        rig : StereoCamera
+            The cameras.
+
+        Returns
+        -------
+        design : Design
+            The wall, the objects, their truth and the camera settings.
+        """
         return draw_objects(rng, n_objects, rig, self.look)
 
 
@@ -101,6 +141,18 @@ _FAMILIES: dict[str, Family] = {}
 def register_family(family: Family) -> Family:
     """Add a family, of a new name, to the registry that :func:`object_layout` and the scripts read.
 
+    Parameters
+    ----------
+    family : Family
+        A family whose name is not registered yet.
+
+    Returns
+    -------
+    family : Family
+        `family` itself.
+
+    Examples
+    --------
     >>> register_family(Family("plain", "The common design, nothing changed")).name
     'plain'
     >>> families()[-1], object_layout(0, 2, family="plain").family
@@ -322,6 +374,24 @@ def object_layout(seed, n_objects: int = 2, *, family: str = "contrast", supersa
     `seed` (int or Generator) draws everything from the family's stream (:meth:`Family.stream`);
     ``scene`` is what the family function returns for it, ``background`` with ``empty=True``.
 
+    Parameters
+    ----------
+    seed : int or numpy.random.Generator
+        Draws the layout, textures and noise.
+    n_objects : int, default 2
+        2 or 3.
+    family : str, default "contrast"
+        A family's name (:func:`families`, or ``"unseen"``).
+    supersample : int, default 1
+        Rays per pixel side, 1 to 8.
+
+    Returns
+    -------
+    layout : Layout
+        Both rendered pairs, the objects' truth, the window shift and the ROI.
+
+    Examples
+    --------
     >>> lay = object_layout(7, 2, family="border")
     >>> lay.objects[0].disparity - lay.objects[1].disparity >= MIN_GAP_PX
     True

@@ -43,6 +43,19 @@ class Plane:
     """A textured two-sided rectangle: `centre`, orthogonal in-plane axes (normalised here; the
     texture's ``(u, v)`` are metres along them from the centre) and half sizes, metres.
 
+    Attributes
+    ----------
+    centre : (3,) float ndarray
+        The rectangle's centre, m.
+    u_axis, v_axis : (3,) float ndarray
+        Orthogonal in-plane axes, normalised.
+    half_u, half_v : float
+        Half sizes along them, m.
+    texture : Texture
+        The surface's texture.
+
+    Examples
+    --------
     >>> wall = Plane((0, 0, 1.8), (1, 0, 0), (0, 1, 0), 10, 10, Texture())
     >>> t, info = wall.intersect([[0, 0, 0], [0, 0, 0]], [[0, 0, 1], [0, 0, -1]])
     >>> t, info[0]
@@ -113,6 +126,15 @@ class Box:
     `textures` is one Texture or one per face, ``-x, +x, -y (top), +y, -z (front), +z``; a face's
     ``(u, v)`` are metres from its ``lo`` corner: ``(z, y)``, ``(x, z)`` or ``(x, y)``.
 
+    Attributes
+    ----------
+    lo, hi : (3,) float ndarray
+        Opposite corners, m.
+    textures : tuple of Texture
+        One per face.
+
+    Examples
+    --------
     >>> box = Box((-0.1, -0.1, 1.0), (0.1, 0.1, 1.2), Texture())
     >>> t, info = box.intersect([[0, 0, 0]], [[0, 0, 1]])
     >>> t, info   # the front face, -z, is face 4
@@ -183,6 +205,23 @@ class Cylinder:
     ``+x``, and ``y - y_top``; `cap` (default plain ``texture.base``) lies on
     ``(x - x_axis, z - z_axis)``.
 
+    Attributes
+    ----------
+    centre_xz : (2,) float ndarray
+        The axis' ``(x, z)``, m.
+    radius : float
+        Radius, m.
+    y_range : (y_top, y_bottom) tuple
+        Vertical extent, m (``y`` down).
+    texture : Texture
+        The side's texture.
+    cap : Texture, optional
+        The caps' texture.
+    name : str, default ""
+        The object's name.
+
+    Examples
+    --------
     >>> can = Cylinder((0.0, 1.2), 0.1, (-0.1, 0.1), Texture(base=0.3))
     >>> t, info = can.intersect([[0, 0, 0], [0, -1, 0]], [[0, 0, 1], [0, 1, 0]])
     >>> t.round(3), info[:, 2], can.normals(info[:1]).round(3)   # the side; a cap, face 1
@@ -292,6 +331,15 @@ class Group:
     """Several boxes (they may overlap: the first hit wins) rendered as one primitive, e.g. a toy
     car; a hit's ``info`` is ``(u, v, 6 * part + face)``.
 
+    Attributes
+    ----------
+    parts : tuple of Box
+        The boxes.
+    name : str, default ""
+        The object's name.
+
+    Examples
+    --------
     >>> g = Group([Box((-0.1, -0.1, 1.0), (0.1, 0.1, 1.2), Texture(base=0.2)),
     ...            Box((0.1, -0.1, 1.5), (0.3, 0.1, 1.7), Texture(base=0.8))], "pair")
     >>> t, info = g.intersect([[0, 0, 0], [0.2, 0, 0]], [[0, 0, 1], [0, 0, 1]])
@@ -387,6 +435,24 @@ def cast(primitives, origins, dirs) -> tuple[np.ndarray, np.ndarray, np.ndarray]
     """First hit of each ray among several primitives: the ray parameter (``inf`` for none), the
     index of the primitive hit (-1) and its surface coordinates ``(u, v, face)`` (NaN).
 
+    Parameters
+    ----------
+    primitives : sequence of Primitive
+        The surfaces.
+    origins, dirs : (N, 3) float array_like
+        Ray origins and unit directions.
+
+    Returns
+    -------
+    t : (N,) float ndarray
+        Ray parameter of the first hit, ``inf`` for none.
+    which : (N,) int ndarray
+        Index of the primitive hit, -1 for none.
+    info : (N, 3) float ndarray
+        Surface coordinates ``(u, v, face)`` of the hit, NaN for none.
+
+    Examples
+    --------
     >>> wall = Plane((0, 0, 1.8), (1, 0, 0), (0, 1, 0), 10, 10, Texture())
     >>> box = Box((-0.1, -0.1, 1.0), (0.1, 0.1, 1.2), Texture())
     >>> t, which, _ = cast([wall, box], [[0, 0, 0], [0.5, 0, 0]], [[0, 0, 1], [0, 0, 1]])

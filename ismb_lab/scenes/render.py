@@ -45,6 +45,23 @@ class Scene:
     camera misses that point.  The right image is ``gain * radiance + offset + noise``, the left
     ``radiance + noise``.
 
+    Attributes
+    ----------
+    left, right : (H, W) float ndarray
+        The grey images, read-only.
+    depth : (H, W) float ndarray
+        ``z`` (m) of the surface seen at each left pixel, ``inf`` where none.
+    disparity : (H, W) float ndarray
+        True ``x_left - x_right``, px; NaN where unknown.
+    occluded : (H, W) bool ndarray
+        Whether the right camera misses the point.
+    rig : StereoCamera
+        The cameras.
+    primitives : tuple of Primitive
+        What was rendered.
+    gain, offset, noise_std : float
+        The right camera's response and the noise, grey levels.
+
     Examples
     --------
     >>> from ismb_lab.scenes import synthetic_scene
@@ -139,6 +156,36 @@ def render(primitives, rig: StereoCamera = StereoCamera.pinhole(), *, seed, nois
     is ``255 * albedo * (ambient + (1 - ambient) * max(0, n . light))`` with `light` the direction
     *towards* the light, and `background` for rays that hit nothing.  `quantise` rounds like 8-bit
     cameras; images are clipped to ``[0, 255]`` either way.
+
+    Parameters
+    ----------
+    primitives : sequence of Primitive
+        The objects to render.
+    rig : StereoCamera, default ``StereoCamera.pinhole()``
+        The cameras.
+    seed : int or numpy.random.Generator
+        Draws the camera noise (required).
+    noise_std : float, default 1.0
+        Standard deviation of the noise, grey levels.
+    gain : float, default 1.0
+        The right camera's gain, > 0.
+    offset : float, default 0.0
+        The right camera's offset, grey levels.
+    supersample : int, default 2
+        Rays per pixel side, 1 to 8.
+    light : (3,) float tuple, default (0.3, -0.8, -1.0)
+        Direction towards the light.
+    ambient : float, default 0.35
+        Share of light that does not depend on the normal, 0 to 1.
+    background : float, default 0.0
+        Radiance of rays that hit nothing, 0 to 255.
+    quantise : bool, default True
+        Round the images to whole grey levels.
+
+    Returns
+    -------
+    scene : Scene
+        Both images with their exact ground truth.
 
     Examples
     --------

@@ -76,6 +76,22 @@ def check_energy_derivation(W, I, net: Network) -> Feedback:
     diagonal, neurons of the same left or right feature, neighbouring neurons, neurons that do not
     interact, and the bias.
 
+    Parameters
+    ----------
+    W : (n, n) float array_like
+        The student's weights, n the network's neurons.
+    I : (n,) float array_like
+        The student's biases.
+    net : Network
+        The network the energy is of.
+
+    Returns
+    -------
+    feedback : Feedback
+        ``"correct"``, or what is off and a hint; true when correct.
+
+    Examples
+    --------
     >>> net = Network.from_arrays(2, 2, rows=[0, 0, 1, 1], cols=[0, 1, 0, 1],
     ...                           similarity=[0.5, -0.5, -0.5, 0.5],
     ...                           pair_a=[0, 1], pair_b=[3, 2], pair_c=[0.9, -0.9])
@@ -190,6 +206,22 @@ def check_hopfield_form(form, *, rng, n_networks: int = 3) -> Feedback:
     one-neuron and random states, and ``dE = -u dy`` (``u = W y + I``) for single flips, with E
     computed from (3-15) directly.  Then :func:`check_energy_derivation` names a term that is off.
 
+    Parameters
+    ----------
+    form : callable
+        ``form(net) -> (W, I)``, the student's function.
+    rng : int or numpy.random.Generator
+        Draws the networks.
+    n_networks : int, default 3
+        How many networks to check it on.
+
+    Returns
+    -------
+    feedback : Feedback
+        ``"correct"``, or what is off and a hint; true when correct.
+
+    Examples
+    --------
     >>> print(check_hopfield_form(lambda net: (np.zeros((net.n_neurons,) * 2), np.zeros(net.n_neurons)), rng=0))
     On a random network of 12 neurons: E(y) from (3-15) differs from E(0) - 1/2 y'Wy - I'y for some states y; ...
     """
@@ -221,6 +253,24 @@ def check_harris_response(R, image, sigma: float = 1.0, k: float = 0.04) -> Feed
     Compared with :func:`ismb_lab.images.features.harris_response` (Sobel gradients divided by 8, a
     Gaussian window of standard deviation `sigma`, Harris' constant `k`).
 
+    Parameters
+    ----------
+    R : (H, W) float array_like
+        The student's response.
+    image : (H, W) float array_like
+        The grey image.
+    sigma : float, default 1.0
+        Standard deviation of the Gaussian window.
+    k : float, default 0.04
+        Harris' constant.
+
+    Returns
+    -------
+    feedback : Feedback
+        ``"correct"``, or what is off and a hint; true when correct.
+
+    Examples
+    --------
     >>> img = np.zeros((20, 20)); img[10:, 10:] = 100.0
     >>> print(check_harris_response(harris_response(img, 1.5, 0.05), img, 1.5, 0.05))
     correct
@@ -298,6 +348,20 @@ def check_disparity(values, left_xy, right_xy) -> Feedback:
     """Check a student's "disparity" column of the thesis' tables for the matched points
     `left_xy`, `right_xy` ((m, 2), x then y); compared to 0.01.
 
+    Parameters
+    ----------
+    values : (m,) float array_like
+        The student's disparities.
+    left_xy, right_xy : (m, 2) float array_like
+        The matched points.
+
+    Returns
+    -------
+    feedback : Feedback
+        ``"correct"``, or what is off and a hint; true when correct.
+
+    Examples
+    --------
     >>> left, right = [[99, 99], [120, 155]], [[88, 100], [98, 158]]   # Tables 5.1 and 5.4
     >>> print(check_disparity([11.05, 22.20], left, right))
     correct
@@ -336,6 +400,22 @@ def check_error_kinds(wrong, extra, pairs, targets) -> Feedback:
     A *wrong partner* is a match of a left feature that has a target, to another right feature; an
     *extra* is a match of a left feature that has no target (:func:`ismb_lab.tuning.evaluation.score`).
 
+    Parameters
+    ----------
+    wrong, extra : int
+        The student's counts of wrong partners and extras.
+    pairs : (m, 2) int array_like
+        Matched ``(i, k)`` feature pairs.
+    targets : (n, 2) int array_like
+        Target pairs.
+
+    Returns
+    -------
+    feedback : Feedback
+        ``"correct"``, or what is off and a hint; true when correct.
+
+    Examples
+    --------
     >>> pairs, targets = [[0, 0], [0, 1], [2, 2], [3, 0]], [[0, 0], [1, 1], [2, 3]]
     >>> print(check_error_kinds(2, 1, pairs, targets))
     correct
@@ -374,6 +454,26 @@ def check_depth_range(near, far, disparity, *, focal_px: float, baseline_m: floa
     """Check a student's depth range ``(near, far)`` in metres of a `disparity` (px) with an error
     bar of `error_px`, without naming the formula.
 
+    Parameters
+    ----------
+    near, far : float
+        The student's range, m.
+    disparity : float
+        The disparity, px.
+    focal_px : float
+        Focal length, px.
+    baseline_m : float
+        Baseline, m.
+    error_px : float
+        The disparity's error bar, px.
+
+    Returns
+    -------
+    feedback : Feedback
+        ``"correct"``, or what is off and a hint; true when correct.
+
+    Examples
+    --------
     >>> print(check_depth_range(0.9, 1.2, 30.0, focal_px=300, baseline_m=0.1, error_px=0.5))
     Your range [0.900, 1.200] m is off; the depth itself is 1.000 m. Hint: work out Z at each end of the disparity's error bar.
     """
@@ -398,6 +498,24 @@ def check_fitness(value, pairs, targets, unknown=()) -> Feedback:
     """Check a student's GA fitness (4-1) of matched `pairs` against `targets`; matches of the left
     features in `unknown` do not count.
 
+    Parameters
+    ----------
+    value : float
+        The student's fitness.
+    pairs : (m, 2) int array_like
+        Matched ``(i, k)`` feature pairs.
+    targets : (n, 2) int array_like
+        Target pairs.
+    unknown : int array_like, optional
+        Left features whose matches do not count.
+
+    Returns
+    -------
+    feedback : Feedback
+        ``"correct"``, or what is off and a hint; true when correct.
+
+    Examples
+    --------
     >>> pairs, targets = [[0, 0], [1, 2], [3, 3]], [[0, 0], [1, 1], [2, 2]]
     >>> print(check_fitness(-1, pairs, targets))
     correct

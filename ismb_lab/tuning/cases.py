@@ -42,6 +42,19 @@ class Case:
 
     Matches of the left features in `unknown` are not scored; `left_out` lists the source file's
     targets that no corner is close enough to.
+
+    Attributes
+    ----------
+    prepared : Prepared
+        The pair's corners, config and candidate neurons.
+    targets : (n, 2) int ndarray
+        Target ``(i, k)`` pairs of left and right corner indices.
+    unknown : int ndarray
+        Left corners whose matches are not scored.
+    name : str
+        Shown in reports.
+    left_out : int ndarray
+        Source targets no corner is close enough to.
     """
 
     prepared: Prepared
@@ -70,6 +83,26 @@ class Case:
         corner has two partners, and snapped to the corners `config` finds.  With `partial` the file
         labels only some corners (a person's labels): matches of the others are not scored; without
         it, as in the thesis, any other match is an error.
+
+        Parameters
+        ----------
+        left, right : str or Path
+            The image files.
+        targets : str or Path
+            The targets JSON file (:func:`~ismb_lab.labels.targets.save_targets`).
+        config : MatchConfig, optional
+            Corner settings; default ``MatchConfig()``.
+        name : str, optional
+            The case's name; default the left file's path.
+        check_hash : bool, default True
+            Refuse targets saved for other images.
+        partial : bool, default False
+            The file labels only some corners.
+
+        Returns
+        -------
+        case : Case
+            The prepared pair with its snapped targets.
         """
         if not isinstance(partial, bool):
             raise ParameterTypeError(message("partial", "Case.from_files", "True or False", partial))
@@ -86,6 +119,22 @@ class Case:
     def from_scene(cls, scene, config: MatchConfig | None = None, name: str = "") -> "Case":
         """A case from a rendered Scene: every corner whose true partner is a detected corner is a target.
 
+        Parameters
+        ----------
+        scene : Scene
+            A rendered scene with its ground truth (e.g. :func:`~ismb_lab.scenes.synthetic_scene`).
+        config : MatchConfig, optional
+            Corner settings; default ``MatchConfig()``.
+        name : str, default ""
+            The case's name.
+
+        Returns
+        -------
+        case : Case
+            The prepared pair with its true targets.
+
+        Examples
+        --------
         >>> from ismb_lab.scenes import synthetic_scene
         >>> case = Case.from_scene(synthetic_scene(seed=0), name="synthetic 0")
         >>> case.name, len(case.targets) > 15
@@ -102,6 +151,27 @@ def family_cases(family: str, start: int, count: int) -> list:
     objects each, in their ROI and window shift), without those of fewer than 3 targets; the
     first case is the training pair, the first with at least 8 targets.
 
+    Parameters
+    ----------
+    family : str
+        A scene family's name (:func:`~ismb_lab.scenes.get_family`).
+    start : int
+        First layout seed.
+    count : int
+        Number of layouts, >= 1.
+
+    Returns
+    -------
+    cases : list of Case
+        The kept cases, the training pair first.
+
+    Raises
+    ------
+    ParameterError
+        No layout has 3 targets.
+
+    Examples
+    --------
     >>> cases = family_cases("cameras", 2300, 3)
     >>> len(cases[0].targets) >= 8, cases[0].name.startswith("cameras ")
     (True, True)
@@ -179,6 +249,23 @@ def load_manifest(path, config: MatchConfig | None = None) -> list[Case]:
     An entry is a file pair, ``{"name", "left", "right", "targets", "roi", "shift"}`` (paths
     relative to the manifest; ``roi`` and ``shift`` optional), or a built-in ground-truth pair,
     ``{"name", "source", "roi"}`` with a source of :data:`SOURCES`.
+
+    Parameters
+    ----------
+    path : str or Path
+        The manifest JSON file.
+    config : MatchConfig, optional
+        Corner settings each entry's ``roi`` and ``shift`` override; default ``MatchConfig()``.
+
+    Returns
+    -------
+    cases : list of Case
+        One per entry, in order.
+
+    Raises
+    ------
+    ParameterError
+        An unreadable manifest, or an entry with a missing file or unknown source.
     """
     path = Path(path)
     owner = f"the manifest '{path}'"
@@ -230,6 +317,7 @@ class Spread:
 
     @classmethod
     def of(cls, values) -> "Spread":
+        """The Spread of `values`, one per seed."""
         v = np.asarray(values, dtype=float)
         return cls(float(v.mean()), float(v.std()), float(v.min()), float(v.max()), len(v))
 
@@ -270,7 +358,29 @@ class PeerReport:
 @dataclass(frozen=True)
 class ProtocolReport:
     """What :func:`protocol` measured: `params` fitted on pair `train` and tested on all, and
-    `held_out`, the held-out pairs' pooled Score per update-order seed."""
+    `held_out`, the held-out pairs' pooled Score per update-order seed.
+
+    Attributes
+    ----------
+    method : str
+        The method's name.
+    params : Params
+        Fitted on the training pair.
+    train : int
+        Index of the training pair.
+    rows : tuple of PairReport
+        One per pair.
+    held_out : tuple of Score
+        The held-out pairs pooled, per seed.
+    solver : str
+        The solver of the tested energies.
+    peers : dict of str to PeerReport
+        Peer matchers' scores, when asked for.
+    solvers : dict of str to SolverReport
+        Other solvers' scores, when asked for.
+    one_to_one : bool
+        Whether matches were cut to one per corner.
+    """
 
     method: str
     params: Params
@@ -313,6 +423,46 @@ def protocol(cases, method=DEFAULT_METHOD, *, train: int = 0, seeds: int = 5, ga
     `solvers` are others reported beside; `peers` also scores :mod:`ismb_lab.matching.peers`;
     `one_to_one` scores the network's matches after one match per corner.  The report is the same
     for every number of worker processes `jobs`.
+
+    Parameters
+    ----------
+    cases : sequence of Case
+        At least two pairs.
+    method : str or Method, default ``DEFAULT_METHOD``
+        The method to fit.
+    train : int, default 0
+        Index of the training pair.
+    seeds : int, default 5
+        Update-order seeds of every network figure.
+    ga : GAConfig, optional
+        The GA's settings.
+    rng : int or numpy.random.Generator, default 0
+        The GA's random source.
+    peers : bool, default False
+        Also score the peer matchers.
+    progress : callable, optional
+        ``progress(case_name, generation)``, called as the GA runs.
+    solver : str or Solver, default ``DEFAULT_SOLVER``
+        Solves the tested energies.
+    solvers : sequence of str or Solver, optional
+        Other solvers reported beside.
+    fit_solver : str or Solver, default ``DEFAULT_SOLVER``
+        Solves the energies while fitting.
+    fit_seeds : int, default 1
+        Update-order seeds per chromosome while fitting.
+    fit_all : bool, default True
+        Fit every pair on its own ("training"), not only pair `train`.
+    jobs : int, default 1
+        Worker processes.
+    one_to_one : bool, default False
+        Score the network's matches after one match per corner.
+    **settings
+        :class:`GAConfig` fields overriding `ga`'s.
+
+    Returns
+    -------
+    report : ProtocolReport
+        The fitted parameters and every score (:func:`format_protocol` prints it).
     """
     own = "protocol"
     if not hasattr(cases, "__len__") or not all(isinstance(c, Case) for c in cases):
@@ -496,7 +646,20 @@ def _over_seeds(scores, what: str) -> list[str]:
 
 def format_protocol(report: ProtocolReport) -> str:
     """The protocol as the thesis prints it: "Testing: 14/2+0/16  Training: 16/0+1/16", with the
-    mean and range over the update-order seeds on lines of their own."""
+    mean and range over the update-order seeds on lines of their own.
+
+    Each score reads ``C/wrong+extra/T`` (see :class:`~ismb_lab.tuning.evaluation.Score`).
+
+    Parameters
+    ----------
+    report : ProtocolReport
+        What :func:`protocol` returned.
+
+    Returns
+    -------
+    text : str
+        The report, one line per pair, solver and peer.
+    """
     lines = [f"Method-{report.method} ({report.solver}{', one match per corner' if report.one_to_one else ''}), "
              f"parameters fitted on pair {report.train}: {report.params}",
              "Per pair, update-order seed 0 (C/wrong+extra/T):"]

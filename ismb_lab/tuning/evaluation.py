@@ -21,6 +21,23 @@ __all__ = ["Score", "Scorer", "score", "unlabelled"]
 class Score:
     """C/E/T counts of one or more pairs (scores add with ``+``).
 
+    Its text form is ``correct/wrong_partner+extra/targets``: ``'14/2+0/16'`` is 14 correct
+    matches, 2 matches of a left feature that has a target to another right feature, 0 extra
+    matches (of a left feature with no target), and 16 targets; C = 14, E = 2 + 0, T = 16.
+
+    Attributes
+    ----------
+    correct : int
+        C: matches that are target pairs.
+    wrong_partner : int
+        Matches of a left feature that has a target, to another right feature.
+    extra : int
+        Matches of a left feature that has no target and is not unknown.
+    targets : int
+        T: the number of target pairs.
+
+    Examples
+    --------
     >>> s = Score(correct=14, wrong_partner=2, extra=0, targets=16)
     >>> str(s), round(s.precision, 3), s.recall
     ('14/2+0/16', 0.875, 0.875)
@@ -35,6 +52,7 @@ class Score:
 
     @property
     def errors(self) -> int:
+        """E = wrong_partner + extra."""
         return self.wrong_partner + self.extra
 
     @property
@@ -102,7 +120,20 @@ class Scorer:
                          for i, k in zip(rows, cols)], dtype=np.uint8)
 
     def count(self, codes: np.ndarray, matched) -> Score:
-        """The :class:`Score` of the matched neurons (indices into `codes`, each at most once)."""
+        """The :class:`Score` of the matched neurons (indices into `codes`, each at most once).
+
+        Parameters
+        ----------
+        codes : uint8 ndarray
+            What :meth:`neuron_codes` returned.
+        matched : int array_like
+            Indices into `codes` of the matched neurons.
+
+        Returns
+        -------
+        score : Score
+            Their counts against this scorer's targets.
+        """
         codes, matched = np.asarray(codes, dtype=np.uint8), np.asarray(matched, dtype=np.int64).ravel()
         correct, wrong, extra = _tally(codes, matched)
         if correct < 0:
@@ -142,6 +173,22 @@ def score(pairs, targets, unknown=()) -> Score:
     """Compare matched ``(i, k)`` feature pairs with target pairs; matches of the left features
     in `unknown` are not counted.
 
+    Parameters
+    ----------
+    pairs : (m, 2) int array_like
+        Matched ``(i, k)`` pairs of left and right feature indices.
+    targets : (n, 2) int array_like
+        Target pairs.
+    unknown : int array_like, optional
+        Left features whose matches are not counted (see :func:`unlabelled`).
+
+    Returns
+    -------
+    score : Score
+        The C/E/T counts; ``str(score)`` is ``'C/wrong+extra/T'``.
+
+    Examples
+    --------
     >>> str(score([[0, 0], [1, 2], [3, 3], [4, 4]], [[0, 0], [1, 1], [2, 2]], unknown=[4]))
     '1/1+1/3'
     """

@@ -31,6 +31,18 @@ _FIELDS = tuple(f.name for f in fields(Params))
 def gene_bounds(method) -> Bounds:
     """The GA's search box for a method's genes.
 
+    Parameters
+    ----------
+    method : str or Method
+        The method, e.g. ``"I"`` or ``"III"``.
+
+    Returns
+    -------
+    bounds : Bounds
+        Low and high of each gene, named.
+
+    Examples
+    --------
     >>> gene_bounds("I").names
     ('theta_c', 'lambda_c')
     """
@@ -42,6 +54,27 @@ def to_params(method, chromosome, base: Params | None = None) -> Params:
     """Chromosome to parameters; the genes a method does not use keep `base`'s values
     (default: the method's).
 
+    Parameters
+    ----------
+    method : str or Method
+        The method whose genes `chromosome` holds.
+    chromosome : (n_genes,) float array_like
+        Gene values in the method's gene order.
+    base : Params, optional
+        Values of the genes the method does not use; default the method's defaults.
+
+    Returns
+    -------
+    params : Params
+        The parameters.
+
+    Raises
+    ------
+    ParameterError
+        `chromosome` of the wrong length.
+
+    Examples
+    --------
     >>> to_params("I", [41.57, 4.40])
     Params(theta_c=41.57, theta_s=24.02, lambda_c=4.4, lambda_s=2.2)
     """
@@ -69,7 +102,28 @@ def evaluate(cases: Sequence, method, params: Params, seed: int = 0,
              solver=DEFAULT_SOLVER, one_to_one: bool = False) -> Score:
     """The summed C/E/T of `params` over `cases`, each solved by `solver` with `seed`; with
     `one_to_one`, after :func:`~ismb_lab.network.solvers.one_match_per_corner`.  Pass `method`
-    as a Method to resolve it once for many calls."""
+    as a Method to resolve it once for many calls.
+
+    Parameters
+    ----------
+    cases : sequence of Case
+        The pairs with their targets.
+    method : str or Method
+        The matching method.
+    params : Params
+        The parameters to score.
+    seed : int, default 0
+        Update-order seed, >= 0.
+    solver : str or Solver, default ``DEFAULT_SOLVER``
+        How the network is solved.
+    one_to_one : bool, default False
+        Keep at most one match per corner before counting.
+
+    Returns
+    -------
+    score : Score
+        C/E/T summed over the cases.
+    """
     m = get_method(method)
     solver = get_solver(solver, "evaluate")
     check_number(seed, "seed", "evaluate", low=0, integer=True)
@@ -104,7 +158,30 @@ def _counts(case, m, params: Params, seed: int, solver, one_to_one: bool = False
 class Fitness:
     """The batch fitness the GA calls: (4-1) summed over the training cases, each chromosome
     scored with the same update-order seeds (the mean over ``seed, seed + 1, ...`` when
-    ``seeds > 1``), so that a chromosome's fitness depends on its genes only."""
+    ``seeds > 1``), so that a chromosome's fitness depends on its genes only.
+
+    Calling it with an ``(m, n_genes)`` population returns ``m`` fitnesses.
+
+    Parameters
+    ----------
+    cases : sequence of Case
+        The training pairs; at least one, with some targets.
+    method : str or Method
+        The method being tuned.
+    seed : int, default 0
+        First update-order seed.
+    base : Params, optional
+        Values of the genes the method does not use.
+    solver : str or Solver, default ``DEFAULT_SOLVER``
+        How the network is solved.
+    seeds : int, default 1
+        Update-order seeds averaged per chromosome.
+
+    Attributes
+    ----------
+    target : int
+        The number of target pairs over all cases (the largest fitness).
+    """
 
     def __init__(self, cases: Sequence, method, *, seed: int = 0, base: Params | None = None,
                  solver=DEFAULT_SOLVER, seeds: int = 1):
@@ -124,6 +201,7 @@ class Fitness:
         self.target = sum(len(c.targets) for c in cases)
 
     def params(self, chromosome) -> Params:
+        """The :class:`Params` of `chromosome` (:func:`to_params` with this fitness' `base`)."""
         return to_params(self.method, chromosome, self.base)
 
     def __call__(self, population: np.ndarray) -> np.ndarray:
@@ -217,6 +295,32 @@ def tune(cases: Sequence, method=DEFAULT_METHOD, *, rng=0, ga: GAConfig | None =
     its fields); :func:`to_params` converts the best chromosome.  `rng` seeds the GA; each
     chromosome's fitness is the mean over `seeds` update-order seeds from `seed`, solved by
     `solver`; `base` holds the genes the method does not use.
+
+    Parameters
+    ----------
+    cases : sequence of Case
+        The training pairs.
+    method : str or Method, default ``DEFAULT_METHOD``
+        The method to tune.
+    rng : int or numpy.random.Generator, default 0
+        The GA's random source.
+    ga : GAConfig, optional
+        The GA's settings; default ``GAConfig()``.
+    seed : int, default 0
+        First update-order seed of the fitness.
+    base : Params, optional
+        Values of the genes the method does not use.
+    solver : str or Solver, default ``DEFAULT_SOLVER``
+        How the network is solved.
+    seeds : int, default 1
+        Update-order seeds averaged per chromosome.
+    **settings
+        :class:`GAConfig` fields overriding `ga`'s (e.g. ``generations=60``).
+
+    Returns
+    -------
+    generations : iterator of Generation
+        One record per generation, index 0 the initial population.
     """
     fitness = Fitness(cases, method, seed=seed, base=base, solver=solver, seeds=seeds)
     if ga is not None and not isinstance(ga, GAConfig):

@@ -29,9 +29,21 @@ __all__ = ["Bounds", "GAConfig", "Generation", "arithmetic_crossover", "batch", 
 class GAConfig:
     """The GA's settings; the defaults are the thesis' (§4.2, §5.2.1).
 
-    `generations` is the last generation's index; `p_crossover` the probability that a pair of
-    winners is crossed, `p_mutation` that a child mutates; `n_elite` best are copied unchanged.
+    Attributes
+    ----------
+    population : int, default 30
+        Chromosomes per generation, 2 to :data:`MAX_POPULATION`.
+    generations : int, default 500
+        The last generation's index.
+    p_crossover : float, default 0.8
+        Probability that a pair of tournament winners is crossed.
+    p_mutation : float, default 0.05
+        Probability that a crossed child mutates.
+    n_elite : int, default 2
+        Best chromosomes copied unchanged into the next generation.
 
+    Examples
+    --------
     >>> GAConfig()
     GAConfig(population=30, generations=500, p_crossover=0.8, p_mutation=0.05, n_elite=2)
     >>> GAConfig().updated("tune", generations=60, population=None).generations
@@ -117,6 +129,7 @@ class Bounds:
 
     @property
     def n_genes(self) -> int:
+        """The number of genes."""
         return int(self.low.size)
 
 
@@ -191,6 +204,22 @@ def batch(score: Callable) -> Callable:
 def initial_population(rng, bounds: Bounds, size: int) -> np.ndarray:
     """Draw ``size`` chromosomes uniformly within `bounds`: a ``(size, n_genes)`` array.
 
+    Parameters
+    ----------
+    rng : int or numpy.random.Generator
+        Random source.
+    bounds : Bounds
+        The search box.
+    size : int
+        Number of chromosomes, >= 1.
+
+    Returns
+    -------
+    population : (size, n_genes) float ndarray
+        The chromosomes.
+
+    Examples
+    --------
     >>> initial_population(0, Bounds([0, 10], [1, 20]), 3).shape
     (3, 2)
     """
@@ -203,6 +232,20 @@ def initial_population(rng, bounds: Bounds, size: int) -> np.ndarray:
 def arithmetic_crossover(a, b, lam: float):
     """Children ``lam*a + (1-lam)*b`` and ``lam*b + (1-lam)*a`` (thesis §4.1).
 
+    Parameters
+    ----------
+    a, b : float array_like
+        The two parents, of one shape.
+    lam : float
+        Mixing weight in [0, 1].
+
+    Returns
+    -------
+    children : (ndarray, ndarray) tuple
+        The two children.
+
+    Examples
+    --------
     >>> arithmetic_crossover([0.0, 4.0], [2.0, 0.0], 0.25)
     (array([1.5, 1. ]), array([0.5, 3. ]))
     """
@@ -217,6 +260,22 @@ def arithmetic_crossover(a, b, lam: float):
 def random_mutation(rng, chromosome, bounds: Bounds) -> np.ndarray:
     """Return a copy with one uniformly chosen gene redrawn uniformly within its bounds.
 
+    Parameters
+    ----------
+    rng : int or numpy.random.Generator
+        Random source.
+    chromosome : (n_genes,) float array_like
+        The chromosome to mutate (not changed).
+    bounds : Bounds
+        The search box.
+
+    Returns
+    -------
+    child : (n_genes,) float ndarray
+        The mutated copy.
+
+    Examples
+    --------
     >>> child = random_mutation(0, [0.5, 0.5, 0.5], Bounds([0, 0, 0], [1, 1, 1]))
     >>> int(np.sum(child != 0.5))
     1
@@ -236,6 +295,22 @@ def tournament(rng, fitness, k: int) -> np.ndarray:
     """Indices of `k` binary-tournament winners: two distinct indices each (the first drawn
     from all, the second from the others), the fitter kept, the first on a tie.
 
+    Parameters
+    ----------
+    rng : int or numpy.random.Generator
+        Random source.
+    fitness : (m,) float array_like
+        Fitness of each chromosome, m >= 2.
+    k : int
+        Number of winners, >= 0.
+
+    Returns
+    -------
+    winners : (k,) int ndarray
+        Indices of the winners.
+
+    Examples
+    --------
     >>> bool(np.all(tournament(0, [0.0, 1.0, 2.0], 100) > 0))
     True
     """
@@ -251,6 +326,20 @@ def tournament(rng, fitness, k: int) -> np.ndarray:
 def elite(fitness, n: int = 2) -> np.ndarray:
     """Indices of the `n` fittest chromosomes, best first; ties go to the lower index.
 
+    Parameters
+    ----------
+    fitness : (m,) float array_like
+        Fitness of each chromosome.
+    n : int, default 2
+        How many to keep, 0 to m.
+
+    Returns
+    -------
+    indices : (n,) int ndarray
+        The fittest, best first.
+
+    Examples
+    --------
     >>> elite([1.0, 3.0, 3.0, 0.0], 3)
     array([1, 2, 0])
     """
@@ -319,6 +408,30 @@ def evolve(fitness: Callable, bounds: Bounds, *, rng, config: GAConfig | None = 
     `target` stops after the first generation whose mean fitness reaches it; `settings` are
     GAConfig fields that override `config` (None keeps its value).
 
+    Parameters
+    ----------
+    fitness : callable
+        Batch fitness: ``(m, n_genes)`` array -> ``m`` finite numbers, larger is better.
+    bounds : Bounds
+        The search box.
+    rng : int or numpy.random.Generator
+        The GA's random source.
+    config : GAConfig, optional
+        The GA's settings; default ``GAConfig()``.
+    target : float, optional
+        Stop after the first generation whose mean fitness reaches it.
+    keep_population : bool, default False
+        Keep each generation's population and fitnesses in its record.
+    **settings
+        GAConfig fields overriding `config`'s.
+
+    Returns
+    -------
+    generations : iterator of Generation
+        One record per generation, bred lazily.
+
+    Examples
+    --------
     >>> sphere = lambda pop: -np.sum((pop - 0.3) ** 2, axis=1)
     >>> runs = list(evolve(sphere, Bounds([-1, -1], [1, 1]), rng=0, generations=40))
     >>> runs[-1].index, runs[-1].best > -1e-3, runs[-1].best >= runs[0].best

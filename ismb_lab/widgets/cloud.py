@@ -284,6 +284,17 @@ class PointCloudView:
     The view draws its own axes: k3d's grid titles each axis twice, and its colour bar
     covered the numbers.
 
+    Parameters
+    ----------
+    cloud : Cloud
+        The points, cameras and notes to show.
+    height : int, default 360
+        The view's height, px.
+    dense : (M, 3) float array_like, optional
+        Dense points (metres), hidden until :meth:`show_dense`.
+
+    Notes
+    -----
     CSS classes: root ``ismb-cloud``; caption ``ismb-cloud-caption``; colour scale
     ``ismb-cloud-colours``; the k3d plot ``ismb-cloud-plot``.
     """

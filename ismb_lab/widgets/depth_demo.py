@@ -96,7 +96,26 @@ class DepthModel:
     def set(self, *, method=None, params: Params | None = None, seed=None, config=None,
             **tolerances) -> "DepthModel":
         """Change any of method, params, seed, config or single config fields; recompute.
-        All or nothing: on an error the model is left as it was."""
+        All or nothing: on an error the model is left as it was.
+
+        Parameters
+        ----------
+        method : str, optional
+            The matching method.
+        params : Params, optional
+            New parameters.
+        seed : int, optional
+            New update-order seed.
+        config : DepthConfig, optional
+            New tolerances.
+        **tolerances
+            Single DepthConfig fields, e.g. ``position_tol_px=4``.
+
+        Returns
+        -------
+        model : DepthModel
+            This model, recomputed.
+        """
         owner = "DepthModel.set"
         new_method = self.method if method is None else get_method(method).name
         new_params = self.params if params is None else self._check_params(params, owner)
@@ -289,6 +308,27 @@ class DepthDemo(Base):
     """Rank the objects added to a background near -> far, with both figures of the thesis;
     the parameters are :class:`DepthModel`'s.
 
+    Parameters
+    ----------
+    background, scene : pair folder, (left, right) or object with ``.left`` and ``.right``
+        The two stereo pairs of the same view.
+    method : str, default ``DEFAULT_METHOD``
+        The matching method.
+    params : Params, optional
+        Default the method's (Method-III: the demo's).
+    seed : int, default 0
+        Update-order seed of both runs.
+    config : DepthConfig, optional
+        Tolerances and calibration.
+    match_config : MatchConfig, optional
+        Corner and window settings.
+    background_name : str, default "the nearest background object"
+        How the ranking sentence calls the background's nearest object.
+    recipe : Recipe or path, optional
+        Replaces `method`, `params` and the solver.
+
+    Notes
+    -----
     CSS classes: root ``ismb-depth``; ranking ``ismb-ranking``; ``ismb-seed``; ``ismb-method``;
     sliders ``ismb-position-tol-px``, ``ismb-disparity-tol-px``, ``ismb-local-px``; button
     ``ismb-recompute``; figures ``ismb-background`` (Fig. 5.12) and ``ismb-scene`` (Fig. 5.14);
@@ -343,7 +383,20 @@ class DepthDemo(Base):
 
     @classmethod
     def from_folders(cls, background_folder, scene_folder, **kw) -> "DepthDemo":
-        """The demo on two pair folders, e.g. ``images/lab`` and ``images/toy_cars``."""
+        """The demo on two pair folders, e.g. ``images/lab`` and ``images/toy_cars``.
+
+        Parameters
+        ----------
+        background_folder, scene_folder : str or Path
+            Pair folders holding ``left.png`` and ``right.png``.
+        **kw
+            The constructor's keyword parameters.
+
+        Returns
+        -------
+        demo : DepthDemo
+            The widget.
+        """
         pairs = [pair_files(f, "DepthDemo.from_folders")[:2] for f in (background_folder, scene_folder)]
         return cls(*pairs, **kw)
 
@@ -352,7 +405,20 @@ class DepthDemo(Base):
         """The §5.2.3 demo on photos of one's own from two fixed cameras: a
         :class:`~ismb_lab.widgets.photos.PhotoLoader` for the empty scene, whose "Use this pair"
         opens a second for the scene (warped with the background's rectification), whose own
-        opens the demo on both saved pairs."""
+        opens the demo on both saved pairs.
+
+        Parameters
+        ----------
+        folder : str or os.PathLike, default "."
+            Where the pairs' folders are made.
+        **kw
+            The constructor's keyword parameters.
+
+        Returns
+        -------
+        loader : PhotoLoader
+            The first loader widget.
+        """
         from .photos import PhotoLoader
 
         def scene_loader(background_folder, roi):

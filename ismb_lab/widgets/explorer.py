@@ -56,7 +56,26 @@ class ExplorerModel:
     def set(self, *, method=None, params: Params | None = None, seed=None, solver=None,
             **genes) -> "ExplorerModel":
         """Change any of method, params (whole or gene by gene, e.g. ``theta_c=12``), seed and
-        solver; rematch."""
+        solver; rematch.
+
+        Parameters
+        ----------
+        method : str, optional
+            The matching method.
+        params : Params, optional
+            New parameters.
+        seed : int, optional
+            New update-order seed.
+        solver : str, optional
+            New solver.
+        **genes
+            Single parameters, e.g. ``theta_c=12``.
+
+        Returns
+        -------
+        model : ExplorerModel
+            This model, rematched.
+        """
         owner = "ExplorerModel.set"
         before = (self.method, self.params, self.seed, self.solver)
         try:
@@ -172,6 +191,27 @@ class ParameterExplorer(Base):
     `left` and `right` are paths or images, or `left` a Prepared; C/E/T is scored against `targets`
     (a TargetSet, its path or feature pairs), only on their left corners when `partial`.
 
+    Parameters
+    ----------
+    left, right : path or ndarray, or a Prepared as `left`
+        The image pair.
+    method : str, default ``DEFAULT_METHOD``
+        The matching method.
+    params : Params, optional
+        Starting slider values; default the method's.
+    seed : int, default 0
+        Update-order seed.
+    config : MatchConfig, optional
+        Corner settings.
+    targets : TargetSet, path or (t, 2) int array_like, optional
+        What C/E/T is scored against.
+    solver : str, default ``DEFAULT_SOLVER``
+        How the network is solved.
+    partial : bool, default False
+        The targets label only some corners: matches of the others are not scored.
+
+    Notes
+    -----
     CSS classes: root ``ismb-explorer``; sliders ``ismb-theta-c``, ``ismb-theta-s``,
     ``ismb-lambda-c``, ``ismb-lambda-s``; ``ismb-method``; ``ismb-solver``; ``ismb-seed``; ``ismb-score``;
     figures ``ismb-matches`` and ``ismb-transfer``; ``ismb-status``; ``ismb-log``.
@@ -226,7 +266,20 @@ class ParameterExplorer(Base):
 
     @classmethod
     def from_folder(cls, folder, **kw) -> "ParameterExplorer":
-        """Explore ``folder/left.png``, ``folder/right.png``, scored against ``answer_key.json`` if present."""
+        """Explore ``folder/left.png``, ``folder/right.png``, scored against ``answer_key.json`` if present.
+
+        Parameters
+        ----------
+        folder : str or Path
+            A pair folder.
+        **kw
+            The constructor's keyword parameters.
+
+        Returns
+        -------
+        explorer : ParameterExplorer
+            The widget.
+        """
         left, right, key = pair_files(folder, "ParameterExplorer.from_folder")
         if key.is_file():
             kw.setdefault("targets", key)
@@ -234,7 +287,20 @@ class ParameterExplorer(Base):
 
     @classmethod
     def from_photos(cls, *, folder=".", **kw):
-        """A :class:`~ismb_lab.widgets.photos.PhotoLoader` whose "Use this pair" opens an explorer."""
+        """A :class:`~ismb_lab.widgets.photos.PhotoLoader` whose "Use this pair" opens an explorer.
+
+        Parameters
+        ----------
+        folder : str or os.PathLike, default "."
+            Where the pair's folder is made.
+        **kw
+            Passed to :meth:`from_folder`.
+
+        Returns
+        -------
+        loader : PhotoLoader
+            The loader widget.
+        """
         from .photos import opening
 
         return opening(cls.from_folder, folder, **kw)

@@ -240,6 +240,27 @@ class GARunner(Base):
     `cases_or_folder` is a Case, a pair folder with an ``answer_key.json`` (corners by `config`),
     or a list of them; the curves are redrawn at most every `redraw_every` s while running.
 
+    Parameters
+    ----------
+    cases_or_folder : Case, folder, or a list of them
+        The training pairs.
+    method : str, default ``DEFAULT_METHOD``
+        The method to tune.
+    population, generations : int, optional
+        GA size; default :class:`~ismb_lab.tuning.genetic.GAConfig`'s.
+    seed : int, default 0
+        Seed of the GA and of every network run's update order.
+    config : MatchConfig, optional
+        Corner settings for folders.
+    redraw_every : float, default 0.2
+        Seconds between redraws of the curves while running.
+    save_to : str or os.PathLike, optional
+        A params file rewritten whenever the best fitness improves.
+    solver : str, default ``DEFAULT_SOLVER``
+        How each chromosome's network is solved.
+
+    Notes
+    -----
     CSS classes: root ``ismb-ga``; buttons ``ismb-start``, ``ismb-pause``, ``ismb-stop``,
     ``ismb-apply``; ``ismb-solver``; ``ismb-generations``; ``ismb-progress``; figure ``ismb-fitness``; best chromosome
     ``ismb-chromosome``; ``ismb-status``; ``ismb-log``.
@@ -292,11 +313,30 @@ class GARunner(Base):
 
     @classmethod
     def from_folder(cls, folder, **kw) -> "GARunner":
-        """Tune on one pair folder (targets: its ``answer_key.json``)."""
+        """Tune on one pair folder (targets: its ``answer_key.json``).
+
+        Parameters
+        ----------
+        folder : str or Path
+            A pair folder with ``answer_key.json``.
+        **kw
+            The constructor's keyword parameters.
+
+        Returns
+        -------
+        runner : GARunner
+            The widget.
+        """
         return cls(Path(folder) if isinstance(folder, str) else folder, **kw)
 
     def on_apply(self, callback: Callable[[Params], object]) -> None:
-        """Call ``callback(params)`` when "Apply best parameters" is pressed."""
+        """Call ``callback(params)`` when "Apply best parameters" is pressed.
+
+        Parameters
+        ----------
+        callback : callable
+            Called with the best :class:`~ismb_lab.network.params.Params`, e.g. an explorer's ``set_params``.
+        """
         if not callable(callback):
             raise ParameterTypeError(message("callback", "GARunner.on_apply", "a callable", callback))
         self._apply.append(callback)

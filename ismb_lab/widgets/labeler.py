@@ -291,6 +291,24 @@ class LabelModel:
         """Match the pair with `method` and score it against the labels saved in `path` (default:
         the labeller's file), leaving out unlabelled left corners; None when nothing is saved there.
 
+        Parameters
+        ----------
+        method : str, default ``DEFAULT_METHOD``
+            The matching method.
+        seed : int, default 0
+            Update-order seed.
+        params : Params, optional
+            Default the method's.
+        path : str or os.PathLike, optional
+            The targets file; default the model's.
+
+        Returns
+        -------
+        result : SavedScore or None
+            The score and its errors.
+
+        Examples
+        --------
         >>> import tempfile, pathlib
         >>> from ismb_lab.scenes import synthetic_scene
         >>> scene = synthetic_scene(0)
@@ -408,6 +426,21 @@ class TargetLabeler(Base):
     (:func:`ismb_lab.labels.classroom.targets_path`, named after `pair_name`); under Voilà without
     a hub, where visitors share one login, the labeller asks for a name first.
 
+    Parameters
+    ----------
+    left, right : path or ndarray, or a Prepared as `left`
+        The image pair.
+    path : str or os.PathLike, optional
+        The targets file of Save and Load; default the student's own.
+    config : MatchConfig, optional
+        Corner settings: labels snap to the features the matcher sees.
+    answer_key : TargetSet or path, optional
+        Ground truth for "Show answer key".
+    pair_name : str, optional
+        The pair's name in the default file name.
+
+    Notes
+    -----
     CSS classes: root ``ismb-labeler``, figure ``ismb-stereo``, buttons ``ismb-undo``,
     ``ismb-delete``, ``ismb-save``, ``ismb-load``, toggle ``ismb-answer-key``, table
     ``ismb-pairs``, unsaved-changes flag ``ismb-dirty``, key summary ``ismb-key-summary``,
@@ -469,7 +502,22 @@ class TargetLabeler(Base):
 
     @classmethod
     def from_folder(cls, folder, *, path=None, config: MatchConfig | None = None) -> "TargetLabeler":
-        """Label ``folder/left.png`` and ``folder/right.png`` (answer key: ``answer_key.json``, if any)."""
+        """Label ``folder/left.png`` and ``folder/right.png`` (answer key: ``answer_key.json``, if any).
+
+        Parameters
+        ----------
+        folder : str or Path
+            A pair folder.
+        path : str or os.PathLike, optional
+            The targets file; default the student's own, named after the folder.
+        config : MatchConfig, optional
+            Corner settings.
+
+        Returns
+        -------
+        labeler : TargetLabeler
+            The widget.
+        """
         left, right, key = pair_files(folder, "TargetLabeler.from_folder")
         return cls(left, right, path=path, config=config, answer_key=key if key.is_file() else None,
                    pair_name=Path(folder).resolve().name)
@@ -477,7 +525,20 @@ class TargetLabeler(Base):
     @classmethod
     def from_photos(cls, *, folder=".", **kw):
         """A :class:`~ismb_lab.widgets.photos.PhotoLoader` whose "Use this pair" saves two photos of
-        one's own (rectified) in `folder` and opens a labeller on them."""
+        one's own (rectified) in `folder` and opens a labeller on them.
+
+        Parameters
+        ----------
+        folder : str or os.PathLike, default "."
+            Where the pair's folder is made.
+        **kw
+            Passed to :meth:`from_folder`.
+
+        Returns
+        -------
+        loader : PhotoLoader
+            The loader widget.
+        """
         from .photos import opening
 
         return opening(cls.from_folder, folder, **kw)
@@ -539,7 +600,24 @@ class TargetLabeler(Base):
             self.refresh()
 
     def score_saved(self, method=DEFAULT_METHOD, *, seed: int = 0, params=None, path=None) -> SavedScore | None:
-        """:meth:`LabelModel.score_saved`: `method`'s matches against the saved labels."""
+        """:meth:`LabelModel.score_saved`: `method`'s matches against the saved labels.
+
+        Parameters
+        ----------
+        method : str, default ``DEFAULT_METHOD``
+            The matching method.
+        seed : int, default 0
+            Update-order seed.
+        params : Params, optional
+            Default the method's.
+        path : str or os.PathLike, optional
+            The targets file; default the labeller's.
+
+        Returns
+        -------
+        result : SavedScore or None
+            The score and its errors; None when nothing is saved there.
+        """
         return self.model.score_saved(method, seed=seed, params=params, path=path)
 
     @staticmethod

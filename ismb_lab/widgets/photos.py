@@ -186,6 +186,23 @@ class PhotoLoader(Base):
     `open_with(folder, roi) -> widget` is what "Use this pair" opens on the saved pair; the
     other parameters are :class:`PhotoModel`'s.
 
+    Parameters
+    ----------
+    open_with : callable, optional
+        ``open_with(folder, roi) -> widget``, opened on the saved pair.
+    folder : str or os.PathLike, default "."
+        Where the pair's folder is made.
+    user : str, optional
+        Whose folder; default :func:`~ismb_lab.labels.classroom.user_name`.
+    role : str, default ""
+        Added to the folder's name (e.g. ``"background"``).
+    homographies : (H_left, H_right, (width, height)), optional
+        A rectification of the same cameras, applied as it is.
+    title : str, default ""
+        A bold line above the loader.
+
+    Notes
+    -----
     CSS classes: root ``ismb-photos``; upload ``ismb-upload``; folder field ``ismb-photo-folder``
     and button ``ismb-open-folder``; figure ``ismb-photo-pair``; buttons ``ismb-rectify`` and
     ``ismb-use``; the opened widget's area ``ismb-opened``; ``ismb-status``; ``ismb-log``.

@@ -123,6 +123,27 @@ class RigCloud(Base):
     The upload is :class:`~ismb_lab.widgets.photos.PhotoLoader`'s, without *Rectify* and *Use
     this pair* (the rig rectifies); each pair reaches :meth:`load` as given, not scaled.
 
+    Parameters
+    ----------
+    rig : StereoCamera, str or os.PathLike, optional
+        The rig or its file; else its path is typed in the widget.
+    left, right : path, bytes or ndarray, optional
+        A pair to show at once.
+    name : str, default "pair"
+        What the status line calls the pair given.
+    method : str, default ``DEFAULT_METHOD``
+        The energy.
+    seed : int, default 0
+        The network's update order.
+    board : bool, default False
+        The pair shows the calibration board.
+    height : int, default 360
+        The 3-D view's height, px.
+    folder, user
+        The photo loader's (:class:`~ismb_lab.widgets.photos.PhotoLoader`).
+
+    Notes
+    -----
     CSS classes: root ``ismb-rig-cloud``; rig path ``ismb-rig-file``, button ``ismb-load-rig``;
     the toggle ``ismb-dense``; ``ismb-status``; ``ismb-log``; the loader's (``ismb-upload``,
     ``ismb-photo-folder``, ``ismb-open-folder``, ``ismb-photo-pair``) and the view's

@@ -87,7 +87,18 @@ class StepperModel:
         return out
 
     def run(self, limit: int = 50_000) -> int:
-        """Step until the network stops or `limit` attempts were made; return the attempts made."""
+        """Step until the network stops or `limit` attempts were made; return the attempts made.
+
+        Parameters
+        ----------
+        limit : int, default 50000
+            Most attempts.
+
+        Returns
+        -------
+        attempts : int
+            The attempts made.
+        """
         limit = check_number(limit, "limit", "StepperModel.run", low=1, integer=True)
         return len(self.step(limit))
 
@@ -204,6 +215,23 @@ class HopfieldStepper(Base):
     `left` and `right` are paths or images, or `left` a Prepared; "Run to convergence" makes
     at most `run_limit` attempts per click.
 
+    Parameters
+    ----------
+    left, right : path or ndarray, or a Prepared as `left`
+        The image pair.
+    method : str, default ``DEFAULT_METHOD``
+        The matching method.
+    params : Params, optional
+        Default the method's.
+    seed : int, default 0
+        Seed of the random visiting order.
+    config : MatchConfig, optional
+        Corner settings.
+    run_limit : int, default 50000
+        Most attempts per click of "Run to convergence".
+
+    Notes
+    -----
     CSS classes: root ``ismb-stepper``; buttons ``ismb-step``, ``ismb-step10``, ``ismb-run``,
     ``ismb-reset``; seed field ``ismb-seed``; checkbox ``ismb-thesis-rule``; figures
     ``ismb-grid`` (neurons), ``ismb-matches`` (image pair) and ``ismb-energy``;
@@ -254,7 +282,20 @@ class HopfieldStepper(Base):
 
     @classmethod
     def from_folder(cls, folder, **kw) -> "HopfieldStepper":
-        """Step the network on ``folder/left.png`` and ``folder/right.png``."""
+        """Step the network on ``folder/left.png`` and ``folder/right.png``.
+
+        Parameters
+        ----------
+        folder : str or Path
+            A pair folder.
+        **kw
+            The constructor's keyword parameters.
+
+        Returns
+        -------
+        stepper : HopfieldStepper
+            The widget.
+        """
         left, right, _ = pair_files(folder, "HopfieldStepper.from_folder")
         return cls(left, right, **kw)
 
