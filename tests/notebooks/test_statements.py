@@ -373,7 +373,8 @@ def test_the_depth_page_states_the_library_defaults():
     `name = value`; each is the library's default today."""
     import inspect
 
-    from ismb_lab.depth import objects as depth, pipeline as depth_demo
+    from ismb_lab import cameras
+    from ismb_lab.depth import pipeline as depth_demo
     from ismb_lab.depth.objects import DepthConfig
 
     import ast
@@ -400,8 +401,8 @@ def test_the_depth_page_states_the_library_defaults():
             actual = inspect.signature(functions[owner]).parameters[attribute].default
         elif owner == "DEPTH_MATCH_CONFIG":
             actual = getattr(depth_demo.DEPTH_MATCH_CONFIG, attribute)
-        elif owner == "depth":
-            actual = getattr(depth, attribute)
+        elif owner == "cameras":
+            actual = getattr(cameras, attribute)
         elif owner == "":
             actual = getattr(depth_demo, attribute)
         else:
