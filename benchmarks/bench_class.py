@@ -12,7 +12,7 @@ as the user who starts the script, with a home folder in a temporary folder, and
 deployment's memory limits (cgroups, RLIMIT_DATA) are not applied.  Each home gets its copy
 of the course before start-up (timed on its own), and a numba cache of its own, as students
 who cannot write into the venv.  ``--numba shared`` (the default, as deployed): the teacher's
-step compiles the kernels once into a read-only folder (``ismb_lab._numba_share.compile_into``,
+step compiles the kernels once into a read-only folder (``ismb_lab.teaching.kernels.compile_into``,
 what ``hub_start stage`` runs; timed), and each student's process copies them into their
 own cache.  ``--numba private`` (the deployment before that step): every student's kernels
 compile on their first run.
@@ -148,7 +148,7 @@ def point_pair(p, q) -> tuple:
 
 def lost_labels(home: Path, path: Path, expected: set) -> str | None:
     """None when the targets file at `path` holds exactly the `expected` coordinate pairs."""
-    from ismb_lab.targets import load_targets
+    from ismb_lab.labels.targets import load_targets
 
     if home.resolve() not in path.resolve().parents:
         return f"saved outside the student's home: {path}"
@@ -187,7 +187,7 @@ def teachers_step(work: Path) -> Path:
     import (this repository, on their PYTHONPATH); the folder, made read-only."""
     import resource
 
-    from ismb_lab._numba_share import compile_into
+    from ismb_lab.teaching.kernels import compile_into
 
     root = Path(__file__).resolve().parents[1]
     os.environ["PYTHONPATH"] = os.pathsep.join(filter(None, [str(root), os.environ.get("PYTHONPATH")]))

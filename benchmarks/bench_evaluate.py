@@ -3,7 +3,7 @@
     python benchmarks/bench_evaluate.py [--generations 60] [--seeds 3] [--repeats 3] [--jobs 1 2]
     python benchmarks/bench_evaluate.py --smoke
 
-Runs ``ismb_lab.protocol.protocol`` over ``images/realistic/manifest.json`` (Method-III,
+Runs ``ismb_lab.tuning.cases.protocol`` over ``images/realistic/manifest.json`` (Method-III,
 every pair fitted, as ``ismb-lab evaluate`` does) with each ``--jobs`` value, checks
 that every run gives the same report, and prints the median wall time, its spread and
 the speed-up over the first ``--jobs`` value.  The corners are found once, outside the
@@ -18,7 +18,7 @@ import statistics
 import time
 from pathlib import Path
 
-from ismb_lab.protocol import load_manifest, protocol
+from ismb_lab.tuning.cases import load_manifest, protocol
 
 MANIFEST = Path(__file__).resolve().parents[1] / "images" / "realistic" / "manifest.json"
 

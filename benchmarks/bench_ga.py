@@ -17,12 +17,12 @@ import time
 
 import numpy as np
 
-from ismb_lab.datasets import ground_truth_pairs, motorcycle
-from ismb_lab.genetic import evolve
-from ismb_lab.matching import MatchConfig, prepare
-from ismb_lab.protocol import Case
+from ismb_lab.images.datasets import ground_truth_pairs, motorcycle
+from ismb_lab.tuning.genetic import evolve
+from ismb_lab.matching.pipeline import MatchConfig, prepare
+from ismb_lab.tuning.cases import Case
 from ismb_lab.scenes import synthetic_scene
-from ismb_lab.tuning import Fitness, gene_bounds
+from ismb_lab.tuning.fitness import Fitness, gene_bounds
 
 
 def main(argv=None) -> None:

@@ -16,10 +16,10 @@ import time
 
 from pathlib import Path
 
-from ismb_lab.datasets import motorcycle
-from ismb_lab.dynamics import run
-from ismb_lab.matching import MatchConfig, prepare
-from ismb_lab.methods import THESIS_PARAMS, get_method
+from ismb_lab.images.datasets import motorcycle
+from ismb_lab.network.dynamics import run
+from ismb_lab.matching.pipeline import MatchConfig, prepare
+from ismb_lab.network.methods import THESIS_PARAMS, get_method
 from ismb_lab.scenes import synthetic_scene
 
 REALISTIC = Path(__file__).resolve().parents[1] / "images" / "realistic" / "01"

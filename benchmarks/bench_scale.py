@@ -22,10 +22,10 @@ import tracemalloc
 
 import numpy as np
 
-from ismb_lab.datasets import motorcycle
-from ismb_lab.dynamics import run
-from ismb_lab.matching import MatchConfig, prepare
-from ismb_lab.methods import THESIS_PARAMS, get_method
+from ismb_lab.images.datasets import motorcycle
+from ismb_lab.network.dynamics import run
+from ismb_lab.matching.pipeline import MatchConfig, prepare
+from ismb_lab.network.methods import THESIS_PARAMS, get_method
 
 
 def timed(fn, repeats: int):

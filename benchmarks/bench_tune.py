@@ -12,9 +12,9 @@ command; ``--earlier`` adds the same recipe over three fit seeds, and each
 and their ratio.
 
 Then, in this process, one annealing of the pair's NM3 network (the GA's work unit): the
-readable schedule (:func:`ismb_lab.annealing.iter_annealing`, dense rows of ``W``, one
+readable schedule (:func:`ismb_lab.network.annealing.iter_annealing`, dense rows of ``W``, one
 compiled call per temperature, then the discrete polish: what ``anneal()`` ran before it was
-compiled whole) against :func:`~ismb_lab.annealing.anneal`, in alternating blocks, with a
+compiled whole) against :func:`~ismb_lab.network.annealing.anneal`, in alternating blocks, with a
 check that both give the same state.  ``--smoke`` runs each command once with 2 generations
 and a few annealings, to check that the script works.
 """
@@ -32,11 +32,11 @@ from pathlib import Path
 
 import numpy as np
 
-from ismb_lab.annealing import anneal, iter_annealing
-from ismb_lab.dynamics import run
-from ismb_lab.matching import prepare
-from ismb_lab.methods import get_method
-from ismb_lab.params import Params
+from ismb_lab.network.annealing import anneal, iter_annealing
+from ismb_lab.network.dynamics import run
+from ismb_lab.matching.pipeline import prepare
+from ismb_lab.network.methods import get_method
+from ismb_lab.network.params import Params
 
 ROOT = Path(__file__).resolve().parents[1]
 

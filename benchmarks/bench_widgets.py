@@ -26,7 +26,7 @@ matplotlib.use("Agg", force=True)
 
 from matplotlib.backend_bases import MouseEvent  # noqa: E402
 
-from ismb_lab.matching import prepare  # noqa: E402
+from ismb_lab.matching.pipeline import prepare  # noqa: E402
 from ismb_lab.widgets import DepthDemo, HopfieldStepper, ParameterExplorer, TargetLabeler  # noqa: E402
 
 IMAGES = Path(__file__).resolve().parents[1] / "images"

@@ -11,11 +11,11 @@ and stop it with ``kill "$(cat /var/lib/ismb-hub/jupyterhub.pid)"``.
 Every setting a course changes is an ``ISMB_HUB_*`` environment variable, listed with its
 default in deploy/README.md; nothing else needs editing. Each student logs in with their
 own account (PAM) and gets their own JupyterLab, started as them by
-``python -m ismb_lab.hub_start serve``: that command copies the course folder into
+``python -m ismb_lab.teaching.hub_start serve``: that command copies the course folder into
 ``~/ismb_lab`` (mode 700) with the student's own rights, then starts the server. Root
 never writes in a home. The course folder's ``config`` is the students' Jupyter config,
 its ``teacher-config`` the teachers' (hub admins'), its ``numba`` the compiled kernels that
-every student's process copies (all made by ``python -m ismb_lab.hub_start stage``).
+every student's process copies (all made by ``python -m ismb_lab.teaching.hub_start stage``).
 """
 
 import os
@@ -24,7 +24,7 @@ from pathlib import Path
 
 from jupyterhub.spawner import LocalProcessSpawner
 
-from ismb_lab import hub_start
+from ismb_lab.teaching import hub_start
 
 c = get_config()  # noqa: F821  (JupyterHub's config loader provides it)
 
@@ -114,7 +114,7 @@ class CourseSpawner(LocalProcessSpawner):
 
 # Servers: one per student, started as that student from the class venv.
 c.JupyterHub.spawner_class = CourseSpawner
-c.Spawner.cmd = [str(VENV / "bin" / "python"), "-m", "ismb_lab.hub_start", "serve"]
+c.Spawner.cmd = [str(VENV / "bin" / "python"), "-m", "ismb_lab.teaching.hub_start", "serve"]
 c.Spawner.environment = {
     "ISMB_HUB_COURSE": str(COURSE),
     # nbgrader's course and exchange (deploy/course/), teacher tools hidden: staged by hub_start.

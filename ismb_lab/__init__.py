@@ -7,7 +7,7 @@ the value received.
 
 __version__ = "0.1.0"
 
-from . import _numba  # noqa: E402,F401  (before any kernel: numba needs a folder it can cache in)
+from ._core import numba_cache as _numba  # noqa: E402,F401  (before any kernel: numba needs a folder it can cache in)
 
 __all__ = ["ParameterError", "ParameterTypeError", "__version__"]
 
@@ -16,6 +16,6 @@ def __getattr__(name):
     # Imported on first use, so that ``import ismb_lab`` (and the command line's start-up,
     # before its signal handlers are in place) does not wait for numpy.
     if name in ("ParameterError", "ParameterTypeError"):
-        from . import _validation
+        from ._core import validation as _validation
         return getattr(_validation, name)
     raise AttributeError(f"module {__name__!r} has no attribute {name!r}")

@@ -1,25 +1,20 @@
-"""Matplotlib drawings of the pipeline's results.
-
-Every ``plot_*`` function draws into a given ``Axes`` and returns its artists;
-none of them calls ``pyplot``, so they serve notebooks, widgets and the CLI alike.
-"""
+"""Matplotlib drawings of the pipeline's results: each draws into a given ``Axes`` (never
+``pyplot``) and returns its artists."""
 
 from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["GAP", "LEFT_COLOUR", "OKABE_ITO", "RIGHT_COLOUR", "VERDICT_COLOURS", "frustum_lines", "outlines",
-           "plot_depth", "plot_matches", "side_by_side", "verdicts"]
+__all__ = ["GAP", "LEFT_COLOUR", "OKABE_ITO", "RIGHT_COLOUR", "VERDICT_COLOURS", "outlines", "plot_depth",
+           "plot_matches", "side_by_side", "verdicts"]
 
 GAP = 8  # pixels between the left and right image in side-by-side views
 
-#: The eight colours of Okabe and Ito's palette, told apart with every common colour-vision
-#: deficiency (M. Okabe and K. Ito, *Color Universal Design*, 2008).
+#: Okabe and Ito's palette (*Color Universal Design*, 2008): told apart with every colour-vision deficiency.
 OKABE_ITO = {"black": "#000000", "orange": "#E69F00", "sky blue": "#56B4E9", "bluish green": "#009E73",
              "yellow": "#F0E442", "blue": "#0072B2", "vermillion": "#D55E00", "reddish purple": "#CC79A7"}
 
-#: A match's verdict against the targets (:func:`verdicts`): blue, vermillion and reddish
-#: purple, never red against green.
+#: A match's verdict against the targets (:func:`verdicts`): never red against green.
 VERDICT_COLOURS = {"correct": OKABE_ITO["blue"], "wrong partner": OKABE_ITO["vermillion"],
                    "extra": OKABE_ITO["reddish purple"]}
 
@@ -28,16 +23,13 @@ LEFT_COLOUR, RIGHT_COLOUR = OKABE_ITO["yellow"], OKABE_ITO["bluish green"]
 
 
 def verdicts(pairs, targets, unknown=()) -> list:
-    """Each matched pair's verdict, as :func:`ismb_lab.evaluation.score` counts it: ``"correct"``,
-    ``"wrong partner"`` (its left feature has another target), ``"extra"`` (its left feature has
-    no target) or ``None`` (its left feature's truth is unknown).
+    """Each matched pair's verdict as :func:`ismb_lab.tuning.evaluation.score` counts it
+    (None: its left feature's truth is unknown).
 
-    Examples
-    --------
     >>> verdicts([[0, 0], [1, 2], [3, 3], [4, 4]], [[0, 0], [1, 1]], unknown=[4])
     ['correct', 'wrong partner', 'extra', None]
     """
-    from .evaluation import Scorer
+    from .tuning.evaluation import Scorer
 
     pairs = np.asarray(pairs, int).reshape(-1, 2)
     names = (None, "correct", "wrong partner", "extra")     # Scorer.neuron_codes' codes 0-3
@@ -47,35 +39,37 @@ def verdicts(pairs, targets, unknown=()) -> list:
 def side_by_side(left: np.ndarray, right: np.ndarray, gap: int = GAP) -> np.ndarray:
     """The two images next to each other, separated by a white gap.
 
-    Examples
-    --------
     >>> side_by_side(np.zeros((2, 3)), np.ones((2, 3)), gap=1).shape
     (2, 7)
     """
-    spacer = np.full((left.shape[0], gap), 255.0)
-    return np.hstack([left, spacer, right])
+    return np.hstack([left, np.full((left.shape[0], gap), 255.0), right])
 
 
 def plot_matches(ax, left, right, left_xy, right_xy, pairs, *, numbers: bool = True,
                  cmap: str = "viridis", targets=None, unknown=()) -> dict:
-    """Draw a pair side by side with its features and match lines.
+    """Draw a pair side by side with its features (``(N, 2)`` points, the right ones offset by
+    ``W + GAP``) and lines for the matched ``(i, k)`` `pairs`, coloured by Euclidean disparity or
+    by their :func:`verdicts` against `targets` (grey where `unknown`); `numbers` labels features
+    1, 2, ... as in the thesis' figures.
 
     Parameters
     ----------
     ax : matplotlib.axes.Axes
-    left, right : (H, W) ndarray
-        Grey images.
-    left_xy, right_xy : (N, 2) ndarray
-        Feature points ``(x, y)``; right points are drawn offset by ``W + GAP``.
-    pairs : (m, 2) int ndarray
-        Matched ``(i, k)`` indices; lines are coloured by Euclidean disparity, or by their
-        verdict if `targets` are given.
-    numbers : bool
-        Label features 1, 2, ... as in the thesis' figures.
-    targets : (t, 2) int array_like, optional
-        Target ``(i, k)`` pairs: each line takes its :func:`verdicts` colour
-        (:data:`VERDICT_COLOURS`; grey where the truth is `unknown`), the correct ones drawn
-        first, under the others.
+        Where to draw.
+    left, right : (H, W) float ndarray
+        The grey images.
+    left_xy, right_xy : (N, 2) float array_like
+        Left and right features ``(x, y)``.
+    pairs : (m, 2) int array_like
+        Matched ``(i, k)`` feature pairs.
+    numbers : bool, default True
+        Label the features 1, 2, ...
+    cmap : str, default "viridis"
+        Colour map of the disparity, without `targets`.
+    targets : (n, 2) int array_like, optional
+        Target pairs: lines are then coloured by verdict.
+    unknown : int array_like, optional
+        Left features whose truth is unknown (grey lines).
 
     Returns
     -------
@@ -87,8 +81,7 @@ def plot_matches(ax, left, right, left_xy, right_xy, pairs, *, numbers: bool = T
     left_xy = np.asarray(left_xy, float).reshape(-1, 2)
     right_xy = np.asarray(right_xy, float).reshape(-1, 2)
     pairs = np.asarray(pairs, int).reshape(-1, 2)
-    offset = np.array([left.shape[1] + GAP, 0.0])
-    shifted = right_xy + offset
+    shifted = right_xy + [left.shape[1] + GAP, 0.0]
     image = ax.imshow(side_by_side(left, right), cmap="gray", vmin=0, vmax=255)
     lp, = ax.plot(*left_xy.T, "+", color=LEFT_COLOUR, ms=8, mew=1.5)
     rp, = ax.plot(*shifted.T, "+", color=RIGHT_COLOUR, ms=8, mew=1.5)
@@ -117,6 +110,16 @@ def plot_matches(ax, left, right, left_xy, right_xy, pairs, *, numbers: bool = T
 def outlines(labels: np.ndarray) -> list:
     """The outer outline of every blob of `labels` (> 0) as a closed polygon of pixel centres.
 
+    Parameters
+    ----------
+    labels : (H, W) int ndarray
+        Blob labels, 0 for none.
+
+    Returns
+    -------
+    polygons : list of (n, 2) float ndarray
+        One closed ``(x, y)`` polygon per outline.
+
     Examples
     --------
     >>> labels = np.zeros((6, 6), dtype=int)
@@ -135,31 +138,17 @@ def outlines(labels: np.ndarray) -> list:
 
 
 def plot_depth(ax, left, result, *, cmap: str = "plasma") -> dict:
-    """Draw Fig. 5.14: the scene's left image, its new features coloured by disparity.
+    """Draw Fig. 5.14: the scene's left image (`left`), the new features of `result` (a
+    :class:`~ismb_lab.depth.objects.DepthResult`) by disparity, the removed ones as grey crosses,
+    each object's rank and depth, the dashed box where corners were sought and the cyan blobs.
 
-    Features removed as background are small grey crosses; every object is labelled
-    with its rank (1 = nearest) and its depth; a dashed box shows where the scene's
-    corners were sought, when the result knows it, and cyan outlines the blobs of
-    change that grouped the objects, when they did.
-
-    Parameters
-    ----------
-    ax : matplotlib.axes.Axes
-    left : (H, W) ndarray
-        The scene's left image.
-    result : ismb_lab.depth.DepthResult
-
-    Returns
-    -------
-    artists : dict
-        ``image``, ``features`` (the scatter of kept matches), ``removed``, ``labels``,
-        ``box`` (None without ``result.scene_roi``) and ``outlines`` (None without
-        ``result.silhouettes``).
+    Returns the artists: ``image``, ``features``, ``removed``, ``labels``, ``box`` (None without
+    ``result.scene_roi``) and ``outlines`` (None without ``result.silhouettes``).
     """
+    from matplotlib.collections import LineCollection
     from matplotlib.patches import Rectangle
 
     image = ax.imshow(left, cmap="gray", vmin=0, vmax=255)
-    from matplotlib.collections import LineCollection
 
     drawn = None
     if getattr(result, "silhouettes", None) is not None:
@@ -183,25 +172,3 @@ def plot_depth(ax, left, result, *, cmap: str = "plasma") -> dict:
     return {"image": image, "features": features, "removed": removed, "labels": labels, "box": box,
             "outlines": drawn}
 
-
-def frustum_lines(camera, depth_m: float) -> np.ndarray:
-    """The outlines of both rectified cameras' views out to `depth_m` metres, as ``(16, 2, 3)``
-    segments in the rectified left camera's frame: for each camera, its centre to the four
-    corners of its view at that depth, and the four sides of that rectangle.
-
-    Examples
-    --------
-    >>> from ismb_lab.camera import StereoCamera
-    >>> lines = frustum_lines(StereoCamera(), 3.0)
-    >>> lines.shape, lines[0].round(3).tolist()
-    ((16, 2, 3), [[0.0, 0.0, 0.0], [-1.6, -1.2, 3.0]])
-    """
-    (w, h), f, (cx, cy) = camera.size, camera.focal_px, camera.rectified_centre
-    corners = np.array([[-0.5, -0.5], [w - 0.5, -0.5], [w - 0.5, h - 0.5], [-0.5, h - 0.5]])
-    far = np.column_stack([(corners[:, 0] - cx) * depth_m / f, (corners[:, 1] - cy) * depth_m / f,
-                           np.full(4, float(depth_m))])
-    segments = []
-    for offset in (0.0, camera.baseline_m):
-        centre, rim = np.array([offset, 0.0, 0.0]), far + [offset, 0.0, 0.0]
-        segments += [(centre, p) for p in rim] + [(rim[n], rim[(n + 1) % 4]) for n in range(4)]
-    return np.array(segments)

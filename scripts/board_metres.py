@@ -30,10 +30,10 @@ from pathlib import Path
 import cv2
 import numpy as np
 
-from ismb_lab.camera import StereoCamera, load_camera
-from ismb_lab.datasets import CHESSBOARD_PAIRS, opencv_samples
-from ismb_lab.rectify import load_photo
-from ismb_lab.rig import board_points, calibrate_rig, find_board, recalibrate
+from ismb_lab.cameras.camera import StereoCamera, load_camera
+from ismb_lab.images.datasets import CHESSBOARD_PAIRS, opencv_samples
+from ismb_lab.images.rectify import load_photo
+from ismb_lab.cameras.rig import board_points, calibrate_rig, find_board, recalibrate
 
 #: The rule of issue 27: at least this many board matches, this share of them on the plane.
 MIN_MATCHES, MIN_SHARE, TOLERANCE = 20, 0.90, 0.05

@@ -3,7 +3,7 @@
 Each layout (:func:`ismb_lab.scenes.object_layout`) holds two or three boxes or cylinders
 at distinct depths (at least 3 px of disparity apart) in front of a textured wall, a
 background pair without them and the truth.  Every layout goes through
-:func:`ismb_lab.depth_demo.relative_depth` -- the code path of ``ismb-lab depth`` -- with the
+:func:`ismb_lab.depth.pipeline.relative_depth` -- the code path of ``ismb-lab depth`` -- with the
 demo's defaults, the layout's ROI ``(40, 40, 240, 160)`` and the layout's window shift
 (``--shift`` on the command line; the middle of the layout's disparity range).
 
@@ -16,8 +16,8 @@ and ``2 + (n // k) % 2`` objects, so the families and object counts are balanced
 ``--families unseen`` draws from :data:`ismb_lab.scenes.UNSEEN`, a family with wider sizes,
 kinds, gaps, textures and cameras than the four, which the library does not register.
 
-Protocol.  Every choice of :mod:`ismb_lab.depth`, :mod:`ismb_lab.silhouettes` and
-:mod:`ismb_lab.depth_demo` was made on the development split (seeds ``DEV_START`` onwards,
+Protocol.  Every choice of :mod:`ismb_lab.depth.objects`, :mod:`ismb_lab.depth.outlines` and
+:mod:`ismb_lab.depth.pipeline` was made on the development split (seeds ``DEV_START`` onwards,
 of the four families and of ``unseen``).  ``--held-out`` runs the held-out split (seeds
 ``HELD_OUT_START`` onwards), drawn after those choices and run once.  The records of every
 study, with the seeds of each split and which of them are spent, are
@@ -56,10 +56,10 @@ from types import SimpleNamespace
 import cv2
 import numpy as np
 
-from ismb_lab.depth import DepthConfig
-from ismb_lab.depth_demo import DEPTH_SOLVER, layout_match_config, relative_depth
+from ismb_lab.depth.objects import DepthConfig
+from ismb_lab.depth.pipeline import DEPTH_SOLVER, layout_match_config, relative_depth
 from ismb_lab.scenes import UNSEEN, families, object_layout, register_family
-from ismb_lab.silhouettes import OutlineConfig
+from ismb_lab.depth.outlines import OutlineConfig
 
 
 DEV_START = 1000
@@ -101,7 +101,7 @@ def verdict(layout, result) -> str:
 
 def run_layout(seed: int, n: int, names=None, **kw):
     """Layout `n` of the split from `seed`, the demo's result and its verdict; `kw` go to
-    :func:`ismb_lab.depth_demo.relative_depth` (``config=``, ``solver=``, ...)."""
+    :func:`ismb_lab.depth.pipeline.relative_depth` (``config=``, ``solver=``, ...)."""
     layout = layout_of(seed, n, names)
     result = relative_depth(layout.background, layout.scene, match_config=layout_match_config(layout), **kw)
     return layout, result, verdict(layout, result)

@@ -13,8 +13,8 @@ import argparse
 import time
 from pathlib import Path
 
-from ismb_lab.evaluation import Score
-from ismb_lab.protocol import Case, Spread, format_protocol, load_manifest, protocol
+from ismb_lab.tuning.evaluation import Score
+from ismb_lab.tuning.cases import Case, Spread, format_protocol, load_manifest, protocol
 from ismb_lab.scenes import synthetic_scene
 
 ROOT = Path(__file__).resolve().parents[1]

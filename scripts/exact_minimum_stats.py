@@ -9,12 +9,12 @@ corners; Method-III (thesis parameters for synthetic scenes used in the tests) a
 
 import numpy as np
 
-from ismb_lab.annealing import anneal
-from ismb_lab.evaluation import Score, score
-from ismb_lab.exact import MAX_EXHAUSTIVE, exhaustive_minimum
-from ismb_lab.dynamics import run
-from ismb_lab.matching import MatchConfig, prepare
-from ismb_lab.methods import Params, get_method
+from ismb_lab.network.annealing import anneal
+from ismb_lab.tuning.evaluation import Score, score
+from ismb_lab.network.exact import MAX_EXHAUSTIVE, exhaustive_minimum
+from ismb_lab.network.dynamics import run
+from ismb_lab.matching.pipeline import MatchConfig, prepare
+from ismb_lab.network.methods import Params, get_method
 from ismb_lab.scenes import synthetic_scene, true_matches
 
 BASE = Params(theta_c=2.0, theta_s=24.02, lambda_c=0.5, lambda_s=2.2)

@@ -1,14 +1,14 @@
-"""How ismb_lab.depth_demo.DEPTH_PARAMS were fitted: the GA on the background pair images/lab only.
+"""How ismb_lab.depth.pipeline.DEPTH_PARAMS were fitted: the GA on the background pair images/lab only.
 
-The depth demo finds corners with ``ismb_lab.depth_demo.DEPTH_MATCH_CONFIG`` (more corners
+The depth demo finds corners with ``ismb_lab.depth.pipeline.DEPTH_MATCH_CONFIG`` (more corners
 than the thesis' 20-30, so that the small toy cars get some).  The GA (Method-III,
-``ismb_lab.tuning.tune``) fits on images/lab with its answer key, scored as
+``ismb_lab.tuning.fitness.tune``) fits on images/lab with its answer key, scored as
 ``ismb-lab tune`` scores it: fitness (4-1) ``n_c - n_e``, where a match of a corner the
 key does not list counts as an error (the key lists the corners of the default
 matcher, so the denser corners' matches must earn their place).  Each chromosome is scored over
 ``--seeds`` update orders, so that parameters working for one visiting order only
 score lower.  No toy-car scene is used.  The demo solves the energy with mean-field
-annealing (``ismb_lab.depth_demo.DEPTH_SOLVER``); the GA scores with the discrete network,
+annealing (``ismb_lab.depth.pipeline.DEPTH_SOLVER``); the GA scores with the discrete network,
 and the script also prints the fitted parameters' score under annealing.
 
     python scripts/fit_depth_params.py [--out PARAMS.json] [--generations 500] [--seed 0]
@@ -21,10 +21,10 @@ import argparse
 import time
 from pathlib import Path
 
-from ismb_lab.depth_demo import DEPTH_MATCH_CONFIG
-from ismb_lab.methods import save_params
-from ismb_lab.protocol import Case
-from ismb_lab.tuning import evaluate, to_params, tune
+from ismb_lab.depth.pipeline import DEPTH_MATCH_CONFIG
+from ismb_lab.network.methods import save_params
+from ismb_lab.tuning.cases import Case
+from ismb_lab.tuning.fitness import evaluate, to_params, tune
 
 LAB = Path(__file__).resolve().parents[1] / "images" / "lab"
 

@@ -11,8 +11,8 @@ import itertools
 
 import numpy as np
 
-from ismb_lab.matching import match, prepare
-from ismb_lab.methods import THESIS_PARAMS, Params
+from ismb_lab.matching.pipeline import match, prepare
+from ismb_lab.network.methods import THESIS_PARAMS, Params
 from ismb_lab.scenes import synthetic_scene, true_matches
 
 

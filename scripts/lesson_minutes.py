@@ -606,8 +606,8 @@ def _minutes(x: float) -> str:
 
 
 def _assignments() -> dict:
-    """``{notebook file name: nbgrader assignment id}`` of the course (``ismb_lab.course.ASSIGNMENTS``)."""
-    from ismb_lab.course import ASSIGNMENTS
+    """``{notebook file name: nbgrader assignment id}`` of the course (``ismb_lab.teaching.course.ASSIGNMENTS``)."""
+    from ismb_lab.teaching.course import ASSIGNMENTS
 
     return {name: key for key, spec in ASSIGNMENTS.items() for name in spec.notebooks}
 

@@ -1,6 +1,6 @@
 """Matching on the new scene families: the network's methods beside the peers, train on one pair.
 
-For each family of :mod:`ismb_lab.scenes.families` (contrast, repetitive, border, cameras) a set
+For each family of :func:`ismb_lab.scenes.families` (contrast, repetitive, border, cameras) a set
 of layouts is rendered (two or three objects each); the targets are every corner whose true
 partner is a detected corner; layouts with fewer than 3 targets are left out. The GA is fitted
 on one pair of each set (the first with at least 8 targets, a rule fixed before any result)
@@ -35,12 +35,12 @@ from pathlib import Path
 
 import numpy as np
 
-from ismb_lab.evaluation import score
-from ismb_lab.io import save_image
-from ismb_lab.protocol import family_cases, protocol
+from ismb_lab.tuning.evaluation import score
+from ismb_lab.images.io import save_image
+from ismb_lab.tuning.cases import family_cases, protocol
 from ismb_lab.scenes import families
-from ismb_lab.solvers import DEFAULT_SOLVER, get_solver
-from ismb_lab.targets import save_targets, targets_from_matches
+from ismb_lab.network.solvers import DEFAULT_SOLVER, get_solver
+from ismb_lab.labels.targets import save_targets, targets_from_matches
 
 DEV_START, HELD_OUT_START = 2000, 930_000
 VARIANTS = ("III:network", "NM4:anneal", "NM:network")
@@ -63,7 +63,7 @@ def solver_of(text: str):
 
 def family_sets(start: int, count: int) -> dict:
     """Every registered family's cases, the `n`-th family of :func:`~ismb_lab.scenes.families`
-    drawn from seed ``start + 100 n`` on (:func:`~ismb_lab.protocol.family_cases`)."""
+    drawn from seed ``start + 100 n`` on (:func:`~ismb_lab.tuning.cases.family_cases`)."""
     return {f: family_cases(f, start + 100 * n, count) for n, f in enumerate(families())}
 
 

@@ -30,12 +30,12 @@ import time
 import numpy as np
 from scipy.optimize import linear_sum_assignment
 
-from ismb_lab.evaluation import score
-from ismb_lab.hopfield import hopfield_form
-from ismb_lab.methods import MethodNM3, get_method, method_names, register_method
-from ismb_lab.protocol import family_cases, protocol
+from ismb_lab.tuning.evaluation import score
+from ismb_lab.network.hopfield import hopfield_form
+from ismb_lab.network.methods import MethodNM3, get_method, method_names, register_method
+from ismb_lab.tuning.cases import family_cases, protocol
 from ismb_lab.scenes import FAMILIES
-from ismb_lab.solvers import matched_neurons, one_match_per_corner, solve
+from ismb_lab.network.solvers import matched_neurons, one_match_per_corner, solve
 
 CLEANUPS = ("none", "u", "evidence", "S", "M", "dy", "drop doubled", "assignment",
             "u, S > 0", "u, S > -0.5", "u, S > -0.9", "u, M < 1.5 theta_s", "u, M < 2 theta_s")

@@ -2,9 +2,9 @@
 
 For each pair, the rig is calibrated on the other 12 (``recalibrate``), and the held-out raw
 pair goes the way ``ismb-lab match LEFT RIGHT --rig RIG.json --shift auto --roi full`` takes
-it, with no ``--n-min``/``--n-max``: :func:`ismb_lab.metric.for_camera`, then
-:func:`ismb_lab.metric.match_with_camera` with the settings the rig gives the photo
-(:func:`ismb_lab.metric.photo_config`) and the default recipe.  The matches are scored as
+it, with no ``--n-min``/``--n-max``: :func:`ismb_lab.matching.metric.for_camera`, then
+:func:`ismb_lab.matching.metric.match_with_camera` with the settings the rig gives the photo
+(:func:`ismb_lab.matching.metric.photo_config`) and the default recipe.  The matches are scored as
 ``scripts/board_metres.py`` scores them: those whose left corner lies on the board, and the
 share of them within 5% of the board's plane (``solvePnP`` on the raw left image).
 
@@ -25,15 +25,15 @@ import time
 from dataclasses import replace
 from pathlib import Path
 
-from ismb_lab.datasets import CHESSBOARD_PAIRS, opencv_samples
-from ismb_lab.io import load_pair
-from ismb_lab.matching import MatchConfig
-from ismb_lab.methods import DEFAULT_METHOD
-from ismb_lab.metric import for_camera, match_points, match_with_camera, photo_config
-from ismb_lab.recipe import Recipe
-from ismb_lab.rectify import load_photo
-from ismb_lab.rig import calibrate_rig, recalibrate
-from ismb_lab.solvers import DEFAULT_SOLVER
+from ismb_lab.images.datasets import CHESSBOARD_PAIRS, opencv_samples
+from ismb_lab.images.io import load_pair
+from ismb_lab.matching.pipeline import MatchConfig
+from ismb_lab.network.methods import DEFAULT_METHOD
+from ismb_lab.matching.metric import for_camera, match_points, match_with_camera, photo_config
+from ismb_lab.matching.recipe import Recipe
+from ismb_lab.images.rectify import load_photo
+from ismb_lab.cameras.rig import calibrate_rig, recalibrate
+from ismb_lab.network.solvers import DEFAULT_SOLVER
 
 
 def _board_metres():

@@ -16,7 +16,7 @@ from pathlib import Path
 
 import pytest
 
-from ismb_lab.datasets import SampleDataMissing, opencv_samples
+from ismb_lab.images.datasets import SampleDataMissing, opencv_samples
 
 WARM = {}
 
@@ -43,17 +43,17 @@ def warm_kernels() -> dict:
     Returns ``{"cold": kernels that had no cached code before, "all": kernels}``."""
     import numpy as np
 
-    from ismb_lab._numba import cold
-    from ismb_lab.annealing import iter_annealing
-    from ismb_lab.exact import exhaustive_minimum
-    from ismb_lab.genetic import initial_population
-    from ismb_lab.hopfield import Network
-    from ismb_lab.matching import MatchConfig, prepare, warm_up
-    from ismb_lab.methods import get_method, method_names
-    from ismb_lab.params import Params
-    from ismb_lab.protocol import Case
-    from ismb_lab.solvers import get_solver, solver_names
-    from ismb_lab.tuning import Fitness, evaluate, gene_bounds
+    from ismb_lab._core.numba_cache import cold
+    from ismb_lab.network.annealing import iter_annealing
+    from ismb_lab.network.exact import exhaustive_minimum
+    from ismb_lab.tuning.genetic import initial_population
+    from ismb_lab.network.hopfield import Network
+    from ismb_lab.matching.pipeline import MatchConfig, prepare, warm_up
+    from ismb_lab.network.methods import get_method, method_names
+    from ismb_lab.network.params import Params
+    from ismb_lab.tuning.cases import Case
+    from ismb_lab.network.solvers import get_solver, solver_names
+    from ismb_lab.tuning.fitness import Fitness, evaluate, gene_bounds
 
     found = kernels()
     before = sum(cold(k) for k in found.values())

@@ -4,10 +4,10 @@ import numpy as np
 import pytest
 
 from ismb_lab import ParameterError
-from ismb_lab.annealing import anneal, iter_annealing
-from ismb_lab.exact import exhaustive_minimum
-from ismb_lab.hopfield import Network, energy, hopfield_form
-from ismb_lab.dynamics import run
+from ismb_lab.network.annealing import anneal, iter_annealing
+from ismb_lab.network.exact import exhaustive_minimum
+from ismb_lab.network.hopfield import Network, energy, hopfield_form
+from ismb_lab.network.dynamics import run
 
 
 def net_of(seed, no_match=True):

@@ -1,11 +1,11 @@
 """anneal() and iter_annealing() against the mean-field schedule written out in plain Python.
 
-:func:`textbook` runs the schedule of :mod:`ismb_lab.annealing` one neuron at a time on the
-dense ``W`` and ``I`` of :func:`ismb_lab.hopfield.hopfield_form`, with :func:`math.exp`,
+:func:`textbook` runs the schedule of :mod:`ismb_lab.network.annealing` one neuron at a time on the
+dense ``W`` and ``I`` of :func:`ismb_lab.network.hopfield.hopfield_form`, with :func:`math.exp`,
 drawing the start and every visiting order from the same generator, then rounds ``v`` at
 1/2 and polishes it with the discrete network's textbook kernel.  The compiled schedule of
-:func:`~ismb_lab.annealing.anneal` (neighbour lists, one call) and the per-temperature one of
-:func:`~ismb_lab.annealing.iter_annealing` must give the same numbers bit for bit, on random
+:func:`~ismb_lab.network.annealing.anneal` (neighbour lists, one call) and the per-temperature one of
+:func:`~ismb_lab.network.annealing.iter_annealing` must give the same numbers bit for bit, on random
 networks, on edge cases and on the networks of two committed pairs, for several seeds and
 schedules.
 """
@@ -16,9 +16,9 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from ismb_lab.annealing import anneal, iter_annealing
-from ismb_lab.dynamics import run
-from ismb_lab.hopfield import Network, energy, hopfield_form
+from ismb_lab.network.annealing import anneal, iter_annealing
+from ismb_lab.network.dynamics import run
+from ismb_lab.network.hopfield import Network, energy, hopfield_form
 
 ROOT = Path(__file__).resolve().parents[1]
 SCHEDULES = {"default": {}, "short": dict(t_start=1.0, t_end=0.05, cooling=0.8, sweeps=3),
@@ -54,9 +54,9 @@ IMAGE_NETS = ("realistic01 III", "realistic01 NM3", "synthetic NM4", "synthetic 
 @pytest.fixture(scope="module")
 def image_nets() -> dict:
     """Networks of two committed pairs, as the GA builds them."""
-    from ismb_lab.matching import prepare
-    from ismb_lab.methods import get_method
-    from ismb_lab.params import Params
+    from ismb_lab.matching.pipeline import prepare
+    from ismb_lab.network.methods import get_method
+    from ismb_lab.network.params import Params
 
     realistic = prepare(ROOT / "images/realistic/01/left.png", ROOT / "images/realistic/01/right.png").problem
     synthetic = prepare(ROOT / "images/synthetic/left.png", ROOT / "images/synthetic/right.png").problem

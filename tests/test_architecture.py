@@ -11,8 +11,8 @@ import pytest
 
 import ismb_lab
 from ismb_lab.cli import build_parser, main
-from ismb_lab.methods import MethodIII, get_method, method_names, register_method, unregister_method
-from ismb_lab.solvers import SOLVERS
+from ismb_lab.network.methods import MethodIII, get_method, method_names, register_method, unregister_method
+from ismb_lab.network.solvers import SOLVERS
 
 PACKAGE = Path(ismb_lab.__file__).parent
 IMAGES = PACKAGE.parent / "images"
@@ -81,13 +81,84 @@ def test_the_package_and_its_widgets_import_in_a_fresh_process():
 
 def test_the_import_graph_has_no_cycle():
     edges = graph()
-    assert len(edges) > 25 and "ismb_lab.protocol" in edges["ismb_lab.cli.evaluate"]
+    assert len(edges) > 25 and "ismb_lab.tuning.cases" in edges["ismb_lab.cli.evaluate"]
     assert find_cycle(edges) is None, " -> ".join(find_cycle(edges))
 
 
 def test_the_cycle_finder_finds_a_cycle():
     assert find_cycle({"a": {"b"}, "b": {"c"}, "c": {"a"}}) == ["a", "b", "c", "a"]
     assert find_cycle({"a": {"b"}, "b": set()}) is None
+
+
+#: The packages in the order the data flows through them: each imports only packages before it.
+LAYERS = ("_core", "images", "cameras", "network", "matching", "labels", "depth", "scenes", "tuning",
+          "teaching", "plotting", "widgets", "cli")
+
+
+def package_of(module: str) -> str | None:
+    """The package of a module (``ismb_lab.network.hopfield`` -> ``network``); None for ``ismb_lab``."""
+    parts = module.split(".")
+    return parts[1] if len(parts) > 1 else None
+
+
+def upward_imports(edges) -> list[str]:
+    found = []
+    for module, targets in edges.items():
+        here = package_of(module)
+        for target in targets:
+            there = package_of(target)
+            if here and there and there != here and LAYERS.index(there) > LAYERS.index(here):
+                found.append(f"{module} -> {target}")
+    return sorted(found)
+
+
+def test_every_package_has_a_layer_and_imports_only_the_layers_below_it():
+    edges = graph()
+    assert {package_of(m) for m in edges} - {None} == set(LAYERS)
+    assert not upward_imports(edges)
+
+
+def test_the_layer_check_sees_an_upward_import():
+    assert upward_imports({"ismb_lab.images.io": {"ismb_lab.network.hopfield", "ismb_lab._core.files"},
+                           "ismb_lab.cli.match": {"ismb_lab.images.io"}}) == \
+        ["ismb_lab.images.io -> ismb_lab.network.hopfield"]
+
+
+def private_crossings(path: Path, name: str) -> list[str]:
+    """Underscore names (not dunders) that module `name` at `path` imports from another package.
+    ``_core`` is the base every package shares, so its own name does not count."""
+    package = name if path.name == "__init__.py" else name.rpartition(".")[0]
+    private = lambda part: part.startswith("_") and not part.endswith("__") and part != "_core"  # noqa: E731
+    found = []
+    for node in ast.walk(ast.parse(path.read_text(encoding="utf-8"))):
+        if isinstance(node, ast.ImportFrom):
+            base = node.module or ""
+            if node.level:
+                anchor = package.split(".")[: len(package.split(".")) - node.level + 1]
+                base = ".".join(anchor + ([base] if base else []))
+            pairs = [(base, a.name) for a in node.names]
+        elif isinstance(node, ast.Import):
+            pairs = [(a.name, "") for a in node.names]
+        else:
+            continue
+        for module, imported in pairs:
+            if not module.startswith("ismb_lab.") or package_of(module) == package_of(name):
+                continue
+            if any(private(part) for part in module.split(".")[1:] + [imported]):
+                found.append(f"{name}: {module} {imported}".rstrip())
+    return found
+
+
+def test_no_private_name_crosses_a_package_boundary():
+    assert not [c for p in MODULES for c in private_crossings(p, module_name(p))]
+
+
+def test_the_private_name_check_sees_a_crossing(tmp_path):
+    module = tmp_path / "m.py"
+    module.write_text("from ..network.kernel import _solve, run_network\nfrom .._core.files import safe\n"
+                      "from .pipeline import _helper\nfrom ..depth import _grouping\n")
+    assert private_crossings(module, "ismb_lab.matching.m") == [
+        "ismb_lab.matching.m: ismb_lab.network.kernel _solve", "ismb_lab.matching.m: ismb_lab.depth _grouping"]
 
 
 def test_the_core_never_imports_pyplot_or_ipywidgets():
@@ -187,7 +258,7 @@ def test_a_method_defined_once_appears_in_match_tune_and_the_explorer(flat_metho
     assert capsys.readouterr().out.count("Method-FLAT") >= 2
 
     pytest.importorskip("ipywidgets")
-    from ismb_lab.matching import prepare
+    from ismb_lab.matching.pipeline import prepare
     from ismb_lab.widgets import ParameterExplorer
 
     explorer = ParameterExplorer(prepare(*pair))
@@ -208,7 +279,7 @@ def test_unregistered_methods_are_gone_from_the_command_line():
 # --- the command line and the library agree ---------------------------------------------
 
 def test_depth_command_writes_exactly_the_library_json(tmp_path):
-    from ismb_lab.depth_demo import relative_depth
+    from ismb_lab.depth.pipeline import relative_depth
 
     bg = [IMAGES / "lab" / "left.png", IMAGES / "lab" / "right.png"]
     cars = [IMAGES / "toy_cars" / "left.png", IMAGES / "toy_cars" / "right.png"]
@@ -230,12 +301,12 @@ def test_the_code_notebooks_and_scripts_pass_the_linter():
 
 
 #: Modules whose "III" defaults are changed on other branches (the peers' signatures, the explorer).
-_DEFAULT_METHOD_ELSEWHERE = {"ismb_lab.peers", "ismb_lab.widgets.explorer"}
+_DEFAULT_METHOD_ELSEWHERE = {"ismb_lab.matching.peers", "ismb_lab.widgets.explorer"}
 
 
 def test_the_default_method_is_declared_once():
     """No function spells the default method out: each refers to ``methods.DEFAULT_METHOD``."""
-    from ismb_lab.methods import DEFAULT_METHOD
+    from ismb_lab.network.methods import DEFAULT_METHOD
 
     spelled = []
     for path in MODULES:

@@ -8,10 +8,10 @@ import numpy as np
 import pytest
 
 from ismb_lab import ParameterError
-from ismb_lab._validation import MAX_SEED, check_number, check_rng, message
-from ismb_lab.params import Params
-from ismb_lab.camera import StereoCamera, load_camera
-from ismb_lab.targets import MAX_BYTES, MAX_PAIRS, TargetSet, load_targets
+from ismb_lab._core.validation import MAX_SEED, check_number, check_rng, message
+from ismb_lab.network.params import Params
+from ismb_lab.cameras.camera import StereoCamera, load_camera
+from ismb_lab.labels.targets import MAX_BYTES, MAX_PAIRS, TargetSet, load_targets
 
 LAB = Path(__file__).resolve().parent.parent / "images" / "lab"
 HUGE = int("9" * 400)
@@ -33,9 +33,9 @@ def test_a_message_shows_an_int_of_any_size():
 
 @pytest.mark.parametrize("seed", [2**63, 2**64, 10**30, -1])
 def test_seeds_are_bounded_by_what_the_update_order_takes(seed):
-    from ismb_lab.dynamics import run
-    from ismb_lab.matching import match, prepare
-    from ismb_lab.methods import get_method
+    from ismb_lab.network.dynamics import run
+    from ismb_lab.matching.pipeline import match, prepare
+    from ismb_lab.network.methods import get_method
 
     with pytest.raises(ParameterError, match=f"'seed' parameter of match.*{MAX_SEED}"):
         match(LAB / "left.png", LAB / "right.png", seed=seed)
@@ -47,7 +47,7 @@ def test_seeds_are_bounded_by_what_the_update_order_takes(seed):
 
 
 def test_the_largest_seed_runs():
-    from ismb_lab.matching import match
+    from ismb_lab.matching.pipeline import match
 
     assert match(LAB / "left.png", LAB / "right.png", seed=MAX_SEED).seed == MAX_SEED
     assert check_rng(MAX_SEED).integers(10) >= 0
@@ -126,7 +126,7 @@ def test_a_degenerate_rig_is_refused_naming_the_field(tmp_path, change, field):
 
 
 def test_a_bound_of_400_digits_is_shown_by_its_size():
-    from ismb_lab.matching import MatchConfig
+    from ismb_lab.matching.pipeline import MatchConfig
 
     with pytest.raises(ParameterError) as info:
         MatchConfig(n_min=HUGE)
@@ -134,7 +134,7 @@ def test_a_bound_of_400_digits_is_shown_by_its_size():
 
 
 def test_family_cases_refuses_an_empty_split_and_bad_counts():
-    from ismb_lab.protocol import family_cases
+    from ismb_lab.tuning.cases import family_cases
 
     with pytest.raises(ValueError, match=r"'count'.*family_cases.*>= 1.*Got 0"):
         family_cases("cameras", 2300, 0)
@@ -143,7 +143,7 @@ def test_family_cases_refuses_an_empty_split_and_bad_counts():
 
 
 def test_ga_population_has_an_upper_bound():
-    from ismb_lab.genetic import MAX_POPULATION, GAConfig
+    from ismb_lab.tuning.genetic import MAX_POPULATION, GAConfig
 
     assert GAConfig(population=MAX_POPULATION).population == MAX_POPULATION
     with pytest.raises(ValueError, match=r"'population'.*GAConfig.*<= 100000.*401 digits"):

@@ -8,17 +8,17 @@ from pathlib import Path
 
 import pytest
 
-from ismb_lab.classroom import pool, save_merging, targets_path, user_name
+from ismb_lab.labels.classroom import pool, save_merging, targets_path, user_name
 from ismb_lab.cli import main
-from ismb_lab.targets import TargetSet, load_targets, save_targets
+from ismb_lab.labels.targets import TargetSet, load_targets, save_targets
 
 IMAGES = Path(__file__).resolve().parents[1] / "images"
 
 CYCLES = """
 import sys
 from pathlib import Path
-from ismb_lab.classroom import save_merging
-from ismb_lab.targets import TargetSet, load_targets
+from ismb_lab.labels.classroom import save_merging
+from ismb_lab.labels.targets import TargetSet, load_targets
 
 path, worker, cycles, reload = Path(sys.argv[1]), int(sys.argv[2]), int(sys.argv[3]), sys.argv[4] == "load"
 mine = base = None
@@ -67,7 +67,7 @@ def test_a_notebook_finds_the_labels_saved_in_the_released_labels_folder(tmp_pat
     """nbgrader's release: 04 is the assignment "labels", 05 and 06 have folders of their own
     beside it (``~/labels/``, ``~/05-explorer/``, ``~/06-genetic/``).  Labels saved by the
     labeller in ``labels/`` are found with ``targets_path(pair)`` in theirs (06 trains on them)."""
-    from ismb_lab.course import ASSIGNMENTS
+    from ismb_lab.teaching.course import ASSIGNMENTS
     from ismb_lab.widgets.labeler import TargetLabeler
 
     monkeypatch.setenv("JUPYTERHUB_USER", "ann")

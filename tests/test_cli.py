@@ -118,9 +118,9 @@ def test_help_lists_every_option():
 @pytest.fixture(scope="module")
 def targets(pair, tmp_path_factory):
     """Ground-truth targets of the pair, in the labeller's file format, with image hashes."""
-    from ismb_lab.matching import prepare
+    from ismb_lab.matching.pipeline import prepare
     from ismb_lab.scenes import true_matches
-    from ismb_lab.targets import save_targets, targets_from_matches
+    from ismb_lab.labels.targets import save_targets, targets_from_matches
 
     prepared = prepare(*pair)
     truth = true_matches(synthetic_scene(seed=3), prepared.problem.left_xy, prepared.problem.right_xy)
@@ -150,8 +150,8 @@ def test_tune_writes_what_match_reads(pair, targets, tmp_path, capsys):
 
 
 def test_tune_scores_each_chromosome_over_fit_seeds_as_the_library_does(pair, targets, tmp_path):
-    from ismb_lab.protocol import Case
-    from ismb_lab.tuning import to_params, tune
+    from ismb_lab.tuning.cases import Case
+    from ismb_lab.tuning.fitness import to_params, tune
 
     out = tmp_path / "p.json"
     assert main(["tune", *map(str, pair), str(targets), "--generations", "6", "--seed", "3",
@@ -176,9 +176,9 @@ def test_tune_is_reproducible_and_the_seed_matters(pair, targets, tmp_path):
 
 
 def test_tune_interrupted_still_writes_the_best_so_far(pair, targets, tmp_path, monkeypatch, capsys):
-    import ismb_lab.tuning
+    import ismb_lab.tuning.fitness
 
-    real_tune = ismb_lab.tuning.tune
+    real_tune = ismb_lab.tuning.fitness.tune
 
     def interrupted_after_three(*args, **kwargs):
         for n, record in enumerate(real_tune(*args, **kwargs)):
@@ -186,7 +186,7 @@ def test_tune_interrupted_still_writes_the_best_so_far(pair, targets, tmp_path, 
                 raise KeyboardInterrupt   # what Ctrl-C raises in the main thread
             yield record
 
-    monkeypatch.setattr(ismb_lab.tuning, "tune", interrupted_after_three)
+    monkeypatch.setattr(ismb_lab.tuning.fitness, "tune", interrupted_after_three)
     out = tmp_path / "params.json"
     code = main(["tune", *map(str, pair), str(targets), "--generations", "400", "--out", str(out)])
     assert code == 130

@@ -134,7 +134,7 @@ def test_missing_file_exits_2(tmp_path, capsys):
 
 
 def test_the_command_agrees_with_the_library_demo_and_can_use_the_plain_network(tmp_path):
-    from ismb_lab.depth_demo import relative_depth
+    from ismb_lab.depth.pipeline import relative_depth
 
     out, plain = tmp_path / "d.json", tmp_path / "n.json"
     assert main(["depth", *map(str, BG + CARS), "--json", str(out)]) == 0

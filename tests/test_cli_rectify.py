@@ -7,7 +7,7 @@ import sys
 import pytest
 
 from ismb_lab.cli import main
-from ismb_lab.datasets import CHESSBOARD_PAIRS
+from ismb_lab.images.datasets import CHESSBOARD_PAIRS
 
 
 @pytest.fixture(scope="session")
@@ -79,8 +79,8 @@ def test_calibrate_refusals(data, tmp_path):
 def test_shift_auto_measures_the_window_and_records_it(data, tmp_path):
     import numpy as np
 
-    from ismb_lab.datasets import aloe
-    from ismb_lab.matching import MatchConfig, prepare
+    from ismb_lab.images.datasets import aloe
+    from ismb_lab.matching.pipeline import MatchConfig, prepare
 
     pair = aloe(320)
     config = prepare(pair.left, pair.right, MatchConfig(shift="auto")).config
@@ -105,7 +105,7 @@ def test_shift_auto_needs_matches():
     import pytest as _pytest
 
     from ismb_lab import ParameterError
-    from ismb_lab.matching import MatchConfig, prepare
+    from ismb_lab.matching.pipeline import MatchConfig, prepare
 
     flat = np.full((120, 160), 80.0)
     flat[40:80, 50:110] = np.random.default_rng(0).uniform(0, 255, (40, 60))
@@ -121,8 +121,8 @@ def test_depth_takes_f_and_b_from_a_rig_of_its_size(data, tmp_path):
 
     import cv2
 
-    from ismb_lab.rig import calibrate_rig
-    from ismb_lab.datasets import chessboard_pairs
+    from ismb_lab.cameras.rig import calibrate_rig
+    from ismb_lab.images.datasets import chessboard_pairs
 
     rig = calibrate_rig(chessboard_pairs()[:5])
     (tmp_path / "rig.json").write_text(rig.to_json())

@@ -7,9 +7,9 @@ import sys
 import numpy as np
 import pytest
 
-from ismb_lab.camera import load_camera
-from ismb_lab.datasets import CHESSBOARD_PAIRS
-from ismb_lab.rig import calibrate_rig, recalibrate
+from ismb_lab.cameras.camera import load_camera
+from ismb_lab.images.datasets import CHESSBOARD_PAIRS
+from ismb_lab.cameras.rig import calibrate_rig, recalibrate
 
 
 def cli(*args):
@@ -109,7 +109,7 @@ def test_held_out_boards_get_their_plane_through_the_command_line(opencv_data, l
 def test_the_plane_score_counts_only_board_matches_and_fails_wrong_depths(opencv_data, full, load_script):
     script = load_script("board_metres")
     camera = recalibrate(full, ["14"])
-    from ismb_lab.rectify import load_photo
+    from ismb_lab.images.rectify import load_photo
     raw = load_photo(opencv_data / "left14.jpg")
     normal, c, outline = script.board_plane(camera, raw)
     centre = outline.mean(axis=0)

@@ -133,7 +133,7 @@ def test_an_input_is_refused_even_with_force(lab, capsys):
 
 
 def test_the_folder_is_fsynced_after_the_rename(tmp_path, monkeypatch):
-    from ismb_lab._files import atomic_write_bytes
+    from ismb_lab._core.files import atomic_write_bytes
 
     synced = []
     real_fsync = os.fsync
@@ -148,12 +148,12 @@ def test_the_folder_is_fsynced_after_the_rename(tmp_path, monkeypatch):
 
 
 def test_an_output_is_checked_before_any_work(lab, tmp_path, monkeypatch, capsys):
-    import ismb_lab.matching
+    import ismb_lab.matching.pipeline
 
     def no_work(*args, **kwargs):
         raise AssertionError("the work started before the output was checked")
 
-    monkeypatch.setattr(ismb_lab.matching, "prepare", no_work)
+    monkeypatch.setattr(ismb_lab.matching.pipeline, "prepare", no_work)
     code = main(["tune", *map(str, lab), "--out", str(tmp_path / "nodir" / "p.json")])
     err = capsys.readouterr().err
     assert code == 2 and "nodir/p.json" in err and ".tmp" not in err and ".probe" not in err
@@ -161,7 +161,7 @@ def test_an_output_is_checked_before_any_work(lab, tmp_path, monkeypatch, capsys
 
 
 def test_check_output_names_the_rule(tmp_path):
-    from ismb_lab._files import OutputError, check_output
+    from ismb_lab._core.files import OutputError, check_output
 
     fifo = tmp_path / "f"
     os.mkfifo(fifo)
@@ -211,9 +211,9 @@ def test_a_signal_during_start_up_exits_130_with_one_line(cli, lab, hard_targets
 
 def test_a_swallowed_ctrl_c_still_stops_tune(lab, hard_targets, tmp_path, monkeypatch, capsys):
     """C code (numba's dispatcher) can swallow the KeyboardInterrupt; the next generation stops."""
-    import ismb_lab.tuning
+    import ismb_lab.tuning.fitness
 
-    real_tune = ismb_lab.tuning.tune
+    real_tune = ismb_lab.tuning.fitness.tune
 
     @functools.wraps(real_tune)   # the same signature, whose defaults the command reads
     def swallowing(*args, **kwargs):
@@ -226,7 +226,7 @@ def test_a_swallowed_ctrl_c_still_stops_tune(lab, hard_targets, tmp_path, monkey
                     pass   # lost, as inside a C extension
             yield record
 
-    monkeypatch.setattr(ismb_lab.tuning, "tune", swallowing)
+    monkeypatch.setattr(ismb_lab.tuning.fitness, "tune", swallowing)
     out = tmp_path / "p.json"
     # as from a terminal: a run started as a background job inherits SIGINT ignored, which the
     # command rightly leaves ignored (tests/test_cli_signals.py)
@@ -320,19 +320,19 @@ def test_a_match_bias_the_method_does_not_run_is_refused_and_nm_keeps_it(lab, tm
 
 
 def test_memory_error_is_one_line(lab, monkeypatch, capsys):
-    import ismb_lab.matching
+    import ismb_lab.matching.pipeline
 
     def out_of_memory(*args, **kwargs):
         raise MemoryError
 
-    monkeypatch.setattr(ismb_lab.matching, "prepare", out_of_memory)
+    monkeypatch.setattr(ismb_lab.matching.pipeline, "prepare", out_of_memory)
     assert main(["match", *map(str, lab[:2])]) == 2
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and "out of memory" in err
 
 
 def test_the_pixel_limit_reads_the_header_and_can_be_raised(tmp_path, monkeypatch):
-    from ismb_lab.io import load_image
+    from ismb_lab.images.io import load_image
 
     path = tmp_path / "wide.png"
     import cv2
@@ -347,8 +347,8 @@ def test_the_pixel_limit_reads_the_header_and_can_be_raised(tmp_path, monkeypatc
 def test_help_lists_every_limit():
     from ismb_lab.cli import build_parser
     from ismb_lab.cli._guard import LIMITS
-    from ismb_lab.io import MAX_PIXELS, MOST_PIXELS
-    from ismb_lab.targets import MAX_BYTES, MAX_PAIRS
+    from ismb_lab.images.io import MAX_PIXELS, MOST_PIXELS
+    from ismb_lab.labels.targets import MAX_BYTES, MAX_PAIRS
 
     epilog = " ".join(build_parser().epilog.split())
     assert f"<= {MAX_PIXELS} (ISMB_LAB_MAX_PIXELS, at most {MOST_PIXELS})" in epilog
@@ -482,7 +482,7 @@ def test_every_limit_variable_is_a_bounded_whole_number(monkeypatch, value):
 # --- render replaces only the regular files it writes ---
 
 def test_render_knows_every_file_it_writes_before_rendering():
-    from ismb_lab.gallery import gallery_files
+    from ismb_lab.scenes.gallery import gallery_files
 
     images = ROOT / "images"
     committed = {p for p in images.rglob("*") if p.is_file() and p != images / "README.md"}
@@ -490,9 +490,9 @@ def test_render_knows_every_file_it_writes_before_rendering():
 
 
 def test_render_replaces_its_regular_files_and_refuses_a_device(tmp_path):
-    from ismb_lab._files import OutputError
+    from ismb_lab._core.files import OutputError
     from ismb_lab.cli.render import check_outputs
-    from ismb_lab.gallery import gallery_files
+    from ismb_lab.scenes.gallery import gallery_files
 
     for path in gallery_files(tmp_path):
         path.parent.mkdir(parents=True, exist_ok=True)

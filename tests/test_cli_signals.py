@@ -16,10 +16,10 @@ from pathlib import Path
 
 import pytest
 
-import ismb_lab._files
+import ismb_lab._core.files
 import ismb_lab.cli.evaluate  # noqa: F401  (imported before any test wraps a function of tuning,
-import ismb_lab.cli.tune  # noqa: F401     which ismb_lab.protocol binds by name at its import)
-import ismb_lab.tuning
+import ismb_lab.cli.tune  # noqa: F401     which ismb_lab.tuning.cases binds by name at its import)
+import ismb_lab.tuning.fitness
 from ismb_lab.cli import main
 
 
@@ -66,7 +66,7 @@ def signal_on_call(monkeypatch, owner, name, n, sig=signal.SIGTERM, like_numba=F
 
 def signal_after_generation(monkeypatch, n, sig=signal.SIGTERM):
     """Send `sig` when the GA is asked for the generation after the `n`-th (n = 0: before the first)."""
-    real = ismb_lab.tuning.tune
+    real = ismb_lab.tuning.fitness.tune
 
     @functools.wraps(real)
     def tune(*args, **kwargs):
@@ -76,7 +76,7 @@ def signal_after_generation(monkeypatch, n, sig=signal.SIGTERM):
         signal.raise_signal(sig)
         yield from records
 
-    monkeypatch.setattr(ismb_lab.tuning, "tune", tune)
+    monkeypatch.setattr(ismb_lab.tuning.fitness, "tune", tune)
 
 
 def tune(lab, out, *options):
@@ -125,7 +125,7 @@ def test_between_generations_the_best_so_far_is_written(lab, tmp_path, monkeypat
 @pytest.mark.parametrize("call", [1, 3])   # the first generation's network runs; generation 3's
 def test_a_signal_inside_the_network_run_keeps_the_best_so_far(lab, tmp_path, monkeypatch, capsys, call):
     # a generation's networks run in one compiled call per case (the lab is one case)
-    calls = signal_on_call(monkeypatch, ismb_lab.tuning, "_fitness_runs", call, like_numba=True)
+    calls = signal_on_call(monkeypatch, ismb_lab.tuning.fitness, "fitness_runs", call, like_numba=True)
     out = tmp_path / "params.json"
     assert tune(lab, out, "--generations", "400") == 128 + signal.SIGTERM
     assert len(calls) == call   # the GA stopped at the signal
@@ -140,7 +140,7 @@ def test_a_signal_inside_the_network_run_keeps_the_best_so_far(lab, tmp_path, mo
 
 def test_a_signal_during_the_final_write_lets_it_finish(lab, tmp_path, monkeypatch, capsys):
     out = tmp_path / "params.json"
-    calls = signal_on_call(monkeypatch, ismb_lab._files.os, "replace", 1)
+    calls = signal_on_call(monkeypatch, ismb_lab._core.files.os, "replace", 1)
     assert tune(lab, out, "--generations", "3") == 128 + signal.SIGTERM
     assert len(calls) == 1 and Path(calls[0][1]) == out
     line = one_line(capsys)
@@ -152,7 +152,7 @@ def test_a_signal_during_the_final_write_lets_it_finish(lab, tmp_path, monkeypat
 
 def test_a_second_signal_during_the_best_so_far_write_lets_it_finish(lab, tmp_path, monkeypatch, capsys):
     signal_after_generation(monkeypatch, 2, signal.SIGINT)
-    signal_on_call(monkeypatch, ismb_lab._files.os, "replace", 1, signal.SIGTERM)
+    signal_on_call(monkeypatch, ismb_lab._core.files.os, "replace", 1, signal.SIGTERM)
     out = tmp_path / "params.json"
     assert tune(lab, out, "--generations", "400") == 130   # the first signal's code
     line = one_line(capsys)
@@ -162,7 +162,7 @@ def test_a_second_signal_during_the_best_so_far_write_lets_it_finish(lab, tmp_pa
 
 def test_a_signal_after_the_write_says_the_file_is_there(lab, tmp_path, monkeypatch, capsys):
     out = tmp_path / "params.json"
-    signal_on_call(monkeypatch, ismb_lab.tuning, "evaluate", 1)   # the summary's own network run
+    signal_on_call(monkeypatch, ismb_lab.tuning.fitness, "evaluate", 1)   # the summary's own network run
     assert tune(lab, out, "--generations", "2") == 128 + signal.SIGTERM
     assert f"the parameters were written to {out}" in one_line(capsys)
     assert json.loads(out.read_text())["interrupted"] is False
@@ -181,7 +181,7 @@ def evaluate(manifest, out):
 @pytest.mark.parametrize("call", [1, 3])   # the first generation's network runs; generation 3's
 def test_evaluate_signalled_inside_the_network_run_keeps_the_best_so_far(manifest, tmp_path, monkeypatch,
                                                                         capsys, call):
-    signal_on_call(monkeypatch, ismb_lab.tuning, "_fitness_runs", call, like_numba=True)
+    signal_on_call(monkeypatch, ismb_lab.tuning.fitness, "fitness_runs", call, like_numba=True)
     out = tmp_path / "report.json"
     assert evaluate(manifest, out) == 128 + signal.SIGTERM
     line = one_line(capsys)
@@ -197,7 +197,7 @@ def test_evaluate_signalled_inside_the_network_run_keeps_the_best_so_far(manifes
 
 def test_evaluate_signalled_while_writing_its_report_finishes_it(manifest, tmp_path, monkeypatch, capsys):
     out = tmp_path / "report.json"
-    signal_on_call(monkeypatch, ismb_lab._files.os, "replace", 1)
+    signal_on_call(monkeypatch, ismb_lab._core.files.os, "replace", 1)
     assert main(["evaluate", manifest, "--jobs", "1", "--seeds", "1", "--population", "6",
                  "--generations", "2", "--json", str(out)]) == 128 + signal.SIGTERM
     assert f"the report is complete and written to {out}" in one_line(capsys)

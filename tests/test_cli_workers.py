@@ -3,7 +3,7 @@
 A worker is recognised in /proc: a child of the command whose command line runs
 multiprocessing's ``spawn_main`` (the pool's resource tracker is a child too, and
 ends by itself when its pipe closes).  A worker is ready once it ignores SIGINT, the
-last step of its start (:func:`ismb_lab.protocol._start_worker`), so the signal is
+last step of its start (:func:`ismb_lab.tuning.cases._start_worker`), so the signal is
 sent when the workers are known to have started: no timing.
 """
 
@@ -86,7 +86,7 @@ def kill_all(pids) -> None:
 
 def test_leaving_the_pool_by_an_interrupt_ends_its_workers():
     """In a notebook the process lives on after Ctrl-C: the workers must not work on."""
-    from ismb_lab.protocol import _workers
+    from ismb_lab.tuning.cases import _workers
 
     workers = []
     try:

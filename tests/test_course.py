@@ -10,10 +10,10 @@ from pathlib import Path
 
 import pytest
 
-from ismb_lab.classroom import collected, pool, save_merging
+from ismb_lab.labels.classroom import collected, pool, save_merging
 from ismb_lab.cli import main
-from ismb_lab.protocol import Case
-from ismb_lab.targets import TargetSet, load_targets, save_targets
+from ismb_lab.tuning.cases import Case
+from ismb_lab.labels.targets import TargetSet, load_targets, save_targets
 
 IMAGES = Path(__file__).resolve().parents[1] / "images"
 LAB = IMAGES / "lab"
@@ -183,7 +183,7 @@ def test_a_lock_file_is_private_to_its_owner(tmp_path):
 
 
 def test_the_assignment_source_is_generated_from_the_notebook(tmp_path):
-    from ismb_lab.course import course_images, make_source
+    from ismb_lab.teaching.course import course_images, make_source
 
     folder = make_source(tmp_path / "course")
     # the notebook's cells, but for its paths into ../images/, which are the assignment's own
@@ -213,7 +213,7 @@ def test_the_commands_a_notebook_prints_name_the_assignments_own_files(tmp_path)
     """``ismb-lab evaluate ../images/realistic/manifest.json`` in notebooks/ is
     ``ismb-lab evaluate images/realistic/manifest.json`` in the assignment, which holds it; a
     path named only in the text is copied too, and prose and other paths are left alone."""
-    from ismb_lab.course import make_source
+    from ismb_lab.teaching.course import make_source
 
     repo = tmp_path / "repo"
     (repo / "notebooks").mkdir(parents=True)
@@ -239,7 +239,7 @@ def test_the_commands_a_notebook_prints_name_the_assignments_own_files(tmp_path)
 def test_a_submission_is_private_and_filed_under_its_owner(tmp_path):
     import pwd
 
-    from ismb_lab.course_exchange import OwnerCollect, PrivateSubmit
+    from ismb_lab.teaching.exchange import OwnerCollect, PrivateSubmit
 
     work = tmp_path / "sub" / "labels"
     work.mkdir(parents=True)

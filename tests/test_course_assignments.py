@@ -5,7 +5,7 @@ versions that hold no solution, and ``nbgrader autograde`` gives the solutions f
 Each released student notebook runs unsolved to its end in its assignment's folder, as a
 student who has solved nothing would run it, and every command its text prints works as
 printed there (:func:`printed_commands` says which spans are commands and where each runs).
-:func:`ismb_lab.course.student_notebook` (the hub's copy, run from ``notebooks/`` by
+:func:`ismb_lab.teaching.course.student_notebook` (the hub's copy, run from ``notebooks/`` by
 tests/notebooks/test_notebooks.py's ``test_runs_headless``) is checked here to be what
 generate_assignment writes, apart from the paths into ``images/`` and ``manifests/``.
 """
@@ -28,8 +28,8 @@ import pytest
 
 pytest.importorskip("nbgrader")
 
-from ismb_lab import exercises  # noqa: E402
-from ismb_lab.course import ASSIGNMENTS, CODE_STUB, _local_paths, student_notebook  # noqa: E402
+from ismb_lab.teaching import exercises  # noqa: E402
+from ismb_lab.teaching.course import ASSIGNMENTS, CODE_STUB, _local_paths, student_notebook  # noqa: E402
 
 ROOT = Path(__file__).resolve().parents[1]
 EXERCISES = sorted(name for name in ASSIGNMENTS if name != "labels")
@@ -280,10 +280,10 @@ def _repo_commands():
 def _save_labels(folder: Path) -> Path:
     """What the labeller's Save leaves in the assignment: the student's targets file, here
     five pairs of the answer key."""
-    from ismb_lab.classroom import targets_path
-    from ismb_lab.course import course_images
-    from ismb_lab.matching import prepare
-    from ismb_lab.targets import load_targets, snap
+    from ismb_lab.labels.classroom import targets_path
+    from ismb_lab.teaching.course import course_images
+    from ismb_lab.matching.pipeline import prepare
+    from ismb_lab.labels.targets import load_targets, snap
     from ismb_lab.widgets.labeler import LabelModel
 
     images = course_images("synthetic", folder)
@@ -332,7 +332,7 @@ def test_every_printed_command_works_in_the_assignment_and_in_notebooks(course, 
     in printed order; an assignment whose text has the student submit is fetched through
     the exchange, and the labeller's Save is made first when the teacher's commands pool it.
     The same commands as the repository's notebook prints them name files that exist from
-    ``notebooks/``: the two differ only in those paths (ismb_lab.course)."""
+    ``notebooks/``: the two differ only in those paths (ismb_lab.teaching.course)."""
     student = notebook(course, "release", name)
     commands = printed_commands(student)
     env = course_env(course)

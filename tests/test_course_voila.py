@@ -9,8 +9,8 @@ matplotlib.use("Agg", force=True)
 
 import pytest  # noqa: E402
 
-from ismb_lab.matching import prepare  # noqa: E402
-from ismb_lab.targets import load_targets  # noqa: E402
+from ismb_lab.matching.pipeline import prepare  # noqa: E402
+from ismb_lab.labels.targets import load_targets  # noqa: E402
 from ismb_lab.widgets import TargetLabeler  # noqa: E402
 
 SYNTHETIC = Path(__file__).resolve().parents[1] / "images" / "synthetic"

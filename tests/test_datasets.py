@@ -4,9 +4,9 @@ import numpy as np
 import pytest
 
 from ismb_lab import ParameterError
-from ismb_lab.datasets import MOTORCYCLE_ROIS, ground_truth_pairs, motorcycle
-from ismb_lab.matching import MatchConfig, prepare
-from ismb_lab.protocol import load_manifest
+from ismb_lab.images.datasets import MOTORCYCLE_ROIS, ground_truth_pairs, motorcycle
+from ismb_lab.matching.pipeline import MatchConfig, prepare
+from ismb_lab.tuning.cases import load_manifest
 
 MANIFEST = __import__("pathlib").Path(__file__).parents[1] / "manifests" / "middlebury.json"
 
@@ -81,7 +81,7 @@ def test_the_middlebury_manifest_gives_four_labelled_rois():
 # --- OpenCV's sample photos (Debian's opencv-doc, which CI installs) -------------------------
 import os  # noqa: E402
 
-from ismb_lab.datasets import (OPENCV_DATA_VARIABLE, SampleDataMissing, aloe, books,  # noqa: E402
+from ismb_lab.images.datasets import (OPENCV_DATA_VARIABLE, SampleDataMissing, aloe, books,  # noqa: E402
                                chessboard_pairs, opencv_samples)
 
 

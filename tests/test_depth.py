@@ -7,8 +7,8 @@ import numpy as np
 import pytest
 
 from ismb_lab import ParameterError, ParameterTypeError
-from ismb_lab.depth import DepthConfig, depth_from_matches, metric_depth
-from ismb_lab.depth_demo import (
+from ismb_lab.depth.objects import DepthConfig, depth_from_matches, metric_depth
+from ismb_lab.depth.pipeline import (
     DEPTH_MATCH_CONFIG,
     DEPTH_PARAMS,
     changed_roi,
@@ -19,11 +19,11 @@ from ismb_lab.depth_demo import (
     relative_depth,
     scene_match_config,
 )
-from ismb_lab.features import resolve_roi
-from ismb_lab.io import load_pair
-from ismb_lab.matching import match, prepare
+from ismb_lab.images.features import resolve_roi
+from ismb_lab.images.io import load_pair
+from ismb_lab.matching.pipeline import match, prepare
 from ismb_lab.scenes import lab_scene, toy_car_scene
-from ismb_lab.silhouettes import Silhouettes
+from ismb_lab.depth.outlines import Silhouettes
 
 IMAGES = __import__("pathlib").Path(__file__).resolve().parent.parent / "images"
 
@@ -86,7 +86,7 @@ def test_committed_scene_metric_depth_of_each_car_within_ten_percent(committed):
 # (DEPTH_PARAMS come from images/lab alone; the layouts 100-139 served for development).
 # The first 20 were checked once with the thesis' ROI for the scene (19 right; in 48274
 # the far car had a single correct match) and again after the change box of
-# ismb_lab.depth.changed_roi was chosen on the development layouts; the second 20 were
+# ismb_lab.depth.pipeline.changed_roi was chosen on the development layouts; the second 20 were
 # drawn after that choice and checked once.  Measured with the demo's defaults: 40 of 40
 # right here (supersample 1); rendered at the committed images' supersample 2, 39 of 40
 # (in 35318 the near car, 1.00 m against 1.15 m, kept no object).

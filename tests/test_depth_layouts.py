@@ -37,7 +37,7 @@ def test_twelve_fixed_layouts_rank_as_measured(load_script):
 def test_verdicts_name_what_went_wrong(load_script):
     from dataclasses import replace
 
-    from ismb_lab.depth import DepthObject, metric_depth
+    from ismb_lab.depth.objects import DepthObject, metric_depth
 
     script = load_script("depth_layouts")
     layout, result, _ = script.run_layout(script.DEV_START, 0)

@@ -6,13 +6,13 @@ import re
 import numpy as np
 import pytest
 
-from ismb_lab.evaluation import Score, Scorer, score
-from ismb_lab.matching import Prepared
-from ismb_lab.methods import Params, build_problem
-from ismb_lab.protocol import Case, format_protocol, protocol
+from ismb_lab.tuning.evaluation import Score, Scorer, score
+from ismb_lab.matching.pipeline import Prepared
+from ismb_lab.network.methods import Params, build_problem
+from ismb_lab.tuning.cases import Case, format_protocol, protocol
 from ismb_lab import ParameterError
 from ismb_lab.scenes import synthetic_scene
-from ismb_lab.tuning import Fitness, evaluate, to_chromosome
+from ismb_lab.tuning.fitness import Fitness, evaluate, to_chromosome
 
 
 @pytest.mark.parametrize("pairs, targets, unknown, expected", [
@@ -182,8 +182,8 @@ def case7(rendered):
 
 @pytest.mark.parametrize("method", ["I", "II", "III", "NM", "NM4"])
 def test_evaluate_is_the_score_of_to_matches_pairs_for_every_method(case7, method):
-    from ismb_lab.methods import get_method
-    from ismb_lab.solvers import solve, to_matches
+    from ismb_lab.network.methods import get_method
+    from ismb_lab.network.solvers import solve, to_matches
 
     case = case7
     problem, m = case.prepared.problem, get_method(method)
@@ -198,7 +198,7 @@ def test_evaluate_is_the_score_of_to_matches_pairs_for_every_method(case7, metho
 
 
 def test_a_postprocess_that_invents_neurons_is_named():
-    from ismb_lab.methods import MethodIII, register_method, unregister_method
+    from ismb_lab.network.methods import MethodIII, register_method, unregister_method
 
     class Stray(MethodIII):
         name, description = "STRAY", "keeps a neuron that does not exist"

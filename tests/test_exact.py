@@ -6,9 +6,9 @@ import numpy as np
 import pytest
 
 from ismb_lab import ParameterError
-from ismb_lab.exact import MAX_EXHAUSTIVE, exhaustive_minimum, milp_minimum
-from ismb_lab.hopfield import Network, energy
-from ismb_lab.dynamics import run
+from ismb_lab.network.exact import MAX_EXHAUSTIVE, exhaustive_minimum, milp_minimum
+from ismb_lab.network.hopfield import Network, energy
+from ismb_lab.network.dynamics import run
 
 
 def random_net(rng, n_left, n_right, p_candidate, no_match):

@@ -4,12 +4,12 @@ import numpy as np
 import pytest
 
 from ismb_lab import ParameterError, ParameterTypeError
-from ismb_lab.exercises import (check_depth_range, check_disparity, check_energy_derivation, check_error_kinds,
+from ismb_lab.teaching.exercises import (check_depth_range, check_disparity, check_energy_derivation, check_error_kinds,
                                 check_fitness, check_harris_response, check_hopfield_form, check_transfer,
                                 random_network)
-from ismb_lab.features import harris_response, image_gradients, structure_tensor
-from ismb_lab.hopfield import Network, hopfield_form
-from ismb_lab.similarity import transfer
+from ismb_lab.images.features import harris_response, image_gradients, structure_tensor
+from ismb_lab.network.hopfield import Network, hopfield_form
+from ismb_lab.network.similarity import transfer
 
 
 @pytest.fixture
@@ -31,7 +31,7 @@ def test_energy_correct(net):
 
 def test_energy_correct_agrees_with_brute_force(net):
     """A W, I derived independently from (3-15) by finite differences passes."""
-    from ismb_lab.hopfield import energy
+    from ismb_lab.network.hopfield import energy
 
     n = net.n_neurons
     E = lambda y: energy(net, np.array(y, dtype=np.uint8))  # noqa: E731
@@ -277,7 +277,7 @@ ANSWERS = {
 def test_a_checks_docstring_does_not_state_the_answer(name):
     import inspect
 
-    from ismb_lab import exercises
+    from ismb_lab.teaching import exercises
 
     doc = re.sub(r"\s+", "", inspect.getdoc(getattr(exercises, name)))
     assert [a for a in ANSWERS[name] if a in doc] == [], f"{name}'s docstring states the answer"
@@ -287,7 +287,7 @@ def test_a_checks_docstring_does_not_state_the_answer(name):
 
 def _exact_form(net):
     """W and I built from the energy (3-15) alone, by finite differences (no library derivation)."""
-    from ismb_lab.hopfield import energy
+    from ismb_lab.network.hopfield import energy
 
     n = net.n_neurons
     E = lambda y: energy(net, np.array(y, dtype=np.uint8))  # noqa: E731

@@ -12,10 +12,10 @@ import numpy as np
 import pytest
 
 from ismb_lab import ParameterError
-from ismb_lab.camera import StereoCamera, load_camera
+from ismb_lab.cameras.camera import StereoCamera, load_camera
 from ismb_lab.cli import main
-from ismb_lab.metric import row_tolerance
-from ismb_lab.ply import ply_bytes
+from ismb_lab.matching.metric import row_tolerance
+from ismb_lab.matching.ply import ply_bytes
 from ismb_lab.scenes import lab_scene
 
 
@@ -294,7 +294,7 @@ def test_match_rig_writes_a_ply_that_an_independent_reader_gives_back_as_the_jso
     cloud = read_ply((folder / "m.ply").read_bytes())
     xyz = np.column_stack([cloud["x"], cloud["y"], cloud["z"]])
     assert np.allclose(xyz, [m["xyz_m"] for m in points], rtol=1e-6, atol=1e-7)
-    from ismb_lab.io import load_image
+    from ismb_lab.images.io import load_image
     grey = load_image(folder / "L.png")
     expected = [int(np.clip(np.rint(grey[int(round(m["left_xy"][1])), int(round(m["left_xy"][0]))]), 0, 255))
                 for m in points]

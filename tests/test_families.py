@@ -16,6 +16,7 @@ def layouts(rendered):
     return [rendered(object_layout, seed, 2 + seed % 2, family=family) for family in FAMILIES for seed in (3, 4)]
 
 
+@pytest.mark.slow
 def test_disparity_at_each_object_centre_is_the_designed_one(layouts):
     for lay in layouts:
         ids = object_ids(lay.scene)

@@ -3,7 +3,7 @@
 ``tests/data/family_digests.json`` holds, for every family recorded there, the digests of
 the layouts that the scripts and tests draw (seeds 0-4, the first layout of each split of
 ``scripts/matching_families.py`` and ``scripts/depth_layouts.py``, and one drawn from a
-Generator) and of the target sets that :func:`ismb_lab.protocol.family_cases` builds.  A
+Generator) and of the target sets that :func:`ismb_lab.tuning.cases.family_cases` builds.  A
 change that moves any of them, by one grey level or one random draw, fails here.  The
 images are rounded grey levels and the truth comes from exact arithmetic, so the digests
 do not depend on the CPU.  Rewrite the file only for a change meant to move the layouts::
@@ -20,7 +20,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from ismb_lab.protocol import family_cases
+from ismb_lab.tuning.cases import family_cases
 from ismb_lab.scenes import Family, Look, object_layout, register_family, unregister_family
 
 FIXTURE = Path(__file__).with_name("data") / "family_digests.json"

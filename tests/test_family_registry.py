@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 from ismb_lab import ParameterError, ParameterTypeError
-from ismb_lab.protocol import family_cases
+from ismb_lab.tuning.cases import family_cases
 from ismb_lab.scenes import (FAMILIES, Family, Look, families, get_family, object_layout, register_family,
                              unregister_family)
 
@@ -84,6 +84,7 @@ def test_a_new_family_has_a_stream_of_its_own():
     assert DIM.stream(rng) is rng                                  # a Generator is used as it is
 
 
+@pytest.mark.slow
 def test_a_new_familys_layouts_depend_neither_on_the_registration_order_nor_on_the_process(dim):
     first = pair(object_layout(8, 2, family="dim"))
     other = register_family(Family("aaa", "registered after dim", DIM.look))

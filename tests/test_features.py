@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 from scipy import ndimage as ndi
 
-from ismb_lab.features import (Corners, detect_corners, harris_from_tensor, harris_response,
+from ismb_lab.images.features import (Corners, detect_corners, harris_from_tensor, harris_response,
                                image_gradients, resolve_roi, structure_tensor)
 
 

@@ -7,12 +7,12 @@ import numpy as np
 import pytest
 
 from ismb_lab.cli import main
-from ismb_lab.gallery import decode_disparity
-from ismb_lab.io import load_pair
-from ismb_lab.matching import prepare
-from ismb_lab.protocol import load_manifest
+from ismb_lab.scenes.gallery import decode_disparity
+from ismb_lab.images.io import load_pair
+from ismb_lab.matching.pipeline import prepare
+from ismb_lab.tuning.cases import load_manifest
 from ismb_lab.scenes import REALISTIC_COUNT, synthetic_scene, toy_car_scene, true_matches
-from ismb_lab.targets import load_targets, snap
+from ismb_lab.labels.targets import load_targets, snap
 
 IMAGES = Path(__file__).resolve().parent.parent / "images"
 

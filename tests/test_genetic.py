@@ -5,7 +5,7 @@ import pytest
 from scipy.stats import chisquare
 
 from ismb_lab import ParameterError, ParameterTypeError
-from ismb_lab.genetic import (Bounds, Generation, arithmetic_crossover, batch, elite, evolve,
+from ismb_lab.tuning.genetic import (Bounds, Generation, arithmetic_crossover, batch, elite, evolve,
                               initial_population, next_generation, random_mutation, tournament)
 
 UNIT4 = Bounds([0, 0, 0, 0], [1, 1, 1, 1])
@@ -337,7 +337,7 @@ def _breed_by_the_operators(rng, population, fitness, bounds, p_c, p_m, n_elite)
 
 @pytest.mark.parametrize("size, n_elite, p_m", [(30, 2, 0.05), (31, 0, 0.5), (2, 1, 1.0), (9, 9, 0.3)])
 def test_a_generation_draws_and_computes_as_its_operators(size, n_elite, p_m):
-    from ismb_lab.genetic import _breed
+    from ismb_lab.tuning.genetic import _breed
 
     bounds = Bounds([0, 0, 0.05], [60, 60, 10])
     for seed in range(20):

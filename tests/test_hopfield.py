@@ -3,8 +3,8 @@
 import numpy as np
 import pytest
 
-from ismb_lab.hopfield import MAX_NEURONS, SCALE, Network, Topology, _weights, energy, hopfield_form
-from ismb_lab.dynamics import iter_updates, run
+from ismb_lab.network.hopfield import MAX_NEURONS, SCALE, Network, Topology, _weights, energy, hopfield_form
+from ismb_lab.network.dynamics import iter_updates, run
 
 
 def random_network(seed, n_left=None, n_right=None, p_candidate=0.4, p_pair=0.5):
@@ -173,7 +173,7 @@ def test_seeded_runs_are_bit_identical_and_seeds_matter():
 
 
 def test_compiled_stream_draws_what_the_python_stream_draws():
-    from ismb_lab.dynamics import _below, _next, _Stream
+    from ismb_lab.network.dynamics import _below, _next, _Stream
 
     for seed in (0, 1, 2**63 - 1, 123456789):
         py, state = _Stream(seed), np.uint64(seed)
@@ -190,7 +190,7 @@ def test_compiled_shuffle_makes_the_sweeps_of_visiting_order(n):
     # the branch-free shuffle against the plain Fisher-Yates of the textbook stream, sizes
     # at and just past powers of two (where the mask changes), several sweeps in a row;
     # numbers drawn one, three and 128 at a time (refilled mid-sweep or not at all)
-    from ismb_lab.dynamics import _Stream, _shuffle, visiting_order
+    from ismb_lab.network.dynamics import _Stream, _shuffle, visiting_order
 
     for seed in (0, 7, 2**63 - 1):
         for m in (1, 3, 128):
@@ -209,7 +209,7 @@ def test_compiled_shuffle_makes_the_sweeps_of_visiting_order(n):
 def test_visiting_orders_are_uniform_permutations():
     """Each sweep is a permutation; over many seeds every neuron comes first about equally
     often (chi-squared below the 0.1% critical value for 4 degrees of freedom, 18.47)."""
-    from ismb_lab.dynamics import visiting_order
+    from ismb_lab.network.dynamics import visiting_order
 
     first = np.zeros(5)
     for seed in range(5000):
@@ -424,7 +424,7 @@ def test_network_rejects_bad_uniqueness_and_bias(kwargs, error, words):
 
 def test_a_match_bias_too_large_for_the_fixed_point_is_refused():
     """With beta = -1e7 the 2**-40 fixed point overflowed int64 and every neuron switched on."""
-    from ismb_lab.hopfield import MAX_INPUT
+    from ismb_lab.network.hopfield import MAX_INPUT
 
     net = Network.from_arrays(2, 2, rows=[0, 0, 1, 1], cols=[0, 1, 0, 1], similarity=[0.5, -0.2, -0.3, 0.4],
                               pair_a=[0, 1], pair_b=[3, 2], pair_c=[0.9, -0.5], match_bias=-1e7)

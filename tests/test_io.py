@@ -6,7 +6,7 @@ import cv2
 import numpy as np
 import pytest
 
-from ismb_lab.io import StereoPair, image_sha256, load_image, load_pair
+from ismb_lab.images.io import StereoPair, image_sha256, load_image, load_pair
 
 
 def bt601(rgb):
@@ -181,7 +181,7 @@ def test_a_huge_radiance_header_is_refused_before_decoding(tmp_path, monkeypatch
 
 
 def test_radiance_lines_are_read_in_opencvs_pieces():
-    from ismb_lab._header import image_size
+    from ismb_lab._core.header import image_size
 
     # OpenCV reads header lines 127 bytes at a time: the newline after a 127-byte line is
     # an empty line to it, so the size it uses is the next line, not the later one.
@@ -197,7 +197,7 @@ ENCODED = [(".png", 1), (".jpg", 1), (".bmp", 1), (".tiff", 1), (".webp", 3), ("
 
 @pytest.mark.parametrize("ext, channels", ENCODED, ids=[f"{e}-{c}" for e, c in ENCODED])
 def test_every_format_read_gives_opencvs_size_from_its_header(ext, channels):
-    from ismb_lab._header import image_size
+    from ismb_lab._core.header import image_size
 
     image = (np.arange(7 * 12 * channels).reshape(7, 12, channels) % 251).astype(np.uint8).squeeze()
     if ext in (".pfm", ".hdr"):
@@ -225,7 +225,7 @@ def test_formats_without_a_readable_size_are_refused_before_decoding(tmp_path, m
 
 @pytest.mark.parametrize("value", ["9" * 400, "0", "-5", "2e6", str((1 << 30) + 1)])
 def test_the_pixel_variable_is_bounded(monkeypatch, value):
-    from ismb_lab.io import max_pixels
+    from ismb_lab.images.io import max_pixels
 
     monkeypatch.setenv("ISMB_LAB_MAX_PIXELS", value)
     with pytest.raises(ValueError) as info:
@@ -234,7 +234,7 @@ def test_the_pixel_variable_is_bounded(monkeypatch, value):
 
 
 def test_uploaded_bytes_pass_the_same_header_check(monkeypatch):
-    from ismb_lab.rectify import load_photo
+    from ismb_lab.images.rectify import load_photo
 
     no_decoding(monkeypatch)
     with pytest.raises(ValueError) as info:
@@ -282,8 +282,8 @@ def _jpeg_with_orientation(path, orientation: int):
 def test_every_loader_turns_a_jpeg_upright_as_opencv_and_rectify_do(tmp_path, orientation):
     import cv2
 
-    from ismb_lab.io import exif_orientation, load_pair
-    from ismb_lab.rectify import load_photo
+    from ismb_lab.images.io import exif_orientation, load_pair
+    from ismb_lab.images.rectify import load_photo
 
     path = _jpeg_with_orientation(tmp_path / "photo.jpg", orientation)
     assert exif_orientation(path.read_bytes()) == orientation

@@ -380,7 +380,7 @@ def test_each_session_has_objectives_prerequisites_a_quiz_of_five_and_references
         references = text.split("**References.**")[1]
         assert len(re.findall(r"^\* ", references, re.M)) >= 4, name
     # the answers are held apart: in the folder the students' servers never get
-    from ismb_lab.hub_start import IGNORE
+    from ismb_lab.teaching.hub_start import IGNORE
 
     assert ANSWERS.parent.name in IGNORE
     assert "QUIZ_ANSWERS" not in "".join(plan.values()).split("**Quiz**")[0]

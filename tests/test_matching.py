@@ -4,9 +4,9 @@ import numpy as np
 import pytest
 
 from ismb_lab import ParameterError, ParameterTypeError
-from ismb_lab.dynamics import iter_updates
-from ismb_lab.matching import MatchConfig, match, prepare
-from ismb_lab.methods import THESIS_PARAMS, Params, get_method
+from ismb_lab.network.dynamics import iter_updates
+from ismb_lab.matching.pipeline import MatchConfig, match, prepare
+from ismb_lab.network.methods import THESIS_PARAMS, Params, get_method
 from ismb_lab.scenes import synthetic_scene, true_matches
 
 # Chosen by scripts/grid_search_synthetic.py on training scenes 100-109 only; the
@@ -168,7 +168,7 @@ def test_match_config_validates(field, value):
 
 
 def test_warm_up_prepares_the_first_match_and_refuses_a_bare_name():
-    from ismb_lab.matching import warm_up
+    from ismb_lab.matching.pipeline import warm_up
 
     assert warm_up(("network", "anneal")) >= 0.0
     with pytest.raises(TypeError, match=r"solvers.*warm_up.*tuple of solver names.*'network'"):

@@ -27,7 +27,7 @@ def test_pooled_figures_lie_within_their_spread_over_ga_and_update_seeds(capsys,
 @pytest.mark.slow
 @pytest.mark.parametrize("method, one_to_one", [("NM3", True), ("NM4", False)])
 def test_the_command_line_alone_gives_the_library_protocol_figures(tmp_path, method, one_to_one, load_script):
-    from ismb_lab.protocol import family_cases, protocol
+    from ismb_lab.tuning.cases import family_cases, protocol
 
     script = load_script("matching_families")
     cases = family_cases("cameras", 2300, 3)

@@ -4,11 +4,11 @@ import numpy as np
 
 
 def test_every_cleanup_keeps_a_subset_and_the_one_per_corner_ones_are_one_per_corner(load_script, rendered):
-    from ismb_lab.matching import prepare
-    from ismb_lab.methods import get_method
-    from ismb_lab.params import Params
+    from ismb_lab.matching.pipeline import prepare
+    from ismb_lab.network.methods import get_method
+    from ismb_lab.network.params import Params
     from ismb_lab.scenes import synthetic_scene
-    from ismb_lab.solvers import matched_neurons, one_match_per_corner, solve
+    from ismb_lab.network.solvers import matched_neurons, one_match_per_corner, solve
 
     script = load_script("matching_trials")
     scene = rendered(synthetic_scene, seed=3)

@@ -8,9 +8,9 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from ismb_lab.classroom import collected, pool
+from ismb_lab.labels.classroom import collected, pool
 from ismb_lab.cli import main
-from ismb_lab.targets import TargetSet, load_targets, save_targets
+from ismb_lab.labels.targets import TargetSet, load_targets, save_targets
 
 IMAGES = Path(__file__).resolve().parents[1] / "images"
 
@@ -213,8 +213,8 @@ def test_the_same_pairs_in_another_order_or_with_other_keys_are_identical(tmp_pa
 
 
 def test_a_copy_loaded_into_the_labeller_and_saved_under_ones_name_is_identical(tmp_path):
-    from ismb_lab.matching import prepare
-    from ismb_lab.targets import snap
+    from ismb_lab.matching.pipeline import prepare
+    from ismb_lab.labels.targets import snap
     from ismb_lab.widgets.labeler import LabelModel
 
     prepared = prepare(IMAGES / "synthetic" / "left.png", IMAGES / "synthetic" / "right.png")
@@ -331,7 +331,7 @@ def test_tune_says_why_its_fitness_is_negative(few_targets, tmp_path, capsys):
 
 def test_tune_says_nothing_more_when_its_fitness_is_not_negative():
     from ismb_lab.cli.tune import why_negative
-    from ismb_lab.evaluation import Score
+    from ismb_lab.tuning.evaluation import Score
 
     assert why_negative(3, Score(5, 0, 2, 5), 40, 5) is None
     assert why_negative(0, Score(2, 1, 1, 5), 40, 5) is None

@@ -5,10 +5,10 @@ import itertools
 import numpy as np
 import pytest
 
-from ismb_lab.compatibility import left_neighbours, neuron_pairs
-from ismb_lab.methods import THESIS_PARAMS, Params, build_problem, get_method
-from ismb_lab.similarity import candidate_mask, mean_abs_difference, patches, transfer
-from ismb_lab.solvers import to_matches
+from ismb_lab.network.compatibility import left_neighbours, neuron_pairs
+from ismb_lab.network.methods import THESIS_PARAMS, Params, build_problem, get_method
+from ismb_lab.network.similarity import candidate_mask, mean_abs_difference, patches, transfer
+from ismb_lab.network.solvers import to_matches
 
 
 def test_transfer_matches_the_thesis_formula_and_its_limits():
@@ -204,8 +204,8 @@ def test_method_nm_is_method_three_with_a_match_bias():
     assert np.array_equal(nm.pair_c, three.pair_c) and np.array_equal(nm.similarity, three.similarity)
     assert (nm.uniqueness, nm.match_bias, nm.target_count) == (1.0, 0.25, 0.5625)
     as_thesis = get_method("NM").network(problem, Params(**base.to_dict(), match_bias=2.0))
-    from ismb_lab.hopfield import hopfield_form
-    from ismb_lab.dynamics import run
+    from ismb_lab.network.hopfield import hopfield_form
+    from ismb_lab.network.dynamics import run
     assert all(np.array_equal(x, y) for x, y in zip(hopfield_form(as_thesis), hopfield_form(three)))
     assert np.array_equal(run(as_thesis, rng=3).state, run(three, rng=3).state)
     assert get_method("NM").gene_names == ("theta_c", "theta_s", "lambda_c", "lambda_s", "match_bias")
@@ -230,8 +230,8 @@ def test_method_nm4_is_method_nm_with_the_match_bias_fixed_at_zero():
     base = Params(theta_c=9.0, theta_s=20.0, lambda_c=0.7, lambda_s=0.3)
     four = get_method("NM4").network(problem, base)
     nm = get_method("NM").network(problem, Params(**base.to_dict(), match_bias=0.0))
-    from ismb_lab.hopfield import hopfield_form
-    from ismb_lab.dynamics import run
+    from ismb_lab.network.hopfield import hopfield_form
+    from ismb_lab.network.dynamics import run
     assert all(np.array_equal(x, y) for x, y in zip(hopfield_form(four), hopfield_form(nm)))
     assert np.array_equal(run(four, rng=2).state, run(nm, rng=2).state)
     ignored = get_method("NM4").network(problem, Params(**base.to_dict(), match_bias=1.5))
@@ -281,8 +281,8 @@ def test_nm3_sets_theta_s_from_the_pair_and_is_nm4_at_that_value():
     """Method-NM3 is Method-NM4 with theta_s = half the median of M, whatever params say."""
     from dataclasses import replace
 
-    from ismb_lab.params import Params
-    from ismb_lab.peers import default_no_match_cost
+    from ismb_lab.network.params import Params
+    from ismb_lab.matching.peers import default_no_match_cost
 
     rng = np.random.default_rng(3)
     lxy = rng.uniform(20, 200, (12, 2))

@@ -3,7 +3,7 @@ HOME; and the test session's warm-up reaches every kernel.
 
 Each cache case runs a fresh interpreter on a copy of the package (slow).  Its two default
 cache places are made unwritable in a way that holds for root as well, who ignores file
-modes: the copy's ``__pycache__`` is a regular file (no folder can be made there) and
+modes: the ``__pycache__`` of the copy's kernel folders is a regular file (no folder can be made there) and
 HOME is a regular file (nor under it).  A read-only mode would not stop root, and the
 interpreter under /work/main/.venv cannot be run by an unprivileged account.
 """
@@ -17,16 +17,20 @@ from pathlib import Path
 
 import pytest
 
+from ismb_lab._core.numba_share import KERNEL_SOURCES
+
 ROOT = Path(__file__).resolve().parent.parent
 
+#: The package's folders with compiled kernels: numba caches beside the source, in their __pycache__.
+KERNEL_FOLDERS = [Path(source).parent for source in KERNEL_SOURCES]
 POSIX = pytest.mark.skipif(not hasattr(os, "getuid"), reason="POSIX users")
 
 PROBE = """
 import json, os
 import numpy as np
-import ismb_lab.dynamics, ismb_lab.similarity
+import ismb_lab.network.dynamics, ismb_lab.network.similarity
 from numba.core import config
-ismb_lab.similarity._block_sum(np.arange(3.0), 0, 3)   # compiles, and writes its cache
+ismb_lab.network.similarity._block_sum(np.arange(3.0), 0, 3)   # compiles, and writes its cache
 print(json.dumps({"variable": os.environ.get("NUMBA_CACHE_DIR"), "config": config.CACHE_DIR}))
 """
 
@@ -36,7 +40,8 @@ def nowhere(tmp_path):
     """An environment and a copy of the package where numba's default cache places cannot be written."""
     site = tmp_path / "site"
     shutil.copytree(ROOT / "ismb_lab", site / "ismb_lab", ignore=shutil.ignore_patterns("__pycache__"))
-    (site / "ismb_lab" / "__pycache__").write_text("not a folder\n")
+    for folder in KERNEL_FOLDERS:
+        (site / "ismb_lab" / folder / "__pycache__").write_text("not a folder\n")
     home = tmp_path / "home"
     home.write_text("not a folder\n")
     temp = tmp_path / "temp"
@@ -93,12 +98,14 @@ def test_where_numba_can_cache_nothing_is_changed(tmp_path):
     env.update(HOME=str(tmp_path), TMPDIR=str(tmp_path))   # a writable HOME, as most users have
     site = tmp_path / "site"
     shutil.copytree(ROOT / "ismb_lab", site / "ismb_lab", ignore=shutil.ignore_patterns("__pycache__"))
-    (site / "ismb_lab").chmod(0o555)   # not beside the package (for a user other than root) ...
+    for folder in KERNEL_FOLDERS:   # not beside the package (for a user other than root) ...
+        (site / "ismb_lab" / folder).chmod(0o555)
     env["PYTHONPATH"] = str(site)
     try:
         assert probe(env) == {"variable": None, "config": ""}   # ... numba's own places serve
     finally:
-        (site / "ismb_lab").chmod(0o755)
+        for folder in KERNEL_FOLDERS:
+            (site / "ismb_lab" / folder).chmod(0o755)
     assert not list(tmp_path.glob("ismb_lab-numba-*"))
 
 
@@ -110,7 +117,7 @@ fixtures = importlib.util.module_from_spec(spec)
 spec.loader.exec_module(fixtures)
 report = fixtures.warm_kernels()
 import ismb_lab
-from ismb_lab._numba import cold
+from ismb_lab._core.numba_cache import cold
 for info in pkgutil.walk_packages(ismb_lab.__path__, "ismb_lab."):
     if not info.name.endswith(".__main__"):
         importlib.import_module(info.name)

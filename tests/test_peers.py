@@ -5,13 +5,13 @@ import pygmtools
 import pytest
 
 from ismb_lab import ParameterError, ParameterTypeError
-from ismb_lab.evaluation import score
-from ismb_lab.matching import prepare
-from ismb_lab.methods import THESIS_PARAMS, build_problem, get_method
-from ismb_lab.peers import (PEERS, affinity_matrix, default_no_match_cost, graph_matching, hungarian,
+from ismb_lab.tuning.evaluation import score
+from ismb_lab.matching.pipeline import prepare
+from ismb_lab.network.methods import THESIS_PARAMS, build_problem, get_method
+from ismb_lab.matching.peers import (PEERS, affinity_matrix, default_no_match_cost, graph_matching, hungarian,
                             mutual_nearest)
 from ismb_lab.scenes import synthetic_scene, true_matches
-from ismb_lab.similarity import candidate_mask
+from ismb_lab.network.similarity import candidate_mask
 
 # Left 0 and 1 share the candidates right 0 and 1; left 2 has only right 2.
 LEFT = [[100, 50], [110, 50], [300, 50]]

@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 
 from ismb_lab import ParameterError
-from ismb_lab.io import load_pair
+from ismb_lab.images.io import load_pair
 
 
 def test_sizes_are_width_by_height_in_load_pair_messages():
@@ -19,7 +19,7 @@ def test_sizes_are_width_by_height_in_load_pair_messages():
 
 @pytest.mark.parametrize("left, right", [("left.jpg", "right.jpg"), ("left01.jpg", "right01.jpg")])
 def test_swapped_photos_are_refused_naming_the_fix(opencv_data, left, right):
-    from ismb_lab.rectify import check_rectified, rectify_pair
+    from ismb_lab.images.rectify import check_rectified, rectify_pair
 
     rectify_pair(opencv_data / left, opencv_data / right)          # the right order is accepted
     with pytest.raises(ParameterError, match="swap the two files") as info:
@@ -81,7 +81,7 @@ def _photo(path, orientation):
 def test_targets_record_the_orientation_and_old_files_on_turned_photos_are_refused(tmp_path, orientation):
     import json
 
-    from ismb_lab.targets import TargetSet, load_targets, save_targets
+    from ismb_lab.labels.targets import TargetSet, load_targets, save_targets
 
     left, right = _photo(tmp_path / "l.jpg", orientation), _photo(tmp_path / "r.jpg", orientation)
     pair = load_pair(left, right)
@@ -98,8 +98,9 @@ def test_targets_record_the_orientation_and_old_files_on_turned_photos_are_refus
     assert "\n" not in str(info.value) and "orientation 6" in str(info.value) and "label the pair again" in str(info.value)
 
 
+@pytest.mark.slow
 def test_rectify_names_what_its_figures_were_measured_on(opencv_data):
-    from ismb_lab.rectify import load_photo, measured, rectify_pair
+    from ismb_lab.images.rectify import load_photo, measured, rectify_pair
 
     assert rectify_pair(opencv_data / "left01.jpg", opencv_data / "right01.jpg").measured_on == "RANSAC inliers"
     left, right = load_photo(opencv_data / "aloeL.jpg"), load_photo(opencv_data / "aloeR.jpg")
@@ -110,7 +111,7 @@ def test_rectify_names_what_its_figures_were_measured_on(opencv_data):
 
 def test_an_epipole_near_the_image_gets_a_framing_warning(opencv_data, tmp_path, capsys):
     from ismb_lab.cli import main
-    from ismb_lab.rectify import epipole_warning, rectify_pair
+    from ismb_lab.images.rectify import epipole_warning, rectify_pair
 
     # the books pair: the camera stepped mostly forward (an epipole inside the image)
     assert main(["rectify", str(opencv_data / "left.jpg"), str(opencv_data / "right.jpg"),

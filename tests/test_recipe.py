@@ -6,17 +6,17 @@ import pytest
 
 from ismb_lab import ParameterError, ParameterTypeError
 from ismb_lab.cli import main
-from ismb_lab.params import Params
-from ismb_lab.recipe import RECIPE_VERSION, Recipe, load_recipe, save_recipe
+from ismb_lab.network.params import Params
+from ismb_lab.matching.recipe import RECIPE_VERSION, Recipe, load_recipe, save_recipe
 from ismb_lab.scenes import synthetic_scene
-from ismb_lab.solvers import AnnealSolver, NetworkSolver
+from ismb_lab.network.solvers import AnnealSolver, NetworkSolver
 
 
 @pytest.fixture(scope="module")
 def targets(pair, tmp_path_factory, rendered):
-    from ismb_lab.matching import prepare
+    from ismb_lab.matching.pipeline import prepare
     from ismb_lab.scenes import true_matches
-    from ismb_lab.targets import save_targets, targets_from_matches
+    from ismb_lab.labels.targets import save_targets, targets_from_matches
 
     prepared = prepare(*pair)
     truth = true_matches(rendered(synthetic_scene, seed=3), prepared.problem.left_xy, prepared.problem.right_xy)

@@ -9,10 +9,10 @@ import numpy as np
 import pytest
 
 from ismb_lab import ParameterError
-from ismb_lab.datasets import OPENCV_DATA, chessboard_pairs
-from ismb_lab.rectify import check_rectified, load_photo, rectify_pair
-from ismb_lab.camera import load_camera
-from ismb_lab.rig import board_depth, calibrate_rig
+from ismb_lab.images.datasets import OPENCV_DATA, chessboard_pairs
+from ismb_lab.images.rectify import check_rectified, load_photo, rectify_pair
+from ismb_lab.cameras.camera import load_camera
+from ismb_lab.cameras.rig import board_depth, calibrate_rig
 
 
 @pytest.fixture(scope="session")
@@ -109,7 +109,7 @@ def test_a_12_megapixel_photo_is_scaled_to_the_working_size(data, tmp_path):
     for side in ("left", "right"):
         photo = cv2.imread(str(data / f"{side}.jpg"))
         cv2.imwrite(str(tmp_path / f"{side}.jpg"), cv2.resize(photo, (4000, 3000), interpolation=cv2.INTER_CUBIC))
-    script = ("import resource, time, tracemalloc; from ismb_lab.rectify import rectify_pair; tracemalloc.start(); "
+    script = ("import resource, time, tracemalloc; from ismb_lab.images.rectify import rectify_pair; tracemalloc.start(); "
               f"t = time.perf_counter(); r = rectify_pair({str(tmp_path / 'left.jpg')!r}, {str(tmp_path / 'right.jpg')!r}); "
               "print(time.perf_counter() - t, tracemalloc.get_traced_memory()[1] / 2**20, "
               "resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024, r.scale, r.median_abs_dy_px, r.p90_abs_dy_px)")
@@ -183,7 +183,7 @@ def test_opencv_data_constant_names_the_debian_folder():
 def test_aloe_manifest_gives_ground_truth_cases(data, tmp_path):
     from pathlib import Path
 
-    from ismb_lab.protocol import load_manifest
+    from ismb_lab.tuning.cases import load_manifest
 
     cases = load_manifest(Path(__file__).resolve().parents[1] / "manifests" / "aloe.json")
     assert [c.name for c in cases][0] == "aloe top-left" and len(cases) == 4

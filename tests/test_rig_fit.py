@@ -6,10 +6,10 @@ import numpy as np
 import pytest
 
 from ismb_lab import ParameterError
-from ismb_lab.camera import StereoCamera, load_camera
+from ismb_lab.cameras.camera import StereoCamera, load_camera
 from ismb_lab.cli import main
-from ismb_lab.datasets import CHESSBOARD_PAIRS
-from ismb_lab.rig import calibrate_rig, recalibrate
+from ismb_lab.images.datasets import CHESSBOARD_PAIRS
+from ismb_lab.cameras.rig import calibrate_rig, recalibrate
 
 
 @pytest.fixture(scope="module")
@@ -57,12 +57,14 @@ def _tagged(source, path, orientation):
     return path
 
 
+@pytest.mark.slow
 def test_a_swapped_raw_pair_is_refused_naming_the_swap(opencv_data, rigs, tmp_path, capsys):
     code, err = _refused(capsys, tmp_path, opencv_data / "right14.jpg", opencv_data / "left14.jpg", rigs("14"))
     assert code == 2 and err.count("\n") == 1 and err.startswith("ismb-lab: error:"), err
     assert "swap the two files" in err
 
 
+@pytest.mark.slow
 def test_a_turned_and_shifted_pair_is_refused_naming_the_calibration(opencv_data, rigs, tmp_path, capsys):
     right = cv2.imread(str(opencv_data / "right14.jpg"), cv2.IMREAD_GRAYSCALE)
     h, w = right.shape
@@ -75,6 +77,7 @@ def test_a_turned_and_shifted_pair_is_refused_naming_the_calibration(opencv_data
 
 
 @pytest.mark.parametrize("both", [False, True])
+@pytest.mark.slow
 def test_a_180_degree_tag_over_upright_pixels_is_refused_naming_exif(opencv_data, rigs, tmp_path, capsys, both):
     left = _tagged(opencv_data / "left14.jpg", tmp_path / "left.jpg", 3)
     right = _tagged(opencv_data / "right14.jpg", tmp_path / "right.jpg", 3) if both else opencv_data / "right14.jpg"
@@ -91,6 +94,7 @@ def test_a_90_degree_tag_is_named_in_the_size_refusal(opencv_data, rigs, tmp_pat
     assert "EXIF orientation tag (6)" in err and "480x640" in err and "640x480" in err
 
 
+@pytest.mark.slow
 def test_stderr_names_the_path_a_pair_took(opencv_data, rigs, tmp_path, capsys):
     rig = rigs("14")
     code, _, err = _run(capsys, "match", opencv_data / "left14.jpg", opencv_data / "right14.jpg", "--rig", rig,
@@ -120,6 +124,7 @@ def test_rectify_refuses_swapped_rectified_photos(opencv_data, rigs, tmp_path, c
     assert code == 0 and (tmp_path / "ok" / "rectify.json").exists(), err     # the right order is accepted
 
 
+@pytest.mark.slow
 def test_rectify_with_the_rig_refuses_a_pair_it_does_not_fit(opencv_data, rigs, tmp_path, capsys):
     rig = rigs("14")
     code, _, err = _run(capsys, "rectify", opencv_data / "right14.jpg", opencv_data / "left14.jpg", "--rig", rig,
@@ -134,8 +139,8 @@ def test_rectify_with_the_rig_refuses_a_pair_it_does_not_fit(opencv_data, rigs, 
 
 
 def test_the_row_spread_scales_with_the_image():
-    from ismb_lab.metric import fit_rows_px
-    from ismb_lab.rectify import row_spread_px
+    from ismb_lab.matching.metric import fit_rows_px
+    from ismb_lab.images.rectify import row_spread_px
 
     assert row_spread_px((480, 640)) == 1.0 and row_spread_px((3000, 4000)) == 6.25
     assert fit_rows_px(StereoCamera(size=(4000, 3000), rms=0.4)) == 6.25
@@ -143,8 +148,8 @@ def test_the_row_spread_scales_with_the_image():
 
 
 def test_photo_config_scales_the_corner_counts_with_the_photo():
-    from ismb_lab.matching import MatchConfig
-    from ismb_lab.metric import photo_config
+    from ismb_lab.matching.pipeline import MatchConfig
+    from ismb_lab.matching.metric import photo_config
 
     thesis = photo_config(StereoCamera(size=(320, 240)))
     assert (thesis.n_min, thesis.n_max) == (MatchConfig().n_min, MatchConfig().n_max)
@@ -164,11 +169,12 @@ def test_the_default_settings_give_a_held_out_board_its_plane(full, opencv_data,
     assert row["board_matches"] >= 20 and row["share"] >= 0.90, row
 
 
+@pytest.mark.slow
 def test_every_board_fits_the_rig_it_helped_calibrate(full, opencv_data, tmp_path):
     """Half of board 05's robust matches are squares matched to their neighbours: a median row
     test refused it with the rig calibrated on all 13 boards (16 px).  The share on their rows
     does not, and still refuses the swapped pair."""
-    from ismb_lab.metric import for_camera
+    from ismb_lab.matching.metric import for_camera
 
     path = tmp_path / "rig.json"
     path.write_text(full.to_json())

@@ -8,7 +8,7 @@ import pytest
 from scipy.ndimage import binary_dilation, map_coordinates
 
 from ismb_lab import ParameterError, ParameterTypeError
-from ismb_lab.camera import StereoCamera
+from ismb_lab.cameras.camera import StereoCamera
 from ismb_lab.scenes import (ROI, Box, Plane, Scene, Texture, cast, random_texture, render,
                              synthetic_scene, true_matches)
 
@@ -227,6 +227,7 @@ def test_correspondence_is_sharp_on_textured_pixels(scene):
         assert residual(scene, pts, shift).mean() > exact + 0.4
 
 
+@pytest.mark.slow
 def test_images_are_float_grey_levels_and_the_right_camera_differs(scene):
     for img in (scene.left, scene.right):
         assert img.dtype == np.float64 and img.shape == (240, 320)

@@ -4,11 +4,11 @@ import numpy as np
 import pytest
 
 from ismb_lab import ParameterError, ParameterTypeError
-from ismb_lab.depth import DepthConfig, depth_from_matches
-from ismb_lab.silhouettes import CHANGE_THRESHOLD, OutlineConfig, Silhouettes, silhouettes
-from ismb_lab.io import load_pair
-from ismb_lab.matching import MatchResult
-from ismb_lab.params import Params
+from ismb_lab.depth.objects import DepthConfig, depth_from_matches
+from ismb_lab.depth.outlines import CHANGE_THRESHOLD, OutlineConfig, Silhouettes, silhouettes
+from ismb_lab.images.io import load_pair
+from ismb_lab.matching.pipeline import MatchResult
+from ismb_lab.network.params import Params
 
 H, W = 240, 320
 
@@ -414,9 +414,9 @@ def test_silhouettes_must_cover_the_scene():
 
 @pytest.mark.slow
 def test_silhouettes_found_once_give_what_finding_them_each_time_gives():
-    from ismb_lab.depth_demo import depth_pairs, pair_silhouettes, relative_depth
+    from ismb_lab.depth.pipeline import depth_pairs, pair_silhouettes, relative_depth
     from ismb_lab.scenes import object_layout
-    from ismb_lab.depth_demo import layout_match_config
+    from ismb_lab.depth.pipeline import layout_match_config
 
     layout = object_layout(1001, 2, family="repetitive")
     config = layout_match_config(layout)
@@ -440,7 +440,7 @@ def test_silhouettes_found_once_give_what_finding_them_each_time_gives():
 def test_a_change_of_light_over_the_whole_view_is_no_outline(gain, offset):
     """The toy-car scene photographed in another light: every pixel changed, so the one blob is
     no object, and the features find the two cars as they do without outlines."""
-    from ismb_lab.depth_demo import depth_pairs, pair_silhouettes, relative_depth
+    from ismb_lab.depth.pipeline import depth_pairs, pair_silhouettes, relative_depth
     from ismb_lab.scenes import lab_scene, toy_car_scene
 
     bg, sc = lab_scene(0), toy_car_scene(0)
@@ -508,7 +508,7 @@ def test_the_features_on_a_poorly_fitting_outline_decide():
 
 def hysteresis_everywhere(bg, sc):
     """The blobs :func:`silhouettes` makes with hysteresis, before it chooses region by region."""
-    from ismb_lab.silhouettes import CHANGE_SIGMA, _partition, changed_in_roi
+    from ismb_lab.depth.outlines import CHANGE_SIGMA, _partition, changed_in_roi
 
     changed = [changed_in_roi(b, c, (0, 0, W, H), CHANGE_THRESHOLD, CHANGE_SIGMA, 0, "test", "scene", 5.0)[0]
                for b, c in ((bg.left, sc.left), (bg.right, sc.right))]
@@ -540,7 +540,7 @@ def test_hysteresis_is_raised_to_the_noise_of_the_cameras():
     from scipy.ndimage import gaussian_filter
     from skimage.filters import apply_hysteresis_threshold
 
-    from ismb_lab.silhouettes import changed_in_roi
+    from ismb_lab.depth.outlines import changed_in_roi
 
     rng = np.random.default_rng(5)
     base = wall(5)

@@ -8,9 +8,9 @@ import pytest
 
 from ismb_lab import ParameterTypeError
 from ismb_lab.cli import main
-from ismb_lab.dynamics import iter_updates, run
-from ismb_lab.hopfield import Network, energy
-from ismb_lab.solvers import ASSIGN, SOLVERS, similarity_assignment, solve
+from ismb_lab.network.dynamics import iter_updates, run
+from ismb_lab.network.hopfield import Network, energy
+from ismb_lab.network.solvers import ASSIGN, SOLVERS, similarity_assignment, solve
 
 
 def grid_network(seed, n_left, n_right):
@@ -75,8 +75,8 @@ def test_similarity_assignment_names_its_argument():
 
 
 def test_one_match_per_corner_keeps_the_most_similar_of_each_corner():
-    from ismb_lab.methods import build_problem
-    from ismb_lab.solvers import one_match_per_corner
+    from ismb_lab.network.methods import build_problem
+    from ismb_lab.network.solvers import one_match_per_corner
 
     rng = np.random.default_rng(5)
     for _ in range(30):
@@ -97,8 +97,8 @@ def test_one_match_per_corner_keeps_the_most_similar_of_each_corner():
 
 
 def test_one_match_per_corner_takes_any_order_and_checks_it():
-    from ismb_lab.methods import build_problem
-    from ismb_lab.solvers import one_match_per_corner
+    from ismb_lab.network.methods import build_problem
+    from ismb_lab.network.solvers import one_match_per_corner
 
     # left corner 0 has two matches: neuron 0 (M 2) and neuron 1 (M 40)
     p = build_problem([[100, 50], [110, 50]], [[80, 51], [90, 51]], [[2.0, 40.0], [30.0, 3.0]])
@@ -112,13 +112,13 @@ def test_one_match_per_corner_takes_any_order_and_checks_it():
 
 def test_one_to_one_in_match_the_cli_and_evaluate(rendered):
 
-    from ismb_lab.matching import match, prepare
-    from ismb_lab.params import Params
-    from ismb_lab.protocol import Case
+    from ismb_lab.matching.pipeline import match, prepare
+    from ismb_lab.network.params import Params
+    from ismb_lab.tuning.cases import Case
     from ismb_lab.scenes import synthetic_scene
-    from ismb_lab.solvers import matched_neurons, one_match_per_corner, to_matches
-    from ismb_lab.tuning import evaluate
-    from ismb_lab.evaluation import score
+    from ismb_lab.network.solvers import matched_neurons, one_match_per_corner, to_matches
+    from ismb_lab.tuning.fitness import evaluate
+    from ismb_lab.tuning.evaluation import score
 
     scene = rendered(synthetic_scene, seed=3)
     prepared = prepare(scene.left, scene.right)
@@ -143,7 +143,7 @@ def test_one_to_one_in_match_the_cli_and_evaluate(rendered):
 
 
 def get_method_network(problem, params):
-    from ismb_lab.methods import get_method
+    from ismb_lab.network.methods import get_method
 
     return get_method("III").network(problem, params)
 
@@ -164,8 +164,8 @@ def test_match_one_to_one_on_the_command_line(pair, tmp_path):
 from dataclasses import dataclass  # noqa: E402
 
 from ismb_lab import ParameterError  # noqa: E402
-from ismb_lab.annealing import anneal  # noqa: E402
-from ismb_lab.solvers import (AnnealSolver, ExactSolver, NetworkSolver, Solution, Solver,  # noqa: E402
+from ismb_lab.network.annealing import anneal  # noqa: E402
+from ismb_lab.network.solvers import (AnnealSolver, ExactSolver, NetworkSolver, Solution, Solver,  # noqa: E402
                               get_solver, register_solver, unregister_solver)
 
 
@@ -216,7 +216,7 @@ def all_off():
 
 
 def test_a_solver_defined_once_shows_up_in_the_cli_and_in_the_protocol(all_off, capsys):
-    from ismb_lab.protocol import format_protocol, protocol
+    from ismb_lab.tuning.cases import format_protocol, protocol
 
     for command in ("match", "tune", "evaluate", "depth"):
         with pytest.raises(SystemExit):
@@ -233,9 +233,9 @@ def test_a_solver_defined_once_shows_up_in_the_cli_and_in_the_protocol(all_off, 
 
 
 def _hand_cases():
-    from ismb_lab.matching import Prepared
-    from ismb_lab.methods import build_problem
-    from ismb_lab.protocol import Case
+    from ismb_lab.matching.pipeline import Prepared
+    from ismb_lab.network.methods import build_problem
+    from ismb_lab.tuning.cases import Case
 
     cases = []
     for offset in (0, 30, 60):

@@ -14,7 +14,7 @@ import cv2
 import numpy as np
 import pytest
 
-import ismb_lab.rectify
+import ismb_lab.images.rectify
 from ismb_lab import ParameterError
 from ismb_lab.cli import main
 
@@ -32,8 +32,8 @@ def one_line(argv, capsys, match: str = "") -> str:
 
 def synthetic_rig(board=(9, 6), square_m=0.025):
     """A rig calibrated from corners projected by a known camera pair (no photos needed)."""
-    from ismb_lab.camera import BoardPair
-    from ismb_lab.rig import _calibrate, board_points
+    from ismb_lab.cameras.camera import BoardPair
+    from ismb_lab.cameras.rig import _calibrate, board_points
 
     points = board_points(board, square_m).astype(np.float64)
     k = np.array([[500.0, 0, 319.5], [0, 500.0, 239.5], [0, 0, 1]])
@@ -93,16 +93,16 @@ def test_a_rig_with_a_negative_square_is_refused_wherever_it_is_read(rig, work, 
 ])
 def test_calibrate_refuses_a_board_or_square_out_of_range_before_reading_photos(work, capsys, monkeypatch, option,
                                                                                 value, words):
-    import ismb_lab.rig
+    import ismb_lab.cameras.rig
 
-    monkeypatch.setattr(ismb_lab.rig, "find_board", lambda *a: pytest.fail("photos read before the check"))
+    monkeypatch.setattr(ismb_lab.cameras.rig, "find_board", lambda *a: pytest.fail("photos read before the check"))
     photos = [work / "L.png", work / "R.png"] * 3
     one_line(["calibrate", *photos, option, value, "--out", work / "rig.json"], capsys, words)
 
 
 def test_the_library_checks_the_board_and_square_too():
-    from ismb_lab.camera import MAX_SQUARE_M, MIN_SQUARE_M, check_board
-    from ismb_lab.rig import calibrate_rig
+    from ismb_lab.cameras.camera import MAX_SQUARE_M, MIN_SQUARE_M, check_board
+    from ismb_lab.cameras.rig import calibrate_rig
 
     for board, square in (((9, 6), 1e308), ((9, 6), 0.0), ((99999999999999999999, 6), 0.025), ((1, 6), 0.025)):
         with pytest.raises((ParameterError, TypeError)):
@@ -110,7 +110,7 @@ def test_the_library_checks_the_board_and_square_too():
     assert check_board((9, 6), MIN_SQUARE_M, "x") == ((9, 6), MIN_SQUARE_M)
     assert check_board([100, 2], MAX_SQUARE_M, "x") == ((100, 2), MAX_SQUARE_M)
     # the range holds real calibrations: the same corners at its ends give the same rig, scaled
-    from ismb_lab.rig import _calibrate
+    from ismb_lab.cameras.rig import _calibrate
 
     rig = synthetic_rig()
     for square in (MIN_SQUARE_M, MAX_SQUARE_M):
@@ -221,7 +221,7 @@ def test_a_worker_is_born_with_ctrl_c_blocked():
     workers are started with SIGINT blocked, and keep it so; the parent gets it back."""
     import signal
 
-    from ismb_lab.protocol import _starting_workers, _workers
+    from ismb_lab.tuning.cases import _starting_workers, _workers
 
     before = signal.pthread_sigmask(signal.SIG_BLOCK, [])
     with _workers(2) as pool:
@@ -268,7 +268,7 @@ def _png_chunks(data: bytes):
 
 @pytest.mark.parametrize("damage", ["ihdr-crc", "truncated", "idat-bytes"])
 def test_a_broken_png_is_one_line_with_the_codec_s_own_words(work, capfd, damage):
-    from ismb_lab.io import load_image
+    from ismb_lab.images.io import load_image
 
     data = bytearray((work / "L.png").read_bytes())
     if damage == "ihdr-crc":
@@ -291,7 +291,7 @@ def test_a_broken_png_is_one_line_with_the_codec_s_own_words(work, capfd, damage
 
 
 def test_a_good_image_decodes_as_before_and_keeps_what_its_codec_said(work, capfd):
-    from ismb_lab.io import _imdecode, load_image
+    from ismb_lab.images.io import _imdecode, load_image
 
     data = (work / "L.png").read_bytes()
     image, said = _imdecode(data, cv2.IMREAD_UNCHANGED)
@@ -309,8 +309,8 @@ def test_parameters_beyond_their_range_are_refused_without_a_warning(work, capfd
 
 
 def test_the_parameter_range_is_documented_and_holds_its_ends():
-    from ismb_lab.params import MAX_BIAS, MAX_LAMBDA, MAX_THETA, Params
-    from ismb_lab.similarity import transfer
+    from ismb_lab.network.params import MAX_BIAS, MAX_LAMBDA, MAX_THETA, Params
+    from ismb_lab.network.similarity import transfer
 
     Params(theta_c=MAX_THETA, theta_s=0.0, lambda_c=MAX_LAMBDA, lambda_s=1e-300, match_bias=-MAX_BIAS)
     for bad in ({"theta_c": MAX_THETA * 1.0001}, {"lambda_s": 1e308}, {"match_bias": 1e308},
@@ -328,7 +328,7 @@ def test_the_parameter_range_is_documented_and_holds_its_ends():
 ])
 def test_match_checks_every_option_before_its_rectification_check(work, capsys, monkeypatch, option):
     """A bad --roi cost a full look for robust matches and printed its warning first."""
-    monkeypatch.setattr(ismb_lab.rectify, "check_for_matching", lambda *a: pytest.fail("checked the pair first"))
+    monkeypatch.setattr(ismb_lab.images.rectify, "check_for_matching", lambda *a: pytest.fail("checked the pair first"))
     one_line(["match", work / "L.png", work / "R.png", *option], capsys)
 
 
@@ -346,12 +346,12 @@ def test_a_shift_beyond_the_image_blames_the_shift_not_the_image(work, capsys):
 def test_a_flat_pair_is_known_at_once(tmp_path, capsys, monkeypatch):
     """Two black 5000 x 5000 PNGs took 46 s and 2.3 GB for "0 matches": a flat image is seen
     before the look for robust matches and before the Harris response."""
-    import ismb_lab.features
+    import ismb_lab.images.features
 
     black = tmp_path / "black.png"
     cv2.imwrite(str(black), np.zeros((3000, 3000), np.uint8))
-    monkeypatch.setattr(ismb_lab.rectify, "check_for_matching", lambda *a: pytest.fail("looked for matches"))
-    monkeypatch.setattr(ismb_lab.features, "harris_response", lambda *a: pytest.fail("computed R"))
+    monkeypatch.setattr(ismb_lab.images.rectify, "check_for_matching", lambda *a: pytest.fail("looked for matches"))
+    monkeypatch.setattr(ismb_lab.images.features, "harris_response", lambda *a: pytest.fail("computed R"))
     out = tmp_path / "m.json"
     assert main(["match", str(black), str(black), "--json", str(out), "--roi", "full"]) == 0
     assert "the image is flat" in capsys.readouterr().out
@@ -359,18 +359,18 @@ def test_a_flat_pair_is_known_at_once(tmp_path, capsys, monkeypatch):
 
 
 def test_a_one_pair_manifest_is_refused_not_reported_as_nan(work, capsys, monkeypatch):
-    import ismb_lab.protocol
+    import ismb_lab.tuning.cases
 
     one_line(["evaluate", work / "M1.json", "--generations", "1", "--jobs", "1"], capsys, "at least two pairs")
-    monkeypatch.setattr(ismb_lab.protocol, "tune", lambda *a, **k: pytest.fail("fitted before the refusal"))
-    cases = ismb_lab.protocol.load_manifest(work / "M1.json")
+    monkeypatch.setattr(ismb_lab.tuning.cases, "tune", lambda *a, **k: pytest.fail("fitted before the refusal"))
+    cases = ismb_lab.tuning.cases.load_manifest(work / "M1.json")
     with pytest.raises(ParameterError, match="at least two pairs"):
-        ismb_lab.protocol.protocol(cases)
+        ismb_lab.tuning.cases.protocol(cases)
 
 
 def test_a_held_out_total_without_targets_says_so_instead_of_nan():
-    from ismb_lab.evaluation import Score
-    from ismb_lab.protocol import _figures
+    from ismb_lab.tuning.evaluation import Score
+    from ismb_lab.tuning.cases import _figures
 
     assert _figures(Score(0, 0, 0, 0)).endswith("C/T - (no targets)   precision - (no matches)")
     assert "nan" not in _figures(Score(0, 0, 0, 0))
@@ -380,15 +380,15 @@ def test_a_held_out_total_without_targets_says_so_instead_of_nan():
 # --- the API: a clear error naming the parameter, the rule and the value ---
 
 @pytest.mark.parametrize("call, words", [
-    (lambda: __import__("ismb_lab.io", fromlist=["orient"]).orient(np.zeros((2, 2)), 9), "'orientation'"),
-    (lambda: __import__("ismb_lab.io", fromlist=["orient"]).orient(np.zeros((2, 2)), 0), "'orientation'"),
-    (lambda: __import__("ismb_lab.io", fromlist=["orient"]).orient(np.zeros(3), 1), "'image'"),
-    (lambda: __import__("ismb_lab.io", fromlist=["png_bytes"]).png_bytes(np.zeros((0, 0))), "'image'"),
-    (lambda: __import__("ismb_lab.io", fromlist=["png_bytes"]).png_bytes(np.zeros((3, 0))), "'image'"),
-    (lambda: __import__("ismb_lab.io", fromlist=["png_bytes"]).png_bytes(np.full((2, 2), np.nan)), "'image'"),
-    (lambda: __import__("ismb_lab.similarity", fromlist=["transfer"]).transfer([1.0], float("nan"), 1.0), "'theta'"),
-    (lambda: __import__("ismb_lab.similarity", fromlist=["transfer"]).transfer([1.0], 1.0, float("inf")), "'lam'"),
-    (lambda: __import__("ismb_lab.similarity", fromlist=["transfer"]).transfer([1.0], np.array([[np.nan]]), 1.0),
+    (lambda: __import__("ismb_lab.images.io", fromlist=["orient"]).orient(np.zeros((2, 2)), 9), "'orientation'"),
+    (lambda: __import__("ismb_lab.images.io", fromlist=["orient"]).orient(np.zeros((2, 2)), 0), "'orientation'"),
+    (lambda: __import__("ismb_lab.images.io", fromlist=["orient"]).orient(np.zeros(3), 1), "'image'"),
+    (lambda: __import__("ismb_lab.images.io", fromlist=["png_bytes"]).png_bytes(np.zeros((0, 0))), "'image'"),
+    (lambda: __import__("ismb_lab.images.io", fromlist=["png_bytes"]).png_bytes(np.zeros((3, 0))), "'image'"),
+    (lambda: __import__("ismb_lab.images.io", fromlist=["png_bytes"]).png_bytes(np.full((2, 2), np.nan)), "'image'"),
+    (lambda: __import__("ismb_lab.network.similarity", fromlist=["transfer"]).transfer([1.0], float("nan"), 1.0), "'theta'"),
+    (lambda: __import__("ismb_lab.network.similarity", fromlist=["transfer"]).transfer([1.0], 1.0, float("inf")), "'lam'"),
+    (lambda: __import__("ismb_lab.network.similarity", fromlist=["transfer"]).transfer([1.0], np.array([[np.nan]]), 1.0),
      "'theta'"),
 ])
 def test_the_api_names_the_parameter_rule_and_value(call, words):
@@ -397,8 +397,8 @@ def test_the_api_names_the_parameter_rule_and_value(call, words):
 
 
 def test_orient_png_bytes_and_transfer_are_unchanged_on_good_values():
-    from ismb_lab.io import orient, png_bytes
-    from ismb_lab.similarity import transfer
+    from ismb_lab.images.io import orient, png_bytes
+    from ismb_lab.network.similarity import transfer
 
     image = np.arange(6.0).reshape(2, 3)
     assert orient(image, 6).tolist() == [[3.0, 0.0], [4.0, 1.0], [5.0, 2.0]]
@@ -410,11 +410,11 @@ def test_orient_png_bytes_and_transfer_are_unchanged_on_good_values():
 
 def test_what_opencv_still_refuses_is_one_line(work, capsys, monkeypatch):
     """The last guard of the class "tracebacks": a cv2.error no check foresaw is the input's."""
-    import ismb_lab.matching
+    import ismb_lab.matching.pipeline
 
     def refuses(*args, **kwargs):
         cv2.calibrateCamera([], [], (1, 1), None, None)   # raises cv2.error
 
-    monkeypatch.setattr(ismb_lab.matching, "prepare", refuses)
+    monkeypatch.setattr(ismb_lab.matching.pipeline, "prepare", refuses)
     err = one_line(["match", work / "L.png", work / "R.png"], capsys, "OpenCV cannot work with this input")
     assert "nimages > 0" in err

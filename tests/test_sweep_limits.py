@@ -7,8 +7,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-import ismb_lab.matching
-import ismb_lab.protocol
+import ismb_lab.matching.pipeline
+import ismb_lab.tuning.cases
 from ismb_lab import ParameterError
 from ismb_lab.cli import main
 
@@ -27,14 +27,14 @@ def no_work(monkeypatch):
     for module in pkgutil.iter_modules(commands.__path__):
         if module.name != "__main__":
             importlib.import_module(f"ismb_lab.cli.{module.name}")
-    for name in ("depth_demo", "metric"):
+    for name in ("depth.pipeline", "matching.metric"):
         importlib.import_module(f"ismb_lab.{name}")
 
     def work(*args, **kwargs):
         raise AssertionError("the work started before the refusal")
 
-    monkeypatch.setattr(ismb_lab.matching, "prepare", work)
-    monkeypatch.setattr(ismb_lab.protocol, "prepare", work)
+    monkeypatch.setattr(ismb_lab.matching.pipeline, "prepare", work)
+    monkeypatch.setattr(ismb_lab.tuning.cases, "prepare", work)
 
 
 def refused(argv, capsys, match: str):
@@ -71,10 +71,10 @@ def test_a_params_file_is_held_to_the_same_limits(work, capsys, no_work, options
 
 
 def test_the_library_bounds_a_schedule_before_it_starts():
-    from ismb_lab.annealing import MAX_SWEEPS, anneal, iter_annealing
-    from ismb_lab.exact import milp_minimum
-    from ismb_lab.hopfield import Network
-    from ismb_lab.solvers import AnnealSolver, ExactSolver
+    from ismb_lab.network.annealing import MAX_SWEEPS, anneal, iter_annealing
+    from ismb_lab.network.exact import milp_minimum
+    from ismb_lab.network.hopfield import Network
+    from ismb_lab.network.solvers import AnnealSolver, ExactSolver
 
     net = Network.from_arrays(1, 2, rows=[0, 0], cols=[0, 1], similarity=[0.5, -0.7], pair_a=[], pair_b=[],
                               pair_c=[])
@@ -109,8 +109,8 @@ def test_a_default_jobs_above_the_limit_is_lowered_with_a_note(monkeypatch, caps
 
 def test_the_protocol_starts_no_more_workers_than_pairs(monkeypatch):
     """``jobs=1000000`` started an interpreter per task (2.76 GB): the pool is no larger than the pairs."""
-    import ismb_lab.protocol as protocol
-    from ismb_lab.protocol import Case
+    import ismb_lab.tuning.cases as protocol
+    from ismb_lab.tuning.cases import Case
 
     asked = []
 
@@ -134,7 +134,7 @@ def test_the_protocol_starts_no_more_workers_than_pairs(monkeypatch):
 # --- files: params, rig and manifest JSON, and image headers ---
 
 def _padded(path, text):
-    from ismb_lab._files import MAX_JSON_BYTES
+    from ismb_lab._core.files import MAX_JSON_BYTES
 
     path.write_text(" " * MAX_JSON_BYTES + text)   # valid JSON, one byte per blank over the cap
     return path
@@ -158,7 +158,7 @@ def test_json_files_above_the_cap_are_refused_unparsed(work, capsys, no_work, mo
 
 
 def test_read_json_reads_no_more_than_the_cap(tmp_path):
-    from ismb_lab._files import read_json
+    from ismb_lab._core.files import read_json
 
     path = tmp_path / "big.json"
     with open(path, "wb") as handle:   # 1 GB of holes: reading it all would take a while and the memory
@@ -176,8 +176,8 @@ def test_read_json_reads_no_more_than_the_cap(tmp_path):
 def test_a_netpbm_header_is_read_whole_before_decoding(tmp_path, monkeypatch, header, size):
     import cv2
 
-    from ismb_lab._header import image_size
-    from ismb_lab.io import load_image
+    from ismb_lab._core.header import image_size
+    from ismb_lab.images.io import load_image
 
     assert image_size(header + b"\0" * 10)[1:] == size
     monkeypatch.setattr(cv2, "imdecode", lambda *a: pytest.fail("decoded before the size was refused"))
@@ -189,7 +189,7 @@ def test_a_netpbm_header_is_read_whole_before_decoding(tmp_path, monkeypatch, he
 
 @pytest.mark.parametrize("number", [b"2147483648", b"0" * 100 + b"99999999999", b"9" * 5000])
 def test_a_netpbm_size_beyond_a_c_int_is_refused(number):
-    from ismb_lab._header import HeaderError, image_size
+    from ismb_lab._core.header import HeaderError, image_size
 
     with pytest.raises(HeaderError, match="2\\*\\*31 - 1"):
         image_size(b"P5\n" + number + b" 10\n255\n")
@@ -198,7 +198,7 @@ def test_a_netpbm_size_beyond_a_c_int_is_refused(number):
 # --- the API's sizes ---
 
 def test_an_array_image_is_held_to_the_pixel_limit_before_any_copy(monkeypatch):
-    from ismb_lab.io import load_image, load_pair
+    from ismb_lab.images.io import load_image, load_pair
 
     huge = np.broadcast_to(np.uint8(0), (65537, 16385))   # no memory: a view of one byte
     with pytest.raises(ParameterError, match="ISMB_LAB_MAX_PIXELS"):
@@ -212,7 +212,7 @@ def test_an_array_image_is_held_to_the_pixel_limit_before_any_copy(monkeypatch):
 
 
 def test_windows_and_candidate_masks_are_bounded_before_they_are_made():
-    from ismb_lab.similarity import MAX_CANDIDATE_PAIRS, candidate_mask, patches
+    from ismb_lab.network.similarity import MAX_CANDIDATE_PAIRS, candidate_mask, patches
 
     image = np.zeros((40, 60))
     for size in (10**9 + 1, 81):   # 2 * 40 - 1 = 79 is the widest window the mirror completes
@@ -232,7 +232,7 @@ def test_windows_and_candidate_masks_are_bounded_before_they_are_made():
 
 
 def test_a_huge_harris_window_is_refused_and_an_empty_search_skips_the_response(monkeypatch):
-    import ismb_lab.features as features
+    import ismb_lab.images.features as features
 
     image = np.random.default_rng(0).uniform(0, 255, (60, 80))
     for call in (lambda: features.detect_corners(image, sigma=1e6),

@@ -10,7 +10,7 @@ from pathlib import Path
 
 import pytest
 
-from ismb_lab._files import OutputError, atomic_write_text, check_output
+from ismb_lab._core.files import OutputError, atomic_write_text, check_output
 from ismb_lab.cli import build_parser, main
 
 ROOT = Path(__file__).resolve().parent.parent
@@ -83,7 +83,7 @@ def test_every_path_a_command_takes_is_a_declared_input(name, tmp_path):
     prog = p.prog.split()[1:]
     args = build_parser().parse_args(prog + argv)
     if name == "source":
-        pytest.skip("course source writes a folder of its own (its files are checked by ismb_lab.course)")
+        pytest.skip("course source writes a folder of its own (its files are checked by ismb_lab.teaching.course)")
     declared = files_of(args)
     read = {Path(path) for _, path in declared.inputs} | {Path(path) for path in declared.reads}
     for action in _path_inputs(p):
@@ -114,7 +114,7 @@ def test_evaluate_refuses_a_json_over_a_file_its_built_in_source_reads(work, cap
 
 
 def test_a_manifest_declares_the_files_of_its_built_in_sources():
-    from ismb_lab.protocol import SOURCES, source_files
+    from ismb_lab.tuning.cases import SOURCES, source_files
 
     assert set(SOURCES) == {"middlebury-motorcycle", "middlebury-aloe"}
     names = [p.name for p in source_files("middlebury-motorcycle")]
@@ -156,7 +156,7 @@ def test_an_output_name_written_as_a_folder_is_refused(work, capsys, monkeypatch
 
 
 def test_the_library_refuses_a_folder_name_too(tmp_path):
-    from ismb_lab._files import refuse_folder_name
+    from ismb_lab._core.files import refuse_folder_name
 
     for name in (f"{tmp_path}/p.json/", f"{tmp_path}/p.json/."):
         with pytest.raises(OutputError, match="names a folder"):
@@ -185,7 +185,7 @@ def course(tmp_path):
 
 
 def test_a_student_folder_that_links_out_of_the_class_is_not_followed(course):
-    from ismb_lab.classroom import collected
+    from ismb_lab.labels.classroom import collected
 
     submitted = course / "course" / "submitted"
     (submitted / "mallory").symlink_to(course / "outside")          # the sweep's link to /
@@ -201,7 +201,7 @@ def test_a_student_folder_that_links_out_of_the_class_is_not_followed(course):
 
 def test_a_submitted_folder_that_is_a_link_is_refused(course):
     from ismb_lab import ParameterError
-    from ismb_lab.classroom import collected
+    from ismb_lab.labels.classroom import collected
 
     (course / "other").mkdir()
     (course / "other" / "submitted").symlink_to(course / "course" / "submitted")

@@ -8,9 +8,8 @@ import numpy as np
 import pytest
 
 from ismb_lab import ParameterError, ParameterTypeError
-from ismb_lab.io import load_pair
-from ismb_lab.targets import (Snapped, TargetSet, load_targets, save_targets, snap,
-                              targets_from_matches)
+from ismb_lab.images.io import load_pair
+from ismb_lab.labels.targets import Snapped, TargetSet, load_targets, save_targets, snap, targets_from_matches
 
 H1 = "a" * 64
 H2 = "b" * 64

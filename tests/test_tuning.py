@@ -4,11 +4,11 @@ import numpy as np
 import pytest
 
 from ismb_lab import ParameterError
-from ismb_lab.matching import match, prepare
-from ismb_lab.methods import Params
-from ismb_lab.protocol import Case, format_protocol, protocol
+from ismb_lab.matching.pipeline import match, prepare
+from ismb_lab.network.methods import Params
+from ismb_lab.tuning.cases import Case, format_protocol, protocol
 from ismb_lab.scenes import synthetic_scene, true_matches
-from ismb_lab.tuning import Fitness, evaluate, gene_bounds, to_chromosome, to_params, tune
+from ismb_lab.tuning.fitness import Fitness, evaluate, gene_bounds, to_chromosome, to_params, tune
 
 
 def case(scene, seed):
@@ -114,8 +114,8 @@ def _one_at_a_time(fitness, population):
 def test_a_batch_of_chromosomes_scores_as_each_one_alone(cases, method):
     """The compiled batch (every built-in method, both rules, both stop rules, several seeds,
     Method-I's post-processing) gives each chromosome the fitness of its own network run."""
-    from ismb_lab.genetic import initial_population
-    from ismb_lab.solvers import get_solver
+    from ismb_lab.tuning.genetic import initial_population
+    from ismb_lab.network.solvers import get_solver
 
     population = initial_population(len(method), gene_bounds(method), 25)
     population[0] = gene_bounds(method).low   # the edges of the box too
@@ -131,7 +131,7 @@ def test_a_batch_of_chromosomes_scores_as_each_one_alone(cases, method):
 
 
 def test_the_batch_leaves_other_methods_solvers_and_bad_genes_to_the_general_path(cases):
-    from ismb_lab.methods import MethodIII
+    from ismb_lab.network.methods import MethodIII
 
     class Flat(MethodIII):
         name = "FLAT-TEST"
@@ -143,7 +143,7 @@ def test_the_batch_leaves_other_methods_solvers_and_bad_genes_to_the_general_pat
     flat = Fitness(cases[:1], Flat())
     assert flat._batch(population) is None
     assert np.array_equal(flat(population), _one_at_a_time(flat, population))
-    from ismb_lab.solvers import get_solver
+    from ismb_lab.network.solvers import get_solver
     textbook = Fitness(cases[:1], "III", solver=get_solver("network", kernel="textbook"))
     assert textbook._batch(population) is None
     assigned = Fitness(cases[:1], "III", solver="assign")
@@ -158,8 +158,8 @@ def test_the_batch_leaves_other_methods_solvers_and_bad_genes_to_the_general_pat
 def test_the_general_path_scores_each_chromosome_over_its_seeds_as_evaluate_does(cases):
     """The annealing path (no compiled batch) builds each network once for all the fit seeds;
     the fitness is still evaluate()'s mean over the seeds."""
-    from ismb_lab.genetic import initial_population
-    from ismb_lab.solvers import AnnealSolver
+    from ismb_lab.tuning.genetic import initial_population
+    from ismb_lab.network.solvers import AnnealSolver
 
     population = initial_population(3, gene_bounds("NM3"), 4)
     for solver in ("anneal", AnnealSolver(settle=0.2)):
@@ -174,10 +174,10 @@ def test_a_persons_few_labels_are_scored_only_at_the_corners_they_label(tmp_path
     labels, only the five corners count, as notebook 04 scores them."""
     import cv2
 
-    from ismb_lab.matching import match, prepare
-    from ismb_lab.protocol import Case
+    from ismb_lab.matching.pipeline import match, prepare
+    from ismb_lab.tuning.cases import Case
     from ismb_lab.scenes import synthetic_scene, true_matches
-    from ismb_lab.targets import save_targets, targets_from_matches
+    from ismb_lab.labels.targets import save_targets, targets_from_matches
     from ismb_lab.widgets.explorer import ParameterExplorer
 
     scene = synthetic_scene(seed=3)
@@ -196,7 +196,7 @@ def test_a_persons_few_labels_are_scored_only_at_the_corners_they_label(tmp_path
     whole, partial = Case.from_files(*files, path), Case.from_files(*files, path, partial=True)
     assert whole.unknown.size == 0 and sorted(set(partial.unknown.tolist()) | {i for i, _ in five}) \
         == list(range(len(prepared.problem.left_xy)))
-    from ismb_lab.methods import THESIS_PARAMS
+    from ismb_lab.network.methods import THESIS_PARAMS
 
     as_whole, as_partial = (evaluate([c], "III", THESIS_PARAMS["III"]) for c in (whole, partial))
     assert as_whole.extra == len(found) - 5 and as_whole.fitness < 0

@@ -1,23 +1,9 @@
-"""The ``ismb-lab`` command line.
+"""The ``ismb-lab`` command line (docs/cli.md).
 
-Every error the user can cause prints one line on stderr and exits with code 2.
-Each command is a module of this package with ``add_parser(subparsers)``, which
-registers its options and its ``run(args) -> exit code``.
-
-Before a command's work starts, :func:`ismb_lab.cli._guard.preflight` checks its
-limits, its inputs (regular files only) and its outputs (never an input, a folder,
-a device, a FIFO or a read-only file unless ``--force``; symbolic links are written
-through, never replaced).  SIGINT, SIGTERM and SIGHUP stop the work alike; the exit
-code is 128 + the signal's number (130 for Ctrl-C).
-
-A closed stdout or stderr (``ismb-lab match ... | head``, ``2>&-``) is not an error: what is
-printed after the reader left is dropped, the command's files are still written, and
-the exit code is the command's own (0 when it succeeded).  A stdout that refuses what is
-written (``> /dev/full``) is an error: one line on stderr, and exit code 2.  A character that
-the terminal's encoding cannot show is printed as a backslash escape.
-
-The command modules are imported when the parser is built, not when this package
-is, so that a signal during start-up already finds the handlers of :func:`main`.
+Each command is a module here with ``add_parser(subparsers)``, which registers its options and its
+``run(args) -> exit code``.  A user's error is one line on stderr and exit code 2; a signal exits
+with 128 + its number.  The command modules are imported when the parser is built, not when this
+package is, so that a signal during start-up already finds the handlers of :func:`main`.
 """
 
 from __future__ import annotations
@@ -26,15 +12,15 @@ import os
 import sys
 
 from .. import __version__
-from .._files import OutputError
-from ._guard import LIMITS, Interrupts, interrupted_line, preflight
+from .._core.files import OutputError
+from ._guard import LIMITS, Interrupts, UsageError, interrupted_line, preflight
 
-__all__ = ["COMMANDS", "UsageError", "build_parser", "main"]
+__all__ = ["UsageError", "build_parser", "main"]
 
 def _epilog() -> str:
-    from .._files import MAX_JSON_BYTES
-    from ..io import MAX_PIXELS, MOST_PIXELS, PIXELS_VARIABLE
-    from ..targets import MAX_BYTES, MAX_PAIRS
+    from .._core.files import MAX_JSON_BYTES
+    from ..images.io import MAX_PIXELS, MOST_PIXELS, PIXELS_VARIABLE
+    from ..labels.targets import MAX_BYTES, MAX_PAIRS
     from ._guard import MOST
 
     return (f"limits (each set by its environment variable, a whole number from 1 to {MOST}; a value typed "
@@ -50,16 +36,8 @@ def _commands():
     return (match, tune, evaluate, depth, rectify, calibrate, rig, render, targets, course)
 
 
-def __getattr__(name):
-    if name == "COMMANDS":   #: The commands, in the order ``--help`` lists them.
-        return _commands()
-    if name == "UsageError":
-        from ._common import UsageError
-        return UsageError
-    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
-
-
 def build_parser():
+    """The ``ismb-lab`` argument parser, with every command's subparser added."""
     from ._common import Parser
 
     parser = Parser(prog="ismb-lab", description="Hopfield-network stereo matching of Harris "
@@ -72,11 +50,6 @@ def build_parser():
     return parser
 
 
-def _cli_words(text: str) -> str:
-    # The library's advice names its own keyword; on the command line the flag does that job.
-    return text.replace("or pass check_hash=False", "or give --no-hash-check to 'ismb-lab tune'")
-
-
 def _interrupted(interrupts, running: bool) -> int:
     # Before its command runs, nothing has been written; once it runs, the command says what it kept.
     print(interrupted_line("" if running else "nothing was saved"), file=sys.stderr)
@@ -84,11 +57,9 @@ def _interrupted(interrupts, running: bool) -> int:
 
 
 class _ReaderMayLeave:
-    """A stand-in for sys.stdout or sys.stderr that never fails the command: what is printed
-    once the reader of its pipe has gone (a BrokenPipeError) is dropped; a write the device
-    refuses (``> /dev/full``) is dropped too, and kept in `failed` for :func:`main` to report;
-    a character the stream's encoding cannot write (``PYTHONIOENCODING=ascii``) is written
-    as a backslash escape."""
+    """sys.stdout or sys.stderr that never fails the command: a write after the pipe's reader left
+    is dropped, one the device refuses (``> /dev/full``) is dropped and kept in `failed`, and a
+    character the encoding cannot write is written as a backslash escape."""
 
     def __init__(self, stream):
         self._stream = stream
@@ -101,23 +72,19 @@ class _ReaderMayLeave:
             except UnicodeEncodeError:
                 encoding = getattr(self._stream, "encoding", None) or "ascii"
                 return self._stream.write(text.encode(encoding, "backslashreplace").decode(encoding))
-        except BrokenPipeError:
-            self._to_devnull()
         except OSError as exc:
-            self.failed = self.failed or exc
-            self._to_devnull()
+            self._lost(exc)
         return len(text)
 
     def flush(self):
         try:
             self._stream.flush()
-        except BrokenPipeError:
-            self._to_devnull()
         except OSError as exc:
-            self.failed = self.failed or exc
-            self._to_devnull()
+            self._lost(exc)
 
-    def _to_devnull(self):
+    def _lost(self, exc):
+        if not isinstance(exc, BrokenPipeError):
+            self.failed = self.failed or exc
         # What is still buffered, and the interpreter's own flush at exit, go to /dev/null.
         try:
             fd = self._stream.fileno()
@@ -138,10 +105,8 @@ class _ReaderMayLeave:
 
 
 def _open_standard_fds() -> None:
-    """Open /dev/null on each of the file descriptors 0, 1 and 2 that is closed (``2>&-``).
-
-    Else the next file opened gets that number, and whatever a C library writes to
-    "stderr" lands in it."""
+    """Open /dev/null on each closed one of the file descriptors 0, 1 and 2 (``2>&-``): else the
+    next file opened gets that number, and what a C library writes to "stderr" lands in it."""
     for fd in (0, 1, 2):
         try:
             os.fstat(fd)
@@ -168,15 +133,12 @@ class _closed_pipes_tolerated:
             setattr(sys, name, _ReaderMayLeave(stream))
         return self
 
-    def failed(self, name: str):
-        """The OSError that made writes to sys.`name` fail, if one did."""
-        stream = getattr(sys, name)
-        return stream.failed if isinstance(stream, _ReaderMayLeave) else None
-
     def __exit__(self, *exc):
         for name in self.NAMES:
             getattr(sys, name).flush()
-        self.errors = {name: self.failed(name) for name in self.NAMES}
+        streams = {name: getattr(sys, name) for name in self.NAMES}
+        self.errors = {name: stream.failed if isinstance(stream, _ReaderMayLeave) else None
+                       for name, stream in streams.items()}
         for name, stream in self._old.items():
             setattr(sys, name, stream)
         for stream in self._opened:
@@ -187,10 +149,9 @@ class _closed_pipes_tolerated:
 def main(argv=None) -> int:
     """Entry point of ``ismb-lab``; returns the exit code.
 
-    Run as the program (`argv` None), an interrupted run ends with ``os._exit`` once
-    its output is flushed: a KeyboardInterrupt that passed through a C extension can
-    leave CPython's "unhandled Ctrl-C" flag set, and the interpreter would then kill
-    itself with SIGINT at exit instead of returning 130.
+    Run as the program (`argv` None), an interrupted run ends with ``os._exit``: a KeyboardInterrupt
+    that passed through a C extension can leave CPython's "unhandled Ctrl-C" flag set, and the
+    interpreter would then kill itself with SIGINT at exit instead of returning 130.
     """
     interrupts = Interrupts()
     if argv is None:
@@ -213,39 +174,28 @@ def main(argv=None) -> int:
     return code
 
 
-#: The commands that run the network, and so compile its kernels on their first run.
-_COMPILING = frozenset({"match", "tune", "evaluate", "depth"})
-
-
 def _announce_compiling() -> None:
-    """One line on a terminal's stderr before numba compiles the network's kernels (the first run
-    for this user, or after an upgrade): that run is silent for up to a minute otherwise.
-    Not said when stderr is a file or a pipe, where a script reads what the command reports."""
-    from .._kernel import _solve
-    from .._numba import cold
+    """One line on a terminal's stderr before numba compiles the network's kernels (silent for up
+    to a minute otherwise); not on a file or a pipe, where a script reads what the command reports."""
+    from ..network.kernel import run_network
+    from .._core.numba_cache import cold
 
-    if sys.stderr.isatty() and cold(_solve):
+    if sys.stderr.isatty() and cold(run_network):
         print("ismb-lab: compiling the network's kernels, once for this installation and user "
               "(up to a minute); later runs start at once", file=sys.stderr, flush=True)
-
-
-def _opencv_error(exc) -> bool:
-    """Whether `exc` is a ``cv2.error`` (named, so that importing the CLI imports no OpenCV)."""
-    kind = type(exc)
-    return kind.__module__ == "cv2" and kind.__name__ == "error"
 
 
 def _main(argv, interrupts) -> int:
     usage_errors, args, running = (OutputError, OSError), None, False
     with interrupts:
         try:
-            from ._common import ParameterError, ParameterTypeError, UsageError
+            from ._common import ParameterError, ParameterTypeError
 
             usage_errors += (UsageError, ParameterError, ParameterTypeError)
             args = build_parser().parse_args(argv)
             preflight(args, UsageError)
             running = True
-            if args.command in _COMPILING:
+            if getattr(args, "compiles", False):   # a command that runs the network says so
                 _announce_compiling()
             code = args.run(args)
             if code == 130 and interrupts.signum is not None:
@@ -259,7 +209,9 @@ def _main(argv, interrupts) -> int:
             if interrupts.signum is not None:
                 return _interrupted(interrupts, running)
             if isinstance(exc, usage_errors):
-                print(f"ismb-lab: error: {_cli_words(str(exc))}", file=sys.stderr)
+                # The library's advice names its own keyword; on the command line the flag does that job.
+                said = str(exc).replace("or pass check_hash=False", "or give --no-hash-check to 'ismb-lab tune'")
+                print(f"ismb-lab: error: {said}", file=sys.stderr)
             elif isinstance(exc, RecursionError):
                 files = [f"{name} {str(getattr(args, name))!r}" for name in ("targets", "manifest")
                          if getattr(args, name, None) is not None]
@@ -268,7 +220,9 @@ def _main(argv, interrupts) -> int:
             elif isinstance(exc, MemoryError):
                 print("ismb-lab: error: out of memory: the input is too large for this machine "
                       "(see the limits in 'ismb-lab --help')", file=sys.stderr)
-            elif _opencv_error(exc):   # OpenCV refuses what no check here foresaw: still the input's fault
+            elif (type(exc).__module__, type(exc).__name__) == ("cv2", "error"):
+                # OpenCV refuses what no check here foresaw: still the input's fault (cv2.error is
+                # named, so that importing the CLI imports no OpenCV)
                 said = " ".join(str(exc).split())
                 print(f"ismb-lab: error: OpenCV cannot work with this input: "
                       f"{said if len(said) <= 300 else said[:297] + '...'}", file=sys.stderr)

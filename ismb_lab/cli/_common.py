@@ -1,7 +1,6 @@
-"""Pieces every ``ismb-lab`` command shares: the one-line error, option groups, parameters.
+"""Pieces the ``ismb-lab`` commands share: the one-line error, option groups, the recipe.
 
-An option left out means "the library's default": options default to None, and
-their help shows the default that the library will use.
+An option left out means the library's default: options default to None, and their help shows it.
 """
 
 from __future__ import annotations
@@ -12,20 +11,20 @@ import sys
 from dataclasses import replace
 from pathlib import Path
 
-from .._files import check_input
-from .._validation import ParameterError, ParameterTypeError
-from ..genetic import GAConfig
-from ..hopfield import RULES
-from ..dynamics import STOP_RULES
-from ..matching import MatchConfig, match
-from ..methods import DEFAULT_METHOD, all_genes, get_method, method_names
-from ..solvers import SOLVERS, NetworkSolver
-from ._guard import UsageError, interrupted
+from .._core.files import check_input
+from .._core.validation import ParameterError, ParameterTypeError
+from ..tuning.genetic import GAConfig
+from ..network.hopfield import RULES
+from ..network.dynamics import STOP_RULES
+from ..matching.pipeline import MatchConfig, match
+from ..network.methods import DEFAULT_METHOD, all_genes, get_method, method_names
+from ..network.solvers import SOLVERS, NetworkSolver
+from ._guard import UsageError, _short, interrupted
 
 __all__ = ["ParameterError", "ParameterTypeError", "Parser", "UsageError", "add_ga_options", "given",
            "add_matching_options", "add_feature_options", "window_record", "add_solver_option",
            "add_solver_settings", "ga_config", "solver_settings", "with_settings",
-           "gene_options", "match_config", "progress_bar", "resolve_recipe"]
+           "match_config", "progress_bar", "resolve_recipe"]
 
 FEATURE_OPTIONS = ("roi", "shift", "n_min", "n_max")
 
@@ -38,11 +37,6 @@ class Parser(argparse.ArgumentParser):
 def default_of(function, name: str):
     """The default of one of `function`'s keyword arguments: the one place it is declared."""
     return inspect.signature(function).parameters[name].default
-
-
-def gene_options() -> tuple[str, ...]:
-    """Every gene of every registered method: one option each."""
-    return tuple(g.name for g in all_genes())
 
 
 def add_method_option(p: argparse.ArgumentParser, default_text: str) -> None:
@@ -118,19 +112,18 @@ def window_record(config: MatchConfig, auto: bool) -> dict:
 
 
 def seed(text: str) -> int:
-    """An argparse type: a seed from 0 to :data:`ismb_lab._validation.MAX_SEED` (2**63 - 1).
+    """An argparse type: a seed from 0 to 2**63 - 1.
 
     >>> seed("7")
     7
     """
-    from .._validation import MAX_SEED
+    from .._core.validation import MAX_SEED
 
     text = text.strip()
     value = int(text) if text.isascii() and text.isdigit() and len(text) <= len(str(MAX_SEED)) else -1
     if not 0 <= value <= MAX_SEED:
-        shown = text if len(text) <= 40 else text[:37] + "..."
         raise argparse.ArgumentTypeError(f"a seed is a whole number from 0 to {MAX_SEED} (2**63 - 1), "
-                                         f"not {shown!r}")
+                                         f"not {_short(text)!r}")
     return value
 
 
@@ -176,13 +169,11 @@ def match_config(args, base: MatchConfig | None = None) -> MatchConfig:
 def resolve_recipe(args, solver: str, defaults=None):
     """The recipe from --params-file, replaced field by field by the options given.
 
-    `solver` is the command's solver when the file names none (or there is no file);
-    `defaults`, a mapping of method name to Params, replaces a method's own defaults
-    when no params file is given (the depth demo's fitted values).  What an option
-    changes in the file's recipe, and a version-1 file whose solver this command did not
-    use before, are said once each on stderr.
+    `solver` is the command's solver when the file names none (or there is no file); `defaults`
+    (method name -> Params) replaces a method's own defaults when no file is given.  What the
+    options change in the file's recipe is said on stderr.
     """
-    from ..recipe import Recipe, load_recipe
+    from ..matching.recipe import Recipe, load_recipe
 
     loaded = None
     if args.params_file is not None:
@@ -198,7 +189,7 @@ def resolve_recipe(args, solver: str, defaults=None):
         method = args.method or DEFAULT_METHOD
         base = Recipe(method, (defaults or {}).get(method), solver)
     method = base.method
-    given = {k: getattr(args, k) for k in gene_options() if getattr(args, k) is not None}
+    given = {g.name: getattr(args, g.name) for g in all_genes() if getattr(args, g.name) is not None}
     for name in method.derived:
         if name in given:
             raise UsageError(f"--{name.replace('_', '-')} is not used by Method-{method.name}, which sets {name} "
@@ -216,9 +207,8 @@ def resolve_recipe(args, solver: str, defaults=None):
 
 
 def configured_solver(args, base):
-    """`base`, or the solver --solver names (with `base`'s options if it is the same one), with
-    --stop-rule and --rule."""
-    from ..solvers import get_solver
+    """`base`, or the solver --solver names, with --stop-rule, --rule and --solver-option."""
+    from ..network.solvers import get_solver
 
     chosen = base if args.solver is None or args.solver == base.name else args.solver
     settings = {"stop_rule": getattr(args, "stop_rule", None), "rule": getattr(args, "rule", None)}
@@ -234,7 +224,7 @@ def configured_solver(args, base):
 
 def with_settings(solver, args):
     """`solver` (a name or a Solver) with the ``--solver-option`` values given; a bad one is a usage error."""
-    from ..solvers import get_solver
+    from ..network.solvers import get_solver
 
     try:
         return get_solver(solver, "ismb-lab", "--solver-option", **solver_settings(args))
@@ -254,11 +244,8 @@ def note(text: str) -> None:
 
 
 def check_unused_genes(method: str, params) -> None:
-    """Refuse a ``match_bias`` that `method` would not run, so that a result records what ran.
-
-    Only methods with the gene run it; a method that fixes it (Method-NM4: 0) accepts
-    that value alone.
-    """
+    """Refuse a ``match_bias`` that `method` would not run (one that fixes it accepts that value
+    alone), so that a result records what ran."""
     m, bias = get_method(method), params.match_bias
     if bias is None or "match_bias" in m.gene_names or m.fixed.get("match_bias") == bias:
         return
@@ -278,18 +265,30 @@ def given(*named) -> tuple:
     return tuple((what, path) for what, path in named if path is not None)
 
 
+def write_ply(path, xyz, xy, image, camera, what: str) -> None:
+    """Write the PLY cloud of the points `xyz` in front of the cameras, each grey as `image` at its `xy`."""
+    import numpy as np
+
+    from .._core.files import atomic_write_bytes
+    from ..matching.ply import ply_bytes
+
+    keep = np.all(np.isfinite(xyz), axis=1)
+    xy = np.rint(np.asarray(xy, dtype=float).reshape(-1, 2)[keep]).astype(int)
+    h, w = image.shape
+    grey = image[np.clip(xy[:, 1], 0, h - 1), np.clip(xy[:, 0], 0, w - 1)]
+    atomic_write_bytes(path, ply_bytes(xyz[keep], np.clip(grey, 0, 255), comments=(
+        f"{what}metres in the rectified left camera's frame (X right, Y down, Z forward)",
+        f"focal length {camera.focal_px:.6g} px, baseline {camera.baseline_m:.6g} m")))
+
+
 def seed_setting(args) -> dict:
     """--seed, if given, as a keyword argument."""
     return {} if args.seed is None else {"seed": args.seed}
 
 
 def progress_bar(total: int, desc: str, unit: str = "gen"):
-    """A tqdm bar whose ``update`` raises KeyboardInterrupt once SIGINT, SIGTERM or SIGHUP came.
-
-    The signal handler raises KeyboardInterrupt itself, but one raised inside a C
-    extension (numba's dispatcher, an import) can be swallowed there; checking at
-    every update makes sure the work still stops at the next one.
-    """
+    """A tqdm bar on stderr whose ``update`` raises KeyboardInterrupt once a signal came (the
+    handler's own can be swallowed inside a C extension)."""
     from tqdm import tqdm
 
     class _Bar(tqdm):
@@ -302,32 +301,27 @@ def progress_bar(total: int, desc: str, unit: str = "gen"):
 
 
 class BestSoFar:
-    """A GA progress callback's companion: keeps the latest record, to save it when interrupted.
-
-    `recipe` (:class:`ismb_lab.recipe.Recipe`) is what the fit runs for; the file written holds it
-    with the best parameters so far.
-    """
+    """A GA progress callback that keeps the latest record, to save `recipe` with the best
+    parameters so far when interrupted."""
 
     def __init__(self, recipe):
-        self.recipe, self.method, self.name, self.record = recipe, recipe.method.name, None, None
+        self.recipe, self.name, self.record = recipe, None, None
 
     def __call__(self, name, record) -> None:
         self.name, self.record = name, record
 
     def save(self, path) -> int:
-        """Write the recipe with the best parameters so far to `path` (if given and a generation
-        finished); 130."""
-        from ..recipe import save_recipe
-        from ..tuning import to_params
+        """Write the recipe with the best parameters so far to `path` (if given); 130."""
+        from ..matching.recipe import save_recipe
+        from ..tuning.fitness import to_params
 
         if self.record is None:
             raise KeyboardInterrupt
         recipe = replace(self.recipe, params=to_params(self.recipe.method, self.record.best_chromosome))
-        params = recipe.params
         if path is not None:
             save_recipe(path, recipe, fitness=self.record.best, generations=self.record.index,
                         fitted_on=self.name, interrupted=True)
         print(f"ismb-lab: interrupted while fitting {self.name}; best parameters so far "
-              f"{params.to_dict()}" + (f", written to {path}" if path is not None else ""),
+              f"{recipe.params.to_dict()}" + (f", written to {path}" if path is not None else ""),
               file=sys.stderr)
         return 130

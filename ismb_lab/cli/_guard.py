@@ -1,39 +1,8 @@
-"""What every ``ismb-lab`` command gets before and around its work.
-
-* :class:`Interrupts`: SIGINT, SIGTERM and SIGHUP all stop the work like Ctrl-C,
-  and the exit code is ``128 + signal number`` (130, 143, 129).  Within
-  :func:`deferred_signals` (the write of what an interrupted command keeps) a signal
-  is only recorded, so that a second one cannot cut that write short.
-* :func:`preflight`: the limits, the inputs (regular files only) and the outputs
-  (:func:`ismb_lab._files.check_output`) are checked before any long work starts.
-* :func:`json_text` and :func:`save_figure`: every JSON and plot output is
-  written atomically through :func:`ismb_lab._files.atomic_write_bytes`.
-
-Limits (each raised, or lowered, by an environment variable; ``ismb-lab --help`` lists them):
-
-=========================  =========  =============================================
-variable                   default    what it bounds
-=========================  =========  =============================================
-ISMB_LAB_MAX_PIXELS        25000000   pixels of one image (its file's header, an array's shape)
-ISMB_LAB_MAX_CORNERS       500        ``--n-max``, corners per image
-ISMB_LAB_MAX_POPULATION    1000       ``--population`` of the GA
-ISMB_LAB_MAX_GENERATIONS   100000     ``--generations`` of the GA
-ISMB_LAB_MAX_SEEDS         100        ``--seeds`` and ``--fit-seeds`` of evaluate
-ISMB_LAB_MAX_JOBS          64         ``--jobs`` of evaluate, worker processes
-=========================  =========  =============================================
-
-Each variable is a whole number from 1 to :data:`MOST` (ISMB_LAB_MAX_PIXELS: to
-:data:`ismb_lab.io.MOST_PIXELS`).  A limit bounds what a command would use, typed or
-not: a value typed above it is refused in one line, and an option left out whose
-default is above it (``ISMB_LAB_MAX_GENERATIONS=5`` against tune's 500 generations) is
-lowered to the limit, with a note on stderr.  So a teacher can lower a limit for a
-class, and a plain ``ismb-lab tune`` still runs, within it.
-
-A targets file holds at most :data:`ismb_lab.targets.MAX_PAIRS` pairs in
-:data:`ismb_lab.targets.MAX_BYTES` bytes, and a params, rig or manifest file at most
-:data:`ismb_lab._files.MAX_JSON_BYTES` bytes (fixed, not variables).  Each command declares
-the defaults of its limited options (``limit_defaults``) and the files it reads and writes
-(``declare_files``, a :class:`Files`), so this module knows no command by name.
+"""What every ``ismb-lab`` command gets before and around its work: the limits (each set by an
+environment variable, listed by ``ismb-lab --help`` and docs/cli.md), the checks of its inputs and
+outputs (:func:`preflight`), the handling of SIGINT, SIGTERM and SIGHUP (:class:`Interrupts`) and
+the atomic writes of its JSON and plots.  Each command declares the defaults of its limited options
+(``limit_defaults``) and its files (``declare_files``), so this module knows no command by name.
 """
 
 from __future__ import annotations
@@ -47,10 +16,10 @@ import threading
 from pathlib import Path
 from typing import NamedTuple
 
-from .._files import atomic_write_bytes, check_input, check_output
+from .._core.files import atomic_write_bytes, check_input, check_output
 
 __all__ = ["LIMITS", "MOST", "Interrupts", "UsageError", "deferred_signals", "interrupted", "interrupted_line",
-           "is_interruption", "json_text", "limit", "preflight", "save_figure"]
+           "is_interruption", "json_text", "limit", "preflight", "save_plot"]
 
 class UsageError(Exception):
     """A mistake in the command line or its files, reported in one line."""
@@ -93,8 +62,8 @@ def limit(name: str) -> int:
 def _short(text) -> str:
     """`text` (or a number) cut to 40 characters, for a one-line message."""
     if isinstance(text, int):
-        from .._validation import _shown_int
-        return _shown_int(text)
+        from .._core.validation import shown_int
+        return shown_int(text)
     return text if len(text) <= 40 else text[:37] + "..."
 
 
@@ -123,11 +92,9 @@ def _bound(args, usage_error) -> None:
 class Interrupts:
     """Within ``with Interrupts() as i:``, SIGINT, SIGTERM and SIGHUP raise KeyboardInterrupt.
 
-    The first signal is kept in ``i.signum``; :func:`interrupted` tells long loops
-    that one came, even if a C extension swallowed the KeyboardInterrupt.  While
-    ``i.deferring`` is true a signal is recorded and nothing is raised.
-    Handlers are installed only in the main thread, and a signal that was ignored
-    when the process started (``nohup``) stays ignored.
+    The first signal is kept in ``i.signum``; while ``i.deferring`` is true a signal is only
+    recorded.  Handlers are installed only in the main thread, and a signal ignored when the
+    process started (``nohup``) stays ignored.
     """
 
     NAMES = ("SIGINT", "SIGTERM", "SIGHUP")
@@ -136,20 +103,16 @@ class Interrupts:
         self.signum = None
         self.deferring = False
         self._old = {}
-        self._old_hook = None
-        self._old_excepthook = None
 
     def _unraisable(self, report):
-        # A KeyboardInterrupt raised inside a __del__ or a callback cannot propagate: Python
-        # prints "Exception ignored ... Traceback" and goes on.  Once a signal came, such
-        # reports are its echoes; the work stops at the next check of interrupted().
+        # A KeyboardInterrupt raised inside a __del__ or a callback cannot propagate: once a
+        # signal came, "Exception ignored ..." reports are its echoes.
         if self.signum is None:
             self._old_hook(report)
 
     def _excepthook(self, kind, value, trace):
-        # C code that calls PyErr_Print (numpy's import_array in an extension's init, for one)
-        # prints a KeyboardInterrupt raised inside an import it started, with no header, and
-        # goes on with an ImportError; after a signal that print is an echo as well.
+        # C code that calls PyErr_Print (numpy's import_array) prints a KeyboardInterrupt raised
+        # inside an import it started; after a signal that print is an echo as well.
         if self.signum is None or not issubclass(kind, KeyboardInterrupt):
             self._old_excepthook(kind, value, trace)
 
@@ -185,10 +148,6 @@ class Interrupts:
         """``128 + n`` for signal n; 130 (SIGINT) when no signal was recorded."""
         return 128 + (self.signum or signal.SIGINT)
 
-    @property
-    def name(self) -> str:
-        return signal.Signals(self.signum or signal.SIGINT).name
-
 
 def interrupted() -> bool:
     """True once a signal reached the innermost active :class:`Interrupts`."""
@@ -196,9 +155,8 @@ def interrupted() -> bool:
 
 
 def is_interruption(exc: BaseException) -> bool:
-    """Whether `exc` is how a signal surfaced: a KeyboardInterrupt, or, once a signal came,
-    any exception (one raised inside a C extension such as numba's dispatcher reaches
-    Python as ``SystemError: ... returned a result with an exception set``)."""
+    """Whether `exc` is how a signal surfaced: a KeyboardInterrupt, or, once a signal came, any
+    exception (one raised inside a C extension reaches Python as a SystemError)."""
     return isinstance(exc, KeyboardInterrupt) or (isinstance(exc, Exception) and interrupted())
 
 
@@ -214,8 +172,8 @@ def interrupted_line(outcome: str = "") -> str:
 
 
 class deferred_signals:
-    """Within ``with deferred_signals():`` a signal is recorded (see :func:`interrupted`) but
-    raises nothing: the block runs to its end.  Outside an :class:`Interrupts` it does nothing."""
+    """Within ``with deferred_signals():`` a signal is recorded but raises nothing: the block runs
+    to its end."""
 
     def __enter__(self):
         self._interrupts = _ACTIVE[-1] if _ACTIVE else None
@@ -241,10 +199,7 @@ def _plain(value):
 
 
 def json_text(data) -> str:
-    """Strict JSON (RFC 8259) of `data`: a number that is not finite is written as ``null``.
-
-    ``json.dumps`` would write ``Infinity`` or ``NaN``, which JSON does not have.
-    In ``ismb-lab`` outputs ``null`` means "no finite value", e.g. an infinite depth.
+    """Strict JSON (RFC 8259) of `data`: a number that is not finite (an infinite depth) is ``null``.
 
     >>> json_text({"z": float("inf"), "d": [1.5, float("nan")]})
     '{\\n  "z": null,\\n  "d": [\\n    1.5,\\n    null\\n  ]\\n}\\n'
@@ -252,35 +207,25 @@ def json_text(data) -> str:
     return json.dumps(_plain(data), indent=2, allow_nan=False) + "\n"
 
 
-def _plot_formats() -> dict:
-    from matplotlib.backend_bases import FigureCanvasBase
-    return FigureCanvasBase.get_supported_filetypes()
-
-
-def save_figure(fig, path, **kwargs) -> Path:
-    """Render `fig` in the format of `path`'s suffix (png without one) and write it atomically."""
+def save_plot(path, size, draw, title: str) -> Path:
+    """A figure of `size` inches drawn by ``draw(ax)`` and titled, written atomically in the format
+    of `path`'s suffix (png without one)."""
     import io
 
+    from matplotlib.figure import Figure
+
+    fig = Figure(figsize=size, layout="constrained")
+    ax = fig.subplots()
+    draw(ax)
+    ax.set_title(title)
     buffer = io.BytesIO()
-    fig.savefig(buffer, format=Path(path).suffix[1:].lower() or "png", **kwargs)
+    fig.savefig(buffer, format=Path(path).suffix[1:].lower() or "png", dpi=120)
     return atomic_write_bytes(path, buffer.getvalue())
 
 
 class Files(NamedTuple):
-    """What a command reads and writes, as it declares it: each command's ``files(args)``,
-    set as the parser's default ``declare_files``.
-
-    Attributes
-    ----------
-    inputs : tuple of (str, path)
-        The files it opens, each with how the messages name it (``"--rig"``); each must be a
-        regular file (a missing one is left to its reader, which names it).
-    reads : tuple of path
-        The further files it reads: named inside an input (a manifest's pairs) or built in
-        (a manifest's ``"source"``).  No output may be one of them either.
-    outputs : tuple of (str, path)
-        The files it writes, each with its option; none may be an input or another output.
-    """
+    """What a command's ``files(args)`` (the parser's default ``declare_files``) declares: the
+    `inputs` and `outputs` as (option, path), and the further files it `reads` (a manifest's pairs)."""
 
     inputs: tuple = ()
     reads: tuple = ()
@@ -288,14 +233,16 @@ class Files(NamedTuple):
 
 
 def files_of(args) -> Files:
-    """The files that `args`' command declares (none for a command that declares nothing)."""
+    """The files that `args`' command declares."""
     declared = getattr(args, "declare_files", None)
     return Files() if declared is None else declared(args)
 
 
 def _check_plot(path, usage_error) -> None:
+    from matplotlib.backend_bases import FigureCanvasBase
+
     suffix = Path(path).suffix[1:].lower()
-    formats = _plot_formats()
+    formats = FigureCanvasBase.get_supported_filetypes()
     if suffix and suffix not in formats:
         raise usage_error(f"--plot {str(path)!r}: cannot draw a '.{suffix}' file "
                           f"(formats: {', '.join(sorted(formats))})")
@@ -304,11 +251,9 @@ def _check_plot(path, usage_error) -> None:
 def preflight(args, usage_error) -> None:
     """Check the limits, inputs and outputs of a parsed command line before its work starts.
 
-    An option left out whose default is above its limit is set to the limit here (see
-    the module's description).  The files are those the command declares (:class:`Files`):
-    every input a regular file, and no output an input, a file any input names, a built-in
-    file read, or another output, whatever link or spelling leads there.  Raises `usage_error`
-    (or :class:`ismb_lab._files.OutputError`) with a one-line message.
+    An option left out whose default is above its limit is lowered to it.  Every input is a regular
+    file, and no output is an input, a file read or another output, whatever link or spelling leads
+    there.  Raises `usage_error` (or :class:`ismb_lab._core.files.OutputError`) with a one-line message.
     """
     _bound(args, usage_error)
     declared = files_of(args)
@@ -341,7 +286,7 @@ def output_path(text: str) -> Path:
     """
     import argparse
 
-    from .._files import OutputError, refuse_folder_name
+    from .._core.files import OutputError, refuse_folder_name
 
     try:
         refuse_folder_name(text, "")

@@ -1,18 +1,19 @@
-"""``ismb-lab calibrate``: calibrate a fixed two-camera rig from chessboard pairs, or again
-from a rig's own corners without some of its pairs (``--from RIG.json --drop left02.jpg``)."""
+"""``ismb-lab calibrate``: a fixed two-camera rig from chessboard pairs, or from a rig's own corners
+without some of its pairs (``--from RIG.json --drop left02.jpg``)."""
 
 from __future__ import annotations
 
 import sys
 from pathlib import Path
 
-from ._guard import Files, add_force_option, output_path
+from ._guard import Files, UsageError, _short, add_force_option, output_path
 
 __all__ = ["add_parser", "files", "report", "run"]
 
 
 def add_parser(sub) -> None:
-    from ..rig import BOARD, MAX_ZOOM, OUTLIER_PX, OUTLIER_RATIO, SQUARE_M
+    """Add the ``calibrate`` command: calibrate a fixed rig from chessboard pairs and write it as JSON."""
+    from ..cameras.rig import BOARD, MAX_ZOOM, OUTLIER_PX, OUTLIER_RATIO, SQUARE_M
 
     c = sub.add_parser("calibrate", help="calibrate a fixed rig from chessboard pairs",
                        description="Find the chessboard in each pair, calibrate both cameras and the "
@@ -49,13 +50,13 @@ def files(args) -> Files:
 
 
 def report(rig, held=()) -> str:
-    """The table of the rig's pairs, their errors and the outliers' marks; with `held`
-    (:func:`ismb_lab.rig.leave_one_out`), each pair's errors when held out, and their summary."""
+    """The table of the rig's pairs, their errors and outliers; with `held` (``leave_one_out``), each
+    pair's errors when held out, and their summary."""
     import math
 
     import numpy as np
 
-    from ..rig import OUTLIER_PX, OUTLIER_RATIO, outliers
+    from ..cameras.rig import OUTLIER_PX, OUTLIER_RATIO, outliers
 
     marked = set(outliers(rig.pairs))
     width = max([len("left")] + [len(p.left) for p in rig.pairs])
@@ -84,22 +85,19 @@ def report(rig, held=()) -> str:
 
 
 def _board(text: str):
-    from ..camera import MAX_BOARD_SIDE
-    from ._common import UsageError
+    from ..cameras.camera import MAX_BOARD_SIDE
 
     parts = [p.strip() for p in text.lower().split("x")]
     if len(parts) != 2 or not all(p.isascii() and p.isdigit() and len(p) <= 4 and 2 <= int(p) <= MAX_BOARD_SIDE
                                   for p in parts):
-        shown = text if len(text) <= 40 else text[:37] + "..."
         raise UsageError(f"--board must be COLSxROWS of inner corners, each from 2 to {MAX_BOARD_SIDE}, e.g. 9x6; "
-                         f"got {shown!r}")
+                         f"got {_short(text)!r}")
     return tuple(int(p) for p in parts)
 
 
 def _from_rig(args):
-    from ..camera import load_camera
-    from ..rig import recalibrate
-    from ._common import UsageError
+    from ..cameras.camera import load_camera
+    from ..cameras.rig import recalibrate
 
     if args.pairs:
         raise UsageError("calibrate takes either photos or --from RIG.json, not both")
@@ -109,10 +107,11 @@ def _from_rig(args):
 
 
 def run(args) -> int:
-    from .._files import atomic_write_text
-    from ..camera import MAX_SQUARE_M, MIN_SQUARE_M
-    from ..rig import BOARD, SQUARE_M, calibrate_rig
-    from ._common import UsageError, progress_bar
+    """Calibrate the rig from the chessboard pairs of `args` and write the rig file; returns the exit code."""
+    from .._core.files import atomic_write_text
+    from ..cameras.camera import MAX_SQUARE_M, MIN_SQUARE_M
+    from ..cameras.rig import BOARD, MIN_PAIRS, SQUARE_M, calibrate_rig, leave_one_out
+    from ._common import progress_bar
 
     if args.drop and args.source is None:
         raise UsageError("--drop leaves a pair out of a rig: give the rig with --from RIG.json")
@@ -130,8 +129,6 @@ def run(args) -> int:
                  for n in range(0, len(args.pairs), 2)]
         with progress_bar(len(pairs), "chessboards", unit="pair") as bar:
             rig = calibrate_rig(pairs, board, square_m, progress=lambda _: bar.update(1))
-    from ..rig import MIN_PAIRS, leave_one_out
-
     held = leave_one_out(rig) if len(rig.pairs) > MIN_PAIRS else ()
     atomic_write_text(args.out, rig.to_json())
     if rig.skipped:

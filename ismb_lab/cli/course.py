@@ -8,7 +8,8 @@ __all__ = ["add_parser", "run"]
 
 
 def add_parser(sub) -> None:
-    from ..course import ASSIGNMENTS
+    """Add the ``course`` command: write the nbgrader course's source folders from the notebooks."""
+    from ..teaching.course import ASSIGNMENTS
 
     c = sub.add_parser("course", help="the nbgrader course (deploy/course/README.md)",
                        description="The nbgrader course of deploy/course/.")
@@ -28,7 +29,8 @@ def add_parser(sub) -> None:
 
 
 def run(args) -> int:
-    from ..course import ASSIGNMENTS, make_source
+    """Write ``source/<assignment>/`` of the chosen assignments; returns the exit code."""
+    from ..teaching.course import ASSIGNMENTS, make_source
 
     names = sorted(ASSIGNMENTS) if args.assignment == "all" else [args.assignment]
     for name in names:

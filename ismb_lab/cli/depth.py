@@ -5,18 +5,19 @@ from __future__ import annotations
 import math
 from pathlib import Path
 
-from .._files import atomic_write_text
-from .._validation import ParameterError
-from ..depth import GROUPINGS, DepthConfig
-from ..depth_demo import DEPTH_MATCH_CONFIG, DEPTH_METHOD, DEPTH_PARAMS, DEPTH_SOLVER
+from .._core.files import atomic_write_text
+from .._core.validation import ParameterError
+from ..depth.objects import GROUPINGS, DepthConfig
+from ..depth.pipeline import DEPTH_MATCH_CONFIG, DEPTH_METHOD, DEPTH_PARAMS, DEPTH_SOLVER
 from ._common import (UsageError, add_matching_options, add_solver_option, given, match_config, resolve_recipe,
-                      seed_setting, window_record)
-from ._guard import Files, add_force_option, json_text, output_path, save_figure
+                      seed_setting, window_record, write_ply)
+from ._guard import Files, add_force_option, json_text, output_path, save_plot
 
 __all__ = ["add_parser", "run"]
 
 
 def add_parser(sub) -> None:
+    """Add the ``depth`` command: rank the objects added to a background pair by depth (§5.2.3)."""
     dp = sub.add_parser("depth", help="rank the objects added to a background by depth (§5.2.3)",
                         description="Match a background pair and a scene pair of the same view, "
                         "remove the scene's background features and rank the objects left "
@@ -53,7 +54,7 @@ def add_parser(sub) -> None:
     dp.add_argument("--plot", type=output_path, default=None, metavar="OUT.png",
                     help="draw the scene's features by disparity with the ranked objects")
     add_force_option(dp)
-    dp.set_defaults(run=run, declare_files=files, limit_defaults=limit_defaults)
+    dp.set_defaults(run=run, declare_files=files, limit_defaults=limit_defaults, compiles=True)
 
 
 def limit_defaults() -> dict:
@@ -70,17 +71,19 @@ def files(args) -> Files:
 
 
 def run(args) -> int:
-    from ..depth_demo import relative_depth
+    """Match the background and scene pairs and print the objects near to far;
+    returns the exit code."""
+    from ..depth.pipeline import relative_depth
 
     calibration = {}
     if args.rig is not None:
-        from .._files import check_input
-        from ..camera import load_camera
+        from .._core.files import check_input
+        from ..cameras.camera import load_camera
 
         if args.focal_px is not None or args.baseline_m is not None:
             raise UsageError("--rig gives the focal length and the baseline: leave out --focal-px and --baseline-m")
         rig = load_camera(check_input(args.rig, what="--rig"))
-        from ..io import load_image
+        from ..images.io import load_image
 
         shape = load_image(args.bg_left).shape
         if (shape[1], shape[0]) != tuple(rig.size):
@@ -102,12 +105,12 @@ def run(args) -> int:
     method = recipe.method.name
     config = match_config(args, DEPTH_MATCH_CONFIG)
     if config.shift == "auto":
-        from ..io import load_pair
-        from ..matching import auto_window
+        from ..images.io import load_pair
+        from ..matching.pipeline import auto_window
 
         background = load_pair(args.bg_left, args.bg_right)
         if args.rig is not None:
-            from ..metric import rig_config
+            from ..matching.metric import rig_config
 
             try:
                 config = rig_config(rig, config, background)
@@ -148,39 +151,26 @@ def run(args) -> int:
         atomic_write_text(args.json, json_text({**result.to_dict(),
                                                 "candidate_window": window_record(config, args.shift == "auto")}))
     if args.ply is not None:
-        from .._files import atomic_write_bytes
-
-        atomic_write_bytes(args.ply, _ply(args, result, rig if args.rig is not None else None))
+        _ply(args, result, rig if args.rig is not None else None)
     if args.plot is not None:
-        from matplotlib.figure import Figure
-
-        from ..io import load_pair
+        from ..images.io import load_pair
         from ..plotting import plot_depth
-        fig = Figure(figsize=(6, 4.5), layout="constrained")
-        ax = fig.subplots()
-        plot_depth(ax, load_pair(args.scene_left, args.scene_right).left, result)
-        ax.set_title(f"Method-{method}: {len(result.objects)} objects, near -> far")
-        save_figure(fig, args.plot, dpi=120)
+
+        left = load_pair(args.scene_left, args.scene_right).left
+        save_plot(args.plot, (6, 4.5), lambda ax: plot_depth(ax, left, result),
+                  f"Method-{method}: {len(result.objects)} objects, near -> far")
     return 0
 
 
-def _ply(args, result, rig) -> bytes:
-    """The scene's kept matches in metres as a PLY cloud: through `rig`, or the pinhole camera of
-    the result's focal length and baseline at the scene's image centre (``DepthResult.points``)."""
-    import numpy as np
-
-    from ..camera import StereoCamera
-    from ..io import load_image
-    from ..ply import ply_bytes
+def _ply(args, result, rig) -> None:
+    """Write the scene's kept matches as a PLY cloud: through `rig`, or the pinhole camera of the
+    result's focal length and baseline at the scene's image centre."""
+    from ..cameras.camera import StereoCamera
+    from ..images.io import load_image
 
     left = load_image(args.scene_left)
     h, w = left.shape
     camera = rig if rig is not None else StereoCamera.pinhole(w, h, focal_px=result.config.focal_px,
                                                               baseline_m=result.config.baseline_m)
-    xyz = result.points(camera)
-    keep = np.all(np.isfinite(xyz), axis=1)
-    xy = np.rint(np.asarray(result.kept_xy, dtype=float).reshape(-1, 2)[keep]).astype(int)
-    grey = left[np.clip(xy[:, 1], 0, h - 1), np.clip(xy[:, 0], 0, w - 1)]
-    return ply_bytes(xyz[keep], np.clip(grey, 0, 255), comments=(
-        "ismb-lab depth: the scene's kept matches, metres in the rectified left camera's frame "
-        "(X right, Y down, Z forward)", f"focal length {camera.focal_px:.6g} px, baseline {camera.baseline_m:.6g} m"))
+    write_ply(args.ply, result.points(camera), result.kept_xy, left, camera,
+              "ismb-lab depth: the scene's kept matches, ")

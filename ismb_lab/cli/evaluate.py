@@ -6,9 +6,10 @@ import os
 import sys
 from pathlib import Path
 
-from .._files import atomic_write_text
-from ..protocol import format_protocol, load_manifest, protocol
-from ..solvers import DEFAULT_SOLVER, SOLVERS
+from .._core.files import atomic_write_text
+from ..tuning.cases import format_protocol, load_manifest, protocol
+from ..tuning.genetic import GAConfig
+from ..network.solvers import DEFAULT_SOLVER, SOLVERS
 from ._common import (DEFAULT_METHOD, BestSoFar, UsageError, add_ga_options, add_method_option, given, seed,
                       add_one_to_one_option, add_solver_option, default_of, ga_config, progress_bar, said_changes)
 from ._guard import (LIMITS, Files, add_force_option, deferred_signals, interrupted, interrupted_line,
@@ -21,6 +22,7 @@ DEFAULTS = {name: default_of(protocol, name) for name in ("train", "seeds", "fit
 
 
 def add_parser(sub) -> None:
+    """Add the ``evaluate`` command: the train/test protocol of Fig. 5.10 over a manifest's pairs."""
     e = sub.add_parser("evaluate", help="train on one pair, test on the others (Fig. 5.10)",
                        description="Run the thesis' train/test protocol over the pairs of a "
                        "manifest, with every network figure over several update-order seeds.")
@@ -62,22 +64,19 @@ def add_parser(sub) -> None:
                    "parameters so far, marked \"interrupted\": true (with --jobs above 1, of the last "
                    "fit that finished), or nothing, as the one line on stderr says")
     add_force_option(e)
-    e.set_defaults(run=run, declare_files=files, limit_defaults=limit_defaults)
+    e.set_defaults(run=run, declare_files=files, limit_defaults=limit_defaults, compiles=True)
 
 
 def limit_defaults() -> dict:
     """The defaults of evaluate's limited options: the protocol's, which evaluate falls back to."""
-    from ..genetic import GAConfig
-
     ga = GAConfig()
     return {"population": ga.population, "generations": ga.generations, "seeds": DEFAULTS["seeds"],
             "fit_seeds": DEFAULTS["fit_seeds"], "jobs": available_cores()}
 
 
 def files(args) -> Files:
-    """The manifest and the recipe read, with every file the manifest names or its built-in
-    sources read; the report written."""
-    from ..protocol import manifest_files
+    """The manifest and the recipe read, with every file the manifest names; the report written."""
+    from ..tuning.cases import manifest_files
 
     return Files(inputs=(("manifest", args.manifest),) + given(("--recipe", args.recipe)),
                  reads=tuple(manifest_files(args.manifest)), outputs=given(("--json", args.json)))
@@ -89,6 +88,8 @@ def available_cores() -> int:
 
 
 def run(args) -> int:
+    """Run :func:`~ismb_lab.tuning.cases.protocol` on the manifest and print its report;
+    returns the exit code."""
     jobs = available_cores() if args.jobs is None else args.jobs
     if jobs < 1:
         raise UsageError(f"--jobs must be an integer >= 1, got {jobs}")
@@ -104,8 +105,8 @@ def run(args) -> int:
 
 
 def _stopped(best, path, unit: str, reported) -> int:
-    """After a signal: say that the report is out, or write the best parameters so far to
-    `path`, or say that nothing was written."""
+    """After a signal: say that the report is out, or write the best parameters so far, or say
+    that nothing was written."""
     where = f" to {path}" if path is not None else ""
     if reported:
         print(interrupted_line(f"the report is complete{' and written' + where if where else ''}"),
@@ -121,9 +122,9 @@ def given_recipe(args):
     """The method, solver, fit seeds and one-to-one of --recipe (if any), replaced by the options given."""
     from dataclasses import replace
 
-    from .._files import check_input
-    from ..recipe import Recipe, load_recipe
-    from ..solvers import get_solver
+    from .._core.files import check_input
+    from ..matching.recipe import Recipe, load_recipe
+    from ..network.solvers import get_solver
 
     if args.recipe is None:
         base = Recipe(args.method or DEFAULT_METHOD, fit_seeds=DEFAULTS["fit_seeds"])

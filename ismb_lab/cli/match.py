@@ -7,18 +7,19 @@ import math
 import sys
 from pathlib import Path
 
-from .._files import atomic_write_text
-from .._validation import ParameterError
-from ..matching import MatchConfig
-from ..solvers import DEFAULT_SOLVER
+from .._core.files import atomic_write_text
+from .._core.validation import ParameterError
+from ..matching.pipeline import MatchConfig
+from ..network.solvers import DEFAULT_SOLVER
 from ._common import (add_matching_options, add_solver_option, add_solver_settings, given, match_config,
-                      resolve_recipe, seed_setting, window_record)
-from ._guard import Files, add_force_option, json_text, output_path, save_figure
+                      resolve_recipe, seed_setting, window_record, write_ply)
+from ._guard import Files, UsageError, add_force_option, json_text, limit, output_path, save_plot
 
 __all__ = ["add_parser", "run"]
 
 
 def add_parser(sub) -> None:
+    """Add the ``match`` command: match a pair's corners and print them as the thesis' Table 5.3."""
     m = sub.add_parser("match", help="match the corners of a stereo pair and print Table 5.3",
                        description="Match the Harris corners of LEFT and RIGHT and print the "
                        "matches in the shape of the thesis' Table 5.3.")
@@ -39,7 +40,7 @@ def add_parser(sub) -> None:
     m.add_argument("--plot", type=output_path, default=None, metavar="OUT.png",
                    help="draw the pair with features and match lines")
     add_force_option(m)
-    m.set_defaults(run=run, declare_files=files, limit_defaults=limit_defaults)
+    m.set_defaults(run=run, declare_files=files, limit_defaults=limit_defaults, compiles=True)
 
 
 def limit_defaults() -> dict:
@@ -56,17 +57,13 @@ def files(args) -> Files:
 
 def _prepared(args):
     """The prepared pair, after refusing a swapped one and warning about an unrectified one."""
-    from ..io import load_pair
-    from ..matching import check_window, prepare
-    from ..rectify import check_for_matching
-    from ._common import UsageError
+    from ..images.io import load_pair
+    from ..matching.pipeline import check_window, prepare
 
     config = match_config(args)
     pair = load_pair(args.left, args.right, min_shape=config.min_shape)
     check_window(config, pair.shape)   # every option before any work on the pair
-    warning = "" if flat(pair) else check_for_matching(pair.left, pair.right, "ismb-lab match")
-    if warning:
-        print(warning, file=sys.stderr)
+    warning = _warn_unrectified(pair, pair.left, pair.right, "ismb-lab match")
     try:
         return prepare(pair, None, config)
     except ParameterError as exc:
@@ -75,21 +72,25 @@ def _prepared(args):
         raise
 
 
-def flat(pair) -> bool:
-    """Whether an image of the pair has one grey level: it has no corner, so the match is empty
-    (and says why) without a look for robust matches, which would only cost time and memory."""
-    return any(image.min() == image.max() for image in (pair.left, pair.right))
+def _warn_unrectified(pair, left, right, who: str) -> str:
+    """The warning, said on stderr, if the pair does not look rectified; none for a pair with an
+    image of one grey level, which has no corner (and the look for robust matches costs time)."""
+    from ..images.rectify import check_for_matching
+
+    flat = any(image.min() == image.max() for image in (pair.left, pair.right))
+    warning = "" if flat else check_for_matching(left, right, who)
+    if warning:
+        print(warning, file=sys.stderr)
+    return warning
 
 
 def _rig_pair(args):
     """The rig, the pair rectified with it (unless it already is) and the match settings."""
-    from .._files import check_input
-    from ..camera import load_camera
-    from ..io import load_pair
-    from ..matching import check_window
-    from ..metric import for_camera, photo_config, row_tolerance
-    from ..rectify import check_for_matching
-    from ._guard import limit
+    from .._core.files import check_input
+    from ..cameras.camera import load_camera
+    from ..images.io import load_pair
+    from ..matching.pipeline import check_window
+    from ..matching.metric import for_camera, photo_config, row_tolerance
 
     camera = load_camera(check_input(args.rig, what="--rig"))
     if args.shift is None:      # a photo's disparities are the pair's own, not the thesis' 20 px
@@ -105,16 +106,14 @@ def _rig_pair(args):
           + (f"2 x the rig's RMS reprojection error ({camera.rms:.3f} px)" if math.isfinite(camera.rms) else
              "the rig has no measured RMS error (rms_px null, a factory rig), so the band of a camera without "
              "one"), file=sys.stderr)
-    warning = "" if flat(pair) else check_for_matching(left, right, "ismb-lab match --rig")
-    if warning:
-        print(warning, file=sys.stderr)
+    _warn_unrectified(pair, left, right, "ismb-lab match --rig")
     return camera, pair, config, how
 
 
 def rig_record(args, camera, how: str) -> dict:
-    """What the JSON says of the rig: its file (path and SHA-256), f, B, the RMS error and the
-    search band it gave, and how the pair was taken."""
-    from ..metric import row_tolerance
+    """What the JSON says of the rig: its file and SHA-256, f, B, the RMS error, the search band it
+    gave, and how the pair was taken."""
+    from ..matching.metric import row_tolerance
 
     return {"path": str(args.rig), "sha256": hashlib.sha256(Path(args.rig).read_bytes()).hexdigest(),
             "focal_px": camera.focal_px, "baseline_m": camera.baseline_m,
@@ -122,35 +121,18 @@ def rig_record(args, camera, how: str) -> dict:
             "row_tolerance_px": row_tolerance(camera, subpixel=True), "pair": how}
 
 
-def ply_file(result, camera, pair, xyz) -> bytes:
-    """The PLY point cloud of the matches in front of the cameras, each grey as the left image's
-    pixel at its corner."""
-    import numpy as np
-
-    from ..ply import ply_bytes
-
-    keep = np.all(np.isfinite(xyz), axis=1)
-    xy = np.rint(result.left_match_xy[keep]).astype(int)
-    h, w = pair.left.shape
-    grey = pair.left[np.clip(xy[:, 1], 0, h - 1), np.clip(xy[:, 0], 0, w - 1)]
-    return ply_bytes(xyz[keep], np.clip(grey, 0, 255), comments=(
-        "ismb-lab match --rig: metres in the rectified left camera's frame (X right, Y down, Z forward)",
-        f"focal length {camera.focal_px:.6g} px, baseline {camera.baseline_m:.6g} m"))
-
-
 def run(args) -> int:
-    from ..matching import match
-
-    from ._common import UsageError
+    """Match LEFT and RIGHT, print the table and write the optional outputs;
+    returns the exit code."""
+    from ..matching.pipeline import match
 
     if args.ply is not None and args.rig is None:
         raise UsageError("--ply writes the matches' points in metres: give the rig with --rig RIG.json "
                          "('ismb-lab calibrate', or 'ismb-lab rig' for a factory-calibrated camera)")
     recipe = resolve_recipe(args, DEFAULT_SOLVER)
-    params = recipe.params
     camera = None
     if args.rig is not None:
-        from ..metric import match_with_camera
+        from ..matching.metric import match_with_camera
 
         camera, pair, config, how = _rig_pair(args)
         prepared, found, result = match_with_camera(pair, config, camera, **recipe.match_settings(),
@@ -160,7 +142,8 @@ def run(args) -> int:
         prepared = _prepared(args)
         result = match(prepared=prepared, **recipe.match_settings(), **seed_setting(args))
     after = ", one match per corner" if result.one_to_one else ""
-    print(f"Method-{result.method} ({result.solver}{after})  params {params.to_dict()}  seed {result.seed}")
+    print(f"Method-{result.method} ({result.solver}{after})  params {recipe.params.to_dict()}  "
+          f"seed {result.seed}")
     print(f"{len(result.left_xy)} left / {len(result.right_xy)} right corners, "
           f"{result.n_candidates} candidate neurons, {len(result.pairs)} matches, "
           f"energy {result.energy:.4f}, stopped by '{result.stop_rule}' "
@@ -181,7 +164,7 @@ def run(args) -> int:
     if camera is not None:
         import numpy as np
 
-        from ..metric import match_points
+        from ..matching.metric import match_points
 
         record["rig"] = rig_record(args, camera, how)
         xyz = match_points(result, camera)
@@ -193,18 +176,13 @@ def run(args) -> int:
                  "no match in front of the cameras"))
     if args.json is not None:
         atomic_write_text(args.json, json_text(record))
+    pair = prepared.pair
     if args.ply is not None:
-        from .._files import atomic_write_bytes
-
-        atomic_write_bytes(args.ply, ply_file(result, camera, prepared.pair, xyz))
+        write_ply(args.ply, xyz, result.left_match_xy, pair.left, camera, "ismb-lab match --rig: ")
     if args.plot is not None:
-        from matplotlib.figure import Figure
-
         from ..plotting import plot_matches
-        pair = prepared.pair
-        fig = Figure(figsize=(10, 4), layout="constrained")
-        ax = fig.subplots()
-        plot_matches(ax, pair.left, pair.right, result.left_xy, result.right_xy, result.pairs)
-        ax.set_title(f"Method-{result.method}: {len(result.pairs)} matches")
-        save_figure(fig, args.plot, dpi=120)
+
+        save_plot(args.plot, (10, 4), lambda ax: plot_matches(ax, pair.left, pair.right, result.left_xy,
+                                                              result.right_xy, result.pairs),
+                  f"Method-{result.method}: {len(result.pairs)} matches")
     return 0

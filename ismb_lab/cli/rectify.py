@@ -6,8 +6,9 @@ import os
 import sys
 from pathlib import Path
 
-from .._files import atomic_write_bytes, atomic_write_text
-from ._guard import Files, add_force_option, json_text
+from .._core.files import atomic_write_bytes, atomic_write_text
+from ._common import given
+from ._guard import Files, UsageError, add_force_option, json_text
 
 __all__ = ["add_parser", "run"]
 
@@ -15,7 +16,8 @@ FILES = ("left.png", "right.png", "rectify.json")
 
 
 def add_parser(sub) -> None:
-    from ..rectify import WORKING_SIDE
+    """Add the ``rectify`` command: rectify a hand-held pair, or a calibrated rig's."""
+    from ..images.rectify import WORKING_SIDE
 
     r = sub.add_parser("rectify", help="rectify a stereo pair (hand-held photos, or a calibrated rig's)",
                        description="Find robust matches (SIFT, ratio test, mutual), estimate the "
@@ -36,10 +38,8 @@ def add_parser(sub) -> None:
 
 
 def files(args) -> Files:
-    """The photos and the rig read; the three files written into the --out folder (checked
-    when it exists: a new one is made after the work, so a refused pair leaves nothing behind)."""
-    from ._common import UsageError, given
-
+    """The photos and the rig read; the files written into --out, if it exists (a new one is made
+    after the work, so a refused pair leaves nothing behind)."""
     folder = Path(args.out_dir)
     if folder.exists() and not folder.is_dir():
         raise UsageError(f"--out {str(folder)!r} is not a folder")
@@ -53,14 +53,15 @@ def files(args) -> Files:
 
 
 def run(args) -> int:
-    from ..io import png_bytes
-    from ..rectify import rectify_pair
+    """Rectify the pair of `args` and write DIR/left.png and DIR/right.png; returns the exit code."""
+    from ..images.io import png_bytes
+    from ..images.rectify import rectify_pair
 
     folder = Path(args.out_dir)
     targets = [folder / name for name in FILES]
     if args.rig is not None:
-        from ..camera import load_camera
-        from ..metric import rectify_for_camera
+        from ..cameras.camera import load_camera
+        from ..matching.metric import rectify_for_camera
 
         result = rectify_for_camera(args.left, args.right, load_camera(args.rig), "ismb-lab rectify --rig")
     else:

@@ -4,10 +4,13 @@ from __future__ import annotations
 
 from pathlib import Path
 
+from ._guard import Files, UsageError
+
 __all__ = ["add_parser", "run"]
 
 
 def add_parser(sub) -> None:
+    """Add the ``render`` command: render the project's synthetic pairs into ``images/``."""
     r = sub.add_parser("render", help="render the project's stereo pairs into images/",
                        description="Render the project's synthetic stereo pairs with their ground "
                        "truth. The output is byte for byte what is committed in images/.")
@@ -17,9 +20,6 @@ def add_parser(sub) -> None:
 
 def files(args):
     """Render reads nothing; its --out is a folder, whose files :func:`check_outputs` checks."""
-    from ._common import UsageError
-    from ._guard import Files
-
     out = Path(args.out)
     if out.exists() and not out.is_dir():
         raise UsageError(f"--out {str(out)!r} is not a folder")
@@ -28,9 +28,9 @@ def files(args):
 
 def check_outputs(out: Path) -> None:
     """Before rendering: every file render writes is new or a regular, writable file, and every
-    folder on the way below `out` is a real folder (no link, device, FIFO or read-only file)."""
-    from .._files import OutputError, check_replace
-    from ..gallery import gallery_files
+    folder below `out` on the way is a real folder, not a link."""
+    from .._core.files import OutputError, check_replace
+    from ..scenes.gallery import gallery_files
 
     checked = set()
     for path in gallery_files(out):
@@ -47,7 +47,8 @@ def check_outputs(out: Path) -> None:
 
 
 def run(args) -> int:
-    from ..gallery import render_gallery
+    """Render the gallery into ``args.out``; returns the exit code."""
+    from ..scenes.gallery import render_gallery
 
     check_outputs(Path(args.out))
     for path in render_gallery(args.out):

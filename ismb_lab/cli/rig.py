@@ -1,11 +1,5 @@
-"""``ismb-lab rig``: a rig file from a factory calibration, for a camera that needs no chessboard.
-
-A rectified stereo camera (OAK-D, RealSense, ZED) ships its rectified focal length, principal
-point and baseline: ``--focal-px --baseline-m --size [--centre]`` (:meth:`StereoCamera.from_factory`).
-A calibration that OpenCV wrote (``cv2.FileStorage``: K, D, R and T of the two cameras) is read with
-``--from-opencv`` (:meth:`StereoCamera.from_opencv`).  Either way the file is the one ``calibrate``
-writes and ``match --rig``, ``depth --rig`` and ``rectify --rig`` read.
-"""
+"""``ismb-lab rig``: a rig file from a factory calibration (``StereoCamera.from_factory``) or from
+one OpenCV wrote (``StereoCamera.from_opencv``), for a camera that needs no chessboard."""
 
 from __future__ import annotations
 
@@ -14,7 +8,7 @@ import math
 import sys
 from pathlib import Path
 
-from ._guard import Files, add_force_option, output_path
+from ._guard import Files, UsageError, _short, add_force_option, output_path
 
 __all__ = ["add_parser", "files", "run"]
 
@@ -23,8 +17,8 @@ def _size(text: str) -> tuple:
     parts = text.lower().split("x")
     if len(parts) != 2 or not all(p.strip().isascii() and p.strip().isdigit() and len(p.strip()) <= 5
                                   and 1 <= int(p) <= 1 << 16 for p in parts):
-        shown = text if len(text) <= 40 else text[:37] + "..."
-        raise argparse.ArgumentTypeError(f"WxH in pixels, each from 1 to {1 << 16}, e.g. 640x480; not {shown!r}")
+        raise argparse.ArgumentTypeError(f"WxH in pixels, each from 1 to {1 << 16}, e.g. 640x480; "
+                                         f"not {_short(text)!r}")
     return tuple(int(p) for p in parts)
 
 
@@ -35,13 +29,13 @@ def _centre(text: str) -> tuple:
     except ValueError:
         values = ()
     if len(values) != 2 or not all(math.isfinite(v) for v in values):
-        shown = text if len(text) <= 40 else text[:37] + "..."
-        raise argparse.ArgumentTypeError(f"CX,CY in pixels, e.g. 319.5,239.5; not {shown!r}")
+        raise argparse.ArgumentTypeError(f"CX,CY in pixels, e.g. 319.5,239.5; not {_short(text)!r}")
     return values
 
 
 def add_parser(sub) -> None:
-    from ..camera import MAX_BASELINE_M, UNITS
+    """Add the ``rig`` command: write a rig file from a factory calibration, without a chessboard."""
+    from ..cameras.camera import MAX_BASELINE_M, UNITS
 
     r = sub.add_parser("rig", help="write a rig file from a factory calibration (no chessboard)",
                        description="Write the rig file that 'calibrate' writes, for a camera calibrated at the "
@@ -75,8 +69,7 @@ def files(args) -> Files:
 
 
 def _factory(args):
-    from ..camera import MAX_BASELINE_M, StereoCamera
-    from ._common import UsageError
+    from ..cameras.camera import MAX_BASELINE_M, StereoCamera
 
     missing = [f"--{name}" for name, value in (("focal-px", args.focal_px), ("baseline-m", args.baseline_m),
                                                ("size", args.size)) if value is None]
@@ -100,8 +93,7 @@ def _factory(args):
 
 
 def _opencv(args):
-    from ..camera import StereoCamera
-    from ._common import UsageError
+    from ..cameras.camera import StereoCamera
 
     given = [f"--{name}" for name, value in (("focal-px", args.focal_px), ("baseline-m", args.baseline_m),
                                              ("centre", args.centre)) if value is not None]
@@ -111,8 +103,9 @@ def _opencv(args):
 
 
 def run(args) -> int:
-    from .._files import atomic_write_text
-    from ..metric import row_tolerance
+    """Build the rig from the given numbers or OpenCV file and write it; returns the exit code."""
+    from .._core.files import atomic_write_text
+    from ..matching.metric import row_tolerance
 
     rig = _opencv(args) if args.opencv else _factory(args)
     warnings = rig.warnings()

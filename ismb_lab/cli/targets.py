@@ -21,6 +21,7 @@ MERGE_HELP = ("Pool the targets files of a class (all for the same two images), 
 
 
 def add_parser(sub) -> None:
+    """Add the ``targets`` command: work with targets files (``merge`` pools a class's labels)."""
     t = sub.add_parser("targets", help="work with targets files (merge a class's labels)",
                        description="Work with targets files as the labeller saves them.")
     actions = t.add_subparsers(dest="action", metavar="ACTION", parser_class=type(t))
@@ -57,9 +58,8 @@ def files(args) -> Files:
 
 
 def _inputs(args) -> tuple[list, object]:
-    """The input files, and what :func:`~ismb_lab.classroom.pool` takes (a list or, for a
-    collected folder, ``{student: files}``)."""
-    from ..classroom import collected
+    """The input files, and what ``pool`` takes (a list or, for a collected folder, ``{student: files}``)."""
+    from ..labels.classroom import collected
 
     folders = [p for p in args.files if p.is_dir()]
     if not folders:
@@ -74,8 +74,9 @@ def _inputs(args) -> tuple[list, object]:
 
 
 def run(args) -> int:
-    from ..classroom import pool
-    from ..targets import load_targets, save_targets
+    """Pool the students' targets files into ``--out`` and print the report; returns the exit code."""
+    from ..labels.classroom import pool
+    from ..labels.targets import load_targets, save_targets
 
     if args.min_votes < 1:
         raise UsageError(f"--min-votes must be 1 or more, not {args.min_votes}")

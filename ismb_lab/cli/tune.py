@@ -6,12 +6,12 @@ import sys
 from dataclasses import replace
 from pathlib import Path
 
-from ..genetic import GAConfig
-from ..matching import MatchConfig
-from ..protocol import Case
-from ..recipe import Recipe, save_recipe
-from ..solvers import DEFAULT_SOLVER
-from .. import tuning
+from ..tuning.genetic import GAConfig
+from ..matching.pipeline import MatchConfig
+from ..tuning.cases import Case
+from ..matching.recipe import Recipe, save_recipe
+from ..network.solvers import DEFAULT_SOLVER
+from ..tuning import fitness as tuning
 from ._common import (DEFAULT_METHOD, UsageError, add_feature_options, seed, add_ga_options, add_method_option,
                       add_solver_option, add_solver_settings, default_of, ga_config, match_config, progress_bar,
                       with_settings)
@@ -20,11 +20,12 @@ from ._guard import (Files, add_force_option, deferred_signals, interrupted, int
 
 __all__ = ["add_parser", "run", "why_negative"]
 
-#: The GA seed and the fitness's update-order seeds that :func:`ismb_lab.tuning.tune` uses by default.
+#: The defaults of :func:`ismb_lab.tuning.fitness.tune`.
 GA_SEED, FIT_SEEDS = default_of(tuning.tune, "rng"), default_of(tuning.tune, "seeds")
 
 
 def add_parser(sub) -> None:
+    """Add the ``tune`` command: fit a method's parameters to a pair's targets with the GA (ch. 4)."""
     t = sub.add_parser("tune", help="fit the parameters to target pairs with the GA (ch. 4)",
                        description="Fit a method's parameters to the target pairs of one image pair "
                        "with the real-coded GA, and write them for 'ismb-lab match --params-file'. "
@@ -50,7 +51,7 @@ def add_parser(sub) -> None:
     add_force_option(t)
     t.add_argument("--no-hash-check", action="store_true",
                    help="accept targets labelled on images with other bytes (e.g. re-encoded)")
-    t.set_defaults(run=run, declare_files=files, limit_defaults=limit_defaults)
+    t.set_defaults(run=run, declare_files=files, limit_defaults=limit_defaults, compiles=True)
 
 
 def limit_defaults() -> dict:
@@ -77,8 +78,7 @@ class _Fit:
         self.targets, self.last, self.written = 0, None, False
 
     def write(self, interrupted: bool) -> Recipe:
-        """Write the recipe with the last generation's best parameters (a signal meanwhile waits);
-        return it."""
+        """Write and return the recipe with the last generation's best parameters."""
         recipe = replace(self.recipe, params=tuning.to_params(self.recipe.method, self.last.best_chromosome))
         with deferred_signals():
             save_recipe(self.out, recipe, fitness=self.last.best, generations=self.last.index, seed=self.seed,
@@ -88,6 +88,7 @@ class _Fit:
 
 
 def run(args) -> int:
+    """Run the GA on the pair and write the best parameters; returns the exit code."""
     fit = _Fit(args)
     try:
         return _run(args, fit)
@@ -114,13 +115,8 @@ def _keep(fit: _Fit) -> str:
 
 
 def why_negative(fitness, score, corners: int, labelled: int) -> str | None:
-    """The line that explains a negative `fitness` (the GA's best) from the `score` of one run
-    (its C/E/T), with `labelled` of the `corners` left corners in a target pair; None when
-    neither is negative.
-
-    A match on a left corner that no target pair covers counts as an extra, so a method
-    that matches many corners of a sparsely labelled pair scores below zero.
-    """
+    """The line that explains a negative `fitness` (the GA's best) or `score` (the C/E/T of one run),
+    with `labelled` of the `corners` left corners in a target pair; None when neither is negative."""
     if fitness >= 0 and score.fitness >= 0:
         return None
     c, w, e = score.correct, score.wrong_partner, score.extra

@@ -1,18 +1,8 @@
 """Random designs of two or three textured objects standing before a textured wall, with their truth.
 
-:func:`draw_objects` draws one design from a Generator: the wall, the objects (boxes and
-upright cylinders) at distinct depths, side by side, and the cameras.  What a scene family
-changes in it is a :class:`Look`: a few small hooks (the wall's texture, the objects' sizes,
-where they stand, their kind, contrast and texture, the cameras), each drawing from the same
-Generator.  The defaults give posters of high contrast, objects 32 to 64 px wide and 36 to
-68 px tall, 8 to 20 px apart inside :data:`LAYOUT_ROI`, a third of them cylinders, and quiet
-cameras; only the sizes and the kinds are drawn.
+A family changes a design through a :class:`Look`, hooks that draw from the same Generator in a
+fixed order (wall, disparities, wall texture, sizes, places, object by object, cameras, noise).
 
-The draws come in a fixed order (wall, object disparities, wall texture, sizes, places,
-then object by object, then the cameras and the noise seeds), so a family's layouts depend
-only on its seed and on its own hooks.
-
->>> from ..camera import StereoCamera
 >>> design = draw_objects(np.random.default_rng(0), 2, StereoCamera.pinhole(), Look())
 >>> [t.rank for t in design.truth], design.camera["noise_std"]
 ([1, 2], 1.0)
@@ -25,8 +15,8 @@ from dataclasses import dataclass, fields
 
 import numpy as np
 
-from .._validation import ParameterTypeError, message
-from ..camera import StereoCamera
+from .._core.validation import ParameterTypeError, message
+from ..cameras.camera import StereoCamera
 from .primitives import Box, Cylinder, Group, Plane
 from .textures import Texture, random_texture
 
@@ -34,7 +24,7 @@ __all__ = ["HIGH", "LAYOUT_ROI", "LOW", "MIN_GAP_PX", "Design", "Look", "ObjectT
            "draw_objects"]
 
 LAYOUT_ROI = (40, 40, 240, 160)
-"""The ROI ``(x, y, w, h)`` in which the families place their objects (columns 40..279)."""
+"""The ROI ``(x, y, w, h)`` in which the families place their objects."""
 
 MIN_GAP_PX = 3.0
 """Smallest disparity difference between two objects, or an object and the wall, pixels."""
@@ -49,25 +39,10 @@ HIGH, LOW = (0.28, 0.4), (0.07, 0.13)
 class ObjectTruth:
     """What was put into the scene, for scoring a ranking.
 
-    Attributes
-    ----------
-    name : str
-        The primitive's name in ``Scene.primitives`` (``"object 1"`` is the leftmost).
-    index : int
-        Its index in ``Scene.primitives``.
-    rank : int
-        1 = nearest.
-    kind : {"box", "cylinder"}
-    disparity : float
-        Designed disparity of the face (or the line of the cylinder) nearest the cameras, pixels.
-    depth_m : float
-        Its depth ``z``, metres.
-    box_xy : (x0, y0, x1, y1)
-        The object's extent in the left image, pixels (may reach past the image).
-    centre_xy : (float, float)
-        A left-image point on that face, inside the image (the middle of its visible part).
-    contrast : {"low", "high"}
-    texture : {"posters", "stripes", "tiles"}
+    ``name`` and ``index`` are the primitive's in ``Scene.primitives`` (``"object 1"`` is the
+    leftmost), ``rank`` 1 the nearest; ``disparity`` (px) and ``depth_m`` are of the face (or
+    cylinder line) nearest the cameras; ``box_xy`` is the left-image extent ``(x0, y0, x1, y1)``
+    and ``centre_xy`` a point of that face inside the image.
     """
 
     name: str
@@ -84,21 +59,9 @@ class ObjectTruth:
 
 @dataclass(frozen=True)
 class Design:
-    """A drawn layout before rendering: primitives, truth and cameras.
-
-    Attributes
-    ----------
-    wall : Plane
-    objects : tuple
-        The objects' primitives, left to right, named ``"object 1"`` ...
-    truth : tuple of ObjectTruth
-        Nearest first.
-    wall_disparity : float
-    camera : dict
-        :func:`~ismb_lab.scenes.render` keywords: ``gain``, ``offset``, ``noise_std``.
-    noise : (int, int)
-        The cameras' noise seeds of the background and of the scene.
-    """
+    """A drawn layout before rendering: primitives (objects left to right), truth (nearest first),
+    the right camera's ``gain``, ``offset`` and ``noise_std``, and the noise seeds of the
+    background and of the scene."""
 
     wall: Plane
     objects: tuple
@@ -110,19 +73,8 @@ class Design:
 
 @dataclass(frozen=True)
 class Placement:
-    """Where the objects stand: left edges between `lo` and `hi`, `gap` pixels apart.
-
-    Attributes
-    ----------
-    lo, hi : float
-        The span of columns the objects share, pixels.
-    gap : (float, float)
-        Range of the gaps between neighbours, pixels.
-    widths : ndarray
-        The objects' widths, left to right, pixels.
-    pin_left, pin_right : bool
-        The first object starts at `lo` (it is then a box), the last ends at `hi`.
-    """
+    """Where the objects of `widths` stand: left edges between `lo` and `hi`, gaps in `gap`; with
+    `pin_left` the first starts at `lo` (a box), with `pin_right` the last ends at `hi`."""
 
     lo: float
     hi: float
@@ -172,24 +124,18 @@ def quiet_cameras(rng) -> dict:
 class Look:
     """What a family changes in :func:`draw_objects`: hooks that may draw from the layout's Generator.
 
+    ``wall(rng, mode) -> (kind, contrast)``: the wall's texture (``"posters"``, ``"stripes"``,
+    ``"tiles"``) and contrast (:data:`HIGH`, :data:`LOW`), `mode` being ``"low-on-high"``,
+    ``"high-on-low"`` or ``"mixed"``; ``sizes(rng, n) -> (widths, heights)``;
+    ``placement(rng, widths) -> Placement``; then per object, left to right,
+    ``shape(rng, box_only) -> "box" | "cylinder"``, ``contrast(rng, mode) -> "low" | "high"``
+    and ``texture(rng) -> kind``; last ``camera(rng) -> dict`` of ``gain``, ``offset``, ``noise_std``.
+
     Attributes
     ----------
-    wall : callable ``(rng, mode) -> (kind, contrast)``
-        The wall's texture kind (``"posters"``, ``"stripes"`` or ``"tiles"``) and its contrast
-        range (:data:`HIGH` or :data:`LOW`); `mode` is the layout's contrast mode,
-        ``"low-on-high"``, ``"high-on-low"`` or ``"mixed"``.
-    placement : callable ``(rng, widths) -> Placement``
-        Where the objects stand, given their drawn widths.
-    contrast : callable ``(rng, mode) -> {"low", "high"}``
-        One object's contrast (called once per object, left to right).
-    texture : callable ``(rng) -> kind``
-        One object's texture kind (once per object, after its tone).
-    camera : callable ``(rng) -> dict``
-        The cameras: ``gain`` and ``offset`` of the right one, ``noise_std`` of both.
-    sizes : callable ``(rng, n) -> (widths, heights)``
-        The `n` objects' widths and heights, pixels (drawn before `placement`).
-    shape : callable ``(rng, box_only) -> {"box", "cylinder"}``
-        One object's kind (once per object, first); a box when `box_only`.
+    wall, placement, contrast, texture, camera, sizes, shape : callable
+        The hooks above; defaults :func:`plain_wall`, :func:`side_by_side`, :func:`high_contrast`,
+        :func:`posters`, :func:`quiet_cameras`, :func:`common_sizes`, :func:`box_or_cylinder`.
 
     Examples
     --------
@@ -298,19 +244,23 @@ def _object(rng, look: Look, mode: str, k: int, left: float, width: float, heigh
 
 
 def draw_objects(rng: np.random.Generator, n: int, rig: StereoCamera, look: Look) -> Design:
-    """Draw `n` objects at distinct depths before a wall, as `look` says, from `rng`.
+    """Draw `n` objects (2 or 3) at distinct depths before a wall, as `look` says, from `rng`.
 
     Parameters
     ----------
     rng : numpy.random.Generator
+        Random source.
     n : int
-        Number of objects (2 or 3 fit the layout ROI).
+        2 or 3 objects.
     rig : StereoCamera
+        The cameras.
     look : Look
+        The family's hooks.
 
     Returns
     -------
-    Design
+    design : Design
+        The wall, objects, truth and camera settings.
 
     Examples
     --------

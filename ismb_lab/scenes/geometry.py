@@ -1,4 +1,4 @@
-"""Rays and small vector helpers of the renderer; its rig is :class:`ismb_lab.camera.StereoCamera`.
+"""Rays and small vector helpers of the renderer; its rig is :class:`ismb_lab.cameras.camera.StereoCamera`.
 
 The geometry of the whole package is in its docstring (:mod:`ismb_lab.scenes`).
 """
@@ -7,7 +7,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .._validation import ParameterError, ParameterTypeError, check_points, message
+from .._core.validation import ParameterError, ParameterTypeError, check_points, message
 
 __all__ = ["EPS", "ROI"]
 

@@ -1,63 +1,16 @@
 """Families of depth-demo scenes: textured objects in front of a textured wall, with exact truth.
 
-Each family draws two or three objects (boxes and upright cylinders) standing at
-distinct depths in front of a wall, renders the *scene* pair and the *background*
-pair (the same wall without the objects, a second photograph: fresh camera noise),
-and records which object is nearest.
+Each layout holds two or three boxes or upright cylinders at distinct depths before a wall: the
+*scene* pair, the *background* pair (the wall alone, fresh camera noise) and the truth.  A family
+(:class:`Family`) is a name, a description and a :class:`~ismb_lab.scenes.design.Look`; the library
+registers four (:data:`FAMILIES`), where the depth demo is weak: ``"contrast"``, ``"repetitive"``,
+``"border"`` and ``"cameras"``.
 
-A family is a registered :class:`Family`: a name, a one-line description and a
-:class:`~ismb_lab.scenes.design.Look`, the few choices in which its layouts differ from the
-common design of :func:`~ismb_lab.scenes.design.draw_objects`.  :func:`register_family` adds
-one, :func:`families` lists them in registration order, and :func:`object_layout`, the
-protocol (:func:`ismb_lab.protocol.family_cases`) and ``scripts/matching_families.py`` and
-``scripts/depth_layouts.py`` draw whatever is registered.  The library registers four, which
-exercise the §5.2.3 depth demo (:func:`ismb_lab.depth_demo.relative_depth`) where it is weak:
-
-``"contrast"``
-    Objects of varied size, some with low-contrast textures in front of a
-    high-contrast wall, or the reverse (a high-contrast object, a quiet wall).
-``"repetitive"``
-    Stripes and tiles with a period of 7 to 13 px, on the objects and often on
-    the wall, so that several candidates in the 40 px window look alike.
-``"border"``
-    One box straddles the left image border (its left edge 8 px beyond it to 4 px
-    inside), so that its left part is out
-    of the right view; objects stand 2 to 6 px apart, so that a nearer object on
-    the right hides part of its neighbour in the right view; and in half the
-    layouts another object leaves the left image on the right.
-``"cameras"``
-    Camera noise of 2 to 4 grey levels, and a right camera with gain 0.75 to 1.3
-    and offset -20 to +20 (the left camera has gain 1, offset 0).
-
-Random streams
---------------
-A layout is drawn from its family's stream for the seed, :meth:`Family.stream`.  A new
-family's stream is its own: numpy's ``SeedSequence(seed, spawn_key=(k,))`` with ``k`` taken
-from the SHA-256 of the family's name, so it depends neither on the registration order nor
-on the other families, and no seed of it repeats another family's draws.  The four families
-above (:data:`FAMILIES`) keep the stream they had before families were registered objects,
-``numpy.random.default_rng(seed)`` itself, so their recorded layouts and figures stay bit
-for bit (``tests/test_family_digests.py``).  A Generator passed instead of a seed is used as
-it is, for every family.
-
-Geometry of every layout (the default :meth:`~ismb_lab.camera.StereoCamera.pinhole`: 320 x 240
-images, ``f B = 30`` px m, so ``d = 30 / Z``):
-
-* the wall has disparity 5 to 9 px (3.3 to 6 m);
-* every object has a disparity in 10 to 26 px, at least :data:`MIN_GAP_PX` = 3 px
-  from every other object's and from the wall's: ranking is meaningful, since
-  3 px is six times the half-pixel quantisation of integer corners;
-* objects are 32 to 64 px wide and 36 to 68 px tall (cylinders a little
-  narrower), side by side in the ROI :data:`LAYOUT_ROI` = ``(40, 40, 240, 160)``;
-* the candidate window's shift is the middle of the layout's disparity range
-  (wall to nearest object), so every true match lies inside the 40 px window;
-  :attr:`Layout.shift` records it.
-
-A family function returns the scene (or, with ``empty=True``, the background) as a
-:class:`~ismb_lab.scenes.Scene`; its ``primitives`` are the wall, then the objects,
-each named (``"object 1"`` ... from left to right), so that :func:`object_ids` tells
-which object every pixel sees.  :func:`object_layout` returns both pairs with the
-truth (:class:`Layout`).  Randomness comes only from the seed or Generator passed in.
+A new family's stream is ``SeedSequence(seed, spawn_key=(k,))``, ``k`` from the SHA-256 of its
+name, so it moves no other family's draws; the four keep ``default_rng(seed)`` itself, so their
+recorded layouts stay bit for bit.  On the default rig (``f B = 30`` px m) walls lie at 5 to 9 px
+of disparity, objects at 10 to 26 px, :data:`MIN_GAP_PX` apart, and the candidate window's shift
+is the middle of that range (:attr:`Layout.shift`).
 
 >>> lay = object_layout(0, 3, family="contrast")
 >>> [o.rank for o in lay.objects], lay.family, lay.roi
@@ -65,8 +18,7 @@ truth (:class:`Layout`).  Randomness comes only from the seed or Generator passe
 >>> bool(np.all(np.diff([o.disparity for o in lay.objects]) <= -MIN_GAP_PX))
 True
 
-:data:`UNSEEN` is a fifth family, for held-out tests of the depth demo, which the library
-defines but does not register:
+:data:`UNSEEN` is a fifth family, defined but not registered:
 
 >>> register_family(UNSEEN).name, object_layout(0, 3, family="unseen").family
 ('unseen', 'unseen')
@@ -80,9 +32,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .._validation import ParameterError, ParameterTypeError, check_choice, check_number, check_rng, message
+from .._core.validation import ParameterError, ParameterTypeError, check_choice, check_number, check_rng, message
 from .design import HIGH, LAYOUT_ROI, LOW, MIN_GAP_PX, Design, Look, ObjectTruth, Placement, draw_objects
-from ..camera import StereoCamera
+from ..cameras.camera import StereoCamera
 from .primitives import cast
 from .render import Scene, render
 
@@ -91,9 +43,7 @@ __all__ = ["FAMILIES", "LAYOUT_ROI", "MIN_GAP_PX", "UNSEEN", "Family", "Layout",
            "register_family", "repetitive_scene", "unregister_family"]
 
 FAMILIES = ("contrast", "repetitive", "border", "cameras")
-"""The four families the library registers, in order; their stream is the seed itself.
-
-:func:`families` lists every registered family."""
+"""The four families the library registers, in order; their stream is the seed itself."""
 
 
 def _name_key(name: str) -> int:
@@ -103,16 +53,17 @@ def _name_key(name: str) -> int:
 
 @dataclass(frozen=True)
 class Family:
-    """A scene family: its name, what it is for, and how its layouts differ from the common design.
+    """A scene family: its name, a one-line description, and the hooks of
+    :func:`~ismb_lab.scenes.design.draw_objects` it changes.
 
     Attributes
     ----------
     name : str
-        What :func:`object_layout`, the protocol and the scripts call it.
+        Non-empty; the name :func:`get_family` looks up.
     description : str
-        One line.
-    look : Look
-        The hooks of :func:`~ismb_lab.scenes.design.draw_objects` it changes.
+        One line on what the family varies.
+    look : Look, default ``Look()``
+        The design hooks it replaces.
 
     Examples
     --------
@@ -138,6 +89,18 @@ class Family:
     def stream(self, seed, owner: str = "Family.stream") -> np.random.Generator:
         """The family's random stream for `seed` (a Generator is returned as it is).
 
+        Parameters
+        ----------
+        seed : int or numpy.random.Generator
+            The layout's seed.
+        owner : str, default "Family.stream"
+            The caller's name, for error messages.
+
+        Returns
+        -------
+        rng : numpy.random.Generator
+            The built-in families' stream is ``default_rng(seed)``; others' are keyed by name.
+
         Examples
         --------
         >>> mine = Family("mine", "").stream(0).integers(1000, size=3)
@@ -153,7 +116,22 @@ class Family:
         return np.random.default_rng(np.random.SeedSequence(int(seed), spawn_key=(_name_key(self.name),)))
 
     def draw(self, rng: np.random.Generator, n_objects: int, rig: StereoCamera) -> Design:
-        """One layout's design, drawn from `rng` (see :func:`~ismb_lab.scenes.design.draw_objects`)."""
+        """One layout's design, drawn from `rng` (see :func:`~ismb_lab.scenes.design.draw_objects`).
+
+        Parameters
+        ----------
+        rng : numpy.random.Generator
+            Random source (:meth:`stream`).
+        n_objects : int
+            2 or 3.
+        rig : StereoCamera
+            The cameras.
+
+        Returns
+        -------
+        design : Design
+            The wall, the objects, their truth and the camera settings.
+        """
         return draw_objects(rng, n_objects, rig, self.look)
 
 
@@ -161,9 +139,17 @@ _FAMILIES: dict[str, Family] = {}
 
 
 def register_family(family: Family) -> Family:
-    """Add a family to the registry that :func:`object_layout`, the protocol and the scripts read.
+    """Add a family, of a new name, to the registry that :func:`object_layout` and the scripts read.
 
-    Its name must be new.  Returns `family`.
+    Parameters
+    ----------
+    family : Family
+        A family whose name is not registered yet.
+
+    Returns
+    -------
+    family : Family
+        `family` itself.
 
     Examples
     --------
@@ -192,8 +178,6 @@ def unregister_family(name: str) -> None:
 def families() -> tuple[str, ...]:
     """The registered families' names, in registration order (the order the scripts cycle through).
 
-    Examples
-    --------
     >>> families()
     ('contrast', 'repetitive', 'border', 'cameras')
     """
@@ -203,8 +187,6 @@ def families() -> tuple[str, ...]:
 def get_family(name, owner: str = "get_family", parameter: str = "family") -> Family:
     """Look a registered family up by name.
 
-    Examples
-    --------
     >>> get_family("border").description.split(",")[0]
     'One box across the left image border'
     >>> get_family("stripes")
@@ -214,8 +196,6 @@ def get_family(name, owner: str = "get_family", parameter: str = "family") -> Fa
     """
     return _FAMILIES[check_choice(name, parameter, owner, families())]
 
-
-# ------------------------------------------------------------------ the library's families
 
 def _contrast_wall(rng, mode: str) -> tuple:
     return "posters", LOW if mode == "high-on-low" else HIGH
@@ -264,8 +244,7 @@ for _family in (
     register_family(_family)
 
 
-# ------------------------------------------------------------------ a family the depth code never saw
-
+# A family the depth code never saw.
 def _any_wall(rng, mode: str) -> tuple:
     return rng.choice(["posters", "stripes", "tiles"]), (HIGH, LOW)[int(rng.integers(2))]
 
@@ -300,39 +279,15 @@ UNSEEN = Family("unseen", "Objects 18 to 96 px wide and 24 to 120 px tall, half 
                 "apart, any texture and contrast on objects and wall, cameras a little off",
                 Look(wall=_any_wall, placement=_anywhere, contrast=_any_contrast, texture=_any_texture,
                      camera=_any_cameras, sizes=_any_sizes, shape=_any_shape))
-"""A family for held-out tests of the depth demo, not registered by the library.
-
-Every hook of :class:`~ismb_lab.scenes.design.Look` draws from wider ranges than the four
-families': sizes, kinds, gaps, textures and contrasts of objects and wall, and the cameras.
-Its stream is its own (:meth:`Family.stream`), so registering it (``register_family(UNSEEN)``,
-as ``scripts/depth_layouts.py --families unseen`` does) moves no other family's layouts;
-it is left out of :func:`families` so that the scripts' recorded splits, which cycle
-through the registered families, stay as they were.
-"""
-
-
-# ------------------------------------------------------------------ layouts
+"""A family of wider ranges than the four, for held-out tests of the depth demo; left out of
+:func:`families` so that the scripts' recorded splits stay as they were."""
 
 
 @dataclass(frozen=True, eq=False)
 class Layout:
-    """One random layout: the background and scene pairs and the truth.
-
-    Attributes
-    ----------
-    family : str
-    seed : int or None
-        The seed it was drawn from (None when drawn from a Generator).
-    background, scene : Scene
-        The empty view and the view with the objects (same wall, same cameras, fresh noise).
-    objects : tuple of ObjectTruth
-        Nearest first.
-    wall_disparity : float
-    shift : float
-        Candidate-window shift for this layout (``MatchConfig.shift``), pixels.
-    roi : (x, y, w, h)
-        :data:`LAYOUT_ROI`.
-    """
+    """One random layout: the background and scene pairs (Scene), the objects' truth nearest
+    first, the wall's disparity, the candidate-window shift and the ROI; `seed` is None when it
+    was drawn from a Generator."""
 
     family: str
     seed: int | None
@@ -373,25 +328,9 @@ def _family_scene(family: str, owner: str, seed, n_objects, empty, supersample) 
 
 _DOC = """{what}
 
-    Parameters
-    ----------
-    seed : int or numpy.random.Generator
-        Draws the layout, the textures and then the cameras' noise.
-    n_objects : {{2, 3}}
-    empty : bool
-        Render the background instead: the same wall and cameras without the
-        objects, with fresh noise (a second photograph).
-    supersample : int
-        Rays per pixel side (see :func:`~ismb_lab.scenes.render`).
+    With `empty`, the background: the same wall and cameras without the objects, fresh noise.
+    ``primitives`` are the wall, then the objects left to right; :func:`object_layout` has the truth.
 
-    Returns
-    -------
-    Scene
-        ``primitives`` are the wall and then the objects, left to right; use
-        :func:`object_layout` for the truth.
-
-    Examples
-    --------
     >>> scene = {name}(0)
     >>> [getattr(p, "name", "wall") for p in scene.primitives]
     ['wall', 'object 1', 'object 2']
@@ -432,22 +371,24 @@ camera_scene.__doc__ = _DOC.format(
 def object_layout(seed, n_objects: int = 2, *, family: str = "contrast", supersample: int = 1) -> Layout:
     """A random layout of two or three objects at distinct depths, both pairs rendered, with its truth.
 
+    `seed` (int or Generator) draws everything from the family's stream (:meth:`Family.stream`);
+    ``scene`` is what the family function returns for it, ``background`` with ``empty=True``.
+
     Parameters
     ----------
     seed : int or numpy.random.Generator
-        Everything random is drawn from the family's stream for it (:meth:`Family.stream`):
-        the same seed gives bit-identical images.
-    n_objects : {2, 3}
-    family : str
-        A registered family's name (:func:`families`); see the module's docstring.
-    supersample : int
-        Rays per pixel side.
+        Draws the layout, textures and noise.
+    n_objects : int, default 2
+        2 or 3.
+    family : str, default "contrast"
+        A family's name (:func:`families`, or ``"unseen"``).
+    supersample : int, default 1
+        Rays per pixel side, 1 to 8.
 
     Returns
     -------
-    Layout
-        ``scene`` is what the family function returns for `seed`, ``background``
-        what it returns with ``empty=True``.
+    layout : Layout
+        Both rendered pairs, the objects' truth, the window shift and the ROI.
 
     Examples
     --------
@@ -475,12 +416,9 @@ def object_layout(seed, n_objects: int = 2, *, family: str = "contrast", supersa
 
 
 def object_ids(scene: Scene) -> np.ndarray:
-    """Which primitive each left pixel centre sees: an ``(H, W)`` index into ``scene.primitives``.
+    """Which primitive each left pixel centre sees: an ``(H, W)`` index into ``scene.primitives``
+    (-1 where none; for the families 0 is the wall and ``k`` is ``"object k"``).
 
-    -1 where no surface.  For the families, 0 is the wall and ``k`` is ``"object k"``.
-
-    Examples
-    --------
     >>> lay = object_layout(0, 2)
     >>> ids = object_ids(lay.scene)
     >>> o = lay.objects[0]

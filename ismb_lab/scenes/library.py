@@ -1,11 +1,4 @@
-"""The named scenes: the synthetic test scene, the lab and toy cars of §5.2.3, the realistic pairs.
-
-A new named scene is a function here (or in a module beside this one) that
-composes :mod:`~ismb_lab.scenes.primitives` and :mod:`~ismb_lab.scenes.textures` and calls
-:func:`~ismb_lab.scenes.render.render`.  A new family of random object layouts is one
-:class:`~ismb_lab.scenes.Family`, added with :func:`~ismb_lab.scenes.register_family`
-(:mod:`~ismb_lab.scenes.layouts`).
-"""
+"""The named scenes: the synthetic test scene, the lab and toy cars of §5.2.3, the realistic pairs."""
 
 from __future__ import annotations
 
@@ -13,8 +6,8 @@ from dataclasses import replace
 
 import numpy as np
 
-from .._validation import ParameterTypeError, check_number, check_rng, message
-from ..camera import StereoCamera
+from .._core.validation import ParameterTypeError, check_number, check_rng, message
+from ..cameras.camera import StereoCamera
 from .geometry import ROI
 from .primitives import _FACE_UV, Box, Group, Plane
 from .render import Scene, render
@@ -22,8 +15,6 @@ from .textures import Texture, random_texture
 
 __all__ = ["CAR_DEPTH", "REALISTIC_COUNT", "TABLE_Y", "WALL_Z", "lab_scene", "realistic_scene",
            "synthetic_scene", "toy_car", "toy_car_layout", "toy_car_scene"]
-
-# ------------------------------------------------------------ ready-made scene
 
 WALL_Z = 1.8
 TABLE_Y = 0.15
@@ -89,16 +80,13 @@ def _cardboard(rng: np.random.Generator, lo, hi, wall_base: float) -> Box:
 
 def _room(rng: np.random.Generator, rig: StereoCamera, wall_base: float, boxes, poster_bottom: float) -> list:
     """The wall at 1.8 m with posters down to ``y = poster_bottom`` and the table: ``[wall, table]``."""
-    # Posters: none that a box's silhouette would cut in either view, so that no
-    # corner of the scene is an occlusion junction that moves between the views.
+    # No poster that a box's silhouette cuts in either view: no occlusion junction moves between them.
     wall_tex = random_texture(rng, (-1.2, -0.9, 1.2, poster_bottom), cell=0.17, fill=0.5,
                               base=wall_base, contrast=(0.32, 0.4))
     wall_tex = _clear(wall_tex, [_wall_shadow(box, rig, margin=0.04) for box in boxes])
     wall = Plane((0, 0, WALL_Z), (1, 0, 0), (0, 1, 0), 20, 20, wall_tex)
-    # The table top reaches from 15 cm in front of the cameras to the wall, so
-    # the wall/table crease has no parallax; it is lit only a little less than
-    # the wall, so the boxes' edges crossing the crease make no strong corners.
-    # Its sheets of paper lie near the cameras only (below the ROI).
+    # The table reaches the wall and is lit a little less than it, so that the crease makes no
+    # strong corners; its sheets of paper lie near the cameras only (below the ROI).
     near, depth = 0.15, WALL_Z - 0.15
     table_tex = random_texture(rng, (-0.6, -depth / 2, 0.6, -depth / 2 + 0.5), cell=0.3, fill=0.5,
                                base=wall_base * rng.uniform(0.95, 1.0), contrast=(0.3, 0.4))
@@ -110,36 +98,13 @@ def synthetic_scene(seed=0, *, vertical_offset_px: float = 0.0, roll_deg: float 
                     noise_std: float = 1.0) -> Scene:
     """A ready-made indoor test scene: posters on a wall, a table, one or two boxes.
 
-    A back wall at 1.8 m with posters, a table top 15 cm below the cameras
-    reaching the wall, and one or two cardboard boxes with labels standing on it
-    (front faces 1.0 to 1.25 m away, backs within 1.4 m), inside the
-    centre-quarter ROI (columns 80..239, rows 60..179).  The right camera has
-    gain 0.9 and offset +8 (a different webcam); both have camera noise.
+    A wall at 1.8 m, a table top 15 cm below the cameras, and one or two labelled boxes 1.0 to
+    1.4 m away in the centre-quarter ROI; the right camera has gain 0.9 and offset +8.  No poster
+    is cut by a box's silhouette, so nearly every corner is a real 3-D point.
 
-    The scene is made for corner matching: posters, labels and box corners give
-    about 25-40 strong, well-separated Harris corners in the ROI, spread over
-    the wall and the boxes.  No poster is cut by a box's silhouette in either
-    view and the table/wall crease has little contrast, so nearly every corner
-    is a real 3-D point seen the same way by both cameras (occluded ones aside).
+    `seed` draws the layout and textures, then the noise; `vertical_offset_px` and `roll_deg` go
+    to :meth:`~ismb_lab.cameras.camera.StereoCamera.pinhole` and do not move the layout.
 
-    Parameters
-    ----------
-    seed : int or numpy.random.Generator
-        Draws the layout and the textures, then the noise.  The layout does not
-        depend on the other arguments, so the same seed with another roll,
-        offset or noise level shows the same scene.
-    vertical_offset_px, roll_deg : float
-        Passed to :meth:`~ismb_lab.camera.StereoCamera.pinhole` (an unrectified pair).
-    noise_std : float
-        Camera noise in grey levels, see :func:`render`.
-
-    Returns
-    -------
-    Scene
-        Its ``primitives`` are ``(wall, table, box[, box])``.
-
-    Examples
-    --------
     >>> scene = synthetic_scene(3)
     >>> [type(p).__name__ for p in scene.primitives]
     ['Plane', 'Plane', 'Box', 'Box']
@@ -150,51 +115,22 @@ def synthetic_scene(seed=0, *, vertical_offset_px: float = 0.0, roll_deg: float 
     """
     own = "synthetic_scene"
     rng = check_rng(seed, "seed", own)
-    vertical_offset_px = check_number(vertical_offset_px, "vertical_offset_px", own)
-    roll_deg = check_number(roll_deg, "roll_deg", own, low=-180, high=180)
+    rig = _demo_rig(own, vertical_offset_px, roll_deg)
     noise_std = check_number(noise_std, "noise_std", own, low=0)
-    rig = StereoCamera.pinhole(vertical_offset_px=vertical_offset_px, roll_deg=roll_deg)
-    prims = _scene_primitives(rng, rig)
-    return render(prims, rig, seed=rng, noise_std=noise_std, gain=0.9, offset=8.0)
+    return render(_scene_primitives(rng, rig), rig, seed=rng, noise_std=noise_std, gain=0.9, offset=8.0)
 
-
-
-
-# ------------------------------------------------------- the depth demo (§5.2.3)
 
 CAR_DEPTH = 0.06
 """Depth (along ``z``) of a toy car's body, metres."""
 
 
 def toy_car(rng, x_centre: float, z_front: float, *, length: float = 0.13, name: str = "toy car") -> Group:
-    """A toy car standing on the table, its side towards the cameras.
+    """A toy car standing on the table, its side towards the cameras: a :class:`Group` of
+    ``(body, cabin, wheel, wheel, wheel, wheel)``, its side striped in a paint drawn from `rng`.
 
-    Parts (all :class:`Box`): a body ``length`` long, 5 cm tall and 6 cm deep,
-    1.6 cm above the table; a cabin on top with windows; four dark 3.2 cm wheels
-    with light hubs, the front pair sticking 6 mm out of the body's side.  The
-    body's side carries stripes (:func:`random_texture`) in a light or dark
-    paint drawn from `rng`, so the car has corners of its own.
+    `x_centre` is the car's middle, `z_front` the depth of its side (> 0) and `length` its body's
+    (0.05 to 0.5), metres.
 
-    Parameters
-    ----------
-    rng : numpy.random.Generator or int
-        Draws the paint and the side's pattern.
-    x_centre : float
-        ``x`` of the car's middle, metres.
-    z_front : float
-        Depth of the body's side facing the cameras, metres (> 0).
-    length : float
-        Body length in metres, 0.05 to 0.5.
-    name : str
-        The group's label.
-
-    Returns
-    -------
-    Group
-        Parts ``(body, cabin, wheel, wheel, wheel, wheel)``.
-
-    Examples
-    --------
     >>> car = toy_car(0, 0.0, 0.8)
     >>> len(car.parts), car.lo.round(3).tolist(), car.hi.round(3).tolist()
     (6, [-0.065, 0.049, 0.794], [0.065, 0.15, 0.866])
@@ -241,8 +177,7 @@ def _lab_primitives(rng: np.random.Generator, rig: StereoCamera) -> list:
     wall_base = rng.uniform(0.45, 0.55)
     box = _cardboard(rng, (xa, TABLE_Y - height, z), (xa + width_px * z / f, TABLE_Y, z + deep),
                      wall_base)
-    # The posters end 9 cm above the table: toy cars on the table, seen against
-    # the plain bottom of the wall, never cut a poster.
+    # The posters end 9 cm above the table: the toy cars never cut a poster.
     return _room(rng, rig, wall_base, [box], poster_bottom=0.06) + [box]
 
 
@@ -255,31 +190,12 @@ def lab_scene(seed=0, *, noise_std: float = 1.0, vertical_offset_px: float = 0.0
               roll_deg: float = 0.0, supersample: int = 2) -> Scene:
     """The background of the depth demo (thesis Fig. 5.11): a box in front of a wall.
 
-    A wall with posters at 1.8 m (the thesis' deepest background), a table top
-    15 cm below the cameras reaching the wall, and one cardboard box with
-    labels just right of the middle of the view, its front 1.3 to 1.45 m away
-    and 36 to 42 px wide.  The posters stop 9 cm above the table, leaving the wall behind
-    :func:`toy_car_scene`'s cars plain.  The right camera has gain 0.92 and
-    offset +6.
+    A wall with posters at 1.8 m, stopping 9 cm above the table so that the cars of
+    :func:`toy_car_scene` stand before plain wall, and one labelled box 1.3 to 1.45 m away,
+    36 to 42 px wide, just right of the middle; the right camera has gain 0.92 and offset +6.
+    `supersample` is rays per pixel side (1 renders 4 times faster).  The layout does not
+    depend on the camera's roll or offset.
 
-    Parameters
-    ----------
-    seed : int or numpy.random.Generator
-        Draws the layout and the textures, then the camera noise.
-    noise_std : float
-        Camera noise in grey levels.
-    vertical_offset_px, roll_deg : float
-        Passed to :meth:`~ismb_lab.camera.StereoCamera.pinhole`; the layout does not depend on them.
-    supersample : int
-        Rays per pixel side, see :func:`render` (1 renders 4 times faster).
-
-    Returns
-    -------
-    Scene
-        Its ``primitives`` are ``(wall, table, box)``.
-
-    Examples
-    --------
     >>> scene = lab_scene(0)
     >>> [type(p).__name__ for p in scene.primitives]
     ['Plane', 'Plane', 'Box']
@@ -298,15 +214,9 @@ def lab_scene(seed=0, *, noise_std: float = 1.0, vertical_offset_px: float = 0.0
 def toy_car_layout(cars=0, rig: StereoCamera = StereoCamera.pinhole()) -> tuple[tuple[float, float, float], ...]:
     """Positions of the two toy cars of :func:`toy_car_scene`: ``((x, z, length), ...)``, left first.
 
-    ``x`` is the car's middle and ``z`` the depth of its side, metres; cars are
-    9 to 11 cm long.  The left car stands 0.88 to 1.0 m away (disparity 30 to
-    34 px), the right one 10 cm or more farther, up to 1.2 m (25 px or more);
-    both stand in front of :func:`lab_scene`'s box (1.3 m or farther), the left
-    one left of it and the right one right of it in the view, with their inner
-    ends 132 to 138 px and 194 to 200 px from the image's left side.
+    The left car stands 0.88 to 1.0 m away, the right one 10 cm or more farther, up to 1.2 m,
+    both in front of :func:`lab_scene`'s box, one on each side of it.
 
-    Examples
-    --------
     >>> (xl, zl, ll), (xr, zr, lr) = toy_car_layout(0)
     >>> bool(0.88 <= zl <= 1.0 and zl + 0.1 <= zr <= 1.2), bool(xl < 0 < xr)
     (True, True)
@@ -330,29 +240,10 @@ def toy_car_scene(seed=0, *, cars=None, noise_std: float = 1.0, vertical_offset_
                   roll_deg: float = 0.0, supersample: int = 2) -> Scene:
     """:func:`lab_scene` with two toy cars on the table, the left one nearer (Fig. 5.13).
 
-    The background (wall, table, box) is exactly ``lab_scene(seed)``'s; the
-    cars, drawn by :func:`toy_car_layout` and :func:`toy_car`, stand in front of
-    the box, one left and one right of it.  The camera noise is drawn afresh, as
-    in a second photograph.
+    The background is exactly ``lab_scene(seed)``'s; `cars` (default `seed`) draws the cars'
+    places and paint (:func:`toy_car_layout`), then fresh camera noise.  The cars are the last two
+    primitives, :class:`Group` objects named ``"left car"`` and ``"right car"``.
 
-    Parameters
-    ----------
-    seed : int
-        The background's seed (as for :func:`lab_scene`).
-    cars : int, optional
-        Seed of the cars' positions, depths and paint, then of the camera noise;
-        None uses `seed`.  Varying it gives variants of the same background.
-    noise_std, vertical_offset_px, roll_deg, supersample
-        As for :func:`lab_scene`.
-
-    Returns
-    -------
-    Scene
-        Its ``primitives`` are ``(wall, table, box, left car, right car)``; the
-        cars are :class:`Group` objects named ``"left car"`` and ``"right car"``.
-
-    Examples
-    --------
     >>> scene = toy_car_scene(0)
     >>> [p.name for p in scene.primitives[3:]]
     ['left car', 'right car']
@@ -378,31 +269,12 @@ REALISTIC_COUNT = 11
 
 
 def realistic_scene(index: int, *, noise_std: float = 1.5, supersample: int = 2) -> Scene:
-    """Varied indoor pairs like the thesis' Fig. 5.10, some not rectified.
+    """Varied indoor pairs like the thesis' Fig. 5.10, some not rectified; `index` >= 1.
 
-    Each index gives another room: one or two boxes (as in :func:`synthetic_scene`),
-    up to two toy cars in front that may hide part of a box or cut a poster (so
-    some corners are occlusion junctions without a true partner), another light
-    direction, and another right camera (gain 0.85 to 1, offset -4 to +10).
-    Two indices in three shift the right image down by 2.5 to 5 px, like the
-    thesis' webcams (Table 5.4: 3 to 5 px), and every fourth one also rolls the
-    right camera by up to 1 degree.
+    Boxes as in :func:`synthetic_scene`, up to two toy cars in front that may hide part of a box,
+    another light and right camera.  Two indices in three shift the right image down by 2.5 to
+    5 px, and every fourth one also rolls the right camera by up to 1 degree.
 
-    Parameters
-    ----------
-    index : int
-        Which pair, >= 1; the layout is a fixed function of it.
-    noise_std : float
-        Camera noise in grey levels.
-    supersample : int
-        Rays per pixel side, see :func:`render`.
-
-    Returns
-    -------
-    Scene
-
-    Examples
-    --------
     >>> scene = realistic_scene(2)
     >>> scene.rig.vertical_offset_px > 0, realistic_scene(3).rig.vertical_offset_px
     (True, 0.0)

@@ -1,8 +1,5 @@
-"""Surfaces that rays can hit: :class:`Plane`, :class:`Box`, :class:`Cylinder` and :class:`Group`,
-and :func:`cast`.
-
-A new kind of surface needs only ``intersect``, ``normals`` and ``albedo`` (:class:`Primitive`).
-"""
+"""Surfaces that rays can hit (:class:`Plane`, :class:`Box`, :class:`Cylinder`, :class:`Group`),
+and :func:`cast`; a new kind needs only ``intersect``, ``normals`` and ``albedo``."""
 
 from __future__ import annotations
 
@@ -11,24 +8,21 @@ from typing import Protocol, runtime_checkable
 
 import numpy as np
 
-from .._validation import ParameterError, ParameterTypeError, check_number, message
+from .._core.validation import ParameterError, ParameterTypeError, check_number, message
 from .geometry import EPS, _rays, _vector
 from .textures import Texture
 
 __all__ = ["Box", "cast", "Cylinder", "Group", "Plane", "Primitive"]
-
-# -------------------------------------------------------------------- primitives
 
 
 @runtime_checkable
 class Primitive(Protocol):
     """What :func:`render` needs from a surface.
 
-    ``intersect(origins, dirs)`` takes ``(N, 3)`` ray origins and unit
-    directions and returns ``(t, info)``: the ray parameter of the first hit
-    (``np.inf`` for a miss; only ``t > EPS`` counts) and an ``(N, 3)`` array of
-    surface coordinates ``(u, v, face)`` in metres.  ``normals(info)`` returns
-    unit normals ``(N, 3)`` and ``albedo(info)`` reflectances in ``[0, 1]``.
+    ``intersect(origins, dirs)`` of ``(N, 3)`` origins and unit directions returns ``(t, info)``:
+    the first hit's ray parameter (``inf`` for a miss; only ``t > EPS`` counts) and ``(N, 3)``
+    surface coordinates ``(u, v, face)``; ``normals(info)`` gives unit normals, ``albedo(info)``
+    reflectances in ``[0, 1]``.
     """
 
     def intersect(self, origins, dirs) -> tuple[np.ndarray, np.ndarray]: ...
@@ -46,19 +40,19 @@ def _check_texture(texture, name: str, owner: str) -> Texture:
 
 @dataclass(frozen=True, eq=False)
 class Plane:
-    """A textured rectangle (two-sided).
+    """A textured two-sided rectangle: `centre`, orthogonal in-plane axes (normalised here; the
+    texture's ``(u, v)`` are metres along them from the centre) and half sizes, metres.
 
-    Parameters
+    Attributes
     ----------
-    centre : (3,) array_like
-        Centre in metres.
-    u_axis, v_axis : (3,) array_like
-        Orthogonal in-plane directions (normalised here); the texture's
-        ``(u, v)`` are metres along them from the centre.
+    centre : (3,) float ndarray
+        The rectangle's centre, m.
+    u_axis, v_axis : (3,) float ndarray
+        Orthogonal in-plane axes, normalised.
     half_u, half_v : float
-        Half sizes along the axes in metres.  Make them large for a wall or a
-        floor that fills the view.
+        Half sizes along them, m.
     texture : Texture
+        The surface's texture.
 
     Examples
     --------
@@ -127,18 +121,17 @@ _FACE_UV = {0: (2, 1), 1: (0, 2), 2: (0, 1)}
 
 @dataclass(frozen=True, eq=False)
 class Box:
-    """A solid axis-aligned box, seen from outside.
+    """A solid axis-aligned box from `lo` to `hi` (metres), seen from outside.
 
-    Parameters
+    `textures` is one Texture or one per face, ``-x, +x, -y (top), +y, -z (front), +z``; a face's
+    ``(u, v)`` are metres from its ``lo`` corner: ``(z, y)``, ``(x, z)`` or ``(x, y)``.
+
+    Attributes
     ----------
-    lo, hi : (3,) array_like
-        Opposite corners, ``lo < hi`` component-wise, in metres.
-    textures : Texture or sequence of 6 Textures
-        One texture for every face, or one per face in the order
-        ``-x, +x, -y (top, y is down), +y (bottom), -z (front), +z (back)``.
-        A face's ``(u, v)`` are metres from its ``lo`` corner: ``(z, y)`` on the
-        ``x`` faces, ``(x, z)`` on the ``y`` faces and ``(x, y)`` on the ``z`` faces.
-        The faces also differ in brightness through shading.
+    lo, hi : (3,) float ndarray
+        Opposite corners, m.
+    textures : tuple of Texture
+        One per face.
 
     Examples
     --------
@@ -201,33 +194,31 @@ class Box:
     def albedo(self, info) -> np.ndarray:
         """Each face's texture at its ``(u, v)``."""
         info = np.asarray(info, dtype=float)
-        face = info[:, 2].astype(int)
-        out = np.zeros(len(info))
-        for f in np.unique(face):
-            sel = face == f
-            out[sel] = self.textures[f](info[sel, :2])
-        return out
+        return _piecewise(info[:, 2].astype(int), info[:, :2], self.textures)
 
 
 @dataclass(frozen=True, eq=False)
 class Cylinder:
-    """A solid upright cylinder (axis along ``y``) with flat caps, seen from outside.
+    """A solid upright cylinder (axis along ``y``, ``y_range = (y_top, y_bottom)``) with flat caps.
 
-    Parameters
+    The side's ``(u, v)`` are the arc length from the point facing ``-z``, positive towards
+    ``+x``, and ``y - y_top``; `cap` (default plain ``texture.base``) lies on
+    ``(x - x_axis, z - z_axis)``.
+
+    Attributes
     ----------
-    centre_xz : (2,) array_like
-        ``(x, z)`` of the axis, metres.
+    centre_xz : (2,) float ndarray
+        The axis' ``(x, z)``, m.
     radius : float
-        Radius in metres (> 0).
-    y_range : (2,) array_like
-        ``(y_top, y_bottom)`` with ``y_top < y_bottom`` (``y`` points down).
+        Radius, m.
+    y_range : (y_top, y_bottom) tuple
+        Vertical extent, m (``y`` down).
     texture : Texture
-        The side's texture; its ``(u, v)`` are the arc length from the point
-        facing the cameras (``-z``), positive towards ``+x``, and ``y - y_top``.
+        The side's texture.
     cap : Texture, optional
-        Both caps' texture on ``(x - x_axis, z - z_axis)``; default plain ``texture.base``.
-    name : str
-        A label, e.g. ``"object 1"``.
+        The caps' texture.
+    name : str, default ""
+        The object's name.
 
     Examples
     --------
@@ -327,10 +318,7 @@ class Cylinder:
 
 
 def _near_rays(origins: np.ndarray, dirs: np.ndarray, lo: np.ndarray, hi: np.ndarray) -> np.ndarray:
-    """Indices of the rays that pass the bounding sphere of the box ``lo..hi``.
-
-    Culling with the sphere first is cheap, and most rays miss a small object.
-    """
+    """Indices of the rays that pass the bounding sphere of the box ``lo..hi`` (a cheap cull)."""
     centre, radius = (lo + hi) / 2, np.linalg.norm(hi - lo) / 2
     to_c = centre - origins
     along = np.einsum("ij,ij->i", to_c, dirs)       # dirs are unit vectors
@@ -340,17 +328,15 @@ def _near_rays(origins: np.ndarray, dirs: np.ndarray, lo: np.ndarray, hi: np.nda
 
 @dataclass(frozen=True, eq=False)
 class Group:
-    """Several boxes rendered as one primitive, e.g. a toy car.
+    """Several boxes (they may overlap: the first hit wins) rendered as one primitive, e.g. a toy
+    car; a hit's ``info`` is ``(u, v, 6 * part + face)``.
 
-    A hit's ``info`` is ``(u, v, 6 * part + face)``: the part's own surface
-    coordinates, with the part's index folded into the face number.
-
-    Parameters
+    Attributes
     ----------
-    parts : sequence of Box
-        The boxes; they may overlap (the first hit wins).
-    name : str
-        A label, e.g. ``"left car"``.
+    parts : tuple of Box
+        The boxes.
+    name : str, default ""
+        The object's name.
 
     Examples
     --------
@@ -412,11 +398,16 @@ class Group:
     def albedo(self, info) -> np.ndarray:
         """Each part's texture at its ``(u, v)``."""
         part, local = self._split(info)
-        out = np.zeros(len(local))
-        for n in np.unique(part):
-            sel = part == n
-            out[sel] = self.parts[n].albedo(local[sel])
-        return out
+        return _piecewise(part, local, [p.albedo for p in self.parts])
+
+
+def _piecewise(index, info, functions) -> np.ndarray:
+    """``functions[k](info)`` on the rows where `index` is ``k``."""
+    out = np.zeros(len(info))
+    for k in np.unique(index):
+        sel = index == k
+        out[sel] = functions[k](info[sel])
+    return out
 
 
 def _misses(origins, dirs, lo, hi, owner: str):
@@ -441,22 +432,24 @@ def _check_primitives(primitives, owner: str) -> tuple:
 
 
 def cast(primitives, origins, dirs) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """First hit of each ray among several primitives.
+    """First hit of each ray among several primitives: the ray parameter (``inf`` for none), the
+    index of the primitive hit (-1) and its surface coordinates ``(u, v, face)`` (NaN).
 
     Parameters
     ----------
     primitives : sequence of Primitive
-    origins, dirs : (N, 3) array_like
+        The surfaces.
+    origins, dirs : (N, 3) float array_like
         Ray origins and unit directions.
 
     Returns
     -------
-    t : (N,) ndarray
-        Ray parameter of the nearest hit, ``np.inf`` for none.
-    which : (N,) ndarray of int
+    t : (N,) float ndarray
+        Ray parameter of the first hit, ``inf`` for none.
+    which : (N,) int ndarray
         Index of the primitive hit, -1 for none.
-    info : (N, 3) ndarray
-        That primitive's surface coordinates ``(u, v, face)`` (NaN for none).
+    info : (N, 3) float ndarray
+        Surface coordinates ``(u, v, face)`` of the hit, NaN for none.
 
     Examples
     --------

@@ -6,14 +6,12 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .._validation import ParameterError, ParameterTypeError, check_number, check_points, check_rng, message
-from ..camera import StereoCamera
+from .._core.validation import ParameterError, ParameterTypeError, check_number, check_points, check_rng, message
+from ..cameras.camera import StereoCamera
 from .geometry import _vector
 from .primitives import _check_primitives, cast
 
 __all__ = ["render", "Scene", "true_matches"]
-
-# -------------------------------------------------------------------------- scene
 
 
 def _correspond(primitives, rig: StereoCamera, left_xy: np.ndarray):
@@ -41,24 +39,28 @@ def _correspond(primitives, rig: StereoCamera, left_xy: np.ndarray):
 class Scene:
     """A rendered stereo pair with exact ground truth.
 
+    `left` and `right` are grey float images in ``[0, 255]``; at each left pixel centre, `depth` is
+    the ``z`` (m) of the surface seen (``inf`` where none), `disparity` the true ``x_left - x_right``
+    (NaN where occluded, out of the right view or surfaceless) and `occluded` whether the right
+    camera misses that point.  The right image is ``gain * radiance + offset + noise``, the left
+    ``radiance + noise``.
+
     Attributes
     ----------
-    left, right : (H, W) ndarray of float64
-        Grey images in ``[0, 255]`` (integer-valued: quantised like 8-bit cameras).
-    depth : (H, W) ndarray
-        ``z`` in metres of the surface seen at each left pixel centre, ``np.inf``
-        where no surface.
-    disparity : (H, W) ndarray
-        ``x_left - x_right`` of each left pixel's true correspondence; NaN where
-        occluded, out of the right view or where there is no surface.
-    occluded : (H, W) ndarray of bool
-        Left pixels whose surface point is hidden from the right camera or falls
-        outside the right image (False where there is no surface at all).
+    left, right : (H, W) float ndarray
+        The grey images, read-only.
+    depth : (H, W) float ndarray
+        ``z`` (m) of the surface seen at each left pixel, ``inf`` where none.
+    disparity : (H, W) float ndarray
+        True ``x_left - x_right``, px; NaN where unknown.
+    occluded : (H, W) bool ndarray
+        Whether the right camera misses the point.
     rig : StereoCamera
+        The cameras.
     primitives : tuple of Primitive
+        What was rendered.
     gain, offset, noise_std : float
-        The right image is ``gain * radiance + offset + noise``; the left image
-        is ``radiance + noise``; ``noise`` has standard deviation ``noise_std``.
+        The right camera's response and the noise, grey levels.
 
     Examples
     --------
@@ -100,8 +102,6 @@ class Scene:
     def surface_points(self, left_xy) -> np.ndarray:
         """3-D points seen at left-image points (exact ray cast); NaN rows where no surface.
 
-        Examples
-        --------
         >>> from ismb_lab.scenes import synthetic_scene
         >>> synthetic_scene(0).surface_points([[20.0, 20.0]]).round(6)   # the back wall
         array([[-0.837, -0.597,  1.8  ]])
@@ -110,26 +110,9 @@ class Scene:
         return _correspond(self.primitives, self.rig, xy)[0]
 
     def correspond(self, left_xy) -> np.ndarray:
-        """True right-image positions of arbitrary left-image points.
+        """True right-image positions of left-image points, by exact ray casting both ways; NaN
+        rows for occluded, out-of-view or surface-less points.
 
-        Casts the left ray analytically, takes its first hit, projects that
-        3-D point into the right camera and checks, by casting the right ray
-        towards it, that nothing lies in front of it and that it is inside the
-        right image.  Exact geometry, not a look-up in the rendered maps.
-
-        Parameters
-        ----------
-        left_xy : (N, 2) array_like
-            Left points ``(x, y)``, any real values.
-
-        Returns
-        -------
-        right_xy : (N, 2) ndarray
-            Their right-image ``(x, y)``; NaN rows for occluded, out-of-view or
-            surface-less points.
-
-        Examples
-        --------
         >>> from ismb_lab.scenes import synthetic_scene
         >>> scene = synthetic_scene(0)
         >>> scene.correspond([[20.0, 20.0], [0.0, 100.0]]).round(3)  # wall; out of the right view
@@ -166,42 +149,43 @@ def _radiance(primitives, origins, dirs, light, ambient, background) -> np.ndarr
 def render(primitives, rig: StereoCamera = StereoCamera.pinhole(), *, seed, noise_std: float = 1.0, gain: float = 1.0,
            offset: float = 0.0, supersample: int = 2, light=(0.3, -0.8, -1.0),
            ambient: float = 0.35, background: float = 0.0, quantise: bool = True) -> Scene:
-    """Ray-cast both views of a scene and compute its ground truth.
+    """Ray-cast both views of a scene and compute its ground truth at the left pixel centres.
+
+    `seed` (required) draws the Gaussian camera noise of `noise_std` grey levels; the right camera
+    responds ``gain * radiance + offset``; `supersample` rays per pixel side are averaged; radiance
+    is ``255 * albedo * (ambient + (1 - ambient) * max(0, n . light))`` with `light` the direction
+    *towards* the light, and `background` for rays that hit nothing.  `quantise` rounds like 8-bit
+    cameras; images are clipped to ``[0, 255]`` either way.
 
     Parameters
     ----------
     primitives : sequence of Primitive
-        The surfaces, e.g. :class:`Plane` and :class:`Box`.
-    rig : StereoCamera
+        The objects to render.
+    rig : StereoCamera, default ``StereoCamera.pinhole()``
         The cameras.
     seed : int or numpy.random.Generator
-        Source of the camera noise (keyword-only, required).
-    noise_std : float
-        Standard deviation of the Gaussian camera noise in grey levels, drawn
-        independently for every pixel of both images.
-    gain, offset : float
-        The right camera's response ``gain * radiance + offset``, mimicking two
-        different webcams (the left camera has gain 1, offset 0).
-    supersample : int
-        Rays per pixel side: ``supersample**2`` rays at regular sub-pixel
-        positions are averaged, which anti-aliases edges.
-    light : (3,) array_like
-        Direction *towards* the distant light (normalised here); the default
-        comes from above, slightly right, behind the cameras.
-    ambient : float
-        Fraction of the light that is ambient; radiance is
-        ``255 * albedo * (ambient + (1 - ambient) * max(0, n . light))``.
-    background : float
-        Grey level of rays that hit nothing.
-    quantise : bool
-        Round to integers (after noise, gain and offset), like 8-bit cameras.
-        Images are clipped to ``[0, 255]`` and returned as float64 in any case.
+        Draws the camera noise (required).
+    noise_std : float, default 1.0
+        Standard deviation of the noise, grey levels.
+    gain : float, default 1.0
+        The right camera's gain, > 0.
+    offset : float, default 0.0
+        The right camera's offset, grey levels.
+    supersample : int, default 2
+        Rays per pixel side, 1 to 8.
+    light : (3,) float tuple, default (0.3, -0.8, -1.0)
+        Direction towards the light.
+    ambient : float, default 0.35
+        Share of light that does not depend on the normal, 0 to 1.
+    background : float, default 0.0
+        Radiance of rays that hit nothing, 0 to 255.
+    quantise : bool, default True
+        Round the images to whole grey levels.
 
     Returns
     -------
-    Scene
-        Images and the exact depth, disparity and occlusion maps of the left
-        view, computed at pixel centres with :meth:`Scene.correspond`'s geometry.
+    scene : Scene
+        Both images with their exact ground truth.
 
     Examples
     --------
@@ -251,31 +235,10 @@ def render(primitives, rig: StereoCamera = StereoCamera.pinhole(), *, seed, nois
                  noise_std=noise_std)
 
 
-
-
 def true_matches(scene: Scene, left_xy, right_xy, tol: float = 1.5) -> np.ndarray:
-    """Index of the true partner of each left point among right points.
+    """Index of the true partner of each left point among right points: the nearest within `tol`
+    px of its exact correspondence (:meth:`Scene.correspond`), or -1.  Two may share a partner.
 
-    Parameters
-    ----------
-    scene : Scene
-    left_xy : (N_l, 2) array_like
-        Left points, e.g. detected corners.
-    right_xy : (N_r, 2) array_like
-        Right points.
-    tol : float
-        Largest distance in pixels between a right point and the true
-        correspondence :meth:`Scene.correspond` of a left point.
-
-    Returns
-    -------
-    index : (N_l,) ndarray of int
-        Index of the nearest right point within `tol` of the true
-        correspondence, or -1 when the left point is occluded or out of the right
-        view, or no right point is that close.  Two left points may share a partner.
-
-    Examples
-    --------
     >>> from ismb_lab.scenes import synthetic_scene
     >>> scene = synthetic_scene(0)
     >>> left = [[120.0, 30.0], [0.0, 100.0]]

@@ -6,35 +6,22 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from .._validation import ParameterError, check_number, check_points, check_rng, message
+from .._core.validation import ParameterError, check_number, check_points, check_rng, message
 from .geometry import _vector
 
 __all__ = ["random_texture", "Texture"]
 
-# ----------------------------------------------------------------------- texture
-
 
 @dataclass(frozen=True, eq=False)
 class Texture:
-    """A procedural grey texture on a surface's 2-D coordinates ``(u, v)`` in metres.
+    """A procedural grey texture on a surface's 2-D coordinates ``(u, v)`` in metres, clipped to [0, 1].
 
-    Three layers, evaluated in this order:
+    1. a ``base`` albedo, optionally a checker of period ``checker`` (``base +- checker_contrast / 2``);
+    2. posters: cells of size ``cell`` from ``origin``; cell ``(row, col)`` may hold one rectangle
+       ``rects[row, col] = (u0, v0, u1, v1)`` in fractions of the cell (NaN = empty) of albedo
+       ``levels[row, col]``, which keeps corners apart and makes evaluation a look-up;
+    3. a factor ``1 + ripple * mean(sin(k_u u + k_v v + phase))`` over the rows of ``waves``.
 
-    1. a ``base`` albedo, optionally a checker of period ``checker`` metres whose
-       squares are ``base +- checker_contrast / 2``;
-    2. "posters": a grid of cells of size ``cell = (cu, cv)`` metres (a single
-       number for square cells) starting at ``origin``; cell ``(row, col)``,
-       that is ``u`` in ``origin[0] + [col, col + 1) * cu``, may hold one axis-aligned rectangle
-       ``rects[row, col] = (u0, v0, u1, v1)`` in fractions of the cell (NaN = empty)
-       painted with albedo ``levels[row, col]``.  One rectangle per cell keeps the
-       corners well separated; evaluation is a table look-up, O(N);
-    3. a mild low-frequency variation: the albedo is multiplied by
-       ``1 + ripple * mean(sin(k_u u + k_v v + phase))`` over the rows of ``waves``.
-
-    The result is clipped to ``[0, 1]``.  Build random ones with :func:`random_texture`.
-
-    Examples
-    --------
     >>> tex = Texture(base=0.5, cell=1.0, origin=(0, 0),
     ...               rects=[[[0.25, 0.25, 0.75, 0.75]]], levels=[[0.9]])
     >>> tex([[0.5, 0.5], [0.1, 0.5], [1.5, 0.5]])
@@ -118,34 +105,11 @@ def random_texture(rng, extent, *, cell: float, fill: float = 0.6, base: float =
                    ripple: float = 0.08, wavelengths=(0.4, 1.5)) -> Texture:
     """A random corner-rich :class:`Texture`: posters on a grid, plus mild ripple.
 
-    Parameters
-    ----------
-    rng : numpy.random.Generator or int
-        Source of randomness (an integer is a seed).
-    extent : (4,) array_like
-        ``(u_min, v_min, u_max, v_max)`` of the surface area to cover, metres.
-        Outside it only the base (and checker, ripple) remain.
-    cell : float
-        Approximate grid cell side in metres; each cell holds at most one
-        rectangle.  The cells are stretched a little so that a whole number of
-        them tiles `extent` exactly: no rectangle crosses its border.
-    fill : float
-        Fraction of the cells that hold a rectangle (rounded; at least one).
-    base : float
-        Background albedo.
-    contrast : (2,) floats
-        Range of ``|level - base|`` of the rectangles; the sign is random.
-    sizes : (2,) floats
-        Range of a rectangle's side, as a fraction of ``cell``.
-    margin : float
-        Smallest gap between a rectangle and its cell's border, as a fraction of
-        ``cell``, so corners of neighbouring rectangles stay apart.
-    checker, checker_contrast : float
-        Optional checker background, see :class:`Texture`.
-    ripple : float
-        Relative amplitude of the low-frequency variation (3 random plane waves).
-    wavelengths : (2,) floats
-        Range of the waves' wavelengths in metres.
+    `extent` ``(u_min, v_min, u_max, v_max)`` is covered by cells of about `cell` metres, stretched
+    so that whole cells tile it; `fill` of them hold a rectangle (at least one) whose side is in
+    `sizes` and whose gap to the cell's border is at least `margin` (fractions of a cell), its
+    ``|level - base|`` in `contrast` of random sign.  `ripple` is the relative amplitude of 3
+    random plane waves of `wavelengths` (m).
 
     Examples
     --------

@@ -1,10 +1,5 @@
 """What every widget shares: figure panes, the status line, the error area, the pair view,
-folder loading.
-
-A widget is a model (plain Python, in its own module), a view (matplotlib
-artists created once and updated in place) and a controller (ipywidgets
-callbacks).  This module holds the plumbing all of them use.
-"""
+folder loading."""
 
 from __future__ import annotations
 
@@ -20,28 +15,25 @@ import matplotlib
 import numpy as np
 from matplotlib.figure import Figure
 
-from .._validation import ParameterError, ParameterTypeError, message
+from .._core.validation import ParameterError, ParameterTypeError, message
 
+#: Widest figure, CSS px: JupyterLab's column at 1024 x 768 with the file browser open is about 592 px.
 COLUMN_PX = 580
-"""Widest figure, in CSS pixels: JupyterLab's notebook column at 1024 x 768, with the file browser
-open at its default width and the right panel collapsed, is about 592 px."""
-
+#: Dots per inch of every widget figure: inches times DPI are CSS pixels.
 DPI = 100
-"""Dots per inch of every widget figure, so that inches times DPI are CSS pixels."""
 
 
-def column_figsize(width: float, height: float, column: float = COLUMN_PX) -> tuple[float, float]:
-    """Figure size in inches that shows `width` x `height` data units at equal aspect, `column` px wide.
+def column_figsize(width: float, height: float) -> tuple[float, float]:
+    """Figure size in inches that shows `width` x `height` data units at equal aspect, a column wide.
 
     >>> column_figsize(648, 240)
     (5.8, 2.148)
     """
-    scale = column / width
-    return round(column / DPI, 3), round(height * scale / DPI, 3)
+    return round(COLUMN_PX / DPI, 3), round(height * (COLUMN_PX / width) / DPI, 3)
 
 
 def pair_figsize(pair) -> tuple[float, float]:
-    """:func:`column_figsize` of a pair's side-by-side view (:data:`ismb_lab.plotting.GAP` between)."""
+    """:func:`column_figsize` of a pair's side-by-side view."""
     from ..plotting import GAP
 
     height, width = pair.shape[:2]
@@ -56,13 +48,9 @@ def ipympl_active() -> bool:
 def _serialise_frames(canvas) -> None:
     """Let one thread at a time render an ipympl canvas, and send every frame whole.
 
-    The GA runner draws from its worker thread, while the kernel's main thread draws
-    whenever the browser asks for a frame.  Two renders of one Agg canvas at once leave
-    a half-drawn buffer, and the browser showed it: after stopping the GA in notebook
-    05, a blank plot with a few tick labels, until the next draw.  A lock per canvas
-    serialises the renders.  Whole frames, never diffs, keep ipympl's frame mode (sent
-    in a separate message) from flipping between frames, so no frame is laid over the
-    wrong base.
+    The GA runner draws from its worker thread while the kernel draws when the browser asks:
+    two renders of one Agg canvas at once leave a half-drawn buffer.  Whole frames, never
+    diffs, keep ipympl's frame mode from flipping so that no frame is laid over the wrong base.
     """
     lock = threading.RLock()
     draw, diff_image = canvas.draw, canvas.get_diff_image
@@ -79,16 +67,10 @@ def _serialise_frames(canvas) -> None:
 
 
 class Pane:
-    """A figure and the ipywidget that shows it.
+    """A figure and the ipywidget (CSS class `css`) that shows it.
 
-    Under ``%matplotlib widget`` the figure's canvas *is* the widget (an ipympl
-    canvas: clicks, zoom and pan in the browser).  Elsewhere (tests, scripts,
-    the inline backend) the figure has a plain Agg canvas and is shown as a PNG
-    in an ``ipywidgets.Image`` refreshed after each draw once the widget has
-    been displayed.  Either way the widget carries the CSS class `css`.
-    `figsize` is in inches at :data:`DPI`; :func:`column_figsize` fits one to the
-    notebook column; ipympl's zoom, pan and home buttons show over its left
-    edge while the pointer is on the figure.
+    Under ``%matplotlib widget`` the widget is the ipympl canvas; elsewhere a PNG in an
+    ``ipywidgets.Image``, refreshed after each draw once shown.  `figsize`: inches at :data:`DPI`.
     """
 
     def __init__(self, figsize, css: str):
@@ -97,12 +79,9 @@ class Pane:
 
             with plt.ioff():
                 self.fig = plt.figure(figsize=figsize, dpi=DPI)
-            canvas = self.fig.canvas
-            canvas.header_visible = False
-            canvas.footer_visible = False
-            canvas.resizable = False
+            canvas = self.widget = self.fig.canvas
+            canvas.header_visible = canvas.footer_visible = canvas.resizable = False
             _serialise_frames(canvas)
-            self.widget = canvas
         else:
             from matplotlib.backends.backend_agg import FigureCanvasAgg
 
@@ -127,13 +106,9 @@ class Pane:
             self.fig.savefig(buffer, format="png")
             self.widget.value = buffer.getvalue()
 
-
     def _seed_first_frame(self, canvas) -> None:
-        # Until the browser's view of an ipympl 0.10 canvas says "initialized", a draw stores
-        # the frame as bare base64 (no "data:image/png;base64," prefix) and leaves the size at
-        # (0, 0) when the canvas sits inside a box.  The browser then fails to set that state
-        # and never initialises the view: the figure stays 0 x 0 px.  Give it a valid first
-        # frame and its size; once initialised, ipympl sends its own frames and sizes.
+        # Until its browser view is initialised, ipympl 0.10 stores a frame as bare base64 and
+        # the size as (0, 0) inside a box: the view then never initialises and stays 0 x 0 px.
         url = canvas._data_url
         if isinstance(url, str) and not url.startswith("data:"):
             canvas._data_url = "data:image/png;base64," + url
@@ -143,21 +118,15 @@ class Pane:
 class Base:
     """Root container, status line, error area and notebook display of a widget.
 
-    Subclasses set :attr:`widget` (an ipywidgets container with the widget's CSS
-    class) and list their figure panes in :attr:`panes`.  Every callback goes
-    through :meth:`guard`: its errors land in :attr:`log`, and while the widget
-    sets its own controls (:meth:`syncing`) the callbacks that would answer those
-    changes do nothing.
+    Subclasses set :attr:`widget` and :attr:`panes`; every callback goes through :meth:`guard`.
     """
 
     widget: ipywidgets.Box
     panes: tuple = ()
 
     def __init__(self):
-        self.status = ipywidgets.HTML("")
-        self.status.add_class("ismb-status")
-        self.log = ipywidgets.Output()
-        self.log.add_class("ismb-log")
+        self.status = with_class(ipywidgets.HTML(""), "ismb-status")
+        self.log = with_class(ipywidgets.Output(), "ismb-log")
         self.errors: list[BaseException] = []
         self._syncing = 0
 
@@ -165,9 +134,7 @@ class Base:
     def syncing(self):
         """Set controls from the model without their guarded observers answering.
 
-        >>> class Demo(Base):
-        ...     pass
-        >>> demo, calls = Demo(), []
+        >>> demo, calls = Base(), []
         >>> callback = demo.guard(lambda: calls.append(1))
         >>> with demo.syncing():
         ...     callback()
@@ -200,8 +167,7 @@ class Base:
 
     def report(self, exc: BaseException) -> None:
         self.errors.append(exc)
-        text = "".join(traceback.format_exception(type(exc), exc, exc.__traceback__))
-        self.log.append_stderr(text)
+        self.log.append_stderr("".join(traceback.format_exception(type(exc), exc, exc.__traceback__)))
         self.say(f"Error: {exc}")
 
     def show(self) -> None:
@@ -218,14 +184,11 @@ class Base:
 def button(description: str, css: str, tooltip: str = "", **kw) -> ipywidgets.Button:
     """A button as wide as its label (ipywidgets' fixed width cuts long labels)."""
     kw.setdefault("layout", ipywidgets.Layout(width="auto", min_width="fit-content"))
-    b = ipywidgets.Button(description=description, tooltip=tooltip or description, **kw)
-    b.add_class(css)
-    return b
+    return with_class(ipywidgets.Button(description=description, tooltip=tooltip or description, **kw), css)
 
 
 def row(children) -> ipywidgets.HBox:
-    """A row of widgets that wraps onto the next line where the screen is too narrow
-    (a 1024 px classroom projector)."""
+    """A row of widgets that wraps where the screen is too narrow (a 1024 px projector)."""
     return ipywidgets.HBox(list(children), layout=ipywidgets.Layout(flex_flow="row wrap"))
 
 
@@ -234,11 +197,16 @@ def with_class(widget, css: str):
     return widget
 
 
+def check_type(value, kind, name: str, owner: str, rule: str):
+    """`value` if it is a `kind`, else a ParameterTypeError naming `name`, `owner` and `rule`."""
+    if not isinstance(value, kind):
+        raise ParameterTypeError(message(name, owner, rule, value))
+    return value
+
+
 def pair_files(folder, owner: str) -> tuple[Path, Path, Path]:
     """``left.png``, ``right.png`` and ``answer_key.json`` of a pair folder (the key may be absent)."""
-    if not isinstance(folder, (str, Path)):
-        raise ParameterTypeError(message("folder", owner, "a folder path (str or Path)", folder))
-    folder = Path(folder)
+    folder = Path(check_type(folder, (str, Path), "folder", owner, "a folder path (str or Path)"))
     for name in ("left.png", "right.png"):
         if not (folder / name).is_file():
             raise ParameterError(f"The 'folder' parameter of {owner} must be a folder holding "
@@ -256,13 +224,9 @@ def path_labels(ax, offsets, strings, colour, *, size: float = 7.0, shift=(2.5, 
                 offset_transform=None, ha: str = "left", declutter: bool = False):
     """Short strings drawn at `offsets` as glyph outlines in ONE collection.
 
-    Each ``Text`` artist costs about 1 ms per Agg draw on a small classroom
-    machine; the same glyphs as paths in a single collection cost well under 1 ms,
-    which keeps a click or a step within the 30 ms a redraw may take.
-    `shift` is in points; ``ha="center"`` or ``"right"`` aligns on the shifted point.
-    With `declutter`, a label that would cover one already placed moves to another corner of
-    its point (:func:`_declutter`), and is left out where none is free, so that no two numbers
-    are drawn over each other at the figure's size.
+    A ``Text`` artist costs about 1 ms per Agg draw; one collection of paths keeps a redraw
+    within 30 ms.  `shift` is in points; ``ha`` aligns on the shifted point.  With `declutter`,
+    a label that would cover another moves to a free corner of its point (:func:`_declutter`).
     """
     from matplotlib.collections import PathCollection
     from matplotlib.path import Path as MplPath
@@ -279,7 +243,6 @@ def path_labels(ax, offsets, strings, colour, *, size: float = 7.0, shift=(2.5, 
         where = (offset_transform or ax.transData).transform(np.asarray(offsets, float).reshape(-1, 2))
         kept, paths = _declutter(paths, where, ax.figure.dpi / 72, shift)
         offsets = np.asarray(offsets, float).reshape(-1, 2)[kept]
-        strings = [s for n, s in enumerate(strings) if n in set(kept)]
     points = Affine2D().scale(1 / 72) + ax.figure.dpi_scale_trans
     labels = PathCollection(paths, offsets=offsets, offset_transform=offset_transform or ax.transData,
                             transform=points, facecolors=colour, edgecolors="none")
@@ -290,10 +253,7 @@ def path_labels(ax, offsets, strings, colour, *, size: float = 7.0, shift=(2.5, 
 
 def _declutter(paths, where, px_per_point: float, shift):
     """Place each label (glyph `paths` in points, anchored at display pixels `where`) at the first
-    corner of its point where it covers no label placed before it.
-
-    Returns the indices kept and their moved paths; a label with no free corner is left out.
-    """
+    corner of its point where it covers no label placed before; returns the kept indices and paths."""
     from matplotlib.path import Path as MplPath
 
     placed, kept, moved = [], [], []
@@ -316,18 +276,8 @@ def _declutter(paths, where, px_per_point: float, shift):
     return kept, moved
 
 
-def number_labels(ax, xy, colour, size: float = 7.0, start: int = 1):
-    """Number the points ``start, start + 1, ...`` beside them, as one artist (:func:`path_labels`);
-    a number that would cover another moves to a free corner of its point, or is left out."""
-    return path_labels(ax, xy, range(start, start + len(xy)), colour, size=size, declutter=True)
-
-
 def draw_pair(ax, model) -> dict:
-    """The pair view: the image pair side by side, numbered features and the current matches.
-
-    `model` has ``prepared`` (:class:`~ismb_lab.matching.Prepared`) and ``pairs``
-    (the matches as ``(i, k)``); :func:`update_pair` redraws the matches in place.
-    """
+    """The pair side by side, numbered features and `model`'s matches (``prepared`` and ``pairs``)."""
     from ..plotting import GAP, LEFT_COLOUR, RIGHT_COLOUR, plot_matches
 
     pair = model.prepared.pair
@@ -336,8 +286,8 @@ def draw_pair(ax, model) -> dict:
     art["image"].set_data(grey_rgb(art["image"].get_array()))
     art["image"].set_interpolation("nearest")
     offset = np.array([pair.shape[1] + GAP, 0.0])
-    number_labels(ax, left_xy, LEFT_COLOUR)
-    number_labels(ax, right_xy + offset, RIGHT_COLOUR)
+    for xy, colour in ((left_xy, LEFT_COLOUR), (right_xy + offset, RIGHT_COLOUR)):
+        path_labels(ax, xy, range(1, len(xy) + 1), colour, declutter=True)
     art["lines"].set_clim(0, 40)
     art["offset"] = offset
     return art

@@ -1,16 +1,7 @@
-"""The matched points in 3-D: a rotatable point cloud coloured by depth, with both cameras drawn.
+"""The matched points in 3-D: a :class:`Cloud` (the model, plain numbers) and its rotatable k3d
+view :class:`PointCloudView`, both cameras drawn.
 
-:class:`Cloud` is the model (plain numbers: points in the rectified left camera's frame,
-the two camera centres, the depth each point is coloured by, short notes);
-:func:`depth_cloud` makes one from a depth demo, :func:`match_cloud` from the network's
-matches of a pair rectified with a calibrated :class:`~ismb_lab.camera.StereoCamera`, and
-:func:`board_cloud` from a chessboard's corners in such a pair.  Every point comes from
-:meth:`~ismb_lab.camera.StereoCamera.points_from_disparity`.  :class:`PointCloudView` is the view: k3d objects (WebGL in the browser, the
-JavaScript shipped inside the k3d wheel and sent by the kernel, nothing fetched from a
-CDN) created once and updated in place by :meth:`PointCloudView.update`.
-
-Frame: metres, X right, Y down, Z forward from the left camera.  The plot shows
-``(X, Z, -Y)`` so that up is up on screen.
+Frame: metres, X right, Y down, Z forward from the left camera; the plot shows ``(X, Z, -Y)``.
 """
 
 from __future__ import annotations
@@ -18,10 +9,12 @@ from __future__ import annotations
 import html
 from dataclasses import dataclass, field
 
+import ipywidgets
 import numpy as np
 
-from .._validation import ParameterError, ParameterTypeError, message, readonly
-from ..camera import StereoCamera
+from .._core.validation import ParameterError, ParameterTypeError, message, readonly
+from ..cameras.camera import StereoCamera
+from ._common import check_type, with_class
 
 __all__ = ["AXIS_TITLES", "Cloud", "MAX_NOTES", "MAX_TICKS", "PointCloudView", "axes_frame", "axis_ticks", "board_cloud",
            "colour_bar_html", "depth_cloud", "frustum_edges", "match_cloud"]
@@ -31,32 +24,22 @@ MAX_NOTES = 6
 
 
 def frustum_edges(centres, corners_xyz) -> tuple[np.ndarray, np.ndarray]:
-    """A pyramid per camera: apex at its centre, base the image's 4 corners seen at some depth.
+    """A pyramid per camera centre (``(K, 3)``): apex at it, base the image's 4 corners
+    `corners_xyz` (``(4, 3)``, in order around the image, relative to a centre).
 
-    Parameters
-    ----------
-    centres : (K, 3) array
-        Camera centres.
-    corners_xyz : (4, 3) array
-        The image corners, in order around the image, relative to a camera's centre.
+    Returns ``(5 K, 3)`` float32 vertices and ``(8 K, 2)`` uint32 edges (4 from the apex, 4 around).
 
-    Returns
-    -------
-    vertices : (5 K, 3) float32 ndarray
-    segments : (8 K, 2) uint32 ndarray
-        Vertex indices of each edge: 4 from the apex, 4 around the base.
-
-    Examples
-    --------
     >>> v, s = frustum_edges([[0, 0, 0], [0.1, 0, 0]], [[-1, -1, 1], [1, -1, 1], [1, 1, 1], [-1, 1, 1]])
     >>> v.shape, s.shape, s[:5].tolist()
     ((10, 3), (16, 2), [[0, 1], [0, 2], [0, 3], [0, 4], [1, 2]])
     """
     centres = np.asarray(centres, dtype=float).reshape(-1, 3)
     corners = np.asarray(corners_xyz, dtype=float).reshape(4, 3)
+    if not len(centres):
+        return np.zeros((0, 3), np.float32), np.zeros((0, 2), np.uint32)
     one = np.array([[0, 1], [0, 2], [0, 3], [0, 4], [1, 2], [2, 3], [3, 4], [4, 1]])
-    vertices = np.concatenate([np.vstack([c, c + corners]) for c in centres]) if len(centres) else np.zeros((0, 3))
-    segments = np.concatenate([one + 5 * k for k in range(len(centres))]) if len(centres) else np.zeros((0, 2))
+    vertices = np.concatenate([np.vstack([c, c + corners]) for c in centres])
+    segments = np.concatenate([one + 5 * k for k in range(len(centres))])
     return vertices.astype(np.float32), segments.astype(np.uint32)
 
 
@@ -67,7 +50,7 @@ class Cloud:
     Parameters
     ----------
     points : (N, 3) array
-        Finite 3-D points, metres, in the rectified left camera's frame.
+        Finite points, metres, in the rectified left camera's frame.
     centres : (2, 3) array
         The left and the right camera centre.
     frustum : (4, 3) array
@@ -76,11 +59,7 @@ class Cloud:
         What each point is coloured by; None: its depth Z.
     notes : tuple of (str, (x, y, z))
         Short texts placed in 3-D (at most :data:`MAX_NOTES`).
-    caption : str
-        One line saying what is shown and in which units.
 
-    Examples
-    --------
     >>> c = Cloud([[0, 0, 1.0]], [[0, 0, 0], [0.1, 0, 0]], np.ones((4, 3)))
     >>> c.colour.tolist(), c.depth_range
     ([1.0], (1.0, 1.0))
@@ -116,8 +95,7 @@ class Cloud:
         object.__setattr__(self, "colour", readonly(colour))
         if not isinstance(self.notes, tuple) or len(self.notes) > MAX_NOTES:
             raise ParameterError(message("notes", owner, f"a tuple of at most {MAX_NOTES} (text, xyz)", self.notes))
-        if not isinstance(self.caption, str):
-            raise ParameterTypeError(message("caption", owner, "a str", self.caption))
+        check_type(self.caption, str, "caption", owner, "a str")
         lo, hi = (float(colour.min()), float(colour.max())) if len(colour) else (0.0, 1.0)
         object.__setattr__(self, "depth_range", (lo, hi))
 
@@ -139,14 +117,8 @@ def _cloud(camera: StereoCamera, points, notes, caption: str) -> Cloud:
 
 
 def depth_cloud(model) -> Cloud:
-    """The depth demo's matched points in 3-D: the background pair's matches (the box, the wall)
-    and the scene's matches kept after background removal, with each object's rank and depth.
-
-    Metres come from the demo's calibration: a :meth:`~ismb_lab.camera.StereoCamera.pinhole`
-    camera of the scene's size with ``model.config.focal_px`` and ``baseline_m`` (its principal
-    point is the image centre, as the rendered rig's), so for photos of one's own they are only
-    as right as those defaults.
-    """
+    """The depth demo's background matches and kept scene matches in 3-D, with each object's rank
+    and depth, in metres of a pinhole camera of ``model.config``'s ``focal_px`` and ``baseline_m``."""
     r, cfg = model.result, model.config
     h, w = model.scene.left.shape
     camera = StereoCamera.pinhole(width=w, height=h, focal_px=cfg.focal_px, baseline_m=cfg.baseline_m)
@@ -163,9 +135,8 @@ def depth_cloud(model) -> Cloud:
 
 
 def _board(camera: StereoCamera, rectified, owner: str) -> tuple:
-    """The board's corners in both rectified views (cv2), their disparities and a note at their
-    centre with their median depth."""
-    from ..rig import find_board
+    """The board's corners in both rectified views (cv2), their disparities and a note of their depth."""
+    from ..cameras.rig import find_board
 
     left, right = find_board(rectified.left, camera.board), find_board(rectified.right, camera.board)
     if left is None or right is None:
@@ -173,53 +144,42 @@ def _board(camera: StereoCamera, rectified, owner: str) -> tuple:
                                      "a pair where it was not found"))
     d = left[:, 0] - right[:, 0]
     median = float(np.median(d))
-    z = float(camera.disparity_at(median))
-    return left, d, (f"board's corners (cv2), median Z {z:.3f} m", left.mean(axis=0), median)
+    note = f"board's corners (cv2), median Z {float(camera.disparity_at(median)):.3f} m"
+    return left, d, (note, left.mean(axis=0), median)
 
 
 def board_cloud(camera: StereoCamera, rectified) -> Cloud:
-    """A chessboard's corners, found in both views of a pair rectified with `camera`, in metres
-    (:meth:`~ismb_lab.camera.StereoCamera.points_from_disparity`)."""
-    if not isinstance(camera, StereoCamera):
-        raise ParameterTypeError(message("camera", "board_cloud", "a StereoCamera", camera))
+    """A chessboard's corners, found in both views of a pair rectified with `camera`, in metres."""
+    check_type(camera, StereoCamera, "camera", "board_cloud", "a StereoCamera")
     left, d, note = _board(camera, rectified, "board_cloud")
-    caption = (f"the board's {len(left)} corners matched between the rectified views, in metres "
-               f"(f = {camera.focal_px:.1f} px, B = {camera.baseline_m * 100:.2f} cm); left camera at 0, "
-               "Z forward, colour = Z")
+    caption = f"the board's {len(left)} corners matched between the rectified views, " + _in_metres(camera)
     return _cloud(camera, camera.points_from_disparity(left, d), [note], caption)
 
 
+def _in_metres(camera: StereoCamera) -> str:
+    return (f"in metres (f = {camera.focal_px:.1f} px, B = {camera.baseline_m * 100:.2f} cm); "
+            "left camera at 0, Z forward, colour = Z")
+
+
 def match_cloud(result, camera: StereoCamera, board=None) -> Cloud:
-    """The network's matches of a pair rectified with `camera`, in metres
-    (:func:`ismb_lab.metric.match_points`), as ``ismb-lab match --rig`` gives them.
+    """The network's matches (`result`) of a pair rectified with `camera`, in metres
+    (:func:`ismb_lab.matching.metric.match_points`).
 
-    Parameters
-    ----------
-    result : ismb_lab.matching.MatchResult
-        The matches (e.g. after :func:`ismb_lab.metric.mutual_best`).
-    camera : StereoCamera
-        The camera that rectified the pair.
-    board : ismb_lab.rectify.Rectified, optional
-        The rectified pair, when it shows the calibration board: a note at the board's centre
-        gives its corners' median depth (found by cv2, not by the network), for comparison.
+    `board`, the rectified pair when it shows the calibration board, adds a note with its
+    corners' median depth (found by cv2, not by the network).
 
-    Examples
-    --------
-    >>> from ismb_lab.matching import match
+    >>> from ismb_lab.matching.pipeline import match
     >>> from ismb_lab.scenes import synthetic_scene
     >>> s = synthetic_scene(0)
     >>> cloud = match_cloud(match(s.left, s.right), StereoCamera())
     >>> len(cloud.points) > 0, bool((cloud.points[:, 2] > 0).all()), cloud.centres[1].tolist()
     (True, True, [0.1, 0.0, 0.0])
     """
-    from ..metric import match_points
+    from ..matching.metric import match_points
 
-    if not isinstance(camera, StereoCamera):
-        raise ParameterTypeError(message("camera", "match_cloud", "a StereoCamera", camera))
+    check_type(camera, StereoCamera, "camera", "match_cloud", "a StereoCamera")
     notes = [] if board is None else [_board(camera, board, "match_cloud")[2]]
-    caption = (f"the network's {len(result.pairs)} matches (Method-{result.method}) in metres "
-               f"(f = {camera.focal_px:.1f} px, B = {camera.baseline_m * 100:.2f} cm); left camera at 0, "
-               "Z forward, colour = Z")
+    caption = f"the network's {len(result.pairs)} matches (Method-{result.method}) " + _in_metres(camera)
     return _cloud(camera, match_points(result, camera), notes, caption)
 
 
@@ -230,17 +190,11 @@ def _shown(xyz) -> np.ndarray:
 
 
 def _colours(n: int = 32) -> np.ndarray:
-    """matplotlib's plasma, reversed (near = yellow, as in the depth demo's disparity colours):
-    ``(n, 4)`` rows of ``t, r, g, b``."""
+    """Reversed plasma (near = yellow, as the depth demo's disparities): ``(n, 4)`` rows ``t, r, g, b``."""
     from matplotlib import colormaps
 
     t = np.linspace(0, 1, n)
     return np.column_stack([t, colormaps["plasma_r"](t)[:, :3]])
-
-
-def _colour_map() -> np.ndarray:
-    """:func:`_colours` as k3d's flat ``[t, r, g, b, ...]``."""
-    return _colours().ravel().astype(np.float32)
 
 
 #: The axes' titles, in the plot's order (X right, Z forward, up).
@@ -265,17 +219,11 @@ def axis_ticks(lo: float, hi: float) -> np.ndarray:
 
 def axes_frame(lo, hi) -> tuple[np.ndarray, np.ndarray, list]:
     """Three axes along the edges of the box `lo` - `hi` (plot coordinates) that meet at its
-    near, left, bottom corner, with tick marks; each axis numbered and titled once.
+    near, left, bottom corner, each numbered and titled once.
 
-    Returns
-    -------
-    vertices : (V, 3) float32 ndarray
-    segments : (S, 2) uint32 ndarray
-    texts : list of (str, (x, y, z), reference_point)
-        The numbers and the three titles (:data:`AXIS_TITLES`), each where it is drawn.
+    Returns ``(V, 3)`` float32 vertices, ``(S, 2)`` uint32 segments and the texts as
+    ``(str, (x, y, z), reference_point)``.
 
-    Examples
-    --------
     >>> v, s, texts = axes_frame([0, 0, 0], [1, 2, 1])
     >>> [t for t, _, _ in texts if t.endswith("(m)")]
     ['X (m)', 'Z (m)', '-Y (m)']
@@ -308,8 +256,7 @@ def axes_frame(lo, hi) -> tuple[np.ndarray, np.ndarray, list]:
 
 
 def colour_bar_html(lo: float, hi: float) -> str:
-    """The colour scale as a strip of HTML beside the 3-D view (outside its canvas, so it never
-    covers the axes): depth `lo` m (yellow) to `hi` m."""
+    """The colour scale, depth `lo` m (yellow) to `hi` m, as HTML outside the canvas (never over the axes)."""
     stops = ", ".join(f"rgb({int(255 * r)},{int(255 * g)},{int(255 * b)}) {100 * t:.0f}%"
                       for t, r, g, b in _colours(9))
     return ("<div style='display:flex;align-items:center;gap:0.5em;font-size:small'>"
@@ -318,18 +265,33 @@ def colour_bar_html(lo: float, hi: float) -> str:
             f"<span>{hi:.2f} m</span></div>")
 
 
+def _fill(points, xyz, colour, size: float, colour_range, wanted: bool) -> None:
+    """Set a k3d points object; positions and colours of the same count arrive together, and
+    no points hide the last ones rather than send an empty object."""
+    with points.hold_sync():
+        if len(xyz):
+            points.positions = _shown(xyz)
+            points.attribute = colour.astype(np.float32)
+            points.point_size = size
+        points.color_range = colour_range
+        points.visible = bool(wanted and len(xyz))
+
+
 class PointCloudView:
-    """A rotatable 3-D view of a :class:`Cloud` (k3d, WebGL): drag to turn, wheel to zoom.
+    """A rotatable 3-D view of a :class:`Cloud` (k3d, WebGL), `height` px tall; `dense` points
+    (metres) are drawn in the same colours, hidden until :meth:`show_dense`.
 
-    Built once; :meth:`update` replaces the data of the same k3d objects.  ``.widget`` is
-    a box as wide as the output area, `height` px tall, with a caption line and the colour
-    scale above.  Optionally a second set of points (a dense disparity's, e.g. SGBM's, in
-    metres) is drawn in the same colours, hidden until :meth:`show_dense`.
+    The view draws its own axes: k3d's grid titles each axis twice, and its colour bar
+    covered the numbers.
 
-    The axes are drawn by the view itself, not by k3d's grid: k3d numbers and titles each axis
-    on two edges of its box (every title twice), and its colour bar, drawn inside the canvas,
-    covered the numbers of the axis beside it.  Here each axis is numbered and titled once,
-    and the colour scale is a strip of HTML above the canvas.
+    Parameters
+    ----------
+    cloud : Cloud
+        The points, cameras and notes to show.
+    height : int, default 360
+        The view's height, px.
+    dense : (M, 3) float array_like, optional
+        Dense points (metres), hidden until :meth:`show_dense`.
 
     Notes
     -----
@@ -338,57 +300,53 @@ class PointCloudView:
     """
 
     def __init__(self, cloud: Cloud, height: int = 360, dense=None):
-        import ipywidgets
         import k3d
 
-        if not isinstance(cloud, Cloud):
-            raise ParameterTypeError(message("cloud", "PointCloudView", "a Cloud", cloud))
+        check_type(cloud, Cloud, "cloud", "PointCloudView", "a Cloud")
         self.plot = k3d.plot(height=int(height), menu_visibility=False, axes_helper=0, grid_visible=False,
                              camera_auto_fit=False)
         # made with the first cloud's data: a k3d points object created empty never shows its
         # colour map in the browser, whatever data it gets later (k3d 3.2, Chromium)
         seed = _shown(cloud.points if len(cloud.points) else [[0, 0, 0]])
         colour = cloud.colour.astype(np.float32) if len(cloud.points) else np.zeros(1, np.float32)
-        self.points = k3d.points(seed, attribute=colour, color_map=_colour_map(), color_range=[0.0, 1.0],
-                                 shader="flat", name="matches")
-        self.dense = k3d.points(seed, attribute=colour, color_map=_colour_map(), color_range=[0.0, 1.0],
-                                shader="flat", name="dense", visible=False)
+        cmap = _colours().ravel().astype(np.float32)
+
+        def points(name, **kw):
+            return k3d.points(seed, attribute=colour, color_map=cmap, color_range=[0.0, 1.0], shader="flat",
+                              name=name, **kw)
+
+        def texts(n, rgb, size):
+            return [k3d.text("", (0.0, 0.0, 0.0), color=rgb, size=size, label_box=False, is_html=True,
+                             visible=False) for _ in range(n)]
+
+        self.points, self.dense = points("matches"), points("dense", visible=False)
         vertices, segments = frustum_edges(cloud.centres, cloud.frustum)
         self.cameras = k3d.lines(vertices, segments, indices_type="segment", shader="simple", color=0x303030,
                                  name="cameras")
         self.axes = k3d.lines(np.zeros((2, 3), np.float32), np.array([[0, 1]], np.uint32), indices_type="segment",
                               shader="simple", color=0x808080, name="axes")
-        self.axis_texts = [k3d.text("", (0.0, 0.0, 0.0), color=0x404040, size=0.8, label_box=False, is_html=True,
-                                    visible=False)
-                           for _ in range(3 * (MAX_TICKS + 1))]
-        self.notes = [k3d.text("", (0.0, 0.0, 0.0), color=0x202020, size=0.7, label_box=False, is_html=True,
-                               visible=False)
-                      for _ in range(MAX_NOTES)]
+        self.axis_texts = texts(3 * (MAX_TICKS + 1), 0x404040, 0.8)
+        self.notes = texts(MAX_NOTES, 0x202020, 0.7)
         for obj in (self.points, self.dense, self.cameras, self.axes, *self.axis_texts, *self.notes):
             self.plot += obj
         # k3d draws a colour bar inside the canvas for the first object with a colour range unless
         # told which object's to draw: the cameras' lines have none, so none is drawn
         self.plot.colorbar_object_id = self.cameras.id
         self.plot.add_class("ismb-cloud-plot")
-        self.caption = ipywidgets.HTML("")
-        self.caption.add_class("ismb-cloud-caption")
-        self.colours = ipywidgets.HTML("", layout=ipywidgets.Layout(width="100%"))
-        self.colours.add_class("ismb-cloud-colours")
-        self.widget = ipywidgets.VBox([self.caption, self.colours, self.plot], layout=ipywidgets.Layout(width="100%"))
-        self.widget.add_class("ismb-cloud")
+        self.caption = with_class(ipywidgets.HTML(""), "ismb-cloud-caption")
+        self.colours = with_class(ipywidgets.HTML("", layout=ipywidgets.Layout(width="100%")),
+                                  "ismb-cloud-colours")
+        self.widget = with_class(ipywidgets.VBox([self.caption, self.colours, self.plot],
+                                                 layout=ipywidgets.Layout(width="100%")), "ismb-cloud")
         self._dense_points = np.zeros((0, 3))
         self._dense_wanted = False
         self.update(cloud, dense)
         self.plot.camera = self._camera(*self._box)
 
     def update(self, cloud: Cloud, dense=None) -> None:
-        """Show `cloud` in the same objects (the camera stays where the student turned it), and
-        `dense` (``(M, 3)`` metres, or None: none) as the second set of points.
-
-        One colour scale serves both: from the nearest to the farthest point of either.
-        """
-        if not isinstance(cloud, Cloud):
-            raise ParameterTypeError(message("cloud", "PointCloudView.update", "a Cloud", cloud))
+        """Show `cloud` and `dense` (``(M, 3)`` metres, or None) in the same objects, with one
+        colour scale from the nearest to the farthest point of either; the camera stays."""
+        check_type(cloud, Cloud, "cloud", "PointCloudView.update", "a Cloud")
         dense = np.zeros((0, 3)) if dense is None else np.asarray(dense, dtype=float).reshape(-1, 3)
         dense = dense[np.isfinite(dense).all(axis=1)]
         lo, hi = cloud.depth_range
@@ -397,25 +355,14 @@ class PointCloudView:
             lo, hi = (min(lo, float(z.min())), max(hi, float(z.max()))) if len(cloud.points) else \
                 (float(z.min()), float(z.max()))
         colour_range = [lo, hi if hi > lo else lo + 1e-3]
-        size = 0.02 * self._span(cloud)
-        with self.points.hold_sync():   # positions and colours of the same count arrive together
-            if len(cloud.points):        # none: hide the last ones rather than send an empty object
-                self.points.positions = _shown(cloud.points)
-                self.points.attribute = cloud.colour.astype(np.float32)
-                self.points.point_size = size
-            self.points.color_range = colour_range
-            self.points.visible = bool(len(cloud.points))
+        both = np.vstack([cloud.points, cloud.centres])
+        size = 0.02 * float(max(np.ptp(both, axis=0).max(), 1e-3))
+        _fill(self.points, cloud.points, cloud.colour, size, colour_range, True)
         self._dense_points = dense
-        with self.dense.hold_sync():
-            if len(dense):
-                self.dense.positions = _shown(dense)
-                self.dense.attribute = dense[:, 2].astype(np.float32)
-                self.dense.point_size = 0.4 * size
-            self.dense.color_range = colour_range
-            self.dense.visible = bool(self._dense_wanted and len(dense))
+        _fill(self.dense, dense, dense[:, 2], 0.4 * size, colour_range, self._dense_wanted)
         vertices, _ = frustum_edges(cloud.centres, cloud.frustum)
         self.cameras.vertices = _shown(vertices)
-        self._draw_axes(cloud, dense)
+        self._draw_axes(cloud, dense, vertices)
         for k, text in enumerate(self.notes):
             if k < len(cloud.notes):
                 words, xyz = cloud.notes[k]
@@ -430,8 +377,7 @@ class PointCloudView:
         self._dense_wanted = bool(shown)
         self.dense.visible = bool(shown and len(self._dense_points))
 
-    def _draw_axes(self, cloud: Cloud, dense) -> None:
-        vertices, _ = frustum_edges(cloud.centres, cloud.frustum)
+    def _draw_axes(self, cloud: Cloud, dense, vertices) -> None:
         every = _shown(np.vstack([cloud.points, dense, vertices]))
         self._box = (every.min(axis=0), every.max(axis=0))
         lines, segments, texts = axes_frame(*self._box)
@@ -445,11 +391,6 @@ class PointCloudView:
                 label.text, label.position, label.reference_point, label.visible = words, list(map(float, at)), anchor, True
             else:
                 label.visible = False
-
-    @staticmethod
-    def _span(cloud: Cloud) -> float:
-        both = np.vstack([cloud.points, cloud.centres])
-        return float(max(np.ptp(both, axis=0).max(), 1e-3))
 
     @staticmethod
     def _camera(lo, hi) -> list:

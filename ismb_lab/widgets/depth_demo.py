@@ -1,11 +1,4 @@
-"""Which toy car is nearer: the thesis' depth demonstration as a widget (§5.2.3, Figs. 5.11-5.14).
-
-:class:`DepthModel` runs :func:`ismb_lab.depth_demo.relative_depth` on a background pair
-and a scene pair and words its ranking; :class:`DepthDemo` adds the background's
-matches and disparities (Fig. 5.12), the scene's new features coloured by
-disparity with the background's removed (Fig. 5.14), and controls for the seed,
-the method and the background-removal tolerances.
-"""
+"""Which toy car is nearer: the thesis' depth demonstration as a widget (§5.2.3, Figs. 5.11-5.14)."""
 
 from __future__ import annotations
 
@@ -13,58 +6,39 @@ import html
 import math
 from dataclasses import fields, replace
 
+import ipywidgets
 import numpy as np
+from matplotlib.figure import Figure
 
-from .._validation import ParameterTypeError, check_number, message
-from ..depth import DepthConfig, DepthObject, DepthResult
-from ..depth_demo import DEPTH_MATCH_CONFIG, DEPTH_SOLVER, depth_pairs, load_stereo, pair_silhouettes, relative_depth
-from ..methods import DEFAULT_METHOD, get_method, method_names
-from ..params import Params
+from .._core.validation import ParameterTypeError, check_number, message
+from ..depth.objects import DepthConfig, DepthObject, DepthResult
+from ..depth.pipeline import DEPTH_MATCH_CONFIG, DEPTH_SOLVER, depth_pairs, load_stereo, pair_silhouettes, relative_depth
+from ..network.methods import DEFAULT_METHOD, get_method, method_names
+from ..network.params import Params
 from ..plotting import OKABE_ITO, outlines
-from ..recipe import recipe_of
-from ._common import Base, Pane, button, grey_rgb, pair_files, path_labels, row, with_class
+from ..matching.recipe import recipe_of
+from ._common import Base, Pane, button, check_type, grey_rgb, pair_files, path_labels, row, with_class
 from .cloud import PointCloudView, depth_cloud
 
 __all__ = ["CMAP", "GROUPING_LABELS", "TOLERANCES", "depth_text", "support_text", "DepthDemo",
            "DepthModel", "disparity_limits", "draw_background", "draw_scene", "label_positions",
            "update_background", "update_scene"]
 
-#: The DepthConfig fields of the background removal that get a slider, with their labels.
+#: The DepthConfig fields that get a slider, with their labels.
 TOLERANCES = {"position_tol_px": "same place (px)", "disparity_tol_px": "same disparity (px)",
               "local_px": "local background (px)"}
 CMAP = "plasma"
-#: The choices of "objects by": blobs of change in both images, or the thesis' features alone.
+#: The choices of "objects by".
 GROUPING_LABELS = (("outlines and features", "silhouettes"), ("features only (thesis)", "features"))
 
 
-def _tolerance_defaults() -> dict:
-    return {f.name: f.default for f in fields(DepthConfig) if f.name in TOLERANCES}
-
-
 class DepthModel:
-    """A background pair and a scene pair, matched and ranked near -> far.
+    """A background pair and a scene pair (:func:`ismb_lab.depth.pipeline.load_stereo`), matched
+    with :func:`~ismb_lab.depth.pipeline.relative_depth` and ranked near -> far.
 
-    Parameters
-    ----------
-    background, scene : pair folder, (left, right) or object with ``.left`` and ``.right``
-        The two stereo pairs of the same view (:func:`ismb_lab.depth_demo.load_stereo`).
-    method : {"I", "II", "III", "NM"}
-    params : Params, optional
-        None: the thesis' values of whichever method is chosen.
-    seed : int
-        Update-order seed of both network runs.
-    config : DepthConfig, optional
-        Tolerances and calibration.
-    match_config : MatchConfig, optional
-    background_name : str
-        What the scene's objects are compared with: the background's nearest object.
-    recipe : Recipe or path, optional
-        A recipe (:class:`ismb_lab.recipe.Recipe`, or the params file ``ismb-lab tune``
-        writes), used as it is: its method, parameters, solver and one-to-one replace
-        `method` and `params` and the demo's solver (:data:`~ismb_lab.depth_demo.DEPTH_SOLVER`).
+    `background_name` is what the ranking sentence calls the background's nearest object; a
+    `recipe` (or its path) replaces `method`, `params` and :data:`~ismb_lab.depth.pipeline.DEPTH_SOLVER`.
 
-    Examples
-    --------
     >>> from ismb_lab.scenes import lab_scene, toy_car_scene
     >>> model = DepthModel(lab_scene(0), toy_car_scene(0))
     >>> model.result.objects == () or model.ranking()[0].startswith("1. object at (")
@@ -85,9 +59,7 @@ class DepthModel:
         self.background = load_stereo(background, "background", owner)
         self.scene = load_stereo(scene, "scene", owner)
         self.match_config = match_config
-        if not isinstance(background_name, str):
-            raise ParameterTypeError(message("background_name", owner, "a str", background_name))
-        self.background_name = background_name
+        self.background_name = check_type(background_name, str, "background_name", owner, "a str")
         self.method = get_method(method).name
         self.params = self._check_params(params, owner)
         self.config = self._check_config(DepthConfig() if config is None else config, owner)
@@ -105,13 +77,10 @@ class DepthModel:
 
     @staticmethod
     def _check_config(config, owner):
-        if not isinstance(config, DepthConfig):
-            raise ParameterTypeError(message("config", owner, "None or a DepthConfig", config))
-        return config
+        return check_type(config, DepthConfig, "config", owner, "None or a DepthConfig")
 
     def _blobs(self, config):
-        """The blobs of change for `config` (None for the features alone), found again only when its
-        outline settings change."""
+        """The blobs of change for `config` (None for features alone), found again on new outline settings."""
         if config.grouping != "silhouettes":
             return None
         if self.silhouettes is None or self._outline != config.outline:
@@ -127,9 +96,25 @@ class DepthModel:
     def set(self, *, method=None, params: Params | None = None, seed=None, config=None,
             **tolerances) -> "DepthModel":
         """Change any of method, params, seed, config or single config fields; recompute.
+        All or nothing: on an error the model is left as it was.
 
-        All or nothing: when a value is bad or the computation fails, the model is
-        left as it was and the error propagates.
+        Parameters
+        ----------
+        method : str, optional
+            The matching method.
+        params : Params, optional
+            New parameters.
+        seed : int, optional
+            New update-order seed.
+        config : DepthConfig, optional
+            New tolerances.
+        **tolerances
+            Single DepthConfig fields, e.g. ``position_tol_px=4``.
+
+        Returns
+        -------
+        model : DepthModel
+            This model, recomputed.
         """
         owner = "DepthModel.set"
         new_method = self.method if method is None else get_method(method).name
@@ -143,28 +128,18 @@ class DepthModel:
         self.result = result
         return self
 
-    def recompute(self) -> "DepthModel":
-        """Match both pairs again with the current settings."""
-        return self.set()
-
     @property
     def objects(self) -> tuple:
         return self.result.objects
 
     def ranking(self) -> list[str]:
-        """One line per object, nearest first, with what it rests on, e.g.
-        ``1. object at (98, 163): d = 33.9 px, Z = 0.88 m ± 0.01 (13 features, spread 0.0 px;
-        outline 34 px)`` (:func:`support_text`).
-
-        The spread is the median absolute deviation of the features' disparities: an
-        object on 2 features with spread 0 is as consistent as it can be, but rests on little.
-        """
-        return [f"{o.rank}. object at ({o.centroid_xy[0]:.0f}, {o.centroid_xy[1]:.0f}): "
-                f"d = {o.mean_disparity:.1f} px, {depth_text(o)} ({support_text(o)})"
-                for o in self.result.objects]
+        """One line per object, nearest first, with what it rests on, e.g. ``1. object at (98, 163):
+        d = 33.9 px, Z = 0.88 m ± 0.01 (13 features, spread 0.0 px; outline 34 px)``."""
+        return [f"{o.rank}. object at ({_xy(o)}): d = {o.mean_disparity:.1f} px, "
+                f"{depth_text(o)} ({support_text(o)})" for o in self.result.objects]
 
     def sentence(self) -> str:
-        """The thesis' conclusion for this result: which object is nearer, and what they are in front of."""
+        """The thesis' conclusion: which object is nearer, and what they are in front of."""
         objects = self.result.objects
         if not objects:
             return self.result.message or "No objects were found in the scene."
@@ -228,13 +203,9 @@ def depth_text(obj: DepthObject) -> str:
 
 
 def support_text(obj: DepthObject) -> str:
-    """What an object rests on: ``13 features, spread 0.0 px; outline 34 px``, or
-    ``outline only: 22 px, overlap 0.98`` when no feature's disparity agrees with its outline's.
+    """What an object rests on: ``13 features, spread 0.0 px; outline 34 px``, or its outline only.
 
-    Examples
-    --------
-    >>> import numpy as np
-    >>> from ismb_lab.depth import DepthObject, metric_depth
+    >>> from ismb_lab.depth.objects import DepthObject, metric_depth
     >>> support_text(DepthObject(1, (0.0, 0.0), 22.0, 0.0, metric_depth(22.0), np.zeros((0, 2)), 0,
     ...                          silhouette_disparity=22.0, silhouette_score=0.98))
     'outline only: 22 px, overlap 0.98'
@@ -246,8 +217,6 @@ def support_text(obj: DepthObject) -> str:
         text += f"; outline {obj.silhouette_disparity:.0f} px"
     return text
 
-
-# --- view -------------------------------------------------------------------------------
 
 def disparity_limits(model: DepthModel) -> tuple[float, float]:
     """One colour scale for both views: the background's and the kept scene disparities."""
@@ -279,13 +248,11 @@ def update_background(art: dict, model: DepthModel) -> None:
 
 def draw_scene(ax, cax, model: DepthModel) -> dict:
     """Fig. 5.14: the scene's left image, background features crossed out, new ones by disparity,
-    (dashed) the box where the scene's corners were sought, and (cyan) the blobs of change
-    that group the objects, when they do."""
+    the box where corners were sought and the blobs of change (as :func:`ismb_lab.plotting.plot_depth`)."""
+    from matplotlib.collections import LineCollection
     from matplotlib.patches import Rectangle
 
     ax.imshow(grey_rgb(model.scene.left), interpolation="nearest")
-    from matplotlib.collections import LineCollection
-
     drawn = ax.add_collection(LineCollection([], colors=OKABE_ITO["sky blue"], linewidths=0.8, visible=False))
     removed, = ax.plot([], [], "x", color="0.75", alpha=0.7, ms=4, mew=1)
     features = ax.scatter([], [], c=[], cmap=CMAP, s=30, edgecolors="white", linewidths=0.6)
@@ -294,8 +261,7 @@ def draw_scene(ax, cax, model: DepthModel) -> dict:
     bar = ax.figure.colorbar(features, cax=cax) if cax is not None else ax.figure.colorbar(features, ax=ax)
     bar.set_label("disparity (px)", fontsize=8)
     bar.ax.tick_params(labelsize=7)
-    return {"ax": ax, "removed": removed, "features": features, "box": box, "outlines": drawn,
-            "labels": None}
+    return {"ax": ax, "removed": removed, "features": features, "box": box, "outlines": drawn, "labels": None}
 
 
 def update_scene(art: dict, model: DepthModel) -> None:
@@ -321,11 +287,9 @@ def update_scene(art: dict, model: DepthModel) -> None:
 
 
 def label_positions(objects, width: float = 45.0, height: float = 12.0) -> np.ndarray:
-    """Where each object's label goes: above its topmost feature (its centroid when it rests on
-    its outline alone), moved up above the labels of nearer objects it would cover.
+    """Where each object's label goes: above its topmost feature (or centroid), moved up above
+    the labels of nearer objects it would cover.
 
-    Examples
-    --------
     >>> from types import SimpleNamespace as O
     >>> label_positions([O(centroid_xy=(100, 150), features=np.array([[95, 140], [105, 160]])),
     ...                  O(centroid_xy=(120, 145), features=np.zeros((0, 2)))]).tolist()
@@ -340,23 +304,28 @@ def label_positions(objects, width: float = 45.0, height: float = 12.0) -> np.nd
     return xy
 
 
-# --- controller -------------------------------------------------------------------------
-
 class DepthDemo(Base):
-    """Rank the objects added to a background near -> far, with both figures of the thesis.
+    """Rank the objects added to a background near -> far, with both figures of the thesis;
+    the parameters are :class:`DepthModel`'s.
 
     Parameters
     ----------
     background, scene : pair folder, (left, right) or object with ``.left`` and ``.right``
-    method : {"I", "II", "III", "NM"}
+        The two stereo pairs of the same view.
+    method : str, default ``DEFAULT_METHOD``
+        The matching method.
     params : Params, optional
-    seed : int
+        Default the method's (Method-III: the demo's).
+    seed : int, default 0
+        Update-order seed of both runs.
     config : DepthConfig, optional
+        Tolerances and calibration.
     match_config : MatchConfig, optional
-    background_name : str
-        How the ranking sentence calls the background's nearest object (e.g. "the box").
+        Corner and window settings.
+    background_name : str, default "the nearest background object"
+        How the ranking sentence calls the background's nearest object.
     recipe : Recipe or path, optional
-        Used as it is (see :class:`DepthModel`).
+        Replaces `method`, `params` and the solver.
 
     Notes
     -----
@@ -370,8 +339,6 @@ class DepthDemo(Base):
     def __init__(self, background, scene, *, method=DEFAULT_METHOD, params: Params | None = None, seed: int = 0,
                  config: DepthConfig | None = None, match_config=None,
                  background_name: str = "the nearest background object", recipe=None):
-        import ipywidgets
-
         super().__init__()
         self.model = DepthModel(background, scene, method, params, seed, config, match_config,
                                 background_name, recipe)
@@ -395,47 +362,62 @@ class DepthDemo(Base):
                                         "ismb-grouping")
         self.recompute_button = button("Recompute", "ismb-recompute", "Match both pairs again", icon="refresh")
         self.sliders = {}
-        defaults = _tolerance_defaults()
+        defaults = {f.name: f.default for f in fields(DepthConfig) if f.name in TOLERANCES}
         for name, label in TOLERANCES.items():
             value = getattr(self.model.config, name)
             s = ipywidgets.FloatSlider(value=value, min=min(0.5, value) if name == "local_px" else 0.0,
                                        max=max(4 * defaults[name], value), step=0.5, description=label,
                                        continuous_update=False, readout_format=".1f",
                                        style={"description_width": "150px"}, layout={"width": "380px"})
-            s.add_class("ismb-" + name.replace("_", "-"))
-            s.observe(self.guard(self._on_control), names="value")
-            self.sliders[name] = s
+            self.sliders[name] = with_class(s, "ismb-" + name.replace("_", "-"))
         self.ranking = with_class(ipywidgets.HTML(""), "ismb-ranking")
-        self.method_menu.observe(self.guard(self._on_control), names="value")
-        self.seed_field.observe(self.guard(self._on_control), names="value")
-        self.grouping_menu.observe(self.guard(self._on_control), names="value")
+        for control in (*self.sliders.values(), self.method_menu, self.seed_field, self.grouping_menu):
+            control.observe(self.guard(lambda _: self.recompute()), names="value")
         self.recompute_button.on_click(self.guard(lambda _: self.recompute()))
-        controls = row([ipywidgets.VBox([self.method_menu, self.seed_field, self.grouping_menu,
-                                          self.recompute_button]),
-                        ipywidgets.VBox(list(self.sliders.values()))])
+        menus = [self.method_menu, self.seed_field, self.grouping_menu, self.recompute_button]
+        controls = row([ipywidgets.VBox(menus), ipywidgets.VBox(list(self.sliders.values()))])
         views = row([self.background_pane.widget, self.scene_pane.widget])
         self.widget = with_class(ipywidgets.VBox([controls, self.status, self.ranking, views, self.cloud.widget,
-                                                  self.log]),
-                                 "ismb-depth")
+                                                  self.log]), "ismb-depth")
         self.refresh()
 
     @classmethod
     def from_folders(cls, background_folder, scene_folder, **kw) -> "DepthDemo":
-        """The demo on two pair folders, e.g. ``images/lab`` and ``images/toy_cars``."""
-        owner = "DepthDemo.from_folders"
-        pairs = [pair_files(f, owner)[:2] for f in (background_folder, scene_folder)]
+        """The demo on two pair folders, e.g. ``images/lab`` and ``images/toy_cars``.
+
+        Parameters
+        ----------
+        background_folder, scene_folder : str or Path
+            Pair folders holding ``left.png`` and ``right.png``.
+        **kw
+            The constructor's keyword parameters.
+
+        Returns
+        -------
+        demo : DepthDemo
+            The widget.
+        """
+        pairs = [pair_files(f, "DepthDemo.from_folders")[:2] for f in (background_folder, scene_folder)]
         return cls(*pairs, **kw)
 
     @classmethod
     def from_photos(cls, *, folder=".", **kw):
-        """The §5.2.3 demo on photos of one's own, taken from two fixed camera positions: first
-        the empty scene (the background), then the same view with objects added.
+        """The §5.2.3 demo on photos of one's own from two fixed cameras: a
+        :class:`~ismb_lab.widgets.photos.PhotoLoader` for the empty scene, whose "Use this pair"
+        opens a second for the scene (warped with the background's rectification), whose own
+        opens the demo on both saved pairs.
 
-        A :class:`~ismb_lab.widgets.photos.PhotoLoader` takes the background pair (check,
-        rectify, ROI); "Use this pair" opens a second one for the scene pair, which is warped
-        with the background's rectification (same cameras, so nothing is estimated again);
-        its "Use this pair" opens the demo on both saved pairs, with the window measured on
-        the background (``shift="auto"``).
+        Parameters
+        ----------
+        folder : str or os.PathLike, default "."
+            Where the pairs' folders are made.
+        **kw
+            The constructor's keyword parameters.
+
+        Returns
+        -------
+        loader : PhotoLoader
+            The first loader widget.
         """
         from .photos import PhotoLoader
 
@@ -456,29 +438,21 @@ class DepthDemo(Base):
                             title="1. The empty scene (the background)")
         return first
 
-    def _on_control(self, _change) -> None:
-        self.recompute()
-
     def recompute(self) -> None:
-        """Match both pairs again with the controls' method, seed and tolerances; redraw.
-
-        When that fails the model and the controls keep their last good state.
-        """
+        """Match both pairs again with the controls' settings and redraw; on failure the model and
+        the controls keep their last good state."""
         try:
             self.model.set(method=self.method_menu.value, seed=self.seed_field.value,
                            grouping=self.grouping_menu.value, **{name: s.value for name, s in self.sliders.items()})
         except Exception:
-            self._sync_controls()
+            with self.syncing():
+                self.method_menu.value = self.model.method
+                self.seed_field.value = self.model.seed
+                self.grouping_menu.value = self.model.config.grouping
+                for name, s in self.sliders.items():
+                    s.value = getattr(self.model.config, name)
             raise
         self.refresh()
-
-    def _sync_controls(self) -> None:
-        with self.syncing():
-            self.method_menu.value = self.model.method
-            self.seed_field.value = self.model.seed
-            self.grouping_menu.value = self.model.config.grouping
-            for name, s in self.sliders.items():
-                s.value = getattr(self.model.config, name)
 
     def refresh(self) -> None:
         """Update the three views, the ranking and the status from the model, and draw."""
@@ -496,14 +470,11 @@ class DepthDemo(Base):
         return self.model.objects
 
     def static_figure(self):
-        """A plain Figure: Fig. 5.12 and Fig. 5.14 side by side, the ranking sentence on top (for print)."""
-        from matplotlib.figure import Figure
-
+        """A plain Figure: Fig. 5.12 and Fig. 5.14 side by side under the ranking sentence (for print)."""
         fig = Figure(figsize=(9.0, 3.6), layout="constrained")
         bg_ax, scene_ax = fig.subplots(1, 2)
         update_background(draw_background(bg_ax, self.model), self.model)
-        art = draw_scene(scene_ax, None, self.model)
-        update_scene(art, self.model)
+        update_scene(draw_scene(scene_ax, None, self.model), self.model)
         bg_ax.set_title("background: matches and disparities", fontsize=8)
         scene_ax.set_title("scene: new features by disparity", fontsize=8)
         fig.suptitle(self.model.sentence(), fontsize=8, wrap=True)

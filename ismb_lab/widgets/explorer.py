@@ -1,52 +1,35 @@
-"""Explore the energy parameters: move a slider, the pair is matched again and scored.
-
-:class:`ExplorerModel` is the plain-Python model; :class:`ParameterExplorer` adds
-sliders for θc, θs, λc, λs, the matches on the image pair, the C/E/T score
-against the loaded targets and the transfer functions S and C (thesis Fig. 3.3).
-"""
+"""Explore the energy parameters: move a slider, the pair is matched again and scored, and the
+transfer functions S and C (thesis Fig. 3.3) follow."""
 
 from __future__ import annotations
 
 import html
 from dataclasses import replace
 
+import ipywidgets
 import numpy as np
+from matplotlib.figure import Figure
 
-from .._validation import ParameterTypeError, check_number, message
-from ..evaluation import Score, score, unlabelled
-from ..matching import MatchConfig, MatchResult, Prepared, match, prepare
-from ..methods import DEFAULT_METHOD, all_genes, get_method, method_names
+from .._core.validation import ParameterTypeError, check_number, message
+from ..tuning.evaluation import Score, score, unlabelled
+from ..matching.pipeline import MatchConfig, MatchResult, Prepared, match, prepare
+from ..network.methods import DEFAULT_METHOD, all_genes, get_method, method_names
 from ..plotting import OKABE_ITO
-from ..params import THETA_C, Params
-from ..similarity import transfer
-from ..solvers import DEFAULT_SOLVER, SOLVERS, get_solver
-from ..targets import TargetSet, load_targets, snap
-from ._common import Base, Pane, draw_pair, pair_figsize, pair_files, update_pair, with_class
+from ..network.params import THETA_C, Params
+from ..network.similarity import transfer
+from ..network.solvers import DEFAULT_SOLVER, SOLVERS, get_solver
+from ..labels.targets import TargetSet, load_targets, snap
+from ._common import Base, Pane, check_type, draw_pair, pair_figsize, pair_files, row, update_pair, with_class
 
 __all__ = ["draw_transfer", "ExplorerModel", "ParameterExplorer", "similarity_theta", "update_transfer"]
-
 
 
 class ExplorerModel:
     """Match one pair with given parameters and score it against target feature pairs.
 
-    Parameters
-    ----------
-    prepared : Prepared
-    method : {"I", "II", "III"}
-    params : Params, optional
-        The thesis' values for the method by default.
-    seed : int
-        Update-order seed.
-    targets : (t, 2) int array_like, optional
-        Target ``(i, k)`` feature pairs (see :func:`ismb_lab.targets.snap`).
-    solver : str
-    unknown : int array_like
-        Left features whose matches are not scored (see :func:`ismb_lab.evaluation.unlabelled`).
+    `targets` are ``(i, k)`` feature pairs (:func:`ismb_lab.labels.targets.snap`); matches of
+    the `unknown` left features are not scored.
 
-    Examples
-    --------
-    >>> from ismb_lab.matching import prepare
     >>> from ismb_lab.scenes import synthetic_scene
     >>> scene = synthetic_scene(0)
     >>> model = ExplorerModel(prepare(scene.left, scene.right), targets=[[0, 0]])
@@ -58,9 +41,7 @@ class ExplorerModel:
                  targets=None, solver: str = DEFAULT_SOLVER, unknown=()):
         owner = "ExplorerModel"
         self.solver = get_solver(solver, owner).name
-        if not isinstance(prepared, Prepared):
-            raise ParameterTypeError(message("prepared", owner, "a Prepared (see matching.prepare)", prepared))
-        self.prepared = prepared
+        self.prepared = check_type(prepared, Prepared, "prepared", owner, "a Prepared (see matching.prepare)")
         self.method = get_method(method).name
         self.params = get_method(self.method).defaults if params is None else params
         if not isinstance(self.params, Params):
@@ -75,34 +56,48 @@ class ExplorerModel:
     def set(self, *, method=None, params: Params | None = None, seed=None, solver=None,
             **genes) -> "ExplorerModel":
         """Change any of method, params (whole or gene by gene, e.g. ``theta_c=12``), seed and
-        solver; rematch."""
+        solver; rematch.
+
+        Parameters
+        ----------
+        method : str, optional
+            The matching method.
+        params : Params, optional
+            New parameters.
+        seed : int, optional
+            New update-order seed.
+        solver : str, optional
+            New solver.
+        **genes
+            Single parameters, e.g. ``theta_c=12``.
+
+        Returns
+        -------
+        model : ExplorerModel
+            This model, rematched.
+        """
         owner = "ExplorerModel.set"
         before = (self.method, self.params, self.seed, self.solver)
         try:
-            return self._set(owner, method, params, seed, solver, genes)
+            if solver is not None:
+                self.solver = get_solver(solver, owner).name
+            if method is not None:
+                self.method = get_method(method).name
+            if params is not None:
+                self.params = check_type(params, Params, "params", owner, "a Params")
+            if genes:
+                self.params = replace(self.params, **genes)
+            if seed is not None:
+                self.seed = check_number(seed, "seed", owner, low=0, integer=True)
+            m = get_method(self.method)
+            unset = {g: getattr(m.defaults, g) for g in m.gene_names if getattr(self.params, g) is None}
+            if unset:   # e.g. Method-NM's match bias after a four-gene method
+                self.params = replace(self.params, **unset)
+            return self.rematch()
         except Exception:
             # e.g. the exact solver on a problem too large for it: keep the last working state
             self.method, self.params, self.seed, self.solver = before
             raise
-
-    def _set(self, owner, method, params, seed, solver, genes) -> "ExplorerModel":
-        if solver is not None:
-            self.solver = get_solver(solver, owner).name
-        if method is not None:
-            self.method = get_method(method).name
-        if params is not None:
-            if not isinstance(params, Params):
-                raise ParameterTypeError(message("params", owner, "a Params", params))
-            self.params = params
-        if genes:
-            self.params = replace(self.params, **genes)
-        if seed is not None:
-            self.seed = check_number(seed, "seed", owner, low=0, integer=True)
-        m = get_method(self.method)
-        unset = {g: getattr(m.defaults, g) for g in m.gene_names if getattr(self.params, g) is None}
-        if unset:   # e.g. Method-NM's match bias after a four-gene method
-            self.params = replace(self.params, **unset)
-        return self.rematch()
 
     def rematch(self) -> "ExplorerModel":
         self.result = match(prepared=self.prepared, method=self.method, params=self.params, seed=self.seed,
@@ -128,8 +123,6 @@ class ExplorerModel:
                 f"C/T {pct(s.recall)}, precision {pct(s.precision)}, fitness {s.fitness}")
 
 
-# --- view -------------------------------------------------------------------------------
-
 def draw_transfer(axes, model: ExplorerModel) -> dict:
     """S(M) and C(X) (thesis 3-10, 3-13; Fig. 3.3) with a marker at the current θ."""
     x = np.linspace(0, THETA_C.high, 241)
@@ -150,21 +143,16 @@ def draw_transfer(axes, model: ExplorerModel) -> dict:
     return art
 
 
-#: The λs of the probe that reads back a derived θs: |λs (M - θs) / 2| stays far below tanh's
-#: saturation for any M of grey levels, so the inverse loses no digits.
+#: The λs that reads back a derived θs: far below tanh's saturation for any M, so no digit is lost.
 _PROBE_LAMBDA = 1e-3
 
 
 def similarity_theta(model: ExplorerModel) -> float | None:
     """The θs the model's method really uses on its pair, or None when it forms no ``S(M)``.
 
-    A method that sets θs from each pair (``"theta_s"`` in its ``derived``, as Method-NM3)
-    ignores the θs of ``model.params``: the value is read back from the method's own
-    similarity of the pair's neurons, ``S = -tanh(λs (M - θs) / 2)``, formed with a λs so
-    small that no ``S`` saturates, at the neuron whose ``S`` is nearest 0.
+    A θs derived from each pair (as Method-NM3's) is read back from the method's own
+    ``S = -tanh(λs (M - θs) / 2)`` at the neuron whose ``S`` is nearest 0.
 
-    Examples
-    --------
     >>> from ismb_lab.scenes import synthetic_scene
     >>> pair = synthetic_scene(0)
     >>> model = ExplorerModel(prepare(pair.left, pair.right), "NM3")
@@ -189,34 +177,38 @@ def similarity_theta(model: ExplorerModel) -> float | None:
 def update_transfer(art: dict, model: ExplorerModel) -> None:
     p = model.params
     theta_s = similarity_theta(model)
-    uses_s = theta_s is not None
     for key, theta, lam in (("s", p.theta_s if theta_s is None else theta_s, p.lambda_s),
                             ("c", p.theta_c, p.lambda_c)):
         art[key].set_ydata(transfer(art["x"], theta, lam))
         art[key + "_theta"].set_xdata([theta, theta])
         art[key + "_dot"].set_data([theta], [0.0])
-        faded = key == "s" and not uses_s
-        art[key].set_alpha(0.25 if faded else 1.0)
+        art[key].set_alpha(0.25 if key == "s" and theta_s is None else 1.0)
 
-
-# --- controller -------------------------------------------------------------------------
 
 class ParameterExplorer(Base):
     """Sliders for the four energy parameters with live matches, score and transfer functions.
 
+    `left` and `right` are paths or images, or `left` a Prepared; C/E/T is scored against `targets`
+    (a TargetSet, its path or feature pairs), only on their left corners when `partial`.
+
     Parameters
     ----------
     left, right : path or ndarray, or a Prepared as `left`
-    method : {"I", "II", "III"}
+        The image pair.
+    method : str, default ``DEFAULT_METHOD``
+        The matching method.
     params : Params, optional
-    seed : int
+        Starting slider values; default the method's.
+    seed : int, default 0
+        Update-order seed.
     config : MatchConfig, optional
-    targets : TargetSet, path, or (t, 2) feature pairs, optional
+        Corner settings.
+    targets : TargetSet, path or (t, 2) int array_like, optional
         What C/E/T is scored against.
-    solver : str
-    partial : bool
-        The targets label only some corners (a person's labels): matches of the other left
-        corners are not scored (see :meth:`ismb_lab.protocol.Case.from_files`).
+    solver : str, default ``DEFAULT_SOLVER``
+        How the network is solved.
+    partial : bool, default False
+        The targets label only some corners: matches of the others are not scored.
 
     Notes
     -----
@@ -228,25 +220,21 @@ class ParameterExplorer(Base):
     def __init__(self, left, right=None, *, method=DEFAULT_METHOD, params: Params | None = None, seed: int = 0,
                  config: MatchConfig | None = None, targets=None, solver: str = DEFAULT_SOLVER,
                  partial: bool = False):
-        import ipywidgets
-
         super().__init__()
         prepared = left if isinstance(left, Prepared) else prepare(left, right, config)
-        if targets is not None and not isinstance(targets, np.ndarray) and not isinstance(targets, list):
+        if targets is not None and not isinstance(targets, (np.ndarray, list)):
             if not isinstance(targets, TargetSet):
                 targets = load_targets(targets, pair=prepared.pair)
             targets = snap(targets, prepared.problem.left_xy, prepared.problem.right_xy).pairs
-        if not isinstance(partial, bool):
-            raise ParameterTypeError(message("partial", "ParameterExplorer", "True or False", partial))
+        check_type(partial, bool, "partial", "ParameterExplorer", "True or False")
         unknown = unlabelled(targets, len(prepared.problem.left_xy)) if partial and targets is not None else ()
         self.model = ExplorerModel(prepared, method, params, seed, targets, solver, unknown)
         self.pair_pane = Pane(pair_figsize(prepared.pair), "ismb-matches")
         self.transfer_pane = Pane((5.8, 2.2), "ismb-transfer")
         self.panes = (self.pair_pane, self.transfer_pane)
         self.pair_artists = draw_pair(self.pair_pane.fig.add_axes((0, 0, 1, 1)), self.model)
-        axes = self.transfer_pane.fig.subplots(1, 2)
         self.transfer_pane.fig.subplots_adjust(left=0.08, right=0.98, bottom=0.2, top=0.88, wspace=0.25)
-        self.transfer_artists = draw_transfer(axes, self.model)
+        self.transfer_artists = draw_transfer(self.transfer_pane.fig.subplots(1, 2), self.model)
 
         self.sliders = {}
         # a gene the current parameters leave unset shows the value of a method that uses it
@@ -257,9 +245,8 @@ class ParameterExplorer(Base):
             s = ipywidgets.FloatSlider(value=fallback[gene.name] if value is None else value, min=gene.low,
                                        max=gene.high, step=0.01, description=gene.symbol or gene.name,
                                        continuous_update=False, readout_format=".2f")
-            s.add_class("ismb-" + gene.name.replace("_", "-"))
             s.observe(self.guard(self._on_slider), names="value")
-            self.sliders[gene.name] = s
+            self.sliders[gene.name] = with_class(s, "ismb-" + gene.name.replace("_", "-"))
         self.method_menu = with_class(ipywidgets.Dropdown(options=list(method_names()), value=self.model.method,
                                                           description="method"), "ismb-method")
         self.seed_field = with_class(ipywidgets.BoundedIntText(value=self.model.seed, min=0, max=2**31 - 1,
@@ -270,9 +257,8 @@ class ParameterExplorer(Base):
         self.solver_menu.observe(self.guard(lambda c: self._change(solver=c["new"])), names="value")
         self.method_menu.observe(self.guard(lambda c: self._change(method=c["new"])), names="value")
         self.seed_field.observe(self.guard(lambda c: self._change(seed=c["new"])), names="value")
-        controls = ipywidgets.HBox([ipywidgets.VBox(list(self.sliders.values())),
-                                    ipywidgets.VBox([self.method_menu, self.solver_menu, self.seed_field])],
-                                   layout=ipywidgets.Layout(flex_flow="row wrap"))
+        controls = row([ipywidgets.VBox(list(self.sliders.values())),
+                        ipywidgets.VBox([self.method_menu, self.solver_menu, self.seed_field])])
         self.widget = with_class(ipywidgets.VBox([controls, self.score_label, self.status,
                                                   self.pair_pane.widget, self.transfer_pane.widget,
                                                   self.log]), "ismb-explorer")
@@ -280,7 +266,20 @@ class ParameterExplorer(Base):
 
     @classmethod
     def from_folder(cls, folder, **kw) -> "ParameterExplorer":
-        """Explore ``folder/left.png``, ``folder/right.png``, scored against ``answer_key.json`` if present."""
+        """Explore ``folder/left.png``, ``folder/right.png``, scored against ``answer_key.json`` if present.
+
+        Parameters
+        ----------
+        folder : str or Path
+            A pair folder.
+        **kw
+            The constructor's keyword parameters.
+
+        Returns
+        -------
+        explorer : ParameterExplorer
+            The widget.
+        """
         left, right, key = pair_files(folder, "ParameterExplorer.from_folder")
         if key.is_file():
             kw.setdefault("targets", key)
@@ -288,15 +287,23 @@ class ParameterExplorer(Base):
 
     @classmethod
     def from_photos(cls, *, folder=".", **kw):
-        """A :class:`~ismb_lab.widgets.photos.PhotoLoader` whose "Use this pair" opens an explorer
-        on the saved (rectified) photos, with the dragged ROI and ``shift="auto"``."""
-        from .photos import PhotoLoader
+        """A :class:`~ismb_lab.widgets.photos.PhotoLoader` whose "Use this pair" opens an explorer.
 
-        def open_with(pair_folder, roi):
-            config = MatchConfig(roi=roi if roi is not None else "center", shift="auto")
-            return cls.from_folder(pair_folder, config=config, **kw)
+        Parameters
+        ----------
+        folder : str or os.PathLike, default "."
+            Where the pair's folder is made.
+        **kw
+            Passed to :meth:`from_folder`.
 
-        return PhotoLoader(open_with, folder=folder)
+        Returns
+        -------
+        loader : PhotoLoader
+            The loader widget.
+        """
+        from .photos import opening
+
+        return opening(cls.from_folder, folder, **kw)
 
     @property
     def params(self) -> Params:
@@ -304,8 +311,7 @@ class ParameterExplorer(Base):
 
     def set_params(self, params: Params) -> None:
         """Show and use `params` (e.g. the GA's best): one rematch, whatever changed."""
-        if not isinstance(params, Params):
-            raise ParameterTypeError(message("params", "ParameterExplorer.set_params", "a Params", params))
+        check_type(params, Params, "params", "ParameterExplorer.set_params", "a Params")
         with self.syncing():
             for gene, slider in self.sliders.items():
                 if getattr(params, gene) is not None:
@@ -339,12 +345,9 @@ class ParameterExplorer(Base):
 
     def static_figure(self):
         """A plain Figure: the matches and the transfer functions (for print)."""
-        from matplotlib.figure import Figure
-
         fig = Figure(figsize=(6.6, 5.0), layout="constrained")
         top, bottom = fig.subfigures(2, 1, height_ratios=[1.2, 1])
-        art = draw_pair(top.add_subplot(), self.model)
-        update_pair(art, self.model)
+        update_pair(draw_pair(top.add_subplot(), self.model), self.model)
         top.suptitle(self.model.score_text(), fontsize=8)
         update_transfer(draw_transfer(bottom.subplots(1, 2), self.model), self.model)
         return fig

@@ -1,20 +1,8 @@
 """Run the GA (thesis ch. 4) live: fitness curves grow while the notebook stays usable.
 
-Why a background thread
------------------------
-A GA generation is a burst of CPU work (a population of network runs per
-training pair).  Run in a worker thread, it leaves the kernel's main thread
-free to handle Pause and Stop clicks at once, and it works the same in a
-notebook, in Voilà, in a script and in tests, none of which needs an event loop.
-An asyncio task would run on the kernel's own loop: every generation would hold
-up the handling of clicks until it ended, and outside a kernel someone would
-have to drive the loop.  The thread checks a stop :class:`threading.Event`
-between generations (a stopped GA computes no further generation) and waits on
-a resume event while paused; widget values are set from the thread (ipywidgets
-sends them through the kernel's thread-safe I/O channel) and figure draws are
-serialised by a lock.
-
-:class:`GAModel` is the plain-Python model; :class:`GARunner` the widget.
+The GA runs in a worker thread, not an asyncio task on the kernel's loop: clicks on Pause
+and Stop are handled at once, and scripts and tests need no event loop.  The thread checks a
+stop event between generations and waits on a resume event while paused.
 """
 
 from __future__ import annotations
@@ -24,18 +12,20 @@ import time
 from pathlib import Path
 from typing import Callable
 
+import ipywidgets
 import numpy as np
+from matplotlib.figure import Figure
 
-from .._validation import ParameterError, ParameterTypeError, check_number, message
-from ..genetic import GAConfig, Generation
-from ..matching import MatchConfig
-from ..methods import DEFAULT_METHOD, get_method
+from .._core.validation import ParameterError, ParameterTypeError, check_number, message
+from ..tuning.genetic import GAConfig, Generation
+from ..matching.pipeline import MatchConfig
+from ..network.methods import DEFAULT_METHOD, get_method
 from ..plotting import OKABE_ITO
-from ..params import Params
-from ..protocol import Case
-from ..recipe import Recipe, save_recipe
-from ..solvers import DEFAULT_SOLVER, SOLVERS, get_solver
-from ..tuning import to_params, tune
+from ..network.params import Params
+from ..tuning.cases import Case
+from ..matching.recipe import Recipe, save_recipe
+from ..network.solvers import DEFAULT_SOLVER, SOLVERS, get_solver
+from ..tuning.fitness import to_params, tune
 from ._common import Base, Pane, button, pair_files, row, with_class
 
 __all__ = ["as_cases", "case_from_folder", "chromosome_html", "draw_fitness", "GAModel", "GARunner",
@@ -43,7 +33,7 @@ __all__ = ["as_cases", "case_from_folder", "chromosome_html", "draw_fitness", "G
 
 
 def case_from_folder(folder, config: MatchConfig | None = None) -> Case:
-    """A training :class:`~ismb_lab.protocol.Case` from ``left.png``, ``right.png`` and ``answer_key.json``."""
+    """A training :class:`~ismb_lab.tuning.cases.Case` from a pair folder with an ``answer_key.json``."""
     left, right, key = pair_files(folder, "case_from_folder")
     if not key.is_file():
         raise ParameterError(f"The 'folder' parameter of case_from_folder must be a folder with an "
@@ -71,25 +61,10 @@ def as_cases(cases_or_folder, config: MatchConfig | None = None) -> list[Case]:
 class GAModel:
     """A GA run in a worker thread, with pause, resume and stop.
 
-    Parameters
-    ----------
-    cases : list of Case
-    method : str
-        A name in :func:`ismb_lab.methods.method_names`.
-    population, generations : int, optional
-        GA size (default: :class:`~ismb_lab.genetic.GAConfig`'s, the thesis' 30 and 500).
-    seed : int
-        Seed of the GA (and of every network run's update order, as in ``tune``).
-    save_to : str or os.PathLike, optional
-        A params file (as ``ismb-lab tune`` writes it) rewritten atomically whenever the
-        best fitness improves, so that a kernel that is shut down, culled or killed
-        mid-run leaves the best parameters so far on disk.
-    solver : str
-        How each chromosome's network is solved (a name in :data:`ismb_lab.solvers.SOLVERS`).
+    `seed` seeds the GA and every run's update order, as in ``tune``; `save_to`, a params file,
+    is rewritten atomically whenever the best fitness improves, so that a killed kernel loses nothing.
 
-    Examples
-    --------
-    >>> from ismb_lab.matching import prepare
+    >>> from ismb_lab.matching.pipeline import prepare
     >>> from ismb_lab.scenes import synthetic_scene, true_matches
     >>> scene = synthetic_scene(0)
     >>> p = prepare(scene.left, scene.right)
@@ -136,7 +111,7 @@ class GAModel:
 
     @property
     def best_params(self) -> Params | None:
-        """The best chromosome so far as :class:`~ismb_lab.methods.Params` (None before generation 0)."""
+        """The best chromosome so far as Params (None before generation 0)."""
         return None if not self.history else to_params(self.method, self.history[-1].best_chromosome)
 
     def start(self) -> bool:
@@ -166,9 +141,8 @@ class GAModel:
                                 targets=self.target)
                 for listener in list(self.listeners):
                     listener(record)
-                while not self._resume.wait(0.1):
-                    if self._stop.is_set():
-                        break
+                while not (self._resume.wait(0.1) or self._stop.is_set()):
+                    pass
                 if self._stop.is_set():
                     self.status = "stopped"
                     return
@@ -221,8 +195,6 @@ class GAModel:
         return text
 
 
-# --- view -------------------------------------------------------------------------------
-
 def draw_fitness(ax, model: GAModel) -> dict:
     """Best and mean fitness per generation (thesis Figs. 5.4, 5.5)."""
     from matplotlib.ticker import MaxNLocator
@@ -262,30 +234,33 @@ def chromosome_html(model: GAModel) -> str:
     return f'<table class="ismb-table"><tr><td>best chromosome:</td>{cells}</tr></table>'
 
 
-# --- controller -------------------------------------------------------------------------
-
 class GARunner(Base):
     """Start, pause and stop the GA and watch its fitness; apply the best parameters elsewhere.
+
+    `cases_or_folder` is a Case, a pair folder with an ``answer_key.json`` (corners by `config`),
+    or a list of them; the curves are redrawn at most every `redraw_every` s while running.
 
     Parameters
     ----------
     cases_or_folder : Case, folder, or a list of them
-        Training pairs; a folder gives ``left.png``, ``right.png`` and ``answer_key.json``.
-    method, population, generations, seed, solver
-        As in :func:`ismb_lab.tuning.tune` (seed: GA and update order).
+        The training pairs.
+    method : str, default ``DEFAULT_METHOD``
+        The method to tune.
+    population, generations : int, optional
+        GA size; default :class:`~ismb_lab.tuning.genetic.GAConfig`'s.
+    seed : int, default 0
+        Seed of the GA and of every network run's update order.
     config : MatchConfig, optional
         Corner settings for folders.
+    redraw_every : float, default 0.2
+        Seconds between redraws of the curves while running.
     save_to : str or os.PathLike, optional
-        Where the best parameters so far are kept on disk (see :class:`GAModel`).
-    redraw_every : float
-        Seconds between redraws of the curves while running (every generation
-        updates the progress bar and the status; the last one is always drawn).
+        A params file rewritten whenever the best fitness improves.
+    solver : str, default ``DEFAULT_SOLVER``
+        How each chromosome's network is solved.
 
     Notes
     -----
-    The ``generations`` field sets the most generations of the next run (the thesis stops at
-    500, which the project's pairs reach in seconds).
-
     CSS classes: root ``ismb-ga``; buttons ``ismb-start``, ``ismb-pause``, ``ismb-stop``,
     ``ismb-apply``; ``ismb-solver``; ``ismb-generations``; ``ismb-progress``; figure ``ismb-fitness``; best chromosome
     ``ismb-chromosome``; ``ismb-status``; ``ismb-log``.
@@ -294,8 +269,6 @@ class GARunner(Base):
     def __init__(self, cases_or_folder, *, method=DEFAULT_METHOD, population: int | None = None,
                  generations: int | None = None, seed: int = 0, config: MatchConfig | None = None,
                  redraw_every: float = 0.2, save_to=None, solver: str = DEFAULT_SOLVER):
-        import ipywidgets
-
         super().__init__()
         self.model = GAModel(as_cases(cases_or_folder, config), method, population=population,
                              generations=generations, seed=seed, save_to=save_to, solver=solver)
@@ -340,16 +313,34 @@ class GARunner(Base):
 
     @classmethod
     def from_folder(cls, folder, **kw) -> "GARunner":
-        """Tune on one pair folder (targets: its ``answer_key.json``)."""
+        """Tune on one pair folder (targets: its ``answer_key.json``).
+
+        Parameters
+        ----------
+        folder : str or Path
+            A pair folder with ``answer_key.json``.
+        **kw
+            The constructor's keyword parameters.
+
+        Returns
+        -------
+        runner : GARunner
+            The widget.
+        """
         return cls(Path(folder) if isinstance(folder, str) else folder, **kw)
 
     def on_apply(self, callback: Callable[[Params], object]) -> None:
-        """Call ``callback(params)`` when "Apply best parameters" is pressed."""
+        """Call ``callback(params)`` when "Apply best parameters" is pressed.
+
+        Parameters
+        ----------
+        callback : callable
+            Called with the best :class:`~ismb_lab.network.params.Params`, e.g. an explorer's ``set_params``.
+        """
         if not callable(callback):
             raise ParameterTypeError(message("callback", "GARunner.on_apply", "a callable", callback))
         self._apply.append(callback)
 
-    # --- actions ------------------------------------------------------------------------
     def set_solver(self, name: str) -> None:
         """Solve with `name` from the next Start on (refused while a run is going)."""
         try:
@@ -373,8 +364,7 @@ class GARunner(Base):
         self.say(self.model.describe())
 
     def start(self) -> bool:
-        started = self.model.start()
-        if not started:
+        if not self.model.start():
             self.say("the GA is running already: Stop it first")
             return False
         self._drawn_at = 0.0
@@ -421,7 +411,6 @@ class GARunner(Base):
         self.say(f"applied {params} to {len(self._apply)} widget(s)")
         return params
 
-    # --- updates from the worker thread -------------------------------------------------
     def _on_generation(self, record: Generation) -> None:
         self.progress.value = record.index
         self.say(self.model.describe())
@@ -464,8 +453,6 @@ class GARunner(Base):
 
     def static_figure(self):
         """A plain Figure of the fitness curves so far (for print)."""
-        from matplotlib.figure import Figure
-
         fig = Figure(figsize=(6.0, 3.0), layout="constrained")
         update_fitness(draw_fitness(fig.add_subplot(), self.model), list(self.model.history))
         return fig

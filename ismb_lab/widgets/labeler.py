@@ -1,15 +1,7 @@
 """Hand-label target pairs on a stereo pair: click a left feature, then its right partner.
 
-:class:`LabelModel` is the plain-Python model (no widgets, no pyplot);
-:class:`TargetLabeler` adds the figure and the buttons.
-
-Coordinates
------------
-:meth:`LabelModel.click` takes a point ``(x, y)`` of the side-by-side figure by
-default: the left image occupies ``0 <= x <= W - 1`` and the right image
-``W + GAP <= x <= 2 W + GAP - 1`` (see :data:`ismb_lab.plotting.GAP`).  With
-``side="left"`` or ``side="right"`` it takes image coordinates instead (the
-package's convention, :mod:`ismb_lab.coords`).
+:meth:`LabelModel.click` takes side-by-side coordinates by default (the right image starts at
+``W + GAP``, :data:`ismb_lab.plotting.GAP`), image coordinates with ``side="left"`` or ``"right"``.
 """
 
 from __future__ import annotations
@@ -18,34 +10,32 @@ import html
 from dataclasses import dataclass
 from pathlib import Path
 
+import ipywidgets
 import numpy as np
+from matplotlib.figure import Figure
 
-from .._validation import ParameterError, ParameterTypeError, check_choice, check_number, message
-from ..evaluation import Score, score, unlabelled
-from ..matching import MatchConfig, Prepared, match, prepare
-from ..methods import DEFAULT_METHOD
-from ..plotting import GAP, LEFT_COLOUR, OKABE_ITO, RIGHT_COLOUR, VERDICT_COLOURS, plot_matches
-from ..classroom import save_merging, targets_path, voila_without_hub
-from ..targets import TargetSet, load_targets, snap, targets_from_matches
-from ._common import Base, Pane, button, column_figsize, grey_rgb, number_labels, pair_files, with_class
+from .._core.validation import ParameterError, ParameterTypeError, check_choice, check_number, message
+from ..tuning.evaluation import Score, score, unlabelled
+from ..matching.pipeline import MatchConfig, Prepared, match, prepare
+from ..network.methods import DEFAULT_METHOD
+from ..plotting import GAP, OKABE_ITO, VERDICT_COLOURS
+from ..labels.classroom import save_merging, targets_path, voila_without_hub
+from ..labels.targets import TargetSet, load_targets, snap, targets_from_matches
+from ._common import Base, Pane, button, check_type, column_figsize, draw_pair, pair_files, with_class
 
 __all__ = ["COLUMNS", "KEY_AFTER", "Comparison", "draw_labels", "LabelModel", "pairs_html", "SavedScore", "TargetLabeler",
            "update_labels"]
 
 COLUMNS = ("Pair", "Left", "Right", "y_left", "x_left", "y_right", "x_right", "disparity")
 
-#: The answer key opens once this many pairs of the student's own are saved (or loaded), and
-#: then stays open: notebook 04's exercise asks for five before it compares anything.
+#: The answer key opens, for good, once this many pairs of the student's own are saved or loaded.
 KEY_AFTER = 5
 
 
 @dataclass(frozen=True)
 class Comparison:
-    """Student labels against the answer key, as feature pairs ``(i, k)``.
-
-    `off_feature` counts answer-key pairs with no detected feature within reach
-    on one side; they cannot be labelled with these features and are not missing.
-    """
+    """Student labels against the answer key, as feature pairs ``(i, k)``; `off_feature` counts
+    key pairs with no feature within reach (not missing: they cannot be labelled)."""
 
     correct: np.ndarray
     wrong: np.ndarray
@@ -59,12 +49,8 @@ class Comparison:
 
 @dataclass(frozen=True, eq=False)
 class SavedScore:
-    """A method's matches scored against the labels saved in a file (:meth:`LabelModel.score_saved`).
-
-    Labels cover only some corners, so C/E/T reads: C, the matches among the saved pairs;
-    E, the matches of a labelled left corner to another right corner (wrong partners; no
-    extras, since a corner without a label says nothing); T, the number of saved pairs.
-    """
+    """A method's matches scored against the labels saved in a file (:meth:`LabelModel.score_saved`):
+    E counts only wrong partners of labelled left corners, T the saved pairs."""
 
     path: Path
     method: str
@@ -86,29 +72,10 @@ def _pair_array(pairs) -> np.ndarray:
 class LabelModel:
     """The labels of one stereo pair and every edit on them.
 
-    Parameters
-    ----------
-    prepared : Prepared
-        The pair and its features (:func:`ismb_lab.matching.prepare`).
-    path : str or os.PathLike, optional
-        Where :meth:`save` and :meth:`load` go by default.  A save merges with what
-        another process saved there since this model last read the file
-        (:func:`ismb_lab.classroom.save_merging`), so two labellers on one file lose
-        nothing; the file's other keys and per-pair notes are kept.
-    answer_key : TargetSet, optional
-        Ground truth for :meth:`compare`.
-    snap_radius : float
-        A click snaps to the nearest feature within this many pixels.
-    key_tol : float
-        Answer-key points snap to features within this many pixels.
-    exclusive : bool
-        Refuse to save into an existing file that this model did not load or save
-        first, instead of merging with it: on a page many visitors share (Voilà without
-        a hub) an existing file may be another visitor's.
+    A click snaps to a feature within `snap_radius` px, an answer-key point within `key_tol` px.
+    With `exclusive`, :meth:`save` refuses an existing file this model did not load or save
+    instead of merging with it (on a page many visitors share).
 
-    Examples
-    --------
-    >>> from ismb_lab.matching import prepare
     >>> from ismb_lab.scenes import synthetic_scene
     >>> scene = synthetic_scene(0)
     >>> model = LabelModel(prepare(scene.left, scene.right))
@@ -122,11 +89,8 @@ class LabelModel:
     def __init__(self, prepared: Prepared, *, path=None, answer_key: TargetSet | None = None,
                  snap_radius: float = 8.0, key_tol: float = 3.0, exclusive: bool = False):
         owner = "LabelModel"
-        if not isinstance(exclusive, bool):
-            raise ParameterTypeError(message("exclusive", owner, "True or False", exclusive))
-        self.exclusive = exclusive
-        if not isinstance(prepared, Prepared):
-            raise ParameterTypeError(message("prepared", owner, "a Prepared (see matching.prepare)", prepared))
+        self.exclusive = check_type(exclusive, bool, "exclusive", owner, "True or False")
+        check_type(prepared, Prepared, "prepared", owner, "a Prepared (see matching.prepare)")
         if answer_key is not None and not isinstance(answer_key, TargetSet):
             raise ParameterTypeError(message("answer_key", owner, "None or a TargetSet", answer_key))
         self.prepared = prepared
@@ -148,21 +112,15 @@ class LabelModel:
         self.selected: int | None = None  # index into pairs
         self.message = "click a left feature, then its partner in the right image"
 
-    # --- reading ------------------------------------------------------------------------
     @property
     def pairs(self) -> np.ndarray:
-        """The labelled ``(i, k)`` feature pairs, sorted by left feature: an ``(m, 2)`` array."""
+        """The labelled ``(i, k)`` feature pairs, sorted: an ``(m, 2)`` array."""
         return _pair_array(self._pairs)
-
-    @property
-    def dirty(self) -> bool:
-        """Whether the labels differ from the last save or load."""
-        return tuple(self._pairs) != self._saved
 
     @property
     def save_status(self) -> str:
         """``"unsaved"``, ``"saved"`` (as last saved or loaded here) or ``""`` (nothing yet)."""
-        if self.dirty:
+        if tuple(self._pairs) != self._saved:
             return "unsaved"
         return "saved" if self._base is not None else ""
 
@@ -176,7 +134,7 @@ class LabelModel:
         return out
 
     def targets(self) -> TargetSet:
-        """The labels as a :class:`~ismb_lab.targets.TargetSet` bound to the two images."""
+        """The labels as a :class:`~ismb_lab.labels.targets.TargetSet` bound to the two images."""
         pair = self.prepared.pair
         return targets_from_matches(self.pairs, self.left_xy, self.right_xy,
                                     left_sha256=pair.left_sha256, right_sha256=pair.right_sha256,
@@ -192,7 +150,6 @@ class LabelModel:
         off = len(self.answer_key) - len(snapped.pairs)
         return Comparison(_pair_array(mine & key), _pair_array(mine - key), _pair_array(key - mine), off)
 
-    # --- locating clicks ----------------------------------------------------------------
     def locate(self, x, y, side=None):
         """``(side, x, y)`` in image coordinates of a click, or None off both images."""
         x = check_number(x, "x", "LabelModel.click")
@@ -218,7 +175,6 @@ class LabelModel:
         j = int(np.argmin(d))
         return j, float(d[j])
 
-    # --- editing ------------------------------------------------------------------------
     def _say(self, text: str) -> str:
         self.message = text
         return text
@@ -227,11 +183,10 @@ class LabelModel:
         self._history.append((tuple(self._pairs), self.pending, self.selected))
 
     def click(self, x, y, side=None) -> str:
-        """Handle a click; see the module docstring for the coordinates.  Returns the status text.
+        """Handle a click (coordinates: see the module docstring); returns the status text.
 
-        A left feature starts a pair (or selects the pair it belongs to); a right
-        feature completes the pending pair (or selects the pair it belongs to).
-        A click on the pending left feature again cancels it.
+        A left feature starts a pair, a right one completes it; a feature already paired
+        selects its pair; the pending left feature clicked again is released.
         """
         where = self.locate(x, y, side)
         if where is None:
@@ -305,22 +260,16 @@ class LabelModel:
         self._say(f"undone ({len(self._pairs)} pairs)")
         return True
 
-    # --- files --------------------------------------------------------------------------
     def _path(self, path, owner) -> Path:
         path = self.path if path is None else path
         if path is None:
             raise ParameterError(message("path", owner, "a file path (none was given here or to the "
                                          "labeler)", None))
-        if not isinstance(path, (str, Path)):
-            raise ParameterTypeError(message("path", owner, "a str or Path", path))
-        return Path(path)
+        return Path(check_type(path, (str, Path), "path", owner, "a str or Path"))
 
     def save(self, path=None) -> Path:
-        """Write the labels atomically, merged with what others saved to the file meanwhile.
-
-        On failure the old file is untouched and the error raised.  Pairs that another
-        labeller saved (on this pair's features) appear among the labels afterwards.
-        """
+        """Write the labels atomically, merged with what others saved to the file meanwhile
+        (:func:`ismb_lab.labels.classroom.save_merging`); on failure the old file is untouched."""
         path = self._path(path, "LabelModel.save")
         base = self._base if self._base is not None and path == self._base_path else None
         if self.exclusive and base is None and path.exists():
@@ -339,11 +288,24 @@ class LabelModel:
         return path
 
     def score_saved(self, method=DEFAULT_METHOD, *, seed: int = 0, params=None, path=None) -> SavedScore | None:
-        """Match the pair with `method` and score it against the labels saved in `path`
-        (default: the labeller's file); None when nothing is saved there yet.
+        """Match the pair with `method` and score it against the labels saved in `path` (default:
+        the labeller's file), leaving out unlabelled left corners; None when nothing is saved there.
 
-        Matches of the left corners that have no saved label are not counted: the labels
-        say nothing about them (see :class:`SavedScore`).
+        Parameters
+        ----------
+        method : str, default ``DEFAULT_METHOD``
+            The matching method.
+        seed : int, default 0
+            Update-order seed.
+        params : Params, optional
+            Default the method's.
+        path : str or os.PathLike, optional
+            The targets file; default the model's.
+
+        Returns
+        -------
+        result : SavedScore or None
+            The score and its errors.
 
         Examples
         --------
@@ -368,11 +330,8 @@ class LabelModel:
                           np.array(errors, dtype=np.intp).reshape(-1, 2))
 
     def load(self, path=None) -> int:
-        """Replace the labels by a targets file's; any error leaves the labels as they were.
-
-        Every target must lie on a detected feature (within 1.5 px) and no feature may
-        be used twice; otherwise the file was made with other features and is refused.
-        """
+        """Replace the labels by a targets file's, each on its own feature (within 1.5 px); any
+        error leaves the labels as they were."""
         owner = "LabelModel.load"
         path = self._path(path, owner)
         targets = load_targets(path, pair=self.prepared.pair)
@@ -396,31 +355,22 @@ class LabelModel:
         return len(self._pairs)
 
 
-# --- view -------------------------------------------------------------------------------
-
-#: The labeller's lines: the answer key's verdicts (blue right, vermillion wrong, and black dashed
-#: for a pair of the key not labelled yet, so that no orange sits beside the vermillion), orange
-#: for a labelled pair before the key is shown, reddish purple for the selected pair.
+#: The labeller's lines: the key's verdicts (a key pair not labelled yet black dashed, so that
+#: no orange sits beside the vermillion), orange before the key is shown, purple when selected.
 _KEY_COLOURS = {"correct": VERDICT_COLOURS["correct"], "wrong": VERDICT_COLOURS["wrong partner"],
                 "missing": OKABE_ITO["black"], "plain": OKABE_ITO["orange"],
                 "selected": OKABE_ITO["reddish purple"]}
 
 
 def draw_labels(ax, model: LabelModel) -> dict:
-    """Create the labeler's artists on `ax` (image, numbered features, pair lines, markers)."""
+    """The labeler's artists on `ax`: the pair view (:func:`draw_pair`), the key's lines, the markers."""
     from matplotlib.collections import LineCollection
 
-    pair = model.prepared.pair
-    art = plot_matches(ax, pair.left, pair.right, model.left_xy, model.right_xy, np.zeros((0, 2), int),
-                       numbers=False)
-    art["image"].set_data(grey_rgb(art["image"].get_array()))
-    art["image"].set_interpolation("nearest")
-    art["labels"] = [number_labels(ax, model.left_xy, LEFT_COLOUR),
-                     number_labels(ax, model.right_xy + [model.offset, 0], RIGHT_COLOUR)]
+    art = draw_pair(ax, model)
     art["lines"].set_array(None)
     art["lines"].set_linewidths(1.6)
-    art["missing"] = LineCollection([], colors=_KEY_COLOURS["missing"], linestyles="dashed", linewidths=1.4)
-    ax.add_collection(art["missing"])
+    art["missing"] = ax.add_collection(LineCollection([], colors=_KEY_COLOURS["missing"], linestyles="dashed",
+                                                      linewidths=1.4))
     art["pending"], = ax.plot([], [], "o", mfc="none", mec=_KEY_COLOURS["selected"], ms=12, mew=2)
     ax.set_xlim(-0.5, model.offset + model.width - 0.5)
     ax.set_ylim(model.height - 0.5, -0.5)
@@ -469,30 +419,25 @@ def pairs_html(model: LabelModel) -> str:
     return f'<table class="ismb-table"><tr>{head}</tr>{"".join(body)}</table>'
 
 
-# --- controller -------------------------------------------------------------------------
-
 class TargetLabeler(Base):
     """Label target pairs by clicking; save them in the targets format.
 
+    `path`, the targets file of Save and Load, is by default the student's own
+    (:func:`ismb_lab.labels.classroom.targets_path`, named after `pair_name`); under Voilà without
+    a hub, where visitors share one login, the labeller asks for a name first.
+
     Parameters
     ----------
-    left, right : path or ndarray
+    left, right : path or ndarray, or a Prepared as `left`
         The image pair.
     path : str or os.PathLike, optional
-        The targets file of Save and Load.  By default each student gets their own,
-        ``targets-<user>-<pair>.json`` in the working folder (the notebook's: inside the
-        assignment that nbgrader fetched, so that ``nbgrader submit`` hands it in; see
-        :func:`ismb_lab.classroom.targets_path`), shown above the buttons.  Under Voilà
-        without a hub every visitor shares one login, so the labeller asks for a name
-        (box ``ismb-name``) before it saves, and never merges into a file that page did
-        not load.
-    pair_name : str, optional
-        The pair's name in that default file name (default: the folder's name for
-        :meth:`from_folder`, else the first 12 hex digits of the left image's hash).
+        The targets file of Save and Load; default the student's own.
     config : MatchConfig, optional
         Corner settings: labels snap to the features the matcher sees.
     answer_key : TargetSet or path, optional
         Ground truth for "Show answer key".
+    pair_name : str, optional
+        The pair's name in the default file name.
 
     Notes
     -----
@@ -504,8 +449,6 @@ class TargetLabeler(Base):
 
     def __init__(self, left, right=None, *, path=None, config: MatchConfig | None = None,
                  answer_key=None, pair_name: str | None = None):
-        import ipywidgets
-
         super().__init__()
         prepared = left if isinstance(left, Prepared) else prepare(left, right, config)
         if answer_key is not None and not isinstance(answer_key, TargetSet):
@@ -517,8 +460,7 @@ class TargetLabeler(Base):
         self.model = LabelModel(prepared, path=path, answer_key=answer_key, exclusive=ask)
         # each image gets half the column (286 px of 320 px images); on larger photos the
         # toolbar's zoom tells corners apart, and clicks still land in image coordinates
-        self.pane = Pane(column_figsize(self.model.offset + self.model.width, self.model.height),
-                         "ismb-stereo")
+        self.pane = Pane(column_figsize(self.model.offset + self.model.width, self.model.height), "ismb-stereo")
         self.panes = (self.pane,)
         self.ax = self.pane.fig.add_axes((0, 0, 1, 1))
         self.artists = draw_labels(self.ax, self.model)
@@ -546,70 +488,85 @@ class TargetLabeler(Base):
 
         self.undo_button.on_click(self.guard(lambda _: self.undo()))
         self.delete_button.on_click(self.guard(lambda _: self.delete_selected()))
-        self.save_button.on_click(self.guard(lambda _: self._save_quietly()))
-        self.load_button.on_click(self.guard(lambda _: self._load_quietly()))
+        self.save_button.on_click(self.guard(lambda _: self._quietly(self.save)))
+        self.load_button.on_click(self.guard(lambda _: self._quietly(self.load)))
         self.key_toggle.observe(self.guard(lambda _: self.refresh()), names="value")
         self.pane.fig.canvas.mpl_connect("button_press_event", self.guard(self._on_press))
 
         bar = ipywidgets.HBox([self.undo_button, self.delete_button, self.save_button,
                                self.load_button, self.key_toggle, self.dirty_label])
         head = [self.name_box, self.path_label] if self.name_box is not None else [self.path_label]
-        self.widget = with_class(ipywidgets.VBox([self.pane.widget, *head, bar, self.status,
-                                                  self.key_summary,
+        self.widget = with_class(ipywidgets.VBox([self.pane.widget, *head, bar, self.status, self.key_summary,
                                                   self.table, self.log]), "ismb-labeler")
         self.refresh()
 
     @classmethod
     def from_folder(cls, folder, *, path=None, config: MatchConfig | None = None) -> "TargetLabeler":
-        """Label ``folder/left.png`` and ``folder/right.png``; the answer key is
-        ``folder/answer_key.json`` when present."""
+        """Label ``folder/left.png`` and ``folder/right.png`` (answer key: ``answer_key.json``, if any).
+
+        Parameters
+        ----------
+        folder : str or Path
+            A pair folder.
+        path : str or os.PathLike, optional
+            The targets file; default the student's own, named after the folder.
+        config : MatchConfig, optional
+            Corner settings.
+
+        Returns
+        -------
+        labeler : TargetLabeler
+            The widget.
+        """
         left, right, key = pair_files(folder, "TargetLabeler.from_folder")
         return cls(left, right, path=path, config=config, answer_key=key if key.is_file() else None,
                    pair_name=Path(folder).resolve().name)
 
     @classmethod
     def from_photos(cls, *, folder=".", **kw):
-        """A :class:`~ismb_lab.widgets.photos.PhotoLoader` for two photos of one's own; "Use this
-        pair" saves them (rectified) to ``photos-<user>-<name>/`` in `folder` and opens a labeller
-        on them, with the ROI dragged on the left image and the candidate window measured on the
-        pair (``shift="auto"``).  Labels are saved against the saved images."""
-        from .photos import PhotoLoader
+        """A :class:`~ismb_lab.widgets.photos.PhotoLoader` whose "Use this pair" saves two photos of
+        one's own (rectified) in `folder` and opens a labeller on them.
 
-        def open_with(pair_folder, roi):
-            config = MatchConfig(roi=roi if roi is not None else "center", shift="auto")
-            return cls.from_folder(pair_folder, config=config, **kw)
+        Parameters
+        ----------
+        folder : str or os.PathLike, default "."
+            Where the pair's folder is made.
+        **kw
+            Passed to :meth:`from_folder`.
 
-        return PhotoLoader(open_with, folder=folder)
+        Returns
+        -------
+        loader : PhotoLoader
+            The loader widget.
+        """
+        from .photos import opening
 
-    # --- the model's operations, redrawn ----------------------------------------------
+        return opening(cls.from_folder, folder, **kw)
+
     @property
     def pairs(self) -> np.ndarray:
         return self.model.pairs
 
+    def _redrawn(self, value):
+        self.refresh()
+        return value
+
     def click(self, x, y, side=None) -> str:
         """:meth:`LabelModel.click` (side-by-side coordinates unless `side` is given), redrawn."""
-        text = self.model.click(x, y, side)
-        self.refresh()
-        return text
+        return self._redrawn(self.model.click(x, y, side))
 
     def add_pair(self, i, k) -> None:
-        self.model.add_pair(i, k)
-        self.refresh()
+        self._redrawn(self.model.add_pair(i, k))
 
     def undo(self) -> bool:
-        done = self.model.undo()
-        self.refresh()
-        return done
+        return self._redrawn(self.model.undo())
 
     def delete_selected(self) -> bool:
-        done = self.model.delete_selected()
-        self.refresh()
-        return done
+        return self._redrawn(self.model.delete_selected())
 
     def set_name(self, name: str) -> None:
         """Choose the visitor's own targets file by their name (Voilà without a hub)."""
-        if not isinstance(name, str):
-            raise ParameterTypeError(message("name", "TargetLabeler.set_name", "a str", name))
+        check_type(name, str, "name", "TargetLabeler.set_name", "a str")
         self.model.path = targets_path(self.pair_name, Path.cwd(), user=name, also=()) if name.strip() else None
         self._show_path()
 
@@ -643,20 +600,32 @@ class TargetLabeler(Base):
             self.refresh()
 
     def score_saved(self, method=DEFAULT_METHOD, *, seed: int = 0, params=None, path=None) -> SavedScore | None:
-        """:meth:`LabelModel.score_saved`: `method`'s matches against the saved labels."""
+        """:meth:`LabelModel.score_saved`: `method`'s matches against the saved labels.
+
+        Parameters
+        ----------
+        method : str, default ``DEFAULT_METHOD``
+            The matching method.
+        seed : int, default 0
+            Update-order seed.
+        params : Params, optional
+            Default the method's.
+        path : str or os.PathLike, optional
+            The targets file; default the labeller's.
+
+        Returns
+        -------
+        result : SavedScore or None
+            The score and its errors; None when nothing is saved there.
+        """
         return self.model.score_saved(method, seed=seed, params=params, path=path)
 
-    def _save_quietly(self):
+    @staticmethod
+    def _quietly(action):
         try:
-            self.save()
+            action()
         except (OSError, ValueError, TypeError):
             pass  # already in the status line
-
-    def _load_quietly(self):
-        try:
-            self.load()
-        except (OSError, ValueError, TypeError):
-            pass
 
     def _on_press(self, event):
         if event.inaxes is not self.ax or event.xdata is None or event.button not in (1, None):
@@ -666,7 +635,6 @@ class TargetLabeler(Base):
             return  # zooming or panning, not labelling
         self.click(event.xdata, event.ydata)
 
-    # --- view ---------------------------------------------------------------------------
     def refresh(self) -> None:
         """Update the figure, table, flags and status from the model, then draw."""
         locked = self.model.answer_key is None or not self.model.key_open
@@ -686,9 +654,6 @@ class TargetLabeler(Base):
 
     def static_figure(self):
         """A plain matplotlib Figure of the pair and its labels (for print)."""
-        from matplotlib.figure import Figure
-
         fig = Figure(figsize=(9.0, 3.6))
-        ax = fig.add_axes((0, 0, 1, 1))
-        update_labels(draw_labels(ax, self.model), self.model, self.key_toggle.value)
+        update_labels(draw_labels(fig.add_axes((0, 0, 1, 1)), self.model), self.model, self.key_toggle.value)
         return fig

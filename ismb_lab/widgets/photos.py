@@ -1,33 +1,26 @@
 """A class's own stereo photos: upload, check, rectify, pick a ROI, then label, explore or match.
 
-:class:`PhotoModel` is the plain-Python model: two photos in, the rectification check
-(:func:`ismb_lab.rectify.check_rectified`) and, on request, the rectified pair
-(:func:`ismb_lab.rectify.rectify_pair`); :meth:`PhotoModel.save` writes the pair the
-student works on to a folder of their own (``photos-<user>-<name>/left.png``, ``right.png``
-and ``rectify.json``), so that labels saved against its images can be used again later;
-another pair uploaded under the same name gets a folder of its own (``...-2``).
-:class:`PhotoLoader` is the widget: a file-upload control (or a folder path), the pair with
-each match's row difference drawn as a line (the epipolar check: on a rectified pair every
-line is level), Rectify, a ROI dragged on the left image, and "Use this pair", which opens
-the widget it was made for (``TargetLabeler.from_photos()``,
-``ParameterExplorer.from_photos()``) on the saved pair.
+:meth:`PhotoModel.save` writes the pair to the student's own ``photos-<user>-<name>/`` (with
+``rectify.json``), so that labels saved against its images stay valid.
 """
 
 from __future__ import annotations
 
 import html
+import json
 import re
 from pathlib import Path
 from typing import Callable
 
+import ipywidgets
 import numpy as np
 
-from .._files import atomic_write_text
-from .._validation import ParameterError, ParameterTypeError, message
-from ..classroom import user_name
-from ..plotting import OKABE_ITO
-from ..io import save_pair
-from ..rectify import Rectified, _inputs, apply_rectification, check_rectified, rectify_pair
+from .._core.files import atomic_write_text
+from .._core.validation import ParameterError, ParameterTypeError, message
+from ..labels.classroom import user_name
+from ..plotting import GAP, OKABE_ITO, side_by_side
+from ..images.io import save_pair
+from ..images.rectify import Rectified, apply_rectification, check_rectified, pair_inputs, rectify_pair
 from ._common import Base, Pane, button, grey_rgb, row, with_class
 
 __all__ = ["PhotoLoader", "PhotoModel"]
@@ -38,21 +31,10 @@ _IMAGE = re.compile(r"\.(jpe?g|png|bmp|tiff?|webp)$", re.IGNORECASE)
 class PhotoModel:
     """Two photos on their way to a rectified pair in the student's own folder.
 
-    Parameters
-    ----------
-    folder : str or os.PathLike
-        Where :meth:`save` makes the pair's folder (default: the working folder).
-    user : str, optional
-        Whose folder (default :func:`ismb_lab.classroom.user_name`).
-    role : str
-        Added to the folder's name (e.g. ``"background"``), so two pairs of one upload name
-        do not share a folder.
-    homographies : (H_left, H_right, (width, height)), optional
-        A rectification found on another pair of the same two camera positions (the depth
-        demo's background): applied as it is, nothing is estimated.
+    :meth:`save` makes the pair's folder in `folder`, named after `user` (default
+    :func:`ismb_lab.labels.classroom.user_name`) and `role`; `homographies`, ``(H_left, H_right,
+    (width, height))`` found on another pair of the same cameras, are applied as they are.
 
-    Examples
-    --------
     >>> import cv2
     >>> rng = np.random.default_rng(0)
     >>> scene = cv2.GaussianBlur(rng.uniform(0, 255, (200, 260)), (0, 0), 2) * 3 % 255
@@ -81,7 +63,7 @@ class PhotoModel:
 
     def set_photos(self, left, right, name: str = "photos") -> str:
         """Load two photos (paths, file bytes or arrays) and check them; nothing is kept on failure."""
-        left, right, _ = _inputs(left, right, "PhotoModel.set_photos", 1600)
+        left, right, _ = pair_inputs(left, right, "PhotoModel.set_photos", 1600)
         check = check_rectified(left, right)
         self.left, self.right, self.check, self.rectified, self.roi, self.saved = left, right, check, None, None, None
         self.name = re.sub(r"[^A-Za-z0-9._-]+", "-", str(name)).strip("-.") or "photos"
@@ -130,20 +112,16 @@ class PhotoModel:
         h, w = self.current()[0].shape
         xs = sorted((int(np.clip(round(x0), 0, w)), int(np.clip(round(x1), 0, w))))
         ys = sorted((int(np.clip(round(y0), 0, h)), int(np.clip(round(y1), 0, h))))
-        if xs[1] - xs[0] < 24 or ys[1] - ys[0] < 24:
+        roi = (xs[0], ys[0], xs[1] - xs[0], ys[1] - ys[0])
+        if roi[2] < 24 or roi[3] < 24:
             raise ParameterError(message("roi", "PhotoModel.set_roi", "at least 24 x 24 pixels inside the image",
-                                         (xs[0], ys[0], xs[1] - xs[0], ys[1] - ys[0])))
-        self.roi = (xs[0], ys[0], xs[1] - xs[0], ys[1] - ys[0])
+                                         roi))
+        self.roi = roi
         self.message = f"ROI {self.roi} (x, y, width, height)"
         return self.roi
 
     def save(self) -> Path:
-        """Write the pair used (rectified when it was) to ``photos-<user>-<name>/`` and return it.
-
-        A folder of that name that holds another pair is left as it is (labels may rest on its
-        images): the pair goes to ``photos-<user>-<name>-2/``, ``-3/``, ... instead.  The same
-        pair saved again (another ROI, say) reuses its folder.
-        """
+        """Write the pair used to ``photos-<user>-<name>/`` (or ``-2/``, ... where another pair is)."""
         if not self.ready:
             raise ParameterError(message("photos", "PhotoModel.save", "a rectified pair (press 'Rectify' first)",
                                          self.message))
@@ -152,8 +130,6 @@ class PhotoModel:
                   {k: v for k, v in self.check.items() if not k.endswith("_xy")} | {"method": "already rectified"})
         record["roi"] = None if self.roi is None else list(self.roi)
         folder = save_pair(left, right, self.folder, f"photos-{self.user}-{self.name}")
-        import json
-
         atomic_write_text(folder / "rectify.json", json.dumps(record, indent=2))
         self.saved = folder
         self.message = f"saved to {folder}"
@@ -167,11 +143,9 @@ def draw_photos(ax, model: PhotoModel) -> dict:
 
     ax.set_axis_off()
     image = ax.imshow(np.zeros((2, 2, 3), np.uint8), interpolation="nearest")
-    lines = LineCollection([], linewidths=0.8, cmap="coolwarm")
+    lines = ax.add_collection(LineCollection([], linewidths=0.8, cmap="coolwarm"))
     lines.set_clim(0, 4)
-    ax.add_collection(lines)
-    roi = Rectangle((0, 0), 0, 0, fill=False, ec=OKABE_ITO["yellow"], lw=1.5, visible=False)
-    ax.add_patch(roi)
+    roi = ax.add_patch(Rectangle((0, 0), 0, 0, fill=False, ec=OKABE_ITO["yellow"], lw=1.5, visible=False))
     return {"image": image, "lines": lines, "roi": roi, "offset": 0.0}
 
 
@@ -180,36 +154,52 @@ def update_photos(art: dict, model: PhotoModel) -> None:
     if pair is None:
         return
     left, right, lxy, rxy = pair
-    gap = 8
-    both = np.full((left.shape[0], 2 * left.shape[1] + gap), 255.0)
-    both[:, :left.shape[1]] = left
-    both[:, left.shape[1] + gap:] = right
+    both = side_by_side(left, right)
     art["image"].set_data(grey_rgb(both))
     art["image"].set_extent((-0.5, both.shape[1] - 0.5, both.shape[0] - 0.5, -0.5))
     art["image"].axes.set_xlim(-0.5, both.shape[1] - 0.5)
     art["image"].axes.set_ylim(both.shape[0] - 0.5, -0.5)
-    art["offset"] = offset = left.shape[1] + gap
+    art["offset"] = offset = left.shape[1] + GAP
     segments = np.stack([lxy, rxy + [offset, 0]], axis=1) if len(lxy) else np.zeros((0, 2, 2))
     art["lines"].set_segments(segments)
     art["lines"].set_array(np.abs(lxy[:, 1] - rxy[:, 1]) if len(lxy) else np.zeros(0))
-    if model.roi is None:
-        art["roi"].set_visible(False)
-    else:
-        x, y, w, h = model.roi
-        art["roi"].set_bounds(x, y, w, h)
-        art["roi"].set_visible(True)
+    if model.roi is not None:
+        art["roi"].set_bounds(*model.roi)
+    art["roi"].set_visible(model.roi is not None)
+
+
+def opening(from_folder, folder, **kw) -> "PhotoLoader":
+    """A :class:`PhotoLoader` whose "Use this pair" returns ``from_folder(pair_folder, config=...,
+    **kw)`` on the saved pair, with the dragged ROI and the window measured on it."""
+    from ..matching.pipeline import MatchConfig
+
+    def open_with(pair_folder, roi):
+        config = MatchConfig(roi=roi if roi is not None else "center", shift="auto")
+        return from_folder(pair_folder, config=config, **kw)
+
+    return PhotoLoader(open_with, folder=folder)
 
 
 class PhotoLoader(Base):
     """Bring two photos of one's own: upload, check, rectify, pick the ROI, then use them.
 
+    `open_with(folder, roi) -> widget` is what "Use this pair" opens on the saved pair; the
+    other parameters are :class:`PhotoModel`'s.
+
     Parameters
     ----------
     open_with : callable, optional
-        ``open_with(folder, roi) -> widget``: what "Use this pair" opens on the saved pair
-        (its ``.widget`` is shown below the loader).
-    folder, user
-        As in :class:`PhotoModel`.
+        ``open_with(folder, roi) -> widget``, opened on the saved pair.
+    folder : str or os.PathLike, default "."
+        Where the pair's folder is made.
+    user : str, optional
+        Whose folder; default :func:`~ismb_lab.labels.classroom.user_name`.
+    role : str, default ""
+        Added to the folder's name (e.g. ``"background"``).
+    homographies : (H_left, H_right, (width, height)), optional
+        A rectification of the same cameras, applied as it is.
+    title : str, default ""
+        A bold line above the loader.
 
     Notes
     -----
@@ -220,14 +210,11 @@ class PhotoLoader(Base):
 
     def __init__(self, open_with: Callable | None = None, *, folder=".", user: str | None = None, role: str = "",
                  homographies=None, title: str = ""):
-        import ipywidgets
-
         super().__init__()
         if open_with is not None and not callable(open_with):
             raise ParameterTypeError(message("open_with", "PhotoLoader", "a callable (folder, roi) -> widget",
                                              open_with))
         self.model = PhotoModel(folder, user, role, homographies)
-        self.title = title
         self.open_with = open_with
         self.opened = None
         self.pane = Pane((5.8, 2.12), "ismb-photo-pair")
@@ -261,7 +248,6 @@ class PhotoLoader(Base):
             row([self.rectify_button, self.use_button]), self.status, self.log, self.area]), "ismb-photos")
         self.say(self.model.message)
 
-    # --- actions -----------------------------------------------------------------------------
     def load(self, left, right, name: str = "photos") -> str:
         try:
             return self.model.set_photos(left, right, name)
@@ -273,11 +259,9 @@ class PhotoLoader(Base):
         if len(files) != 2:
             raise ParameterError(message("upload", "PhotoLoader", "two photos at once (the left camera's "
                                          "first, or named left... and right...)", f"{len(files)} files"))
-        names = [f["name"] for f in files]
-        if "right" in names[0].lower() and "left" in names[1].lower():
+        if "right" in files[0]["name"].lower() and "left" in files[1]["name"].lower():
             files.reverse()
-        contents = [bytes(f["content"]) for f in files]
-        self.load(contents[0], contents[1], Path(files[0]["name"]).stem)
+        self.load(bytes(files[0]["content"]), bytes(files[1]["content"]), Path(files[0]["name"]).stem)
 
     def open_folder(self, folder) -> str:
         folder = Path(str(folder).strip()).expanduser()
@@ -311,7 +295,6 @@ class PhotoLoader(Base):
                 self.opened.show()
         return self.opened
 
-    # --- view --------------------------------------------------------------------------------
     def refresh(self) -> None:
         update_photos(self.artists, self.model)
         problem = bool(self.model.check and self.model.check["problem"])

@@ -1,20 +1,5 @@
-"""Any rig's pair in 3-D: the network's matches in metres, with OpenCV's SGBM beside them.
-
-:class:`RigCloudModel` is the plain-Python model: a rig (a file of ``ismb-lab calibrate`` or
-``ismb-lab rig``, :func:`ismb_lab.camera.load_camera`) and a pair (paths, file bytes or
-arrays) taken the way ``ismb-lab match --rig`` takes them: :func:`ismb_lab.metric.for_camera`
-(a pair the rig does not fit is refused, in one line), then
-:func:`ismb_lab.metric.match_with_camera` with the corner counts of
-:func:`ismb_lab.metric.photo_config`, the whole photo (``roi="full"``) and the window measured
-on the pair (``shift="auto"``).  Beside the network's matches it computes SGBM's dense
-disparity of the same rectified pair (:mod:`ismb_lab.dense`), its agreement with the network
-at the matched points, and a subsample of it in metres.
-
-:class:`RigCloud` is the widget: the rig file's path, the upload of
-:class:`~ismb_lab.widgets.photos.PhotoLoader` (two photos, or a folder), the pair as given,
-the status line, a toggle for SGBM's points, and the 3-D view
-(:class:`~ismb_lab.widgets.cloud.PointCloudView`), all created once and updated in place.
-"""
+"""Any rig's pair in 3-D: the network's matches in metres, as ``ismb-lab match --rig --roi full``
+gives them, with OpenCV's SGBM dense disparity of the same rectified pair beside them."""
 
 from __future__ import annotations
 
@@ -22,13 +7,14 @@ import html
 from dataclasses import replace
 from pathlib import Path
 
+import ipywidgets
 import numpy as np
 
-from .._validation import ParameterError, ParameterTypeError, message
-from ..camera import StereoCamera, load_camera
-from ..dense import MAX_DENSE, agreement, dense_points, sgbm_disparity, window_range
-from ..methods import DEFAULT_METHOD
-from ._common import Base, button, row, with_class
+from .._core.validation import ParameterError, message
+from ..cameras.camera import StereoCamera, load_camera
+from ..matching.dense import MAX_DENSE, agreement, dense_points, sgbm_disparity, window_range
+from ..network.methods import DEFAULT_METHOD
+from ._common import Base, button, check_type, row, with_class
 from .cloud import Cloud, PointCloudView, _cloud, match_cloud
 
 __all__ = ["RigCloud", "RigCloudModel"]
@@ -38,8 +24,7 @@ def _camera(rig, owner: str) -> tuple[StereoCamera, str]:
     """The rig and how to name it: a StereoCamera as it is, else a rig file (path or JSON text)."""
     if isinstance(rig, StereoCamera):
         return rig, "the rig given"
-    if not isinstance(rig, (str, Path)):
-        raise ParameterTypeError(message("rig", owner, "a StereoCamera or a rig file (path or JSON text)", rig))
+    check_type(rig, (str, Path), "rig", owner, "a StereoCamera or a rig file (path or JSON text)")
     camera = load_camera(rig)
     return camera, ("the rig file given" if str(rig).lstrip().startswith("{") else Path(rig).name)
 
@@ -47,37 +32,19 @@ def _camera(rig, owner: str) -> tuple[StereoCamera, str]:
 class RigCloudModel:
     """A rig's pair matched as ``ismb-lab match --rig`` matches it, in metres, with SGBM beside it.
 
-    Parameters
-    ----------
-    rig : StereoCamera, str or os.PathLike
-        The rig, or its file (path or JSON text) as ``ismb-lab calibrate`` or ``ismb-lab rig``
-        write it.
-    method : str
-        The energy (the thesis' parameters of :class:`~ismb_lab.recipe.Recipe`, its solver).
-    seed : int
-        The network's update order.
-    board : bool
-        Whether the pair shows the rig's calibration board: a note then gives its corners'
-        median depth (found by OpenCV, not by the network), for comparison.
-    most : int
-        At most this many SGBM points in the view.
+    `rig` is a StereoCamera or its file (path or JSON text); `method` runs with
+    :class:`~ismb_lab.matching.recipe.Recipe`'s parameters and solver; with `board` (the pair shows
+    the calibration board) a note gives its corners' median depth; at most `most` SGBM points.
 
     Attributes
     ----------
     cloud : Cloud or None
         The network's matches in metres (None before a pair, or when the pair was refused).
     dense : (H, W) ndarray or None
-        SGBM's disparity of the rectified pair (NaN: none).
-    dense_xyz : (M, 3) ndarray
-        Its subsample in metres.
-    agreement : ismb_lab.dense.Agreement or None
+        SGBM's disparity of the rectified pair (NaN: none); `dense_xyz` its subsample in metres.
     refused : str
         The one-line refusal of a pair the rig does not fit ("" when it fits).
-    message : str
-        One line on what was done.
 
-    Examples
-    --------
     >>> from ismb_lab.scenes import synthetic_scene
     >>> s = synthetic_scene(0)
     >>> model = RigCloudModel(s.rig)
@@ -87,7 +54,7 @@ class RigCloudModel:
     """
 
     def __init__(self, rig, *, method: str = DEFAULT_METHOD, seed: int = 0, board: bool = False, most: int = MAX_DENSE):
-        from ..recipe import Recipe
+        from ..matching.recipe import Recipe
 
         self.settings = Recipe(method=method).match_settings()
         self.seed, self.board, self.most = seed, bool(board), most
@@ -95,7 +62,7 @@ class RigCloudModel:
 
     def set_rig(self, rig) -> str:
         """Use `rig` from now on (a pair matched before is forgotten)."""
-        from ..metric import photo_config
+        from ..matching.metric import photo_config
 
         self.camera, self.rig_name = _camera(rig, "RigCloudModel")
         # the corners in proportion to the photo, the whole photo, the window measured on the pair:
@@ -118,12 +85,9 @@ class RigCloudModel:
 
     def load(self, left, right, name: str = "pair") -> str:
         """Match `left` and `right` (paths, file bytes or arrays) with the rig; returns the status line.
-
-        A pair the rig does not fit (:func:`ismb_lab.metric.for_camera`'s refusal: swapped,
-        turned, tagged, another camera's) leaves no cloud; its one line is :attr:`refused`.
-        """
-        from ..io import load_pair
-        from ..metric import for_camera, match_with_camera
+        A pair the rig does not fit (:func:`ismb_lab.matching.metric.for_camera`) leaves no cloud."""
+        from ..images.io import load_pair
+        from ..matching.metric import for_camera, match_with_camera
 
         self._clear()
         try:
@@ -153,27 +117,33 @@ class RigCloud(Base):
     """Your rig and your pair in 3-D: the network's matches coloured by depth, the cameras, and
     SGBM's dense points at the press of a toggle.
 
+    Without `rig`, its path is typed in the widget; without `left` and `right`, two photos are
+    uploaded or a folder opened.  The other parameters are :class:`RigCloudModel`'s.
+
+    The upload is :class:`~ismb_lab.widgets.photos.PhotoLoader`'s, without *Rectify* and *Use
+    this pair* (the rig rectifies); each pair reaches :meth:`load` as given, not scaled.
+
     Parameters
     ----------
     rig : StereoCamera, str or os.PathLike, optional
-        The rig or its file; else type its path in the widget and press *Load rig*.
+        The rig or its file; else its path is typed in the widget.
     left, right : path, bytes or ndarray, optional
-        A pair to show at once; else upload two photos (the left camera's first, or named
-        ``left...`` and ``right...``) or open a folder holding ``left.*`` and ``right.*``.
-    name : str
+        A pair to show at once.
+    name : str, default "pair"
         What the status line calls the pair given.
-    method, seed, board
-        As in :class:`RigCloudModel`.
-    height : int
-        The 3-D view's height, px (it is as wide as the output area).
+    method : str, default ``DEFAULT_METHOD``
+        The energy.
+    seed : int, default 0
+        The network's update order.
+    board : bool, default False
+        The pair shows the calibration board.
+    height : int, default 360
+        The 3-D view's height, px.
+    folder, user
+        The photo loader's (:class:`~ismb_lab.widgets.photos.PhotoLoader`).
 
     Notes
     -----
-    The upload is :class:`~ismb_lab.widgets.photos.PhotoLoader`'s (its pair figure shows the
-    photos as given, each robust match's rows joined by a line); its *Rectify* and *Use this
-    pair* buttons are hidden, since the rig rectifies.  Every pair the loader takes reaches
-    :meth:`load` as it was given (the file's bytes or path, not the loader's scaled copy).
-
     CSS classes: root ``ismb-rig-cloud``; rig path ``ismb-rig-file``, button ``ismb-load-rig``;
     the toggle ``ismb-dense``; ``ismb-status``; ``ismb-log``; the loader's (``ismb-upload``,
     ``ismb-photo-folder``, ``ismb-open-folder``, ``ismb-photo-pair``) and the view's
@@ -182,8 +152,6 @@ class RigCloud(Base):
 
     def __init__(self, rig=None, left=None, right=None, *, name: str = "pair", method: str = DEFAULT_METHOD, seed: int = 0,
                  board: bool = False, height: int = 360, folder=".", user: str | None = None):
-        import ipywidgets
-
         from .photos import PhotoLoader
 
         super().__init__()
@@ -227,7 +195,6 @@ class RigCloud(Base):
             self.loader.log, self.log], layout=ipywidgets.Layout(width="100%")), "ismb-rig-cloud")
         self.refresh()
 
-    # --- actions -----------------------------------------------------------------------------
     def set_rig(self, rig) -> str:
         """Use `rig` (a StereoCamera, or a rig file's path); the pair shown, if any, is matched again."""
         if isinstance(rig, str) and not rig:
@@ -253,7 +220,6 @@ class RigCloud(Base):
             if hasattr(self, "view"):
                 self.refresh()
 
-    # --- view --------------------------------------------------------------------------------
     def refresh(self) -> None:
         model = self.model
         if model is None:

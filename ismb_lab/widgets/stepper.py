@@ -1,24 +1,22 @@
-"""Step the Hopfield network one update attempt at a time (thesis §3.3, Fig. 5.6).
-
-:class:`StepperModel` consumes :func:`ismb_lab.dynamics.iter_updates`, the same
-generator the core runs, so the widget shows exactly what the network does;
-:class:`HopfieldStepper` adds the neuron grid, the matches on the image pair and
-the energy curve.
-"""
+"""Step the Hopfield network one update attempt at a time (thesis §3.3, Fig. 5.6), through
+:func:`ismb_lab.network.dynamics.iter_updates`, the generator the core runs."""
 
 from __future__ import annotations
 
+import ipywidgets
 import numpy as np
+from matplotlib.figure import Figure
 
-from .._validation import ParameterTypeError, check_choice, check_number, message
-from ..hopfield import RULES, energy
-from ..dynamics import STOP_RULES, Update, iter_updates
-from ..matching import MatchConfig, Prepared, prepare
+from .._core.validation import ParameterTypeError, check_choice, check_number, message
+from ..network.hopfield import RULES, energy
+from ..network.dynamics import STOP_RULES, Update, iter_updates
+from ..matching.pipeline import MatchConfig, Prepared, prepare
 from ..plotting import OKABE_ITO
-from ..methods import DEFAULT_METHOD, get_method
-from ..params import Params
-from ..solvers import to_matches
-from ._common import Base, Pane, button, draw_pair, pair_figsize, pair_files, path_labels, row, update_pair, with_class
+from ..network.methods import DEFAULT_METHOD, get_method
+from ..network.params import Params
+from ..network.solvers import to_matches
+from ._common import (Base, Pane, button, check_type, draw_pair, pair_figsize, pair_files, path_labels, row,
+                      update_pair, with_class)
 
 __all__ = ["draw_energy", "draw_grid", "HopfieldStepper", "StepperModel", "update_energy", "update_grid"]
 
@@ -26,21 +24,9 @@ __all__ = ["draw_energy", "draw_grid", "HopfieldStepper", "StepperModel", "updat
 class StepperModel:
     """A network being run attempt by attempt.
 
-    Parameters
-    ----------
-    prepared : Prepared
-    method : {"I", "II", "III"}
-    params : Params, optional
-        The thesis' values for the method by default.
-    seed : int
-        Seed of the random visiting order (as in :func:`ismb_lab.dynamics.run`).
-    rule : {"exact", "thesis"}
-        ``"thesis"`` is the literal (3-17)/(3-20) rule, whose energy can rise.
-    stop_rule : {"sweep", "stall"}
+    `seed` orders the visits as in :func:`ismb_lab.network.dynamics.run`; ``rule="thesis"`` is the
+    literal (3-17)/(3-20) rule, whose energy can rise.
 
-    Examples
-    --------
-    >>> from ismb_lab.matching import prepare
     >>> from ismb_lab.scenes import synthetic_scene
     >>> scene = synthetic_scene(0)
     >>> model = StepperModel(prepare(scene.left, scene.right))
@@ -53,9 +39,7 @@ class StepperModel:
     def __init__(self, prepared: Prepared, method=DEFAULT_METHOD, params: Params | None = None, seed: int = 0,
                  rule: str = "exact", stop_rule: str = "sweep"):
         owner = "StepperModel"
-        if not isinstance(prepared, Prepared):
-            raise ParameterTypeError(message("prepared", owner, "a Prepared (see matching.prepare)", prepared))
-        self.prepared = prepared
+        self.prepared = check_type(prepared, Prepared, "prepared", owner, "a Prepared (see matching.prepare)")
         self.method = get_method(method)
         self.params = self.method.defaults if params is None else params
         if not isinstance(self.params, Params):
@@ -71,8 +55,7 @@ class StepperModel:
             self.seed = check_number(seed, "seed", owner, low=0, integer=True)
         if rule is not None:
             self.rule = check_choice(rule, "rule", owner, RULES)
-        self._updates = iter_updates(self.network, rng=self.seed, rule=self.rule,
-                                     stop_rule=self.stop_rule)
+        self._updates = iter_updates(self.network, rng=self.seed, rule=self.rule, stop_rule=self.stop_rule)
         self.state = self.network.initial_state().copy()
         self.energies = [energy(self.network, self.state)]
         self.last: Update | None = None
@@ -93,7 +76,7 @@ class StepperModel:
         out = []
         while len(out) < n and not self.done:
             update = next(self._updates, None)
-            if update is None:  # the generator ended without a stop record: cannot happen, but be safe
+            if update is None:  # the generator ended without a stop record
                 self.stop = self.stop or "ended"
                 break
             self.state[update.neuron] = update.new
@@ -104,7 +87,18 @@ class StepperModel:
         return out
 
     def run(self, limit: int = 50_000) -> int:
-        """Step until the network stops or `limit` attempts were made; return the attempts made."""
+        """Step until the network stops or `limit` attempts were made; return the attempts made.
+
+        Parameters
+        ----------
+        limit : int, default 50000
+            Most attempts.
+
+        Returns
+        -------
+        attempts : int
+            The attempts made.
+        """
         limit = check_number(limit, "limit", "StepperModel.run", low=1, integer=True)
         return len(self.step(limit))
 
@@ -143,26 +137,18 @@ class StepperModel:
         return text
 
 
-# --- view -------------------------------------------------------------------------------
-
-#: The cursor on the neuron just attempted: orange when it flipped, black when it kept its state
-#: (two colours apart in lightness and hue for every common colour-vision deficiency; the grid
-#: itself is grey, white and dark blue).
+#: The cursor on the neuron just attempted: orange when it flipped, black when it kept its state.
 CURSOR_COLOURS = {True: OKABE_ITO["orange"], False: OKABE_ITO["black"]}
-
-
-def _grid_colours():
-    from matplotlib.colors import ListedColormap
-
-    return ListedColormap(["#d9d9d9", "#ffffff", "#1f4e9c"])  # no neuron, off, on
 
 
 def draw_grid(ax, model: StepperModel) -> dict:
     """The ``N_l x N_r`` neuron grid with a cursor on the neuron just attempted."""
+    from matplotlib.colors import ListedColormap
     from matplotlib.patches import Rectangle
     from matplotlib.transforms import blended_transform_factory
 
-    grid = ax.imshow(model.grid() + 1, cmap=_grid_colours(), vmin=0, vmax=2, interpolation="nearest")
+    colours = ListedColormap(["#d9d9d9", "#ffffff", "#1f4e9c"])  # no neuron, off, on
+    grid = ax.imshow(model.grid() + 1, cmap=colours, vmin=0, vmax=2, interpolation="nearest")
     ax.set_xlabel("right feature k", labelpad=12)
     ax.set_ylabel("left feature i", labelpad=16)
     ax.set_xticks([])
@@ -181,27 +167,26 @@ def draw_grid(ax, model: StepperModel) -> dict:
                 offset_transform=below, ha="center")
     path_labels(ax, [(0, i) for i in rows], [i + 1 for i in rows], "black", size=7, shift=(-3, -2.5),
                 offset_transform=beside, ha="right")
-    cursor = Rectangle((-0.5, -0.5), 1, 1, fill=False, ec=CURSOR_COLOURS[False], lw=2.5, visible=False)
-    ax.add_patch(cursor)
+    cursor = ax.add_patch(Rectangle((-0.5, -0.5), 1, 1, fill=False, ec=CURSOR_COLOURS[False], lw=2.5,
+                                    visible=False))
     return {"grid": grid, "cursor": cursor}
 
 
 def update_grid(art: dict, model: StepperModel) -> None:
     art["grid"].set_data(model.grid() + 1)
     cursor = art["cursor"]
-    if model.last is None:
-        cursor.set_visible(False)
-    else:
-        cursor.set_visible(True)
+    cursor.set_visible(model.last is not None)
+    if model.last is not None:
         cursor.set_xy((model.last.k - 0.5, model.last.i - 0.5))
         cursor.set_edgecolor(CURSOR_COLOURS[bool(model.last.changed)])
 
 
 def draw_energy(ax, model: StepperModel) -> dict:
     """The energy (3-15) after each attempt, as in the thesis' Fig. 5.6."""
+    from matplotlib.ticker import MaxNLocator
+
     line, = ax.plot([0], model.energies[:1], "-", color=OKABE_ITO["blue"], lw=1.2)
     rises = ax.scatter([], [], s=14, color=OKABE_ITO["vermillion"], zorder=3, label="energy went up")
-    from matplotlib.ticker import MaxNLocator
 
     ax.set_xlabel("update attempt")
     ax.set_ylabel("energy E (3-15)")
@@ -224,20 +209,26 @@ def update_energy(art: dict, model: StepperModel) -> None:
     ax.set_ylim(low - pad, high + pad)
 
 
-# --- controller -------------------------------------------------------------------------
-
 class HopfieldStepper(Base):
     """Buttons to step the network, with its grid, its matches and its energy curve.
+
+    `left` and `right` are paths or images, or `left` a Prepared; "Run to convergence" makes
+    at most `run_limit` attempts per click.
 
     Parameters
     ----------
     left, right : path or ndarray, or a Prepared as `left`
-    method : {"I", "II", "III"}
+        The image pair.
+    method : str, default ``DEFAULT_METHOD``
+        The matching method.
     params : Params, optional
-    seed : int
+        Default the method's.
+    seed : int, default 0
+        Seed of the random visiting order.
     config : MatchConfig, optional
-    run_limit : int
-        "Run to convergence" makes at most this many attempts per click, then redraws once.
+        Corner settings.
+    run_limit : int, default 50000
+        Most attempts per click of "Run to convergence".
 
     Notes
     -----
@@ -249,8 +240,6 @@ class HopfieldStepper(Base):
 
     def __init__(self, left, right=None, *, method=DEFAULT_METHOD, params: Params | None = None, seed: int = 0,
                  config: MatchConfig | None = None, run_limit: int = 50_000):
-        import ipywidgets
-
         super().__init__()
         prepared = left if isinstance(left, Prepared) else prepare(left, right, config)
         self.model = StepperModel(prepared, method, params, seed)
@@ -261,14 +250,11 @@ class HopfieldStepper(Base):
         self.pair_pane = Pane(pair_figsize(prepared.pair), "ismb-matches")
         self.energy_pane = Pane((5.8, 2.6), "ismb-energy")
         self.panes = (self.grid_pane, self.pair_pane, self.energy_pane)
-        self.grid_ax = self.grid_pane.fig.add_subplot()
         self.grid_pane.fig.subplots_adjust(left=0.18, bottom=0.16, right=0.76, top=0.97)
-        self.grid_artists = draw_grid(self.grid_ax, self.model)
-        self.pair_ax = self.pair_pane.fig.add_axes((0, 0, 1, 1))
-        self.pair_artists = draw_pair(self.pair_ax, self.model)
-        self.energy_ax = self.energy_pane.fig.add_subplot()
+        self.grid_artists = draw_grid(self.grid_pane.fig.add_subplot(), self.model)
+        self.pair_artists = draw_pair(self.pair_pane.fig.add_axes((0, 0, 1, 1)), self.model)
         self.energy_pane.fig.subplots_adjust(left=0.14, bottom=0.18, right=0.97, top=0.95)
-        self.energy_artists = draw_energy(self.energy_ax, self.model)
+        self.energy_artists = draw_energy(self.energy_pane.fig.add_subplot(), self.model)
 
         self.step_button = button("Step", "ismb-step", "One update attempt", icon="step-forward")
         self.step10_button = button("Step 10", "ismb-step10", "Ten update attempts", icon="forward")
@@ -296,7 +282,20 @@ class HopfieldStepper(Base):
 
     @classmethod
     def from_folder(cls, folder, **kw) -> "HopfieldStepper":
-        """Step the network on ``folder/left.png`` and ``folder/right.png``."""
+        """Step the network on ``folder/left.png`` and ``folder/right.png``.
+
+        Parameters
+        ----------
+        folder : str or Path
+            A pair folder.
+        **kw
+            The constructor's keyword parameters.
+
+        Returns
+        -------
+        stepper : HopfieldStepper
+            The widget.
+        """
         left, right, _ = pair_files(folder, "HopfieldStepper.from_folder")
         return cls(left, right, **kw)
 
@@ -334,13 +333,10 @@ class HopfieldStepper(Base):
 
     def static_figure(self):
         """A plain Figure: grid, matches and energy curve of the current state (for print)."""
-        from matplotlib.figure import Figure
-
         fig = Figure(figsize=(10.0, 6.0), layout="constrained")
         grid_ax, pair_ax, energy_ax = fig.subplot_mosaic([["grid", "pair"], ["energy", "energy"]],
                                                          width_ratios=[1, 2.2]).values()
         update_grid(draw_grid(grid_ax, self.model), self.model)
         update_pair(draw_pair(pair_ax, self.model), self.model)
-        art = draw_energy(energy_ax, self.model)
-        update_energy(art, self.model)
+        update_energy(draw_energy(energy_ax, self.model), self.model)
         return fig

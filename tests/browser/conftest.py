@@ -105,7 +105,7 @@ def workspace(tmp_path_factory):
     are the students' versions (solutions and hidden tests cleared, as the hub stages them)."""
     import nbformat
 
-    from ismb_lab.course import student_notebook
+    from ismb_lab.teaching.course import student_notebook
 
     root = tmp_path_factory.mktemp("lab")
     shutil.copytree(ROOT / "notebooks", root / "notebooks",

@@ -11,7 +11,7 @@ import numpy as np  # noqa: E402
 import pytest  # noqa: E402
 from playwright.sync_api import expect  # noqa: E402
 
-from ismb_lab.classroom import user_name  # noqa: E402
+from ismb_lab.labels.classroom import user_name  # noqa: E402
 
 pytestmark = pytest.mark.browser
 DEADLINE_S = 300
@@ -25,7 +25,7 @@ def data(opencv_data):
 def geometry(folder):
     """Where left feature 0 and the right feature on its row sit, as fractions of the labeller's
     figure, built here as the kernel builds it (same folder, ROI and window)."""
-    from ismb_lab.matching import MatchConfig
+    from ismb_lab.matching.pipeline import MatchConfig
     from ismb_lab.widgets import TargetLabeler
 
     labeler = TargetLabeler.from_folder(folder, config=MatchConfig(roi="center", shift="auto"))

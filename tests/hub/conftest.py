@@ -189,7 +189,7 @@ def teacher_kernels(student_python):
     """The kernels compiled once for the session by the students' venv (a cache root as
     ``stage`` leaves it: root's, read-only); each test's ``stage`` starts from it, and compiles
     only what changed (nothing)."""
-    from ismb_lab._numba_share import compile_into
+    from ismb_lab.teaching.kernels import compile_into
 
     folder = Path(tempfile.mkdtemp(prefix="ismb-hub-kernels-"))
     try:
@@ -237,7 +237,7 @@ def deployment(accounts, student_python, teacher_kernels):
         # the course, staged with the venv's python (the kernels: from the session's, unchanged)
         course = shared / "course"
         started = time.monotonic()
-        staged = subprocess.run([str(student_python / "bin" / "python"), "-m", "ismb_lab.hub_start", "stage",
+        staged = subprocess.run([str(student_python / "bin" / "python"), "-m", "ismb_lab.teaching.hub_start", "stage",
                                  str(repo), str(course)], cwd=shared, capture_output=True, text=True,
                                 env=venv_env(student_python, ISMB_NUMBA_SHARED=str(teacher_kernels), **env))
         assert staged.returncode == 0, staged.stderr

@@ -24,10 +24,10 @@ pytestmark = pytest.mark.hub
 
 LABEL = """
 import sys
-from ismb_lab.classroom import targets_path
-from ismb_lab.course import course_images
-from ismb_lab.matching import prepare
-from ismb_lab.targets import load_targets, snap
+from ismb_lab.labels.classroom import targets_path
+from ismb_lab.teaching.course import course_images
+from ismb_lab.matching.pipeline import prepare
+from ismb_lab.labels.targets import load_targets, snap
 from ismb_lab.widgets.labeler import LabelModel
 
 folder = course_images("synthetic")

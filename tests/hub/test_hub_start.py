@@ -1,4 +1,4 @@
-"""ismb_lab.hub_start without a hub: staging, the student's copy, sizes and cgroup folders."""
+"""ismb_lab.teaching.hub_start without a hub: staging, the student's copy, sizes and cgroup folders."""
 
 import json
 import os
@@ -10,7 +10,8 @@ from pathlib import Path
 
 import pytest
 
-from ismb_lab import ParameterError, hub_start
+from ismb_lab import ParameterError
+from ismb_lab.teaching import hub_start
 
 ROOT = Path(__file__).resolve().parents[2]
 

@@ -1,4 +1,4 @@
-"""The teacher's compiled kernels reach a student's own cache (ismb_lab._numba_share), without a hub.
+"""The teacher's compiled kernels reach a student's own cache (ismb_lab._core.numba_share), without a hub.
 
 Each check runs a new interpreter: numba reads its cache settings when it is imported. The
 kernel used is ``evaluation._tally``, small enough to compile in a second or two.
@@ -13,14 +13,17 @@ from pathlib import Path
 
 import pytest
 
-from ismb_lab import _numba_share
+from ismb_lab._core import numba_share as _numba_share
+
+#: Each check starts interpreters that compile a kernel: more than a CPU-second apiece.
+pytestmark = pytest.mark.slow
 
 ROOT = Path(__file__).resolve().parents[2]
 #: Call the kernel once; report whether numba's cache was cold, and where it loaded from.
 CALL = """
 import json, os, numpy as np
-from ismb_lab import _numba
-from ismb_lab.evaluation import _tally
+from ismb_lab._core import numba_cache as _numba
+from ismb_lab.tuning.evaluation import _tally
 cold = _numba.cold(_tally)
 _tally(np.zeros(3, dtype=np.uint8), np.zeros(1, dtype=np.int64))
 print(json.dumps({"cold": cold, "hits": sum(_tally.stats.cache_hits.values()),

@@ -33,7 +33,7 @@ def student_version(nb):
     tests/test_course_assignments.py runs through ``nbgrader autograde``.  Without nbgrader
     (the ``[course]`` extra) the notebook is run as it is, solutions included."""
     try:
-        from ismb_lab.course import student_notebook
+        from ismb_lab.teaching.course import student_notebook
         return student_notebook(nb)
     except ImportError:
         return nb

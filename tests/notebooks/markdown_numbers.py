@@ -179,7 +179,7 @@ LISTED["03"] = [
 LISTED["04"] = [
     ("marks 13 target pairs", "thesis", "the target contains 13 matched pairs"),
     ("among 39 candidates", "thesis", "there are 39 pairs to be considered"),
-    ("SHA-256", "count", "the name of the hash function, stored by ismb_lab.targets"),
+    ("SHA-256", "count", "the name of the hash function, stored by ismb_lab.labels.targets"),
     ("numbers features from 1", "count", "the table's numbering, shown by the table above it"),
     ("at least 5 pairs", "count", "how many pairs the exercise asks a student to label"),
     ("(the thesis' parameters, seed 0)", "code", 'labeler.score_saved("III", seed=0)'),

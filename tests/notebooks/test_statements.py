@@ -44,7 +44,7 @@ def test_05_sweep_shows_what_its_text_says(executed_notebook):
     default = next(r for r in lc if r[0] == 6.37)
     assert all(r[1:] != default[1:] for r in lc if r[0] < 6.37) and C(lc[0]) < T, lc
     # exercise 3's check: every λs of the gene's range, one score, the thesis' values'
-    from ismb_lab.tuning import gene_bounds
+    from ismb_lab.tuning.fitness import gene_bounds
 
     bounds = gene_bounds("III")
     low, high = (float(b[bounds.names.index("lambda_s")]) for b in (bounds.low, bounds.high))
@@ -133,8 +133,8 @@ def test_06_fits_the_labels_a_student_saved_in_04_and_05_keeps_the_shared_key(ru
     the eleven pairs; 05 and 06's in-class runner stay on the shared pairs and keys."""
     from pathlib import Path
 
-    from ismb_lab.classroom import targets_path
-    from ismb_lab.targets import TargetSet, load_targets, save_targets
+    from ismb_lab.labels.classroom import targets_path
+    from ismb_lab.labels.targets import TargetSet, load_targets, save_targets
 
     notebooks = Path(__file__).resolve().parents[2] / "notebooks"
     mine = notebooks / targets_path("synthetic").name
@@ -317,8 +317,13 @@ _WORDS = dict(zip(map(str, range(1, 13)), ("one", "two", "three", "four", "five"
 def _library_scope() -> dict:
     import math
 
-    from ismb_lab import (camera, datasets, depth, depth_demo, exact, features, gallery, genetic, matching,
-                          methods, peers, protocol, rig, silhouettes)
+    from ismb_lab.cameras import camera, rig
+    from ismb_lab.images import datasets, features
+    from ismb_lab.depth import objects as depth, pipeline as depth_demo, outlines as silhouettes
+    from ismb_lab.network import exact, methods
+    from ismb_lab.scenes import gallery
+    from ismb_lab.tuning import cases as protocol, genetic
+    from ismb_lab.matching import pipeline as matching, peers
     return {"math": math, "camera": camera, "datasets": datasets, "depth": depth, "depth_demo": depth_demo,
             "exact": exact, "features": features, "gallery": gallery, "genetic": genetic,
             "matching": matching, "methods": methods, "peers": peers, "protocol": protocol, "rig": rig,
@@ -368,8 +373,9 @@ def test_the_depth_page_states_the_library_defaults():
     `name = value`; each is the library's default today."""
     import inspect
 
-    from ismb_lab import depth, depth_demo
-    from ismb_lab.depth import DepthConfig
+    from ismb_lab import cameras
+    from ismb_lab.depth import pipeline as depth_demo
+    from ismb_lab.depth.objects import DepthConfig
 
     import ast
 
@@ -395,8 +401,8 @@ def test_the_depth_page_states_the_library_defaults():
             actual = inspect.signature(functions[owner]).parameters[attribute].default
         elif owner == "DEPTH_MATCH_CONFIG":
             actual = getattr(depth_demo.DEPTH_MATCH_CONFIG, attribute)
-        elif owner == "depth":
-            actual = getattr(depth, attribute)
+        elif owner == "cameras":
+            actual = getattr(cameras, attribute)
         elif owner == "":
             actual = getattr(depth_demo, attribute)
         else:

@@ -87,8 +87,8 @@ def test_00_a_shift_of_the_right_image_leaves_the_score_as_it_was(executed_noteb
 def test_04_delta_y_ignores_a_shift_of_the_whole_right_image():
     """04: ΔY compares two matches' vertical offsets, so moving every right corner alike changes nothing
     (Δd, with the Euclidean disparity, does change); and the reason it quotes is the thesis'."""
-    from ismb_lab.compatibility import neuron_pairs
-    from ismb_lab.matching import prepare
+    from ismb_lab.network.compatibility import neuron_pairs
+    from ismb_lab.matching.pipeline import prepare
 
     problem = prepare(ROOT / "images" / "synthetic" / "left.png", ROOT / "images" / "synthetic" / "right.png").problem
     n = len(problem.left_xy)
@@ -106,8 +106,8 @@ def test_04_delta_y_ignores_a_shift_of_the_whole_right_image():
 
 def test_01_every_slider_setting_keeps_at_least_n_min_corners():
     """01: whatever k and σ the sliders set (T and N_min as they start), at least N_min corners."""
-    from ismb_lab.features import detect_corners
-    from ismb_lab.io import load_pair
+    from ismb_lab.images.features import detect_corners
+    from ismb_lab.images.io import load_pair
 
     pair = load_pair(ROOT / "images" / "synthetic" / "left.png", ROOT / "images" / "synthetic" / "right.png")
     code = "\n".join(c.source for c in source("01_harris_features.ipynb").cells if c.cell_type == "code")
@@ -185,7 +185,7 @@ def test_02_names_no_function_that_returns_its_exercise_answer():
     them, and the check's docstring neither names it nor shows a right answer."""
     import inspect
 
-    from ismb_lab import exercises
+    from ismb_lab.teaching import exercises
 
     text = "\n".join(c.source for c in source("02_hopfield_network.ipynb").cells)
     assert not re.search(r"(?<!check_)hopfield_form", text) and "from ismb_lab import hopfield" not in text
@@ -244,8 +244,8 @@ def test_00_says_what_its_printed_sweep_means(executed_notebook):
 
 def test_01_exercise_2s_starter_shows_no_change_of_the_relaxations():
     """The starter of 01's exercise 2 must not print the answer (where the relaxations change)."""
-    from ismb_lab.features import detect_corners
-    from ismb_lab.io import load_pair
+    from ismb_lab.images.features import detect_corners
+    from ismb_lab.images.io import load_pair
 
     code = next(c.source for c in source("01_harris_features.ipynb").cells if c.id == "01-ex2")
     tried = re.search(r"for k in \(([\d., ]+)\):   # a first try", code)
@@ -258,8 +258,8 @@ def test_01_exercise_2s_starter_shows_no_change_of_the_relaxations():
 def test_04_exercise_1_scores_the_saved_labels_as_the_key_says(tmp_path):
     """04's exercise 1 calls labeler.score_saved; the key's figures: every true pair labelled gives
     C/E/T = 19/5+0/19, the errors at left corners 2, 4, 9, 10 and 13 (numbered from 1)."""
-    from ismb_lab.matching import prepare
-    from ismb_lab.targets import load_targets, snap
+    from ismb_lab.matching.pipeline import prepare
+    from ismb_lab.labels.targets import load_targets, snap
     from ismb_lab.widgets.labeler import LabelModel
 
     code = "\n".join(c.source for c in source("04_label_targets.ipynb").cells if c.cell_type == "code")

@@ -10,9 +10,9 @@ import numpy as np  # noqa: E402
 import pytest  # noqa: E402
 from matplotlib.backend_bases import MouseEvent  # noqa: E402
 
-from ismb_lab.matching import prepare  # noqa: E402
+from ismb_lab.matching.pipeline import prepare  # noqa: E402
 from ismb_lab.scenes import synthetic_scene, true_matches  # noqa: E402
-from ismb_lab.targets import save_targets, targets_from_matches  # noqa: E402
+from ismb_lab.labels.targets import save_targets, targets_from_matches  # noqa: E402
 
 SYNTHETIC = Path(__file__).resolve().parents[2] / "images" / "synthetic"
 

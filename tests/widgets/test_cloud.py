@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from ismb_lab import ParameterError, ParameterTypeError
-from ismb_lab.camera import StereoCamera
+from ismb_lab.cameras.camera import StereoCamera
 from ismb_lab.widgets import DepthDemo, DepthModel
 from ismb_lab.widgets.cloud import (MAX_NOTES, Cloud, PointCloudView, _cloud, board_cloud, depth_cloud,
                                     frustum_edges, match_cloud)
@@ -17,7 +17,7 @@ IMAGES = Path(__file__).resolve().parents[2] / "images"
 def test_matches_in_3d_project_back_onto_their_pixels(rendered):
     """The cloud's points, seen again by the camera that placed them, fall on the matched pixels:
     on the left one exactly, and on the right one's column (the pinhole pair shares rows)."""
-    from ismb_lab.matching import match
+    from ismb_lab.matching.pipeline import match
     from ismb_lab.scenes import synthetic_scene
 
     scene = rendered(synthetic_scene, 0)
@@ -152,8 +152,8 @@ def test_an_empty_cloud_hides_the_points_without_a_new_object(model):
 
 
 def test_the_board_cloud_lies_at_the_board_depth(opencv_data):
-    from ismb_lab.datasets import chessboard_pairs
-    from ismb_lab.rig import board_depth, calibrate_rig
+    from ismb_lab.images.datasets import chessboard_pairs
+    from ismb_lab.cameras.rig import board_depth, calibrate_rig
 
     pairs = chessboard_pairs()
     rig = calibrate_rig([p for p in pairs if p[0] != "14"])
@@ -169,16 +169,17 @@ def test_the_board_cloud_lies_at_the_board_depth(opencv_data):
     assert np.median(step) == pytest.approx(rig.square_m, rel=0.05)
 
 
+@pytest.mark.slow
 def test_the_networks_matches_of_a_held_out_pair_are_placed_by_the_rig(opencv_data):
     """The path of ``ismb-lab match --rig`` (as notebook 09 takes it) on held-out pair 14: the
     cloud holds the matches' points in metres, most of them at the board's depths (the board
     fills part of the photo; the room behind it is farther), and the note gives the board's own
     depth from its corners."""
-    from ismb_lab.datasets import chessboard_pairs
-    from ismb_lab.io import load_pair
-    from ismb_lab.matching import MatchConfig
-    from ismb_lab.metric import for_camera, match_points, match_with_camera
-    from ismb_lab.rig import board_depth, calibrate_rig
+    from ismb_lab.images.datasets import chessboard_pairs
+    from ismb_lab.images.io import load_pair
+    from ismb_lab.matching.pipeline import MatchConfig
+    from ismb_lab.matching.metric import for_camera, match_points, match_with_camera
+    from ismb_lab.cameras.rig import board_depth, calibrate_rig
 
     pairs = chessboard_pairs()
     rig = calibrate_rig([p for p in pairs if p[0] != "14"])
@@ -224,7 +225,7 @@ def test_sgbm_agrees_with_the_truth_and_its_agreement_with_the_network_is_counte
     """On a rendered pair whose true disparity is known: SGBM, run in the window the network's
     pair measured, is right at the network's matched points; and a match where both are within
     0.5 px of the truth counts as agreeing, one where only one of them is right as not."""
-    from ismb_lab.dense import agreement, window_range
+    from ismb_lab.matching.dense import agreement, window_range
     from ismb_lab.scenes import synthetic_scene
     from ismb_lab.widgets.rig_cloud import RigCloudModel
 
@@ -256,7 +257,7 @@ def test_sgbm_agrees_with_the_truth_and_its_agreement_with_the_network_is_counte
     assert truth_agrees.agree == int((known & (np.abs(truth - d) <= np.maximum(1.0, 0.05 * d))).sum())
     assert str(a) in model.message and f"{a.agree} of {a.measured}" in model.message
     # SGBM's points in metres through the same rig: back on their pixels, at Z = f B / d
-    from ismb_lab.dense import dense_points
+    from ismb_lab.matching.dense import dense_points
 
     xyz, pixels = dense_points(scene.rig, model.dense)
     np.testing.assert_allclose(scene.rig.project_left(xyz), pixels, atol=1e-6)
@@ -267,7 +268,7 @@ def test_sgbm_agrees_with_the_truth_and_its_agreement_with_the_network_is_counte
 def test_sgbm_finds_a_known_shift_within_its_range():
     import cv2
 
-    from ismb_lab.dense import sgbm_disparity, sgbm_range
+    from ismb_lab.matching.dense import sgbm_disparity, sgbm_range
 
     rng = np.random.default_rng(1)
     texture = cv2.GaussianBlur(rng.uniform(0, 255, (120, 400)), (0, 0), 1.2) * 3 % 255

@@ -4,9 +4,9 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from ismb_lab.depth import DepthConfig, DepthObject, metric_depth
-from ismb_lab.depth_demo import relative_depth
-from ismb_lab.methods import Params
+from ismb_lab.depth.objects import DepthConfig, DepthObject, metric_depth
+from ismb_lab.depth.pipeline import relative_depth
+from ismb_lab.network.methods import Params
 from ismb_lab.widgets import DepthDemo, DepthModel
 
 IMAGES = Path(__file__).resolve().parents[2] / "images"
@@ -35,7 +35,7 @@ def test_model_computes_what_relative_depth_computes():
 
 
 def test_a_seed_change_does_not_find_the_corners_again(monkeypatch):
-    import ismb_lab.depth_demo as depth_demo
+    import ismb_lab.depth.pipeline as depth_demo
 
     model = DepthModel(IMAGES / "lab", IMAGES / "toy_cars")
     prepared = model.prepared
@@ -59,7 +59,7 @@ def test_a_seed_change_does_not_find_the_corners_again(monkeypatch):
 def test_an_outline_setting_finds_the_blobs_again():
     from dataclasses import replace
 
-    from ismb_lab.silhouettes import OutlineConfig
+    from ismb_lab.depth.outlines import OutlineConfig
 
     model = DepthModel(IMAGES / "lab", IMAGES / "toy_cars")
     blobs = model.silhouettes
@@ -128,6 +128,7 @@ def test_sentence_says_which_is_nearer_and_what_they_are_in_front_of(demo):
     assert model.sentence() == "no matches in the scene pair" and model.ranking() == []
 
 
+@pytest.mark.slow
 def test_controls_recompute_and_redraw(demo):
     demo.seed_field.value = 3
     assert demo.model.result.to_dict() == expected(seed=3)
@@ -197,7 +198,7 @@ def test_static_figure_and_css(demo):
 
 
 def test_the_model_uses_a_recipe_as_it_is(tmp_path):
-    from ismb_lab.recipe import Recipe, save_recipe
+    from ismb_lab.matching.recipe import Recipe, save_recipe
 
     recipe = Recipe("NM3", Params(theta_c=9.0, lambda_c=5.0, lambda_s=4.0), "network", one_to_one=True)
     path = save_recipe(tmp_path / "recipe.json", recipe)

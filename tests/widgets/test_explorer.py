@@ -1,10 +1,10 @@
 import numpy as np
 import pytest
 
-from ismb_lab.evaluation import score
-from ismb_lab.matching import match
-from ismb_lab.methods import THESIS_PARAMS, Params
-from ismb_lab.similarity import transfer
+from ismb_lab.tuning.evaluation import score
+from ismb_lab.matching.pipeline import match
+from ismb_lab.network.methods import THESIS_PARAMS, Params
+from ismb_lab.network.similarity import transfer
 from ismb_lab.widgets.explorer import ExplorerModel, ParameterExplorer
 
 
@@ -84,7 +84,7 @@ def test_set_params_rematches_once(explorer, monkeypatch):
 
 
 def test_ga_apply_reaches_the_explorer(explorer, prepared, truth):
-    from ismb_lab.protocol import Case
+    from ismb_lab.tuning.cases import Case
     from ismb_lab.widgets.ga_runner import GARunner
 
     runner = GARunner(Case(prepared, truth), population=4, generations=2)
@@ -120,7 +120,7 @@ def test_from_folder_reads_the_answer_key(pair_folder, truth):
 def test_nm3_draws_s_at_the_theta_s_it_sets_from_the_pair(prepared, lambda_s):
     from matplotlib.figure import Figure
 
-    from ismb_lab.methods import get_method
+    from ismb_lab.network.methods import get_method
     from ismb_lab.widgets.explorer import draw_transfer, update_transfer
 
     params = Params(theta_c=17.97, theta_s=24.02, lambda_c=6.37, lambda_s=lambda_s)

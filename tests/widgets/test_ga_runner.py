@@ -5,9 +5,9 @@ import time
 import numpy as np
 import pytest
 
-from ismb_lab.methods import Params
-from ismb_lab.protocol import Case
-from ismb_lab.tuning import to_params, tune
+from ismb_lab.network.methods import Params
+from ismb_lab.tuning.cases import Case
+from ismb_lab.tuning.fitness import to_params, tune
 from ismb_lab.widgets.ga_runner import GAModel, GARunner
 
 
@@ -165,7 +165,7 @@ def test_the_best_parameters_so_far_are_on_disk_during_the_run(case, tmp_path):
 
 KILLED = """
 import sys, time
-from ismb_lab.protocol import Case
+from ismb_lab.tuning.cases import Case
 from ismb_lab.scenes import synthetic_scene
 from ismb_lab.widgets.ga_runner import GAModel
 
@@ -206,7 +206,7 @@ def test_solver_menu_tunes_with_that_solver_and_records_it(case, tmp_path):
     expected = list(tune([case], "III", rng=2, population=6, generations=3, seed=2, solver="anneal"))
     assert [g.best for g in runner.model.history] == [g.best for g in expected]
     assert json.loads((tmp_path / "p.json").read_text())["solver"] == "anneal"
-    from ismb_lab.recipe import load_recipe
+    from ismb_lab.matching.recipe import load_recipe
 
     saved = load_recipe(tmp_path / "p.json").recipe       # the recipe match --params-file uses as it is
     assert saved.solver.name == "anneal" and saved.params == runner.model.best_params

@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 
 from ismb_lab import ParameterError
-from ismb_lab.targets import load_targets, targets_from_matches
+from ismb_lab.labels.targets import load_targets, targets_from_matches
 from ismb_lab.widgets.labeler import COLUMNS, LabelModel, TargetLabeler
 
 
@@ -346,8 +346,8 @@ def test_the_key_draws_its_three_kinds_of_line_in_far_apart_colours(labeler, tru
 
 def test_score_saved_counts_the_labelled_corners_only(prepared, tmp_path, truth):
     """04's exercise: Method-III against a student's saved labels, which cover some corners."""
-    from ismb_lab.evaluation import score
-    from ismb_lab.matching import match
+    from ismb_lab.tuning.evaluation import score
+    from ismb_lab.matching.pipeline import match
 
     labeler = TargetLabeler(prepared, path=tmp_path / "t.json")
     assert labeler.score_saved() is None                      # nothing saved yet

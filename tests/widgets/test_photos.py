@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 from matplotlib.backend_bases import MouseEvent
 
-from ismb_lab.io import image_sha256
+from ismb_lab.images.io import image_sha256
 from ismb_lab.widgets import ParameterExplorer, PhotoLoader, TargetLabeler
 
 
@@ -93,6 +93,7 @@ def test_bad_photos_are_refused_and_lose_nothing(data, tmp_path, monkeypatch):
     assert not any(p.name.startswith("photos-") for p in tmp_path.iterdir())
 
 
+@pytest.mark.slow
 def test_depth_demo_from_photos_background_then_scene(tmp_path, monkeypatch):
     """The rendered lab (empty) and toy-car pairs stand in for two pairs of photos taken from
     one fixed pair of camera positions: both are rectified, so no rectification is needed."""

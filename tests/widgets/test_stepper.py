@@ -1,9 +1,9 @@
 import numpy as np
 import pytest
 
-from ismb_lab.dynamics import iter_updates, run
-from ismb_lab.matching import match
-from ismb_lab.methods import THESIS_PARAMS, get_method
+from ismb_lab.network.dynamics import iter_updates, run
+from ismb_lab.matching.pipeline import match
+from ismb_lab.network.methods import THESIS_PARAMS, get_method
 from ismb_lab.widgets.stepper import HopfieldStepper, StepperModel
 
 
@@ -128,6 +128,7 @@ def _lab(colour) -> np.ndarray:
     return np.array([116 * fy - 16, 500 * (fx - fy), 200 * (fy - fz)])
 
 
+@pytest.mark.slow
 def test_the_cursor_tells_a_flip_from_a_kept_state_by_far_apart_colours(prepared):
     """Orange beside vermillion differ mostly in lightness (ΔE about 37); the cursor's two
     colours are far apart (ΔE above 50) and neither is vermillion."""

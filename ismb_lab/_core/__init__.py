@@ -1,0 +1,1 @@
+"""What every stage shares: one validation format, safe outputs, image headers and numba's cache."""
