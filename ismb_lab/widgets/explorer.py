@@ -21,6 +21,7 @@ from ..network.solvers import DEFAULT_SOLVER, SOLVERS, get_solver
 from ..labels.targets import TargetSet, load_targets, snap
 from ._common import (Base, Pane, check_params, check_type, draw_pair, menu, pair_figsize, pair_files, row,
                       seed_field, update_pair, with_class)
+from .photos import FromPhotos
 
 __all__ = ["draw_transfer", "ExplorerModel", "ParameterExplorer", "similarity_theta", "update_transfer"]
 
@@ -184,7 +185,7 @@ def update_transfer(art: dict, model: ExplorerModel) -> None:
         art[key].set_alpha(0.25 if key == "s" and theta_s is None else 1.0)
 
 
-class ParameterExplorer(Base):
+class ParameterExplorer(FromPhotos, Base):
     """Sliders for the four energy parameters with live matches, score and transfer functions.
 
     `left` and `right` are paths or images, or `left` a Prepared; C/E/T is scored against `targets`
@@ -280,26 +281,6 @@ class ParameterExplorer(Base):
         if key.is_file():
             kw.setdefault("targets", key)
         return cls(left, right, **kw)
-
-    @classmethod
-    def from_photos(cls, *, folder=".", **kw):
-        """A :class:`~ismb_lab.widgets.photos.PhotoLoader` whose "Use this pair" opens an explorer.
-
-        Parameters
-        ----------
-        folder : str or os.PathLike, default "."
-            Where the pair's folder is made.
-        **kw
-            Passed to :meth:`from_folder`.
-
-        Returns
-        -------
-        loader : PhotoLoader
-            The loader widget.
-        """
-        from .photos import opening
-
-        return opening(cls.from_folder, folder, **kw)
 
     @property
     def params(self) -> Params:

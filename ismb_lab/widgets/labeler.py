@@ -22,6 +22,7 @@ from ..plotting import GAP, OKABE_ITO, VERDICT_COLOURS
 from ..labels.classroom import save_merging, targets_path, voila_without_hub
 from ..labels.targets import TargetSet, load_targets, snap, targets_from_matches
 from ._common import Base, Pane, button, check_type, column_figsize, draw_pair, pair_files, with_class
+from .photos import FromPhotos
 
 __all__ = ["COLUMNS", "KEY_AFTER", "Comparison", "draw_labels", "LabelModel", "pairs_html", "SavedScore", "TargetLabeler",
            "update_labels"]
@@ -419,7 +420,7 @@ def pairs_html(model: LabelModel) -> str:
     return f'<table class="ismb-table"><tr>{head}</tr>{"".join(body)}</table>'
 
 
-class TargetLabeler(Base):
+class TargetLabeler(FromPhotos, Base):
     """Label target pairs by clicking; save them in the targets format.
 
     `path`, the targets file of Save and Load, is by default the student's own
@@ -521,27 +522,6 @@ class TargetLabeler(Base):
         left, right, key = pair_files(folder, "TargetLabeler.from_folder")
         return cls(left, right, path=path, config=config, answer_key=key if key.is_file() else None,
                    pair_name=Path(folder).resolve().name)
-
-    @classmethod
-    def from_photos(cls, *, folder=".", **kw):
-        """A :class:`~ismb_lab.widgets.photos.PhotoLoader` whose "Use this pair" saves two photos of
-        one's own (rectified) in `folder` and opens a labeller on them.
-
-        Parameters
-        ----------
-        folder : str or os.PathLike, default "."
-            Where the pair's folder is made.
-        **kw
-            Passed to :meth:`from_folder`.
-
-        Returns
-        -------
-        loader : PhotoLoader
-            The loader widget.
-        """
-        from .photos import opening
-
-        return opening(cls.from_folder, folder, **kw)
 
     @property
     def pairs(self) -> np.ndarray:
