@@ -268,6 +268,13 @@ class LabelModel:
                                          "labeler)", None))
         return Path(check_type(path, (str, Path), "path", owner, "a str or Path"))
 
+    def _on_disk(self, pairs: list, targets: TargetSet, path: Path) -> None:
+        """Take `pairs` as the labels, as the file `path` now holds them (`targets`)."""
+        self._pairs = pairs
+        self._saved = tuple(pairs)
+        self.key_open = self.key_open or len(pairs) >= KEY_AFTER
+        self._base, self._base_path = targets, path
+
     def save(self, path=None) -> Path:
         """Write the labels atomically, merged with what others saved to the file meanwhile
         (:func:`ismb_lab.labels.classroom.save_merging`); on failure the old file is untouched."""
@@ -279,10 +286,7 @@ class LabelModel:
                                  "did not load, instead: Load them if they are yours, or use another name")
         merged = save_merging(path, self.targets(), base)
         snapped = snap(merged.targets, self.left_xy, self.right_xy)
-        self._pairs = sorted(set(map(tuple, snapped.pairs.tolist())))
-        self._saved = tuple(self._pairs)
-        self.key_open = self.key_open or len(self._pairs) >= KEY_AFTER
-        self._base, self._base_path = merged.targets, path
+        self._on_disk(sorted(set(map(tuple, snapped.pairs.tolist()))), merged.targets, path)
         others = (f"; kept {merged.kept_from_disk} pairs saved to it meanwhile from another tab"
                   if merged.kept_from_disk else "")
         self._say(f"saved {len(self._pairs)} pairs to {path}{others}")
@@ -347,10 +351,7 @@ class LabelModel:
                                  f"feature once. Got {str(path)!r}, where pairs "
                                  f"{snapped.shared.tolist()} share a feature instead.")
         self._remember()
-        self._pairs = sorted(map(tuple, snapped.pairs.tolist()))
-        self._saved = tuple(self._pairs)
-        self.key_open = self.key_open or len(self._pairs) >= KEY_AFTER
-        self._base, self._base_path = targets, path
+        self._on_disk(sorted(map(tuple, snapped.pairs.tolist())), targets, path)
         self.pending = self.selected = None
         self._say(f"loaded {len(self._pairs)} pairs from {path}")
         return len(self._pairs)
