@@ -63,7 +63,7 @@ def limit_defaults() -> dict:
 
 
 def files(args) -> Files:
-    """The four images, the params file and the rig read; the JSON and the plot written."""
+    """The four images, the params file and the rig read; the JSON, the plot and the PLY written."""
     return matched_files(args, ((name.replace("_", "-"), getattr(args, name))
                                 for name in ("bg_left", "bg_right", "scene_left", "scene_right")))
 

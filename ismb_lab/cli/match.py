@@ -49,7 +49,7 @@ def limit_defaults() -> dict:
 
 
 def files(args) -> Files:
-    """The images, the params file and the rig read; the JSON and the plot written."""
+    """The images, the params file and the rig read; the JSON, the plot and the PLY written."""
     return matched_files(args, (("left", args.left), ("right", args.right)))
 
 

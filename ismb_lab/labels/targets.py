@@ -393,9 +393,9 @@ def many_to_one(targets: TargetSet) -> np.ndarray:
                           | _repeated(np.round(targets.right_xy, 6), axis=0))
 
 
-def _repeated(values, **axis) -> np.ndarray:
+def _repeated(values, axis=None) -> np.ndarray:
     """Whether each of `values` (each row, with ``axis=0``) is also another one."""
-    _, inverse, counts = np.unique(values, return_inverse=True, return_counts=True, **axis)
+    _, inverse, counts = np.unique(values, axis=axis, return_inverse=True, return_counts=True)
     return counts[inverse.reshape(-1)] > 1
 
 
