@@ -49,7 +49,6 @@ def trusted(path) -> bool:
 
 
 def _source(file: str) -> str:
-    """The absolute path of `file`, one of :data:`KERNEL_SOURCES`."""
     return os.path.join(_PACKAGE, *file.split("/"))
 
 

@@ -266,8 +266,7 @@ def given(*named) -> tuple:
 
 
 def matched_files(args, images) -> Files:
-    """`images` ((name, path) pairs), the params file and the rig read; the JSON, the plot and the
-    PLY written: the files of a command that matches pairs."""
+    """`images` ((name, path) pairs), --params-file and --rig read; --json, --plot and --ply written."""
     return Files(inputs=tuple(images) + given(("--params-file", args.params_file), ("--rig", args.rig)),
                  outputs=given(("--json", args.json), ("--plot", args.plot), ("--ply", args.ply)))
 

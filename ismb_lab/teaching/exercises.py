@@ -438,7 +438,6 @@ def check_error_kinds(wrong, extra, pairs, targets) -> Feedback:
                                f"{len(matches)} matches are errors (not true matches). Hint: every error "
                                "is of exactly one kind.")
     slips = (
-        # (s.errors, 0) when there is no extra is the right split, answered above
         ((s.errors, 0), "You counted every error as a wrong partner. Hint: an extra is a match of a "
                         "left corner with no true partner at all; do all your errors have one?"),
         ((s.extra, s.wrong_partner), "The two counts are swapped. Hint: which kind of error has a true "
