@@ -171,8 +171,9 @@ def save_merging(path, ours: TargetSet, base: TargetSet | None = None) -> Merged
         result.update({k: v for k, v in added.items() if k not in result})
         kept = sum(1 for k in result if k in disk and k not in mine)
         meta = {**ours.meta, **(theirs.meta if theirs is not None else {})}
-        merged = _from_rows(list(result.values()), ours.left_sha256 or (theirs and theirs.left_sha256),
-                            ours.right_sha256 or (theirs and theirs.right_sha256), meta)
+        # An empty TargetSet is falsy, so theirs is tested against None.
+        left, right = (None, None) if theirs is None else (theirs.left_sha256, theirs.right_sha256)
+        merged = _from_rows(list(result.values()), ours.left_sha256 or left, ours.right_sha256 or right, meta)
         save_targets(path, merged)
     return Merged(merged, kept, replaced)
 
