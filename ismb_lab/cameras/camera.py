@@ -18,6 +18,7 @@ import cv2
 import numpy as np
 
 from .._core.validation import ParameterError, ParameterTypeError, check_number, check_points, message
+from ..images.io import JsonRecord
 
 __all__ = ["BASELINE_M", "BOARD", "FOCAL_PX", "MAX_BASELINE_M", "MAX_BOARD_SIDE", "MAX_SQUARE_M", "MAX_ZOOM",
            "MIN_SQUARE_M", "SQUARE_M", "FORMAT", "HEIGHT", "OPENCV_NAMES", "UNITS", "WIDTH", "BoardPair",
@@ -108,7 +109,7 @@ def _intrinsics(focal_px: float, cx: float, cy: float) -> np.ndarray:
 
 
 @dataclass(frozen=True, eq=False)
-class StereoCamera:
+class StereoCamera(JsonRecord):
     """Two cameras, their rectification and the calibration they came from.
 
     ``k_*`` and ``d_*`` are the camera matrices and distortions (None: :data:`FOCAL_PX` at the
@@ -662,16 +663,6 @@ class StereoCamera:
                 "k_right": self.k_right.tolist(), "d_right": self.d_right.ravel().tolist(),
                 "rotation": self.rotation.tolist(), "translation": self.translation.ravel().tolist(),
                 "pairs": [pair.to_dict() for pair in self.pairs]}
-
-    def to_json(self) -> str:
-        """:meth:`to_dict` as indented JSON text.
-
-        Returns
-        -------
-        text : str
-            The JSON document.
-        """
-        return json.dumps(self.to_dict(), indent=2)
 
 
 _RMS_RULE = ("a finite number > 0 (the calibration's RMS reprojection error in pixels, which sets the search "

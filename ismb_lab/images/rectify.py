@@ -9,14 +9,13 @@ Photos are first scaled to at most :data:`WORKING_SIDE` pixels, EXIF orientation
 
 from __future__ import annotations
 
-import json
 from dataclasses import dataclass, field
 
 import cv2
 import numpy as np
 
 from .._core.validation import ParameterError, ParameterTypeError, check_number, message
-from .io import _is_path, _read, _to_grey, decode
+from .io import JsonRecord, _is_path, _read, _to_grey, decode
 
 __all__ = ["ROW_SPREAD", "WORKING_SIDE", "Correspondences", "Rectified", "apply_rectification", "check_for_matching",
            "check_rectified", "epipole_warning", "load_photo", "measured", "negative_share", "photo_orientation",
@@ -237,7 +236,7 @@ def _dy_figures(left_xy, right_xy) -> dict:
 
 
 @dataclass(frozen=True, eq=False)
-class Rectified:
+class Rectified(JsonRecord):
     """A rectified pair at the working size, and how it was made.
 
     ``left_h``, ``right_h`` are the homographies from the scaled inputs (the identity for a rig);
@@ -279,16 +278,6 @@ class Rectified:
                 "p90_abs_dy_px": self.p90_abs_dy_px, "disparity_range_px": list(self.disparity_range_px),
                 "size": self.size, "scale": self.scale, "working_side": WORKING_SIDE,
                 "left_homography": self.left_h.tolist(), "right_homography": self.right_h.tolist()}
-
-    def to_json(self) -> str:
-        """:meth:`to_dict` as indented JSON text.
-
-        Returns
-        -------
-        text : str
-            The JSON document.
-        """
-        return json.dumps(self.to_dict(), indent=2)
 
 
 def pair_inputs(left, right, owner: str, max_side: int):
