@@ -476,11 +476,9 @@ def rectify_pair(left, right, *, max_side: int = WORKING_SIDE) -> Rectified:
         scale = np.diag([shrink, shrink, 1.0])
         h_left, h_right, size = _place(scale @ h_left, scale @ h_right, lxy, rxy, (h, w))
         size = (min(size[0], max_side), min(size[1], max_side))
-    warp = lambda image, hom: cv2.warpPerspective(image.astype(np.float32), hom, size, flags=cv2.INTER_LINEAR,
-                                                  borderMode=cv2.BORDER_CONSTANT, borderValue=0).astype(float)
     lxy, rxy = _transform(h_left, lxy), _transform(h_right, rxy)
     warning = epipole_warning(F, (h, w))
-    return Rectified(np.clip(warp(left, h_left), 0, 255), np.clip(warp(right, h_right), 0, 255), h_left,
+    return Rectified(_warp(left, h_left, size), _warp(right, h_right, size), h_left,
                      h_right, "uncalibrated", n, **_dy_figures(lxy, rxy), scale=factor, left_xy=lxy,
                      right_xy=rxy, warnings=(warning,) if warning else ())
 
@@ -503,9 +501,14 @@ def apply_rectification(left, right, left_h, right_h, size) -> Rectified:
     """Warp a pair to `size` ``(width, height)`` by homographies found on another pair of the same
     camera positions (the depth demo's background), measured on new robust matches."""
     size = (int(size[0]), int(size[1]))
-    warp = lambda image, h: np.clip(cv2.warpPerspective(np.asarray(image, np.float32), np.asarray(h, float), size)
-                                    .astype(float), 0, 255)
-    return measured(warp(left, left_h), warp(right, right_h), left_h, right_h, "the background's")
+    return measured(_warp(left, left_h, size), _warp(right, right_h, size), left_h, right_h,
+                    "the background's")
+
+
+def _warp(image, h, size) -> np.ndarray:
+    """`image` warped by the homography `h` to `size` (bilinear, 0 outside), clipped to ``[0, 255]``."""
+    warped = cv2.warpPerspective(np.asarray(image, np.float32), np.asarray(h, float), size)
+    return np.clip(warped.astype(float), 0, 255)
 
 
 def measured(left, right, left_h, right_h, method: str) -> Rectified:
