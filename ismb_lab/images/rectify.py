@@ -52,7 +52,7 @@ def negative_share(matches: "Correspondences", rows_px: float) -> tuple[float, i
     """
     if not len(matches):
         return 0.0, 0
-    on_rows = np.abs(matches.left_xy[:, 1] - matches.right_xy[:, 1]) <= rows_px
+    on_rows = matches.abs_dy <= rows_px
     d = (matches.left_xy[:, 0] - matches.right_xy[:, 0])[on_rows]
     return (float(np.mean(d < 0)) if len(d) else 0.0), int(len(d))
 
@@ -159,6 +159,11 @@ class Correspondences:
 
     def __len__(self) -> int:
         return len(self.left_xy)
+
+    @property
+    def abs_dy(self) -> np.ndarray:
+        """(n,) float array: the row difference ``|y_left - y_right|`` of each match."""
+        return np.abs(self.left_xy[:, 1] - self.right_xy[:, 1])
 
 
 def robust_matches(left, right, *, max_features: int = 4000, rows_px: float | None = None) -> Correspondences:
@@ -350,7 +355,7 @@ def _refuse_swapped(left_xy, right_xy, F, shape, owner: str) -> None:
     pure sideways F leaves ``cv2.recoverPose`` guessing), else by :func:`sideways_step`."""
     limit = row_spread_px(shape)
     matches = Correspondences(np.asarray(left_xy, float), np.asarray(right_xy, float))
-    if len(matches) and np.median(np.abs(matches.left_xy[:, 1] - matches.right_xy[:, 1])) <= limit:
+    if len(matches) and np.median(matches.abs_dy) <= limit:
         if _refuse_by_sign(matches, limit, owner) >= 8:
             return
     step = sideways_step(left_xy, right_xy, F, shape)
@@ -379,7 +384,7 @@ def check_for_matching(left, right, owner: str = "check_for_matching") -> str:
     if len(matches) < 8:
         return ""
     limit = row_spread_px(np.shape(left))
-    spread = float(np.median(np.abs(matches.left_xy[:, 1] - matches.right_xy[:, 1])))
+    spread = float(np.median(matches.abs_dy))
     if spread > limit:
         return (f"warning: the pair is not rectified (the rows of its {len(matches)} robust matches differ by "
                 f"{spread:.1f} px at the median): make it so with 'ismb-lab rectify LEFT RIGHT --out DIR'")

@@ -266,7 +266,7 @@ def _misfit(matches, limit: float) -> str:
 
     if len(matches) < 8:
         return ""
-    dy = np.abs(matches.left_xy[:, 1] - matches.right_xy[:, 1])
+    dy = matches.abs_dy
     # a share, not the median: on a chessboard half the robust matches may pair neighbouring squares
     within = float(np.mean(dy <= limit))
     if within < FIT_SHARE:
@@ -390,7 +390,7 @@ def for_camera(left, right, camera: StereoCamera) -> tuple:
     limit = fit_rows_px(camera)
     given = robust_matches(left, right)
     rectified = camera.rectify(left, right)
-    median = lambda m: float(np.median(np.abs(m.left_xy[:, 1] - m.right_xy[:, 1]))) if len(m) >= 8 else math.inf
+    median = lambda m: float(np.median(m.abs_dy)) if len(m) >= 8 else math.inf
     again = Correspondences(rectified.left_xy, rectified.right_xy)
     before, after = median(given), median(again)
     as_given = before <= limit and not after < (1 - IMPROVES) * before

@@ -149,9 +149,9 @@ def auto_window(pair, config: MatchConfig, *, rows_px: float | None = None) -> M
     x, y, w, h = resolve_roi(config.roi, pair.shape)
     lxy, rxy = matches.left_xy, matches.right_xy
     inside = ((lxy[:, 0] >= x) & (lxy[:, 0] < x + w) & (lxy[:, 1] >= y) & (lxy[:, 1] < y + h)
-              & (np.abs(lxy[:, 1] - rxy[:, 1]) <= rows_px)) if len(lxy) else np.zeros(0, bool)
+              & (matches.abs_dy <= rows_px)) if len(lxy) else np.zeros(0, bool)
     if inside.sum() < 8:      # a small ROI: the whole pair's range is the best guess there is
-        inside = np.abs(lxy[:, 1] - rxy[:, 1]) <= rows_px if len(lxy) else inside
+        inside = matches.abs_dy <= rows_px if len(lxy) else inside
     d = lxy[inside, 0] - rxy[inside, 0]
     if len(d) < 8:
         raise ParameterError(message("shift", "MatchConfig", "a number of pixels when the pair has fewer than "
