@@ -232,8 +232,7 @@ def match_points(result: MatchResult, camera: StereoCamera) -> np.ndarray:
     """
     if not isinstance(camera, StereoCamera):
         raise ParameterTypeError(message("camera", "match_points", "a StereoCamera", camera))
-    left, right = result.left_match_xy, result.right_match_xy
-    return camera.points_from_disparity(left, left[:, 0] - right[:, 0])
+    return camera.points_from_disparity(result.left_match_xy, result.horizontal_disparity)
 
 
 #: The rig's rectification improves a pair's rows when it lowers their median difference by
