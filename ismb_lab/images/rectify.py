@@ -15,7 +15,7 @@ import cv2
 import numpy as np
 
 from .._core.validation import ParameterError, ParameterTypeError, check_number, message
-from .io import JsonRecord, _is_path, _read, _to_grey, decode
+from .io import JsonRecord, _is_path, _read, _to_grey, decode, grey_uint8
 
 __all__ = ["ROW_SPREAD", "WORKING_SIDE", "Correspondences", "Rectified", "apply_rectification", "check_for_matching",
            "check_rectified", "epipole_warning", "load_photo", "measured", "negative_share", "photo_orientation",
@@ -185,7 +185,7 @@ def robust_matches(left, right, *, max_features: int = 4000, rows_px: float | No
     sift = cv2.SIFT_create(nfeatures=max_features)
     # SIFT doubles its input first: a larger image would hold several hundred MB of pyramid
     factor = working_size(np.shape(left), DETECT_SIDE)
-    as_u8 = lambda g: np.clip(np.rint(_scale(np.asarray(g, dtype=float), factor)), 0, 255).astype(np.uint8)
+    as_u8 = lambda g: grey_uint8(_scale(np.asarray(g, dtype=float), factor))
     kl, dl = sift.detectAndCompute(as_u8(left), None)
     kr, dr = sift.detectAndCompute(as_u8(right), None)
     empty = Correspondences(np.zeros((0, 2)), np.zeros((0, 2)))
