@@ -8,17 +8,32 @@ is refused.  :func:`check_replace` is the stricter check for a tree a command re
 
 from __future__ import annotations
 
+import json
 import os
 import stat
 import tempfile
 from pathlib import Path
 
-__all__ = ["MAX_JSON_BYTES", "OutputError", "atomic_write_bytes", "atomic_write_text", "check_input", "private_folder",
-           "check_output", "check_replace", "read_json", "refuse_folder_name"]
+__all__ = ["MAX_JSON_BYTES", "JsonRecord", "OutputError", "atomic_write_bytes", "atomic_write_text", "check_input",
+           "private_folder", "check_output", "check_replace", "read_json", "refuse_folder_name"]
 
 #: Most bytes of a params, rig or manifest JSON file, checked before it is parsed (the package's
 #: largest, a rig of 13 pairs, is about 110 KB; parsing holds some ten times a file's size).
 MAX_JSON_BYTES = 4 << 20
+
+
+class JsonRecord:
+    """A record whose ``to_dict`` is JSON-ready, written as indented JSON text by :meth:`to_json`."""
+
+    def to_json(self) -> str:
+        """:meth:`to_dict` as indented JSON text.
+
+        Returns
+        -------
+        text : str
+            The JSON document.
+        """
+        return json.dumps(self.to_dict(), indent=2)
 
 
 class OutputError(ValueError):

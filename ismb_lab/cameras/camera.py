@@ -17,8 +17,8 @@ from pathlib import Path
 import cv2
 import numpy as np
 
+from .._core.files import JsonRecord
 from .._core.validation import ParameterError, ParameterTypeError, check_number, check_points, message
-from ..images.io import JsonRecord
 
 __all__ = ["BASELINE_M", "BOARD", "FOCAL_PX", "MAX_BASELINE_M", "MAX_BOARD_SIDE", "MAX_SQUARE_M", "MAX_ZOOM",
            "MIN_SQUARE_M", "SQUARE_M", "FORMAT", "HEIGHT", "OPENCV_NAMES", "UNITS", "WIDTH", "BoardPair",

@@ -2,7 +2,7 @@
 """
 
 from .coords import euclidean_disparity, horizontal_disparity, vertical_disparity
-from .io import (MAX_PIXELS, MOST_PIXELS, PIXELS_VARIABLE, JsonRecord, decode, exif_orientation, grey_uint8,
+from .io import (MAX_PIXELS, MOST_PIXELS, PIXELS_VARIABLE, decode, exif_orientation, grey_uint8,
     image_sha256, load_image, load_pair, max_pixels, orient, png_bytes, save_image, save_pair, StereoPair)
 from .features import (MAX_SIGMA, Corners, check_roi, detect_corners, harris_from_tensor, harris_response, image_gradients,
     resolve_roi, structure_tensor)
@@ -13,7 +13,7 @@ from .datasets import (CHESSBOARD_PAIRS, MOTORCYCLE_ROIS, OPENCV_DATA, OPENCV_DA
     aloe_files, books, chessboard_pairs, ground_truth_pairs, GroundTruthPair, motorcycle,
     motorcycle_files, opencv_samples)
 
-__all__ = ["CHESSBOARD_PAIRS", "Corners", "Correspondences", "GroundTruthPair", "JsonRecord", "MAX_PIXELS",
+__all__ = ["CHESSBOARD_PAIRS", "Corners", "Correspondences", "GroundTruthPair", "MAX_PIXELS",
            "MAX_SIGMA", "MOST_PIXELS", "MOTORCYCLE_ROIS", "OPENCV_DATA", "OPENCV_DATA_VARIABLE",
            "PIXELS_VARIABLE", "ROW_SPREAD", "Rectified", "SampleDataMissing", "StereoPair", "WORKING_SIDE",
            "aloe", "aloe_files", "apply_rectification", "books", "check_for_matching", "check_rectified",

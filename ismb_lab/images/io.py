@@ -7,7 +7,6 @@ Every image in the package is a C-contiguous ``float64`` array of grey values in
 from __future__ import annotations
 
 import hashlib
-import json
 import os
 from dataclasses import dataclass
 
@@ -16,25 +15,11 @@ import numpy as np
 
 from .._core.validation import ParameterError, ParameterTypeError, check_number, message
 
-__all__ = ["MAX_PIXELS", "MOST_PIXELS", "PIXELS_VARIABLE", "JsonRecord", "decode", "exif_orientation",
+__all__ = ["MAX_PIXELS", "MOST_PIXELS", "PIXELS_VARIABLE", "decode", "exif_orientation",
            "grey_uint8", "image_sha256", "load_image", "load_pair", "max_pixels", "orient", "png_bytes",
            "save_image", "save_pair", "StereoPair"]
 
 _ARRAY_TAG = b"ismb_lab-array-v1\n"
-
-
-class JsonRecord:
-    """A record whose ``to_dict`` is JSON-ready, written as indented JSON text by :meth:`to_json`."""
-
-    def to_json(self) -> str:
-        """:meth:`to_dict` as indented JSON text.
-
-        Returns
-        -------
-        text : str
-            The JSON document.
-        """
-        return json.dumps(self.to_dict(), indent=2)
 
 
 def _is_path(source) -> bool:

@@ -14,8 +14,9 @@ from dataclasses import dataclass, field
 import cv2
 import numpy as np
 
+from .._core.files import JsonRecord
 from .._core.validation import ParameterError, ParameterTypeError, check_number, message
-from .io import JsonRecord, _is_path, _read, _to_grey, decode, grey_uint8
+from .io import _is_path, _read, _to_grey, decode, grey_uint8
 
 __all__ = ["ROW_SPREAD", "WORKING_SIDE", "Correspondences", "Rectified", "apply_rectification", "check_for_matching",
            "check_rectified", "epipole_warning", "load_photo", "measured", "negative_share", "photo_orientation",

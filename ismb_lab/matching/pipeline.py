@@ -13,10 +13,11 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
+from .._core.files import JsonRecord
 from .._core.validation import MAX_SEED, ParameterError, ParameterTypeError, check_choice, check_number, message
 from ..images.coords import euclidean_disparity, horizontal_disparity
 from ..images.features import MAX_SIGMA, Corners, check_roi, detect_corners, resolve_roi
-from ..images.io import JsonRecord, StereoPair, load_pair
+from ..images.io import StereoPair, load_pair
 from ..network.methods import DEFAULT_METHOD, Problem, build_problem, get_method
 from ..network.params import Params
 from ..network.similarity import mean_abs_difference
