@@ -5,6 +5,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from .images.coords import euclidean_disparity
+
 __all__ = ["GAP", "LEFT_COLOUR", "OKABE_ITO", "RIGHT_COLOUR", "VERDICT_COLOURS", "outlines", "plot_depth",
            "plot_matches", "side_by_side", "verdicts"]
 
@@ -95,8 +97,7 @@ def plot_matches(ax, left, right, left_xy, right_xy, pairs, *, numbers: bool = T
     else:
         lines = LineCollection(segments, cmap=cmap, linewidths=1.2)
         if len(pairs):
-            diff = left_xy[pairs[:, 0]] - right_xy[pairs[:, 1]]
-            lines.set_array(np.hypot(diff[:, 0], diff[:, 1]))
+            lines.set_array(euclidean_disparity(left_xy[pairs[:, 0]], right_xy[pairs[:, 1]]))
     ax.add_collection(lines)
     labels = []
     if numbers:

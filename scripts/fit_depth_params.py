@@ -13,16 +13,17 @@ and the script also prints the fitted parameters' score under annealing.
 
     python scripts/fit_depth_params.py [--out PARAMS.json] [--generations 500] [--seed 0]
 
-It prints the parameters and writes them in the ``ismb-lab tune --out`` format,
-readable by ``ismb-lab depth --params-file``.
+It prints the parameters and writes them as ``ismb-lab tune --out`` does
+(``ismb_lab.matching.recipe.save_recipe``): Method-III, the fitted parameters, the demo's
+solver and the update orders per chromosome, for ``ismb-lab depth --params-file``.
 """
 
 import argparse
 import time
 from pathlib import Path
 
-from ismb_lab.depth.pipeline import DEPTH_MATCH_CONFIG
-from ismb_lab.network.methods import save_params
+from ismb_lab.depth.pipeline import DEPTH_MATCH_CONFIG, DEPTH_SOLVER
+from ismb_lab.matching.recipe import Recipe, save_recipe
 from ismb_lab.tuning.cases import Case
 from ismb_lab.tuning.fitness import evaluate, to_params, tune
 
@@ -60,7 +61,8 @@ def main(argv=None):
     print("annealed, per seed:", ", ".join(map(str, annealed)))
     print("params:", {k: round(v, 4) for k, v in params.to_dict().items()})
     if args.out is not None:
-        save_params(args.out, "III", params, fitness=best.best, generations=best.index, seed=args.seed,
+        recipe = Recipe("III", params, DEPTH_SOLVER, fit_seeds=args.seeds)
+        save_recipe(args.out, recipe, fitness=best.best, generations=best.index, seed=args.seed,
                     targets=len(case.targets), interrupted=False)
         print(f"written to {args.out}")
 

@@ -6,6 +6,7 @@ import subprocess
 import sys
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 from ismb_lab.labels.classroom import pool, save_merging, targets_path, user_name
@@ -117,6 +118,16 @@ def test_a_merge_refuses_a_file_for_other_images(tmp_path):
     with pytest.raises(ValueError, match="same images"):
         save_merging(path, TargetSet([[2, 2]], [[1, 2]], "c" * 64, "d" * 64))
     assert len(load_targets(path)) == 1
+
+
+@pytest.mark.parametrize("hashes", [(), ("a" * 64, "b" * 64)])
+def test_a_merge_onto_an_empty_file_keeps_the_hashes_of_either_side(tmp_path, hashes):
+    # An empty TargetSet is falsy: the file on disk once stood in for its own missing hash.
+    path = save_targets(tmp_path / "t.json", TargetSet(np.zeros((0, 2)), np.zeros((0, 2)), *hashes))
+    merged = save_merging(path, TargetSet([[10, 10]], [[5, 10]])).targets
+    assert merged.left_xy.tolist() == [[10.0, 10.0]]
+    assert (merged.left_sha256, merged.right_sha256) == (hashes or (None, None))
+    assert load_targets(path).left_sha256 == merged.left_sha256
 
 
 def test_a_file_listing_every_pair_twice_is_refused(tmp_path):

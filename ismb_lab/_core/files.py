@@ -8,17 +8,32 @@ is refused.  :func:`check_replace` is the stricter check for a tree a command re
 
 from __future__ import annotations
 
+import json
 import os
 import stat
 import tempfile
 from pathlib import Path
 
-__all__ = ["MAX_JSON_BYTES", "OutputError", "atomic_write_bytes", "atomic_write_text", "check_input", "private_folder",
-           "check_output", "check_replace", "read_json", "refuse_folder_name"]
+__all__ = ["MAX_JSON_BYTES", "JsonRecord", "OutputError", "atomic_write_bytes", "atomic_write_text", "check_input",
+           "private_folder", "check_output", "check_replace", "read_json", "refuse_folder_name"]
 
 #: Most bytes of a params, rig or manifest JSON file, checked before it is parsed (the package's
 #: largest, a rig of 13 pairs, is about 110 KB; parsing holds some ten times a file's size).
 MAX_JSON_BYTES = 4 << 20
+
+
+class JsonRecord:
+    """A record whose ``to_dict`` is JSON-ready, written as indented JSON text by :meth:`to_json`."""
+
+    def to_json(self) -> str:
+        """:meth:`to_dict` as indented JSON text.
+
+        Returns
+        -------
+        text : str
+            The JSON document.
+        """
+        return json.dumps(self.to_dict(), indent=2)
 
 
 class OutputError(ValueError):
@@ -192,6 +207,16 @@ def refuse_folder_name(text, what: str = "output") -> None:
         raise OutputError(f"{what} {text!r} names a folder (it ends with {end!r}); give a file name")
 
 
+def _status(stat_of, shown: str):
+    """``stat_of()``, or None where the path does not exist; any other OSError as an OutputError."""
+    try:
+        return stat_of()
+    except FileNotFoundError:
+        return None
+    except OSError as exc:
+        raise OutputError(f"{shown}: {exc.strerror or exc}") from None
+
+
 def check_output(path, *, inputs=(), force: bool = False, what: str = "output") -> Path:
     """Check, before any work, that `path` may be written by :func:`atomic_write_bytes`.
 
@@ -222,12 +247,7 @@ def check_output(path, *, inputs=(), force: bool = False, what: str = "output") 
     final = Path(os.path.realpath(path)) if path.is_symlink() else path
     if path.is_symlink() and not final.parent.is_dir():
         raise OutputError(f"{shown} is a symbolic link to {str(final)!r}, whose folder does not exist")
-    try:
-        st = path.stat()   # through any link (/dev/stdout -> /proc/self/fd/1 -> a pipe)
-    except FileNotFoundError:
-        st = None
-    except OSError as exc:
-        raise OutputError(f"{shown}: {exc.strerror or exc}") from None
+    st = _status(path.stat, shown)   # through any link (/dev/stdout -> /proc/self/fd/1 -> a pipe)
     if st is not None and stat.S_ISDIR(st.st_mode):
         raise OutputError(f"{shown} is a folder; give a file name")
     if st is not None and not stat.S_ISREG(st.st_mode):
@@ -269,12 +289,7 @@ def check_replace(path, *, what: str = "output") -> Path:
     """
     path = Path(path)
     shown = f"{what} {str(path)!r}"
-    try:
-        st = path.lstat()
-    except FileNotFoundError:
-        st = None
-    except OSError as exc:
-        raise OutputError(f"{shown}: {exc.strerror or exc}") from None
+    st = _status(path.lstat, shown)
     if st is not None and stat.S_ISLNK(st.st_mode):
         raise OutputError(f"{shown} is a symbolic link, which is never written through or replaced; "
                           "remove it first")

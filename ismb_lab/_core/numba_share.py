@@ -48,8 +48,8 @@ def trusted(path) -> bool:
     return True
 
 
-def _source(folder: str) -> str:
-    return os.path.join(_PACKAGE, *folder.split("/"))
+def _source(file: str) -> str:
+    return os.path.join(_PACKAGE, *file.split("/"))
 
 
 def shared_folder(root, source: str = KERNEL_SOURCES[0]) -> str:

@@ -76,8 +76,7 @@ def check_number(value, name: str, owner: str, *, low=None, high=None,
     ...
     ismb_lab.ParameterError: The 'theta_c' parameter of Params must be a finite number. Got nan instead.
     """
-    kind = "an integer" if integer else "a finite number"
-    rule = kind
+    rule = "an integer" if integer else "a finite number"
     bound = lambda b: shown_int(b) if isinstance(b, int) else b   # noqa: E731
     if low is not None:
         rule += f" {'>' if low_open else '>='} {bound(low)}"
@@ -86,11 +85,8 @@ def check_number(value, name: str, owner: str, *, low=None, high=None,
     if type(value) not in (float, int) and (isinstance(value, bool) or not isinstance(value, numbers.Real)):
         raise ParameterTypeError(message(name, owner, rule, value))
     if integer:
-        if not isinstance(value, numbers.Integral):
-            if float(value).is_integer():
-                value = int(value)
-            else:
-                raise ParameterTypeError(message(name, owner, rule, value))
+        if not isinstance(value, numbers.Integral) and not float(value).is_integer():
+            raise ParameterTypeError(message(name, owner, rule, value))
         value = int(value)
     else:
         try:

@@ -17,6 +17,7 @@ from pathlib import Path
 import cv2
 import numpy as np
 
+from .._core.files import JsonRecord
 from .._core.validation import ParameterError, ParameterTypeError, check_number, check_points, message
 
 __all__ = ["BASELINE_M", "BOARD", "FOCAL_PX", "MAX_BASELINE_M", "MAX_BOARD_SIDE", "MAX_SQUARE_M", "MAX_ZOOM",
@@ -108,7 +109,7 @@ def _intrinsics(focal_px: float, cx: float, cy: float) -> np.ndarray:
 
 
 @dataclass(frozen=True, eq=False)
-class StereoCamera:
+class StereoCamera(JsonRecord):
     """Two cameras, their rectification and the calibration they came from.
 
     ``k_*`` and ``d_*`` are the camera matrices and distortions (None: :data:`FOCAL_PX` at the
@@ -663,16 +664,6 @@ class StereoCamera:
                 "rotation": self.rotation.tolist(), "translation": self.translation.ravel().tolist(),
                 "pairs": [pair.to_dict() for pair in self.pairs]}
 
-    def to_json(self) -> str:
-        """:meth:`to_dict` as indented JSON text.
-
-        Returns
-        -------
-        text : str
-            The JSON document.
-        """
-        return json.dumps(self.to_dict(), indent=2)
-
 
 _RMS_RULE = ("a finite number > 0 (the calibration's RMS reprojection error in pixels, which sets the search "
              "band), or NaN when none was measured")
@@ -937,7 +928,6 @@ def _pair(fields: _Fields, n: int, record) -> BoardPair:
     if not isinstance(record, dict):
         raise fields.fail(at, "a pair's record {left, right, left_corners, right_corners, rms_px, rvec, tvec}",
                           record, ParameterTypeError)
-    sub = _Fields(record, fields.owner)
     for name in ("left", "right", "left_corners", "right_corners", "rms_px", "rvec", "tvec"):
         if name not in record:
             raise fields.fail(f"{at}.{name}", "given in every pair", _Missing())
@@ -945,14 +935,14 @@ def _pair(fields: _Fields, n: int, record) -> BoardPair:
         if not isinstance(record[name], str):
             raise fields.fail(f"{at}.{name}", "a photo's name", record[name], ParameterTypeError)
     corners = "finite (x, y) corners, one [x, y] per corner"
-    left = sub.numbers(f"{at}.left_corners", record["left_corners"], (-1, 2), corners)
-    right = sub.numbers(f"{at}.right_corners", record["right_corners"], (-1, 2), corners)
+    left = fields.numbers(f"{at}.left_corners", record["left_corners"], (-1, 2), corners)
+    right = fields.numbers(f"{at}.right_corners", record["right_corners"], (-1, 2), corners)
     if left.shape != right.shape or not len(left):
         raise fields.fail(f"{at}.right_corners", "as many corners as left_corners (at least one)",
                           f"{len(right)} against {len(left)}")
     rms = _number(fields, f"{at}.rms_px", record["rms_px"], low=0)
-    vectors = [sub.numbers(f"{at}.{name}", record[name], (3,), "three finite numbers (a Rodrigues vector "
-                           "or a translation in metres)") for name in ("rvec", "tvec")]
+    vectors = [fields.numbers(f"{at}.{name}", record[name], (3,), "three finite numbers (a Rodrigues vector "
+                              "or a translation in metres)") for name in ("rvec", "tvec")]
     return BoardPair(record["left"], record["right"], left, right, rms, *vectors)
 
 
@@ -991,8 +981,9 @@ def load_camera(source) -> StereoCamera:
     from .._core.files import MAX_JSON_BYTES, read_json
 
     owner = "load_camera"
+    inline = str(source).lstrip().startswith("{")
     try:
-        if str(source).lstrip().startswith("{"):
+        if inline:
             if len(str(source)) > MAX_JSON_BYTES:
                 raise ValueError(f"it is larger than {MAX_JSON_BYTES} bytes")
             data = json.loads(str(source))
@@ -1007,5 +998,5 @@ def load_camera(source) -> StereoCamera:
     if not isinstance(data, dict) or data.get("format") not in _FORMATS:
         raise ParameterError(message("source", owner, "a rig file written by 'ismb-lab calibrate' "
                                      f"(format {' or '.join(_FORMATS)})", str(source)))
-    shown = "the rig file" if str(source).lstrip().startswith("{") else f"the rig file {str(source)!r}"
+    shown = "the rig file" if inline else f"the rig file {str(source)!r}"
     return _from_record(data, shown)

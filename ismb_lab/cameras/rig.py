@@ -17,6 +17,7 @@ import numpy as np
 
 from .._core.validation import ParameterError, message
 from .camera import BOARD, FORMAT, MAX_ZOOM, SQUARE_M, BoardPair, StereoCamera, check_board
+from ..images.io import grey_uint8
 from ..images.rectify import load_photo
 
 __all__ = ["BOARD", "MAX_ZOOM", "SQUARE_M", "HeldOut", "board_depth", "board_points", "calibrate_rig",
@@ -32,13 +33,9 @@ OUTLIER_RATIO = 3.0
 OUTLIER_PX = 0.5
 
 
-def _u8(image) -> np.ndarray:
-    return np.clip(np.rint(np.asarray(image, dtype=float)), 0, 255).astype(np.uint8)
-
-
 def find_board(image, board=BOARD) -> np.ndarray | None:
     """The board's inner corners ``(x, y)``, refined to sub-pixel, or None when not found."""
-    grey = _u8(image)
+    grey = grey_uint8(image)
     found, corners = cv2.findChessboardCorners(grey, tuple(board), cv2.CALIB_CB_ADAPTIVE_THRESH
                                                + cv2.CALIB_CB_NORMALIZE_IMAGE)
     if not found:

@@ -43,8 +43,7 @@ def build_parser():
     parser = Parser(prog="ismb-lab", description="Hopfield-network stereo matching of Harris "
                     "corners (the ISMB thesis) from the command line.", epilog=_epilog())
     parser.add_argument("--version", action="version", version=f"%(prog)s {__version__}")
-    sub = parser.add_subparsers(dest="command", metavar="COMMAND", parser_class=Parser)
-    sub.required = True
+    sub = parser.add_subparsers(dest="command", metavar="COMMAND", parser_class=Parser, required=True)
     for command in _commands():
         command.add_parser(sub)
     return parser

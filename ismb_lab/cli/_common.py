@@ -19,7 +19,7 @@ from ..network.dynamics import STOP_RULES
 from ..matching.pipeline import MatchConfig, match
 from ..network.methods import DEFAULT_METHOD, all_genes, get_method, method_names
 from ..network.solvers import SOLVERS, NetworkSolver
-from ._guard import UsageError, _short, interrupted
+from ._guard import Files, UsageError, _short, interrupted
 
 __all__ = ["ParameterError", "ParameterTypeError", "Parser", "UsageError", "add_ga_options", "given",
            "add_matching_options", "add_feature_options", "window_record", "add_solver_option",
@@ -263,6 +263,12 @@ def given(*named) -> tuple:
     (('--json', 'out.json'),)
     """
     return tuple((what, path) for what, path in named if path is not None)
+
+
+def matched_files(args, images) -> Files:
+    """`images` ((name, path) pairs), --params-file and --rig read; --json, --plot and --ply written."""
+    return Files(inputs=tuple(images) + given(("--params-file", args.params_file), ("--rig", args.rig)),
+                 outputs=given(("--json", args.json), ("--plot", args.plot), ("--ply", args.ply)))
 
 
 def write_ply(path, xyz, xy, image, camera, what: str) -> None:

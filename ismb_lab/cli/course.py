@@ -13,8 +13,7 @@ def add_parser(sub) -> None:
 
     c = sub.add_parser("course", help="the nbgrader course (deploy/course/README.md)",
                        description="The nbgrader course of deploy/course/.")
-    actions = c.add_subparsers(dest="action", metavar="ACTION", parser_class=type(c))
-    actions.required = True
+    actions = c.add_subparsers(dest="action", metavar="ACTION", parser_class=type(c), required=True)
     s = actions.add_parser("source", help="write COURSE/source/ASSIGNMENT/ from the notebooks",
                            description="Write the course's source/<assignment>/ folder from the "
                            "repository's notebooks (which carry the nbgrader metadata) and images, "

@@ -9,8 +9,8 @@ from .._core.files import atomic_write_text
 from .._core.validation import ParameterError
 from ..depth.objects import GROUPINGS, DepthConfig
 from ..depth.pipeline import DEPTH_MATCH_CONFIG, DEPTH_METHOD, DEPTH_PARAMS, DEPTH_SOLVER
-from ._common import (UsageError, add_matching_options, add_solver_option, given, match_config, resolve_recipe,
-                      seed_setting, window_record, write_ply)
+from ._common import (UsageError, add_matching_options, add_solver_option, match_config, matched_files,
+                      resolve_recipe, seed_setting, window_record, write_ply)
 from ._guard import Files, add_force_option, json_text, output_path, save_plot
 
 __all__ = ["add_parser", "run"]
@@ -63,11 +63,9 @@ def limit_defaults() -> dict:
 
 
 def files(args) -> Files:
-    """The four images, the params file and the rig read; the JSON and the plot written."""
-    images = tuple((name.replace("_", "-"), getattr(args, name))
-                   for name in ("bg_left", "bg_right", "scene_left", "scene_right"))
-    return Files(inputs=images + given(("--params-file", args.params_file), ("--rig", args.rig)),
-                 outputs=given(("--json", args.json), ("--plot", args.plot), ("--ply", args.ply)))
+    """The four images, the params file and the rig read; the JSON, the plot and the PLY written."""
+    return matched_files(args, ((name.replace("_", "-"), getattr(args, name))
+                                for name in ("bg_left", "bg_right", "scene_left", "scene_right")))
 
 
 def run(args) -> int:

@@ -11,7 +11,7 @@ from .._core.files import atomic_write_text
 from .._core.validation import ParameterError
 from ..matching.pipeline import MatchConfig
 from ..network.solvers import DEFAULT_SOLVER
-from ._common import (add_matching_options, add_solver_option, add_solver_settings, given, match_config,
+from ._common import (add_matching_options, add_solver_option, add_solver_settings, match_config, matched_files,
                       resolve_recipe, seed_setting, window_record, write_ply)
 from ._guard import Files, UsageError, add_force_option, json_text, limit, output_path, save_plot
 
@@ -49,10 +49,8 @@ def limit_defaults() -> dict:
 
 
 def files(args) -> Files:
-    """The images, the params file and the rig read; the JSON and the plot written."""
-    return Files(inputs=(("left", args.left), ("right", args.right))
-                 + given(("--params-file", args.params_file), ("--rig", args.rig)),
-                 outputs=given(("--json", args.json), ("--plot", args.plot), ("--ply", args.ply)))
+    """The images, the params file and the rig read; the JSON, the plot and the PLY written."""
+    return matched_files(args, (("left", args.left), ("right", args.right)))
 
 
 def _prepared(args):

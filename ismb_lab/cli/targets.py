@@ -24,8 +24,7 @@ def add_parser(sub) -> None:
     """Add the ``targets`` command: work with targets files (``merge`` pools a class's labels)."""
     t = sub.add_parser("targets", help="work with targets files (merge a class's labels)",
                        description="Work with targets files as the labeller saves them.")
-    actions = t.add_subparsers(dest="action", metavar="ACTION", parser_class=type(t))
-    actions.required = True
+    actions = t.add_subparsers(dest="action", metavar="ACTION", parser_class=type(t), required=True)
     m = actions.add_parser("merge", help="pool several students' targets files into one",
                            description=MERGE_HELP)
     m.add_argument("files", type=Path, nargs="+", metavar="TARGETS.json|SUBMITTED/",

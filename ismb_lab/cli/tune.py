@@ -11,7 +11,7 @@ from ..matching.pipeline import MatchConfig
 from ..tuning.cases import Case
 from ..matching.recipe import Recipe, save_recipe
 from ..network.solvers import DEFAULT_SOLVER
-from ..tuning import fitness as tuning
+from ..tuning import fitness
 from ._common import (DEFAULT_METHOD, UsageError, add_feature_options, seed, add_ga_options, add_method_option,
                       add_solver_option, add_solver_settings, default_of, ga_config, match_config, progress_bar,
                       with_settings)
@@ -21,7 +21,7 @@ from ._guard import (Files, add_force_option, deferred_signals, interrupted, int
 __all__ = ["add_parser", "run", "why_negative"]
 
 #: The defaults of :func:`ismb_lab.tuning.fitness.tune`.
-GA_SEED, FIT_SEEDS = default_of(tuning.tune, "rng"), default_of(tuning.tune, "seeds")
+GA_SEED, FIT_SEEDS = default_of(fitness.tune, "rng"), default_of(fitness.tune, "seeds")
 
 
 def add_parser(sub) -> None:
@@ -79,7 +79,7 @@ class _Fit:
 
     def write(self, interrupted: bool) -> Recipe:
         """Write and return the recipe with the last generation's best parameters."""
-        recipe = replace(self.recipe, params=tuning.to_params(self.recipe.method, self.last.best_chromosome))
+        recipe = replace(self.recipe, params=fitness.to_params(self.recipe.method, self.last.best_chromosome))
         with deferred_signals():
             save_recipe(self.out, recipe, fitness=self.last.best, generations=self.last.index, seed=self.seed,
                         targets=self.targets, interrupted=interrupted)
@@ -139,7 +139,7 @@ def _run(args, fit: _Fit) -> int:
         raise UsageError(f"{args.targets}: no target pair lies on the corners found "
                          f"({len(case.left_out)} targets, {len(case.prepared.problem.left_xy)} left corners)")
     fit.targets = len(case.targets)
-    records = tuning.tune([case], recipe.method, rng=fit.seed, ga=ga, solver=recipe.solver, seeds=recipe.fit_seeds)
+    records = fitness.tune([case], recipe.method, rng=fit.seed, ga=ga, solver=recipe.solver, seeds=recipe.fit_seeds)
     with progress_bar(ga.generations + 1, f"Method-{method} GA") as bar:
         for fit.last in records:
             bar.update(1)
@@ -148,7 +148,7 @@ def _run(args, fit: _Fit) -> int:
     params = recipe.params
     if interrupted():   # a signal came during the write, which finished first
         raise KeyboardInterrupt
-    result = tuning.evaluate([case], recipe.method, params, solver=recipe.solver, one_to_one=recipe.one_to_one)
+    result = fitness.evaluate([case], recipe.method, params, solver=recipe.solver, one_to_one=recipe.one_to_one)
     after = ", one match per corner" if recipe.one_to_one else ""
     print(f"Method-{method} ({solver}{after}): best fitness {best.best:g} of {fit.targets} after "
           f"{best.index} generations; C/E/T {result}; parameters {params.to_dict()}")

@@ -130,9 +130,7 @@ def scene_match_config(background, scene, match_config=None):
     (97, 127, 134, 49)
     """
     own = "scene_match_config"
-    match_config = _match_config(match_config, own)
-    if match_config.shift == "auto" and background is not None:
-        match_config = auto_window(load_stereo(background, "background", own), match_config)
+    match_config = _match_config(match_config, own, background)
     for name, value in (("background", background), ("scene", scene)):
         if not isinstance(value, StereoPair):
             raise ParameterTypeError(message(name, own, "a StereoPair", value))
@@ -313,17 +311,18 @@ def depth_match(pair, *, background=None, method=DEFAULT_METHOD, params=None, ma
     return _match(_prepared(pair, background, match_config, own), method, params, seed, solver, one_to_one)
 
 
-def _match_config(match_config, own: str) -> MatchConfig:
+def _match_config(match_config, own: str, background=None) -> MatchConfig:
+    """`match_config` (default :data:`DEPTH_MATCH_CONFIG`), its ``shift="auto"`` measured on `background`."""
     match_config = DEPTH_MATCH_CONFIG if match_config is None else match_config
     if not isinstance(match_config, MatchConfig):
         raise ParameterTypeError(message("match_config", own, "a MatchConfig", match_config))
+    if match_config.shift == "auto" and background is not None:
+        match_config = auto_window(load_stereo(background, "background", own), match_config)
     return match_config
 
 
 def _prepared(pair, background, match_config, own: str) -> Prepared:
-    match_config = _match_config(match_config, own)
-    if match_config.shift == "auto" and background is not None:
-        match_config = auto_window(load_stereo(background, "background", own), match_config)
+    match_config = _match_config(match_config, own, background)
     pair = load_stereo(pair, "pair", own)
     if background is not None:
         return scene_prepared(load_stereo(background, "background", own), pair, match_config)

@@ -15,8 +15,9 @@ import numpy as np
 
 from .._core.validation import ParameterError, ParameterTypeError, check_number, message
 
-__all__ = ["MAX_PIXELS", "MOST_PIXELS", "PIXELS_VARIABLE", "decode", "exif_orientation", "image_sha256", "load_image", "load_pair", "max_pixels",
-           "orient", "png_bytes", "save_image", "save_pair", "StereoPair"]
+__all__ = ["MAX_PIXELS", "MOST_PIXELS", "PIXELS_VARIABLE", "decode", "exif_orientation",
+           "grey_uint8", "image_sha256", "load_image", "load_pair", "max_pixels", "orient", "png_bytes",
+           "save_image", "save_pair", "StereoPair"]
 
 _ARRAY_TAG = b"ismb_lab-array-v1\n"
 
@@ -376,6 +377,15 @@ def load_pair(left, right, *, min_shape=(1, 1)) -> StereoPair:
     return StereoPair(*grey, image_sha256(left), image_sha256(right), path(left), path(right))
 
 
+def grey_uint8(image) -> np.ndarray:
+    """A grey image rounded to whole grey levels and clipped to 0-255, as ``uint8``.
+
+    >>> grey_uint8([[-3.0, 127.5, 300.0]])
+    array([[  0, 128, 255]], dtype=uint8)
+    """
+    return np.clip(np.rint(np.asarray(image, dtype=float)), 0, 255).astype(np.uint8)
+
+
 def png_bytes(image) -> bytes:
     """A grey image as 8-bit PNG bytes: rounded to whole grey levels and clipped to 0-255.
 
@@ -393,7 +403,7 @@ def png_bytes(image) -> bytes:
         raise ParameterError(message("image", "png_bytes", rule, f"an array of shape {grey.shape}"))
     if not np.all(np.isfinite(grey)):
         raise ParameterError(message("image", "png_bytes", rule, "an array with NaN or infinite values"))
-    ok, data = cv2.imencode(".png", np.clip(np.rint(grey), 0, 255).astype(np.uint8))
+    ok, data = cv2.imencode(".png", grey_uint8(grey))
     if not ok:  # pragma: no cover - OpenCV refuses only what the checks above refuse
         raise ParameterError(message("image", "png_bytes", rule, f"an array of shape {grey.shape}"))
     return data.tobytes()

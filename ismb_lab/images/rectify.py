@@ -9,14 +9,14 @@ Photos are first scaled to at most :data:`WORKING_SIDE` pixels, EXIF orientation
 
 from __future__ import annotations
 
-import json
 from dataclasses import dataclass, field
 
 import cv2
 import numpy as np
 
+from .._core.files import JsonRecord
 from .._core.validation import ParameterError, ParameterTypeError, check_number, message
-from .io import _is_path, _read, _to_grey, decode
+from .io import _is_path, _read, _to_grey, decode, grey_uint8
 
 __all__ = ["ROW_SPREAD", "WORKING_SIDE", "Correspondences", "Rectified", "apply_rectification", "check_for_matching",
            "check_rectified", "epipole_warning", "load_photo", "measured", "negative_share", "photo_orientation",
@@ -53,7 +53,7 @@ def negative_share(matches: "Correspondences", rows_px: float) -> tuple[float, i
     """
     if not len(matches):
         return 0.0, 0
-    on_rows = np.abs(matches.left_xy[:, 1] - matches.right_xy[:, 1]) <= rows_px
+    on_rows = matches.abs_dy <= rows_px
     d = (matches.left_xy[:, 0] - matches.right_xy[:, 0])[on_rows]
     return (float(np.mean(d < 0)) if len(d) else 0.0), int(len(d))
 
@@ -161,6 +161,11 @@ class Correspondences:
     def __len__(self) -> int:
         return len(self.left_xy)
 
+    @property
+    def abs_dy(self) -> np.ndarray:
+        """(n,) float array: the row difference ``|y_left - y_right|`` of each match."""
+        return np.abs(self.left_xy[:, 1] - self.right_xy[:, 1])
+
 
 def robust_matches(left, right, *, max_features: int = 4000, rows_px: float | None = None) -> Correspondences:
     """SIFT keypoints matched both ways, kept when they pass the ratio test and are mutual.
@@ -181,7 +186,7 @@ def robust_matches(left, right, *, max_features: int = 4000, rows_px: float | No
     sift = cv2.SIFT_create(nfeatures=max_features)
     # SIFT doubles its input first: a larger image would hold several hundred MB of pyramid
     factor = working_size(np.shape(left), DETECT_SIDE)
-    as_u8 = lambda g: np.clip(np.rint(_scale(np.asarray(g, dtype=float), factor)), 0, 255).astype(np.uint8)
+    as_u8 = lambda g: grey_uint8(_scale(np.asarray(g, dtype=float), factor))
     kl, dl = sift.detectAndCompute(as_u8(left), None)
     kr, dr = sift.detectAndCompute(as_u8(right), None)
     empty = Correspondences(np.zeros((0, 2)), np.zeros((0, 2)))
@@ -237,7 +242,7 @@ def _dy_figures(left_xy, right_xy) -> dict:
 
 
 @dataclass(frozen=True, eq=False)
-class Rectified:
+class Rectified(JsonRecord):
     """A rectified pair at the working size, and how it was made.
 
     ``left_h``, ``right_h`` are the homographies from the scaled inputs (the identity for a rig);
@@ -279,16 +284,6 @@ class Rectified:
                 "p90_abs_dy_px": self.p90_abs_dy_px, "disparity_range_px": list(self.disparity_range_px),
                 "size": self.size, "scale": self.scale, "working_side": WORKING_SIDE,
                 "left_homography": self.left_h.tolist(), "right_homography": self.right_h.tolist()}
-
-    def to_json(self) -> str:
-        """:meth:`to_dict` as indented JSON text.
-
-        Returns
-        -------
-        text : str
-            The JSON document.
-        """
-        return json.dumps(self.to_dict(), indent=2)
 
 
 def pair_inputs(left, right, owner: str, max_side: int):
@@ -361,7 +356,7 @@ def _refuse_swapped(left_xy, right_xy, F, shape, owner: str) -> None:
     pure sideways F leaves ``cv2.recoverPose`` guessing), else by :func:`sideways_step`."""
     limit = row_spread_px(shape)
     matches = Correspondences(np.asarray(left_xy, float), np.asarray(right_xy, float))
-    if len(matches) and np.median(np.abs(matches.left_xy[:, 1] - matches.right_xy[:, 1])) <= limit:
+    if len(matches) and np.median(matches.abs_dy) <= limit:
         if _refuse_by_sign(matches, limit, owner) >= 8:
             return
     step = sideways_step(left_xy, right_xy, F, shape)
@@ -390,7 +385,7 @@ def check_for_matching(left, right, owner: str = "check_for_matching") -> str:
     if len(matches) < 8:
         return ""
     limit = row_spread_px(np.shape(left))
-    spread = float(np.median(np.abs(matches.left_xy[:, 1] - matches.right_xy[:, 1])))
+    spread = float(np.median(matches.abs_dy))
     if spread > limit:
         return (f"warning: the pair is not rectified (the rows of its {len(matches)} robust matches differ by "
                 f"{spread:.1f} px at the median): make it so with 'ismb-lab rectify LEFT RIGHT --out DIR'")
@@ -487,11 +482,9 @@ def rectify_pair(left, right, *, max_side: int = WORKING_SIDE) -> Rectified:
         scale = np.diag([shrink, shrink, 1.0])
         h_left, h_right, size = _place(scale @ h_left, scale @ h_right, lxy, rxy, (h, w))
         size = (min(size[0], max_side), min(size[1], max_side))
-    warp = lambda image, hom: cv2.warpPerspective(image.astype(np.float32), hom, size, flags=cv2.INTER_LINEAR,
-                                                  borderMode=cv2.BORDER_CONSTANT, borderValue=0).astype(float)
     lxy, rxy = _transform(h_left, lxy), _transform(h_right, rxy)
     warning = epipole_warning(F, (h, w))
-    return Rectified(np.clip(warp(left, h_left), 0, 255), np.clip(warp(right, h_right), 0, 255), h_left,
+    return Rectified(_warp(left, h_left, size), _warp(right, h_right, size), h_left,
                      h_right, "uncalibrated", n, **_dy_figures(lxy, rxy), scale=factor, left_xy=lxy,
                      right_xy=rxy, warnings=(warning,) if warning else ())
 
@@ -514,9 +507,14 @@ def apply_rectification(left, right, left_h, right_h, size) -> Rectified:
     """Warp a pair to `size` ``(width, height)`` by homographies found on another pair of the same
     camera positions (the depth demo's background), measured on new robust matches."""
     size = (int(size[0]), int(size[1]))
-    warp = lambda image, h: np.clip(cv2.warpPerspective(np.asarray(image, np.float32), np.asarray(h, float), size)
-                                    .astype(float), 0, 255)
-    return measured(warp(left, left_h), warp(right, right_h), left_h, right_h, "the background's")
+    return measured(_warp(left, left_h, size), _warp(right, right_h, size), left_h, right_h,
+                    "the background's")
+
+
+def _warp(image, h, size) -> np.ndarray:
+    """`image` warped by the homography `h` to `size` (bilinear, 0 outside), clipped to ``[0, 255]``."""
+    warped = cv2.warpPerspective(np.asarray(image, np.float32), np.asarray(h, float), size)
+    return np.clip(warped.astype(float), 0, 255)
 
 
 def measured(left, right, left_h, right_h, method: str) -> Rectified:

@@ -25,9 +25,6 @@ from .targets import TargetSet, load_targets, save_targets
 __all__ = ["collected", "Merged", "Pool", "pool", "save_merging", "SIBLINGS", "targets_path", "user_name",
            "voila_without_hub"]
 
-_UNSAFE = re.compile(r"[^A-Za-z0-9._-]+")
-
-
 def user_name() -> str:
     """Who is labelling: ``JUPYTERHUB_USER`` on a hub, else the login name, made safe for a file name.
 
@@ -37,7 +34,12 @@ def user_name() -> str:
         Letters, digits, ``.``, ``_`` and ``-`` only; ``"student"`` if nothing is left.
     """
     name = os.environ.get("JUPYTERHUB_USER") or getpass.getuser() or "student"
-    return _UNSAFE.sub("-", name).strip("-.") or "student"
+    return _safe(name) or "student"
+
+
+def _safe(text: str) -> str:
+    """`text` with letters, digits, ``.``, ``_`` and ``-`` only, for a file name."""
+    return re.sub(r"[^A-Za-z0-9._-]+", "-", text).strip("-.")
 
 
 def voila_without_hub() -> bool:
@@ -84,8 +86,8 @@ def targets_path(pair: str, folder=".", user: str | None = None, *, also=SIBLING
     folders = tuple(also) if isinstance(also, (tuple, list)) else None
     if folders is None or not all(isinstance(f, (str, os.PathLike)) for f in folders):
         raise ParameterTypeError(message("also", "targets_path", "a tuple or list of folder names", also))
-    who = user_name() if user is None else _UNSAFE.sub("-", str(user)).strip("-.") or "student"
-    name = f"targets-{who}-{_UNSAFE.sub('-', pair).strip('-.')}.json"
+    who = user_name() if user is None else _safe(str(user)) or "student"
+    name = f"targets-{who}-{_safe(pair)}.json"
     here = Path(folder) / name
     if here.is_file():
         return here
@@ -95,8 +97,7 @@ def targets_path(pair: str, folder=".", user: str | None = None, *, also=SIBLING
 def _keys(targets: TargetSet | None) -> dict:
     if targets is None:
         return {}
-    return {tuple(np.round(np.concatenate([p, q]), 6).tolist()): (p, q, e)
-            for p, q, e in zip(targets.left_xy, targets.right_xy, targets.extras)}
+    return {_point(p) + _point(q): (p, q, e) for p, q, e in zip(targets.left_xy, targets.right_xy, targets.extras)}
 
 
 @contextlib.contextmanager
@@ -157,24 +158,22 @@ def save_merging(path, ours: TargetSet, base: TargetSet | None = None) -> Merged
         mine, old, disk = _keys(ours), _keys(base), _keys(theirs)
         added = {k: v for k, v in mine.items() if k not in old}
         deleted = {k for k in old if k not in mine}
-        taken_left = {tuple(np.round(v[0], 6)) for v in added.values()}
-        taken_right = {tuple(np.round(v[1], 6)) for v in added.values()}
+        taken_left = {_point(v[0]) for v in added.values()}
+        taken_right = {_point(v[1]) for v in added.values()}
         result, replaced = {}, 0
         for k, (p, q, e) in disk.items():
             if k in deleted:
                 continue
-            if k not in added and (tuple(np.round(p, 6)) in taken_left or tuple(np.round(q, 6)) in taken_right):
+            if k not in added and (_point(p) in taken_left or _point(q) in taken_right):
                 replaced += 1
                 continue
             result[k] = (p, q, e)
         result.update({k: v for k, v in added.items() if k not in result})
         kept = sum(1 for k in result if k in disk and k not in mine)
-        rows = list(result.values())
         meta = {**ours.meta, **(theirs.meta if theirs is not None else {})}
-        merged = TargetSet(np.reshape([r[0] for r in rows], (-1, 2)), np.reshape([r[1] for r in rows], (-1, 2)),
-                           ours.left_sha256 or (theirs and theirs.left_sha256),
-                           ours.right_sha256 or (theirs and theirs.right_sha256),
-                           meta=meta, extras=[r[2] for r in rows])
+        # An empty TargetSet is falsy, so theirs is tested against None.
+        left, right = (None, None) if theirs is None else (theirs.left_sha256, theirs.right_sha256)
+        merged = _from_rows(list(result.values()), ours.left_sha256 or left, ours.right_sha256 or right, meta)
         save_targets(path, merged)
     return Merged(merged, kept, replaced)
 
@@ -292,6 +291,13 @@ def _point(xy) -> tuple:
     return tuple(np.round(xy, 6).tolist())
 
 
+def _from_rows(rows, left_sha256, right_sha256, meta: dict) -> TargetSet:
+    """The targets of `rows`, ``(left_xy, right_xy, extras)`` each."""
+    left, right, extras = ([r[j] for r in rows] for j in range(3))
+    return TargetSet(np.reshape(left, (-1, 2)), np.reshape(right, (-1, 2)), left_sha256, right_sha256,
+                     meta=meta, extras=extras)
+
+
 def _pairs(targets: TargetSet) -> list:
     return [(_point(p), _point(q)) for p, q in zip(targets.left_xy, targets.right_xy)]
 
@@ -343,11 +349,9 @@ def _tally(who: list, pair: tuple, copies: list) -> list:
 
 def _disagreements(by_left: dict, by_right: dict) -> list:
     """Left points with disagreeing partners, then right points given several left partners."""
-    lefts = [{"left_xy": list(p), "partners": {str(list(q)): who for q, who in partners.items()}}
-             for p, partners in by_left.items() if len(partners) > 1]
-    rights = [{"right_xy": list(q), "partners": {str(list(p)): who for p, who in partners.items()}}
-              for q, partners in by_right.items() if len(partners) > 1]
-    return lefts + rights
+    return [{f"{side}_xy": list(point), "partners": {str(list(o)): who for o, who in partners.items()}}
+            for side, by_point in (("left", by_left), ("right", by_right))
+            for point, partners in by_point.items() if len(partners) > 1]
 
 
 def pool(paths, answer_key: TargetSet | None = None, tol: float = 1.5, *, min_votes: int = 1,
@@ -451,10 +455,8 @@ def pool(paths, answer_key: TargetSet | None = None, tol: float = 1.5, *, min_vo
                 rows.append((left, right, extras))
                 kept.add((left, right))
     first = next(iter(sets.values()))
-    pooled = TargetSet(np.reshape([r[0] for r in rows], (-1, 2)), np.reshape([r[1] for r in rows], (-1, 2)),
-                       first.left_sha256, first.right_sha256,
-                       meta={"pooled_from": [str(p.name) for p in files], "min_votes": min_votes},
-                       extras=[r[2] for r in rows])
+    pooled = _from_rows(rows, first.left_sha256, first.right_sha256,
+                        {"pooled_from": [str(p.name) for p in files], "min_votes": min_votes})
     dropped = [_why(pair, who, votes, by_left, by_right, left_votes, right_votes, min_votes)
                for pair, who in sorted(handed.items()) if pair not in kept]
     found = [{"students": who, "files": [str(f) for f in paths], "pairs": len(pairs)}

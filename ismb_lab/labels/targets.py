@@ -389,11 +389,14 @@ def many_to_one(targets: TargetSet) -> np.ndarray:
     """
     if not isinstance(targets, TargetSet):
         raise ParameterTypeError(message("targets", "many_to_one", "a TargetSet", targets))
-    shared = np.zeros(len(targets), dtype=bool)
-    for xy in (targets.left_xy, targets.right_xy):
-        _, inverse, counts = np.unique(np.round(xy, 6), axis=0, return_inverse=True, return_counts=True)
-        shared |= counts[inverse.reshape(-1)] > 1
-    return np.flatnonzero(shared)
+    return np.flatnonzero(_repeated(np.round(targets.left_xy, 6), axis=0)
+                          | _repeated(np.round(targets.right_xy, 6), axis=0))
+
+
+def _repeated(values, axis=None) -> np.ndarray:
+    """Whether each of `values` (each row, with ``axis=0``) is also another one."""
+    _, inverse, counts = np.unique(values, axis=axis, return_inverse=True, return_counts=True)
+    return counts[inverse.reshape(-1)] > 1
 
 
 def check_one_to_one(targets: TargetSet, source: str, owner: str) -> TargetSet:
@@ -444,11 +447,7 @@ class Snapped:
     @property
     def shared(self) -> np.ndarray:
         """Snapped targets whose left or right feature another snapped target also uses."""
-        dup = np.zeros(len(self.pairs), dtype=bool)
-        for col in self.pairs.T:
-            _, inverse, counts = np.unique(col, return_inverse=True, return_counts=True)
-            dup |= counts[inverse.reshape(-1)] > 1
-        return self.target_index[dup]
+        return self.target_index[_repeated(self.pairs[:, 0]) | _repeated(self.pairs[:, 1])]
 
 
 def snap(targets: TargetSet, left_xy, right_xy, tol=1.5) -> Snapped:

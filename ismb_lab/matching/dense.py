@@ -12,6 +12,7 @@ import numpy as np
 
 from .._core.validation import ParameterError, ParameterTypeError, check_number, message
 from ..cameras.camera import StereoCamera
+from ..images.io import grey_uint8
 
 __all__ = ["AGREE_PX", "AGREE_SHARE", "Agreement", "MAX_DENSE", "SGBM_BLOCK", "agreement", "dense_points",
            "sgbm_disparity", "sgbm_range", "window_range"]
@@ -62,7 +63,7 @@ def _grey8(image, name: str, owner: str) -> np.ndarray:
     if arr.ndim != 2 or min(arr.shape) < 8 or not np.isfinite(arr).all():
         raise ParameterError(message(name, owner, "a grey image (2-D, finite, at least 8 x 8)",
                                      f"an array of shape {arr.shape}"))
-    return np.clip(np.rint(arr), 0, 255).astype(np.uint8)
+    return grey_uint8(arr)
 
 
 def sgbm_disparity(left, right, low: float, high: float, *, block: int = SGBM_BLOCK) -> np.ndarray:

@@ -232,8 +232,7 @@ def match_points(result: MatchResult, camera: StereoCamera) -> np.ndarray:
     """
     if not isinstance(camera, StereoCamera):
         raise ParameterTypeError(message("camera", "match_points", "a StereoCamera", camera))
-    left, right = result.left_match_xy, result.right_match_xy
-    return camera.points_from_disparity(left, left[:, 0] - right[:, 0])
+    return camera.points_from_disparity(result.left_match_xy, result.horizontal_disparity)
 
 
 #: The rig's rectification improves a pair's rows when it lowers their median difference by
@@ -266,7 +265,7 @@ def _misfit(matches, limit: float) -> str:
 
     if len(matches) < 8:
         return ""
-    dy = np.abs(matches.left_xy[:, 1] - matches.right_xy[:, 1])
+    dy = matches.abs_dy
     # a share, not the median: on a chessboard half the robust matches may pair neighbouring squares
     within = float(np.mean(dy <= limit))
     if within < FIT_SHARE:
@@ -390,7 +389,7 @@ def for_camera(left, right, camera: StereoCamera) -> tuple:
     limit = fit_rows_px(camera)
     given = robust_matches(left, right)
     rectified = camera.rectify(left, right)
-    median = lambda m: float(np.median(np.abs(m.left_xy[:, 1] - m.right_xy[:, 1]))) if len(m) >= 8 else math.inf
+    median = lambda m: float(np.median(m.abs_dy)) if len(m) >= 8 else math.inf
     again = Correspondences(rectified.left_xy, rectified.right_xy)
     before, after = median(given), median(again)
     as_given = before <= limit and not after < (1 - IMPROVES) * before

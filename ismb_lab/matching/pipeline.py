@@ -9,11 +9,11 @@
 
 from __future__ import annotations
 
-import json
 from dataclasses import dataclass, field, replace
 
 import numpy as np
 
+from .._core.files import JsonRecord
 from .._core.validation import MAX_SEED, ParameterError, ParameterTypeError, check_choice, check_number, message
 from ..images.coords import euclidean_disparity, horizontal_disparity
 from ..images.features import MAX_SIGMA, Corners, check_roi, detect_corners, resolve_roi
@@ -150,9 +150,9 @@ def auto_window(pair, config: MatchConfig, *, rows_px: float | None = None) -> M
     x, y, w, h = resolve_roi(config.roi, pair.shape)
     lxy, rxy = matches.left_xy, matches.right_xy
     inside = ((lxy[:, 0] >= x) & (lxy[:, 0] < x + w) & (lxy[:, 1] >= y) & (lxy[:, 1] < y + h)
-              & (np.abs(lxy[:, 1] - rxy[:, 1]) <= rows_px)) if len(lxy) else np.zeros(0, bool)
+              & (matches.abs_dy <= rows_px)) if len(lxy) else np.zeros(0, bool)
     if inside.sum() < 8:      # a small ROI: the whole pair's range is the best guess there is
-        inside = np.abs(lxy[:, 1] - rxy[:, 1]) <= rows_px if len(lxy) else inside
+        inside = matches.abs_dy <= rows_px if len(lxy) else inside
     d = lxy[inside, 0] - rxy[inside, 0]
     if len(d) < 8:
         raise ParameterError(message("shift", "MatchConfig", "a number of pixels when the pair has fewer than "
@@ -286,7 +286,7 @@ def corner_problem(pair: StereoPair, left_xy, right_xy, config: MatchConfig, dis
 
 
 @dataclass(frozen=True, eq=False)
-class MatchResult:
+class MatchResult(JsonRecord):
     """The outcome of matching one pair: all features ``left_xy``, ``right_xy`` (``(x, y)`` in the
     full image), the matched ``pairs`` ``(i, k)`` sorted by ``i``, the final ``energy`` (3-15), the
     candidate neurons' ``state`` after post-processing, and ``message``, why the match is empty or
@@ -402,16 +402,6 @@ class MatchResult:
                                            self.disparity)
             ],
         }
-
-    def to_json(self) -> str:
-        """:meth:`to_dict` as indented JSON text.
-
-        Returns
-        -------
-        text : str
-            The JSON document.
-        """
-        return json.dumps(self.to_dict(), indent=2)
 
 
 def _xy_list(xy):

@@ -1,7 +1,8 @@
 """A recipe: everything about a match but the images and the corners, saved and loaded whole.
 
-The file is a params file with more keys (``"version": 2``, ``"solver_options"``,
-``"fit_seeds"``, ``"one_to_one"``); a file without ``"version"`` predates recipes.
+The params file (``{"method": ..., "params": {...}}``) is written and read here only.  A recipe
+adds keys (``"version": 2``, ``"solver_options"``, ``"fit_seeds"``, ``"one_to_one"``); a file
+without ``"version"`` predates recipes.
 
 >>> import tempfile, pathlib
 >>> path = pathlib.Path(tempfile.mkdtemp()) / "p.json"
@@ -20,7 +21,7 @@ from typing import NamedTuple
 
 from .._core.files import atomic_write_text
 from .._core.validation import ParameterError, ParameterTypeError, check_number, message
-from ..network.methods import DEFAULT_METHOD, Method, get_method, params_of
+from ..network.methods import DEFAULT_METHOD, Method, get_method, method_names
 from ..network.params import Params
 from ..network.solvers import DEFAULT_SOLVER, Solver, get_solver
 
@@ -176,7 +177,13 @@ def load_recipe(path, *, method=None, solver=DEFAULT_SOLVER, before: str | None 
     version = data.get("version", 1)
     if type(version) is not int or not 1 <= version <= RECIPE_VERSION:
         raise ParameterError(message("version", own, f"an integer from 1 to {RECIPE_VERSION}", version))
-    named, values = params_of(data, path, method, "load_recipe")
+    named = data.get("method")
+    if named is not None and not (isinstance(named, str) and named in method_names()):
+        raise ParameterError(message("method", own, "one of " + ", ".join(repr(n) for n in method_names()),
+                                     named))
+    # missing values take the defaults of the file's method, else of `method`, else DEFAULT_METHOD's
+    base = get_method(named or method or DEFAULT_METHOD).defaults
+    values = Params.from_dict({**base.to_dict(), **data["params"]}, owner=own)
     saved = data.get("solver")
     options = data.get("solver_options", {})
     if not isinstance(options, dict):

@@ -8,7 +8,7 @@ from .compatibility import left_neighbours, neuron_pairs, NeuronPairs
 from .params import (LAMBDA_C, LAMBDA_S, MATCH_BIAS, MAX_BIAS, MAX_LAMBDA, MAX_THETA, THETA_C, THETA_S, Gene, Params)
 from .methods import (BATCHED, all_genes, Method, MethodI, MethodII, MethodIII, MethodNM, MethodNM3, MethodNM4,
     DEFAULT_METHOD, Problem, THESIS_PARAMS, build_problem, get_method, method_names, register_method,
-    save_params, unregister_method)
+    unregister_method)
 from .hopfield import MAX_INPUT, MAX_NEURONS, RULES, SCALE, energy, hopfield_form, Network, Topology
 from .kernel import fitness_runs, run_network
 from .dynamics import KERNELS, STOP_RULES, iter_updates, run, RunResult, Update, visiting_order
@@ -29,6 +29,6 @@ __all__ = ["ANNEAL", "ASSIGN", "AnnealResult", "AnnealSolver", "AnnealStep", "As
            "exhaustive_minimum", "fitness_runs", "get_method", "get_solver", "hopfield_form", "iter_annealing",
            "iter_updates", "left_neighbours", "matched_neurons", "mean_abs_difference", "method_names",
            "milp_minimum", "neuron_pairs", "no_match_cut", "one_match_per_corner", "patches",
-           "register_method", "register_solver", "run", "run_network", "save_params", "similarity_assignment",
+           "register_method", "register_solver", "run", "run_network", "similarity_assignment",
            "solve", "solver_names", "to_matches", "transfer", "unregister_method", "unregister_solver",
            "visiting_order"]

@@ -189,8 +189,7 @@ def _anneal(net, rng, t_start, t_end, cooling, sweeps, settle, holder):
     if holder is not None:
         holder[:] = [v]
     u = W @ v + I
-    T, index = t_start, 0
-    while T >= t_end * (1 - 1e-12):
+    for index, T in enumerate(_temperatures(t_start, t_end, cooling, MAX_SWEEPS // sweeps)):
         orders = np.array([rng.permutation(n) for _ in range(sweeps)], dtype=np.int64).reshape(sweeps, n)
         before = v > 0.5
         change = _sweeps(W, u, v, orders, T)
@@ -199,8 +198,6 @@ def _anneal(net, rng, t_start, t_end, cooling, sweeps, settle, holder):
         yield AnnealStep(index, float(T), float(change), float(e), committed)
         if settle > 0 and np.array_equal(before, v > 0.5) and np.all((v < settle) | (v > 1 - settle)):
             return
-        index += 1
-        T *= cooling
 
 
 def anneal(net: Network, *, rng=0, t_start: float = 2.0, t_end: float = 0.02, cooling: float = 0.9,

@@ -17,15 +17,12 @@ whatever is registered.
 
 from __future__ import annotations
 
-import json
 from collections.abc import Mapping
 from dataclasses import dataclass, field, fields, replace
 from functools import cached_property
-from pathlib import Path
 
 import numpy as np
 
-from .._core.files import atomic_write_text
 from .._core.validation import ParameterError, ParameterTypeError, check_choice, message
 from .compatibility import NeuronPairs, left_neighbours, neuron_pairs
 from .hopfield import Network, Topology
@@ -34,7 +31,7 @@ from .similarity import candidate_mask, no_match_cut, transfer
 
 __all__ = ["BATCHED", "all_genes", "Method", "MethodI", "MethodII", "MethodIII", "MethodNM", "MethodNM3", "MethodNM4",
            "DEFAULT_METHOD", "Problem", "THESIS_PARAMS", "build_problem", "get_method", "method_names",
-           "register_method", "save_params", "unregister_method"]
+           "register_method", "unregister_method"]
 
 
 @dataclass(frozen=True, eq=False)
@@ -598,37 +595,3 @@ def get_method(name) -> Method:
     check_choice(name, "method", "get_method", method_names())
     return _METHODS[name]
 
-
-def save_params(path, method, params: Params, **extra) -> Path:
-    """Write ``{"method": ..., "params": {...}, **extra}`` atomically (the file of ``ismb-lab tune``).
-
-    Examples
-    --------
-    >>> import tempfile, pathlib
-    >>> path = pathlib.Path(tempfile.mkdtemp()) / "p.json"
-    >>> _ = save_params(path, "II", Params(theta_c=5.0), fitness=3)
-    >>> saved = json.loads(path.read_text())
-    >>> saved["method"], saved["params"]["theta_c"], saved["fitness"]
-    ('II', 5.0, 3)
-    """
-    m = get_method(method)
-    if not isinstance(params, Params):
-        raise ParameterTypeError(message("params", "save_params", "a Params instance", params))
-    data = {"method": m.name, "params": params.to_dict(), **extra}
-    return atomic_write_text(path, json.dumps(data, indent=2) + "\n")
-
-
-def params_of(data: dict, path, method: str | None = None,
-              owner: str = "params_of") -> tuple[str | None, Params]:
-    """The method (None if `data` names none) and the parameters of a params file's object
-    `data`, read from `path`.  Missing values take the defaults of its method, else of
-    `method`, else of :data:`DEFAULT_METHOD`; errors name the file."""
-    named = data.get("method")
-    if named is not None:
-        named = get_method(named).name if isinstance(named, str) and named in _METHODS else None
-        if named is None:
-            raise ParameterError(message("method", f"{owner}('{path}')", "one of "
-                                         + ", ".join(repr(n) for n in method_names()), data["method"]))
-    base = get_method(named or method or DEFAULT_METHOD).defaults
-    merged = {**base.to_dict(), **data["params"]}
-    return named, Params.from_dict(merged, owner=f"{owner}('{path}')")

@@ -14,7 +14,7 @@ import numpy as np
 
 from .._core.files import atomic_write_bytes, atomic_write_text
 from ..cameras.camera import BASELINE_M, FOCAL_PX
-from ..images.io import image_sha256
+from ..images.io import grey_uint8, image_sha256
 from . import REALISTIC_COUNT, Scene, lab_scene, realistic_scene, synthetic_scene, toy_car_scene, true_matches
 from ..labels.targets import save_targets, targets_from_matches
 
@@ -77,8 +77,8 @@ def write_scene(scene: Scene, folder, **about) -> list[Path]:
             "disparity_encoding": "uint16 PNG: horizontal disparity of the left view * 256; 0 = unknown",
             **about}
     files = {
-        "left.png": _png(np.clip(np.rint(scene.left), 0, 255).astype(np.uint8)),
-        "right.png": _png(np.clip(np.rint(scene.right), 0, 255).astype(np.uint8)),
+        "left.png": _png(grey_uint8(scene.left)),
+        "right.png": _png(grey_uint8(scene.right)),
         "disparity.png": _png(encode_disparity(scene.disparity)),
     }
     written = [atomic_write_bytes(folder / name, data) for name, data in files.items()]

@@ -53,9 +53,9 @@ class PrivateSubmit(ExchangeSubmit):
         """
         if os.path.dirname(os.path.abspath(dest)) != os.path.abspath(self.inbound_path):
             return super().do_copy(src, dest, log)     # the student's own cache copy
-        limit = 1000 * self.coursedir.max_dir_size
-        if self.get_size(src) > limit:
-            raise RuntimeError(f"Directory size is too big. Size is {self.get_size(src)}, maximum size is {limit}")
+        size, limit = self.get_size(src), 1000 * self.coursedir.max_dir_size
+        if size > limit:
+            raise RuntimeError(f"Directory size is too big. Size is {size}, maximum size is {limit}")
         names = os.listdir(src)
         skip = ignore_patterns(exclude=self.coursedir.ignore, include=self.coursedir.include,
                                max_file_size=self.coursedir.max_file_size, log=self.log)(src, names)

@@ -437,17 +437,17 @@ def check_error_kinds(wrong, extra, pairs, targets) -> Feedback:
         return Feedback(False, f"Your two counts add up to {wrong + extra}, but {s.errors} of the "
                                f"{len(matches)} matches are errors (not true matches). Hint: every error "
                                "is of exactly one kind.")
-    if (wrong, extra) == (s.errors, 0) and s.extra:
-        return Feedback(False, "You counted every error as a wrong partner. Hint: an extra is a match of a "
-                               "left corner with no true partner at all; do all your errors have one?")
-    if (wrong, extra) == (s.extra, s.wrong_partner):
-        return Feedback(False, "The two counts are swapped. Hint: which kind of error has a true partner "
-                               "for its left corner?")
-    if (wrong, extra) == (len(errors) - by_right, by_right):
-        return Feedback(False, "You told the kinds apart by the right corner of each error. Hint: the "
-                               "definitions look at the left corner i of a match (i, k).")
-    return Feedback(False, f"The split is off (yours: {wrong} wrong partners and {extra} extras). Hint: "
-                           "for each error, ask whether its left corner has a true partner.")
+    slips = (
+        ((s.errors, 0), "You counted every error as a wrong partner. Hint: an extra is a match of a "
+                        "left corner with no true partner at all; do all your errors have one?"),
+        ((s.extra, s.wrong_partner), "The two counts are swapped. Hint: which kind of error has a true "
+                                     "partner for its left corner?"),
+        ((len(errors) - by_right, by_right), "You told the kinds apart by the right corner of each error. "
+                                             "Hint: the definitions look at the left corner i of a match (i, k)."),
+    )
+    return _slip(slips, lambda answer: (wrong, extra) == answer,
+                 f"The split is off (yours: {wrong} wrong partners and {extra} extras). Hint: for each "
+                 "error, ask whether its left corner has a true partner.")
 
 
 def check_depth_range(near, far, disparity, *, focal_px: float, baseline_m: float, error_px: float) -> Feedback:
@@ -482,12 +482,12 @@ def check_depth_range(near, far, disparity, *, focal_px: float, baseline_m: floa
     far = check_number(far, "far", owner) if not (isinstance(far, float) and far == np.inf) else far
     d = check_number(disparity, "disparity", owner, low=0, low_open=True)
     want = metric_depth(d, focal_px, baseline_m, error_px)
-    if np.allclose((near, far), (want.near, want.far), rtol=1e-9, atol=1e-12):
+    if _close((near, far), (want.near, want.far), 1e-12):
         return _OK
-    if np.allclose((far, near), (want.near, want.far), rtol=1e-9, atol=1e-12):
+    if _close((far, near), (want.near, want.far), 1e-12):
         return Feedback(False, "Your near end is farther from the cameras than your far end. Hint: Z = fB/d; "
                                "does a nearer point have the larger or the smaller disparity?")
-    if np.allclose((near, far), (want.z, want.z), rtol=1e-9):
+    if _close((near, far), (want.z, want.z), 1e-8):
         return Feedback(False, "Both ends are the depth itself. Hint: the range comes from the disparity's "
                                "error bar.")
     return Feedback(False, f"Your range [{near:.3f}, {far:.3f}] m is off; the depth itself is {want.z:.3f} m. "

@@ -23,18 +23,18 @@ def compile_kernels() -> dict:
     from ..network.methods import get_method
     from ..network.solvers import solver_names
     from ..scenes import synthetic_scene
-    from ..tuning import fitness as tuning
+    from ..tuning import fitness
     from ..tuning.cases import Case
 
     start = time.perf_counter()
     warm_up(solver_names())
     case = Case.from_scene(synthetic_scene(seed=0))
     for method in ("I", "III"):       # Method-I's post-processing is a kernel of its own
-        bounds = tuning.gene_bounds(method)
-        tuning.Fitness([case], method)(np.array([(bounds.low + bounds.high) / 2]))
+        bounds = fitness.gene_bounds(method)
+        fitness.Fitness([case], method)(np.array([(bounds.low + bounds.high) / 2]))
     net = hopfield.Network.from_arrays(1, 2, rows=[0, 0], cols=[0, 1], similarity=[0.5, 0.0],
                                        pair_a=[], pair_b=[], pair_c=[])
-    tuning.evaluate([case], "III", get_method("III").defaults)
+    fitness.evaluate([case], "III", get_method("III").defaults)
     list(annealing.iter_annealing(net))
     exact.exhaustive_minimum(net)
     kernels = cached_kernels()

@@ -16,6 +16,7 @@ import numpy as np
 from matplotlib.figure import Figure
 
 from .._core.validation import ParameterError, ParameterTypeError, message
+from ..network.params import Params
 
 #: Widest figure, CSS px: JupyterLab's column at 1024 x 768 with the file browser open is about 592 px.
 COLUMN_PX = 580
@@ -197,11 +198,30 @@ def with_class(widget, css: str):
     return widget
 
 
+def seed_field(seed: int, **kw) -> ipywidgets.BoundedIntText:
+    """The update-order seed's field (CSS class ``ismb-seed``); `kw` e.g. its ``layout``."""
+    return with_class(ipywidgets.BoundedIntText(value=seed, min=0, max=2**31 - 1, description="seed", **kw),
+                      "ismb-seed")
+
+
+def menu(name: str, options, value, **kw) -> ipywidgets.Dropdown:
+    """A drop-down of `options` described as `name`, CSS class ``ismb-<name>``, e.g. ``"method"``."""
+    return with_class(ipywidgets.Dropdown(options=list(options), value=value, description=name, **kw),
+                      "ismb-" + name)
+
+
 def check_type(value, kind, name: str, owner: str, rule: str):
     """`value` if it is a `kind`, else a ParameterTypeError naming `name`, `owner` and `rule`."""
     if not isinstance(value, kind):
         raise ParameterTypeError(message(name, owner, rule, value))
     return value
+
+
+def check_params(params, owner: str, default=None):
+    """`params`, or `default` when it is None; a ParameterTypeError naming `owner` unless a Params."""
+    if params is None:
+        return default
+    return check_type(params, Params, "params", owner, "None or a Params")
 
 
 def pair_files(folder, owner: str) -> tuple[Path, Path, Path]:

@@ -10,14 +10,15 @@ import ipywidgets
 import numpy as np
 from matplotlib.figure import Figure
 
-from .._core.validation import ParameterTypeError, check_number, message
+from .._core.validation import check_number
 from ..depth.objects import DepthConfig, DepthObject, DepthResult
 from ..depth.pipeline import DEPTH_MATCH_CONFIG, DEPTH_SOLVER, depth_pairs, load_stereo, pair_silhouettes, relative_depth
 from ..network.methods import DEFAULT_METHOD, get_method, method_names
 from ..network.params import Params
 from ..plotting import OKABE_ITO, outlines
 from ..matching.recipe import recipe_of
-from ._common import Base, Pane, button, check_type, grey_rgb, pair_files, path_labels, row, with_class
+from ._common import (Base, Pane, button, check_params, check_type, grey_rgb, menu, pair_files, path_labels,
+                      row, seed_field, with_class)
 from .cloud import PointCloudView, depth_cloud
 
 __all__ = ["CMAP", "GROUPING_LABELS", "TOLERANCES", "depth_text", "support_text", "DepthDemo",
@@ -61,19 +62,13 @@ class DepthModel:
         self.match_config = match_config
         self.background_name = check_type(background_name, str, "background_name", owner, "a str")
         self.method = get_method(method).name
-        self.params = self._check_params(params, owner)
+        self.params = check_params(params, owner)
         self.config = self._check_config(DepthConfig() if config is None else config, owner)
         self.seed = check_number(seed, "seed", owner, low=0, integer=True)
         # corners, M and the blobs of change do not depend on the controls: found once, reused
         self.prepared = depth_pairs(self.background, self.scene, match_config)
         self.silhouettes, self._outline = None, None
         self.result: DepthResult = self._compute(self.method, self.params, self.seed, self.config)
-
-    @staticmethod
-    def _check_params(params, owner):
-        if params is not None and not isinstance(params, Params):
-            raise ParameterTypeError(message("params", owner, "None or a Params", params))
-        return params
 
     @staticmethod
     def _check_config(config, owner):
@@ -118,7 +113,7 @@ class DepthModel:
         """
         owner = "DepthModel.set"
         new_method = self.method if method is None else get_method(method).name
-        new_params = self.params if params is None else self._check_params(params, owner)
+        new_params = check_params(params, owner, self.params)
         new_seed = self.seed if seed is None else check_number(seed, "seed", owner, low=0, integer=True)
         new_config = self.config if config is None else self._check_config(config, owner)
         if tolerances:
@@ -351,12 +346,8 @@ class DepthDemo(Base):
                                         self.model)
         self.cloud = PointCloudView(depth_cloud(self.model))
 
-        self.method_menu = with_class(ipywidgets.Dropdown(options=list(method_names()), value=self.model.method,
-                                                          description="method", layout={"width": "160px"}),
-                                      "ismb-method")
-        self.seed_field = with_class(ipywidgets.BoundedIntText(value=self.model.seed, min=0, max=2**31 - 1,
-                                                               description="seed", layout={"width": "160px"}),
-                                     "ismb-seed")
+        self.method_menu = menu("method", method_names(), self.model.method, layout={"width": "160px"})
+        self.seed_field = seed_field(self.model.seed, layout={"width": "160px"})
         self.grouping_menu = with_class(ipywidgets.Dropdown(options=GROUPING_LABELS, value=self.model.config.grouping,
                                                             description="objects by", layout={"width": "240px"}),
                                         "ismb-grouping")

@@ -10,7 +10,7 @@ import ipywidgets
 import numpy as np
 from matplotlib.figure import Figure
 
-from .._core.validation import ParameterTypeError, check_number, message
+from .._core.validation import check_number
 from ..tuning.evaluation import Score, score, unlabelled
 from ..matching.pipeline import MatchConfig, MatchResult, Prepared, match, prepare
 from ..network.methods import DEFAULT_METHOD, all_genes, get_method, method_names
@@ -19,7 +19,9 @@ from ..network.params import THETA_C, Params
 from ..network.similarity import transfer
 from ..network.solvers import DEFAULT_SOLVER, SOLVERS, get_solver
 from ..labels.targets import TargetSet, load_targets, snap
-from ._common import Base, Pane, check_type, draw_pair, pair_figsize, pair_files, row, update_pair, with_class
+from ._common import (Base, Pane, check_params, check_type, draw_pair, menu, pair_figsize, pair_files, row,
+                      seed_field, update_pair, with_class)
+from .photos import FromPhotos
 
 __all__ = ["draw_transfer", "ExplorerModel", "ParameterExplorer", "similarity_theta", "update_transfer"]
 
@@ -43,9 +45,7 @@ class ExplorerModel:
         self.solver = get_solver(solver, owner).name
         self.prepared = check_type(prepared, Prepared, "prepared", owner, "a Prepared (see matching.prepare)")
         self.method = get_method(method).name
-        self.params = get_method(self.method).defaults if params is None else params
-        if not isinstance(self.params, Params):
-            raise ParameterTypeError(message("params", owner, "None or a Params", params))
+        self.params = check_params(params, owner, get_method(self.method).defaults)
         self.seed = check_number(seed, "seed", owner, low=0, integer=True)
         self.targets = None if targets is None else np.asarray(targets, dtype=np.intp).reshape(-1, 2)
         self.unknown = np.asarray(unknown, dtype=np.intp).ravel()
@@ -185,7 +185,7 @@ def update_transfer(art: dict, model: ExplorerModel) -> None:
         art[key].set_alpha(0.25 if key == "s" and theta_s is None else 1.0)
 
 
-class ParameterExplorer(Base):
+class ParameterExplorer(FromPhotos, Base):
     """Sliders for the four energy parameters with live matches, score and transfer functions.
 
     `left` and `right` are paths or images, or `left` a Prepared; C/E/T is scored against `targets`
@@ -247,12 +247,9 @@ class ParameterExplorer(Base):
                                        continuous_update=False, readout_format=".2f")
             s.observe(self.guard(self._on_slider), names="value")
             self.sliders[gene.name] = with_class(s, "ismb-" + gene.name.replace("_", "-"))
-        self.method_menu = with_class(ipywidgets.Dropdown(options=list(method_names()), value=self.model.method,
-                                                          description="method"), "ismb-method")
-        self.seed_field = with_class(ipywidgets.BoundedIntText(value=self.model.seed, min=0, max=2**31 - 1,
-                                                               description="seed"), "ismb-seed")
-        self.solver_menu = with_class(ipywidgets.Dropdown(options=list(SOLVERS), value=self.model.solver,
-                                                          description="solver"), "ismb-solver")
+        self.method_menu = menu("method", method_names(), self.model.method)
+        self.seed_field = seed_field(self.model.seed)
+        self.solver_menu = menu("solver", SOLVERS, self.model.solver)
         self.score_label = with_class(ipywidgets.HTML(""), "ismb-score")
         self.solver_menu.observe(self.guard(lambda c: self._change(solver=c["new"])), names="value")
         self.method_menu.observe(self.guard(lambda c: self._change(method=c["new"])), names="value")
@@ -284,26 +281,6 @@ class ParameterExplorer(Base):
         if key.is_file():
             kw.setdefault("targets", key)
         return cls(left, right, **kw)
-
-    @classmethod
-    def from_photos(cls, *, folder=".", **kw):
-        """A :class:`~ismb_lab.widgets.photos.PhotoLoader` whose "Use this pair" opens an explorer.
-
-        Parameters
-        ----------
-        folder : str or os.PathLike, default "."
-            Where the pair's folder is made.
-        **kw
-            Passed to :meth:`from_folder`.
-
-        Returns
-        -------
-        loader : PhotoLoader
-            The loader widget.
-        """
-        from .photos import opening
-
-        return opening(cls.from_folder, folder, **kw)
 
     @property
     def params(self) -> Params:

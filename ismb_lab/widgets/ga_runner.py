@@ -26,7 +26,7 @@ from ..tuning.cases import Case
 from ..matching.recipe import Recipe, save_recipe
 from ..network.solvers import DEFAULT_SOLVER, SOLVERS, get_solver
 from ..tuning.fitness import to_params, tune
-from ._common import Base, Pane, button, pair_files, row, with_class
+from ._common import Base, Pane, button, menu, pair_files, row, with_class
 
 __all__ = ["as_cases", "case_from_folder", "chromosome_html", "draw_fitness", "GAModel", "GARunner",
            "update_fitness"]
@@ -292,9 +292,7 @@ class GARunner(Base):
         self.progress = with_class(ipywidgets.IntProgress(value=0, min=0, max=self.model.generations,
                                                           description="generation"), "ismb-progress")
         self.chromosome = with_class(ipywidgets.HTML(""), "ismb-chromosome")
-        self.solver_menu = with_class(ipywidgets.Dropdown(options=list(SOLVERS), value=self.model.solver,
-                                                          description="solver",
-                                                          layout=ipywidgets.Layout(width="auto")), "ismb-solver")
+        self.solver_menu = menu("solver", SOLVERS, self.model.solver, layout=ipywidgets.Layout(width="auto"))
         self.solver_menu.observe(self.guard(lambda c: self.set_solver(c["new"])), names="value")
         self.generations_field = with_class(ipywidgets.BoundedIntText(
             value=self.model.generations, min=1, max=100_000, description="generations",

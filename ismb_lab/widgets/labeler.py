@@ -22,6 +22,7 @@ from ..plotting import GAP, OKABE_ITO, VERDICT_COLOURS
 from ..labels.classroom import save_merging, targets_path, voila_without_hub
 from ..labels.targets import TargetSet, load_targets, snap, targets_from_matches
 from ._common import Base, Pane, button, check_type, column_figsize, draw_pair, pair_files, with_class
+from .photos import FromPhotos
 
 __all__ = ["COLUMNS", "KEY_AFTER", "Comparison", "draw_labels", "LabelModel", "pairs_html", "SavedScore", "TargetLabeler",
            "update_labels"]
@@ -267,6 +268,13 @@ class LabelModel:
                                          "labeler)", None))
         return Path(check_type(path, (str, Path), "path", owner, "a str or Path"))
 
+    def _on_disk(self, pairs: list, targets: TargetSet, path: Path) -> None:
+        """Take `pairs` as the labels, as the file `path` now holds them (`targets`)."""
+        self._pairs = pairs
+        self._saved = tuple(pairs)
+        self.key_open = self.key_open or len(pairs) >= KEY_AFTER
+        self._base, self._base_path = targets, path
+
     def save(self, path=None) -> Path:
         """Write the labels atomically, merged with what others saved to the file meanwhile
         (:func:`ismb_lab.labels.classroom.save_merging`); on failure the old file is untouched."""
@@ -278,10 +286,7 @@ class LabelModel:
                                  "did not load, instead: Load them if they are yours, or use another name")
         merged = save_merging(path, self.targets(), base)
         snapped = snap(merged.targets, self.left_xy, self.right_xy)
-        self._pairs = sorted(set(map(tuple, snapped.pairs.tolist())))
-        self._saved = tuple(self._pairs)
-        self.key_open = self.key_open or len(self._pairs) >= KEY_AFTER
-        self._base, self._base_path = merged.targets, path
+        self._on_disk(sorted(set(map(tuple, snapped.pairs.tolist()))), merged.targets, path)
         others = (f"; kept {merged.kept_from_disk} pairs saved to it meanwhile from another tab"
                   if merged.kept_from_disk else "")
         self._say(f"saved {len(self._pairs)} pairs to {path}{others}")
@@ -346,10 +351,7 @@ class LabelModel:
                                  f"feature once. Got {str(path)!r}, where pairs "
                                  f"{snapped.shared.tolist()} share a feature instead.")
         self._remember()
-        self._pairs = sorted(map(tuple, snapped.pairs.tolist()))
-        self._saved = tuple(self._pairs)
-        self.key_open = self.key_open or len(self._pairs) >= KEY_AFTER
-        self._base, self._base_path = targets, path
+        self._on_disk(sorted(map(tuple, snapped.pairs.tolist())), targets, path)
         self.pending = self.selected = None
         self._say(f"loaded {len(self._pairs)} pairs from {path}")
         return len(self._pairs)
@@ -419,7 +421,7 @@ def pairs_html(model: LabelModel) -> str:
     return f'<table class="ismb-table"><tr>{head}</tr>{"".join(body)}</table>'
 
 
-class TargetLabeler(Base):
+class TargetLabeler(FromPhotos, Base):
     """Label target pairs by clicking; save them in the targets format.
 
     `path`, the targets file of Save and Load, is by default the student's own
@@ -521,27 +523,6 @@ class TargetLabeler(Base):
         left, right, key = pair_files(folder, "TargetLabeler.from_folder")
         return cls(left, right, path=path, config=config, answer_key=key if key.is_file() else None,
                    pair_name=Path(folder).resolve().name)
-
-    @classmethod
-    def from_photos(cls, *, folder=".", **kw):
-        """A :class:`~ismb_lab.widgets.photos.PhotoLoader` whose "Use this pair" saves two photos of
-        one's own (rectified) in `folder` and opens a labeller on them.
-
-        Parameters
-        ----------
-        folder : str or os.PathLike, default "."
-            Where the pair's folder is made.
-        **kw
-            Passed to :meth:`from_folder`.
-
-        Returns
-        -------
-        loader : PhotoLoader
-            The loader widget.
-        """
-        from .photos import opening
-
-        return opening(cls.from_folder, folder, **kw)
 
     @property
     def pairs(self) -> np.ndarray:

@@ -168,16 +168,33 @@ def update_photos(art: dict, model: PhotoModel) -> None:
     art["roi"].set_visible(model.roi is not None)
 
 
-def opening(from_folder, folder, **kw) -> "PhotoLoader":
-    """A :class:`PhotoLoader` whose "Use this pair" returns ``from_folder(pair_folder, config=...,
-    **kw)`` on the saved pair, with the dragged ROI and the window measured on it."""
-    from ..matching.pipeline import MatchConfig
+class FromPhotos:
+    """What a widget made by ``from_folder(folder, config=..., **kw)`` gains: :meth:`from_photos`."""
 
-    def open_with(pair_folder, roi):
-        config = MatchConfig(roi=roi if roi is not None else "center", shift="auto")
-        return from_folder(pair_folder, config=config, **kw)
+    @classmethod
+    def from_photos(cls, *, folder=".", **kw) -> "PhotoLoader":
+        """A :class:`PhotoLoader` whose "Use this pair" saves two photos of one's own (rectified) in
+        `folder` and opens this widget on them, with the dragged ROI and the window measured on it.
 
-    return PhotoLoader(open_with, folder=folder)
+        Parameters
+        ----------
+        folder : str or os.PathLike, default "."
+            Where the pair's folder is made.
+        **kw
+            Passed to ``from_folder``.
+
+        Returns
+        -------
+        loader : PhotoLoader
+            The loader widget.
+        """
+        from ..matching.pipeline import MatchConfig
+
+        def open_with(pair_folder, roi):
+            config = MatchConfig(roi=roi if roi is not None else "center", shift="auto")
+            return cls.from_folder(pair_folder, config=config, **kw)
+
+        return PhotoLoader(open_with, folder=folder)
 
 
 class PhotoLoader(Base):

@@ -7,7 +7,7 @@ import ipywidgets
 import numpy as np
 from matplotlib.figure import Figure
 
-from .._core.validation import ParameterTypeError, check_choice, check_number, message
+from .._core.validation import check_choice, check_number
 from ..network.hopfield import RULES, energy
 from ..network.dynamics import STOP_RULES, Update, iter_updates
 from ..matching.pipeline import MatchConfig, Prepared, prepare
@@ -15,8 +15,8 @@ from ..plotting import OKABE_ITO
 from ..network.methods import DEFAULT_METHOD, get_method
 from ..network.params import Params
 from ..network.solvers import to_matches
-from ._common import (Base, Pane, button, check_type, draw_pair, pair_figsize, pair_files, path_labels, row,
-                      update_pair, with_class)
+from ._common import (Base, Pane, button, check_params, check_type, draw_pair, pair_figsize, pair_files,
+                      path_labels, row, seed_field, update_pair, with_class)
 
 __all__ = ["draw_energy", "draw_grid", "HopfieldStepper", "StepperModel", "update_energy", "update_grid"]
 
@@ -41,9 +41,7 @@ class StepperModel:
         owner = "StepperModel"
         self.prepared = check_type(prepared, Prepared, "prepared", owner, "a Prepared (see matching.prepare)")
         self.method = get_method(method)
-        self.params = self.method.defaults if params is None else params
-        if not isinstance(self.params, Params):
-            raise ParameterTypeError(message("params", owner, "None or a Params", params))
+        self.params = check_params(params, owner, self.method.defaults)
         self.stop_rule = check_choice(stop_rule, "stop_rule", owner, STOP_RULES)
         self.network = self.method.network(prepared.problem, self.params)
         self.reset(seed, rule)
@@ -262,9 +260,7 @@ class HopfieldStepper(Base):
                                  f"Run until a stop rule fires (at most {run_limit} attempts per click)",
                                  icon="fast-forward")
         self.reset_button = button("Reset", "ismb-reset", "All candidates on again", icon="refresh")
-        self.seed_field = with_class(ipywidgets.BoundedIntText(value=self.model.seed, min=0, max=2**31 - 1,
-                                                               description="seed",
-                                                               layout={"width": "140px"}), "ismb-seed")
+        self.seed_field = seed_field(self.model.seed, layout={"width": "140px"})
         self.rule_box = with_class(ipywidgets.Checkbox(value=False, description="literal thesis rule (3-20)",
                                                        indent=False), "ismb-thesis-rule")
         self.step_button.on_click(self.guard(lambda _: self.step(1)))
