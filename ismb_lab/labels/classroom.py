@@ -349,9 +349,11 @@ def _tally(who: list, pair: tuple, copies: list) -> list:
 
 def _disagreements(by_left: dict, by_right: dict) -> list:
     """Left points with disagreeing partners, then right points given several left partners."""
-    return [{f"{side}_xy": list(point), "partners": {str(list(o)): who for o, who in partners.items()}}
-            for side, by_point in (("left", by_left), ("right", by_right))
-            for point, partners in by_point.items() if len(partners) > 1]
+    lefts = [{"left_xy": list(p), "partners": {str(list(q)): who for q, who in partners.items()}}
+             for p, partners in by_left.items() if len(partners) > 1]
+    rights = [{"right_xy": list(q), "partners": {str(list(p)): who for p, who in partners.items()}}
+              for q, partners in by_right.items() if len(partners) > 1]
+    return lefts + rights
 
 
 def pool(paths, answer_key: TargetSet | None = None, tol: float = 1.5, *, min_votes: int = 1,
