@@ -25,6 +25,7 @@ from .targets import TargetSet, load_targets, save_targets
 __all__ = ["collected", "Merged", "Pool", "pool", "save_merging", "SIBLINGS", "targets_path", "user_name",
            "voila_without_hub"]
 
+
 def user_name() -> str:
     """Who is labelling: ``JUPYTERHUB_USER`` on a hub, else the login name, made safe for a file name.
 
@@ -38,7 +39,8 @@ def user_name() -> str:
 
 
 def _safe(text: str) -> str:
-    """`text` with letters, digits, ``.``, ``_`` and ``-`` only, for a file name."""
+    """`text` for a file name: each run of other characters than letters, digits, ``.``, ``_`` and
+    ``-`` becomes one ``-``, and ``-`` and ``.`` are stripped from the ends (so it may be ``""``)."""
     return re.sub(r"[^A-Za-z0-9._-]+", "-", text).strip("-.")
 
 
@@ -293,7 +295,9 @@ def _point(xy) -> tuple:
 
 def _from_rows(rows, left_sha256, right_sha256, meta: dict) -> TargetSet:
     """The targets of `rows`, ``(left_xy, right_xy, extras)`` each."""
-    left, right, extras = ([r[j] for r in rows] for j in range(3))
+    left = [row[0] for row in rows]
+    right = [row[1] for row in rows]
+    extras = [row[2] for row in rows]
     return TargetSet(np.reshape(left, (-1, 2)), np.reshape(right, (-1, 2)), left_sha256, right_sha256,
                      meta=meta, extras=extras)
 
