@@ -5,8 +5,6 @@ from __future__ import annotations
 
 import numpy as np
 
-from .images.coords import euclidean_disparity
-
 __all__ = ["GAP", "LEFT_COLOUR", "OKABE_ITO", "RIGHT_COLOUR", "VERDICT_COLOURS", "outlines", "plot_depth",
            "plot_matches", "side_by_side", "verdicts"]
 
@@ -79,6 +77,8 @@ def plot_matches(ax, left, right, left_xy, right_xy, pairs, *, numbers: bool = T
         ``image``, ``left_points``, ``right_points``, ``lines`` and ``labels``.
     """
     from matplotlib.collections import LineCollection
+
+    from .images.coords import euclidean_disparity
 
     left_xy = np.asarray(left_xy, float).reshape(-1, 2)
     right_xy = np.asarray(right_xy, float).reshape(-1, 2)

@@ -13,15 +13,17 @@ and the script also prints the fitted parameters' score under annealing.
 
     python scripts/fit_depth_params.py [--out PARAMS.json] [--generations 500] [--seed 0]
 
-It prints the parameters and writes them as ``ismb-lab tune --out`` does
-(``ismb_lab.matching.recipe.save_recipe``): Method-III, the fitted parameters, the demo's
-solver and the update orders per chromosome, for ``ismb-lab depth --params-file``.
+It prints the parameters and, with ``--out``, writes a recipe (``ismb_lab.matching.recipe``)
+for ``ismb-lab depth --params-file``: Method-III, the fitted parameters, ``--seeds`` as its
+``fit_seeds``, and the demo's solver, annealing, under which ``depth`` runs them (not the
+discrete network the GA scored with).
 """
 
 import argparse
 import time
 from pathlib import Path
 
+from ismb_lab._core.files import check_output
 from ismb_lab.depth.pipeline import DEPTH_MATCH_CONFIG, DEPTH_SOLVER
 from ismb_lab.matching.recipe import Recipe, save_recipe
 from ismb_lab.tuning.cases import Case
@@ -44,6 +46,8 @@ def main(argv=None):
     parser.add_argument("--seeds", type=int, default=5, help="update orders per chromosome")
     parser.add_argument("--seed", type=int, default=0, help="seed of the GA")
     args = parser.parse_args(argv)
+    if args.out is not None:
+        check_output(args.out)   # before the GA's minutes, not after
     case = lab_case()
     start = time.perf_counter()
     best = None

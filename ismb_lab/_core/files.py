@@ -1,4 +1,4 @@
-"""Safe file outputs and inputs.
+"""Safe file outputs and inputs, and the JSON text of a record (:class:`JsonRecord`).
 
 Writes are atomic (a reader sees the old file or the new one, and the folder is fsynced) and
 destroy nothing: a symbolic link is written through and stays; a device or FIFO is refused,
@@ -23,7 +23,11 @@ MAX_JSON_BYTES = 4 << 20
 
 
 class JsonRecord:
-    """A record whose ``to_dict`` is JSON-ready, written as indented JSON text by :meth:`to_json`."""
+    """A record whose :meth:`to_dict` is JSON-ready, written as indented JSON text by :meth:`to_json`."""
+
+    def to_dict(self) -> dict:
+        """The record as plain JSON types; each record class defines it."""
+        raise NotImplementedError
 
     def to_json(self) -> str:
         """:meth:`to_dict` as indented JSON text.
@@ -207,7 +211,7 @@ def refuse_folder_name(text, what: str = "output") -> None:
         raise OutputError(f"{what} {text!r} names a folder (it ends with {end!r}); give a file name")
 
 
-def _status(stat_of, shown: str):
+def _stat_or_none(stat_of, shown: str):
     """``stat_of()``, or None where the path does not exist; any other OSError as an OutputError."""
     try:
         return stat_of()
@@ -247,7 +251,7 @@ def check_output(path, *, inputs=(), force: bool = False, what: str = "output") 
     final = Path(os.path.realpath(path)) if path.is_symlink() else path
     if path.is_symlink() and not final.parent.is_dir():
         raise OutputError(f"{shown} is a symbolic link to {str(final)!r}, whose folder does not exist")
-    st = _status(path.stat, shown)   # through any link (/dev/stdout -> /proc/self/fd/1 -> a pipe)
+    st = _stat_or_none(path.stat, shown)   # through any link (/dev/stdout -> /proc/self/fd/1 -> a pipe)
     if st is not None and stat.S_ISDIR(st.st_mode):
         raise OutputError(f"{shown} is a folder; give a file name")
     if st is not None and not stat.S_ISREG(st.st_mode):
@@ -289,7 +293,7 @@ def check_replace(path, *, what: str = "output") -> Path:
     """
     path = Path(path)
     shown = f"{what} {str(path)!r}"
-    st = _status(path.lstat, shown)
+    st = _stat_or_none(path.lstat, shown)
     if st is not None and stat.S_ISLNK(st.st_mode):
         raise OutputError(f"{shown} is a symbolic link, which is never written through or replaced; "
                           "remove it first")

@@ -114,10 +114,10 @@ def _keep(fit: _Fit) -> str:
             f"after {fit.last.index} generations)")
 
 
-def why_negative(fitness, score, corners: int, labelled: int) -> str | None:
-    """The line that explains a negative `fitness` (the GA's best) or `score` (the C/E/T of one run),
-    with `labelled` of the `corners` left corners in a target pair; None when neither is negative."""
-    if fitness >= 0 and score.fitness >= 0:
+def why_negative(best, score, corners: int, labelled: int) -> str | None:
+    """The line that explains a negative `best` (the GA's best fitness) or `score` (the C/E/T of one
+    run), with `labelled` of the `corners` left corners in a target pair; None when neither is negative."""
+    if best >= 0 and score.fitness >= 0:
         return None
     c, w, e = score.correct, score.wrong_partner, score.extra
     head = f"negative fitness: fitness = correct - wrong - extra ({c} - {w} - {e} = {c - w - e} in the C/E/T above); "

@@ -25,6 +25,7 @@ from .targets import TargetSet, load_targets, save_targets
 __all__ = ["collected", "Merged", "Pool", "pool", "save_merging", "SIBLINGS", "targets_path", "user_name",
            "voila_without_hub"]
 
+
 def user_name() -> str:
     """Who is labelling: ``JUPYTERHUB_USER`` on a hub, else the login name, made safe for a file name.
 
@@ -38,7 +39,8 @@ def user_name() -> str:
 
 
 def _safe(text: str) -> str:
-    """`text` with letters, digits, ``.``, ``_`` and ``-`` only, for a file name."""
+    """`text` for a file name: each run of other characters than letters, digits, ``.``, ``_`` and
+    ``-`` becomes one ``-``, and ``-`` and ``.`` are stripped from the ends (so it may be ``""``)."""
     return re.sub(r"[^A-Za-z0-9._-]+", "-", text).strip("-.")
 
 
@@ -293,7 +295,9 @@ def _point(xy) -> tuple:
 
 def _from_rows(rows, left_sha256, right_sha256, meta: dict) -> TargetSet:
     """The targets of `rows`, ``(left_xy, right_xy, extras)`` each."""
-    left, right, extras = ([r[j] for r in rows] for j in range(3))
+    left = [row[0] for row in rows]
+    right = [row[1] for row in rows]
+    extras = [row[2] for row in rows]
     return TargetSet(np.reshape(left, (-1, 2)), np.reshape(right, (-1, 2)), left_sha256, right_sha256,
                      meta=meta, extras=extras)
 
@@ -349,9 +353,11 @@ def _tally(who: list, pair: tuple, copies: list) -> list:
 
 def _disagreements(by_left: dict, by_right: dict) -> list:
     """Left points with disagreeing partners, then right points given several left partners."""
-    return [{f"{side}_xy": list(point), "partners": {str(list(o)): who for o, who in partners.items()}}
-            for side, by_point in (("left", by_left), ("right", by_right))
-            for point, partners in by_point.items() if len(partners) > 1]
+    lefts = [{"left_xy": list(p), "partners": {str(list(q)): who for q, who in partners.items()}}
+             for p, partners in by_left.items() if len(partners) > 1]
+    rights = [{"right_xy": list(q), "partners": {str(list(p)): who for p, who in partners.items()}}
+              for q, partners in by_right.items() if len(partners) > 1]
+    return lefts + rights
 
 
 def pool(paths, answer_key: TargetSet | None = None, tol: float = 1.5, *, min_votes: int = 1,

@@ -394,7 +394,7 @@ def many_to_one(targets: TargetSet) -> np.ndarray:
 
 
 def _repeated(values, axis=None) -> np.ndarray:
-    """Whether each of `values` (each row, with ``axis=0``) is also another one."""
+    """True where a value of `values` (a row, with ``axis=0``) occurs more than once."""
     _, inverse, counts = np.unique(values, axis=axis, return_inverse=True, return_counts=True)
     return counts[inverse.reshape(-1)] > 1
 

@@ -16,6 +16,7 @@ import numpy as np
 from matplotlib.figure import Figure
 
 from .._core.validation import ParameterError, ParameterTypeError, message
+from ..images.io import grey_uint8
 from ..network.params import Params
 
 #: Widest figure, CSS px: JupyterLab's column at 1024 x 768 with the file browser open is about 592 px.
@@ -236,7 +237,7 @@ def pair_files(folder, owner: str) -> tuple[Path, Path, Path]:
 
 def grey_rgb(image) -> np.ndarray:
     """A grey image as an ``(H, W, 3)`` uint8 array: drawn without a colour map, so faster."""
-    g = np.clip(np.rint(np.asarray(image, dtype=float)), 0, 255).astype(np.uint8)
+    g = grey_uint8(image)
     return np.repeat(g[:, :, None], 3, axis=2)
 
 

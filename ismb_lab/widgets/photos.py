@@ -169,7 +169,7 @@ def update_photos(art: dict, model: PhotoModel) -> None:
 
 
 class FromPhotos:
-    """What a widget made by ``from_folder(folder, config=..., **kw)`` gains: :meth:`from_photos`."""
+    """Mixin: :meth:`from_photos` for a widget with a ``from_folder(folder, config=..., **kw)`` classmethod."""
 
     @classmethod
     def from_photos(cls, *, folder=".", **kw) -> "PhotoLoader":
